@@ -1,0 +1,2 @@
+//! rodloop-exact
+pub mod euler;
