@@ -1,1 +1,56 @@
-fn main() {}
+//! `rodloop`: equilibria, energies, forces and branch diagrams of elastic rod loops packed in
+//! a sphere (Wang, Li & Yi, J. Mech. Phys. Solids, 2024).
+//!
+//! `main` parses arguments, runs one subcommand, prints the whole error chain on failure and
+//! returns a non-zero exit code; it never panics on bad input.
+
+mod analytic;
+mod diagram;
+mod euler;
+mod output;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// Command-line arguments.
+#[derive(Parser, Debug)]
+#[command(
+    name = "rodloop",
+    version,
+    about = "Elastic rod loops packed in a sphere: exact and numerical equilibria, energies, forces, branch diagrams",
+    long_about = None
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Every exact closed loop with eta periods of geodesic curvature at one length (Sec. 4.3).
+    Analytic(analytic::Args),
+    /// The Euler rotation curve approximation (Eqs. 4-6) at one length.
+    Euler(euler::Args),
+    /// The energy-versus-length diagram with its critical lengths (Fig. 3a).
+    Diagram(diagram::Args),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Analytic(a) => analytic::run(&a),
+        Command::Euler(a) => euler::run(&a),
+        Command::Diagram(a) => diagram::run(&a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => {
+            eprintln!("error: {err}");
+            for cause in err.chain().skip(1) {
+                eprintln!("  caused by: {cause}");
+            }
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,169 @@
+//! `rodloop analytic`: every exact closed loop with `eta` periods of geodesic curvature.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context, Result};
+use rodloop_exact::{all_loops, branch_of_eta, Family};
+use serde_json::json;
+
+use crate::output::{ensure_dir, write_json, Cell, Table};
+
+/// Arguments of `rodloop analytic`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Normalised length L/(2 pi R).
+    #[arg(long)]
+    pub lbar: f64,
+    /// Number of periods of the geodesic curvature (eta = 2 is branch 1, eta = 1 branch 2).
+    #[arg(long)]
+    pub eta: u32,
+    /// Number of points per loop, uniform in arclength.
+    #[arg(long, default_value_t = 512)]
+    pub points: usize,
+    /// Output directory.
+    #[arg(long, default_value = "out/analytic")]
+    pub out: PathBuf,
+}
+
+/// Run the subcommand.
+pub fn run(args: &Args) -> Result<()> {
+    if args.eta == 0 {
+        bail!("--eta must be a positive integer (got 0)");
+    }
+    if !(args.lbar.is_finite() && args.lbar > 0.0) {
+        bail!("--lbar must be a positive number (got {})", args.lbar);
+    }
+    if args.points < 8 {
+        bail!("--points must be at least 8 (got {})", args.points);
+    }
+    let loops = all_loops(args.eta, args.lbar).with_context(|| {
+        format!(
+            "solving the closure for eta = {} at lbar = {}",
+            args.eta, args.lbar
+        )
+    })?;
+    if loops.is_empty() {
+        bail!(
+            "no closed loop with eta = {} at lbar = {} (the paper's branch for this eta exists for {} < lbar < {})",
+            args.eta,
+            args.lbar,
+            args.eta - 1,
+            args.eta + 1
+        );
+    }
+    ensure_dir(&args.out)?;
+    let mut summaries = Vec::new();
+    println!(
+        "{} closed loop(s) with eta = {} at lbar = {} (branch {} is q = {}):",
+        loops.len(),
+        args.eta,
+        args.lbar,
+        branch_of_eta(args.eta),
+        -(args.eta as i32 + 1)
+    );
+    println!(
+        "  {:>3} {:>6} {:>4} {:>4} {:>20} {:>20} {:>20} {:>10}",
+        "#", "family", "p", "q", "k", "cR", "E R/(pi D)", "closure"
+    );
+    for (i, lp) in loops.iter().enumerate() {
+        let name = format!("loop-{:02}.csv", i + 1);
+        let mut table = Table::new(
+            &name,
+            &[
+                "s", "x", "y", "z", "kappa", "tau", "kappa_g", "lambda", "F_t", "F_n", "F_b",
+            ],
+        );
+        for p in lp.sample(args.points)? {
+            table.push(vec![
+                Cell::F(p.s),
+                Cell::F(p.x),
+                Cell::F(p.y),
+                Cell::F(p.z),
+                Cell::F(p.kappa),
+                Cell::F(p.tau),
+                Cell::F(p.kappa_g),
+                Cell::F(p.lambda),
+                Cell::F(p.f_t),
+                Cell::F(p.f_n),
+                Cell::F(p.f_b),
+            ])?;
+        }
+        table.write(&args.out)?;
+        let energy = lp.energy()?;
+        let (lambda_min, lambda_max) = lp.lambda_range();
+        let family = match lp.family {
+            Family::Wave => "wave",
+            Family::Orbit => "orbit",
+        };
+        let paper_branch = lp.family == Family::Wave && lp.q == -(args.eta as i32 + 1);
+        let k2_small = lp.k2_small();
+        println!(
+            "  {:>3} {:>6} {:>4} {:>4} {:>20.15} {:>20.15} {:>20.15} {:>10.1e}{}",
+            i + 1,
+            family,
+            lp.p,
+            lp.q,
+            lp.k,
+            lp.c,
+            energy,
+            lp.closure_residual,
+            if paper_branch {
+                "  <- paper branch"
+            } else {
+                ""
+            }
+        );
+        summaries.push(json!({
+            "file": name,
+            "family": family,
+            "paper_branch": paper_branch,
+            "branch": if paper_branch { Some(branch_of_eta(args.eta)) } else { None },
+            "lbar": lp.lbar,
+            "eta": lp.eta,
+            "p": lp.p,
+            "q": lp.q,
+            "k": lp.k,
+            "c": lp.c,
+            "energy": energy,
+            "energy_n": lp.energy_n(),
+            "energy_g": lp.energy_g()?,
+            "lambda_min": lambda_min,
+            "lambda_max": lambda_max,
+            "conserved_moment": lp.conserved_moment(),
+            "closure_residual": lp.closure_residual,
+            "k2_small_b4": if lp.family == Family::Wave { Some(k2_small) } else { None },
+            "k2_small_b4_error": if lp.family == Family::Wave { Some(k2_small - lp.k * lp.k) } else { None },
+        }));
+    }
+    let summary = json!({
+        "lbar": args.lbar,
+        "eta": args.eta,
+        "units": "R = 1, D = 1: energy E R/(pi D), lambda R^3/D, forces F R^2/D",
+        "search": "all integers q crossed by the continuous closure p_cont(m), 0 < m <= 1 - 1e-6, both families",
+        "loops": summaries,
+    });
+    // serde_json writes None as null; our NaN guard would reject that, so drop the nulls.
+    let summary = strip_nulls(summary);
+    write_json(&args.out, "summary.json", &summary)?;
+    println!(
+        "wrote {} loop file(s) and summary.json to {}",
+        loops.len(),
+        args.out.display()
+    );
+    Ok(())
+}
+
+fn strip_nulls(v: serde_json::Value) -> serde_json::Value {
+    match v {
+        serde_json::Value::Object(map) => serde_json::Value::Object(
+            map.into_iter()
+                .filter(|(_, v)| !v.is_null())
+                .map(|(k, v)| (k, strip_nulls(v)))
+                .collect(),
+        ),
+        serde_json::Value::Array(a) => {
+            serde_json::Value::Array(a.into_iter().map(strip_nulls).collect())
+        }
+        other => other,
+    }
+}

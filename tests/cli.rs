@@ -1,0 +1,171 @@
+//! End-to-end tests: run the built `rodloop` binary as a user would.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn rodloop(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_rodloop"))
+        .args(args)
+        .output()
+        .expect("run rodloop")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows = lines
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect();
+    (header, rows)
+}
+
+fn assert_no_nan(path: &Path) {
+    let text = std::fs::read_to_string(path).unwrap();
+    assert!(
+        !text.to_lowercase().contains("nan") && !text.contains("inf"),
+        "{}",
+        path.display()
+    );
+}
+
+#[test]
+fn analytic_writes_loops_and_summary() {
+    let out = tmp("analytic");
+    let o = rodloop(&[
+        "analytic",
+        "--lbar",
+        "1.2",
+        "--eta",
+        "2",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let loops = summary["loops"].as_array().unwrap();
+    assert!(!loops.is_empty());
+    let first = &loops[0];
+    assert_eq!(first["p"], 1, "paper Fig. 6a: (eta, p) = (2, 1)");
+    assert!(first["closure_residual"].as_f64().unwrap() <= 1e-10);
+    for key in [
+        "lbar",
+        "eta",
+        "p",
+        "k",
+        "c",
+        "energy",
+        "energy_n",
+        "energy_g",
+        "lambda_min",
+        "lambda_max",
+    ] {
+        assert!(first.get(key).is_some(), "summary lacks {key}");
+    }
+    let file = out.join(first["file"].as_str().unwrap());
+    let (header, rows) = read_csv(&file);
+    assert_eq!(
+        header,
+        ["s", "x", "y", "z", "kappa", "tau", "kappa_g", "lambda", "F_t", "F_n", "F_b"]
+    );
+    assert_eq!(rows.len(), 512);
+    assert_no_nan(&file);
+    // Every point lies on the unit sphere.
+    for r in &rows {
+        let v: Vec<f64> = r[1..4].iter().map(|x| x.parse().unwrap()).collect();
+        assert!(((v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt() - 1.0).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn euler_writes_curve_and_summary() {
+    let out = tmp("euler");
+    let o = rodloop(&[
+        "euler",
+        "--l",
+        "2",
+        "--lbar",
+        "1.2",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let alpha = summary["alpha"].as_f64().unwrap();
+    assert!(alpha > 0.0 && alpha < std::f64::consts::PI);
+    assert!(summary["energy"].as_f64().unwrap() > 1.2);
+    assert_no_nan(&out.join("curve.csv"));
+}
+
+#[test]
+fn diagram_exact_reports_critical_lengths() {
+    let out = tmp("diagram");
+    let o = rodloop(&[
+        "diagram",
+        "--model",
+        "exact",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("1.3799"), "{stdout}");
+    let (header, rows) = read_csv(&out.join("critical.csv"));
+    for col in ["lbar_cr", "kind", "from_branch", "to_branch", "energy"] {
+        assert!(header.iter().any(|h| h == col), "critical.csv lacks {col}");
+    }
+    let lcol = header.iter().position(|h| h == "lbar_cr").unwrap();
+    let values: Vec<f64> = rows.iter().map(|r| r[lcol].parse().unwrap()).collect();
+    assert!(
+        values.iter().any(|v| (v - 2.426).abs() < 5e-4),
+        "{values:?}"
+    );
+    let (bh, brows) = read_csv(&out.join("branches.csv"));
+    for col in [
+        "branch",
+        "eta",
+        "p",
+        "lbar",
+        "energy",
+        "energy_g",
+        "lambda_min",
+        "lambda_max",
+    ] {
+        assert!(bh.iter().any(|h| h == col), "branches.csv lacks {col}");
+    }
+    assert!(brows.len() > 400);
+    assert_no_nan(&out.join("branches.csv"));
+}
+
+#[test]
+fn bad_input_gives_clear_errors_without_panics() {
+    let cases: &[(&[&str], &str)] = &[
+        (&["analytic", "--lbar", "1.2", "--eta", "0"], "eta"),
+        (&["analytic", "--lbar", "-1", "--eta", "2"], "lbar"),
+        (&["euler", "--l", "2", "--lbar", "3.5"], "lbar"),
+        (&["diagram", "--model", "numeric"], "numeric"),
+        (&["diagram", "--lbar-min", "3", "--lbar-max", "2"], "lbar"),
+    ];
+    for (args, word) in cases {
+        let out = tmp("bad");
+        let mut a: Vec<&str> = args.to_vec();
+        a.extend(["--out", out.to_str().unwrap()]);
+        let o = rodloop(&a);
+        assert!(!o.status.success(), "{args:?} should fail");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(word), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+        assert!(
+            !out.join("summary.json").exists(),
+            "{args:?} wrote a summary"
+        );
+    }
+}
