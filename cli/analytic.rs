@@ -8,6 +8,12 @@ use serde_json::json;
 
 use crate::output::{ensure_dir, write_json, Cell, Table};
 
+/// Largest `--eta` accepted: beyond it `p` reaches ~1e3 and the closure loses the digits
+/// needed for a 1e-10 residual.
+const MAX_ETA: u32 = 1000;
+/// Largest `--lbar` accepted, for the same reason.
+const MAX_LBAR: f64 = 1000.0;
+
 /// Arguments of `rodloop analytic`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -27,11 +33,17 @@ pub struct Args {
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
-    if args.eta == 0 {
-        bail!("--eta must be a positive integer (got 0)");
+    if args.eta == 0 || args.eta > MAX_ETA {
+        bail!(
+            "--eta must be an integer from 1 to {MAX_ETA} (got {})",
+            args.eta
+        );
     }
-    if !(args.lbar.is_finite() && args.lbar > 0.0) {
-        bail!("--lbar must be a positive number (got {})", args.lbar);
+    if !(args.lbar.is_finite() && args.lbar > 0.0 && args.lbar <= MAX_LBAR) {
+        bail!(
+            "--lbar must be a number in (0, {MAX_LBAR}] (got {})",
+            args.lbar
+        );
     }
     if args.points < 8 {
         bail!("--points must be at least 8 (got {})", args.points);
@@ -53,7 +65,7 @@ pub fn run(args: &Args) -> Result<()> {
     }
     ensure_dir(&args.out)?;
     let mut summaries = Vec::new();
-    println!(
+    outln!(
         "{} closed loop(s) with eta = {} at lbar = {} (branch {} is q = {}):",
         loops.len(),
         args.eta,
@@ -61,9 +73,16 @@ pub fn run(args: &Args) -> Result<()> {
         branch_of_eta(args.eta),
         -(args.eta as i32 + 1)
     );
-    println!(
+    outln!(
         "  {:>3} {:>6} {:>4} {:>4} {:>20} {:>20} {:>20} {:>10}",
-        "#", "family", "p", "q", "k", "cR", "E R/(pi D)", "closure"
+        "#",
+        "family",
+        "p",
+        "q",
+        "k",
+        "cR",
+        "E R/(pi D)",
+        "closure"
     );
     for (i, lp) in loops.iter().enumerate() {
         let name = format!("loop-{:02}.csv", i + 1);
@@ -97,7 +116,7 @@ pub fn run(args: &Args) -> Result<()> {
         };
         let paper_branch = lp.family == Family::Wave && lp.q == -(args.eta as i32 + 1);
         let k2_small = lp.k2_small();
-        println!(
+        outln!(
             "  {:>3} {:>6} {:>4} {:>4} {:>20.15} {:>20.15} {:>20.15} {:>10.1e}{}",
             i + 1,
             family,
@@ -145,7 +164,7 @@ pub fn run(args: &Args) -> Result<()> {
     // serde_json writes None as null; our NaN guard would reject that, so drop the nulls.
     let summary = strip_nulls(summary);
     write_json(&args.out, "summary.json", &summary)?;
-    println!(
+    outln!(
         "wrote {} loop file(s) and summary.json to {}",
         loops.len(),
         args.out.display()

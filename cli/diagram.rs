@@ -137,18 +137,29 @@ pub fn run(args: &Args) -> Result<()> {
     });
     write_json(&args.out, "summary.json", &summary)?;
 
-    println!("Critical lengths (exact model, homogeneous loops on the sphere):");
-    println!(
+    outln!("Critical lengths (exact model, homogeneous loops on the sphere):");
+    outln!(
         "  {:>2}  {:>18}  {:>9}  {:>6}  {:>18}  {:>9}",
-        "i", "lbar_cr", "kind", "from->to", "E R/(pi D)", "error"
+        "i",
+        "lbar_cr",
+        "kind",
+        "from->to",
+        "E R/(pi D)",
+        "error"
     );
     for c in &d.critical {
-        println!(
+        outln!(
             "  {:>2}  {:>18.15}  {:>9}  {:>3}->{:<2}  {:>18.15}  {:>9.1e}",
-            c.index, c.lbar_cr, c.kind, c.from_branch, c.to_branch, c.energy, c.error_estimate
+            c.index,
+            c.lbar_cr,
+            c.kind,
+            c.from_branch,
+            c.to_branch,
+            c.energy,
+            c.error_estimate
         );
     }
-    println!(
+    outln!(
         "{} states on {} branches, {} continuation points, computed in {:.3} s; wrote branches.csv, critical.csv, summary.json to {}",
         d.points.len(),
         d.points.iter().map(|p| p.branch).collect::<std::collections::BTreeSet<_>>().len(),

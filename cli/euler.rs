@@ -38,6 +38,15 @@ pub fn run(args: &Args) -> Result<()> {
     })?;
     let energy = curve.bending_energy();
     let energy_g = curve.energy_g();
+    if !energy.converged || !energy_g.converged {
+        anyhow::bail!(
+            "the Euler curve with l = {} at lbar = {} is too close to degenerate for the energy quadrature to converge ({} points); choose lbar further from {}",
+            args.l,
+            args.lbar,
+            energy.points,
+            args.l.saturating_sub(1)
+        );
+    }
     let mut table = Table::new(
         "curve.csv",
         &["s", "x", "y", "z", "kappa", "tau", "kappa_g"],
@@ -69,10 +78,10 @@ pub fn run(args: &Args) -> Result<()> {
         "units": "R = 1; energy is E R/(pi D)",
     });
     write_json(&args.out, "summary.json", &summary)?;
-    println!(
+    outln!(
         "Euler rotation curve l = {}, lbar = {}: alpha = {:.15}, energy E R/(pi D) = {:.12} (quadrature error <= {:.1e})",
         args.l, args.lbar, curve.alpha, energy.value, energy.error_estimate
     );
-    println!("wrote {}/curve.csv and summary.json", args.out.display());
+    outln!("wrote {}/curve.csv and summary.json", args.out.display());
     Ok(())
 }

@@ -4,6 +4,15 @@
 //! `main` parses arguments, runs one subcommand, prints the whole error chain on failure and
 //! returns a non-zero exit code; it never panics on bad input.
 
+/// Print a line to stdout, ignoring write errors (a closed pipe, as in `rodloop … | head`,
+/// must not turn into a panic).
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+
 mod analytic;
 mod diagram;
 mod euler;

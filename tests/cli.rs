@@ -153,6 +153,8 @@ fn bad_input_gives_clear_errors_without_panics() {
         (&["euler", "--l", "2", "--lbar", "3.5"], "lbar"),
         (&["diagram", "--model", "numeric"], "numeric"),
         (&["diagram", "--lbar-min", "3", "--lbar-max", "2"], "lbar"),
+        (&["euler", "--l", "1", "--lbar", "1e-9"], "degenerate"),
+        (&["analytic", "--lbar", "2", "--eta", "4000000000"], "eta"),
     ];
     for (args, word) in cases {
         let out = tmp("bad");
@@ -168,4 +170,30 @@ fn bad_input_gives_clear_errors_without_panics() {
             "{args:?} wrote a summary"
         );
     }
+}
+
+/// `rodloop … | head` closes stdout early: that must end quietly, not in a panic.
+#[test]
+fn closed_stdout_is_not_a_panic() {
+    use std::process::Stdio;
+    let out = tmp("pipe");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rodloop"))
+        .args([
+            "analytic",
+            "--lbar",
+            "3",
+            "--eta",
+            "2",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    assert_ne!(o.status.code(), Some(101), "{err}");
 }
