@@ -1,0 +1,429 @@
+//! Scene files: what a `rodloop` run models.
+//!
+//! A scene is a small TOML file naming the sphere, the confinement, the bending-stiffness
+//! profile and the accuracy. Every key is optional except where noted; unknown keys are an
+//! error, reported with the line and column, so that a misspelt key never silently falls back
+//! to a default. `data/scenes/` holds the paper's scenes.
+//!
+//! ```toml
+//! # Homogeneous loops on the sphere (paper Secs. 3.1 and 4).
+//! name = "homogeneous-surface"
+//! radius = 1.0                  # sphere radius R
+//! confinement = "surface"       # |r| = R ("enclosed", |r| <= R, is not modelled yet)
+//! lbar_min = 1.0                # range of L/(2 pi R) for diagrams
+//! lbar_max = 5.0
+//! accuracy = "default"          # fast | default | high
+//!
+//! [stiffness]
+//! kind = "uniform"              # uniform | tanh | table
+//! d = 1.0
+//! ```
+//!
+//! The two-segment profile of Eq. (51) is `kind = "tanh"` with `d0, d1, s0, s1, gamma`
+//! (`s0`, `s1` as fractions of L); a table is `kind = "table"` with arrays `s` (fractions of
+//! L in `[0, 1)`, increasing) and `d`.
+
+use std::path::Path;
+
+use serde::Deserialize;
+
+/// Errors reading or validating a scene.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// The file could not be read.
+    #[error("cannot read scene file {path}: {source}")]
+    Io {
+        /// The path.
+        path: String,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// TOML syntax error, unknown key or wrong type (the message names the line and key).
+    #[error("scene file {path}: {message}")]
+    Parse {
+        /// The path (or `<string>`).
+        path: String,
+        /// The parser's message, with line and column.
+        message: String,
+    },
+    /// A value outside its domain.
+    #[error("scene file {path}: {key} = {value}: {reason}")]
+    Invalid {
+        /// The path (or `<string>`).
+        path: String,
+        /// The offending key.
+        key: String,
+        /// Its value.
+        value: String,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+/// How the loop is confined.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Confinement {
+    /// On the sphere, `|r| = R`.
+    #[default]
+    Surface,
+    /// Inside the sphere, `|r| ≤ R` (not modelled yet).
+    Enclosed,
+}
+
+/// Accuracy level: a speed-for-accuracy dial.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Accuracy {
+    /// Coarse resolution for quick looks.
+    Fast,
+    /// The default resolution.
+    #[default]
+    Default,
+    /// Fine resolution with extrapolation.
+    High,
+}
+
+impl std::str::FromStr for Accuracy {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "fast" => Ok(Accuracy::Fast),
+            "default" => Ok(Accuracy::Default),
+            "high" => Ok(Accuracy::High),
+            other => Err(format!("unknown accuracy {other:?} (fast, default, high)")),
+        }
+    }
+}
+
+/// The `[stiffness]` table as written: a flat struct, so that the TOML parser can point at the
+/// line of an unknown key (an internally tagged enum would lose that position).
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawStiffness {
+    kind: Option<String>,
+    d: Option<NumberOrArray>,
+    d0: Option<f64>,
+    d1: Option<f64>,
+    s0: Option<f64>,
+    s1: Option<f64>,
+    gamma: Option<f64>,
+    s: Option<Vec<f64>>,
+}
+
+/// `d` is a number for a uniform profile and an array for a table.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(untagged)]
+enum NumberOrArray {
+    Number(f64),
+    Array(Vec<f64>),
+}
+
+/// The scene file as written, before the stiffness table is resolved.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScene {
+    #[serde(default = "default_name")]
+    name: String,
+    #[serde(default = "one")]
+    radius: f64,
+    #[serde(default)]
+    confinement: Confinement,
+    #[serde(default = "one")]
+    lbar_min: f64,
+    #[serde(default = "five")]
+    lbar_max: f64,
+    #[serde(default)]
+    accuracy: Accuracy,
+    stiffness: Option<RawStiffness>,
+}
+
+impl RawStiffness {
+    fn resolve(self, origin: &str) -> Result<StiffnessSpec, SceneError> {
+        let kind = self.kind.clone().unwrap_or_else(|| "uniform".into());
+        let bad = |key: &str, reason: String| SceneError::Invalid {
+            path: origin.to_string(),
+            key: format!("stiffness.{key}"),
+            value: String::new(),
+            reason,
+        };
+        let need = |key: &str, v: Option<f64>| {
+            v.ok_or_else(|| bad(key, format!("is required for kind = \"{kind}\"")))
+        };
+        let allowed: &[&str] = match kind.as_str() {
+            "uniform" => &["d"],
+            "tanh" => &["d0", "d1", "s0", "s1", "gamma"],
+            "table" => &["s", "d"],
+            other => {
+                return Err(SceneError::Invalid {
+                    path: origin.to_string(),
+                    key: "stiffness.kind".into(),
+                    value: format!("{other:?}"),
+                    reason: "must be \"uniform\", \"tanh\" or \"table\"".into(),
+                })
+            }
+        };
+        let present = [
+            ("d", self.d.is_some()),
+            ("d0", self.d0.is_some()),
+            ("d1", self.d1.is_some()),
+            ("s0", self.s0.is_some()),
+            ("s1", self.s1.is_some()),
+            ("gamma", self.gamma.is_some()),
+            ("s", self.s.is_some()),
+        ];
+        for (key, is_set) in present {
+            if is_set && !allowed.contains(&key) {
+                return Err(bad(key, format!("is not used by kind = \"{kind}\"")));
+            }
+        }
+        let d_number = |d: Option<NumberOrArray>| match d {
+            None => Ok(1.0),
+            Some(NumberOrArray::Number(x)) => Ok(x),
+            Some(NumberOrArray::Array(_)) => {
+                Err(bad("d", "must be a number for kind = \"uniform\"".into()))
+            }
+        };
+        Ok(match kind.as_str() {
+            "uniform" => StiffnessSpec::Uniform {
+                d: d_number(self.d)?,
+            },
+            "tanh" => StiffnessSpec::Tanh {
+                d0: need("d0", self.d0)?,
+                d1: need("d1", self.d1)?,
+                s0: need("s0", self.s0)?,
+                s1: need("s1", self.s1)?,
+                gamma: need("gamma", self.gamma)?,
+            },
+            _ => StiffnessSpec::Table {
+                s: self
+                    .s
+                    .ok_or_else(|| bad("s", "is required for kind = \"table\"".into()))?,
+                d: match self.d {
+                    Some(NumberOrArray::Array(v)) => v,
+                    _ => {
+                        return Err(bad(
+                            "d",
+                            "is required for kind = \"table\" as an array of stiffness values"
+                                .into(),
+                        ))
+                    }
+                },
+            },
+        })
+    }
+}
+
+/// A bending-stiffness profile `D(s)`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum StiffnessSpec {
+    /// Uniform stiffness `D`.
+    Uniform {
+        /// The stiffness.
+        d: f64,
+    },
+    /// Two-segment profile of Eq. (51):
+    /// `D(s) = D0 − (D0 − D1)/2 [tanh(γ(s − s0* L)/L) − tanh(γ(s − s1* L)/L)]`.
+    Tanh {
+        /// Stiffness of the stiff segment `D0`.
+        d0: f64,
+        /// Stiffness of the soft segment `D1`.
+        d1: f64,
+        /// Start of the soft segment as a fraction of L (`s0*/L`).
+        s0: f64,
+        /// End of the soft segment as a fraction of L (`s1*/L`).
+        s1: f64,
+        /// Sharpness `γ`.
+        gamma: f64,
+    },
+    /// Tabulated `D` at fractions of L, interpolated periodically.
+    Table {
+        /// Positions as fractions of L, increasing, in `[0, 1)`.
+        s: Vec<f64>,
+        /// Stiffness values (positive).
+        d: Vec<f64>,
+    },
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+impl Default for StiffnessSpec {
+    fn default() -> Self {
+        StiffnessSpec::Uniform { d: 1.0 }
+    }
+}
+
+impl StiffnessSpec {
+    /// Whether `D` is the same everywhere (then the arclength shift is a symmetry).
+    pub fn is_uniform(&self) -> bool {
+        matches!(self, StiffnessSpec::Uniform { .. })
+    }
+
+    /// Reference stiffness used to normalise energies and forces (`D` or `D0`; for a table the
+    /// largest value).
+    pub fn reference(&self) -> f64 {
+        match self {
+            StiffnessSpec::Uniform { d } => *d,
+            StiffnessSpec::Tanh { d0, .. } => *d0,
+            StiffnessSpec::Table { d, .. } => d.iter().cloned().fold(f64::NAN, f64::max),
+        }
+    }
+}
+
+/// A validated scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// A short name used in output summaries.
+    pub name: String,
+    /// Sphere radius `R`.
+    pub radius: f64,
+    /// Confinement.
+    pub confinement: Confinement,
+    /// Smallest `L̄` of a diagram.
+    pub lbar_min: f64,
+    /// Largest `L̄` of a diagram.
+    pub lbar_max: f64,
+    /// Accuracy level.
+    pub accuracy: Accuracy,
+    /// Stiffness profile.
+    pub stiffness: StiffnessSpec,
+}
+
+fn default_name() -> String {
+    "scene".into()
+}
+
+fn five() -> f64 {
+    5.0
+}
+
+impl Default for Scene {
+    /// The built-in default scene: homogeneous loops on the unit sphere, `1 ≤ L̄ ≤ 5`.
+    fn default() -> Self {
+        Scene {
+            name: "homogeneous-surface".into(),
+            radius: 1.0,
+            confinement: Confinement::Surface,
+            lbar_min: 1.0,
+            lbar_max: 5.0,
+            accuracy: Accuracy::Default,
+            stiffness: StiffnessSpec::Uniform { d: 1.0 },
+        }
+    }
+}
+
+impl Scene {
+    /// Parse and validate a scene from TOML text; `origin` names it in messages.
+    pub fn from_toml(text: &str, origin: &str) -> Result<Self, SceneError> {
+        let raw: RawScene = toml::from_str(text).map_err(|e| SceneError::Parse {
+            path: origin.to_string(),
+            message: e.to_string().trim_end().replace('\n', "\n  "),
+        })?;
+        let stiffness = raw.stiffness.unwrap_or_default().resolve(origin)?;
+        let scene = Scene {
+            name: raw.name,
+            radius: raw.radius,
+            confinement: raw.confinement,
+            lbar_min: raw.lbar_min,
+            lbar_max: raw.lbar_max,
+            accuracy: raw.accuracy,
+            stiffness,
+        };
+        scene.validate(origin)?;
+        Ok(scene)
+    }
+
+    /// Read, parse and validate a scene file.
+    pub fn from_file(path: &Path) -> Result<Self, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            path: path.display().to_string(),
+            source,
+        })?;
+        Self::from_toml(&text, &path.display().to_string())
+    }
+
+    /// Check every value's domain.
+    pub fn validate(&self, origin: &str) -> Result<(), SceneError> {
+        let bad = |key: &str, value: String, reason: &str| SceneError::Invalid {
+            path: origin.to_string(),
+            key: key.to_string(),
+            value,
+            reason: reason.to_string(),
+        };
+        let positive = |key: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(bad(key, v.to_string(), "must be a positive finite number"))
+            }
+        };
+        positive("radius", self.radius)?;
+        positive("lbar_min", self.lbar_min)?;
+        positive("lbar_max", self.lbar_max)?;
+        if self.lbar_max <= self.lbar_min {
+            return Err(bad(
+                "lbar_max",
+                self.lbar_max.to_string(),
+                &format!("must exceed lbar_min = {}", self.lbar_min),
+            ));
+        }
+        if self.lbar_max > 50.0 {
+            return Err(bad(
+                "lbar_max",
+                self.lbar_max.to_string(),
+                "must be at most 50",
+            ));
+        }
+        match &self.stiffness {
+            StiffnessSpec::Uniform { d } => positive("stiffness.d", *d)?,
+            StiffnessSpec::Tanh {
+                d0,
+                d1,
+                s0,
+                s1,
+                gamma,
+            } => {
+                positive("stiffness.d0", *d0)?;
+                positive("stiffness.d1", *d1)?;
+                positive("stiffness.gamma", *gamma)?;
+                for (k, v) in [("stiffness.s0", *s0), ("stiffness.s1", *s1)] {
+                    if !(0.0..=1.0).contains(&v) {
+                        return Err(bad(k, v.to_string(), "must be a fraction of L in [0, 1]"));
+                    }
+                }
+                if s1 <= s0 {
+                    return Err(bad(
+                        "stiffness.s1",
+                        s1.to_string(),
+                        &format!("must exceed stiffness.s0 = {s0}"),
+                    ));
+                }
+            }
+            StiffnessSpec::Table { s, d } => {
+                if s.len() != d.len() || s.len() < 2 {
+                    return Err(bad(
+                        "stiffness.s",
+                        format!("{} values", s.len()),
+                        &format!(
+                            "needs at least 2 values and as many as stiffness.d ({})",
+                            d.len()
+                        ),
+                    ));
+                }
+                if s.windows(2).any(|w| w[1] <= w[0]) || s[0] < 0.0 || s[s.len() - 1] >= 1.0 {
+                    return Err(bad(
+                        "stiffness.s",
+                        format!("{s:?}"),
+                        "must increase strictly within [0, 1)",
+                    ));
+                }
+                for v in d {
+                    positive("stiffness.d", *v)?;
+                }
+            }
+        }
+        Ok(())
+    }
+}

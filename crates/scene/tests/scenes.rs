@@ -1,0 +1,82 @@
+//! Scene parsing: the shipped scenes load, bad files are rejected with the key and line.
+
+use rodloop_scene::{Accuracy, Confinement, Scene, SceneError, StiffnessSpec};
+
+#[test]
+fn shipped_scenes_parse() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../../data/scenes");
+    let mut n = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            Scene::from_file(&path).unwrap_or_else(|e| panic!("{e}"));
+            n += 1;
+        }
+    }
+    assert!(
+        n >= 4,
+        "expected the paper's scenes in data/scenes, found {n}"
+    );
+}
+
+#[test]
+fn defaults_are_the_homogeneous_surface_scene() {
+    let s = Scene::from_toml("", "<empty>").unwrap();
+    assert_eq!(s.confinement, Confinement::Surface);
+    assert_eq!(s.accuracy, Accuracy::Default);
+    assert_eq!(s.stiffness, StiffnessSpec::Uniform { d: 1.0 });
+    assert_eq!((s.lbar_min, s.lbar_max, s.radius), (1.0, 5.0, 1.0));
+}
+
+#[test]
+fn unknown_key_is_an_error_naming_key_and_line() {
+    let text = "radius = 1.0\nradus = 2.0\n";
+    let err = Scene::from_toml(text, "x.toml").unwrap_err();
+    let msg = err.to_string();
+    assert!(matches!(err, SceneError::Parse { .. }));
+    assert!(msg.contains("radus") && msg.contains("line 2"), "{msg}");
+    let text = "[stiffness]\nkind = \"tanh\"\nd0 = 1\nd1 = 0.5\ns0 = 0.3\ns1 = 0.8\ngama = 200\n";
+    let msg = Scene::from_toml(text, "x.toml").unwrap_err().to_string();
+    assert!(msg.contains("gama") && msg.contains("line 7"), "{msg}");
+}
+
+#[test]
+fn invalid_values_name_the_key() {
+    for (text, key) in [
+        ("radius = -1\n", "radius"),
+        ("lbar_min = 3\nlbar_max = 2\n", "lbar_max"),
+        (
+            "[stiffness]\nkind = \"tanh\"\nd0 = 1\nd1 = 0\ns0 = 0.3\ns1 = 0.8\ngamma = 200\n",
+            "stiffness.d1",
+        ),
+        (
+            "[stiffness]\nkind = \"tanh\"\nd0 = 1\nd1 = 0.5\ns0 = 0.8\ns1 = 0.3\ngamma = 200\n",
+            "stiffness.s1",
+        ),
+        (
+            "[stiffness]\nkind = \"table\"\ns = [0.0, 0.5, 0.4]\nd = [1, 2, 3]\n",
+            "stiffness.s",
+        ),
+        ("accuracy = \"extreme\"\n", "accuracy"),
+        ("confinement = \"outside\"\n", "confinement"),
+        ("[stiffness]\nkind = \"uniform\"\nd0 = 2\n", "stiffness.d0"),
+        ("[stiffness]\nkind = \"tanh\"\nd0 = 1\n", "stiffness.d1"),
+        ("[stiffness]\nkind = \"spline\"\n", "stiffness.kind"),
+    ] {
+        let msg = Scene::from_toml(text, "x.toml").unwrap_err().to_string();
+        assert!(msg.contains(key), "{text:?}: {msg}");
+    }
+}
+
+#[test]
+fn table_profile_parses() {
+    let text = "[stiffness]\nkind = \"table\"\ns = [0.0, 0.5]\nd = [1, 0.5]\n";
+    let s = Scene::from_toml(text, "t.toml").unwrap();
+    assert_eq!(
+        s.stiffness,
+        StiffnessSpec::Table {
+            s: vec![0.0, 0.5],
+            d: vec![1.0, 0.5]
+        }
+    );
+}
