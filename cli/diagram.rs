@@ -4,10 +4,11 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{bail, Result};
-use rodloop_exact::diagram::{compute, DiagramSettings};
+use rodloop_exact::diagram::{compute, Diagram, DiagramSettings};
 use serde_json::json;
 
-use crate::output::{ensure_dir, write_json, Cell, Table};
+use crate::output::{ensure_dir, write_atomic, write_json, Cell, Table};
+use crate::svg::{self, branch_color, Curve, Figure, LegendEntry, LineStyle, Marker};
 
 /// Which model computes the diagram.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -125,6 +126,10 @@ pub fn run(args: &Args) -> Result<()> {
     ensure_dir(&args.out)?;
     branches.write(&args.out)?;
     critical.write(&args.out)?;
+    for (name, energy_g) in [("diagram.svg", false), ("diagram_g.svg", true)] {
+        let fig = figure(&d, energy_g);
+        write_atomic(&args.out, name, svg::render(&fig).as_bytes())?;
+    }
     let summary = json!({
         "model": "exact",
         "lbar_min": args.lbar_min,
@@ -160,7 +165,7 @@ pub fn run(args: &Args) -> Result<()> {
         );
     }
     outln!(
-        "{} states on {} branches, {} continuation points, computed in {:.3} s; wrote branches.csv, critical.csv, summary.json to {}",
+        "{} states on {} branches, {} continuation points, computed in {:.3} s; wrote branches.csv, critical.csv, diagram.svg, diagram_g.svg, summary.json to {}",
         d.points.len(),
         d.points.iter().map(|p| p.branch).collect::<std::collections::BTreeSet<_>>().len(),
         d.continuation_steps,
@@ -168,4 +173,85 @@ pub fn run(args: &Args) -> Result<()> {
         args.out.display()
     );
     Ok(())
+}
+
+/// The energy (or its geodesic part) versus length, one colour per branch: solid where the
+/// branch has the lowest energy, dashed elsewhere (the exact model does not compute the Hessian
+/// index, so higher-energy states are not split into metastable and unstable), critical lengths
+/// as vertical markers.
+fn figure(d: &Diagram, energy_g: bool) -> Figure {
+    let mut curves = Vec::new();
+    let mut branches: Vec<u32> = d.points.iter().map(|p| p.branch).collect();
+    branches.sort_unstable();
+    branches.dedup();
+    for &b in &branches {
+        let pts: Vec<_> = d.points.iter().filter(|p| p.branch == b).collect();
+        let mut start = 0;
+        for i in 1..=pts.len() {
+            if i == pts.len() || pts[i].lowest != pts[start].lowest {
+                // Include the first point of the next run so runs join up.
+                let end = (i + 1).min(pts.len());
+                let points = pts[start..end]
+                    .iter()
+                    .map(|p| (p.lbar, if energy_g { p.energy_g } else { p.energy }))
+                    .collect();
+                let lowest = pts[start].lowest;
+                curves.push(Curve {
+                    color: branch_color(b),
+                    style: if lowest {
+                        LineStyle::Solid
+                    } else {
+                        LineStyle::Dashed
+                    },
+                    width: if lowest { 2.2 } else { 1.3 },
+                    points,
+                });
+                start = i;
+            }
+        }
+    }
+    let mut legend: Vec<LegendEntry> = branches
+        .iter()
+        .map(|&b| LegendEntry {
+            label: format!("branch {b} (eta = {})", rodloop_exact::eta_of_branch(b)),
+            color: branch_color(b),
+            style: LineStyle::Solid,
+        })
+        .collect();
+    legend.push(LegendEntry {
+        label: "solid: lowest energy".into(),
+        color: "black".into(),
+        style: LineStyle::Solid,
+    });
+    legend.push(LegendEntry {
+        label: "dashed: higher energy".into(),
+        color: "black".into(),
+        style: LineStyle::Dashed,
+    });
+    let markers = d
+        .critical
+        .iter()
+        .map(|c| Marker {
+            x: c.lbar_cr,
+            label: format!("{:.4}", c.lbar_cr),
+        })
+        .collect();
+    Figure {
+        title: if energy_g {
+            "Exact branches: geodesic-curvature energy E_g R/(pi D)".into()
+        } else {
+            "Exact branches: bending energy E R/(pi D) of homogeneous loops on the sphere".into()
+        },
+        xlabel: "L / (2 pi R)".into(),
+        ylabel: if energy_g {
+            "E_g R/(pi D)"
+        } else {
+            "E R/(pi D)"
+        }
+        .into(),
+        curves,
+        markers,
+        legend,
+        range: None,
+    }
 }

@@ -17,6 +17,7 @@ mod analytic;
 mod diagram;
 mod euler;
 mod output;
+mod svg;
 
 use std::process::ExitCode;
 

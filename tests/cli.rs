@@ -143,6 +143,20 @@ fn diagram_exact_reports_critical_lengths() {
     }
     assert!(brows.len() > 400);
     assert_no_nan(&out.join("branches.csv"));
+    for fig in ["diagram.svg", "diagram_g.svg"] {
+        let svg = std::fs::read_to_string(out.join(fig)).unwrap();
+        assert!(
+            svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"),
+            "{fig}"
+        );
+        // Five branches, each drawn as at least one path, and nine critical-length markers.
+        assert!(svg.matches("<path").count() >= 5, "{fig}");
+        assert!(
+            svg.matches("stroke-dasharray=\"2 3\"").count() >= 9,
+            "{fig}"
+        );
+        assert!(!svg.contains("NaN"), "{fig}");
+    }
 }
 
 #[test]
