@@ -14,6 +14,7 @@ macro_rules! outln {
 }
 
 mod analytic;
+mod compare;
 mod diagram;
 mod euler;
 mod output;
@@ -44,6 +45,9 @@ enum Command {
     Euler(euler::Args),
     /// The energy-versus-length diagram with its critical lengths (Fig. 3a).
     Diagram(diagram::Args),
+    /// The paper's printed values (critical lengths, buckling loads, winding numbers) next to
+    /// rodloop's, with deviations.
+    Compare(compare::Args),
 }
 
 fn main() -> ExitCode {
@@ -52,6 +56,7 @@ fn main() -> ExitCode {
         Command::Analytic(a) => analytic::run(&a),
         Command::Euler(a) => euler::run(&a),
         Command::Diagram(a) => diagram::run(&a),
+        Command::Compare(a) => compare::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
