@@ -94,6 +94,20 @@ fn exact_value(pv: &PaperValue, crit: &[rodloop_exact::diagram::Critical]) -> Re
     })
 }
 
+/// Point group (Schoenflies) of the exact loop of a branch at the row's length, sampled from
+/// the maximum of κ_g with 48η points (a multiple of 4η, as the detector requires).
+fn exact_symmetry(pv: &PaperValue) -> Result<String> {
+    let eta = eta_of_branch(pv.branch);
+    let l = pv.lbar.context("symmetry rows need lbar")?;
+    let lp = paper_branch_loop(eta, l)?;
+    let pts: Vec<nalgebra::Vector3<f64>> = lp
+        .sample(48 * eta as usize)?
+        .iter()
+        .map(|p| nalgebra::Vector3::new(p.x, p.y, p.z))
+        .collect();
+    Ok(rodloop_exact::symmetry::point_group(&pts, 1e-9).symbol)
+}
+
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
     let values = paper_values()?;
@@ -134,7 +148,13 @@ pub fn run(args: &Args) -> Result<()> {
     for pv in &values {
         let exact = exact_value(pv, &d.critical)?;
         let paper_num: Option<f64> = pv.value.parse().ok();
+        let symmetry = if pv.kind == "symmetry" {
+            Some(exact_symmetry(pv)?)
+        } else {
+            None
+        };
         let (dev, agrees) = match (exact, paper_num) {
+            _ if symmetry.is_some() => (None, symmetry.as_ref().map(|s| *s == pv.value)),
             (Some(e), Some(p)) => {
                 let dev = e - p;
                 let tol = pv.resolution.unwrap_or(0.0).max(1e-6 * p.abs().max(1.0));
@@ -154,7 +174,7 @@ pub fn run(args: &Args) -> Result<()> {
             pv.lbar.map(|l| l.to_string()).unwrap_or_default(),
             pv.value,
             match pv.kind.as_str() {
-                "symmetry" => "not computed".to_string(),
+                "symmetry" => symmetry.clone().unwrap_or_default(),
                 "winding" => exact.map(|v| format!("{v}")).unwrap_or_default(),
                 _ => fmt_opt(exact),
             },
@@ -174,14 +194,19 @@ pub fn run(args: &Args) -> Result<()> {
             Cell::S(pv.lbar.map(|l| l.to_string()).unwrap_or_default()),
             Cell::S(pv.value.clone()),
             Cell::S(pv.resolution.map(|r| r.to_string()).unwrap_or_default()),
-            Cell::S(exact.map(|v| v.to_string()).unwrap_or_default()),
+            Cell::S(
+                symmetry
+                    .clone()
+                    .or_else(|| exact.map(|v| v.to_string()))
+                    .unwrap_or_default(),
+            ),
             Cell::S(dev.map(|v| v.to_string()).unwrap_or_default()),
             Cell::S(agrees.map(|a| a.to_string()).unwrap_or_default()),
             Cell::S(String::new()),
             Cell::S(String::new()),
             Cell::S(pv.source.clone()),
         ])?;
-        rows.push(json!({"id": pv.id, "paper": pv.value, "exact": exact, "agrees": agrees}));
+        rows.push(json!({"id": pv.id, "paper": pv.value, "exact": symmetry.clone().map(serde_json::Value::from).unwrap_or_else(|| exact.into()), "agrees": agrees}));
     }
     ensure_dir(&args.out)?;
     table.write(&args.out)?;
@@ -189,7 +214,6 @@ pub fn run(args: &Args) -> Result<()> {
         "rows": values.len(),
         "disagreements_exact": disagreements,
         "numeric": "not available yet (numeric model: issue 3/4)",
-        "symmetry": "not computed yet",
     });
     write_json(&args.out, "summary.json", &summary)?;
     outln!(

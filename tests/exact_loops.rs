@@ -398,3 +398,32 @@ fn euler_curves_are_within_half_a_percent_of_exact_energy() {
         );
     }
 }
+
+/// Point groups of the exact loops (paper Sec. 3.1): branch 1 D2d, branch 2 C2v, branch 3
+/// D3h, branch 4 D4d. Sampled from the maximum of κ_g (s = 0) with n a multiple of 4η.
+#[test]
+fn exact_loops_have_the_papers_point_groups() {
+    use rodloop_exact::symmetry::point_group;
+    for (eta, lbar, expected) in [
+        (2, 1.2, "D2d"),
+        (2, 2.8, "D2d"),
+        (1, 1.7, "C2v"),
+        (3, 2.2, "D3h"),
+        (3, 3.5, "D3h"),
+        (4, 3.5, "D4d"),
+    ] {
+        let lp = paper_branch_loop(eta, lbar).unwrap();
+        let pts: Vec<Vector3<f64>> = lp
+            .sample(48 * eta as usize)
+            .unwrap()
+            .iter()
+            .map(|p| Vector3::new(p.x, p.y, p.z))
+            .collect();
+        let g = point_group(&pts, 1e-9);
+        eprintln!(
+            "eta {eta} lbar {lbar}: {} (order {}, residual {:.1e})",
+            g.symbol, g.order, g.worst_residual
+        );
+        assert_eq!(g.symbol, expected, "eta {eta} lbar {lbar}");
+    }
+}

@@ -10,6 +10,7 @@ pub mod diagram;
 pub mod euler;
 pub mod homogeneous;
 pub mod roots;
+pub mod symmetry;
 
 pub use homogeneous::{all_loops, paper_branch_loop, ExactLoop, Family, LoopPoint};
 
