@@ -43,6 +43,116 @@ pub fn expm_skew(w: &Matrix3<f64>) -> Matrix3<f64> {
     Matrix3::identity() + w * a + w * w * b
 }
 
+/// Rodrigues coefficients `a(q) = sin θ/θ`, `b(q) = (1 − cos θ)/θ²` as functions of
+/// `q = θ²`, with their first and second derivatives in `q`:
+/// returns `[a, a', a'', b, b', b'']`.
+///
+/// For `q < 1` the Maclaurin series `a = Σ (−q)^k/(2k+1)!`, `b = Σ (−q)^k/(2k+2)!` are summed
+/// (18 terms, error below 1e-30); otherwise the closed forms
+/// `a' = (cos θ − a)/(2q)`, `a'' = −(a/2 + 3a')/(2q)`, `b' = (a/2 − b)/q`,
+/// `b'' = (a'/2 − 2b')/q` are used, which have no cancellation problem there.
+pub fn rodrigues_coefficients(q: f64) -> [f64; 6] {
+    if q < 1.0 {
+        // pw[k] = (−q)^k, so that (−1)^k q^{k−1} = −pw[k−1] and (−1)^k q^{k−2} = pw[k−2].
+        let mut pw = [1.0; 18];
+        for k in 1..18 {
+            pw[k] = pw[k - 1] * (-q);
+        }
+        let mut out = [0.0; 6];
+        let mut fa = 1.0; // (2k+1)!
+        let mut fb = 2.0; // (2k+2)!
+        for k in 0..18 {
+            let kf = k as f64;
+            out[0] += pw[k] / fa;
+            out[3] += pw[k] / fb;
+            if k >= 1 {
+                let d1 = -kf * pw[k - 1];
+                out[1] += d1 / fa;
+                out[4] += d1 / fb;
+            }
+            if k >= 2 {
+                let d2 = kf * (kf - 1.0) * pw[k - 2];
+                out[2] += d2 / fa;
+                out[5] += d2 / fb;
+            }
+            fa *= (2.0 * kf + 2.0) * (2.0 * kf + 3.0);
+            fb *= (2.0 * kf + 3.0) * (2.0 * kf + 4.0);
+        }
+        out
+    } else {
+        let th = q.sqrt();
+        let (s, c) = th.sin_cos();
+        let a = s / th;
+        let b = (1.0 - c) / q;
+        let a1 = (c - a) / (2.0 * q);
+        let a2 = -(0.5 * a + 3.0 * a1) / (2.0 * q);
+        let b1 = (0.5 * a - b) / q;
+        let b2 = (0.5 * a1 - 2.0 * b1) / q;
+        [a, a1, a2, b, b1, b2]
+    }
+}
+
+/// Skew matrix `hat(w)` with `hat(w) v = w × v`.
+pub fn hat(w: &Vector3<f64>) -> Matrix3<f64> {
+    Matrix3::new(0.0, -w[2], w[1], w[2], 0.0, -w[0], -w[1], w[0], 0.0)
+}
+
+/// `exp(W)`, its first derivatives `[∂_i]` and second derivatives `[[∂_i∂_j]]` (upper
+/// triangle filled) with respect to `K` variables.
+pub type ExpJet<const K: usize> = (Matrix3<f64>, [Matrix3<f64>; K], [[Matrix3<f64>; K]; K]);
+
+/// `exp(hat(ω))` and its first and second derivatives with respect to `K` scalar variables
+/// `x_i`, given `ω`, `∂ω/∂x_i` and `∂²ω/∂x_i∂x_j` (a second-order "jet" through Rodrigues'
+/// formula `exp(W) = I + a(q) W + b(q) W²`, `q = |ω|²`).
+///
+/// With `q_i = 2 ω·ω_i`, `q_ij = 2(ω_i·ω_j + ω·ω_ij)`, `a_i = a' q_i`,
+/// `a_ij = a'' q_i q_j + a' q_ij` (same for `b`):
+/// `∂_i E = a_i W + a W_i + b_i W² + b (W_i W + W W_i)` and
+/// `∂_ij E = a_ij W + a_i W_j + a_j W_i + a W_ij + b_ij W² + b_i (W_j W + W W_j)
+///  + b_j (W_i W + W W_i) + b (W_ij W + W W_ij + W_i W_j + W_j W_i)`.
+/// Only the upper triangle `i ≤ j` of the second derivatives is filled (symmetric).
+pub fn exp_jet<const K: usize>(
+    w: &Vector3<f64>,
+    wi: &[Vector3<f64>; K],
+    wij: &[[Vector3<f64>; K]; K],
+) -> ExpJet<K> {
+    let q = w.norm_squared();
+    let [a, a1, a2, b, b1, b2] = rodrigues_coefficients(q);
+    let wm = hat(w);
+    let w2 = wm * wm;
+    let e = Matrix3::identity() + wm * a + w2 * b;
+    let mut d = [Matrix3::zeros(); K];
+    let mut dd = [[Matrix3::zeros(); K]; K];
+    let mut wim = [Matrix3::zeros(); K];
+    let mut qi = [0.0; K];
+    let mut sym = [Matrix3::zeros(); K]; // W_i W + W W_i
+    for i in 0..K {
+        wim[i] = hat(&wi[i]);
+        qi[i] = 2.0 * w.dot(&wi[i]);
+        sym[i] = wim[i] * wm + wm * wim[i];
+        d[i] = wm * (a1 * qi[i]) + wim[i] * a + w2 * (b1 * qi[i]) + sym[i] * b;
+    }
+    for i in 0..K {
+        for j in i..K {
+            let wijm = hat(&wij[i][j]);
+            let qij = 2.0 * (wi[i].dot(&wi[j]) + w.dot(&wij[i][j]));
+            let aij = a2 * qi[i] * qi[j] + a1 * qij;
+            let bij = b2 * qi[i] * qi[j] + b1 * qij;
+            let (ai, aj) = (a1 * qi[i], a1 * qi[j]);
+            let (bi, bj) = (b1 * qi[i], b1 * qi[j]);
+            dd[i][j] = wm * aij
+                + wim[j] * ai
+                + wim[i] * aj
+                + wijm * a
+                + w2 * bij
+                + sym[j] * bi
+                + sym[i] * bj
+                + (wijm * wm + wm * wijm + wim[i] * wim[j] + wim[j] * wim[i]) * b;
+        }
+    }
+    (e, d, dd)
+}
+
 /// Result of integrating the frame along a closed curve.
 #[derive(Clone, Debug)]
 pub struct FrameCurve {

@@ -1,0 +1,171 @@
+//! Resolution choice and error estimates.
+//!
+//! The scheme (Gauss collocation + fourth-order Magnus + two-point Gauss quadrature) converges
+//! like `h⁴` in the energy and in `λ` (measured in `tests/convergence.rs`). Every
+//! [`solve_with_accuracy`] solves at two resolutions and reports an error estimate from
+//! their difference (`|X_fine − X_coarse|/(2⁴ − 1)` for a halving of `h`):
+//!
+//! * [`Accuracy::Fast`] and [`Accuracy::Default`]: `N` cells and `N/2` cells; the values are
+//!   those at `N`, the estimate is that of their error.
+//! * [`Accuracy::High`]: `N` and `2N` cells (`N` of `Default`), Richardson extrapolation
+//!   `X* = X_2N + (X_2N − X_N)/15` of the energies and of `λ_min, λ_max`; the estimate is
+//!   `|X_2N − X_N|/15` (the error of `X_2N`, a conservative bound for `X*`). Profiles are
+//!   those of the `2N` solution.
+
+use crate::model::{Phase, SurfaceModel};
+use crate::solve::{solve, EnergyReport, Equilibrium, SolveOptions};
+use crate::start::StartShape;
+use crate::stiffness::Stiffness;
+use crate::SolverError;
+
+/// Accuracy level (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Accuracy {
+    /// Coarse and quick.
+    Fast,
+    /// Meets energy relative error ≤ 1e-6 and `max|λ − λ_exact| ≤ 1e-4 max|λ_exact|` for
+    /// the homogeneous branches η = 1..4 (measured in `tests/convergence.rs`).
+    Default,
+    /// `Default` and twice its resolution, Richardson-extrapolated.
+    High,
+}
+
+impl std::str::FromStr for Accuracy {
+    type Err = SolverError;
+    fn from_str(s: &str) -> Result<Self, SolverError> {
+        match s.to_ascii_lowercase().as_str() {
+            "fast" => Ok(Accuracy::Fast),
+            "default" => Ok(Accuracy::Default),
+            "high" => Ok(Accuracy::High),
+            _ => Err(SolverError::InvalidInput(format!(
+                "unknown accuracy level '{s}' (expected fast, default or high)"
+            ))),
+        }
+    }
+}
+
+/// Cells per period of `κ_g` (plus one) at the default accuracy.
+pub const DEFAULT_CELLS_PER_PERIOD: usize = 40;
+/// Cells per period of `κ_g` (plus one) at the fast accuracy.
+pub const FAST_CELLS_PER_PERIOD: usize = 16;
+
+impl Accuracy {
+    /// Number of cells of the main solve for a loop whose geodesic curvature has `periods`
+    /// oscillation periods (`η` of the branch; see [`StartShape::periods`]):
+    /// `N = c (1 + η)` with `c = 40` (default, high) or `16` (fast). The discretisation error
+    /// grows with the number of oscillations, not with `L̄`: the measured requirement for an
+    /// energy error of 5e-7 is `N ≈ 70, 110, 131, 148` for `η = 1..4` (worst `L̄` of each
+    /// branch; `tests/convergence.rs`). Non-uniform profiles also need their own features
+    /// resolved: at least `2γ` cells for Eq. (51) (`γ` for `Fast`), two per table point.
+    /// Rounded up to a multiple of 4. For `High` this is the coarse one of the pair `(N, 2N)`.
+    pub fn cells(self, periods: usize, stiffness: &Stiffness) -> usize {
+        let per = match self {
+            Accuracy::Fast => FAST_CELLS_PER_PERIOD,
+            Accuracy::Default | Accuracy::High => DEFAULT_CELLS_PER_PERIOD,
+        };
+        let mut n = per * (1 + periods.max(1));
+        let factor = if self == Accuracy::Fast { 1.0 } else { 2.0 };
+        match stiffness {
+            Stiffness::Tanh { gamma, .. } => {
+                n = n.max((factor * gamma).ceil().min(4096.0) as usize);
+            }
+            Stiffness::Table { s, .. } => n = n.max(s.len() * factor as usize),
+            Stiffness::Uniform { .. } => {}
+        }
+        n.div_ceil(4) * 4
+    }
+}
+
+/// Result of [`solve_with_accuracy`].
+#[derive(Clone, Debug)]
+pub struct AccurateEquilibrium {
+    /// The finest solution (profiles, forces, stability come from it).
+    pub equilibrium: Equilibrium,
+    /// The companion solution used for the error estimate.
+    pub companion: Equilibrium,
+    /// Energies (extrapolated for `High`), `E R/(π D0)`.
+    pub energy: EnergyReport,
+    /// Estimated absolute error of `energy.total`.
+    pub energy_error: f64,
+    /// `(λ_min, λ_max)` (extrapolated for `High`).
+    pub lambda_range: (f64, f64),
+    /// Estimated absolute error of `λ_min, λ_max` (the larger of the two).
+    pub lambda_error: f64,
+    /// Accuracy level used.
+    pub accuracy: Accuracy,
+}
+
+fn solve_at(
+    radius: f64,
+    lbar: f64,
+    cells: usize,
+    stiffness: &Stiffness,
+    start: &StartShape,
+    initial: Option<&Equilibrium>,
+    opts: &SolveOptions,
+) -> Result<Equilibrium, SolverError> {
+    let mut model = SurfaceModel::new(radius, lbar, cells, stiffness)?;
+    let reference = start.gauss_values(&model)?;
+    if stiffness.is_uniform() {
+        // The same continuous phase condition at every resolution keeps the arclength origin
+        // of the two solutions consistent.
+        model = model.with_phase(Phase::from_gauss_values(&reference, cells)?)?;
+    }
+    let guess = match initial {
+        Some(eq) => eq.resample(cells)?,
+        None => reference,
+    };
+    solve(&model, &guess, opts)
+}
+
+/// Solve at the resolution of `accuracy` from `start` and estimate the discretisation error
+/// (see the module docs).
+pub fn solve_with_accuracy(
+    radius: f64,
+    lbar: f64,
+    stiffness: &Stiffness,
+    start: &StartShape,
+    accuracy: Accuracy,
+    opts: &SolveOptions,
+) -> Result<AccurateEquilibrium, SolverError> {
+    let periods = start.periods(lbar)?;
+    let n = accuracy.cells(periods, stiffness);
+    let main = solve_at(radius, lbar, n, stiffness, start, None, opts)?;
+    let (fine, coarse) = match accuracy {
+        Accuracy::High => {
+            let fine = solve_at(radius, lbar, 2 * n, stiffness, start, Some(&main), opts)?;
+            (fine, main)
+        }
+        _ => {
+            let coarse = solve_at(radius, lbar, n / 2, stiffness, start, Some(&main), opts)?;
+            (main, coarse)
+        }
+    };
+    let (ef, ec) = (fine.energy(), coarse.energy());
+    let (lf, lc) = (fine.lambda_range(), coarse.lambda_range());
+    let energy_error = (ef.total - ec.total).abs() / 15.0;
+    let lambda_error = ((lf.0 - lc.0).abs()).max((lf.1 - lc.1).abs()) / 15.0;
+    let (energy, lambda_range) = if accuracy == Accuracy::High {
+        let rich = |f: f64, c: f64| f + (f - c) / 15.0;
+        (
+            EnergyReport {
+                total: rich(ef.total, ec.total),
+                geodesic: rich(ef.geodesic, ec.geodesic),
+                normal: rich(ef.normal, ec.normal),
+            },
+            (rich(lf.0, lc.0), rich(lf.1, lc.1)),
+        )
+    } else {
+        (ef, lf)
+    };
+    Ok(AccurateEquilibrium {
+        equilibrium: fine,
+        companion: coarse,
+        energy,
+        energy_error,
+        lambda_range,
+        lambda_error,
+        accuracy,
+    })
+}

@@ -1,0 +1,725 @@
+//! The discretised surface model: a closed loop on a sphere described by its geodesic
+//! curvature at Gauss points, its energy, its closure (holonomy) condition and the KKT system
+//! of constrained equilibrium with analytic first and second derivatives.
+//!
+//! # Formulation
+//!
+//! A closed curve on the sphere of radius `R` is determined up to a rotation by its geodesic
+//! curvature `κ_g(s)`: the Darboux frame `X(s)` (rows `t, g, n`, `n = r/R`) obeys
+//! `X' = Ω(κ_g) X` (App. A with `κ_n = −1/R`, `τ_g = 0`; see [`crate::frame`]) and
+//! `r = R n`. Every iterate therefore lies exactly on the sphere with `|r'| = 1`: both
+//! constraints of Sec. 2 hold by construction, and closure of the loop with a continuous
+//! tangent is the holonomy condition `X(L) = X(0)` (three equations).
+//!
+//! Rigid rotations of the loop do not appear: `κ_g` is invariant under them, and the frame
+//! starts from `X(0) = I` (the loop is reported in that orientation).
+//!
+//! # Discretisation ("Gauss collocation")
+//!
+//! `N` equal cells of length `h = L/N`; the unknowns are `κ_g` at the two Gauss points of
+//! every cell, `s_{c,1,2} = (c + 1/2 ∓ √3/6) h`, stored as `κ[2c + j]`.
+//!
+//! * Energy, Eq. (2) with `κ² = κ_g² + 1/R²` (Sec. 3.1) and two-point Gauss quadrature:
+//!   `E = Σ_c (h/2) Σ_j ½ D(s_cj)(κ_cj² + 1/R²)`.
+//! * Cell propagator (fourth-order Magnus): `E_c = exp(Θ_c)`,
+//!   `Θ_c = (h/2)(Ω(κ_c1) + Ω(κ_c2)) + (√3/12)h² [Ω(κ_c2), Ω(κ_c1)]`. As `Ω = κA + B` is
+//!   affine in `κ`, the commutator is `(κ_c2 − κ_c1)[A, B]` and `Θ_c` is affine in the two
+//!   cell unknowns. Holonomy `H = E_{N−1} ⋯ E_0`.
+//! * Closure `c(κ) = vee(skew H) = ((H₃₂ − H₂₃), (H₁₃ − H₃₁), (H₂₁ − H₁₂))/2`, zero iff
+//!   `H = I` near the identity; `μ·c = −½ tr(hat(μ) H)`.
+//! * Lagrangian `ℒ = E − μ·c − ν φ`, with the phase condition `φ` (uniform `D` only, see
+//!   [`Phase`]). KKT residual `F(z) = (∇E − ∇cᵀμ − ν∇φ, −c, −φ)`, `z = (κ, μ, ν)`, whose
+//!   Jacobian `[[∇²ℒ, −∇cᵀ, −∇φ], [−∇c, 0, 0], [−∇φᵀ, 0, 0]]` is symmetric.
+//!
+//! Derivatives of `H`: each unknown lives in one cell, `∂H/∂κ_a = S_c ∂E_c P_c` with the
+//! prefix `P_c = E_{c−1}⋯E_0` and suffix `S_c = E_{N−1}⋯E_{c+1}`; second derivatives for
+//! unknowns in cells `c < c'` are `S_{c'} ∂E_{c'} (E_{c'−1}⋯E_{c+1}) ∂E_c P_c`, in one cell
+//! `S_c ∂²E_c P_c`. The cell derivatives come exactly from a second-order jet through
+//! Rodrigues' formula ([`crate::frame::exp_jet`]); the full Hessian costs `O(N²)` 3×3
+//! products.
+//!
+//! # Multiplier and conserved moment
+//!
+//! In the continuum, `δH = H ∫ δκ_g X(s)ᵀ A X(s) ds = −H ∫ δκ_g hat(n(s)) ds`, so at a closed
+//! loop `∇c = −n(s)` (per unit length) and stationarity reads `D κ_g = −μ·n`. Comparing with
+//! `𝓜·n = Dκ_g` (Eq. 41) identifies the conserved moment about the sphere centre (Sec. 4.3)
+//! with `𝓜 = −μ` (in the frame where `X(0) = I`); see [`crate::Equilibrium::moment`].
+
+use std::f64::consts::PI;
+
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+
+use crate::frame::{exp_jet, expm_skew, hat};
+use crate::periodic::TrigInterpolant;
+use crate::stiffness::{Stiffness, StiffnessProfile};
+use crate::SolverError;
+
+type M3 = Matrix3<f64>;
+type V3 = Vector3<f64>;
+
+/// `√3/6`, offset of the Gauss points from the cell centre in units of `h`.
+pub const GAUSS_HALF_GAP: f64 = 0.288_675_134_594_812_9;
+
+/// Positions of the two Gauss points inside a cell, in units of `h`.
+pub const GAUSS_OFFSETS: [f64; 2] = [0.5 - GAUSS_HALF_GAP, 0.5 + GAUSS_HALF_GAP];
+
+/// `√3/12`, coefficient of the Magnus commutator term.
+const MAGNUS_C: f64 = 0.144_337_567_297_406_43;
+
+/// Phase condition fixing the arclength-shift symmetry of a uniform rod.
+///
+/// `φ(κ) = (1/2N) Σ_a κ̇_ref,a (κ_a − κ_ref,a)`, with `κ_ref` a reference profile at the
+/// Gauss points and `κ̇_ref = dκ_ref/dσ` (`σ = s/L`) normalised to unit root-mean-square.
+/// `φ = 0` says that `κ` has no component along the shift mode of the reference. Both
+/// arrays are functions of `σ`, so the condition does not depend on `L̄` (it is held fixed
+/// during continuation in `L̄`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Phase {
+    reference: Vec<f64>,
+    slope: Vec<f64>,
+}
+
+impl Phase {
+    /// Phase condition from reference values at the Gauss points of `cells` cells; the
+    /// slope is obtained by spectral differentiation on each of the two interleaved uniform
+    /// sub-grids (`σ = (c + offset_j)/N`).
+    pub fn from_gauss_values(reference: &[f64], cells: usize) -> Result<Self, SolverError> {
+        check_len(reference.len(), 2 * cells)?;
+        let mut slope = vec![0.0; 2 * cells];
+        for (j, off) in GAUSS_OFFSETS.iter().enumerate() {
+            let sub: Vec<f64> = (0..cells).map(|c| reference[2 * c + j]).collect();
+            let t = TrigInterpolant::with_offset(&sub, off / cells as f64)?;
+            for c in 0..cells {
+                slope[2 * c + j] = t.derivative((c as f64 + off) / cells as f64);
+            }
+        }
+        Self::from_parts(reference.to_vec(), slope)
+    }
+
+    /// Phase condition from reference values and their σ-derivatives at the Gauss points.
+    pub fn from_parts(reference: Vec<f64>, mut slope: Vec<f64>) -> Result<Self, SolverError> {
+        check_len(slope.len(), reference.len())?;
+        let n = slope.len().max(1) as f64;
+        let rms = (slope.iter().map(|v| v * v).sum::<f64>() / n).sqrt();
+        let scale = reference.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        if !(rms.is_finite() && rms > 1e-9 * (1.0 + scale)) {
+            return Err(SolverError::InvalidInput(
+                "the phase reference is (nearly) constant: it has no arclength-shift mode \
+                 (a circle needs no phase condition)"
+                    .into(),
+            ));
+        }
+        for v in &mut slope {
+            *v /= rms;
+        }
+        Ok(Self { reference, slope })
+    }
+
+    /// `φ(κ)`.
+    pub fn value(&self, kappa: &[f64]) -> f64 {
+        let n = self.slope.len() as f64;
+        self.slope
+            .iter()
+            .zip(kappa.iter().zip(&self.reference))
+            .map(|(s, (k, r))| s * (k - r))
+            .sum::<f64>()
+            / n
+    }
+
+    /// `∂φ/∂κ_a` (constant: φ is linear).
+    pub fn gradient(&self) -> Vec<f64> {
+        let n = self.slope.len() as f64;
+        self.slope.iter().map(|s| s / n).collect()
+    }
+
+    /// Reference profile at the Gauss points.
+    pub fn reference(&self) -> &[f64] {
+        &self.reference
+    }
+
+    /// Normalised reference slope `dκ_ref/dσ` at the Gauss points (unit RMS).
+    pub fn slope(&self) -> &[f64] {
+        &self.slope
+    }
+}
+
+fn check_len(found: usize, expected: usize) -> Result<(), SolverError> {
+    if found != expected {
+        return Err(SolverError::WrongLength { expected, found });
+    }
+    Ok(())
+}
+
+/// The discretised loop on a sphere (see the module docs).
+#[derive(Clone, Debug)]
+pub struct SurfaceModel {
+    radius: f64,
+    lbar: f64,
+    cells: usize,
+    stiffness: StiffnessProfile,
+    phase: Option<Phase>,
+    /// `D` at the Gauss points (functions of `σ` only, hence independent of `L̄`).
+    d_gauss: Vec<f64>,
+}
+
+/// Cell propagators with their derivatives and the prefix/suffix products.
+struct Chain {
+    e: Vec<M3>,
+    de: Vec<[M3; 2]>,
+    /// `[∂₁₁, ∂₁₂, ∂₂₂]`.
+    dde: Vec<[M3; 3]>,
+    /// `P_c = E_{c−1}⋯E_0`, `c = 0..=N` (`P_N = H`).
+    prefix: Vec<M3>,
+    /// `S_c = E_{N−1}⋯E_{c+1}`, `c = 0..N`.
+    suffix: Vec<M3>,
+}
+
+/// `vee(skew(X))`.
+fn vee_skew(x: &M3) -> V3 {
+    V3::new(
+        0.5 * (x[(2, 1)] - x[(1, 2)]),
+        0.5 * (x[(0, 2)] - x[(2, 0)]),
+        0.5 * (x[(1, 0)] - x[(0, 1)]),
+    )
+}
+
+/// `tr(A B)`.
+fn tr_prod(a: &M3, b: &M3) -> f64 {
+    let mut s = 0.0;
+    for i in 0..3 {
+        for j in 0..3 {
+            s += a[(i, j)] * b[(j, i)];
+        }
+    }
+    s
+}
+
+impl SurfaceModel {
+    /// Loop of normalised length `lbar = L/(2πR)` on a sphere of radius `radius`, discretised
+    /// with `cells` cells, with bending stiffness `stiffness` (validated here). No phase
+    /// condition: add one with [`SurfaceModel::with_phase`] for uniform rods (the solver does
+    /// so automatically from the starting shape).
+    pub fn new(
+        radius: f64,
+        lbar: f64,
+        cells: usize,
+        stiffness: &Stiffness,
+    ) -> Result<Self, SolverError> {
+        if !(radius.is_finite() && radius > 0.0) {
+            return Err(SolverError::InvalidInput(format!(
+                "sphere radius must be positive and finite (got {radius})"
+            )));
+        }
+        if !(lbar.is_finite() && lbar > 0.0) {
+            return Err(SolverError::InvalidInput(format!(
+                "normalised length L̄ must be positive and finite (got {lbar})"
+            )));
+        }
+        if cells < 4 {
+            return Err(SolverError::InvalidInput(format!(
+                "at least 4 cells are needed (got {cells})"
+            )));
+        }
+        let profile = stiffness.validate()?;
+        let d_gauss = (0..2 * cells)
+            .map(|a| profile.eval(Self::sigma_of(cells, a)).d)
+            .collect();
+        Ok(Self {
+            radius,
+            lbar,
+            cells,
+            stiffness: profile,
+            phase: None,
+            d_gauss,
+        })
+    }
+
+    /// The same model with a phase condition.
+    pub fn with_phase(mut self, phase: Phase) -> Result<Self, SolverError> {
+        check_len(phase.reference.len(), 2 * self.cells)?;
+        self.phase = Some(phase);
+        Ok(self)
+    }
+
+    /// The same model without phase condition.
+    pub fn without_phase(mut self) -> Self {
+        self.phase = None;
+        self
+    }
+
+    /// The same model at another normalised length (same cells, profile and phase).
+    pub fn with_lbar(&self, lbar: f64) -> Result<Self, SolverError> {
+        if !(lbar.is_finite() && lbar > 0.0) {
+            return Err(SolverError::InvalidInput(format!(
+                "normalised length L̄ must be positive and finite (got {lbar})"
+            )));
+        }
+        let mut m = self.clone();
+        m.lbar = lbar;
+        Ok(m)
+    }
+
+    fn sigma_of(cells: usize, a: usize) -> f64 {
+        ((a / 2) as f64 + GAUSS_OFFSETS[a % 2]) / cells as f64
+    }
+
+    /// Sphere radius `R`.
+    pub fn radius(&self) -> f64 {
+        self.radius
+    }
+
+    /// Normalised length `L̄ = L/(2πR)`.
+    pub fn lbar(&self) -> f64 {
+        self.lbar
+    }
+
+    /// Number of cells `N`.
+    pub fn cells(&self) -> usize {
+        self.cells
+    }
+
+    /// Number of curvature unknowns `2N`.
+    pub fn n_kappa(&self) -> usize {
+        2 * self.cells
+    }
+
+    /// Number of multipliers: 3 (closure) plus 1 with a phase condition.
+    pub fn n_multipliers(&self) -> usize {
+        3 + usize::from(self.phase.is_some())
+    }
+
+    /// Size of the KKT system, `2N + 3 (+1)`.
+    pub fn dim(&self) -> usize {
+        self.n_kappa() + self.n_multipliers()
+    }
+
+    /// Loop length `L = 2πR L̄`.
+    pub fn length(&self) -> f64 {
+        2.0 * PI * self.radius * self.lbar
+    }
+
+    /// Cell length `h = L/N`.
+    pub fn h(&self) -> f64 {
+        self.length() / self.cells as f64
+    }
+
+    /// The validated stiffness profile.
+    pub fn stiffness(&self) -> &StiffnessProfile {
+        &self.stiffness
+    }
+
+    /// The phase condition, if any.
+    pub fn phase(&self) -> Option<&Phase> {
+        self.phase.as_ref()
+    }
+
+    /// Normalised arclength `σ = s/L` of every unknown (the Gauss points).
+    pub fn gauss_sigma(&self) -> Vec<f64> {
+        (0..self.n_kappa())
+            .map(|a| Self::sigma_of(self.cells, a))
+            .collect()
+    }
+
+    /// Quadrature weights `h/2` of the unknowns (the metric of the energy).
+    pub fn weight(&self) -> f64 {
+        0.5 * self.h()
+    }
+
+    /// `D` at the Gauss points.
+    pub fn d_gauss(&self) -> &[f64] {
+        &self.d_gauss
+    }
+
+    fn check_kappa(&self, kappa: &[f64]) -> Result<(), SolverError> {
+        check_len(kappa.len(), self.n_kappa())?;
+        if let Some(i) = kappa.iter().position(|v| !v.is_finite()) {
+            return Err(SolverError::InvalidInput(format!(
+                "curvature unknown {i} is not finite ({})",
+                kappa[i]
+            )));
+        }
+        Ok(())
+    }
+
+    /// `(ω0, v1, v2)` with `Θ_c = hat(ω0 + κ_c1 v1 + κ_c2 v2)` for cell length `h`.
+    fn cell_vectors(&self, h: f64) -> (V3, V3, V3) {
+        let r = self.radius;
+        let w0 = V3::new(0.0, -h / r, 0.0);
+        let v1 = V3::new(MAGNUS_C * h * h / r, 0.0, -0.5 * h);
+        let v2 = V3::new(-MAGNUS_C * h * h / r, 0.0, -0.5 * h);
+        (w0, v1, v2)
+    }
+
+    /// Cell propagators `E_c` only.
+    fn propagators(&self, kappa: &[f64]) -> Vec<M3> {
+        let (w0, v1, v2) = self.cell_vectors(self.h());
+        (0..self.cells)
+            .map(|c| expm_skew(&hat(&(w0 + v1 * kappa[2 * c] + v2 * kappa[2 * c + 1]))))
+            .collect()
+    }
+
+    fn chain(&self, kappa: &[f64]) -> Chain {
+        let n = self.cells;
+        let (w0, v1, v2) = self.cell_vectors(self.h());
+        let zero = [[V3::zeros(); 2]; 2];
+        let mut e = Vec::with_capacity(n);
+        let mut de = Vec::with_capacity(n);
+        let mut dde = Vec::with_capacity(n);
+        for c in 0..n {
+            let w = w0 + v1 * kappa[2 * c] + v2 * kappa[2 * c + 1];
+            let (ec, d, dd) = exp_jet::<2>(&w, &[v1, v2], &zero);
+            e.push(ec);
+            de.push(d);
+            dde.push([dd[0][0], dd[0][1], dd[1][1]]);
+        }
+        let (prefix, suffix) = prefix_suffix(&e);
+        Chain {
+            e,
+            de,
+            dde,
+            prefix,
+            suffix,
+        }
+    }
+
+    /// Holonomy `H = E_{N−1} ⋯ E_0` (the frame at `s = L` when `X(0) = I`).
+    pub fn holonomy(&self, kappa: &[f64]) -> Result<M3, SolverError> {
+        self.check_kappa(kappa)?;
+        Ok(self
+            .propagators(kappa)
+            .iter()
+            .fold(M3::identity(), |acc, e| e * acc))
+    }
+
+    /// Frames `X(s_i)` (rows `t, g, n`) at the cell boundaries `s_i = i h`, `i = 0..=N`.
+    pub fn frames(&self, kappa: &[f64]) -> Result<Vec<M3>, SolverError> {
+        self.check_kappa(kappa)?;
+        let e = self.propagators(kappa);
+        let mut out = Vec::with_capacity(self.cells + 1);
+        let mut x = M3::identity();
+        out.push(x);
+        for ec in &e {
+            x = ec * x;
+            out.push(x);
+        }
+        Ok(out)
+    }
+
+    /// Closure residual `c(κ) = vee(skew H)`.
+    pub fn closure(&self, kappa: &[f64]) -> Result<[f64; 3], SolverError> {
+        let h = self.holonomy(kappa)?;
+        let v = vee_skew(&h);
+        Ok([v[0], v[1], v[2]])
+    }
+
+    /// Discrete energy `E` (dimensional), two-point Gauss quadrature of Eq. (2).
+    pub fn energy(&self, kappa: &[f64]) -> Result<f64, SolverError> {
+        self.check_kappa(kappa)?;
+        let (g, n) = self.energy_parts_raw(kappa);
+        Ok(g + n)
+    }
+
+    /// `(E_g, E_n)`: geodesic and normal parts of the discrete energy (dimensional).
+    fn energy_parts_raw(&self, kappa: &[f64]) -> (f64, f64) {
+        let w = self.weight();
+        let r2 = 1.0 / (self.radius * self.radius);
+        let mut eg = 0.0;
+        let mut en = 0.0;
+        for (k, d) in kappa.iter().zip(&self.d_gauss) {
+            eg += 0.5 * w * d * k * k;
+            en += 0.5 * w * d * r2;
+        }
+        (eg, en)
+    }
+
+    /// Energy parts normalised as `E R/(π D0)` (`D0` = [`Stiffness::reference`]):
+    /// `(total, geodesic, normal)`. For uniform `D` the normal part is `L̄` (Sec. 3.1).
+    pub fn energy_normalized(&self, kappa: &[f64]) -> Result<(f64, f64, f64), SolverError> {
+        self.check_kappa(kappa)?;
+        let (g, n) = self.energy_parts_raw(kappa);
+        let scale = self.radius / (PI * self.stiffness.kind().reference());
+        Ok(((g + n) * scale, g * scale, n * scale))
+    }
+
+    /// Gradient of the energy, `∂E/∂κ_a = (h/2) D_a κ_a`.
+    pub fn energy_gradient(&self, kappa: &[f64]) -> Result<Vec<f64>, SolverError> {
+        self.check_kappa(kappa)?;
+        let w = self.weight();
+        Ok(kappa
+            .iter()
+            .zip(&self.d_gauss)
+            .map(|(k, d)| w * d * k)
+            .collect())
+    }
+
+    /// Constraint Jacobian `∇c` (3 × 2N).
+    pub fn closure_jacobian(&self, kappa: &[f64]) -> Result<DMatrix<f64>, SolverError> {
+        self.check_kappa(kappa)?;
+        let ch = self.chain(kappa);
+        Ok(self.closure_jacobian_from(&ch))
+    }
+
+    fn closure_jacobian_from(&self, ch: &Chain) -> DMatrix<f64> {
+        let mut j = DMatrix::zeros(3, self.n_kappa());
+        for c in 0..self.cells {
+            for i in 0..2 {
+                let v = vee_skew(&(ch.suffix[c] * ch.de[c][i] * ch.prefix[c]));
+                for k in 0..3 {
+                    j[(k, 2 * c + i)] = v[k];
+                }
+            }
+        }
+        j
+    }
+
+    /// Hessian of `μ·c(κ)` (2N × 2N), `μ·c = −½ tr(hat(μ) H)`.
+    fn closure_hessian_from(&self, ch: &Chain, mu: &V3) -> DMatrix<f64> {
+        let n = self.cells;
+        let m = hat(mu);
+        // K_c = M S_c and G_{c,i} = K_c ∂_i E_c, so that tr(∂_i E_c R M S_c) = tr(R G_{c,i}).
+        let k: Vec<M3> = ch.suffix.iter().map(|s| m * s).collect();
+        let g: Vec<[M3; 2]> = (0..n)
+            .map(|c| [k[c] * ch.de[c][0], k[c] * ch.de[c][1]])
+            .collect();
+        let mut hess = DMatrix::zeros(2 * n, 2 * n);
+        for c in 0..n {
+            // Same cell: −½ tr(∂²E_c P_c K_c).
+            let pk = ch.prefix[c] * k[c];
+            let h11 = -0.5 * tr_prod(&ch.dde[c][0], &pk);
+            let h12 = -0.5 * tr_prod(&ch.dde[c][1], &pk);
+            let h22 = -0.5 * tr_prod(&ch.dde[c][2], &pk);
+            hess[(2 * c, 2 * c)] = h11;
+            hess[(2 * c, 2 * c + 1)] = h12;
+            hess[(2 * c + 1, 2 * c)] = h12;
+            hess[(2 * c + 1, 2 * c + 1)] = h22;
+            // Cells c < c': −½ tr(M S_{c'} ∂_i E_{c'} Q ∂_j E_c P_c), Q = E_{c'−1}⋯E_{c+1}.
+            for j in 0..2 {
+                let mut r = ch.de[c][j] * ch.prefix[c];
+                for cp in c + 1..n {
+                    for i in 0..2 {
+                        let v = -0.5 * tr_prod(&r, &g[cp][i]);
+                        hess[(2 * cp + i, 2 * c + j)] = v;
+                        hess[(2 * c + j, 2 * cp + i)] = v;
+                    }
+                    r = ch.e[cp] * r;
+                }
+            }
+        }
+        hess
+    }
+
+    /// Hessian of the Lagrangian `∇²ℒ = ∇²E − ∇²(μ·c)` (2N × 2N) at `(κ, μ)`; `φ` is linear
+    /// and does not contribute.
+    pub fn lagrangian_hessian(
+        &self,
+        kappa: &[f64],
+        mu: &[f64; 3],
+    ) -> Result<DMatrix<f64>, SolverError> {
+        self.check_kappa(kappa)?;
+        let ch = self.chain(kappa);
+        Ok(self.lagrangian_hessian_from(&ch, &V3::from(*mu)))
+    }
+
+    fn lagrangian_hessian_from(&self, ch: &Chain, mu: &V3) -> DMatrix<f64> {
+        let mut h = -self.closure_hessian_from(ch, mu);
+        let w = self.weight();
+        for (a, d) in self.d_gauss.iter().enumerate() {
+            h[(a, a)] += w * d;
+        }
+        h
+    }
+
+    /// Split a KKT vector `z = (κ, μ, ν)` into its parts (`ν = 0` without phase condition).
+    pub fn split<'a>(&self, z: &'a [f64]) -> Result<(&'a [f64], [f64; 3], f64), SolverError> {
+        check_len(z.len(), self.dim())?;
+        let n = self.n_kappa();
+        let mu = [z[n], z[n + 1], z[n + 2]];
+        let nu = if self.phase.is_some() { z[n + 3] } else { 0.0 };
+        Ok((&z[..n], mu, nu))
+    }
+
+    /// KKT residual `F(z) = (∇E − ∇cᵀμ − ν∇φ, −c, −φ)`.
+    pub fn kkt_residual(&self, z: &[f64]) -> Result<DVector<f64>, SolverError> {
+        let (kappa, mu, nu) = self.split(z)?;
+        self.check_kappa(kappa)?;
+        let ch = self.chain(kappa);
+        Ok(self.kkt_residual_from(&ch, kappa, &V3::from(mu), nu))
+    }
+
+    fn kkt_residual_from(&self, ch: &Chain, kappa: &[f64], mu: &V3, nu: f64) -> DVector<f64> {
+        let n = self.n_kappa();
+        let mut f = DVector::zeros(self.dim());
+        let w = self.weight();
+        let m = hat(mu);
+        for c in 0..self.cells {
+            let pk = ch.prefix[c] * (m * ch.suffix[c]);
+            for i in 0..2 {
+                let a = 2 * c + i;
+                // ∂(μ·c)/∂κ_a = −½ tr(M S_c ∂E_c P_c) = −½ tr(∂E_c P_c M S_c).
+                let dmuc = -0.5 * tr_prod(&ch.de[c][i], &pk);
+                f[a] = w * self.d_gauss[a] * kappa[a] - dmuc;
+            }
+        }
+        let cl = vee_skew(&ch.prefix[self.cells]);
+        for k in 0..3 {
+            f[n + k] = -cl[k];
+        }
+        if let Some(ph) = &self.phase {
+            for (a, g) in ph.gradient().iter().enumerate() {
+                f[a] -= nu * g;
+            }
+            f[n + 3] = -ph.value(kappa);
+        }
+        f
+    }
+
+    /// KKT Jacobian `[[∇²ℒ, −∇cᵀ, −∇φ], [−∇c, 0, 0], [−∇φᵀ, 0, 0]]` (symmetric).
+    pub fn kkt_jacobian(&self, z: &[f64]) -> Result<DMatrix<f64>, SolverError> {
+        let (kappa, mu, _) = self.split(z)?;
+        self.check_kappa(kappa)?;
+        let ch = self.chain(kappa);
+        Ok(self.kkt_jacobian_from(&ch, &V3::from(mu)))
+    }
+
+    fn kkt_jacobian_from(&self, ch: &Chain, mu: &V3) -> DMatrix<f64> {
+        let n = self.n_kappa();
+        let dim = self.dim();
+        let mut jac = DMatrix::zeros(dim, dim);
+        jac.view_mut((0, 0), (n, n))
+            .copy_from(&self.lagrangian_hessian_from(ch, mu));
+        let cj = self.closure_jacobian_from(ch);
+        for a in 0..n {
+            for k in 0..3 {
+                jac[(a, n + k)] = -cj[(k, a)];
+                jac[(n + k, a)] = -cj[(k, a)];
+            }
+        }
+        if let Some(ph) = &self.phase {
+            for (a, g) in ph.gradient().iter().enumerate() {
+                jac[(a, n + 3)] = -g;
+                jac[(n + 3, a)] = -g;
+            }
+        }
+        jac
+    }
+
+    /// Residual and Jacobian together (one pass over the cells).
+    pub fn kkt_residual_and_jacobian(
+        &self,
+        z: &[f64],
+    ) -> Result<(DVector<f64>, DMatrix<f64>), SolverError> {
+        let (kappa, mu, nu) = self.split(z)?;
+        self.check_kappa(kappa)?;
+        let ch = self.chain(kappa);
+        let mu = V3::from(mu);
+        Ok((
+            self.kkt_residual_from(&ch, kappa, &mu, nu),
+            self.kkt_jacobian_from(&ch, &mu),
+        ))
+    }
+
+    /// `∂F/∂L̄` at fixed `z`: `h = 2πR L̄/N` changes, the profile and the phase condition are
+    /// held fixed in `σ = s/L`. `∂∇E/∂L̄ = ∇E/L̄`; the closure terms are differentiated
+    /// through the cell propagators with a jet in `(κ_c1, κ_c2, h)`.
+    pub fn kkt_dlbar(&self, z: &[f64]) -> Result<DVector<f64>, SolverError> {
+        let (kappa, mu, _) = self.split(z)?;
+        self.check_kappa(kappa)?;
+        let n = self.cells;
+        let h = self.h();
+        let dh_dlbar = h / self.lbar;
+        let r = self.radius;
+        let avec = V3::new(0.0, 0.0, -1.0);
+        let bvec = V3::new(0.0, -1.0 / r, 0.0);
+        let cvec = V3::new(-1.0 / r, 0.0, 0.0);
+        let (w0, v1, v2) = self.cell_vectors(h);
+        let mut e = Vec::with_capacity(n);
+        let mut dk = Vec::with_capacity(n); // ∂E_c/∂κ_ci
+        let mut dh = Vec::with_capacity(n); // ∂E_c/∂h
+        let mut dkh = Vec::with_capacity(n); // ∂²E_c/∂κ_ci∂h
+        for c in 0..n {
+            let (k1, k2) = (kappa[2 * c], kappa[2 * c + 1]);
+            let w = w0 + v1 * k1 + v2 * k2;
+            let wh = avec * (0.5 * (k1 + k2)) + bvec + cvec * (2.0 * MAGNUS_C * h * (k2 - k1));
+            let w1h = avec * 0.5 - cvec * (2.0 * MAGNUS_C * h);
+            let w2h = avec * 0.5 + cvec * (2.0 * MAGNUS_C * h);
+            let whh = cvec * (2.0 * MAGNUS_C * (k2 - k1));
+            let z3 = V3::zeros();
+            let wij = [[z3, z3, w1h], [z3, z3, w2h], [w1h, w2h, whh]];
+            let (ec, d, dd) = exp_jet::<3>(&w, &[v1, v2, wh], &wij);
+            e.push(ec);
+            dk.push([d[0], d[1]]);
+            dh.push(d[2]);
+            dkh.push([dd[0][2], dd[1][2]]);
+        }
+        let (prefix, suffix) = prefix_suffix(&e);
+        // ∂_h P_c and ∂_h S_c by the product rule along the chain.
+        let mut dprefix = vec![M3::zeros(); n + 1];
+        for c in 0..n {
+            dprefix[c + 1] = dh[c] * prefix[c] + e[c] * dprefix[c];
+        }
+        let mut dsuffix = vec![M3::zeros(); n];
+        for c in (1..n).rev() {
+            dsuffix[c - 1] = dsuffix[c] * e[c] + suffix[c] * dh[c];
+        }
+        let m = hat(&V3::from(mu));
+        let mut out = DVector::zeros(self.dim());
+        let wgt = self.weight();
+        for c in 0..n {
+            for i in 0..2 {
+                let a = 2 * c + i;
+                // ∂_a∂_h H = ∂_hS_c ∂_aE_c P_c + S_c ∂_{ah}E_c P_c + S_c ∂_aE_c ∂_hP_c.
+                let d2h = dsuffix[c] * dk[c][i] * prefix[c]
+                    + suffix[c] * dkh[c][i] * prefix[c]
+                    + suffix[c] * dk[c][i] * dprefix[c];
+                let d2f = -0.5 * tr_prod(&m, &d2h);
+                // F_a = ∇E_a − ∂_a(μ·c) − ν∂_aφ; ∇E_a ∝ h.
+                out[a] = wgt * self.d_gauss[a] * kappa[a] / self.lbar - d2f * dh_dlbar;
+            }
+        }
+        let dc = vee_skew(&dprefix[n]);
+        let nk = self.n_kappa();
+        for k in 0..3 {
+            out[nk + k] = -dc[k] * dh_dlbar;
+        }
+        Ok(out)
+    }
+
+    /// Resolution-independent norm of a KKT residual: the root-mean-square of the
+    /// stationarity density `F_a/(h/2)` over the loop in units of `D0/R`, combined with the
+    /// closure residual `|c|` and the phase residual.
+    pub fn residual_norm(&self, f: &DVector<f64>) -> f64 {
+        self.residual_scales()
+            .iter()
+            .zip(f.iter())
+            .map(|(s, v)| s * v * v)
+            .sum::<f64>()
+            .sqrt()
+    }
+
+    /// Weights `s_i` of the squared residual norm `Σ s_i F_i²` (see [`Self::residual_norm`]).
+    pub fn residual_scales(&self) -> Vec<f64> {
+        let n = self.n_kappa();
+        let w = self.weight();
+        let unit = self.radius / self.stiffness.kind().reference();
+        let sg = unit * unit / (w * w) / n as f64;
+        let mut s = vec![sg; n];
+        s.extend(std::iter::repeat_n(1.0, self.n_multipliers()));
+        s
+    }
+}
+
+fn prefix_suffix(e: &[M3]) -> (Vec<M3>, Vec<M3>) {
+    let n = e.len();
+    let mut prefix = Vec::with_capacity(n + 1);
+    let mut acc = M3::identity();
+    prefix.push(acc);
+    for ec in e {
+        acc = ec * acc;
+        prefix.push(acc);
+    }
+    let mut suffix = vec![M3::identity(); n];
+    for c in (1..n).rev() {
+        suffix[c - 1] = suffix[c] * e[c];
+    }
+    (prefix, suffix)
+}

@@ -1,0 +1,644 @@
+//! Globalised Newton's method on the KKT system, and the equilibrium it returns with its
+//! energies, forces and profiles (Sec. 4.1, Eqs. (24)–(27), (38)–(42)).
+
+use std::f64::consts::PI;
+
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+
+use crate::model::{Phase, SurfaceModel};
+use crate::periodic::TrigInterpolant;
+use crate::SolverError;
+
+/// How [`solve`] globalises Newton's method.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Globalization {
+    /// Newton on the KKT system with a backtracking line search on `‖F‖²`: converges to
+    /// the equilibrium near the start, stable or not (continuation, re-solving known
+    /// states).
+    Newton,
+    /// First relax the start by energy minimisation on the constraint manifold (feasible
+    /// reduced Newton steps with the reduced Hessian shifted to be positive definite, a
+    /// restoration projection onto `c = 0` and an Armijo line search on the energy), then
+    /// polish with [`Globalization::Newton`]. Converges to a local minimum.
+    Minimize,
+    /// [`Globalization::Newton`] when the start is already close (KKT residual below
+    /// [`SolveOptions::relax_threshold`]), otherwise [`Globalization::Minimize`]; a Newton
+    /// run that stalls is retried with `Minimize`.
+    Auto,
+}
+
+/// Settings of [`solve`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct SolveOptions {
+    /// Globalisation strategy.
+    pub globalization: Globalization,
+    /// KKT residual norm below which [`Globalization::Auto`] goes straight to Newton, and
+    /// reduced-gradient norm at which the relaxation hands over to Newton.
+    pub relax_threshold: f64,
+    /// Maximum number of relaxation iterations.
+    pub max_relax_iterations: usize,
+    /// Maximum number of Newton iterations.
+    pub max_iterations: usize,
+    /// Convergence tolerance on the KKT residual norm ([`SurfaceModel::residual_norm`]).
+    pub tolerance: f64,
+    /// Maximum number of step halvings in the backtracking line search.
+    pub max_backtracks: usize,
+}
+
+impl Default for SolveOptions {
+    fn default() -> Self {
+        Self {
+            globalization: Globalization::Auto,
+            relax_threshold: 1e-2,
+            max_relax_iterations: 200,
+            max_iterations: 60,
+            tolerance: 1e-10,
+            max_backtracks: 40,
+        }
+    }
+}
+
+/// How a Newton solve went.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ConvergenceReport {
+    /// Newton iterations performed.
+    pub iterations: usize,
+    /// Final KKT residual norm ([`SurfaceModel::residual_norm`]).
+    pub residual: f64,
+    /// Final closure violation `|c|` (holonomy skew part).
+    pub closure: f64,
+    /// Whether the tolerance was reached.
+    pub converged: bool,
+    /// Residual norm before every iteration and at the end.
+    pub history: Vec<f64>,
+    /// Step length accepted by the line search at every iteration.
+    pub step_lengths: Vec<f64>,
+    /// Energy-minimisation (relaxation) iterations before Newton (0 if none).
+    pub relax_iterations: usize,
+}
+
+/// Energies of an equilibrium, normalised as `E R/(π D0)`.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct EnergyReport {
+    /// Total bending energy, Eq. (2).
+    pub total: f64,
+    /// Geodesic part `½∫Dκ_g²` (Sec. 3.1).
+    pub geodesic: f64,
+    /// Normal part `½∫D/R²` (`= L̄` for a uniform rod, Sec. 3.1).
+    pub normal: f64,
+}
+
+/// Local quantities of an equilibrium at one arclength (dimensional in the model's `R`, `D`).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct ProfilePoint {
+    /// Arclength `s`.
+    pub s: f64,
+    /// Position `x` (`r = R n`).
+    pub x: f64,
+    /// Position `y`.
+    pub y: f64,
+    /// Position `z`.
+    pub z: f64,
+    /// Curvature `κ = sqrt(κ_g² + 1/R²)`.
+    pub kappa: f64,
+    /// Torsion `τ = κ_g'/(Rκ²)` (Eq. (36) for uniform rods).
+    pub tau: f64,
+    /// Geodesic curvature `κ_g = 𝓜·n/D` (Eq. (41)).
+    pub kappa_g: f64,
+    /// `dκ_g/ds = (𝓜·t/R − D'κ_g)/D`.
+    pub kappa_g_prime: f64,
+    /// Contact force `λ = −F_t/R + D''/R` (Eq. (27); Eq. (38) for uniform rods).
+    pub lambda: f64,
+    /// Tangential internal force `F_t = (𝓜·g − D/R)/R` (Eq. (26) via Eq. (40)).
+    pub f_t: f64,
+    /// Principal-normal internal force, Eq. (25).
+    pub f_n: f64,
+    /// Binormal internal force, Eq. (24).
+    pub f_b: f64,
+    /// Conormal internal force `F_g = F·g = −𝓜·t/R` (Eq. (40)).
+    pub f_g: f64,
+    /// Bending stiffness `D(s)`.
+    pub d: f64,
+}
+
+/// A converged (or best-effort) equilibrium of the discrete model.
+#[derive(Clone, Debug)]
+pub struct Equilibrium {
+    model: SurfaceModel,
+    kappa: Vec<f64>,
+    mu: [f64; 3],
+    nu: f64,
+    report: ConvergenceReport,
+}
+
+/// Least-squares closure multiplier for a given `κ`: minimises the stationarity residual
+/// `Σ_a (∇E_a − (∇cᵀμ)_a)²` over `μ`.
+fn initial_multiplier(model: &SurfaceModel, kappa: &[f64]) -> Result<[f64; 3], SolverError> {
+    let grad = DVector::from_vec(model.energy_gradient(kappa)?);
+    let j = model.closure_jacobian(kappa)?;
+    let a = &j * j.transpose();
+    let b = &j * grad;
+    // Regularise slightly: near a great circle one direction is nearly unconstrained.
+    let reg = 1e-14 * a.trace().max(f64::MIN_POSITIVE);
+    let a = a + DMatrix::identity(3, 3) * reg;
+    let sol = a.lu().solve(&b).unwrap_or_else(|| DVector::zeros(3));
+    Ok([sol[0], sol[1], sol[2]])
+}
+
+/// Solve the KKT system of `model` from the curvature `start` (values at the Gauss points,
+/// see [`SurfaceModel::gauss_sigma`]).
+///
+/// For a uniform rod without a phase condition, one is built from `start`
+/// ([`Phase::from_gauss_values`]). The closure multiplier starts at its least-squares value.
+/// Globalisation ([`SolveOptions::globalization`], default [`Globalization::Auto`]):
+///
+/// * Newton: each step solves the bordered symmetric KKT system with the analytic Jacobian
+///   (LU with partial pivoting) and is globalised by a backtracking (Armijo) line search on
+///   the merit `‖F‖²` (weighted as in [`SurfaceModel::residual_norm`]), for which the Newton
+///   direction is always a descent direction. Converges to the nearby equilibrium, stable or
+///   not (quadratically: 1–3 iterations from an exact or continued state).
+/// * Relaxation (for rough starts such as Euler curves, point clouds, or inhomogeneous rods
+///   started from homogeneous shapes): the start is projected onto the constraints, then
+///   the energy is decreased monotonically by reduced Newton steps on the constraint
+///   manifold whose reduced Hessian is shifted until positive definite, with restoration of
+///   `c = 0` after every step; Newton polishes the result. This finds local minima.
+///
+/// Converged when the residual norm is below `opts.tolerance`.
+///
+/// Errors: [`SolverError::NewtonNotConverged`] (with the residual and closure violation
+/// reached), [`SolverError::SingularJacobian`], [`SolverError::WrongLength`],
+/// [`SolverError::InvalidInput`] (a start without shift mode, a closure that cannot be
+/// restored).
+pub fn solve(
+    model: &SurfaceModel,
+    start: &[f64],
+    opts: &SolveOptions,
+) -> Result<Equilibrium, SolverError> {
+    let mut model = model.clone();
+    if start.len() != model.n_kappa() {
+        return Err(SolverError::WrongLength {
+            expected: model.n_kappa(),
+            found: start.len(),
+        });
+    }
+    if model.stiffness().kind().is_uniform() && model.phase().is_none() {
+        let phase = Phase::from_gauss_values(start, model.cells())?;
+        model = model.with_phase(phase)?;
+    }
+    let state_of = |kappa: &[f64]| -> Result<Vec<f64>, SolverError> {
+        let mu = initial_multiplier(&model, kappa)?;
+        let mut z: Vec<f64> = kappa.to_vec();
+        z.extend_from_slice(&mu);
+        if model.phase().is_some() {
+            z.push(0.0);
+        }
+        Ok(z)
+    };
+    let newton_opts = SolveOptions {
+        globalization: Globalization::Newton,
+        ..opts.clone()
+    };
+    let relax_then_newton = || -> Result<Equilibrium, SolverError> {
+        let (kappa, iters) = relax(&model, start, opts)?;
+        let mut eq = solve_from_state(model.clone(), state_of(&kappa)?, &newton_opts)?;
+        eq.report.relax_iterations = iters;
+        Ok(eq)
+    };
+    match opts.globalization {
+        Globalization::Newton => solve_from_state(model.clone(), state_of(start)?, opts),
+        Globalization::Minimize => relax_then_newton(),
+        Globalization::Auto => {
+            let z0 = state_of(start)?;
+            let r0 = model.residual_norm(&model.kkt_residual(&z0)?);
+            if r0 <= opts.relax_threshold {
+                match solve_from_state(model.clone(), z0, &newton_opts) {
+                    Ok(eq) => Ok(eq),
+                    Err(SolverError::NewtonNotConverged { .. })
+                    | Err(SolverError::SingularJacobian { .. }) => relax_then_newton(),
+                    Err(e) => Err(e),
+                }
+            } else {
+                relax_then_newton()
+            }
+        }
+    }
+}
+
+/// All equality constraints `(c, φ)` and their Jacobian (3 or 4 rows).
+fn constraints(
+    model: &SurfaceModel,
+    kappa: &[f64],
+) -> Result<(DVector<f64>, DMatrix<f64>), SolverError> {
+    let c = model.closure(kappa)?;
+    let j = model.closure_jacobian(kappa)?;
+    let m = model.n_multipliers();
+    let n = model.n_kappa();
+    let mut cv = DVector::zeros(m);
+    let mut jm = DMatrix::zeros(m, n);
+    jm.rows_mut(0, 3).copy_from(&j);
+    for k in 0..3 {
+        cv[k] = c[k];
+    }
+    if let Some(ph) = model.phase() {
+        cv[3] = ph.value(kappa);
+        for (a, g) in ph.gradient().iter().enumerate() {
+            jm[(3, a)] = *g;
+        }
+    }
+    Ok((cv, jm))
+}
+
+/// Project onto `{c = 0, φ = 0}` by Gauss–Newton minimum-norm corrections.
+fn restore(model: &SurfaceModel, kappa: &[f64]) -> Result<Vec<f64>, SolverError> {
+    let mut k = kappa.to_vec();
+    for _ in 0..40 {
+        let (c, j) = constraints(model, &k)?;
+        if c.norm() < 1e-14 {
+            return Ok(k);
+        }
+        let a = &j * j.transpose();
+        let reg = 1e-13 * a.trace();
+        let a = a + DMatrix::identity(c.len(), c.len()) * reg;
+        let y = a
+            .lu()
+            .solve(&c)
+            .ok_or(SolverError::SingularJacobian { iteration: 0 })?;
+        let d = j.transpose() * y;
+        for (ki, di) in k.iter_mut().zip(d.iter()) {
+            *ki -= di;
+        }
+        if k.iter().any(|v| !v.is_finite()) {
+            break;
+        }
+    }
+    let (c, _) = constraints(model, &k)?;
+    if c.norm() < 1e-10 {
+        Ok(k)
+    } else {
+        Err(SolverError::InvalidInput(format!(
+            "could not restore closure of the start (|c| = {:.3e})",
+            c.norm()
+        )))
+    }
+}
+
+/// Energy minimisation on the constraint manifold (see [`Globalization::Minimize`]).
+/// Returns the relaxed curvature and the number of iterations.
+fn relax(
+    model: &SurfaceModel,
+    start: &[f64],
+    opts: &SolveOptions,
+) -> Result<(Vec<f64>, usize), SolverError> {
+    use crate::stability::{householder, reflect_both, reflect_vec};
+    let n = model.n_kappa();
+    let w = model.weight();
+    let d0 = model.stiffness().kind().reference();
+    let gscale = (model.radius() / d0) / w / (n as f64).sqrt();
+    let mut kappa = restore(model, start)?;
+    let mut energy = model.energy(&kappa)?;
+    let mut quiet = 0;
+    for it in 0..opts.max_relax_iterations {
+        let g = DVector::from_vec(model.energy_gradient(&kappa)?);
+        let (_, j) = constraints(model, &kappa)?;
+        let m = j.nrows();
+        // Least-squares multipliers and the reduced gradient r = g − Jᵀλ (W uniform).
+        let a = &j * j.transpose();
+        let reg = 1e-13 * a.trace();
+        let lam = (a + DMatrix::identity(m, m) * reg)
+            .lu()
+            .solve(&(&j * &g))
+            .ok_or(SolverError::SingularJacobian { iteration: it })?;
+        let r = &g - j.transpose() * &lam;
+        if r.norm() * gscale < opts.relax_threshold.min(1e-3) || quiet >= 2 {
+            return Ok((kappa, it));
+        }
+        // Reduced Hessian in the energy metric via Householder reflections.
+        let mu = [lam[0], lam[1], lam[2]];
+        let mut h = model.lagrangian_hessian(&kappa, &mu)? / (w * d0);
+        let mut cols: Vec<DVector<f64>> = (0..m).map(|k| j.row(k).transpose()).collect();
+        let mut refl = Vec::new();
+        let mut rt = &r / (w.sqrt() * d0);
+        for k in 0..m {
+            if let Some(v) = householder(&cols[k], refl.len()) {
+                for col in cols.iter_mut().skip(k) {
+                    reflect_vec(col, &v);
+                }
+                reflect_both(&mut h, &v);
+                reflect_vec(&mut rt, &v);
+                refl.push(v);
+            }
+        }
+        let p = refl.len();
+        let red = h.view((p, p), (n - p, n - p)).into_owned();
+        let red = (&red + red.transpose()) * 0.5;
+        let rhs = -rt.rows(p, n - p).into_owned();
+        let mut sigma = 0.0;
+        let y = loop {
+            let shifted = &red + DMatrix::identity(n - p, n - p) * sigma;
+            if let Some(ch) = shifted.cholesky() {
+                break ch.solve(&rhs);
+            }
+            sigma = if sigma == 0.0 { 1e-3 } else { sigma * 4.0 };
+            if sigma > 1e8 {
+                return Err(SolverError::InvalidInput(
+                    "relaxation: reduced Hessian could not be made positive definite".into(),
+                ));
+            }
+        };
+        let mut u = DVector::zeros(n);
+        u.rows_mut(p, n - p).copy_from(&y);
+        for v in refl.iter().rev() {
+            reflect_vec(&mut u, v);
+        }
+        let delta = u / w.sqrt();
+        let slope = g.dot(&delta);
+        let mut alpha = 1.0;
+        let mut accepted = false;
+        for _ in 0..40 {
+            let trial: Vec<f64> = kappa
+                .iter()
+                .zip(delta.iter())
+                .map(|(k, d)| k + alpha * d)
+                .collect();
+            if let Ok(kt) = restore(model, &trial) {
+                let et = model.energy(&kt)?;
+                if et <= energy + 1e-4 * alpha * slope.min(0.0) {
+                    kappa = kt;
+                    energy = et;
+                    accepted = true;
+                    break;
+                }
+            }
+            alpha *= 0.5;
+        }
+        if !accepted {
+            // No further decrease: hand over to Newton.
+            return Ok((kappa, it + 1));
+        }
+        quiet = if sigma == 0.0 && alpha == 1.0 {
+            quiet + 1
+        } else {
+            0
+        };
+    }
+    Ok((kappa, opts.max_relax_iterations))
+}
+
+/// Newton's method from a full KKT state `z = (κ, μ, ν)` (e.g. a continuation point).
+pub fn solve_from_state(
+    model: SurfaceModel,
+    z0: Vec<f64>,
+    opts: &SolveOptions,
+) -> Result<Equilibrium, SolverError> {
+    let scales = model.residual_scales();
+    let merit = |f: &DVector<f64>| -> f64 {
+        scales
+            .iter()
+            .zip(f.iter())
+            .map(|(s, v)| s * v * v)
+            .sum::<f64>()
+    };
+    let mut z = DVector::from_vec(z0);
+    let mut history = Vec::new();
+    let mut steps = Vec::new();
+    let (mut f, mut jac) = model.kkt_residual_and_jacobian(z.as_slice())?;
+    let mut m = merit(&f);
+    let mut iterations = 0;
+    let mut converged = false;
+    loop {
+        history.push(m.sqrt());
+        if !m.is_finite() {
+            break;
+        }
+        if m.sqrt() <= opts.tolerance {
+            converged = true;
+            break;
+        }
+        if iterations >= opts.max_iterations {
+            break;
+        }
+        iterations += 1;
+        let delta = jac
+            .clone()
+            .lu()
+            .solve(&(-&f))
+            .filter(|d| d.iter().all(|v| v.is_finite()))
+            .ok_or(SolverError::SingularJacobian {
+                iteration: iterations,
+            })?;
+        let mut alpha = 1.0;
+        let mut accepted = None;
+        for _ in 0..=opts.max_backtracks {
+            let trial = &z + &delta * alpha;
+            match model.kkt_residual(trial.as_slice()) {
+                Ok(ft) => {
+                    let mt = merit(&ft);
+                    if mt.is_finite() && mt <= (1.0 - 1e-4 * alpha) * m {
+                        accepted = Some((trial, ft, mt));
+                        break;
+                    }
+                }
+                Err(SolverError::InvalidInput(_)) => {}
+                Err(e) => return Err(e),
+            }
+            alpha *= 0.5;
+        }
+        let Some((zn, fnew, mnew)) = accepted else {
+            // No decrease possible: at the round-off floor or stuck.
+            let step_small = delta.norm() <= 1e-12 * (1.0 + z.norm());
+            if step_small && m.sqrt() <= 1e3 * opts.tolerance {
+                converged = true;
+            }
+            break;
+        };
+        steps.push(alpha);
+        z = zn;
+        f = fnew;
+        m = mnew;
+        if m.sqrt() > opts.tolerance {
+            jac = model.kkt_jacobian(z.as_slice())?;
+        }
+    }
+    let (kappa, mu, nu) = model.split(z.as_slice())?;
+    let cl = model.closure(kappa)?;
+    let closure = (cl[0] * cl[0] + cl[1] * cl[1] + cl[2] * cl[2]).sqrt();
+    let report = ConvergenceReport {
+        iterations,
+        residual: m.sqrt(),
+        closure,
+        converged,
+        history,
+        step_lengths: steps,
+        relax_iterations: 0,
+    };
+    if !converged {
+        return Err(SolverError::NewtonNotConverged {
+            iterations,
+            residual: report.residual,
+            closure,
+        });
+    }
+    Ok(Equilibrium {
+        kappa: kappa.to_vec(),
+        mu,
+        nu,
+        model,
+        report,
+    })
+}
+
+impl Equilibrium {
+    /// The model (with the phase condition actually used).
+    pub fn model(&self) -> &SurfaceModel {
+        &self.model
+    }
+
+    /// Geodesic curvature at the Gauss points (the unknowns).
+    pub fn kappa(&self) -> &[f64] {
+        &self.kappa
+    }
+
+    /// Closure multiplier `μ`.
+    pub fn multiplier(&self) -> [f64; 3] {
+        self.mu
+    }
+
+    /// Phase multiplier `ν` (0 without phase condition). It measures how much the
+    /// discretisation breaks the arclength-shift symmetry of a uniform rod.
+    pub fn phase_multiplier(&self) -> f64 {
+        self.nu
+    }
+
+    /// Full KKT state `z = (κ, μ, ν)`.
+    pub fn state(&self) -> Vec<f64> {
+        let mut z = self.kappa.clone();
+        z.extend_from_slice(&self.mu);
+        if self.model.phase().is_some() {
+            z.push(self.nu);
+        }
+        z
+    }
+
+    /// Convergence report of the solve.
+    pub fn report(&self) -> &ConvergenceReport {
+        &self.report
+    }
+
+    /// Conserved moment about the sphere centre, `𝓜 = M + r × F` (Sec. 4.3, Eqs. (40)–(41)),
+    /// in the frame where `X(0) = I`. It equals minus the closure multiplier, `𝓜 = −μ`
+    /// (see [`crate::model`]); `|𝓜|` is Eq. (42) for uniform rods.
+    pub fn moment(&self) -> [f64; 3] {
+        [-self.mu[0], -self.mu[1], -self.mu[2]]
+    }
+
+    /// Energies normalised as `E R/(π D0)` (discrete Gauss quadrature of Eq. (2)).
+    pub fn energy(&self) -> EnergyReport {
+        let (total, geodesic, normal) =
+            self.model
+                .energy_normalized(&self.kappa)
+                .unwrap_or((f64::NAN, f64::NAN, f64::NAN));
+        EnergyReport {
+            total,
+            geodesic,
+            normal,
+        }
+    }
+
+    /// Local quantities at the cell boundaries `s_i = i h`, `i = 0..N`, computed from the
+    /// conserved moment and the frame (no numerical differentiation):
+    /// `κ_g = 𝓜·n/D`, `F_t = (𝓜·g − D/R)/R`, `F_g = −𝓜·t/R`, `λ = −F_t/R + D''/R`,
+    /// `κ_g' = (𝓜·t/R − D'κ_g)/D`, `τ = κ_g'/(Rκ²)`, `F_b = −Dκ_g'/sqrt(1 + R²κ_g²)` (Eq. (24)),
+    /// `F_n = −D' sqrt(1 + R²κ_g²)/R − DRκ_gκ_g'/sqrt(1 + R²κ_g²)` (Eq. (25)).
+    ///
+    /// `λ = −F_t/R + D''/R` follows from the force balance normal to the sphere,
+    /// `F' = λ n` (Eq. (13)), with the internal force component along `n`,
+    /// `F·n = D'/R` (nonzero for a non-uniform rod); it equals Eq. (27) and, for `D' = 0`,
+    /// Eq. (38).
+    pub fn profile(&self) -> Vec<ProfilePoint> {
+        let frames = self
+            .model
+            .frames(&self.kappa)
+            .expect("kappa has the model's length");
+        let r = self.model.radius();
+        let len = self.model.length();
+        let h = self.model.h();
+        let mm = Vector3::from(self.moment());
+        (0..self.model.cells())
+            .map(|i| {
+                let s = i as f64 * h;
+                let x: &Matrix3<f64> = &frames[i];
+                let t = Vector3::new(x[(0, 0)], x[(0, 1)], x[(0, 2)]);
+                let g = Vector3::new(x[(1, 0)], x[(1, 1)], x[(1, 2)]);
+                let n = Vector3::new(x[(2, 0)], x[(2, 1)], x[(2, 2)]);
+                let (d, d1, d2) = self.model.stiffness().eval(s / len).per_arclength(len);
+                let kg = mm.dot(&n) / d;
+                let f_t = (mm.dot(&g) - d / r) / r;
+                let f_g = -mm.dot(&t) / r;
+                let lambda = -f_t / r + d2 / r;
+                let kappa = (kg * kg + 1.0 / (r * r)).sqrt();
+                let kgp = (mm.dot(&t) / r - d1 * kg) / d;
+                let tau = kgp / (r * kappa * kappa);
+                let root = (1.0 + r * r * kg * kg).sqrt();
+                let f_b = -d * kgp / root;
+                let f_n = -d1 * root / r - d * r * kg * kgp / root;
+                ProfilePoint {
+                    s,
+                    x: r * n[0],
+                    y: r * n[1],
+                    z: r * n[2],
+                    kappa,
+                    tau,
+                    kappa_g: kg,
+                    kappa_g_prime: kgp,
+                    lambda,
+                    f_t,
+                    f_n,
+                    f_b,
+                    f_g,
+                    d,
+                }
+            })
+            .collect()
+    }
+
+    /// Trigonometric interpolant (in `σ = s/L`) of the geodesic curvature at the cell
+    /// boundaries, `κ_g = 𝓜·n/D`: used to resample the equilibrium to another resolution.
+    pub fn kappa_g_interpolant(&self) -> Result<TrigInterpolant, SolverError> {
+        let kg: Vec<f64> = self.profile().iter().map(|p| p.kappa_g).collect();
+        TrigInterpolant::new(&kg)
+    }
+
+    /// Geodesic curvature at the Gauss points of a grid of `cells` cells (for Richardson
+    /// extrapolation and continuation at another resolution).
+    pub fn resample(&self, cells: usize) -> Result<Vec<f64>, SolverError> {
+        let t = self.kappa_g_interpolant()?;
+        let n = cells as f64;
+        Ok((0..2 * cells)
+            .map(|a| t.eval(((a / 2) as f64 + crate::model::GAUSS_OFFSETS[a % 2]) / n))
+            .collect())
+    }
+
+    /// Extremes of the contact force `(λ_min, λ_max)`: the trigonometric interpolant of `λ`
+    /// at the cell boundaries, maximised/minimised by Newton's method between the samples.
+    pub fn lambda_range(&self) -> (f64, f64) {
+        let lam: Vec<f64> = self.profile().iter().map(|p| p.lambda).collect();
+        match TrigInterpolant::new(&lam) {
+            Ok(t) => {
+                let ((_, lo), (_, hi)) = t.extrema(4 * lam.len());
+                (lo, hi)
+            }
+            Err(_) => (f64::NAN, f64::NAN),
+        }
+    }
+
+    /// Normalised length `L̄`.
+    pub fn lbar(&self) -> f64 {
+        self.model.lbar()
+    }
+
+    /// Loop length `L`.
+    pub fn length(&self) -> f64 {
+        2.0 * PI * self.model.radius() * self.model.lbar()
+    }
+}

@@ -1,0 +1,456 @@
+//! Bending-stiffness profiles `D(s)` along the loop.
+//!
+//! Every profile is a periodic function of the normalised arclength `σ = s/L ∈ [0, 1)`, so a
+//! profile stays attached to the material when the loop length changes (continuation in
+//! `L̄`). Derivatives with respect to the arclength `s` follow from `d/ds = (1/L) d/dσ`.
+
+use crate::SolverError;
+
+/// Bending stiffness `D(s)` of the rod.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Stiffness {
+    /// Homogeneous rod, `D(s) = d`.
+    Uniform {
+        /// The stiffness `D`.
+        d: f64,
+    },
+    /// Two-segment profile of Eq. (51):
+    /// `D(s) = D0 − (D0 − D1)/2 [tanh(γ(s − s0*)/L) − tanh(γ(s − s1*)/L)]`,
+    /// soft segment `s0* < s < s1*`.
+    ///
+    /// Eq. (51) is not exactly periodic on `[0, L)`; we use its periodic extension by images,
+    /// `Σ_{j=−2}^{2}` of the bracket at `σ + j`, which differs from Eq. (51) on `[0, 1)` by at
+    /// most `≈ 4 e^{−2γ δ}` relative, `δ = min(σ0, 1 − σ1)` (≈ 1e-52 for the paper's
+    /// `γ = 200, σ0 = 0.3, σ1 = 0.8`), and makes `D` smooth across `s = 0`.
+    Tanh {
+        /// Stiffness `D0` of the stiffer segment.
+        d0: f64,
+        /// Stiffness `D1` of the softer segment.
+        d1: f64,
+        /// Start of the soft segment, `s0*/L`.
+        s0: f64,
+        /// End of the soft segment, `s1*/L`.
+        s1: f64,
+        /// Sharpness `γ` of the transitions.
+        gamma: f64,
+    },
+    /// A user table `(s/L, D)` interpolated by the periodic cubic spline (period 1): `D`,
+    /// `D'` and `D''` are continuous, `D''` is piecewise linear. The abscissae must be
+    /// strictly increasing in `[0, 1)`; at least three points, or one point (constant).
+    Table {
+        /// Abscissae `s/L ∈ [0, 1)`, strictly increasing.
+        s: Vec<f64>,
+        /// Stiffness values at those abscissae.
+        d: Vec<f64>,
+    },
+}
+
+/// `D`, `dD/dσ`, `d²D/dσ²` at one point (`σ = s/L`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StiffnessValue {
+    /// `D`.
+    pub d: f64,
+    /// `dD/dσ`.
+    pub d1: f64,
+    /// `d²D/dσ²`.
+    pub d2: f64,
+}
+
+impl StiffnessValue {
+    /// Convert the σ-derivatives to arclength derivatives for a loop of length `length`:
+    /// returns `(D, D'(s), D''(s))`.
+    pub fn per_arclength(&self, length: f64) -> (f64, f64, f64) {
+        (self.d, self.d1 / length, self.d2 / (length * length))
+    }
+}
+
+/// A validated stiffness profile, ready for evaluation (spline coefficients precomputed).
+#[derive(Clone, Debug, PartialEq)]
+pub struct StiffnessProfile {
+    kind: Stiffness,
+    /// Second derivatives of the periodic spline at the table knots (tables only).
+    spline_m: Vec<f64>,
+}
+
+impl Stiffness {
+    /// Homogeneous stiffness `d`.
+    pub fn uniform(d: f64) -> Self {
+        Stiffness::Uniform { d }
+    }
+
+    /// `true` for the homogeneous rod (the arclength shift is then a symmetry).
+    pub fn is_uniform(&self) -> bool {
+        match self {
+            Stiffness::Uniform { .. } => true,
+            Stiffness::Table { d, .. } => d.iter().all(|&v| v == d[0]),
+            Stiffness::Tanh { d0, d1, .. } => d0 == d1,
+        }
+    }
+
+    /// Reference stiffness `D0` used to normalise energies (`E R/(π D0)`) and forces: `d` for
+    /// uniform rods, `D0` (the stiffer segment) for Eq. (51), the largest value of a table.
+    pub fn reference(&self) -> f64 {
+        match self {
+            Stiffness::Uniform { d } => *d,
+            Stiffness::Tanh { d0, .. } => *d0,
+            Stiffness::Table { d, .. } => d.iter().copied().fold(f64::MIN, f64::max),
+        }
+    }
+
+    /// Validate the parameters and precompute the interpolant.
+    ///
+    /// Errors ([`SolverError::InvalidProfile`]): non-finite numbers, `D ≤ 0` anywhere (for
+    /// tables checked on a fine sampling of the spline, which can undershoot), `s0* ≥ s1*`,
+    /// `s0*, s1*` outside `[0, 1]`, `γ ≤ 0`, table abscissae not strictly increasing in
+    /// `[0, 1)`, mismatched table lengths, or a table of two points.
+    pub fn validate(&self) -> Result<StiffnessProfile, SolverError> {
+        let bad = |m: String| Err(SolverError::InvalidProfile(m));
+        match self {
+            Stiffness::Uniform { d } => {
+                if !(d.is_finite() && *d > 0.0) {
+                    return bad(format!(
+                        "uniform stiffness must be positive and finite (got {d})"
+                    ));
+                }
+                Ok(StiffnessProfile {
+                    kind: self.clone(),
+                    spline_m: Vec::new(),
+                })
+            }
+            Stiffness::Tanh {
+                d0,
+                d1,
+                s0,
+                s1,
+                gamma,
+            } => {
+                let all = [*d0, *d1, *s0, *s1, *gamma];
+                if all.iter().any(|v| !v.is_finite()) {
+                    return bad(format!(
+                        "tanh profile parameters must be finite (got {all:?})"
+                    ));
+                }
+                if *d0 <= 0.0 || *d1 <= 0.0 {
+                    return bad(format!(
+                        "tanh profile needs D0 > 0 and D1 > 0 (got D0 = {d0}, D1 = {d1})"
+                    ));
+                }
+                if !(0.0..=1.0).contains(s0) || !(0.0..=1.0).contains(s1) || s0 >= s1 {
+                    return bad(format!(
+                        "tanh profile needs 0 <= s0*/L < s1*/L <= 1 (got {s0}, {s1})"
+                    ));
+                }
+                if *gamma <= 0.0 {
+                    return bad(format!("tanh profile needs gamma > 0 (got {gamma})"));
+                }
+                let p = StiffnessProfile {
+                    kind: self.clone(),
+                    spline_m: Vec::new(),
+                };
+                // The periodised profile lies between min(D0, D1) and max(D0, D1) up to the
+                // image tails; check positivity anyway.
+                p.check_positive()?;
+                Ok(p)
+            }
+            Stiffness::Table { s, d } => {
+                if s.len() != d.len() {
+                    return bad(format!(
+                        "stiffness table has {} abscissae but {} values",
+                        s.len(),
+                        d.len()
+                    ));
+                }
+                if s.is_empty() || s.len() == 2 {
+                    return bad(format!(
+                        "stiffness table needs one point (constant) or at least three (got {})",
+                        s.len()
+                    ));
+                }
+                if s.iter().chain(d.iter()).any(|v| !v.is_finite()) {
+                    return bad("stiffness table contains a non-finite number".into());
+                }
+                if s[0] < 0.0 || s[s.len() - 1] >= 1.0 {
+                    return bad(format!(
+                        "stiffness table abscissae s/L must lie in [0, 1) (got {} .. {})",
+                        s[0],
+                        s[s.len() - 1]
+                    ));
+                }
+                if let Some(i) = (1..s.len()).find(|&i| s[i] <= s[i - 1]) {
+                    return bad(format!(
+                        "stiffness table abscissae must increase strictly (row {}: {} after {})",
+                        i + 1,
+                        s[i],
+                        s[i - 1]
+                    ));
+                }
+                if let Some(v) = d.iter().find(|&&v| v <= 0.0) {
+                    return bad(format!("stiffness table contains D = {v} <= 0"));
+                }
+                let spline_m = if s.len() >= 3 {
+                    periodic_spline_moments(s, d)
+                } else {
+                    vec![0.0]
+                };
+                let p = StiffnessProfile {
+                    kind: self.clone(),
+                    spline_m,
+                };
+                p.check_positive()?;
+                Ok(p)
+            }
+        }
+    }
+}
+
+impl StiffnessProfile {
+    /// The profile description.
+    pub fn kind(&self) -> &Stiffness {
+        &self.kind
+    }
+
+    fn check_positive(&self) -> Result<(), SolverError> {
+        let n = 4096;
+        for i in 0..n {
+            let sigma = i as f64 / n as f64;
+            let v = self.eval(sigma).d;
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(SolverError::InvalidProfile(format!(
+                    "stiffness profile is not positive: D = {v} at s/L = {sigma}"
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// `D`, `dD/dσ`, `d²D/dσ²` at `σ = s/L` (any real `σ`; the profile has period 1).
+    pub fn eval(&self, sigma: f64) -> StiffnessValue {
+        let sigma = sigma - sigma.floor();
+        match &self.kind {
+            Stiffness::Uniform { d } => StiffnessValue {
+                d: *d,
+                d1: 0.0,
+                d2: 0.0,
+            },
+            Stiffness::Tanh {
+                d0,
+                d1,
+                s0,
+                s1,
+                gamma,
+            } => {
+                let half = 0.5 * (d0 - d1);
+                let (mut v, mut v1, mut v2) = (0.0, 0.0, 0.0);
+                for j in -2..=2 {
+                    let x = sigma + j as f64;
+                    for (sign, c) in [(1.0, *s0), (-1.0, *s1)] {
+                        let t = (gamma * (x - c)).tanh();
+                        let sech2 = 1.0 - t * t;
+                        v += sign * t;
+                        v1 += sign * gamma * sech2;
+                        v2 += sign * (-2.0 * gamma * gamma * t * sech2);
+                    }
+                }
+                // The images j = ±1, ±2 contribute ±(1 − 1) pairs plus exponentially small
+                // tails; the sum over j of the brackets has period 1.
+                StiffnessValue {
+                    d: d0 - half * v,
+                    d1: -half * v1,
+                    d2: -half * v2,
+                }
+            }
+            Stiffness::Table { s, d } => {
+                if s.len() == 1 {
+                    return StiffnessValue {
+                        d: d[0],
+                        d1: 0.0,
+                        d2: 0.0,
+                    };
+                }
+                eval_periodic_spline(s, d, &self.spline_m, sigma)
+            }
+        }
+    }
+}
+
+/// Interval `i` (from knot `i` to knot `i + 1`, cyclically) containing `σ ∈ [0, 1)`, with the
+/// offset from knot `i` and the interval length.
+fn locate(s: &[f64], sigma: f64) -> (usize, f64, f64) {
+    let n = s.len();
+    // Last knot <= sigma; sigma below the first knot belongs to the wrap-around interval.
+    let idx = s.partition_point(|&x| x <= sigma);
+    if idx == 0 {
+        let i = n - 1;
+        let hi = s[0] + 1.0 - s[n - 1];
+        (i, sigma + 1.0 - s[n - 1], hi)
+    } else {
+        let i = idx - 1;
+        let next = if i + 1 < n { s[i + 1] } else { s[0] + 1.0 };
+        (i, sigma - s[i], next - s[i])
+    }
+}
+
+pub(crate) fn eval_periodic_spline(s: &[f64], d: &[f64], m: &[f64], sigma: f64) -> StiffnessValue {
+    let n = s.len();
+    let (i, x, h) = locate(s, sigma);
+    let j = (i + 1) % n;
+    let (y0, y1, m0, m1) = (d[i], d[j], m[i], m[j]);
+    let a = (h - x) / h;
+    let b = x / h;
+    let v = a * y0 + b * y1 + ((a * a * a - a) * m0 + (b * b * b - b) * m1) * h * h / 6.0;
+    let v1 = (y1 - y0) / h + (-(3.0 * a * a - 1.0) * m0 + (3.0 * b * b - 1.0) * m1) * h / 6.0;
+    let v2 = a * m0 + b * m1;
+    StiffnessValue {
+        d: v,
+        d1: v1,
+        d2: v2,
+    }
+}
+
+/// Second derivatives `M_i` of the periodic cubic spline through `(s_i, d_i)`, period 1:
+/// `h_{i−1} M_{i−1} + 2(h_{i−1} + h_i) M_i + h_i M_{i+1} = 6 (δ_i − δ_{i−1})` cyclically,
+/// `δ_i = (d_{i+1} − d_i)/h_i`; solved densely (tables are short).
+pub(crate) fn periodic_spline_moments(s: &[f64], d: &[f64]) -> Vec<f64> {
+    let n = s.len();
+    let hs: Vec<f64> = (0..n)
+        .map(|i| {
+            if i + 1 < n {
+                s[i + 1] - s[i]
+            } else {
+                s[0] + 1.0 - s[n - 1]
+            }
+        })
+        .collect();
+    let slope = |i: usize| (d[(i + 1) % n] - d[i]) / hs[i];
+    let mut a = nalgebra::DMatrix::<f64>::zeros(n, n);
+    let mut rhs = nalgebra::DVector::<f64>::zeros(n);
+    for i in 0..n {
+        let im = (i + n - 1) % n;
+        a[(i, im)] += hs[im];
+        a[(i, i)] += 2.0 * (hs[im] + hs[i]);
+        a[(i, (i + 1) % n)] += hs[i];
+        rhs[i] = 6.0 * (slope(i) - slope(im));
+    }
+    // The matrix is strictly diagonally dominant, hence invertible.
+    let lu = a.lu();
+    lu.solve(&rhs)
+        .map(|v| v.iter().copied().collect())
+        .unwrap_or_else(|| vec![0.0; n])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn fd_check(p: &StiffnessProfile, sigma: f64) {
+        let e = 1e-5;
+        let v = p.eval(sigma);
+        let d1 = (p.eval(sigma + e).d - p.eval(sigma - e).d) / (2.0 * e);
+        let d2 = (p.eval(sigma + e).d1 - p.eval(sigma - e).d1) / (2.0 * e);
+        assert!(
+            (d1 - v.d1).abs() < 1e-6 * (1.0 + v.d1.abs()),
+            "{d1} {}",
+            v.d1
+        );
+        assert!(
+            (d2 - v.d2).abs() < 1e-5 * (1.0 + v.d2.abs()),
+            "{d2} {}",
+            v.d2
+        );
+    }
+
+    #[test]
+    fn tanh_matches_eq51_and_derivatives() {
+        let st = Stiffness::Tanh {
+            d0: 1.0,
+            d1: 0.5,
+            s0: 0.3,
+            s1: 0.8,
+            gamma: 200.0,
+        };
+        let p = st.validate().unwrap();
+        for &sigma in &[0.0f64, 0.1, 0.29, 0.3, 0.31, 0.5, 0.79, 0.8, 0.95] {
+            let eq51 =
+                1.0 - 0.25 * ((200.0 * (sigma - 0.3)).tanh() - (200.0 * (sigma - 0.8)).tanh());
+            assert!((p.eval(sigma).d - eq51).abs() < 1e-14, "{sigma}");
+        }
+        let soft = Stiffness::Tanh {
+            d0: 1.0,
+            d1: 0.1,
+            s0: 0.3,
+            s1: 0.8,
+            gamma: 7.0,
+        }
+        .validate()
+        .unwrap();
+        for &sigma in &[0.0, 0.05, 0.3, 0.55, 0.99] {
+            fd_check(&soft, sigma);
+        }
+        // Periodic: value and slope agree across σ = 0.
+        let (a, b) = (soft.eval(1e-12), soft.eval(1.0 - 1e-12));
+        assert!((a.d - b.d).abs() < 1e-9 && (a.d1 - b.d1).abs() < 1e-8);
+    }
+
+    #[test]
+    fn table_spline_interpolates_and_is_periodic() {
+        let s: Vec<f64> = (0..12).map(|i| (i as f64 + 0.3) / 12.0).collect();
+        let d: Vec<f64> = s
+            .iter()
+            .map(|&x| 1.0 + 0.3 * (2.0 * std::f64::consts::PI * x).sin())
+            .collect();
+        let p = Stiffness::Table {
+            s: s.clone(),
+            d: d.clone(),
+        }
+        .validate()
+        .unwrap();
+        for i in 0..s.len() {
+            assert!((p.eval(s[i]).d - d[i]).abs() < 1e-14);
+        }
+        for &sigma in &[0.0, 0.01, 0.5, 0.999] {
+            fd_check(&p, sigma);
+            let exact = 1.0 + 0.3 * (2.0 * std::f64::consts::PI * sigma).sin();
+            assert!((p.eval(sigma).d - exact).abs() < 1e-3);
+        }
+    }
+
+    #[test]
+    fn invalid_profiles_are_rejected() {
+        let cases = vec![
+            Stiffness::Uniform { d: 0.0 },
+            Stiffness::Uniform { d: f64::NAN },
+            Stiffness::Tanh {
+                d0: 1.0,
+                d1: 0.5,
+                s0: 0.8,
+                s1: 0.3,
+                gamma: 200.0,
+            },
+            Stiffness::Tanh {
+                d0: 1.0,
+                d1: -0.5,
+                s0: 0.3,
+                s1: 0.8,
+                gamma: 200.0,
+            },
+            Stiffness::Table {
+                s: vec![0.0, 0.5, 0.4],
+                d: vec![1.0, 1.0, 1.0],
+            },
+            Stiffness::Table {
+                s: vec![0.0, 0.5, 0.7],
+                d: vec![1.0, 1.0],
+            },
+            Stiffness::Table {
+                s: vec![0.0, 0.3, 0.6],
+                d: vec![1.0, -1.0, 1.0],
+            },
+        ];
+        for c in cases {
+            assert!(
+                matches!(c.validate(), Err(SolverError::InvalidProfile(_))),
+                "{c:?}"
+            );
+        }
+    }
+}
