@@ -18,6 +18,7 @@ mod compare;
 mod diagram;
 mod euler;
 mod output;
+mod solve;
 mod svg;
 
 use std::process::ExitCode;
@@ -41,6 +42,9 @@ struct Cli {
 enum Command {
     /// Every exact closed loop with eta periods of geodesic curvature at one length (Sec. 4.3).
     Analytic(analytic::Args),
+    /// One numerical equilibrium for any stiffness profile: shape, energy, forces, Hessian
+    /// stability (index), with an error estimate.
+    Solve(solve::Args),
     /// The Euler rotation curve approximation (Eqs. 4-6) at one length.
     Euler(euler::Args),
     /// The energy-versus-length diagram with its critical lengths (Fig. 3a).
@@ -54,6 +58,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Analytic(a) => analytic::run(&a),
+        Command::Solve(a) => solve::run(&a),
         Command::Euler(a) => euler::run(&a),
         Command::Diagram(a) => diagram::run(&a),
         Command::Compare(a) => compare::run(&a),

@@ -229,3 +229,193 @@ fn compare_puts_paper_values_next_to_exact_ones() {
         assert_eq!(r[agrees], expected, "{}", r[id]);
     }
 }
+
+#[test]
+fn solve_matches_the_exact_loop_within_its_error_estimate() {
+    for (branch, lbar) in [("1", 1.2), ("2", 1.7)] {
+        let out = tmp(&format!("solve{branch}"));
+        let l = lbar.to_string();
+        let o = rodloop(&[
+            "solve",
+            "--lbar",
+            &l,
+            "--branch",
+            branch,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        for key in [
+            "lbar",
+            "branch",
+            "eta",
+            "energy",
+            "energy_g",
+            "index",
+            "eigenvalues",
+            "symmetry_eigenvalues",
+            "lambda_min",
+            "lambda_max",
+            "residual",
+            "error_estimate",
+            "nodes",
+            "iterations",
+        ] {
+            assert!(s.get(key).is_some(), "summary lacks {key}");
+        }
+        let eta = rodloop_exact::eta_of_branch(branch.parse().unwrap());
+        let exact = rodloop_exact::paper_branch_loop(eta, lbar)
+            .unwrap()
+            .energy()
+            .unwrap();
+        let (e, est) = (
+            s["energy"].as_f64().unwrap(),
+            s["error_estimate"].as_f64().unwrap(),
+        );
+        assert!(
+            (e - exact).abs() <= 3.0 * est + 1e-12,
+            "{e} vs {exact} (estimate {est})"
+        );
+        assert!((e - exact).abs() / exact <= 1e-6, "default accuracy target");
+        assert_eq!(
+            s["index"], 0,
+            "the paper's stable branch is a local minimum"
+        );
+        let (header, rows) = read_csv(&out.join("config.csv"));
+        for col in ["s", "x", "y", "z", "kappa", "tau", "kappa_g", "lambda", "D"] {
+            assert!(header.iter().any(|h| h == col), "config.csv lacks {col}");
+        }
+        assert_eq!(rows.len() as u64, s["nodes"].as_u64().unwrap());
+        assert_no_nan(&out.join("config.csv"));
+        // Restart from the saved configuration: same state.
+        let out2 = tmp(&format!("solve{branch}b"));
+        let cfg = out.join("config.csv");
+        let o = rodloop(&[
+            "solve",
+            "--lbar",
+            &l,
+            "--branch",
+            branch,
+            "--from",
+            cfg.to_str().unwrap(),
+            "--out",
+            out2.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let s2: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out2.join("summary.json")).unwrap())
+                .unwrap();
+        assert!((s2["energy"].as_f64().unwrap() - e).abs() < 1e-9);
+    }
+}
+
+#[test]
+fn solve_bad_input_is_reported_clearly() {
+    let dir = tmp("solve-bad");
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad_scene = dir.join("bad.toml");
+    std::fs::write(&bad_scene, "radius = 1.0\nradus = 2.0\n").unwrap();
+    let enclosed = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/data/scenes/homogeneous-enclosed.toml"
+    );
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["solve", "--lbar", "1.5", "--branch", "3"],
+            "exists only for 2 < lbar < 4",
+        ),
+        (
+            vec![
+                "solve",
+                "--lbar",
+                "1.5",
+                "--branch",
+                "1",
+                "--scene",
+                bad_scene.to_str().unwrap(),
+            ],
+            "line 2",
+        ),
+        (
+            vec![
+                "solve", "--lbar", "1.5", "--branch", "1", "--scene", enclosed,
+            ],
+            "enclosed",
+        ),
+        (
+            vec![
+                "solve",
+                "--lbar",
+                "1.5",
+                "--branch",
+                "1",
+                "--accuracy",
+                "extreme",
+            ],
+            "accuracy",
+        ),
+        (
+            vec![
+                "solve",
+                "--lbar",
+                "1.5",
+                "--branch",
+                "1",
+                "--from",
+                "/nonexistent.csv",
+            ],
+            "nonexistent",
+        ),
+    ];
+    for (args, word) in cases {
+        let out = tmp("solve-bad-out");
+        let mut a = args.clone();
+        a.extend(["--out", out.to_str().unwrap()]);
+        let o = rodloop(&a);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{args:?} should fail");
+        assert!(err.contains(word), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+        assert!(!out.join("summary.json").exists());
+    }
+}
+
+/// A start that Newton cannot bring to this branch: the error names the residual and no
+/// result files are written.
+#[test]
+fn non_converged_solve_writes_nothing() {
+    let fig8 = tmp("fig8");
+    let o = rodloop(&[
+        "solve",
+        "--lbar",
+        "1.7",
+        "--branch",
+        "2",
+        "--out",
+        fig8.to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    let out = tmp("nonconv");
+    let cfg = fig8.join("config.csv");
+    let o = rodloop(&[
+        "solve",
+        "--lbar",
+        "1.2",
+        "--branch",
+        "1",
+        "--from",
+        cfg.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("did not converge") && err.contains("residual"),
+        "{err}"
+    );
+    assert!(!out.join("summary.json").exists() && !out.join("config.csv").exists());
+}

@@ -402,12 +402,12 @@ impl Scene {
                 }
             }
             StiffnessSpec::Table { s, d } => {
-                if s.len() != d.len() || s.len() < 2 {
+                if s.len() != d.len() || s.is_empty() || s.len() == 2 {
                     return Err(bad(
                         "stiffness.s",
                         format!("{} values", s.len()),
                         &format!(
-                            "needs at least 2 values and as many as stiffness.d ({})",
+                            "needs 1 value (constant) or at least 3 (periodic cubic spline), as many as stiffness.d ({})",
                             d.len()
                         ),
                     ));

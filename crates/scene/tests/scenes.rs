@@ -70,13 +70,18 @@ fn invalid_values_name_the_key() {
 
 #[test]
 fn table_profile_parses() {
-    let text = "[stiffness]\nkind = \"table\"\ns = [0.0, 0.5]\nd = [1, 0.5]\n";
+    let text = "[stiffness]\nkind = \"table\"\ns = [0.0, 0.5, 0.7]\nd = [1, 0.5, 2]\n";
     let s = Scene::from_toml(text, "t.toml").unwrap();
     assert_eq!(
         s.stiffness,
         StiffnessSpec::Table {
-            s: vec![0.0, 0.5],
-            d: vec![1.0, 0.5]
+            s: vec![0.0, 0.5, 0.7],
+            d: vec![1.0, 0.5, 2.0]
         }
     );
+    let two = "[stiffness]\nkind = \"table\"\ns = [0.0, 0.5]\nd = [1, 0.5]\n";
+    assert!(Scene::from_toml(two, "t.toml")
+        .unwrap_err()
+        .to_string()
+        .contains("stiffness.s"));
 }
