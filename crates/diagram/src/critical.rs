@@ -1,0 +1,363 @@
+//! Critical lengths: where the lowest-energy branch changes.
+//!
+//! * **Detection** on the traced samples: on the union of all traced lengths, the branch of
+//!   lowest energy (cubic Hermite interpolation of each branch's energies and slopes) is
+//!   found; where it changes between two neighbouring lengths and both branches exist on
+//!   the whole interval, the two branches cross there.
+//! * **Crossings** are then located on re-solved equilibria ([`crate::refine`]): Newton's
+//!   method on `f(L̄) = E_a(L̄) − E_b(L̄)` with `f' = dE_a/dL̄ − dE_b/dL̄` (both analytic,
+//!   Richardson-extrapolated), every evaluation re-solving both branches at the two reporting
+//!   resolutions. The error estimate is `(δE_a + δE_b)/|f'| + |last Newton step|`, with
+//!   `δE` the discretisation error estimate of each extrapolated energy.
+//! * **Collapses**: at an integer `m` in the range where the lowest branch just below ends on
+//!   the m-fold great circle, or the lowest branch just above starts from it. The m-fold great
+//!   circle `κ ≡ 0` closes exactly at `L̄ = m` in the discrete model too (its holonomy is the
+//!   rotation by `L/R`), so `L̄_cr = m` with no error; its energy is computed from the model
+//!   (`= m` for a uniform rod) and checked against the traced branches, whose energies
+//!   extrapolate (linearly in `L̄`, from the last traced state and its slope) to it.
+
+use serde::{Deserialize, Serialize};
+
+use crate::refine::BranchRefiner;
+use crate::trace::TracedBranch;
+use crate::{DiagramError, DiagramOptions};
+
+/// Kind of a critical length.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CriticalKind {
+    /// Two branches exchange the lowest energy, `E_a = E_b`.
+    Crossing,
+    /// The lowest branch collapses onto (or emanates from) the m-fold great circle at
+    /// `L̄ = m`.
+    Collapse,
+}
+
+impl std::fmt::Display for CriticalKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            CriticalKind::Crossing => "crossing",
+            CriticalKind::Collapse => "collapse",
+        })
+    }
+}
+
+/// A critical length `L̄_icr`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CriticalLength {
+    /// Index `i` of `L̄_icr` in increasing order (from 1).
+    pub index: usize,
+    /// The critical length.
+    pub lbar_cr: f64,
+    /// Crossing or collapse.
+    pub kind: CriticalKind,
+    /// Paper branch lowest just below (0: none computed there, e.g. the circle below
+    /// `L̄ = 1`).
+    pub from_branch: u32,
+    /// Paper branch lowest just above (0: none computed there).
+    pub to_branch: u32,
+    /// `η` of `from_branch` (0: none).
+    pub from_eta: u32,
+    /// `η` of `to_branch` (0: none).
+    pub to_eta: u32,
+    /// Energy `E R/(π D0)` at the critical length.
+    pub energy: f64,
+    /// Estimated absolute error of `lbar_cr` (0 for collapses, exact in the model).
+    pub error_estimate: f64,
+    /// Crossings: `|dE_a/dL̄ − dE_b/dL̄|` at the root; collapses: 0.
+    pub slope_difference: f64,
+    /// Crossings: Newton iterations in `L̄`; collapses: 0.
+    pub iterations: usize,
+    /// How the number was obtained and checked (human-readable).
+    pub note: String,
+}
+
+/// A crossing found on the samples, before location.
+#[derive(Clone, Debug)]
+pub(crate) struct Candidate {
+    /// Index of the branch lowest below.
+    pub a: usize,
+    /// Index of the branch lowest above.
+    pub b: usize,
+    /// Bracket from the samples.
+    pub lo: f64,
+    /// Bracket from the samples.
+    pub hi: f64,
+    /// Root of the interpolated energy difference.
+    pub guess: f64,
+}
+
+/// The branch of lowest interpolated energy at `lbar` among those covering it.
+pub(crate) fn lowest_interpolated(branches: &[TracedBranch], lbar: f64) -> Option<(usize, f64)> {
+    let mut best: Option<(usize, f64)> = None;
+    for (i, b) in branches.iter().enumerate() {
+        if let Some(e) = b.energy_at(lbar) {
+            if best.is_none_or(|(_, eb)| e < eb) {
+                best = Some((i, e));
+            }
+        }
+    }
+    best
+}
+
+/// Crossings of the lowest energy seen on the traced samples, plus warnings for changes of
+/// the lowest branch that are neither crossings nor at integer lengths.
+pub(crate) fn detect_crossings(
+    opts: &DiagramOptions,
+    branches: &[TracedBranch],
+) -> (Vec<Candidate>, Vec<String>) {
+    let mut grid: Vec<f64> = branches
+        .iter()
+        .flat_map(|b| b.points.iter().map(|p| p.lbar))
+        .filter(|&l| l >= opts.lbar_min && l <= opts.lbar_max)
+        .collect();
+    grid.sort_by(f64::total_cmp);
+    grid.dedup_by(|a, b| (*a - *b).abs() <= 1e-13);
+    let lowest: Vec<Option<usize>> = grid
+        .iter()
+        .map(|&l| lowest_interpolated(branches, l).map(|x| x.0))
+        .collect();
+    let mut out = Vec::new();
+    let mut warnings = Vec::new();
+    for k in 1..grid.len() {
+        let (Some(a), Some(b)) = (lowest[k - 1], lowest[k]) else {
+            continue;
+        };
+        if a == b {
+            continue;
+        }
+        let (l0, l1) = (grid[k - 1], grid[k]);
+        let (ba, bb) = (&branches[a], &branches[b]);
+        if ba.covers(l0) && ba.covers(l1) && bb.covers(l0) && bb.covers(l1) {
+            let diff =
+                |l: f64| ba.energy_at(l).unwrap_or(f64::NAN) - bb.energy_at(l).unwrap_or(f64::NAN);
+            let (mut lo, mut hi) = (l0, l1);
+            for _ in 0..60 {
+                let mid = 0.5 * (lo + hi);
+                if diff(mid) < 0.0 {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            out.push(Candidate {
+                a,
+                b,
+                lo: l0,
+                hi: l1,
+                guess: 0.5 * (lo + hi),
+            });
+        } else {
+            // An end of a branch between the two samples: fine at an integer (collapse),
+            // suspicious elsewhere.
+            let int_between = (l0.ceil() <= l1.floor())
+                || (l1 - l1.round()).abs() < 1e-3
+                || (l0 - l0.round()).abs() < 1e-3;
+            if !int_between {
+                warnings.push(format!(
+                    "the lowest branch changes from {} to {} between L̄ = {l0:.6} and {l1:.6} \
+                     where one of them is not traced (stop reasons: {} / {}; {} / {})",
+                    ba.branch, bb.branch, ba.stop_low, ba.stop_high, bb.stop_low, bb.stop_high
+                ));
+            }
+        }
+    }
+    (out, warnings)
+}
+
+/// Locate a crossing on re-solved equilibria (see the module docs).
+pub(crate) fn locate_crossing(
+    opts: &DiagramOptions,
+    branches: &[TracedBranch],
+    cand: &Candidate,
+) -> Result<CriticalLength, DiagramError> {
+    let (ba, bb) = (&branches[cand.a], &branches[cand.b]);
+    let fail = |lbar: f64, reason: String| DiagramError::Critical {
+        from_branch: ba.branch,
+        to_branch: bb.branch,
+        lbar,
+        reason,
+    };
+    let width = cand.hi - cand.lo;
+    let mut x = cand.guess;
+    let mut ra = BranchRefiner::new(opts, ba, x).map_err(|e| fail(x, e.to_string()))?;
+    let mut rb = BranchRefiner::new(opts, bb, x).map_err(|e| fail(x, e.to_string()))?;
+    let mut iterations = 0;
+    let mut last_step = f64::INFINITY;
+    let (mut va, mut vb);
+    loop {
+        va = ra.values().map_err(|e| fail(x, e.to_string()))?;
+        vb = rb.values().map_err(|e| fail(x, e.to_string()))?;
+        let f = va.energy - vb.energy;
+        let fp = va.slope - vb.slope;
+        if !(f.is_finite() && fp.is_finite() && fp != 0.0) {
+            return Err(fail(
+                x,
+                format!("degenerate energy difference (f = {f}, f' = {fp})"),
+            ));
+        }
+        let step = (-f / fp).clamp(-width, width);
+        // Converged at the tolerance, or at the noise floor (the step stops shrinking).
+        let converged = step.abs() <= 1e-13 * x.abs().max(1.0)
+            || (iterations >= 2 && step.abs() > 0.25 * last_step && step.abs() < 1e-9)
+            || iterations >= 30;
+        if converged {
+            last_step = last_step.min(step.abs()).max(f64::EPSILON * x.abs());
+            break;
+        }
+        x += step;
+        if !(x > cand.lo - 2.0 * width && x < cand.hi + 2.0 * width) {
+            return Err(fail(x, "Newton's method left the bracket".into()));
+        }
+        last_step = step.abs();
+        iterations += 1;
+        ra.move_to(x).map_err(|e| fail(x, e.to_string()))?;
+        rb.move_to(x).map_err(|e| fail(x, e.to_string()))?;
+    }
+    let slope_difference = (va.slope - vb.slope).abs();
+    let (err_a, err_b) = (
+        ra.error_estimate(opts, ba.eta),
+        rb.error_estimate(opts, bb.eta),
+    );
+    let error_estimate = (err_a + err_b) / slope_difference + last_step + 4.0 * f64::EPSILON * x;
+    Ok(CriticalLength {
+        index: 0,
+        lbar_cr: x,
+        kind: CriticalKind::Crossing,
+        from_branch: ba.branch,
+        to_branch: bb.branch,
+        from_eta: ba.eta,
+        to_eta: bb.eta,
+        energy: 0.5 * (va.energy + vb.energy),
+        error_estimate,
+        slope_difference,
+        iterations,
+        note: format!(
+            "E_{} = E_{} solved by Newton in L̄ on equilibria re-solved with {} and {} / {} and \
+             {} cells, Richardson-extrapolated; energy error estimates {:.1e}, {:.1e}",
+            ba.branch,
+            bb.branch,
+            ra.fine().model().cells(),
+            crate::refine::reporting_cells(opts, ba.eta).1,
+            rb.fine().model().cells(),
+            crate::refine::reporting_cells(opts, bb.eta).1,
+            err_a,
+            err_b
+        ),
+    })
+}
+
+/// Collapses at the integers of the range (see the module docs). `beyond(m)` names the
+/// branch (`η` and how it was found) emanating upwards from the m-fold great circle when
+/// no traced branch is above `m` (the top of the range).
+pub(crate) fn collapses(
+    opts: &DiagramOptions,
+    branches: &[TracedBranch],
+    beyond: &dyn Fn(u32) -> Option<(u32, String)>,
+) -> Vec<CriticalLength> {
+    let mut out = Vec::new();
+    let d = opts.end_distance;
+    let first = opts.lbar_min.ceil().max(1.0) as u32;
+    let last = opts.lbar_max.floor() as u32;
+    for m in first..=last {
+        let mf = f64::from(m);
+        let mut below = lowest_interpolated(branches, mf - d).filter(|_| mf - d >= opts.lbar_min);
+        // Below L̄ = 1 a uniform rod also has the circle, `E R/(πD) = 1/L̄` (the small
+        // circles of the sphere, which end on the great circle at L̄ = 1): not traced, but
+        // lower than every traced loop there.
+        let circle_below =
+            m == 1 && opts.stiffness.is_uniform() && below.is_none_or(|(_, e)| 1.0 / (1.0 - d) < e);
+        if circle_below {
+            below = None;
+        }
+        let above = lowest_interpolated(branches, mf + d).filter(|_| mf + d <= opts.lbar_max);
+        let ends_here = |i: usize| branches[i].high_end.great_circle() == Some(m);
+        let starts_here = |i: usize| branches[i].low_end.great_circle() == Some(m);
+        let below_ends = below.is_some_and(|(i, _)| ends_here(i)) || circle_below;
+        let above_starts = above.is_some_and(|(i, _)| starts_here(i));
+        if !(below_ends || above_starts) {
+            continue;
+        }
+        let (from_eta, from_branch) =
+            below.map_or((0, 0), |(i, _)| (branches[i].eta, branches[i].branch));
+        let (to_eta, to_branch, named) = match above {
+            Some((i, _)) => (branches[i].eta, branches[i].branch, None),
+            None => match beyond(m) {
+                Some((eta, how)) => (eta, rodloop_exact::branch_of_eta(eta), Some((eta, how))),
+                None => (0, 0, None),
+            },
+        };
+        if from_eta == to_eta && from_eta != 0 {
+            continue;
+        }
+        // Energy of the great circle in the model, and the checks of the branch ends.
+        let circle = great_circle_energy(opts, mf);
+        let mut checks = Vec::new();
+        for b in branches {
+            let (end, p) = if b.high_end.great_circle() == Some(m) {
+                ("upper", b.points.last())
+            } else if b.low_end.great_circle() == Some(m) {
+                ("lower", b.points.first())
+            } else {
+                continue;
+            };
+            if let Some(p) = p {
+                let extrap = p.energy + p.slope * (mf - p.lbar);
+                checks.push(format!(
+                    "branch {} ({end} end at L̄ = {:.6}, E = {:.9}) extrapolates to E = {:.9} \
+                     at L̄ = {m} (difference {:.1e})",
+                    b.branch,
+                    p.lbar,
+                    p.energy,
+                    extrap,
+                    (extrap - circle).abs()
+                ));
+            }
+        }
+        let mut note = format!(
+            "the {m}-fold great circle closes exactly at L̄ = {m} (E = {circle:.12}); {}",
+            if checks.is_empty() {
+                "no traced branch end to check".to_string()
+            } else {
+                checks.join("; ")
+            }
+        );
+        if circle_below {
+            note.push_str(
+                "; below L̄ = 1 the lowest state is the circle (E R/(πD) = 1/L̄, branch 0, not \
+                 traced), which becomes the great circle at L̄ = 1",
+            );
+        }
+        if let Some((eta, how)) = named {
+            note.push_str(&format!(
+                "; above L̄ = {m} (outside the range) the branch with η = {eta} emanates from \
+                 the great circle ({how})"
+            ));
+        }
+        out.push(CriticalLength {
+            index: 0,
+            lbar_cr: mf,
+            kind: CriticalKind::Collapse,
+            from_branch,
+            to_branch,
+            from_eta,
+            to_eta,
+            energy: circle,
+            error_estimate: 0.0,
+            slope_difference: 0.0,
+            iterations: 0,
+            note,
+        });
+    }
+    out
+}
+
+/// Energy `E R/(π D0)` of the m-fold great circle (`κ ≡ 0`) at `L̄ = m`: the normal part
+/// `½∫D/R² ds` (`= m` for a uniform rod), evaluated by the model's quadrature.
+pub(crate) fn great_circle_energy(opts: &DiagramOptions, m: f64) -> f64 {
+    let cells = 2048;
+    rodloop_solver::SurfaceModel::new(opts.radius, m, cells, &opts.stiffness)
+        .and_then(|model| model.energy_normalized(&vec![0.0; 2 * cells]))
+        .map(|e| e.0)
+        .unwrap_or(m)
+}

@@ -1,0 +1,462 @@
+//! The assembled diagram: critical lengths, labels, great circles.
+
+use std::collections::VecDeque;
+use std::sync::{mpsc, Mutex};
+use std::time::Instant;
+
+use rodloop_solver::Accuracy;
+use serde::Serialize;
+
+use crate::buckling::{self, BucklingReport};
+use crate::critical::{self, CriticalKind, CriticalLength};
+use crate::labels::{self, Label};
+use crate::trace::TracedBranch;
+use crate::{DiagramError, DiagramOptions, Progress};
+
+/// Work of the assembly phase.
+enum Task {
+    Circle(u32),
+    Crossing(critical::Candidate),
+}
+
+/// Result of a [`Task`] with its duration.
+enum Done {
+    Circle(u32, buckling::CircleResult, f64),
+    Crossing(Box<Result<CriticalLength, DiagramError>>, f64),
+}
+
+/// Wall times of the phases, in seconds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Timings {
+    /// Tracing all branches (wall time; 0 when [`assemble`] is called directly).
+    pub tracing: f64,
+    /// Locating the crossings (sum over the tasks, which run in parallel with the great
+    /// circles).
+    pub critical: f64,
+    /// Great circles: buckling loads and branch switching (sum over the circles).
+    pub great_circles: f64,
+    /// Wall time of the parallel phase (crossings and great circles).
+    pub parallel_wall: f64,
+    /// Labels.
+    pub labels: f64,
+    /// Everything ([`crate::compute`]) or the assembly alone ([`assemble`]).
+    pub total: f64,
+}
+
+/// The numeric branch diagram.
+#[derive(Clone, Debug, Serialize)]
+pub struct NumericDiagram {
+    /// Accuracy level.
+    pub accuracy: Accuracy,
+    /// Scene and resolution summary (human-readable).
+    pub scene: String,
+    /// Diagram range `(lbar_min, lbar_max)`.
+    pub range: (f64, f64),
+    /// Traced branches, by `η`.
+    pub branches: Vec<TracedBranch>,
+    /// Labels of the traced states, `labels[i][k]` for `branches[i].points[k]`.
+    pub labels: Vec<Vec<Label>>,
+    /// Critical lengths in increasing order.
+    pub critical: Vec<CriticalLength>,
+    /// Great-circle analysis (`None` if disabled).
+    pub great_circles: Option<BucklingReport>,
+    /// Anything suspicious met on the way.
+    pub warnings: Vec<String>,
+    /// Wall times.
+    pub timings: Timings,
+}
+
+/// One row of the branch table (`branches.csv`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct DiagramRow {
+    /// Paper branch number.
+    pub branch: u32,
+    /// Periods of `κ_g`.
+    pub eta: u32,
+    /// Normalised length.
+    pub lbar: f64,
+    /// `E R/(π D0)`.
+    pub energy: f64,
+    /// `E_g R/(π D0)`.
+    pub energy_g: f64,
+    /// Estimated error of `energy` (`None` if unknown).
+    pub energy_error: Option<f64>,
+    /// Stability label.
+    pub stability: Label,
+    /// Stability index.
+    pub index: usize,
+    /// Minimum of `λR³/D0`.
+    pub lambda_min: f64,
+    /// Maximum of `λR³/D0`.
+    pub lambda_max: f64,
+}
+
+/// A compact summary of a diagram (no states): what `summary.json` needs.
+#[derive(Clone, Debug, Serialize)]
+pub struct DiagramSummary<'a> {
+    /// Accuracy level.
+    pub accuracy: Accuracy,
+    /// Scene and resolution summary.
+    pub scene: &'a str,
+    /// Diagram range.
+    pub range: (f64, f64),
+    /// One entry per branch.
+    pub branches: Vec<BranchSummary<'a>>,
+    /// Critical lengths.
+    pub critical: &'a [CriticalLength],
+    /// Great-circle analysis.
+    pub great_circles: Option<&'a BucklingReport>,
+    /// Warnings.
+    pub warnings: &'a [String],
+    /// Wall times.
+    pub timings: Timings,
+}
+
+/// Summary of one traced branch.
+#[derive(Clone, Debug, Serialize)]
+pub struct BranchSummary<'a> {
+    /// Paper branch number.
+    pub branch: u32,
+    /// Periods of `κ_g`.
+    pub eta: u32,
+    /// Number of traced states.
+    pub points: usize,
+    /// Traced span `(first, last)` of `L̄`.
+    pub span: (f64, f64),
+    /// Tracing resolution (cells).
+    pub cells: usize,
+    /// Reporting resolutions `(N_f, N_c)` of the critical lengths.
+    pub reporting_cells: (usize, usize),
+    /// How the lower end came about.
+    pub low_end: &'a crate::BranchEnd,
+    /// How the upper end came about.
+    pub high_end: &'a crate::BranchEnd,
+    /// Why the lower end stopped.
+    pub stop_low: &'a str,
+    /// Why the upper end stopped.
+    pub stop_high: &'a str,
+    /// Seed.
+    pub seed: &'a str,
+    /// Changes of the stability index.
+    pub index_changes: &'a [crate::IndexChange],
+    /// Continuation steps.
+    pub steps: usize,
+    /// Wall time of the tracing.
+    pub seconds: f64,
+}
+
+impl NumericDiagram {
+    /// A compact, serialisable summary (everything but the states).
+    pub fn summary(&self, opts: &DiagramOptions) -> DiagramSummary<'_> {
+        DiagramSummary {
+            accuracy: self.accuracy,
+            scene: &self.scene,
+            range: self.range,
+            branches: self
+                .branches
+                .iter()
+                .map(|b| BranchSummary {
+                    branch: b.branch,
+                    eta: b.eta,
+                    points: b.points.len(),
+                    span: b.span(),
+                    cells: b.cells,
+                    reporting_cells: crate::refine::reporting_cells(opts, b.eta),
+                    low_end: &b.low_end,
+                    high_end: &b.high_end,
+                    stop_low: &b.stop_low,
+                    stop_high: &b.stop_high,
+                    seed: &b.seed,
+                    index_changes: &b.index_changes,
+                    steps: b.steps,
+                    seconds: b.seconds,
+                })
+                .collect(),
+            critical: &self.critical,
+            great_circles: self.great_circles.as_ref(),
+            warnings: &self.warnings,
+            timings: self.timings,
+        }
+    }
+
+    /// All traced states as flat rows, by branch then length.
+    pub fn rows(&self) -> Vec<DiagramRow> {
+        self.branches
+            .iter()
+            .zip(&self.labels)
+            .flat_map(|(b, ls)| {
+                b.points.iter().zip(ls).map(move |(p, &l)| DiagramRow {
+                    branch: b.branch,
+                    eta: b.eta,
+                    lbar: p.lbar,
+                    energy: p.energy,
+                    energy_g: p.energy_g,
+                    energy_error: p.energy_error,
+                    stability: l,
+                    index: p.index,
+                    lambda_min: p.lambda_min,
+                    lambda_max: p.lambda_max,
+                })
+            })
+            .collect()
+    }
+
+    /// The branch with `eta`, if traced.
+    pub fn branch_by_eta(&self, eta: u32) -> Option<&TracedBranch> {
+        self.branches.iter().find(|b| b.eta == eta)
+    }
+
+    /// Label of the state of branch `eta` nearest to `lbar` (with its length).
+    pub fn label_near(&self, eta: u32, lbar: f64) -> Option<(f64, Label)> {
+        let i = self.branches.iter().position(|b| b.eta == eta)?;
+        let b = &self.branches[i];
+        let k = (0..b.points.len()).min_by(|&x, &y| {
+            (b.points[x].lbar - lbar)
+                .abs()
+                .total_cmp(&(b.points[y].lbar - lbar).abs())
+        })?;
+        Some((b.points[k].lbar, self.labels[i][k]))
+    }
+
+    /// Paper branch numbers lowest at `lbar` (two exactly at a critical length).
+    pub fn lowest_at(&self, lbar: f64) -> Vec<u32> {
+        labels::lowest_etas(&self.branches, &self.critical, lbar)
+            .into_iter()
+            .map(rodloop_exact::branch_of_eta)
+            .collect()
+    }
+}
+
+/// Run `f` on every item on up to `threads` threads (largest first as given), forwarding the
+/// progress events to `progress` on the calling thread; results in the order of `items`.
+pub(crate) fn run_parallel<T, R, F>(
+    threads: usize,
+    items: Vec<T>,
+    progress: &mut dyn FnMut(Progress),
+    f: F,
+) -> Vec<R>
+where
+    T: Send,
+    R: Send,
+    F: Fn(T, &dyn Fn(Progress)) -> R + Sync,
+{
+    let count = items.len();
+    if threads <= 1 || count <= 1 {
+        let cell = std::cell::RefCell::new(progress);
+        return items
+            .into_iter()
+            .map(|it| f(it, &|p| (cell.borrow_mut())(p)))
+            .collect();
+    }
+    enum Msg<R> {
+        Progress(Progress),
+        Done(usize, R),
+    }
+    let queue = Mutex::new(items.into_iter().enumerate().collect::<VecDeque<_>>());
+    let (tx, rx) = mpsc::channel::<Msg<R>>();
+    let mut results: Vec<Option<R>> = (0..count).map(|_| None).collect();
+    std::thread::scope(|scope| {
+        for _ in 0..threads.min(count) {
+            let tx = tx.clone();
+            let queue = &queue;
+            let f = &f;
+            scope.spawn(move || loop {
+                let next = queue.lock().map(|mut q| q.pop_front()).unwrap_or(None);
+                let Some((i, item)) = next else { break };
+                let txp = tx.clone();
+                let r = f(item, &move |p| {
+                    let _ = txp.send(Msg::Progress(p));
+                });
+                if tx.send(Msg::Done(i, r)).is_err() {
+                    break;
+                }
+            });
+        }
+        drop(tx);
+        for msg in rx {
+            match msg {
+                Msg::Progress(p) => progress(p),
+                Msg::Done(i, r) => results[i] = Some(r),
+            }
+        }
+    });
+    results
+        .into_iter()
+        .map(|r| r.expect("every item is processed"))
+        .collect()
+}
+
+/// Everything after tracing: critical lengths (located on re-solved equilibria), labels,
+/// great circles. `branches` are the traced branches (any order; sorted by `η` here).
+pub fn assemble(
+    opts: &DiagramOptions,
+    mut branches: Vec<TracedBranch>,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<NumericDiagram, DiagramError> {
+    opts.validate()?;
+    let start = Instant::now();
+    branches.sort_by_key(|b| b.eta);
+    for b in &branches {
+        check_branch(b)?;
+    }
+    let mut timings = Timings::default();
+
+    // Crossings (located on re-solved equilibria) and great circles, in parallel.
+    let t = Instant::now();
+    let (candidates, mut warnings) = critical::detect_crossings(opts, &branches);
+    let circles = if opts.great_circles {
+        buckling::circles(opts)
+    } else {
+        Vec::new()
+    };
+    progress(Progress::AssemblyPlanned {
+        crossings: candidates.len(),
+        great_circles: circles.len(),
+    });
+    let total_circles = circles.len();
+    let mut tasks: Vec<Task> = circles.into_iter().map(Task::Circle).collect();
+    tasks.extend(candidates.into_iter().map(Task::Crossing));
+    let results = run_parallel(opts.worker_threads(), tasks, progress, |task, tx| {
+        let t = Instant::now();
+        match task {
+            Task::Circle(m) => {
+                let r = buckling::analyse_circle(opts, m, &branches);
+                tx(Progress::GreatCircleDone {
+                    m,
+                    total: total_circles,
+                });
+                Done::Circle(m, r, t.elapsed().as_secs_f64())
+            }
+            Task::Crossing(cand) => {
+                let r = critical::locate_crossing(opts, &branches, &cand);
+                if let Ok(c) = &r {
+                    tx(Progress::CriticalLocated {
+                        kind: c.kind,
+                        lbar_cr: c.lbar_cr,
+                        from_branch: c.from_branch,
+                        to_branch: c.to_branch,
+                    });
+                }
+                Done::Crossing(Box::new(r), t.elapsed().as_secs_f64())
+            }
+        }
+    });
+    let mut critical = Vec::new();
+    let mut circle_results = Vec::new();
+    for r in results {
+        match r {
+            Done::Circle(m, r, secs) => {
+                timings.great_circles += secs;
+                circle_results.push((m, r));
+            }
+            Done::Crossing(r, secs) => {
+                timings.critical += secs;
+                critical.push((*r)?);
+            }
+        }
+    }
+    let great = opts
+        .great_circles
+        .then(|| buckling::collect_report(opts, circle_results));
+    let beyond = |m: u32| -> Option<(u32, String)> {
+        match great.as_ref().and_then(|g| g.branch_above(m)) {
+            Some(eta) => Some((
+                eta,
+                format!("found by branch switching from its buckling mode with {eta} periods"),
+            )),
+            None => Some((
+                m + 1,
+                "named after the buckling mode with m + 1 periods of Eq. (33); not computed"
+                    .to_string(),
+            )),
+        }
+    };
+    for c in critical::collapses(opts, &branches, &beyond) {
+        progress(Progress::CriticalLocated {
+            kind: CriticalKind::Collapse,
+            lbar_cr: c.lbar_cr,
+            from_branch: c.from_branch,
+            to_branch: c.to_branch,
+        });
+        critical.push(c);
+    }
+    timings.parallel_wall = t.elapsed().as_secs_f64();
+    critical.sort_by(|a, b| a.lbar_cr.total_cmp(&b.lbar_cr));
+    for (i, c) in critical.iter_mut().enumerate() {
+        c.index = i + 1;
+    }
+    for w in critical.windows(2) {
+        if w[0].to_eta != w[1].from_eta {
+            warnings.push(format!(
+                "critical lengths {} (L̄ = {:.6}, to branch {}) and {} (L̄ = {:.6}, from branch \
+                 {}) do not connect",
+                w[0].index,
+                w[0].lbar_cr,
+                w[0].to_branch,
+                w[1].index,
+                w[1].lbar_cr,
+                w[1].from_branch
+            ));
+        }
+    }
+
+    // Labels.
+    let t = Instant::now();
+    let labels = labels::label_all(&branches, &critical);
+    timings.labels = t.elapsed().as_secs_f64();
+
+    for b in &branches {
+        for (end, stop) in [(&b.low_end, &b.stop_low), (&b.high_end, &b.stop_high)] {
+            if matches!(end, crate::BranchEnd::Failed { .. }) {
+                warnings.push(format!("branch {} (η = {}): {stop}", b.branch, b.eta));
+            }
+        }
+    }
+    if let Some(g) = &great {
+        warnings.extend(g.notes.iter().cloned());
+    }
+    timings.total = start.elapsed().as_secs_f64();
+    let scene = format!(
+        "R = {}, D = {:?}, {} ≤ L̄ ≤ {}, accuracy {:?}, tracing with {} cells per period",
+        opts.radius,
+        opts.stiffness,
+        opts.lbar_min,
+        opts.lbar_max,
+        opts.accuracy,
+        opts.trace_cells_per_period()
+    );
+    Ok(NumericDiagram {
+        accuracy: opts.accuracy,
+        scene,
+        range: (opts.lbar_min, opts.lbar_max),
+        branches,
+        labels,
+        critical,
+        great_circles: great,
+        warnings,
+        timings,
+    })
+}
+
+fn check_branch(b: &TracedBranch) -> Result<(), DiagramError> {
+    let bad = |reason: String| Err(DiagramError::InvalidBranch { eta: b.eta, reason });
+    if b.points.is_empty() {
+        return bad("no traced states".into());
+    }
+    let dim = 2 * b.cells + 3 + usize::from(b.phase);
+    for (k, p) in b.points.iter().enumerate() {
+        if p.state.len() != dim {
+            return bad(format!(
+                "state {k} has length {} instead of {dim}",
+                p.state.len()
+            ));
+        }
+        if !(p.lbar.is_finite() && p.energy.is_finite() && p.slope.is_finite()) {
+            return bad(format!("state {k} has non-finite values"));
+        }
+        if k > 0 && p.lbar < b.points[k - 1].lbar {
+            return bad("states are not in increasing L̄".into());
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,480 @@
+//! The numeric branch diagram of elastic rod loops on a sphere (paper: Wang, Li & Yi, JMPS
+//! 2024, Secs. 3.1, 4.2, 4.3, Figs. 2, 3, 7): every configuration branch followed in the
+//! normalised length `L̄ = L/(2πR)`, the critical lengths where branches exchange global
+//! stability, a stability label for every computed state, and the buckling of the m-fold
+//! great circles with branch switching from them.
+//!
+//! # Pipeline
+//!
+//! 1. **Tracing** ([`compute_branch`], [`trace`]): branch `η` (number of periods of the
+//!    geodesic curvature; paper branch [`rodloop_exact::branch_of_eta`]) is seeded from the
+//!    Euler rotation curve with `l = η` near the middle of its range
+//!    `(η − 1, η + 1) ∩ [L̄_min, L̄_max]`, relaxed and solved at a *coarse tracing resolution*,
+//!    and followed by pseudo-arclength continuation in `L̄` in both directions
+//!    ([`rodloop_solver::LbarProblem`], the phase condition held fixed in `s/L`), with the
+//!    stability index monitored at every point. Where the branch ends on an `(η ± 1)`-fold
+//!    great circle (the loop collapses, the constraint Jacobian loses rank and the KKT matrix
+//!    becomes singular) the state behaves like `√|L̄ − m|`; the last stretch is therefore
+//!    followed by Newton's method at prescribed lengths `L̄ = m ± a²` with `a` halved at every
+//!    step and a predictor polynomial in `a`, down to [`DiagramOptions::end_distance`]
+//!    (default `5·10⁻⁵`) from the great circle. Every traced state carries its energy
+//!    (Richardson-extrapolated with a solve at half the tracing resolution, with an error
+//!    estimate), `dE/dL̄`, contact-force extremes and stability index.
+//! 2. **Critical lengths** ([`critical`]): where the lowest branch changes between traced
+//!    samples, `E_a(L̄) = E_b(L̄)` is solved by Newton's method in `L̄` (analytic slopes
+//!    `dE/dL̄`, bracket safeguard), every evaluation *re-solving* both equilibria at the
+//!    reporting resolution of the accuracy level and at half (or, for `High`, double) that
+//!    resolution, Richardson-extrapolated. Collapses are the integer lengths `L̄ = m` where
+//!    the lowest branch ends on the m-fold great circle (checked: the branch energy
+//!    extrapolates to `E R/(πD) = m`).
+//! 3. **Labels** ([`Label`]): stable / metastable / unstable for every traced state.
+//! 4. **Great circles** ([`buckling`]): the loads at which the constrained Hessian of the
+//!    m-fold great circle becomes singular (Eqs. 33–34), and branch switching from the null
+//!    vectors onto the traced branches (merged when they coincide).
+//!
+//! [`compute`] runs it all; a caller that wants to save branches as they finish (and resume an
+//! interrupted run) calls [`compute_branch`] per branch and [`assemble`] at the end.
+//!
+//! Energies are `E R/(π D0)`, forces `λR³/D0` (with `R`, `D0` of the scene), as in the paper.
+
+#![warn(missing_docs)]
+
+pub mod buckling;
+pub mod critical;
+mod diagram;
+mod labels;
+pub mod refine;
+mod stability;
+pub mod trace;
+
+use std::time::Instant;
+
+pub use buckling::{Buckling, BucklingReport, Switching};
+pub use critical::{CriticalKind, CriticalLength};
+pub use diagram::{assemble, BranchSummary, DiagramRow, DiagramSummary, NumericDiagram, Timings};
+pub use labels::Label;
+pub use trace::{
+    compute_branch, BranchEnd, BranchTimings, IndexChange, PointSource, TracedBranch, TracedPoint,
+};
+
+use rodloop_solver::{Accuracy, SolverError, Stiffness};
+
+/// Errors of the diagram engine.
+#[derive(Debug, thiserror::Error)]
+pub enum DiagramError {
+    /// Options that cannot describe a diagram (non-positive radius, empty range, …).
+    #[error("invalid diagram options: {0}")]
+    InvalidOptions(String),
+    /// A branch whose existence range `(η − 1, η + 1)` misses `[lbar_min, lbar_max]`.
+    #[error(
+        "branch eta = {eta} exists for {lo} < L̄ < {hi}, which misses the range \
+         [{lbar_min}, {lbar_max}]"
+    )]
+    BranchOutOfRange {
+        /// Periods of `κ_g`.
+        eta: u32,
+        /// Lower end of the branch.
+        lo: f64,
+        /// Upper end of the branch.
+        hi: f64,
+        /// Lower end of the diagram range.
+        lbar_min: f64,
+        /// Upper end of the diagram range.
+        lbar_max: f64,
+    },
+    /// The seed of a branch could not be solved.
+    #[error("seeding branch eta = {eta} at L̄ = {lbar} failed: {source}")]
+    Seed {
+        /// Periods of `κ_g`.
+        eta: u32,
+        /// Length of the seed.
+        lbar: f64,
+        /// The solver's error.
+        #[source]
+        source: SolverError,
+    },
+    /// The continuation could not even start from the seed.
+    #[error("continuation of branch eta = {eta} failed: {reason}")]
+    Continuation {
+        /// Periods of `κ_g`.
+        eta: u32,
+        /// What went wrong.
+        reason: String,
+    },
+    /// A critical length could not be located.
+    #[error("critical length of branches {from_branch} → {to_branch} near L̄ = {lbar}: {reason}")]
+    Critical {
+        /// Lowest branch below.
+        from_branch: u32,
+        /// Lowest branch above.
+        to_branch: u32,
+        /// Approximate location.
+        lbar: f64,
+        /// What went wrong.
+        reason: String,
+    },
+    /// A traced branch passed to [`assemble`] is unusable (no points, wrong state length, …).
+    #[error("traced branch eta = {eta} is unusable: {reason}")]
+    InvalidBranch {
+        /// Periods of `κ_g`.
+        eta: u32,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// An error of the solver outside the cases above.
+    #[error("solver: {0}")]
+    Solver(#[from] SolverError),
+}
+
+/// What to compute: the scene, the range of lengths and the accuracy level.
+///
+/// [`DiagramOptions::default`] is the default scene of the CLI: homogeneous rod (`D = 1`) on
+/// the unit sphere, `1 ≤ L̄ ≤ 5`, [`Accuracy::Default`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct DiagramOptions {
+    /// Sphere radius `R`.
+    pub radius: f64,
+    /// Bending stiffness profile.
+    pub stiffness: Stiffness,
+    /// Smallest length of the diagram.
+    pub lbar_min: f64,
+    /// Largest length of the diagram.
+    pub lbar_max: f64,
+    /// Accuracy level: tracing resolution, reporting resolution of the critical lengths.
+    pub accuracy: Accuracy,
+    /// Largest `η` traced. `None`: every branch whose range `(η − 1, η + 1)` meets
+    /// `[lbar_min, lbar_max]`.
+    pub eta_max: Option<u32>,
+    /// Cells per period of `κ_g` (times `η + 1`) of the tracing resolution; `None`: from the
+    /// accuracy level (8, 12, 16 for fast, default, high).
+    pub trace_cells_per_period: Option<usize>,
+    /// Distance from the great circle at which a branch end stops (must be in `(0, 1e-2)`).
+    pub end_distance: f64,
+    /// Whether [`assemble`] analyses the great circles (buckling loads and branch switching).
+    pub great_circles: bool,
+    /// Worker threads for tracing and refinement (0: the available parallelism).
+    pub threads: usize,
+}
+
+impl Default for DiagramOptions {
+    fn default() -> Self {
+        Self {
+            radius: 1.0,
+            stiffness: Stiffness::uniform(1.0),
+            lbar_min: 1.0,
+            lbar_max: 5.0,
+            accuracy: Accuracy::Default,
+            eta_max: None,
+            trace_cells_per_period: None,
+            end_distance: 5e-5,
+            great_circles: true,
+            threads: 0,
+        }
+    }
+}
+
+impl DiagramOptions {
+    /// The default scene at another accuracy level.
+    pub fn with_accuracy(accuracy: Accuracy) -> Self {
+        Self {
+            accuracy,
+            ..Self::default()
+        }
+    }
+
+    /// Check the options (finite positive radius, `0 < lbar_min < lbar_max`, a valid
+    /// stiffness profile, a sensible end distance).
+    pub fn validate(&self) -> Result<(), DiagramError> {
+        let bad = |m: String| Err(DiagramError::InvalidOptions(m));
+        if !(self.radius.is_finite() && self.radius > 0.0) {
+            return bad(format!("radius must be positive (got {})", self.radius));
+        }
+        if !(self.lbar_min.is_finite() && self.lbar_max.is_finite()) {
+            return bad("the length range must be finite".into());
+        }
+        if !(self.lbar_min > 0.0 && self.lbar_max > self.lbar_min) {
+            return bad(format!(
+                "need 0 < lbar_min < lbar_max (got {}, {})",
+                self.lbar_min, self.lbar_max
+            ));
+        }
+        if self.lbar_max > 1000.0 {
+            return bad(format!("lbar_max = {} is beyond 1000", self.lbar_max));
+        }
+        if !(self.end_distance > 0.0 && self.end_distance < 1e-2) {
+            return bad(format!(
+                "end_distance must lie in (0, 0.01) (got {})",
+                self.end_distance
+            ));
+        }
+        if let Some(c) = self.trace_cells_per_period {
+            if !(4..=400).contains(&c) {
+                return bad(format!(
+                    "trace_cells_per_period must lie in [4, 400] (got {c})"
+                ));
+            }
+        }
+        self.stiffness.validate()?;
+        Ok(())
+    }
+
+    /// The branches `η` of the diagram, ascending.
+    pub fn etas(&self) -> Vec<u32> {
+        let top = self.lbar_max.ceil() as u32 + 1;
+        let max = self.eta_max.unwrap_or(top);
+        (1..=max.min(top))
+            .filter(|&eta| {
+                let e = f64::from(eta);
+                e - 1.0 < self.lbar_max && e + 1.0 > self.lbar_min
+            })
+            .collect()
+    }
+
+    /// Cells per period of the tracing resolution.
+    pub fn trace_cells_per_period(&self) -> usize {
+        self.trace_cells_per_period.unwrap_or(match self.accuracy {
+            Accuracy::Fast => 8,
+            Accuracy::Default => 12,
+            Accuracy::High => 16,
+        })
+    }
+
+    /// Number of cells of the tracing resolution of branch `eta`:
+    /// `c (η + 1)` with `c` = [`Self::trace_cells_per_period`], at least what the stiffness
+    /// profile needs (`γ` cells for Eq. (51), one per table point; twice that for modest
+    /// profiles (`≤ 64` cells) except at the fast level, so that the half-resolution partner
+    /// of the energy extrapolation resolves the profile too; sharp profiles are traced
+    /// without that partner, the reporting resolution resolves them) and 8, rounded up to a
+    /// multiple of 4.
+    pub fn trace_cells(&self, eta: u32) -> usize {
+        let base = self.trace_cells_per_period() * (eta as usize + 1);
+        let profile = profile_cells(&self.stiffness);
+        let factor = if self.accuracy == Accuracy::Fast || profile > 64 {
+            1
+        } else {
+            2
+        };
+        base.max(factor * profile).max(8).div_ceil(4) * 4
+    }
+
+    /// Worker threads actually used.
+    pub fn worker_threads(&self) -> usize {
+        if self.threads > 0 {
+            self.threads
+        } else {
+            std::thread::available_parallelism()
+                .map(|n| n.get())
+                .unwrap_or(1)
+        }
+    }
+
+    /// A string identifying everything that determines a traced branch (scene, range,
+    /// accuracy, tracing resolution, end distance): [`compute`] reuses a resumed branch only
+    /// if its fingerprint matches.
+    pub fn fingerprint(&self) -> String {
+        format!(
+            "R={:e};D={:?};range=[{:e},{:e}];accuracy={:?};cpp={};end={:e};v=1",
+            self.radius,
+            self.stiffness,
+            self.lbar_min,
+            self.lbar_max,
+            self.accuracy,
+            self.trace_cells_per_period(),
+            self.end_distance
+        )
+    }
+}
+
+/// Cells a stiffness profile needs to be resolved at all: `γ` for Eq. (51), one per table
+/// point, none for a uniform rod (the fast-level rule of [`Accuracy::cells`]).
+pub(crate) fn profile_cells(stiffness: &Stiffness) -> usize {
+    match stiffness {
+        Stiffness::Tanh { gamma, .. } => gamma.ceil().min(4096.0) as usize,
+        Stiffness::Table { s, .. } => s.len(),
+        Stiffness::Uniform { .. } => 0,
+    }
+}
+
+/// Progress events of [`compute`], [`compute_branch`] and [`assemble`] (for progress bars).
+#[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum Progress {
+    /// [`compute`] will produce these branches (`η` values), `resumed` of them from the
+    /// resume list.
+    Planned {
+        /// Branches (`η`) of the diagram.
+        etas: Vec<u32>,
+        /// How many come from the resume list.
+        resumed: usize,
+    },
+    /// Tracing of a branch started.
+    BranchStarted {
+        /// Paper branch number.
+        branch: u32,
+        /// Periods of `κ_g`.
+        eta: u32,
+    },
+    /// Tracing of a branch progressed (after every run of 25 continuation steps, and at the
+    /// end of each direction).
+    BranchStep {
+        /// Periods of `κ_g`.
+        eta: u32,
+        /// Length reached.
+        lbar: f64,
+        /// Continuation steps so far in this direction.
+        steps: usize,
+    },
+    /// A branch was traced.
+    BranchFinished {
+        /// Paper branch number.
+        branch: u32,
+        /// Periods of `κ_g`.
+        eta: u32,
+        /// Number of traced states.
+        points: usize,
+        /// Wall time of the branch in seconds.
+        seconds: f64,
+    },
+    /// A branch was taken from the resume list.
+    BranchResumed {
+        /// Paper branch number.
+        branch: u32,
+        /// Periods of `κ_g`.
+        eta: u32,
+        /// Number of traced states.
+        points: usize,
+    },
+    /// A branch could not be traced (it is left out of the diagram, with a warning).
+    BranchFailed {
+        /// Periods of `κ_g`.
+        eta: u32,
+        /// Why.
+        reason: String,
+    },
+    /// A resumed branch did not match the options and is traced again.
+    BranchResumeRejected {
+        /// Periods of `κ_g`.
+        eta: u32,
+        /// Why it was rejected.
+        reason: String,
+    },
+    /// [`assemble`] will locate this many crossings and analyse this many great circles
+    /// (one [`Progress::CriticalLocated`] per crossing, one [`Progress::GreatCircleDone`] per
+    /// circle follow, in any order).
+    AssemblyPlanned {
+        /// Number of crossings found on the samples.
+        crossings: usize,
+        /// Number of great circles to analyse.
+        great_circles: usize,
+    },
+    /// A critical length was located.
+    CriticalLocated {
+        /// Crossing or collapse.
+        kind: CriticalKind,
+        /// The critical length.
+        lbar_cr: f64,
+        /// Lowest branch below.
+        from_branch: u32,
+        /// Lowest branch above.
+        to_branch: u32,
+    },
+    /// The great circle with `m` turns was analysed (buckling loads and switching).
+    GreatCircleDone {
+        /// Number of turns.
+        m: u32,
+        /// Of this many.
+        total: usize,
+    },
+}
+
+/// Compute the whole numeric diagram: [`compute_branch`] for every branch of
+/// [`DiagramOptions::etas`] not found (with a matching fingerprint) in `resume`, then
+/// [`assemble`]. Branches are traced on [`DiagramOptions::worker_threads`] threads; the
+/// progress callback is always called from the calling thread.
+pub fn compute(
+    opts: &DiagramOptions,
+    resume: &[TracedBranch],
+    progress: &mut dyn FnMut(Progress),
+) -> Result<NumericDiagram, DiagramError> {
+    opts.validate()?;
+    let start = Instant::now();
+    let etas = opts.etas();
+    if etas.is_empty() {
+        return Err(DiagramError::InvalidOptions(
+            "no branch meets the length range".into(),
+        ));
+    }
+    let fingerprint = opts.fingerprint();
+    let mut have: Vec<TracedBranch> = Vec::new();
+    let mut todo: Vec<u32> = Vec::new();
+    let mut rejected = Vec::new();
+    for &eta in &etas {
+        match resume.iter().find(|b| b.eta == eta) {
+            Some(b) if b.fingerprint == fingerprint && !b.points.is_empty() => have.push(b.clone()),
+            Some(b) => {
+                rejected.push(Progress::BranchResumeRejected {
+                    eta,
+                    reason: if b.points.is_empty() {
+                        "no traced points".into()
+                    } else {
+                        format!(
+                            "traced with other options ({} ≠ {})",
+                            b.fingerprint, fingerprint
+                        )
+                    },
+                });
+                todo.push(eta);
+            }
+            None => todo.push(eta),
+        }
+    }
+    progress(Progress::Planned {
+        etas: etas.clone(),
+        resumed: have.len(),
+    });
+    for r in rejected {
+        progress(r);
+    }
+    for b in &have {
+        progress(Progress::BranchResumed {
+            branch: b.branch,
+            eta: b.eta,
+            points: b.points.len(),
+        });
+    }
+    // Largest branches first, for the balance of the threads.
+    todo.sort_by_key(|&eta| std::cmp::Reverse(eta));
+    let traced = diagram::run_parallel(opts.worker_threads(), todo, progress, |eta, tx| {
+        let r = compute_branch(opts, eta, &mut |p| tx(p));
+        if let Err(e) = &r {
+            tx(Progress::BranchFailed {
+                eta,
+                reason: e.to_string(),
+            });
+        }
+        r
+    });
+    // A branch that cannot be traced at all is left out with a warning (the others still make
+    // a diagram); invalid options fail everything.
+    let mut failures = Vec::new();
+    for t in traced {
+        match t {
+            Ok(b) => have.push(b),
+            Err(e @ DiagramError::InvalidOptions(_)) => return Err(e),
+            Err(e) => failures.push(format!("branch left out of the diagram: {e}")),
+        }
+    }
+    if have.is_empty() {
+        return Err(DiagramError::InvalidOptions(format!(
+            "no branch could be traced: {}",
+            failures.join("; ")
+        )));
+    }
+    have.sort_by_key(|b| b.eta);
+    let tracing_seconds = start.elapsed().as_secs_f64();
+    let mut d = assemble(opts, have, progress)?;
+    d.warnings.splice(0..0, failures);
+    d.timings.tracing = tracing_seconds;
+    d.timings.total = start.elapsed().as_secs_f64();
+    Ok(d)
+}

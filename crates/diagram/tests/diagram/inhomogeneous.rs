@@ -1,0 +1,80 @@
+//! A two-segment rod (Eq. 51, D1/D0 = 0.5, s0 = 0.3, s1 = 0.8; γ = 20 to keep it cheap).
+
+use rodloop_diagram::{compute, BranchEnd, CriticalKind, DiagramOptions, Label};
+use rodloop_solver::{Accuracy, Stiffness};
+
+#[test]
+fn tanh_profile_diagram_runs_through() {
+    let opts = DiagramOptions {
+        stiffness: Stiffness::Tanh {
+            d0: 1.0,
+            d1: 0.5,
+            s0: 0.3,
+            s1: 0.8,
+            gamma: 20.0,
+        },
+        ..DiagramOptions::with_accuracy(Accuracy::Fast)
+    };
+    let d = compute(&opts, &[], &mut |_| {}).unwrap();
+    println!("{:#?}", d.warnings);
+    assert_eq!(d.branches.len(), 5);
+    // Mean stiffness 0.75 D0: a great circle at L̄ = m has E R/(π D0) = 0.75 m.
+    let collapses: Vec<_> = d
+        .critical
+        .iter()
+        .filter(|c| c.kind == CriticalKind::Collapse)
+        .collect();
+    assert_eq!(collapses.len(), 5);
+    for c in &collapses {
+        assert!((c.energy - 0.75 * c.lbar_cr).abs() < 1e-6, "{c:?}");
+    }
+    let crossings: Vec<_> = d
+        .critical
+        .iter()
+        .filter(|c| c.kind == CriticalKind::Crossing)
+        .collect();
+    assert_eq!(crossings.len(), 4);
+    for w in d.critical.windows(2) {
+        assert_eq!(w[0].to_branch, w[1].from_branch);
+        assert!(w[0].lbar_cr < w[1].lbar_cr);
+    }
+    for (b, labels) in d.branches.iter().zip(&d.labels) {
+        for end in [&b.low_end, &b.high_end] {
+            assert!(
+                !matches!(end, BranchEnd::Failed { .. }),
+                "branch {}: {end:?}",
+                b.branch
+            );
+        }
+        for (k, p) in b.points.iter().enumerate() {
+            assert!(p.energy.is_finite() && p.energy > 0.0);
+            // Energies are bounded below by the great-circle (normal) part and lie above
+            // the geodesic part.
+            assert!(p.energy >= 0.75 * p.lbar - 1e-6 && p.energy_g >= 0.0);
+            assert!(p.energy_g < p.energy);
+            assert_eq!(labels[k] == Label::Unstable, p.index > 0);
+            // The slopes integrate to the energy differences (trapezoidal rule).
+            if k > 0 {
+                let q = &b.points[k - 1];
+                let h = p.lbar - q.lbar;
+                let de = p.energy - q.energy;
+                let trap = 0.5 * h * (p.slope + q.slope);
+                assert!(
+                    (de - trap).abs() <= 0.05 * h * (p.slope.abs() + q.slope.abs()) + 1e-4,
+                    "branch {} at {}: {de} vs {trap}",
+                    b.branch,
+                    p.lbar
+                );
+            }
+        }
+    }
+    // There is a stable state at every length of the range away from the critical ones.
+    let mut l = 1.02;
+    while l < 5.0 {
+        if d.critical.iter().all(|c| (c.lbar_cr - l).abs() > 0.05) {
+            let lowest = d.lowest_at(l);
+            assert_eq!(lowest.len(), 1, "L̄ = {l}");
+        }
+        l += 0.1;
+    }
+}
