@@ -108,6 +108,35 @@ fn exact_symmetry(pv: &PaperValue) -> Result<String> {
     Ok(rodloop_exact::symmetry::point_group(&pts, 1e-9).symbol)
 }
 
+/// The numeric model's value for a paper row: critical lengths from the numeric diagram,
+/// buckling loads from its great-circle analysis (Eq. 33 rows: the mode with m + 1 periods,
+/// Eq. 34 rows: m − 1). Winding numbers and symmetries are compared on the exact layer only.
+fn numeric_value(pv: &PaperValue, nd: &rodloop_diagram::NumericDiagram) -> Option<f64> {
+    match pv.kind.as_str() {
+        "critical_length" => {
+            let target: f64 = pv.value.parse().ok()?;
+            let want = if pv.resolution == Some(0.0) {
+                rodloop_diagram::CriticalKind::Collapse
+            } else {
+                rodloop_diagram::CriticalKind::Crossing
+            };
+            nd.critical
+                .iter()
+                .filter(|c| c.kind == want)
+                .map(|c| c.lbar_cr)
+                .min_by(|a, b| (a - target).abs().total_cmp(&(b - target).abs()))
+        }
+        "buckling_load" => {
+            let m = pv.lbar? as u32;
+            let eq = if pv.side == "above" { "33" } else { "34" };
+            nd.great_circles.as_ref()?.loads.iter().find_map(|l| {
+                (l.m == m && l.equation.as_deref() == Some(eq)).then_some(l.lambda_numeric)
+            })
+        }
+        _ => None,
+    }
+}
+
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
     let values = paper_values()?;
@@ -115,6 +144,12 @@ pub fn run(args: &Args) -> Result<()> {
         bail!("no paper values compiled in");
     }
     let d = compute(&DiagramSettings::default())?;
+    let nd = rodloop_diagram::compute(
+        &rodloop_diagram::DiagramOptions::default(),
+        &[],
+        &mut |_| {},
+    )
+    .context("numeric diagram of the default scene")?;
     let mut table = Table::new(
         "compare.csv",
         &[
@@ -129,12 +164,14 @@ pub fn run(args: &Args) -> Result<()> {
             "within_resolution",
             "numeric",
             "numeric_deviation",
+            "numeric_within_resolution",
+            "numeric_minus_exact",
             "source",
         ],
     );
     let mut rows = Vec::new();
     outln!(
-        "{:<11} {:<15} {:>6} {:>6} {:>10} {:>20} {:>10} {:>6}  source",
+        "{:<11} {:<15} {:>6} {:>5} {:>9} {:>17} {:>9} {:>6} {:>17} {:>9} {:>6}",
         "id",
         "kind",
         "branch",
@@ -142,85 +179,129 @@ pub fn run(args: &Args) -> Result<()> {
         "paper",
         "exact",
         "deviation",
+        "agrees",
+        "numeric",
+        "deviation",
         "agrees"
     );
     let mut disagreements = 0;
+    let mut numeric_disagreements = 0;
     for pv in &values {
         let exact = exact_value(pv, &d.critical)?;
+        let numeric = numeric_value(pv, &nd);
         let paper_num: Option<f64> = pv.value.parse().ok();
         let symmetry = if pv.kind == "symmetry" {
             Some(exact_symmetry(pv)?)
         } else {
             None
         };
-        let (dev, agrees) = match (exact, paper_num) {
-            _ if symmetry.is_some() => (None, symmetry.as_ref().map(|s| *s == pv.value)),
-            (Some(e), Some(p)) => {
-                let dev = e - p;
+        // Deviation from the paper and agreement within its printed resolution.
+        let judge = |v: Option<f64>| match (v, paper_num) {
+            (Some(x), Some(p)) => {
+                let dev = x - p;
                 let tol = pv.resolution.unwrap_or(0.0).max(1e-6 * p.abs().max(1.0));
                 (Some(dev), Some(dev.abs() <= tol))
             }
             _ => (None, None),
         };
-        if agrees == Some(false) {
-            disagreements += 1;
-        }
-        let fmt_opt = |v: Option<f64>| v.map(|x| format!("{x:.12}")).unwrap_or_else(|| "-".into());
+        let (dev, agrees) = match &symmetry {
+            Some(sym) => (None, Some(*sym == pv.value)),
+            None => judge(exact),
+        };
+        let (ndev, nagrees) = judge(numeric);
+        disagreements += usize::from(agrees == Some(false));
+        numeric_disagreements += usize::from(nagrees == Some(false));
+        let numeric_vs_exact = match (numeric, exact) {
+            (Some(n), Some(e)) => Some(n - e),
+            _ => None,
+        };
+        let shown = |v: Option<f64>| match (pv.kind.as_str(), v) {
+            ("winding", Some(x)) => format!("{x}"),
+            (_, Some(x)) => format!("{x:.12}"),
+            (_, None) => "-".into(),
+        };
+        let yes = |a: Option<bool>| match a {
+            Some(true) => "yes",
+            Some(false) => "NO",
+            None => "-",
+        };
+        let sci = |v: Option<f64>| v.map(|x| format!("{x:.1e}")).unwrap_or_else(|| "-".into());
         outln!(
-            "{:<11} {:<15} {:>6} {:>6} {:>10} {:>20} {:>10} {:>6}  {}",
+            "{:<11} {:<15} {:>6} {:>5} {:>9} {:>17} {:>9} {:>6} {:>17} {:>9} {:>6}",
             pv.id,
             pv.kind,
             pv.branch,
             pv.lbar.map(|l| l.to_string()).unwrap_or_default(),
-            pv.value,
-            match pv.kind.as_str() {
-                "symmetry" => symmetry.clone().unwrap_or_default(),
-                "winding" => exact.map(|v| format!("{v}")).unwrap_or_default(),
-                _ => fmt_opt(exact),
+            if pv.value.len() > 9 {
+                &pv.value[..9]
+            } else {
+                &pv.value
             },
-            dev.map(|x| format!("{x:.1e}"))
-                .unwrap_or_else(|| "-".into()),
-            match agrees {
-                Some(true) => "yes",
-                Some(false) => "NO",
-                None => "-",
-            },
-            pv.source
+            symmetry.clone().unwrap_or_else(|| shown(exact)),
+            sci(dev),
+            yes(agrees),
+            shown(numeric),
+            sci(ndev),
+            yes(nagrees),
         );
+        let opt = |v: Option<f64>| v.map(|x| x.to_string()).unwrap_or_default();
         table.push(vec![
             Cell::S(pv.id.clone()),
             Cell::S(pv.kind.clone()),
             Cell::I(pv.branch.into()),
-            Cell::S(pv.lbar.map(|l| l.to_string()).unwrap_or_default()),
+            Cell::S(opt(pv.lbar)),
             Cell::S(pv.value.clone()),
-            Cell::S(pv.resolution.map(|r| r.to_string()).unwrap_or_default()),
-            Cell::S(
-                symmetry
-                    .clone()
-                    .or_else(|| exact.map(|v| v.to_string()))
-                    .unwrap_or_default(),
-            ),
-            Cell::S(dev.map(|v| v.to_string()).unwrap_or_default()),
+            Cell::S(opt(pv.resolution)),
+            Cell::S(symmetry.clone().unwrap_or_else(|| opt(exact))),
+            Cell::S(opt(dev)),
             Cell::S(agrees.map(|a| a.to_string()).unwrap_or_default()),
-            Cell::S(String::new()),
-            Cell::S(String::new()),
+            Cell::S(opt(numeric)),
+            Cell::S(opt(ndev)),
+            Cell::S(nagrees.map(|a| a.to_string()).unwrap_or_default()),
+            Cell::S(opt(numeric_vs_exact)),
             Cell::S(pv.source.clone()),
         ])?;
-        rows.push(json!({"id": pv.id, "paper": pv.value, "exact": symmetry.clone().map(serde_json::Value::from).unwrap_or_else(|| exact.into()), "agrees": agrees}));
+        rows.push(json!({
+            "id": pv.id,
+            "paper": pv.value,
+            "exact": symmetry.clone().map(serde_json::Value::from).unwrap_or_else(|| exact.into()),
+            "numeric": numeric,
+            "agrees_exact": agrees,
+            "agrees_numeric": nagrees,
+            "numeric_minus_exact": numeric_vs_exact,
+        }));
     }
     ensure_dir(&args.out)?;
     table.write(&args.out)?;
     let summary = json!({
         "rows": values.len(),
         "disagreements_exact": disagreements,
-        "numeric": "not available yet (numeric model: issue 3/4)",
+        "disagreements_numeric": numeric_disagreements,
+        "numeric_model": "rodloop diagram --model numeric, default scene, default accuracy",
+        "values": rows,
     });
-    write_json(&args.out, "summary.json", &summary)?;
+    write_json(&args.out, "summary.json", &strip_nulls(summary))?;
     outln!(
-        "{} paper values; {} disagree with the exact layer beyond the printed resolution; numeric column: not available yet. Wrote compare.csv to {}",
+        "{} paper values; beyond the printed resolution {} disagree with the exact layer and {} with the numeric model (winding numbers and symmetries: exact layer only). Wrote compare.csv and summary.json to {}",
         values.len(),
         disagreements,
+        numeric_disagreements,
         args.out.display()
     );
     Ok(())
+}
+
+fn strip_nulls(v: serde_json::Value) -> serde_json::Value {
+    match v {
+        serde_json::Value::Object(map) => serde_json::Value::Object(
+            map.into_iter()
+                .filter(|(_, v)| !v.is_null())
+                .map(|(k, v)| (k, strip_nulls(v)))
+                .collect(),
+        ),
+        serde_json::Value::Array(a) => {
+            serde_json::Value::Array(a.into_iter().map(strip_nulls).collect())
+        }
+        other => other,
+    }
 }

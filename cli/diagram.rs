@@ -13,27 +13,39 @@ use crate::svg::{self, branch_color, Curve, Figure, LegendEntry, LineStyle, Mark
 /// Which model computes the diagram.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Model {
+    /// Numerical equilibria of the scene (any stiffness profile), traced by continuation.
+    Numeric,
     /// Closed-form elliptic-function solutions (homogeneous loops on the surface only).
     Exact,
-    /// Discretised equilibria (any stiffness profile); not available yet.
-    Numeric,
 }
 
 /// Arguments of `rodloop diagram`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Model used to compute the branches.
-    #[arg(long, value_enum, default_value_t = Model::Exact)]
+    #[arg(long, value_enum, default_value_t = Model::Numeric)]
     pub model: Model,
-    /// Smallest normalised length.
-    #[arg(long, default_value_t = 1.0)]
-    pub lbar_min: f64,
-    /// Largest normalised length.
-    #[arg(long, default_value_t = 5.0)]
-    pub lbar_max: f64,
-    /// Spacing of the sampled lengths in branches.csv.
+    /// Scene file (TOML; see data/scenes/). Default: homogeneous loops on the unit sphere.
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// Accuracy: fast, default or high (overrides the scene's; numeric model).
+    #[arg(long)]
+    pub accuracy: Option<String>,
+    /// Smallest normalised length (default: the scene's, 1).
+    #[arg(long)]
+    pub lbar_min: Option<f64>,
+    /// Largest normalised length (default: the scene's, 5).
+    #[arg(long)]
+    pub lbar_max: Option<f64>,
+    /// Spacing of the sampled lengths in branches.csv (exact model).
     #[arg(long, default_value_t = 0.01)]
     pub step: f64,
+    /// Continue an interrupted numeric run from the branch files in OUT/branches.
+    #[arg(long)]
+    pub resume: bool,
+    /// No progress bars (they are also hidden when stderr is not a terminal).
+    #[arg(long)]
+    pub quiet: bool,
     /// Output directory.
     #[arg(long, default_value = "out/diagram")]
     pub out: PathBuf,
@@ -41,17 +53,27 @@ pub struct Args {
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
-    if args.model == Model::Numeric {
-        bail!("--model numeric is not implemented yet; use --model exact (homogeneous loops on the sphere)");
-    }
-    if !(args.lbar_min > 0.0 && args.lbar_max > args.lbar_min && args.lbar_max <= 50.0) {
+    let scene = crate::solve::load_scene(args.scene.as_deref())?;
+    let lbar_min = args.lbar_min.unwrap_or(scene.lbar_min);
+    let lbar_max = args.lbar_max.unwrap_or(scene.lbar_max);
+    if !(lbar_min > 0.0 && lbar_max > lbar_min && lbar_max <= 50.0) {
         bail!(
             "need 0 < --lbar-min < --lbar-max <= 50 (got {} and {})",
-            args.lbar_min,
-            args.lbar_max
+            lbar_min,
+            lbar_max
         );
     }
-    if !(args.step > 0.0 && (args.lbar_max - args.lbar_min) / args.step <= 1e6) {
+    if args.model == Model::Numeric {
+        return run_numeric(args, &scene, lbar_min, lbar_max);
+    }
+    // Energies and lengths are normalised (E R/(pi D), L/(2 pi R)), so R does not matter.
+    if !scene.stiffness.is_uniform() {
+        bail!(
+            "--model exact covers homogeneous loops only; scene {} has a non-uniform stiffness (use --model numeric)",
+            scene.name
+        );
+    }
+    if !(args.step > 0.0 && (lbar_max - lbar_min) / args.step <= 1e6) {
         bail!(
             "--step must be positive and give at most 1e6 samples (got {})",
             args.step
@@ -59,9 +81,9 @@ pub fn run(args: &Args) -> Result<()> {
     }
     let t0 = Instant::now();
     let settings = DiagramSettings {
-        lbar_min: args.lbar_min,
-        lbar_max: args.lbar_max,
-        eta_max: (args.lbar_max.floor() as u32).max(1),
+        lbar_min,
+        lbar_max,
+        eta_max: (lbar_max.floor() as u32).max(1),
         step: args.step,
     };
     let d = compute(&settings)?;
@@ -132,8 +154,8 @@ pub fn run(args: &Args) -> Result<()> {
     }
     let summary = json!({
         "model": "exact",
-        "lbar_min": args.lbar_min,
-        "lbar_max": args.lbar_max,
+        "lbar_min": lbar_min,
+        "lbar_max": lbar_max,
         "step": args.step,
         "branches": d.points.len(),
         "continuation_points": d.continuation_steps,
@@ -170,6 +192,107 @@ pub fn run(args: &Args) -> Result<()> {
         d.points.iter().map(|p| p.branch).collect::<std::collections::BTreeSet<_>>().len(),
         d.continuation_steps,
         elapsed.as_secs_f64(),
+        args.out.display()
+    );
+    Ok(())
+}
+
+/// The numeric model: trace, locate, label, write, print.
+fn run_numeric(
+    args: &Args,
+    scene: &rodloop_scene::Scene,
+    lbar_min: f64,
+    lbar_max: f64,
+) -> Result<()> {
+    let accuracy = crate::solve::accuracy_of(scene, args.accuracy.as_deref())?;
+    let opts = rodloop_diagram::DiagramOptions {
+        radius: scene.radius,
+        stiffness: crate::solve::stiffness_of(&scene.stiffness),
+        lbar_min,
+        lbar_max,
+        accuracy,
+        ..Default::default()
+    };
+    opts.validate()?;
+    let d = crate::numeric_diagram::run_numeric(&opts, &args.out, args.resume, args.quiet)?;
+    crate::numeric_diagram::write_outputs(&d, &opts, &scene.name, &args.out)?;
+    // For homogeneous scenes, show the exact layer's critical lengths next to the numeric ones.
+    let exact = if scene.stiffness.is_uniform() {
+        compute(&DiagramSettings {
+            lbar_min,
+            lbar_max,
+            eta_max: (lbar_max.floor() as u32).max(1),
+            step: 0.01,
+        })
+        .ok()
+    } else {
+        None
+    };
+    outln!(
+        "Critical lengths (numeric model, scene {}, accuracy {:?}):",
+        scene.name,
+        accuracy
+    );
+    outln!(
+        "  {:>2}  {:>18}  {:>9}  {:>8}  {:>16}  {:>9}{}",
+        "i",
+        "lbar_cr",
+        "kind",
+        "from->to",
+        "E R/(pi D0)",
+        "error",
+        if exact.is_some() {
+            "    exact deviation"
+        } else {
+            ""
+        }
+    );
+    for c in &d.critical {
+        let dev = exact.as_ref().and_then(|e| {
+            e.critical
+                .iter()
+                .min_by(|a, b| {
+                    (a.lbar_cr - c.lbar_cr)
+                        .abs()
+                        .total_cmp(&(b.lbar_cr - c.lbar_cr).abs())
+                })
+                .map(|x| c.lbar_cr - x.lbar_cr)
+        });
+        outln!(
+            "  {:>2}  {:>18.12}  {:>9}  {:>3}->{:<3}  {:>16.10}  {:>9.1e}{}",
+            c.index,
+            c.lbar_cr,
+            c.kind,
+            c.from_branch,
+            c.to_branch,
+            c.energy,
+            c.error_estimate,
+            dev.map(|x| format!("  {x:>17.1e}")).unwrap_or_default()
+        );
+    }
+    if let Some(gc) = &d.great_circles {
+        for l in &gc.loads {
+            if let (Some(f), Some(eq)) = (l.lambda_formula, &l.equation) {
+                outln!(
+                    "  buckling of the {}-fold great circle (mode with {} periods of kappa_g): lambda R^3/D = {:.10} ± {:.1e}, Eq. ({eq}) {:.10}",
+                    l.m,
+                    l.mode_periods,
+                    l.lambda_numeric,
+                    l.lambda_error,
+                    f
+                );
+            }
+        }
+    }
+    for w in &d.warnings {
+        eprintln!("warning: {w}");
+    }
+    outln!(
+        "{} states on {} branches in {:.2} s (tracing {:.2} s); wrote branches.csv, critical.csv, diagram.svg, summary.json to {}",
+        d.rows().len(),
+        d.branches.len(),
+        d.timings.total,
+        d.timings.tracing,
         args.out.display()
     );
     Ok(())

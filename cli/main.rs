@@ -17,7 +17,9 @@ mod analytic;
 mod compare;
 mod diagram;
 mod euler;
+mod numeric_diagram;
 mod output;
+mod progress;
 mod solve;
 mod svg;
 

@@ -12,6 +12,8 @@ pub enum LineStyle {
     Solid,
     /// Dashed line.
     Dashed,
+    /// Dotted line.
+    Dotted,
 }
 
 impl LineStyle {
@@ -19,6 +21,7 @@ impl LineStyle {
         match self {
             LineStyle::Solid => "",
             LineStyle::Dashed => " stroke-dasharray=\"7 4\"",
+            LineStyle::Dotted => " stroke-dasharray=\"1.5 3\"",
         }
     }
 }

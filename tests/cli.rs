@@ -165,7 +165,7 @@ fn bad_input_gives_clear_errors_without_panics() {
         (&["analytic", "--lbar", "1.2", "--eta", "0"], "eta"),
         (&["analytic", "--lbar", "-1", "--eta", "2"], "lbar"),
         (&["euler", "--l", "2", "--lbar", "3.5"], "lbar"),
-        (&["diagram", "--model", "numeric"], "numeric"),
+        (&["diagram", "--accuracy", "extreme"], "accuracy"),
         (&["diagram", "--lbar-min", "3", "--lbar-max", "2"], "lbar"),
         (&["euler", "--l", "1", "--lbar", "1e-9"], "degenerate"),
         (&["analytic", "--lbar", "2", "--eta", "4000000000"], "eta"),
@@ -220,6 +220,17 @@ fn compare_puts_paper_values_next_to_exact_ones() {
     let (header, rows) = read_csv(&out.join("compare.csv"));
     let col = |name: &str| header.iter().position(|h| h == name).unwrap();
     let (id, agrees) = (col("id"), col("within_resolution"));
+    let nagrees = col("numeric_within_resolution");
+    let numeric_rows = rows.iter().filter(|r| !r[nagrees].is_empty()).count();
+    assert!(
+        numeric_rows >= 10,
+        "numeric column filled for critical lengths and loads"
+    );
+    for r in &rows {
+        if !r[nagrees].is_empty() {
+            assert_eq!(r[nagrees], "true", "{}", r[id]);
+        }
+    }
     let rows: Vec<_> = rows.iter().filter(|r| !r[agrees].is_empty()).collect();
     assert!(rows.len() >= 20);
     for r in rows {
@@ -418,4 +429,132 @@ fn non_converged_solve_writes_nothing() {
         "{err}"
     );
     assert!(!out.join("summary.json").exists() && !out.join("config.csv").exists());
+}
+
+/// The main job: the numeric diagram of the default scene. Its critical crossings must agree
+/// with the exact layer's to 1e-6 at the default accuracy (issue 4), and the labels must
+/// follow the paper (branch 1 stable at 1.2, branch 2 metastable there).
+#[test]
+fn numeric_diagram_of_the_default_scene() {
+    let out = tmp("numeric");
+    let o = rodloop(&["diagram", "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in [
+        "branches.csv",
+        "critical.csv",
+        "summary.json",
+        "diagram.svg",
+    ] {
+        assert!(out.join(f).exists(), "{f}");
+    }
+    let (bh, brows) = read_csv(&out.join("branches.csv"));
+    for col in [
+        "branch",
+        "eta",
+        "lbar",
+        "energy",
+        "energy_g",
+        "stability",
+        "index",
+        "lambda_min",
+        "lambda_max",
+    ] {
+        assert!(bh.iter().any(|h| h == col), "branches.csv lacks {col}");
+    }
+    assert_no_nan(&out.join("branches.csv"));
+    let c = |n: &str| bh.iter().position(|h| h == n).unwrap();
+    let label_near = |branch: &str, l: f64| -> String {
+        brows
+            .iter()
+            .filter(|r| r[c("branch")] == branch)
+            .min_by(|a, b| {
+                let da = (a[c("lbar")].parse::<f64>().unwrap() - l).abs();
+                let db = (b[c("lbar")].parse::<f64>().unwrap() - l).abs();
+                da.total_cmp(&db)
+            })
+            .map(|r| r[c("stability")].clone())
+            .unwrap()
+    };
+    assert_eq!(label_near("1", 1.2), "stable");
+    assert_eq!(label_near("2", 1.2), "metastable");
+    assert_eq!(label_near("2", 1.7), "stable");
+    assert_eq!(label_near("3", 2.2), "stable");
+    assert_eq!(label_near("1", 2.8), "stable");
+    let (ch, crows) = read_csv(&out.join("critical.csv"));
+    let k = |n: &str| ch.iter().position(|h| h == n).unwrap();
+    let exact =
+        rodloop_exact::diagram::compute(&rodloop_exact::diagram::DiagramSettings::default())
+            .unwrap();
+    assert_eq!(crows.len(), exact.critical.len());
+    for (r, e) in crows.iter().zip(&exact.critical) {
+        let x: f64 = r[k("lbar_cr")].parse().unwrap();
+        let est: f64 = r[k("error_estimate")].parse().unwrap();
+        assert!((x - e.lbar_cr).abs() < 1e-6, "{x} vs exact {}", e.lbar_cr);
+        assert!(
+            (x - e.lbar_cr).abs() <= 3.0 * est + 1e-12,
+            "{x} vs {} (estimate {est})",
+            e.lbar_cr
+        );
+        assert_eq!(r[k("kind")], e.kind.to_string());
+    }
+    let svg = std::fs::read_to_string(out.join("diagram.svg")).unwrap();
+    assert!(
+        svg.contains("stroke-dasharray=\"7 4\""),
+        "metastable states are dashed"
+    );
+}
+
+/// An interrupted run continues from the branch files already written.
+#[test]
+fn numeric_diagram_resumes_from_branch_files() {
+    let out = tmp("resume");
+    let args = [
+        "diagram",
+        "--accuracy",
+        "fast",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let o = rodloop(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let first = std::fs::read_to_string(out.join("critical.csv")).unwrap();
+    let branches: Vec<_> = std::fs::read_dir(out.join("branches")).unwrap().collect();
+    assert_eq!(branches.len(), 5, "one file per branch");
+    // Simulate an interruption: the summary and one branch are missing.
+    std::fs::remove_file(out.join("summary.json")).unwrap();
+    std::fs::remove_file(out.join("branches").join("eta-3.json")).unwrap();
+    let mut resumed = args.to_vec();
+    resumed.push("--resume");
+    let o = rodloop(&resumed);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).is_empty(),
+        "--quiet prints nothing on stderr"
+    );
+    assert_eq!(
+        std::fs::read_to_string(out.join("critical.csv")).unwrap(),
+        first
+    );
+    assert!(out.join("branches").join("eta-3.json").exists());
+}
+
+#[test]
+fn exact_model_rejects_inhomogeneous_scenes() {
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/data/scenes/inhomogeneous-d1-0.5.toml"
+    );
+    let out = tmp("exact-inhom");
+    let o = rodloop(&[
+        "diagram",
+        "--model",
+        "exact",
+        "--scene",
+        scene,
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("homogeneous"));
 }

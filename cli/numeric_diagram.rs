@@ -1,0 +1,362 @@
+//! `rodloop diagram --model numeric`: numerical branches traced by pseudo-arclength
+//! continuation, critical lengths on re-solved equilibria, stable / metastable / unstable
+//! labels from the Hessian index, great-circle buckling loads.
+//!
+//! Each branch is written to `DIR/branches/eta-N.json` as soon as it is traced, so that an
+//! interrupted run continues with `--resume` from the branches already there.
+
+use std::path::Path;
+use std::sync::mpsc;
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use rodloop_diagram::{
+    assemble, compute_branch, DiagramOptions, Label, NumericDiagram, Progress, TracedBranch,
+};
+use serde_json::json;
+
+use crate::output::{ensure_dir, write_atomic, write_json, Cell, Table};
+use crate::progress::Progress as Bar;
+use crate::svg::{self, branch_color, Curve, Figure, LegendEntry, LineStyle, Marker};
+
+/// Messages from the tracing threads to the main thread.
+enum Msg {
+    Event(Progress),
+    Done(
+        u32,
+        Box<Result<TracedBranch, rodloop_diagram::DiagramError>>,
+    ),
+}
+
+/// Load the branches of an interrupted run (`DIR/branches/eta-N.json`).
+fn load_resume(dir: &Path) -> Result<Vec<TracedBranch>> {
+    let bdir = dir.join("branches");
+    let mut out = Vec::new();
+    let Ok(entries) = std::fs::read_dir(&bdir) else {
+        return Ok(out);
+    };
+    for e in entries {
+        let path = e?.path();
+        if path.extension().is_some_and(|x| x == "json") {
+            let text = std::fs::read_to_string(&path)
+                .with_context(|| format!("cannot read {}", path.display()))?;
+            let b: TracedBranch = serde_json::from_str(&text).with_context(|| {
+                format!(
+                    "{} is not a branch file of this rodloop version",
+                    path.display()
+                )
+            })?;
+            out.push(b);
+        }
+    }
+    Ok(out)
+}
+
+/// Trace every branch (in parallel), writing each branch file when it is done, then assemble.
+pub fn run_numeric(
+    opts: &DiagramOptions,
+    out: &Path,
+    resume: bool,
+    quiet: bool,
+) -> Result<NumericDiagram> {
+    ensure_dir(out)?;
+    ensure_dir(&out.join("branches"))?;
+    let t0 = Instant::now();
+    let previous = if resume {
+        load_resume(out)?
+    } else {
+        Vec::new()
+    };
+    let fingerprint = opts.fingerprint();
+    let etas = opts.etas();
+    if etas.is_empty() {
+        bail!(
+            "no branch meets the length range [{}, {}]",
+            opts.lbar_min,
+            opts.lbar_max
+        );
+    }
+    let mut have = Vec::new();
+    let mut todo = Vec::new();
+    for &eta in &etas {
+        match previous.iter().find(|b| b.eta == eta) {
+            Some(b) if b.fingerprint == fingerprint && !b.points.is_empty() => have.push(b.clone()),
+            _ => todo.push(eta),
+        }
+    }
+    let bar = Bar::new(etas.len() as u64, "branches", quiet);
+    bar.set_length(etas.len() as u64);
+    for b in &have {
+        bar.step(format!(
+            "branch {} resumed ({} states)",
+            b.branch,
+            b.points.len()
+        ));
+    }
+    // Largest η first: they take longest.
+    todo.sort_by_key(|&e| std::cmp::Reverse(e));
+    let threads = opts.worker_threads().max(1).min(todo.len().max(1));
+    let (tx, rx) = mpsc::channel::<Msg>();
+    let queue = std::sync::Mutex::new(todo.clone());
+    let mut failures = Vec::new();
+    std::thread::scope(|scope| -> Result<()> {
+        for _ in 0..threads {
+            let tx = tx.clone();
+            let queue = &queue;
+            scope.spawn(move || loop {
+                let next = queue.lock().ok().and_then(|mut q| q.pop());
+                let Some(eta) = next else { break };
+                let txe = tx.clone();
+                let r = compute_branch(opts, eta, &mut |p| {
+                    let _ = txe.send(Msg::Event(p));
+                });
+                let _ = tx.send(Msg::Done(eta, Box::new(r)));
+            });
+        }
+        drop(tx);
+        for msg in rx {
+            match msg {
+                Msg::Event(Progress::BranchStarted { branch, .. }) => {
+                    bar.message(format!("tracing branch {branch}"))
+                }
+                Msg::Event(_) => {}
+                Msg::Done(eta, r) => match *r {
+                    Ok(b) => {
+                        let text = serde_json::to_string(&b)?;
+                        write_atomic(
+                            &out.join("branches"),
+                            &format!("eta-{eta}.json"),
+                            text.as_bytes(),
+                        )?;
+                        bar.step(format!(
+                            "branch {} traced ({} states, {:.2} s)",
+                            b.branch,
+                            b.points.len(),
+                            b.seconds
+                        ));
+                        have.push(b);
+                    }
+                    Err(e) => {
+                        bar.step(format!("eta {eta} failed"));
+                        failures.push(format!("branch with eta = {eta} left out: {e}"));
+                    }
+                },
+            }
+        }
+        Ok(())
+    })?;
+    bar.finish();
+    if have.is_empty() {
+        bail!("no branch could be traced: {}", failures.join("; "));
+    }
+    let tracing = t0.elapsed().as_secs_f64();
+    let bar = Bar::new(1, "critical", quiet);
+    let mut d = assemble(opts, have, &mut |p| {
+        if let Progress::CriticalLocated { lbar_cr, kind, .. } = p {
+            bar.message(format!("{kind} at {lbar_cr:.9}"));
+        }
+    })?;
+    bar.finish();
+    d.warnings.splice(0..0, failures);
+    d.timings.tracing = tracing;
+    d.timings.total = t0.elapsed().as_secs_f64();
+    Ok(d)
+}
+
+/// Write branches.csv, critical.csv, diagram.svg, summary.json (the summary last).
+pub fn write_outputs(
+    d: &NumericDiagram,
+    opts: &DiagramOptions,
+    scene: &str,
+    out: &Path,
+) -> Result<()> {
+    let mut branches = Table::new(
+        "branches.csv",
+        &[
+            "branch",
+            "eta",
+            "lbar",
+            "energy",
+            "energy_g",
+            "energy_error",
+            "stability",
+            "index",
+            "lambda_min",
+            "lambda_max",
+        ],
+    );
+    for r in d.rows() {
+        branches.push(vec![
+            Cell::I(r.branch.into()),
+            Cell::I(r.eta.into()),
+            Cell::F(r.lbar),
+            Cell::F(r.energy),
+            Cell::F(r.energy_g),
+            match r.energy_error {
+                Some(e) => Cell::F(e),
+                None => Cell::S(String::new()),
+            },
+            Cell::S(r.stability.as_str().into()),
+            Cell::I(r.index as i64),
+            Cell::F(r.lambda_min),
+            Cell::F(r.lambda_max),
+        ])?;
+    }
+    let mut critical = Table::new(
+        "critical.csv",
+        &[
+            "index",
+            "lbar_cr",
+            "kind",
+            "from_branch",
+            "to_branch",
+            "energy",
+            "error_estimate",
+        ],
+    );
+    for c in &d.critical {
+        critical.push(vec![
+            Cell::I(c.index as i64),
+            Cell::F(c.lbar_cr),
+            Cell::S(c.kind.to_string()),
+            Cell::I(c.from_branch.into()),
+            Cell::I(c.to_branch.into()),
+            Cell::F(c.energy),
+            Cell::F(c.error_estimate),
+        ])?;
+    }
+    branches.write(out)?;
+    critical.write(out)?;
+    write_atomic(
+        out,
+        "diagram.svg",
+        svg::render(&figure(d, scene)).as_bytes(),
+    )?;
+    let ends: Vec<_> = d
+        .branches
+        .iter()
+        .map(|b| {
+            json!({
+                "branch": b.branch, "eta": b.eta, "states": b.points.len(), "cells": b.cells,
+                "low_end": b.stop_low, "high_end": b.stop_high, "seed": b.seed, "seconds": b.seconds,
+            })
+        })
+        .collect();
+    let summary = json!({
+        "model": "numeric",
+        "scene": scene,
+        "description": d.scene,
+        "accuracy": format!("{:?}", opts.accuracy).to_lowercase(),
+        "lbar_min": opts.lbar_min,
+        "lbar_max": opts.lbar_max,
+        "critical": d.critical,
+        "branches": ends,
+        "great_circles": d.great_circles,
+        "warnings": d.warnings,
+        "timings": d.timings,
+    });
+    write_json(out, "summary.json", &strip_nulls(summary))?;
+    Ok(())
+}
+
+fn strip_nulls(v: serde_json::Value) -> serde_json::Value {
+    match v {
+        serde_json::Value::Object(map) => serde_json::Value::Object(
+            map.into_iter()
+                .filter(|(_, v)| !v.is_null())
+                .map(|(k, v)| (k, strip_nulls(v)))
+                .collect(),
+        ),
+        serde_json::Value::Array(a) => {
+            serde_json::Value::Array(a.into_iter().map(strip_nulls).collect())
+        }
+        other => other,
+    }
+}
+
+fn style_of(l: Label) -> (LineStyle, f64) {
+    match l {
+        Label::Stable => (LineStyle::Solid, 2.2),
+        Label::Metastable => (LineStyle::Dashed, 1.4),
+        Label::Unstable => (LineStyle::Dotted, 1.4),
+    }
+}
+
+/// Energy versus length: one colour per branch; solid stable, dashed metastable, dotted
+/// unstable; critical lengths marked (the paper's Fig. 3a).
+fn figure(d: &NumericDiagram, scene: &str) -> Figure {
+    let mut curves = Vec::new();
+    for (b, labels) in d.branches.iter().zip(&d.labels) {
+        // (lbar, energy, label) with a point inserted at every critical length where the label
+        // changes between two samples, so that the line style switches there and not at the
+        // next traced state.
+        let mut pts: Vec<(f64, f64, Label)> = Vec::new();
+        for (k, p) in b.points.iter().enumerate() {
+            if k > 0 && labels[k] != labels[k - 1] {
+                let q = &b.points[k - 1];
+                if let Some(c) = d
+                    .critical
+                    .iter()
+                    .find(|c| c.lbar_cr > q.lbar.min(p.lbar) && c.lbar_cr < q.lbar.max(p.lbar))
+                {
+                    let t = (c.lbar_cr - q.lbar) / (p.lbar - q.lbar);
+                    let e = q.energy + t * (p.energy - q.energy);
+                    pts.push((c.lbar_cr, e, labels[k - 1]));
+                    pts.push((c.lbar_cr, e, labels[k]));
+                }
+            }
+            pts.push((p.lbar, p.energy, labels[k]));
+        }
+        let mut start = 0;
+        for i in 1..=pts.len() {
+            if i == pts.len() || pts[i].2 != pts[start].2 {
+                let end = (i + 1).min(pts.len());
+                let (style, width) = style_of(pts[start].2);
+                curves.push(Curve {
+                    color: branch_color(b.branch),
+                    style,
+                    width,
+                    points: pts[start..end].iter().map(|p| (p.0, p.1)).collect(),
+                });
+                start = i;
+            }
+        }
+    }
+    let mut order: Vec<&TracedBranch> = d.branches.iter().collect();
+    order.sort_by_key(|b| b.branch);
+    let mut legend: Vec<LegendEntry> = order
+        .into_iter()
+        .map(|b| LegendEntry {
+            label: format!("branch {} (eta = {})", b.branch, b.eta),
+            color: branch_color(b.branch),
+            style: LineStyle::Solid,
+        })
+        .collect();
+    for (label, style) in [
+        ("stable", LineStyle::Solid),
+        ("metastable", LineStyle::Dashed),
+        ("unstable", LineStyle::Dotted),
+    ] {
+        legend.push(LegendEntry {
+            label: label.into(),
+            color: "black".into(),
+            style,
+        });
+    }
+    Figure {
+        title: format!("Numeric branches ({scene}): bending energy E R/(pi D0)"),
+        xlabel: "L / (2 pi R)".into(),
+        ylabel: "E R/(pi D0)".into(),
+        curves,
+        markers: d
+            .critical
+            .iter()
+            .map(|c| Marker {
+                x: c.lbar_cr,
+                label: format!("{:.4}", c.lbar_cr),
+            })
+            .collect(),
+        legend,
+        range: None,
+    }
+}

@@ -1,0 +1,52 @@
+//! Progress reporting on stderr (indicatif): shown only when stderr is a terminal and
+//! `--quiet` was not given, so that logs and pipes stay clean.
+
+use std::io::IsTerminal;
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+/// A progress bar that is hidden when it should not draw.
+pub struct Progress {
+    bar: ProgressBar,
+}
+
+impl Progress {
+    /// A bar of `len` steps labelled `what`; hidden if `quiet` or stderr is not a terminal.
+    pub fn new(len: u64, what: &str, quiet: bool) -> Self {
+        let bar = if quiet || !std::io::stderr().is_terminal() {
+            ProgressBar::hidden()
+        } else {
+            let bar = ProgressBar::new(len);
+            bar.set_draw_target(ProgressDrawTarget::stderr());
+            if let Ok(style) = ProgressStyle::with_template(
+                "{prefix:>10} [{bar:30}] {pos}/{len} {elapsed_precise} {msg}",
+            ) {
+                bar.set_style(style.progress_chars("=> "));
+            }
+            bar
+        };
+        bar.set_prefix(what.to_string());
+        Self { bar }
+    }
+
+    /// Advance by one step with a message.
+    pub fn step(&self, msg: String) {
+        self.bar.set_message(msg);
+        self.bar.inc(1);
+    }
+
+    /// Change the message without advancing.
+    pub fn message(&self, msg: String) {
+        self.bar.set_message(msg);
+    }
+
+    /// Grow the total.
+    pub fn set_length(&self, len: u64) {
+        self.bar.set_length(len);
+    }
+
+    /// Finish and clear the bar.
+    pub fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
+}
