@@ -162,7 +162,7 @@ pub fn run(args: &Args) -> Result<()> {
         "loops": summaries,
     });
     // serde_json writes None as null; our NaN guard would reject that, so drop the nulls.
-    let summary = strip_nulls(summary);
+    let summary = crate::output::strip_nulls(summary);
     write_json(&args.out, "summary.json", &summary)?;
     outln!(
         "wrote {} loop file(s) and summary.json to {}",
@@ -170,19 +170,4 @@ pub fn run(args: &Args) -> Result<()> {
         args.out.display()
     );
     Ok(())
-}
-
-fn strip_nulls(v: serde_json::Value) -> serde_json::Value {
-    match v {
-        serde_json::Value::Object(map) => serde_json::Value::Object(
-            map.into_iter()
-                .filter(|(_, v)| !v.is_null())
-                .map(|(k, v)| (k, strip_nulls(v)))
-                .collect(),
-        ),
-        serde_json::Value::Array(a) => {
-            serde_json::Value::Array(a.into_iter().map(strip_nulls).collect())
-        }
-        other => other,
-    }
 }

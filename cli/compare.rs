@@ -280,7 +280,11 @@ pub fn run(args: &Args) -> Result<()> {
         "numeric_model": "rodloop diagram --model numeric, default scene, default accuracy",
         "values": rows,
     });
-    write_json(&args.out, "summary.json", &strip_nulls(summary))?;
+    write_json(
+        &args.out,
+        "summary.json",
+        &crate::output::strip_nulls(summary),
+    )?;
     outln!(
         "{} paper values; beyond the printed resolution {} disagree with the exact layer and {} with the numeric model (winding numbers and symmetries: exact layer only). Wrote compare.csv and summary.json to {}",
         values.len(),
@@ -289,19 +293,4 @@ pub fn run(args: &Args) -> Result<()> {
         args.out.display()
     );
     Ok(())
-}
-
-fn strip_nulls(v: serde_json::Value) -> serde_json::Value {
-    match v {
-        serde_json::Value::Object(map) => serde_json::Value::Object(
-            map.into_iter()
-                .filter(|(_, v)| !v.is_null())
-                .map(|(k, v)| (k, strip_nulls(v)))
-                .collect(),
-        ),
-        serde_json::Value::Array(a) => {
-            serde_json::Value::Array(a.into_iter().map(strip_nulls).collect())
-        }
-        other => other,
-    }
 }

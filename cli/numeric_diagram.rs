@@ -255,23 +255,8 @@ pub fn write_outputs(
         "warnings": d.warnings,
         "timings": d.timings,
     });
-    write_json(out, "summary.json", &strip_nulls(summary))?;
+    write_json(out, "summary.json", &crate::output::strip_nulls(summary))?;
     Ok(())
-}
-
-fn strip_nulls(v: serde_json::Value) -> serde_json::Value {
-    match v {
-        serde_json::Value::Object(map) => serde_json::Value::Object(
-            map.into_iter()
-                .filter(|(_, v)| !v.is_null())
-                .map(|(k, v)| (k, strip_nulls(v)))
-                .collect(),
-        ),
-        serde_json::Value::Array(a) => {
-            serde_json::Value::Array(a.into_iter().map(strip_nulls).collect())
-        }
-        other => other,
-    }
 }
 
 fn style_of(l: Label) -> (LineStyle, f64) {

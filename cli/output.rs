@@ -112,3 +112,23 @@ pub fn write_json(dir: &Path, name: &str, value: &serde_json::Value) -> Result<P
     }
     write_atomic(dir, name, format!("{text}\n").as_bytes())
 }
+
+/// Drop the keys whose value is `null` from a JSON summary: they stand for absent optional
+/// values (`None`). Note that serde_json also turns a non-finite float into `null`, so a
+/// summary must only hold numbers that were checked elsewhere: every command writes its
+/// numbers to a CSV table first ([`Table::push`] rejects non-finite values) or derives them
+/// from those.
+pub fn strip_nulls(v: serde_json::Value) -> serde_json::Value {
+    match v {
+        serde_json::Value::Object(map) => serde_json::Value::Object(
+            map.into_iter()
+                .filter(|(_, v)| !v.is_null())
+                .map(|(k, v)| (k, strip_nulls(v)))
+                .collect(),
+        ),
+        serde_json::Value::Array(a) => {
+            serde_json::Value::Array(a.into_iter().map(strip_nulls).collect())
+        }
+        other => other,
+    }
+}
