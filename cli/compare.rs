@@ -57,23 +57,32 @@ fn paper_values() -> Result<Vec<PaperValue>> {
     Ok(out)
 }
 
+/// The computed critical length closest to a printed one, of the kind the row implies (an
+/// exact printed value is a collapse onto a great circle, a rounded one a crossing).
+fn nearest_critical(
+    pv: &PaperValue,
+    target: f64,
+    crit: impl Iterator<Item = (CriticalKind, f64)>,
+) -> Option<f64> {
+    let want = if pv.resolution == Some(0.0) {
+        CriticalKind::Collapse
+    } else {
+        CriticalKind::Crossing
+    };
+    crit.filter(|(k, _)| *k == want)
+        .map(|(_, x)| x)
+        .min_by(|a, b| (a - target).abs().total_cmp(&(b - target).abs()))
+}
+
 /// The exact layer's value for a paper row, as text, with the numeric value when there is one.
 fn exact_value(pv: &PaperValue, crit: &[rodloop_exact::diagram::Critical]) -> Result<Option<f64>> {
     let eta = eta_of_branch(pv.branch);
     Ok(match pv.kind.as_str() {
-        "critical_length" => {
-            let target: f64 = pv.value.parse()?;
-            // The critical length closest to the printed one, of the expected kind.
-            let want = if pv.resolution == Some(0.0) {
-                CriticalKind::Collapse
-            } else {
-                CriticalKind::Crossing
-            };
-            crit.iter()
-                .filter(|c| c.kind == want)
-                .map(|c| c.lbar_cr)
-                .min_by(|a, b| (a - target).abs().total_cmp(&(b - target).abs()))
-        }
+        "critical_length" => nearest_critical(
+            pv,
+            pv.value.parse()?,
+            crit.iter().map(|c| (c.kind, c.lbar_cr)),
+        ),
         "buckling_load" => {
             // Contact force of the exact branch 1e-7 from its great-circle end: it tends to the
             // buckling load as the branch collapses (λ is constant on the circle, Eq. 20).
@@ -113,19 +122,11 @@ fn exact_symmetry(pv: &PaperValue) -> Result<String> {
 /// Eq. 34 rows: m − 1). Winding numbers and symmetries are compared on the exact layer only.
 fn numeric_value(pv: &PaperValue, nd: &rodloop_diagram::NumericDiagram) -> Option<f64> {
     match pv.kind.as_str() {
-        "critical_length" => {
-            let target: f64 = pv.value.parse().ok()?;
-            let want = if pv.resolution == Some(0.0) {
-                rodloop_diagram::CriticalKind::Collapse
-            } else {
-                rodloop_diagram::CriticalKind::Crossing
-            };
-            nd.critical
-                .iter()
-                .filter(|c| c.kind == want)
-                .map(|c| c.lbar_cr)
-                .min_by(|a, b| (a - target).abs().total_cmp(&(b - target).abs()))
-        }
+        "critical_length" => nearest_critical(
+            pv,
+            pv.value.parse().ok()?,
+            nd.critical.iter().map(|c| (c.kind, c.lbar_cr)),
+        ),
         "buckling_load" => {
             let m = pv.lbar? as u32;
             let eq = if pv.side == "above" { "33" } else { "34" };

@@ -7,7 +7,9 @@ use anyhow::{bail, Result};
 use rodloop_exact::diagram::{compute, Diagram, DiagramSettings};
 use serde_json::json;
 
-use crate::output::{ensure_dir, write_atomic, write_json, Cell, Table};
+use crate::output::{
+    critical_table, ensure_dir, write_atomic, write_json, Cell, CriticalRow, Table,
+};
 use crate::svg::{self, branch_color, Curve, Figure, LegendEntry, LineStyle, Marker};
 
 /// Which model computes the diagram.
@@ -122,29 +124,15 @@ pub fn run(args: &Args) -> Result<()> {
             Cell::I(p.lowest.into()),
         ])?;
     }
-    let mut critical = Table::new(
-        "critical.csv",
-        &[
-            "index",
-            "lbar_cr",
-            "kind",
-            "from_branch",
-            "to_branch",
-            "energy",
-            "error_estimate",
-        ],
-    );
-    for c in &d.critical {
-        critical.push(vec![
-            Cell::I(c.index as i64),
-            Cell::F(c.lbar_cr),
-            Cell::S(c.kind.to_string()),
-            Cell::I(c.from_branch.into()),
-            Cell::I(c.to_branch.into()),
-            Cell::F(c.energy),
-            Cell::F(c.error_estimate),
-        ])?;
-    }
+    let critical = critical_table(d.critical.iter().map(|c| CriticalRow {
+        index: c.index,
+        lbar_cr: c.lbar_cr,
+        kind: c.kind,
+        from_branch: c.from_branch,
+        to_branch: c.to_branch,
+        energy: c.energy,
+        error_estimate: c.error_estimate,
+    }))?;
     ensure_dir(&args.out)?;
     branches.write(&args.out)?;
     critical.write(&args.out)?;
@@ -308,30 +296,28 @@ fn figure(d: &Diagram, energy_g: bool) -> Figure {
     branches.sort_unstable();
     branches.dedup();
     for &b in &branches {
-        let pts: Vec<_> = d.points.iter().filter(|p| p.branch == b).collect();
-        let mut start = 0;
-        for i in 1..=pts.len() {
-            if i == pts.len() || pts[i].lowest != pts[start].lowest {
-                // Include the first point of the next run so runs join up.
-                let end = (i + 1).min(pts.len());
-                let points = pts[start..end]
-                    .iter()
-                    .map(|p| (p.lbar, if energy_g { p.energy_g } else { p.energy }))
-                    .collect();
-                let lowest = pts[start].lowest;
-                curves.push(Curve {
-                    color: branch_color(b),
-                    style: if lowest {
-                        LineStyle::Solid
-                    } else {
-                        LineStyle::Dashed
-                    },
-                    width: if lowest { 2.2 } else { 1.3 },
-                    points,
-                });
-                start = i;
-            }
-        }
+        let pts: Vec<(f64, f64, bool)> = d
+            .points
+            .iter()
+            .filter(|p| p.branch == b)
+            .map(|p| {
+                (
+                    p.lbar,
+                    if energy_g { p.energy_g } else { p.energy },
+                    p.lowest,
+                )
+            })
+            .collect();
+        curves.extend(svg::runs(&pts, |lowest, points| Curve {
+            color: branch_color(b),
+            style: if lowest {
+                LineStyle::Solid
+            } else {
+                LineStyle::Dashed
+            },
+            width: if lowest { 2.2 } else { 1.3 },
+            points,
+        }));
     }
     let mut legend: Vec<LegendEntry> = branches
         .iter()

@@ -15,7 +15,9 @@ use rodloop_diagram::{
 };
 use serde_json::json;
 
-use crate::output::{ensure_dir, write_atomic, write_json, Cell, Table};
+use crate::output::{
+    critical_table, ensure_dir, write_atomic, write_json, Cell, CriticalRow, Table,
+};
 use crate::progress::Progress as Bar;
 use crate::svg::{self, branch_color, Curve, Figure, LegendEntry, LineStyle, Marker};
 
@@ -202,29 +204,15 @@ pub fn write_outputs(
             Cell::F(r.lambda_max),
         ])?;
     }
-    let mut critical = Table::new(
-        "critical.csv",
-        &[
-            "index",
-            "lbar_cr",
-            "kind",
-            "from_branch",
-            "to_branch",
-            "energy",
-            "error_estimate",
-        ],
-    );
-    for c in &d.critical {
-        critical.push(vec![
-            Cell::I(c.index as i64),
-            Cell::F(c.lbar_cr),
-            Cell::S(c.kind.to_string()),
-            Cell::I(c.from_branch.into()),
-            Cell::I(c.to_branch.into()),
-            Cell::F(c.energy),
-            Cell::F(c.error_estimate),
-        ])?;
-    }
+    let critical = critical_table(d.critical.iter().map(|c| CriticalRow {
+        index: c.index,
+        lbar_cr: c.lbar_cr,
+        kind: c.kind,
+        from_branch: c.from_branch,
+        to_branch: c.to_branch,
+        energy: c.energy,
+        error_estimate: c.error_estimate,
+    }))?;
     branches.write(out)?;
     critical.write(out)?;
     write_atomic(
@@ -292,20 +280,15 @@ fn figure(d: &NumericDiagram, scene: &str) -> Figure {
             }
             pts.push((p.lbar, p.energy, labels[k]));
         }
-        let mut start = 0;
-        for i in 1..=pts.len() {
-            if i == pts.len() || pts[i].2 != pts[start].2 {
-                let end = (i + 1).min(pts.len());
-                let (style, width) = style_of(pts[start].2);
-                curves.push(Curve {
-                    color: branch_color(b.branch),
-                    style,
-                    width,
-                    points: pts[start..end].iter().map(|p| (p.0, p.1)).collect(),
-                });
-                start = i;
+        curves.extend(svg::runs(&pts, |label, points| {
+            let (style, width) = style_of(label);
+            Curve {
+                color: branch_color(b.branch),
+                style,
+                width,
+                points,
             }
-        }
+        }));
     }
     let mut order: Vec<&TracedBranch> = d.branches.iter().collect();
     order.sort_by_key(|b| b.branch);

@@ -132,3 +132,49 @@ pub fn strip_nulls(v: serde_json::Value) -> serde_json::Value {
         other => other,
     }
 }
+
+/// One row of `critical.csv`, the same columns for the exact and the numeric model.
+pub struct CriticalRow {
+    /// Index `i` of `L̄_icr`.
+    pub index: usize,
+    /// The critical length.
+    pub lbar_cr: f64,
+    /// Crossing or collapse.
+    pub kind: rodloop_exact::diagram::CriticalKind,
+    /// Lowest branch below.
+    pub from_branch: u32,
+    /// Lowest branch above.
+    pub to_branch: u32,
+    /// Energy at the critical length.
+    pub energy: f64,
+    /// Estimated error of `lbar_cr`.
+    pub error_estimate: f64,
+}
+
+/// The `critical.csv` table.
+pub fn critical_table(rows: impl IntoIterator<Item = CriticalRow>) -> Result<Table> {
+    let mut t = Table::new(
+        "critical.csv",
+        &[
+            "index",
+            "lbar_cr",
+            "kind",
+            "from_branch",
+            "to_branch",
+            "energy",
+            "error_estimate",
+        ],
+    );
+    for c in rows {
+        t.push(vec![
+            Cell::I(c.index as i64),
+            Cell::F(c.lbar_cr),
+            Cell::S(c.kind.to_string()),
+            Cell::I(c.from_branch.into()),
+            Cell::I(c.to_branch.into()),
+            Cell::F(c.energy),
+            Cell::F(c.error_estimate),
+        ])?;
+    }
+    Ok(t)
+}

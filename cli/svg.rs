@@ -78,6 +78,27 @@ pub struct Figure {
     pub range: Option<(f64, f64, f64, f64)>,
 }
 
+/// Split a branch's points `(x, y, key)` into runs of equal key, one curve per run made by
+/// `curve(key, points)`; each run also takes the first point of the next so the runs join up.
+pub fn runs<K: PartialEq + Copy>(
+    pts: &[(f64, f64, K)],
+    mut curve: impl FnMut(K, Vec<(f64, f64)>) -> Curve,
+) -> Vec<Curve> {
+    let mut out = Vec::new();
+    let mut start = 0;
+    for i in 1..=pts.len() {
+        if i == pts.len() || pts[i].2 != pts[start].2 {
+            let end = (i + 1).min(pts.len());
+            out.push(curve(
+                pts[start].2,
+                pts[start..end].iter().map(|p| (p.0, p.1)).collect(),
+            ));
+            start = i;
+        }
+    }
+    out
+}
+
 /// Colours for branches 1, 2, 3, …: blue, red, green, pink (as in the paper's Fig. 3), then more.
 pub fn branch_color(branch: u32) -> String {
     const C: [&str; 8] = [

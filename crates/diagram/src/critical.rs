@@ -22,25 +22,8 @@ use crate::refine::BranchRefiner;
 use crate::trace::TracedBranch;
 use crate::{DiagramError, DiagramOptions};
 
-/// Kind of a critical length.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum CriticalKind {
-    /// Two branches exchange the lowest energy, `E_a = E_b`.
-    Crossing,
-    /// The lowest branch collapses onto (or emanates from) the m-fold great circle at
-    /// `L̄ = m`.
-    Collapse,
-}
-
-impl std::fmt::Display for CriticalKind {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            CriticalKind::Crossing => "crossing",
-            CriticalKind::Collapse => "collapse",
-        })
-    }
-}
+/// Kind of a critical length: the exact layer's, shared so both models use one vocabulary.
+pub use rodloop_exact::diagram::CriticalKind;
 
 /// A critical length `L̄_icr`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

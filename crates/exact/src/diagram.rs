@@ -45,13 +45,14 @@ pub struct BranchPoint {
     pub lowest: bool,
 }
 
-/// Kind of a critical length.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+/// Kind of a critical length (used by the exact and the numeric diagram alike).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum CriticalKind {
     /// Two branches exchange the lowest energy (`E_a = E_b`).
     Crossing,
-    /// The lowest branch collapses onto an `m`-fold great circle at `L̄ = m`.
+    /// The lowest branch collapses onto (or emanates from) an `m`-fold great circle at
+    /// `L̄ = m`.
     Collapse,
 }
 
