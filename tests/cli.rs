@@ -26,6 +26,10 @@ fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
     (header, rows)
 }
 
+fn read_json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
 fn assert_no_nan(path: &Path) {
     let text = std::fs::read_to_string(path).unwrap();
     assert!(
@@ -48,8 +52,7 @@ fn analytic_writes_loops_and_summary() {
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let summary = read_json(&out.join("summary.json"));
     let loops = summary["loops"].as_array().unwrap();
     assert!(!loops.is_empty());
     let first = &loops[0];
@@ -97,8 +100,7 @@ fn euler_writes_curve_and_summary() {
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let summary = read_json(&out.join("summary.json"));
     let alpha = summary["alpha"].as_f64().unwrap();
     assert!(alpha > 0.0 && alpha < std::f64::consts::PI);
     assert!(summary["energy"].as_f64().unwrap() > 1.2);
@@ -256,9 +258,7 @@ fn solve_matches_the_exact_loop_within_its_error_estimate() {
             out.to_str().unwrap(),
         ]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let s: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
-                .unwrap();
+        let s = read_json(&out.join("summary.json"));
         for key in [
             "lbar",
             "branch",
@@ -316,9 +316,7 @@ fn solve_matches_the_exact_loop_within_its_error_estimate() {
             out2.to_str().unwrap(),
         ]);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let s2: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out2.join("summary.json")).unwrap())
-                .unwrap();
+        let s2 = read_json(&out2.join("summary.json"));
         assert!((s2["energy"].as_f64().unwrap() - e).abs() < 1e-9);
     }
 }
