@@ -31,34 +31,13 @@
 use std::f64::consts::FRAC_PI_2;
 
 use crate::error::SpecialError;
-use crate::integrals::{complete_e, complete_k, complete_pi};
+use crate::integrals::{characteristic, complete_e, complete_k, complete_pi, modulus};
 
 type Result<T> = std::result::Result<T, SpecialError>;
 
+/// Validate a modulus (finite, `|k| ≤ 1`) with the integrals' check, returning it unchanged.
 fn check_k(k: f64) -> Result<f64> {
-    if !k.is_finite() {
-        return Err(SpecialError::NotFinite {
-            name: "k",
-            value: k,
-        });
-    }
-    if k.abs() > 1.0 {
-        return Err(SpecialError::ModulusOutOfRange { k });
-    }
-    Ok(k)
-}
-
-fn check_n(n: f64) -> Result<f64> {
-    if !n.is_finite() {
-        return Err(SpecialError::NotFinite {
-            name: "n",
-            value: n,
-        });
-    }
-    if n >= 1.0 {
-        return Err(SpecialError::CharacteristicOutOfRange { n });
-    }
-    Ok(n)
+    modulus(k).map(|_| k)
 }
 
 fn rd(x: f64, y: f64, z: f64) -> Result<f64> {
@@ -132,7 +111,7 @@ pub struct PiDerivatives {
 /// [`SpecialError::ModulusOutOfRange`] for `|k| ≥ 1` (the derivatives are
 /// infinite at `|k| = 1`), [`SpecialError::NotFinite`] for NaN/∞.
 pub fn complete_pi_derivatives(n: f64, k: f64) -> Result<PiDerivatives> {
-    let n = check_n(n)?;
+    let n = characteristic(n)?;
     let k = check_k(k)?;
     let a = k.abs();
     if a == 1.0 {

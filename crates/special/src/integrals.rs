@@ -32,7 +32,7 @@ type Result<T> = std::result::Result<T, SpecialError>;
 // argument checks
 
 /// Validate a modulus and return `(m, m') = (k², (1 − k)(1 + k))`.
-fn modulus(k: f64) -> Result<(f64, f64)> {
+pub(crate) fn modulus(k: f64) -> Result<(f64, f64)> {
     if !k.is_finite() {
         return Err(SpecialError::NotFinite {
             name: "k",
@@ -60,7 +60,7 @@ fn parameter(m: f64) -> Result<(f64, f64)> {
     Ok((m, 1.0 - m))
 }
 
-fn characteristic(n: f64) -> Result<f64> {
+pub(crate) fn characteristic(n: f64) -> Result<f64> {
     if !n.is_finite() {
         return Err(SpecialError::NotFinite {
             name: "n",
