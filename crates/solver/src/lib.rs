@@ -28,6 +28,8 @@
 pub mod accuracy;
 pub mod continuation;
 pub mod frame;
+pub mod kkt;
+pub mod mesh;
 pub mod model;
 pub mod periodic;
 pub mod solve;
@@ -37,6 +39,8 @@ pub mod stiffness;
 
 pub use accuracy::{solve_with_accuracy, Accuracy, AccurateEquilibrium};
 pub use continuation::LbarProblem;
+pub use kkt::KktFactor;
+pub use mesh::MeshMap;
 pub use model::{Phase, SurfaceModel};
 pub use solve::{
     solve, solve_from_state, ConvergenceReport, EnergyReport, Equilibrium, Globalization,

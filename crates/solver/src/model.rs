@@ -50,6 +50,7 @@ use std::f64::consts::PI;
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 use crate::frame::{exp_jet, expm_skew, hat};
+use crate::mesh::MeshMap;
 use crate::periodic::TrigInterpolant;
 use crate::stiffness::{Stiffness, StiffnessProfile};
 use crate::SolverError;
@@ -160,22 +161,25 @@ pub struct SurfaceModel {
     phase: Option<Phase>,
     /// `D` at the Gauss points (functions of `σ` only, hence independent of `L̄`).
     d_gauss: Vec<f64>,
+    /// The mesh map and the cell boundaries `σ_0 = 0 < … < σ_N = 1`.
+    map: MeshMap,
+    bounds: Vec<f64>,
 }
 
 /// Cell propagators with their derivatives and the prefix/suffix products.
-struct Chain {
-    e: Vec<M3>,
-    de: Vec<[M3; 2]>,
+pub(crate) struct Chain {
+    pub(crate) e: Vec<M3>,
+    pub(crate) de: Vec<[M3; 2]>,
     /// `[∂₁₁, ∂₁₂, ∂₂₂]`.
-    dde: Vec<[M3; 3]>,
+    pub(crate) dde: Vec<[M3; 3]>,
     /// `P_c = E_{c−1}⋯E_0`, `c = 0..=N` (`P_N = H`).
-    prefix: Vec<M3>,
+    pub(crate) prefix: Vec<M3>,
     /// `S_c = E_{N−1}⋯E_{c+1}`, `c = 0..N`.
-    suffix: Vec<M3>,
+    pub(crate) suffix: Vec<M3>,
 }
 
 /// `vee(skew(X))`.
-fn vee_skew(x: &M3) -> V3 {
+pub(crate) fn vee_skew(x: &M3) -> V3 {
     V3::new(
         0.5 * (x[(2, 1)] - x[(1, 2)]),
         0.5 * (x[(0, 2)] - x[(2, 0)]),
@@ -184,7 +188,7 @@ fn vee_skew(x: &M3) -> V3 {
 }
 
 /// `tr(A B)`.
-fn tr_prod(a: &M3, b: &M3) -> f64 {
+pub(crate) fn tr_prod(a: &M3, b: &M3) -> f64 {
     let mut s = 0.0;
     for i in 0..3 {
         for j in 0..3 {
@@ -221,22 +225,58 @@ impl SurfaceModel {
             )));
         }
         let profile = stiffness.validate()?;
-        let d_gauss = (0..2 * cells)
-            .map(|a| profile.eval(Self::sigma_of(cells, a)).d)
-            .collect();
-        Ok(Self {
+        let mut m = Self {
             radius,
             lbar,
             cells,
             stiffness: profile,
             phase: None,
-            d_gauss,
-        })
+            d_gauss: Vec::new(),
+            map: MeshMap::Uniform,
+            bounds: Vec::new(),
+        };
+        m.set_mesh(MeshMap::for_profile(stiffness))?;
+        Ok(m)
     }
 
-    /// The same model with a phase condition.
+    fn set_mesh(&mut self, map: MeshMap) -> Result<(), SolverError> {
+        self.bounds = map.bounds(self.cells)?;
+        self.map = map;
+        self.d_gauss = (0..2 * self.cells)
+            .map(|a| self.stiffness.eval(self.sigma_of(a)).d)
+            .collect();
+        Ok(())
+    }
+
+    /// The same model on another mesh map (the default is [`MeshMap::for_profile`]).
+    /// Drops a phase condition unless the new mesh is uniform.
+    pub fn with_mesh(mut self, map: MeshMap) -> Result<Self, SolverError> {
+        if !map.is_uniform() {
+            self.phase = None;
+        }
+        self.set_mesh(map)?;
+        Ok(self)
+    }
+
+    /// The mesh map.
+    pub fn mesh(&self) -> &MeshMap {
+        &self.map
+    }
+
+    /// Cell boundaries `σ_i = s_i/L`, `i = 0..=N`.
+    pub fn bounds(&self) -> &[f64] {
+        &self.bounds
+    }
+
+    /// The same model with a phase condition (uniform meshes only: the phase condition is
+    /// for uniform rods, whose mesh is uniform).
     pub fn with_phase(mut self, phase: Phase) -> Result<Self, SolverError> {
         check_len(phase.reference.len(), 2 * self.cells)?;
+        if !self.map.is_uniform() {
+            return Err(SolverError::InvalidInput(
+                "a phase condition needs a uniform mesh".into(),
+            ));
+        }
         self.phase = Some(phase);
         Ok(self)
     }
@@ -259,8 +299,9 @@ impl SurfaceModel {
         Ok(m)
     }
 
-    fn sigma_of(cells: usize, a: usize) -> f64 {
-        ((a / 2) as f64 + GAUSS_OFFSETS[a % 2]) / cells as f64
+    fn sigma_of(&self, a: usize) -> f64 {
+        let c = a / 2;
+        self.bounds[c] + GAUSS_OFFSETS[a % 2] * (self.bounds[c + 1] - self.bounds[c])
     }
 
     /// Sphere radius `R`.
@@ -298,9 +339,19 @@ impl SurfaceModel {
         2.0 * PI * self.radius * self.lbar
     }
 
-    /// Cell length `h = L/N`.
+    /// Mean cell length `L/N` (the cell length of a uniform mesh).
     pub fn h(&self) -> f64 {
         self.length() / self.cells as f64
+    }
+
+    /// Length `h_c` of cell `c`.
+    pub fn cell_length(&self, c: usize) -> f64 {
+        self.length() * (self.bounds[c + 1] - self.bounds[c])
+    }
+
+    /// Quadrature weight `h_c/2` of the two unknowns of cell `c`.
+    pub fn cell_weight(&self, c: usize) -> f64 {
+        0.5 * self.cell_length(c)
     }
 
     /// The validated stiffness profile.
@@ -315,12 +366,11 @@ impl SurfaceModel {
 
     /// Normalised arclength `σ = s/L` of every unknown (the Gauss points).
     pub fn gauss_sigma(&self) -> Vec<f64> {
-        (0..self.n_kappa())
-            .map(|a| Self::sigma_of(self.cells, a))
-            .collect()
+        (0..self.n_kappa()).map(|a| self.sigma_of(a)).collect()
     }
 
-    /// Quadrature weights `h/2` of the unknowns (the metric of the energy).
+    /// Mean quadrature weight `L/(2N)` (the weight of every unknown on a uniform mesh; see
+    /// [`SurfaceModel::cell_weight`]).
     pub fn weight(&self) -> f64 {
         0.5 * self.h()
     }
@@ -352,20 +402,22 @@ impl SurfaceModel {
 
     /// Cell propagators `E_c` only.
     fn propagators(&self, kappa: &[f64]) -> Vec<M3> {
-        let (w0, v1, v2) = self.cell_vectors(self.h());
         (0..self.cells)
-            .map(|c| expm_skew(&hat(&(w0 + v1 * kappa[2 * c] + v2 * kappa[2 * c + 1]))))
+            .map(|c| {
+                let (w0, v1, v2) = self.cell_vectors(self.cell_length(c));
+                expm_skew(&hat(&(w0 + v1 * kappa[2 * c] + v2 * kappa[2 * c + 1])))
+            })
             .collect()
     }
 
-    fn chain(&self, kappa: &[f64]) -> Chain {
+    pub(crate) fn chain(&self, kappa: &[f64]) -> Chain {
         let n = self.cells;
-        let (w0, v1, v2) = self.cell_vectors(self.h());
         let zero = [[V3::zeros(); 2]; 2];
         let mut e = Vec::with_capacity(n);
         let mut de = Vec::with_capacity(n);
         let mut dde = Vec::with_capacity(n);
         for c in 0..n {
+            let (w0, v1, v2) = self.cell_vectors(self.cell_length(c));
             let w = w0 + v1 * kappa[2 * c] + v2 * kappa[2 * c + 1];
             let (ec, d, dd) = exp_jet::<2>(&w, &[v1, v2], &zero);
             e.push(ec);
@@ -421,11 +473,11 @@ impl SurfaceModel {
 
     /// `(E_g, E_n)`: geodesic and normal parts of the discrete energy (dimensional).
     fn energy_parts_raw(&self, kappa: &[f64]) -> (f64, f64) {
-        let w = self.weight();
         let r2 = 1.0 / (self.radius * self.radius);
         let mut eg = 0.0;
         let mut en = 0.0;
-        for (k, d) in kappa.iter().zip(&self.d_gauss) {
+        for (a, (k, d)) in kappa.iter().zip(&self.d_gauss).enumerate() {
+            let w = self.cell_weight(a / 2);
             eg += 0.5 * w * d * k * k;
             en += 0.5 * w * d * r2;
         }
@@ -441,14 +493,14 @@ impl SurfaceModel {
         Ok(((g + n) * scale, g * scale, n * scale))
     }
 
-    /// Gradient of the energy, `∂E/∂κ_a = (h/2) D_a κ_a`.
+    /// Gradient of the energy, `∂E/∂κ_a = (h_c/2) D_a κ_a`.
     pub fn energy_gradient(&self, kappa: &[f64]) -> Result<Vec<f64>, SolverError> {
         self.check_kappa(kappa)?;
-        let w = self.weight();
         Ok(kappa
             .iter()
             .zip(&self.d_gauss)
-            .map(|(k, d)| w * d * k)
+            .enumerate()
+            .map(|(a, (k, d))| self.cell_weight(a / 2) * d * k)
             .collect())
     }
 
@@ -522,9 +574,8 @@ impl SurfaceModel {
 
     fn lagrangian_hessian_from(&self, ch: &Chain, mu: &V3) -> DMatrix<f64> {
         let mut h = -self.closure_hessian_from(ch, mu);
-        let w = self.weight();
         for (a, d) in self.d_gauss.iter().enumerate() {
-            h[(a, a)] += w * d;
+            h[(a, a)] += self.cell_weight(a / 2) * d;
         }
         h
     }
@@ -549,9 +600,9 @@ impl SurfaceModel {
     fn kkt_residual_from(&self, ch: &Chain, kappa: &[f64], mu: &V3, nu: f64) -> DVector<f64> {
         let n = self.n_kappa();
         let mut f = DVector::zeros(self.dim());
-        let w = self.weight();
         let m = hat(mu);
         for c in 0..self.cells {
+            let w = self.cell_weight(c);
             let pk = ch.prefix[c] * (m * ch.suffix[c]);
             for i in 0..2 {
                 let a = 2 * c + i;
@@ -625,18 +676,18 @@ impl SurfaceModel {
         let (kappa, mu, _) = self.split(z)?;
         self.check_kappa(kappa)?;
         let n = self.cells;
-        let h = self.h();
-        let dh_dlbar = h / self.lbar;
         let r = self.radius;
         let avec = V3::new(0.0, 0.0, -1.0);
         let bvec = V3::new(0.0, -1.0 / r, 0.0);
         let cvec = V3::new(-1.0 / r, 0.0, 0.0);
-        let (w0, v1, v2) = self.cell_vectors(h);
         let mut e = Vec::with_capacity(n);
         let mut dk = Vec::with_capacity(n); // ∂E_c/∂κ_ci
-        let mut dh = Vec::with_capacity(n); // ∂E_c/∂h
-        let mut dkh = Vec::with_capacity(n); // ∂²E_c/∂κ_ci∂h
+        let mut dh = Vec::with_capacity(n); // ∂E_c/∂L̄ (through h_c = σ-width · 2πR L̄)
+        let mut dkh = Vec::with_capacity(n); // ∂²E_c/∂κ_ci∂L̄
         for c in 0..n {
+            let h = self.cell_length(c);
+            let dh_dlbar = h / self.lbar;
+            let (w0, v1, v2) = self.cell_vectors(h);
             let (k1, k2) = (kappa[2 * c], kappa[2 * c + 1]);
             let w = w0 + v1 * k1 + v2 * k2;
             let wh = avec * (0.5 * (k1 + k2)) + bvec + cvec * (2.0 * MAGNUS_C * h * (k2 - k1));
@@ -648,8 +699,8 @@ impl SurfaceModel {
             let (ec, d, dd) = exp_jet::<3>(&w, &[v1, v2, wh], &wij);
             e.push(ec);
             dk.push([d[0], d[1]]);
-            dh.push(d[2]);
-            dkh.push([dd[0][2], dd[1][2]]);
+            dh.push(d[2] * dh_dlbar);
+            dkh.push([dd[0][2] * dh_dlbar, dd[1][2] * dh_dlbar]);
         }
         let (prefix, suffix) = prefix_suffix(&e);
         // ∂_h P_c and ∂_h S_c by the product rule along the chain.
@@ -663,8 +714,8 @@ impl SurfaceModel {
         }
         let m = hat(&V3::from(mu));
         let mut out = DVector::zeros(self.dim());
-        let wgt = self.weight();
         for c in 0..n {
+            let wgt = self.cell_weight(c);
             for i in 0..2 {
                 let a = 2 * c + i;
                 // ∂_a∂_h H = ∂_hS_c ∂_aE_c P_c + S_c ∂_{ah}E_c P_c + S_c ∂_aE_c ∂_hP_c.
@@ -673,13 +724,13 @@ impl SurfaceModel {
                     + suffix[c] * dk[c][i] * dprefix[c];
                 let d2f = -0.5 * tr_prod(&m, &d2h);
                 // F_a = ∇E_a − ∂_a(μ·c) − ν∂_aφ; ∇E_a ∝ h.
-                out[a] = wgt * self.d_gauss[a] * kappa[a] / self.lbar - d2f * dh_dlbar;
+                out[a] = wgt * self.d_gauss[a] * kappa[a] / self.lbar - d2f;
             }
         }
         let dc = vee_skew(&dprefix[n]);
         let nk = self.n_kappa();
         for k in 0..3 {
-            out[nk + k] = -dc[k] * dh_dlbar;
+            out[nk + k] = -dc[k];
         }
         Ok(out)
     }
@@ -699,10 +750,13 @@ impl SurfaceModel {
     /// Weights `s_i` of the squared residual norm `Σ s_i F_i²` (see [`Self::residual_norm`]).
     pub fn residual_scales(&self) -> Vec<f64> {
         let n = self.n_kappa();
-        let w = self.weight();
         let unit = self.radius / self.stiffness.kind().reference();
-        let sg = unit * unit / (w * w) / n as f64;
-        let mut s = vec![sg; n];
+        let mut s: Vec<f64> = (0..n)
+            .map(|a| {
+                let w = self.cell_weight(a / 2);
+                unit * unit / (w * w) / n as f64
+            })
+            .collect();
         s.extend(std::iter::repeat_n(1.0, self.n_multipliers()));
         s
     }

@@ -562,11 +562,11 @@ impl Equilibrium {
             .expect("kappa has the model's length");
         let r = self.model.radius();
         let len = self.model.length();
-        let h = self.model.h();
+        let bounds = self.model.bounds();
         let mm = Vector3::from(self.moment());
         (0..self.model.cells())
             .map(|i| {
-                let s = i as f64 * h;
+                let s = bounds[i] * len;
                 let x: &Matrix3<f64> = &frames[i];
                 let t = Vector3::new(x[(0, 0)], x[(0, 1)], x[(0, 2)]);
                 let g = Vector3::new(x[(1, 0)], x[(1, 1)], x[(1, 2)]);
@@ -602,21 +602,35 @@ impl Equilibrium {
             .collect()
     }
 
-    /// Trigonometric interpolant (in `σ = s/L`) of the geodesic curvature at the cell
-    /// boundaries, `κ_g = 𝓜·n/D`: used to resample the equilibrium to another resolution.
+    /// Trigonometric interpolant of the geodesic curvature at the cell boundaries,
+    /// `κ_g = 𝓜·n/D`, in the mesh coordinate `u` (`σ = s/L` on a uniform mesh; see
+    /// [`crate::mesh`]): used to resample the equilibrium to another resolution.
     pub fn kappa_g_interpolant(&self) -> Result<TrigInterpolant, SolverError> {
         let kg: Vec<f64> = self.profile().iter().map(|p| p.kappa_g).collect();
         TrigInterpolant::new(&kg)
     }
 
-    /// Geodesic curvature at the Gauss points of a grid of `cells` cells (for Richardson
-    /// extrapolation and continuation at another resolution).
+    /// Geodesic curvature at the Gauss points of a grid of `cells` cells on the same mesh
+    /// map (for Richardson extrapolation and continuation at another resolution).
     pub fn resample(&self, cells: usize) -> Result<Vec<f64>, SolverError> {
+        let map = self.model.mesh();
+        let bounds = map.bounds(cells)?;
+        self.sample_at(
+            &(0..2 * cells)
+                .map(|a| {
+                    let c = a / 2;
+                    bounds[c] + crate::model::GAUSS_OFFSETS[a % 2] * (bounds[c + 1] - bounds[c])
+                })
+                .collect::<Vec<_>>(),
+        )
+    }
+
+    /// Geodesic curvature at the normalised arclengths `sigma` (spectral interpolation in
+    /// the mesh coordinate).
+    pub fn sample_at(&self, sigma: &[f64]) -> Result<Vec<f64>, SolverError> {
         let t = self.kappa_g_interpolant()?;
-        let n = cells as f64;
-        Ok((0..2 * cells)
-            .map(|a| t.eval(((a / 2) as f64 + crate::model::GAUSS_OFFSETS[a % 2]) / n))
-            .collect())
+        let map = self.model.mesh();
+        Ok(sigma.iter().map(|&s| t.eval(map.u_of_sigma(s))).collect())
     }
 
     /// Extremes of the contact force `(λ_min, λ_max)`: the trigonometric interpolant of `λ`
