@@ -124,6 +124,9 @@ impl MeshMap {
             return u;
         }
         let k = u.floor();
+        if u == k {
+            return u;
+        }
         let target = (u - k) * self.integral(1.0);
         let (mut lo, mut hi) = (0.0, 1.0);
         let mut s = u - k;

@@ -5,6 +5,7 @@ use std::f64::consts::PI;
 
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
+use crate::kkt::KktFactor;
 use crate::model::{Phase, SurfaceModel};
 use crate::periodic::TrigInterpolant;
 use crate::SolverError;
@@ -285,16 +286,21 @@ fn restore(model: &SurfaceModel, kappa: &[f64]) -> Result<Vec<f64>, SolverError>
 
 /// Energy minimisation on the constraint manifold (see [`Globalization::Minimize`]).
 /// Returns the relaxed curvature and the number of iterations.
+///
+/// Each iteration minimises the quadratic model `½δᵀ(∇²ℒ + τW)δ + ∇ℒᵀδ` on the tangent
+/// space of the constraints, with the smallest `τ ∈ {0, 1e-3, 4e-3, …}` (units of `D0`)
+/// for which the shifted Hessian is positive definite there — checked by the inertia of the
+/// shifted KKT matrix ([`crate::stability`], Sylvester's law), as interior-point codes
+/// correct inertia. The step comes from one `O(N)` solve with that factorisation, then a
+/// backtracking line search on the energy with closure restored at every trial.
 fn relax(
     model: &SurfaceModel,
     start: &[f64],
     opts: &SolveOptions,
 ) -> Result<(Vec<f64>, usize), SolverError> {
-    use crate::stability::{householder, reflect_both, reflect_vec};
     let n = model.n_kappa();
-    let w = model.weight();
     let d0 = model.stiffness().kind().reference();
-    let gscale = (model.radius() / d0) / w / (n as f64).sqrt();
+    let gscale = (model.radius() / d0) / model.weight() / (n as f64).sqrt();
     let mut kappa = restore(model, start)?;
     let mut energy = model.energy(&kappa)?;
     let mut quiet = 0;
@@ -302,7 +308,7 @@ fn relax(
         let g = DVector::from_vec(model.energy_gradient(&kappa)?);
         let (_, j) = constraints(model, &kappa)?;
         let m = j.nrows();
-        // Least-squares multipliers and the reduced gradient r = g − Jᵀλ (W uniform).
+        // Least-squares multipliers and the reduced gradient r = g − Jᵀλ.
         let a = &j * j.transpose();
         let reg = 1e-13 * a.trace();
         let lam = (a + DMatrix::identity(m, m) * reg)
@@ -313,45 +319,32 @@ fn relax(
         if r.norm() * gscale < opts.relax_threshold.min(1e-3) || quiet >= 2 {
             return Ok((kappa, it));
         }
-        // Reduced Hessian in the energy metric via Householder reflections.
-        let mu = [lam[0], lam[1], lam[2]];
-        let mut h = model.lagrangian_hessian(&kappa, &mu)? / (w * d0);
-        let mut cols: Vec<DVector<f64>> = (0..m).map(|k| j.row(k).transpose()).collect();
-        let mut refl = Vec::new();
-        let mut rt = &r / (w.sqrt() * d0);
-        for k in 0..m {
-            if let Some(v) = householder(&cols[k], refl.len()) {
-                for col in cols.iter_mut().skip(k) {
-                    reflect_vec(col, &v);
-                }
-                reflect_both(&mut h, &v);
-                reflect_vec(&mut rt, &v);
-                refl.push(v);
+        let mut z = kappa.clone();
+        z.extend(lam.iter());
+        let mut tau = 0.0;
+        let factor = loop {
+            match KktFactor::new(model, &z, -tau) {
+                Ok(f) if f.reduced_negative_count() == 0 => break f,
+                Ok(_) | Err(SolverError::SingularJacobian { .. }) => {}
+                Err(e) => return Err(e),
             }
-        }
-        let p = refl.len();
-        let red = h.view((p, p), (n - p, n - p)).into_owned();
-        let red = (&red + red.transpose()) * 0.5;
-        let rhs = -rt.rows(p, n - p).into_owned();
-        let mut sigma = 0.0;
-        let y = loop {
-            let shifted = &red + DMatrix::identity(n - p, n - p) * sigma;
-            if let Some(ch) = shifted.cholesky() {
-                break ch.solve(&rhs);
-            }
-            sigma = if sigma == 0.0 { 1e-3 } else { sigma * 4.0 };
-            if sigma > 1e8 {
+            tau = if tau == 0.0 { 1e-3 } else { tau * 4.0 };
+            if tau > 1e8 {
                 return Err(SolverError::InvalidInput(
-                    "relaxation: reduced Hessian could not be made positive definite".into(),
+                    "relaxation: the constrained Hessian could not be made positive definite"
+                        .into(),
                 ));
             }
         };
-        let mut u = DVector::zeros(n);
-        u.rows_mut(p, n - p).copy_from(&y);
-        for v in refl.iter().rev() {
-            reflect_vec(&mut u, v);
+        let mut rhs = DVector::zeros(model.dim());
+        for a in 0..n {
+            rhs[a] = -r[a];
         }
-        let delta = u / w.sqrt();
+        let delta = factor
+            .solve(&rhs)
+            .ok_or(SolverError::SingularJacobian { iteration: it })?
+            .rows(0, n)
+            .into_owned();
         let slope = g.dot(&delta);
         let mut alpha = 1.0;
         let mut accepted = false;
@@ -376,13 +369,27 @@ fn relax(
             // No further decrease: hand over to Newton.
             return Ok((kappa, it + 1));
         }
-        quiet = if sigma == 0.0 && alpha == 1.0 {
+        quiet = if tau == 0.0 && alpha == 1.0 {
             quiet + 1
         } else {
             0
         };
     }
     Ok((kappa, opts.max_relax_iterations))
+}
+
+/// The Newton step `−J⁻¹F` at `z`: the `O(N)` block factorisation ([`KktFactor`]), or
+/// the dense matrix if a pivot block is singular. `None` if both fail.
+fn newton_step(model: &SurfaceModel, z: &[f64], f: &DVector<f64>) -> Option<DVector<f64>> {
+    let finite = |d: &DVector<f64>| d.iter().all(|v| v.is_finite());
+    if let Some(d) = KktFactor::new(model, z, 0.0)
+        .ok()
+        .and_then(|k| k.solve(&(-f)))
+        .filter(finite)
+    {
+        return Some(d);
+    }
+    model.kkt_jacobian(z).ok()?.lu().solve(&(-f)).filter(finite)
 }
 
 /// Newton's method from a full KKT state `z = (κ, μ, ν)` (e.g. a continuation point).
@@ -402,7 +409,7 @@ pub fn solve_from_state(
     let mut z = DVector::from_vec(z0);
     let mut history = Vec::new();
     let mut steps = Vec::new();
-    let (mut f, mut jac) = model.kkt_residual_and_jacobian(z.as_slice())?;
+    let mut f = model.kkt_residual(z.as_slice())?;
     let mut m = merit(&f);
     let mut iterations = 0;
     let mut converged = false;
@@ -419,14 +426,9 @@ pub fn solve_from_state(
             break;
         }
         iterations += 1;
-        let delta = jac
-            .clone()
-            .lu()
-            .solve(&(-&f))
-            .filter(|d| d.iter().all(|v| v.is_finite()))
-            .ok_or(SolverError::SingularJacobian {
-                iteration: iterations,
-            })?;
+        let delta = newton_step(&model, z.as_slice(), &f).ok_or(SolverError::SingularJacobian {
+            iteration: iterations,
+        })?;
         let mut alpha = 1.0;
         let mut accepted = None;
         for _ in 0..=opts.max_backtracks {
@@ -456,9 +458,6 @@ pub fn solve_from_state(
         z = zn;
         f = fnew;
         m = mnew;
-        if m.sqrt() > opts.tolerance {
-            jac = model.kkt_jacobian(z.as_slice())?;
-        }
     }
     let (kappa, mu, nu) = model.split(z.as_slice())?;
     let cl = model.closure(kappa)?;

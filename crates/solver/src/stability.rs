@@ -1,35 +1,40 @@
 //! Stability of an equilibrium: the spectrum of the Hessian of the Lagrangian restricted to
-//! the tangent space of the closure constraints, with the symmetry modes removed.
+//! the tangent space of the constraints, with the symmetry modes removed. This module is
+//! the one place where that restriction is computed; `solve`, continuation, the diagram's
+//! tracing and great-circle buckling all call it.
 //!
-//! * **Constraint tangent space.** Second-order optimality for `min E` subject to `c = 0`
-//!   is about `δκᵀ ∇²ℒ δκ` on `{δκ : ∇c δκ = 0}`, `ℒ = E − μ·c`.
-//! * **Metric.** The unknowns are `κ_g` at Gauss points with quadrature weights `w = h/2`,
-//!   so `δκᵀ W δκ ≈ ∫ δκ_g² ds`. We solve the generalised problem
-//!   `Zᵀ∇²ℒZ y = λ ZᵀWZ y` by the substitution `u = W^{1/2} δκ`: the eigenvalues of
-//!   `W^{−1/2} ∇²ℒ W^{−1/2}` on the null space of `∇c W^{−1/2}`. They approximate the
-//!   eigenvalues of the continuous second variation (an operator `δκ ↦ D δκ − …`), so they
-//!   converge as `N` grows instead of scaling with `h`. They are reported in units of `D0`.
-//! * **Symmetry modes.** Rigid rotations do not appear in this formulation: `κ_g` is
-//!   invariant under them and the frame starts from `X(0) = I`, so there is nothing to
-//!   remove. For a uniform rod the shift of the arclength origin is a symmetry of the
-//!   continuous problem (broken only at the level of the discretisation error): its mode is
-//!   `δκ = dκ/ds`, obtained by spectral differentiation on the two Gauss sub-grids,
-//!   projected onto the tangent space and removed; its Rayleigh quotient is reported as the
-//!   symmetry eigenvalue (≈ 0 when the split is clean).
-//!
-//! Implementation: the null-space basis comes from three Householder reflections (QR of
-//! `(∇c W^{−1/2})ᵀ`), the shift mode from a fourth; they are applied on both sides of the
-//! Hessian (`O(n²)` each), and the remaining block is diagonalised with nalgebra's symmetric
-//! eigenvalue routine.
+//! * **Problem.** Second-order optimality for `min E` subject to `c = 0` is about
+//!   `δκᵀ ∇²ℒ δκ` on `{δκ : ∇c δκ = 0}`, `ℒ = E − μ·c`. The metric is the energy's,
+//!   `W = diag(w_a D0)` with the quadrature weights `w_a = h_c/2`, so that
+//!   `δκᵀWδκ ≈ D0 ∫ δκ_g² ds`: the eigenvalues of `Zᵀ∇²ℒZ y = λ ZᵀWZ y` approximate those of
+//!   the continuous second variation and converge as `N` grows. They are in units of `D0`.
+//! * **Symmetry modes.** Rigid rotations do not appear (`κ_g` is invariant under them and
+//!   the frame starts from `X(0) = I`). For a uniform rod the shift of the arclength origin
+//!   is a symmetry; the phase condition `φ = 0` is then one more constraint, which removes
+//!   that direction (its Rayleigh quotient on the closure tangent space is reported as the
+//!   symmetry eigenvalue, ≈ 0 when the split is clean).
+//! * **Index in `O(N)`.** By Sylvester's law of inertia (with Haynsworth's additivity), the
+//!   number of eigenvalues below `σ` is the number of negative eigenvalues of the KKT
+//!   matrix shifted by `−σW`, minus the number of constraints; [`crate::kkt`] computes that
+//!   inertia from its block factorisation. The index uses `σ = −tolerance`.
+//! * **Lowest eigenvalues in `O(N)` per iteration.** Shift-invert Lanczos in the `W` inner
+//!   product with a shift `σ` below the spectrum (found by inertia counts): each iteration
+//!   is one solve with the factorised shifted KKT matrix, whose curvature part is
+//!   `(A − σW)⁻¹W` restricted to the constraint tangent space (C. Lanczos 1950; shift-invert
+//!   as in Ericsson & Ruhe, Math. Comp. 35, 1980). Full reorthogonalisation.
+//! * **Dense reduction** ([`TangentReduction`]): Householder reflections onto the null space
+//!   of a constraint Jacobian, for small problems and when eigenvectors are needed
+//!   ([`Equilibrium::constrained_modes`], the buckling pencil of a great circle).
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::model::GAUSS_OFFSETS;
+use crate::kkt::KktFactor;
+use crate::model::{SurfaceModel, GAUSS_OFFSETS};
 use crate::periodic::TrigInterpolant;
 use crate::solve::Equilibrium;
 use crate::SolverError;
 
-/// Settings of [`Equilibrium::stability`].
+/// Settings of [`Equilibrium::stability_with`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct StabilityOptions {
     /// How many of the lowest eigenvalues to report.
@@ -60,51 +65,280 @@ pub struct Stability {
     /// Fraction of the shift mode lying in the constraint tangent space (`≈ 1` for a clean
     /// split; empty for non-uniform rods).
     pub symmetry_tangency: Vec<f64>,
-    /// Dimension of the reduced space that was diagonalised.
+    /// Dimension of the constrained space.
     pub dimension: usize,
     /// The threshold used for the index.
     pub tolerance: f64,
 }
 
-/// Householder reflector `I − 2 v vᵀ` (unit `v`, zero above `start`) mapping `x[start..]` to
-/// a multiple of `e_start`; `None` when `x[start..]` vanishes.
-pub(crate) fn householder(x: &DVector<f64>, start: usize) -> Option<DVector<f64>> {
-    let n = x.len();
-    let mut v = DVector::zeros(n);
-    let norm = x.rows(start, n - start).norm();
-    if norm == 0.0 {
-        return None;
+/// Number of eigenvalues below `−tolerance` of the constrained Hessian at the KKT state `z`
+/// of `model` (symmetry modes removed): the stability index, in `O(N)`. Falls back to the
+/// dense reduction if the block factorisation meets a singular pivot block.
+pub fn index(model: &SurfaceModel, z: &[f64], tolerance: f64) -> Result<usize, SolverError> {
+    match KktFactor::new(model, z, -tolerance) {
+        Ok(f) => Ok(f.reduced_negative_count()),
+        Err(SolverError::SingularJacobian { .. }) => {
+            let vals = dense_spectrum(model, z)?;
+            Ok(vals.iter().filter(|v| **v < -tolerance).count())
+        }
+        Err(e) => Err(e),
     }
-    for i in start..n {
-        v[i] = x[i];
-    }
-    let alpha = if x[start] >= 0.0 { -norm } else { norm };
-    v[start] -= alpha;
-    let vn = v.norm();
-    if vn == 0.0 {
-        return None;
-    }
-    Some(v / vn)
 }
 
-/// `A ← (I − 2vvᵀ) A (I − 2vvᵀ)` for symmetric `A`.
-pub(crate) fn reflect_both(a: &mut DMatrix<f64>, v: &DVector<f64>) {
-    // P A P = A − 2 v wᵀ − 2 w vᵀ + 4 (vᵀAv) v vᵀ, w = A v.
-    let w = &*a * v;
-    let vav = v.dot(&w);
-    let n = a.nrows();
-    for j in 0..n {
-        for i in 0..n {
-            a[(i, j)] += -2.0 * v[i] * w[j] - 2.0 * w[i] * v[j] + 4.0 * vav * v[i] * v[j];
+/// Metric weights `W_aa = w_a D0` of the curvature unknowns.
+fn metric(model: &SurfaceModel) -> DVector<f64> {
+    let d0 = model.stiffness().kind().reference();
+    DVector::from_fn(model.n_kappa(), |a, _| model.cell_weight(a / 2) * d0)
+}
+
+/// All constraint gradients (closure rows, then the phase row) as rows of a matrix.
+fn constraint_rows(model: &SurfaceModel, kappa: &[f64]) -> Result<DMatrix<f64>, SolverError> {
+    let cj = model.closure_jacobian(kappa)?;
+    let n = model.n_kappa();
+    let m = model.n_multipliers();
+    let mut j = DMatrix::zeros(m, n);
+    j.rows_mut(0, 3).copy_from(&cj);
+    if let Some(ph) = model.phase() {
+        for (a, g) in ph.gradient().iter().enumerate() {
+            j[(3, a)] = *g;
         }
     }
+    Ok(j)
+}
+
+/// Dense constrained spectrum (all eigenvalues, ascending) through [`TangentReduction`].
+fn dense_spectrum(model: &SurfaceModel, z: &[f64]) -> Result<Vec<f64>, SolverError> {
+    let (kappa, mu, _) = model.split(z)?;
+    let h = model.lagrangian_hessian(kappa, &mu)?;
+    let red = TangentReduction::new(&constraint_rows(model, kappa)?, &metric(model), 0.0)?;
+    let mut vals: Vec<f64> = red
+        .reduce(&h)
+        .symmetric_eigenvalues()
+        .iter()
+        .copied()
+        .collect();
+    vals.sort_by(f64::total_cmp);
+    Ok(vals)
+}
+
+/// Restriction of symmetric matrices to the null space of a constraint Jacobian `J`
+/// (rows = constraint gradients), in the metric `W` (diagonal): with `u = W^{1/2} δκ`, the
+/// null space of `J W^{−1/2}` is spanned by the last columns of a product of Householder
+/// reflections (a QR factorisation of `(J W^{−1/2})ᵀ`).
+#[derive(Clone, Debug)]
+pub struct TangentReduction {
+    reflectors: Vec<DVector<f64>>,
+    sqrt_w: DVector<f64>,
+}
+
+/// Householder vector `v` (unit, zero above `start`) with `(I − 2vvᵀ) x` a multiple of
+/// `e_start` on the rows `start..`; `None` if those rows vanish.
+fn householder(x: &DVector<f64>, start: usize) -> Option<DVector<f64>> {
+    let n = x.len();
+    let norm = x.rows(start, n - start).norm();
+    if norm == 0.0 || !norm.is_finite() {
+        return None;
+    }
+    let mut v = DVector::zeros(n);
+    v.rows_mut(start, n - start)
+        .copy_from(&x.rows(start, n - start));
+    v[start] += if x[start] >= 0.0 { norm } else { -norm };
+    let vn = v.norm();
+    (vn > 0.0).then(|| v / vn)
+}
+
+/// `A ← P A P` with `P = I − 2vvᵀ`, `A` symmetric.
+fn reflect_both(a: &mut DMatrix<f64>, v: &DVector<f64>) {
+    let w = &*a * v;
+    let vav = v.dot(&w);
+    // P A P = A − 2 v wᵀ − 2 w vᵀ + 4 (vᵀAv) v vᵀ.
+    let u = &w - v * vav;
+    a.ger(-2.0, v, &u, 1.0);
+    a.ger(-2.0, &u, v, 1.0);
 }
 
 /// `x ← (I − 2vvᵀ) x`.
-pub(crate) fn reflect_vec(x: &mut DVector<f64>, v: &DVector<f64>) {
+fn reflect_vec(x: &mut DVector<f64>, v: &DVector<f64>) {
     let d = 2.0 * v.dot(x);
     x.axpy(-d, v, 1.0);
 }
+
+impl TangentReduction {
+    /// Reduction onto `{δκ : J δκ = 0}` in the metric `diag(weights)`. Rows of `J` whose
+    /// norm (in the metric) is below `drop` times the largest are ignored (a great circle's
+    /// closure has rank 2).
+    pub fn new(j: &DMatrix<f64>, weights: &DVector<f64>, drop: f64) -> Result<Self, SolverError> {
+        let n = j.ncols();
+        if weights.len() != n {
+            return Err(SolverError::WrongLength {
+                expected: n,
+                found: weights.len(),
+            });
+        }
+        let sqrt_w = weights.map(f64::sqrt);
+        let mut cols: Vec<DVector<f64>> = (0..j.nrows())
+            .map(|k| j.row(k).transpose().component_div(&sqrt_w))
+            .collect();
+        let big = cols.iter().map(|c| c.norm()).fold(0.0, f64::max);
+        cols.retain(|c| c.norm() > drop * big);
+        let mut reflectors = Vec::new();
+        for k in 0..cols.len() {
+            if let Some(v) = householder(&cols[k], reflectors.len()) {
+                for col in cols.iter_mut().skip(k) {
+                    reflect_vec(col, &v);
+                }
+                reflectors.push(v);
+            }
+        }
+        Ok(Self { reflectors, sqrt_w })
+    }
+
+    /// Number of independent constraints removed.
+    pub fn removed(&self) -> usize {
+        self.reflectors.len()
+    }
+
+    /// `Zᵀ (W^{−1/2} A W^{−1/2}) Z` (symmetrised), of size `n − removed`.
+    pub fn reduce(&self, a: &DMatrix<f64>) -> DMatrix<f64> {
+        let n = a.nrows();
+        let mut b = a.clone();
+        for i in 0..n {
+            for k in 0..n {
+                b[(i, k)] /= self.sqrt_w[i] * self.sqrt_w[k];
+            }
+        }
+        for v in &self.reflectors {
+            reflect_both(&mut b, v);
+        }
+        let p = self.removed();
+        let block = b.view((p, p), (n - p, n - p)).into_owned();
+        (&block + block.transpose()) * 0.5
+    }
+
+    /// The direction `δκ` (original unknowns) of a reduced vector `y`; `δκᵀWδκ = |y|²`.
+    pub fn lift(&self, y: &DVector<f64>) -> DVector<f64> {
+        let n = self.sqrt_w.len();
+        let p = self.removed();
+        let mut u = DVector::zeros(n);
+        u.rows_mut(p, n - p).copy_from(y);
+        for v in self.reflectors.iter().rev() {
+            reflect_vec(&mut u, v);
+        }
+        u.component_div(&self.sqrt_w)
+    }
+}
+
+/// Shift mode `dκ/dσ` at the Gauss points of a uniform mesh (spectral derivative on the two
+/// interleaved sub-grids).
+fn shift_mode(kappa: &[f64], cells: usize) -> Result<DVector<f64>, SolverError> {
+    let mut d = DVector::zeros(2 * cells);
+    for (j, off) in GAUSS_OFFSETS.iter().enumerate() {
+        let sub: Vec<f64> = (0..cells).map(|c| kappa[2 * c + j]).collect();
+        let t = TrigInterpolant::with_offset(&sub, off / cells as f64)?;
+        for c in 0..cells {
+            d[2 * c + j] = t.derivative((c as f64 + off) / cells as f64);
+        }
+    }
+    Ok(d)
+}
+
+/// Lowest `count` eigenvalues of the constrained pencil by shift-invert Lanczos.
+fn lanczos_lowest(
+    model: &SurfaceModel,
+    z: &[f64],
+    count: usize,
+    dim: usize,
+) -> Result<Vec<f64>, SolverError> {
+    let wdiag = metric(model);
+    let n = model.n_kappa();
+    // A shift below the spectrum.
+    let mut sigma = -1.0;
+    let mut factor = None;
+    for _ in 0..40 {
+        match KktFactor::new(model, z, sigma) {
+            Ok(f) if f.reduced_negative_count() == 0 => {
+                factor = Some(f);
+                break;
+            }
+            Ok(_) => sigma *= 4.0,
+            Err(SolverError::SingularJacobian { .. }) => sigma *= 1.1,
+            Err(e) => return Err(e),
+        }
+    }
+    let factor = factor.ok_or_else(|| {
+        SolverError::InvalidInput("no shift below the constrained spectrum was found".into())
+    })?;
+    let apply = |v: &DVector<f64>| -> Result<DVector<f64>, SolverError> {
+        let mut b = DVector::zeros(model.dim());
+        for a in 0..n {
+            b[a] = wdiag[a] * v[a];
+        }
+        let x = factor
+            .solve(&b)
+            .ok_or(SolverError::SingularJacobian { iteration: 0 })?;
+        Ok(x.rows(0, n).into_owned())
+    };
+    let mdot = |a: &DVector<f64>, b: &DVector<f64>| a.component_mul(&wdiag).dot(b);
+    // Deterministic start with every harmonic present, projected by one application.
+    let start = DVector::from_fn(n, |a, _| 1.0 + ((a as f64) * 0.7548776662).sin());
+    let mut q = apply(&start)?;
+    let nq = mdot(&q, &q).sqrt();
+    q /= nq;
+    let max_steps = dim.min(80);
+    let mut basis: Vec<DVector<f64>> = vec![q];
+    let mut alpha = Vec::new();
+    let mut beta: Vec<f64> = Vec::new();
+    let mut ritz: Vec<f64> = Vec::new();
+    for j in 0..max_steps {
+        let mut w = apply(&basis[j])?;
+        let a = mdot(&basis[j], &w);
+        alpha.push(a);
+        for _ in 0..2 {
+            for qi in &basis {
+                let c = mdot(qi, &w);
+                w.axpy(-c, qi, 1.0);
+            }
+        }
+        let b = mdot(&w, &w).sqrt();
+        // Ritz values of the tridiagonal matrix.
+        let k = alpha.len();
+        let mut t = DMatrix::zeros(k, k);
+        for i in 0..k {
+            t[(i, i)] = alpha[i];
+            if i + 1 < k {
+                t[(i, i + 1)] = beta[i];
+                t[(i + 1, i)] = beta[i];
+            }
+        }
+        let eig = t.symmetric_eigen();
+        let mut pairs: Vec<(f64, f64)> = (0..k)
+            .map(|i| (eig.eigenvalues[i], (b * eig.eigenvectors[(k - 1, i)]).abs()))
+            .collect();
+        pairs.sort_by(|x, y| y.0.total_cmp(&x.0));
+        let want = count.min(k);
+        ritz = pairs.iter().take(want).map(|p| p.0).collect();
+        let converged = k >= count.min(dim)
+            && pairs
+                .iter()
+                .take(want)
+                .all(|(th, res)| *res <= 1e-12 * th.abs().max(1e-300));
+        if converged || b <= 1e-14 * a.abs().max(1e-300) || j + 1 == max_steps {
+            break;
+        }
+        beta.push(b);
+        basis.push(w / b);
+    }
+    let mut vals: Vec<f64> = ritz
+        .iter()
+        .filter(|th| **th > 0.0)
+        .map(|th| sigma + 1.0 / th)
+        .collect();
+    vals.sort_by(f64::total_cmp);
+    Ok(vals)
+}
+
+/// Problems up to this many curvature unknowns use the dense reduction for the eigenvalues.
+const DENSE_LIMIT: usize = 160;
 
 impl Equilibrium {
     /// Stability with default options ([`StabilityOptions::default`]).
@@ -112,117 +346,70 @@ impl Equilibrium {
         self.stability_with(&StabilityOptions::default())
     }
 
-    /// Spectrum of the constrained Hessian (see the module docs), its index, the lowest
-    /// eigenvalues and the symmetry eigenvalues.
+    /// Spectrum of the constrained Hessian (see the module docs): the index from the
+    /// inertia of the shifted KKT matrix, the lowest eigenvalues (shift-invert Lanczos, or
+    /// the dense reduction for small problems), and the symmetry eigenvalues.
     pub fn stability_with(&self, opts: &StabilityOptions) -> Result<Stability, SolverError> {
         let model = self.model();
+        let z = self.state();
         let kappa = self.kappa();
         let n = model.n_kappa();
-        let w = model.weight();
-        let d0 = model.stiffness().kind().reference();
-        let mut a = model.lagrangian_hessian(kappa, &self.multiplier())? / (w * d0);
-        let cj = model.closure_jacobian(kappa)? / w.sqrt();
-        // Shift mode u = W^{1/2} dκ/dσ for uniform rods.
-        let mut shift = if model.stiffness().kind().is_uniform() {
-            let cells = model.cells();
-            let mut d = DVector::zeros(n);
-            for (j, off) in GAUSS_OFFSETS.iter().enumerate() {
-                let sub: Vec<f64> = (0..cells).map(|c| kappa[2 * c + j]).collect();
-                let t = TrigInterpolant::with_offset(&sub, off / cells as f64)?;
-                for c in 0..cells {
-                    d[2 * c + j] = t.derivative((c as f64 + off) / cells as f64) * w.sqrt();
-                }
-            }
-            Some(d)
+        let dimension = n - model.n_multipliers();
+        let index = index(model, &z, opts.tolerance)?;
+        let mut eigenvalues = if n <= DENSE_LIMIT {
+            dense_spectrum(model, &z)?
         } else {
-            None
+            lanczos_lowest(model, &z, opts.count, dimension)?
         };
-        // Three reflections: Q = P1 P2 P3 with Qᵀ Cᵀ upper triangular; Z = Q[:, 3..].
-        let mut ct: Vec<DVector<f64>> = (0..3).map(|k| cj.row(k).transpose()).collect();
-        let mut used = 0;
-        for k in 0..3 {
-            if let Some(v) = householder(&ct[k], used) {
-                for col in ct.iter_mut().skip(k) {
-                    reflect_vec(col, &v);
-                }
-                reflect_both(&mut a, &v);
-                if let Some(s) = shift.as_mut() {
-                    reflect_vec(s, &v);
-                }
-                used += 1;
-            }
-        }
-        let mut start = used;
+        eigenvalues.truncate(opts.count);
         let mut symmetry = Vec::new();
         let mut tangency = Vec::new();
-        if let Some(s) = shift {
-            let total = s.norm();
-            let tangent = s.rows(start, n - start).norm();
-            if let Some(v) = householder(&s, start) {
-                reflect_both(&mut a, &v);
-                symmetry.push(a[(start, start)]);
-                tangency.push(if total > 0.0 { tangent / total } else { 0.0 });
-                start += 1;
-            }
+        if model.phase().is_some() {
+            // Shift mode projected onto the closure tangent space in the metric W.
+            let wdiag = metric(model);
+            let s = shift_mode(kappa, model.cells())?;
+            let cj = model.closure_jacobian(kappa)?;
+            let winv_ct = DMatrix::from_fn(n, 3, |a, k| cj[(k, a)] / wdiag[a]);
+            let g = &cj * &winv_ct;
+            let rhs = &cj * &s;
+            let y = (g + DMatrix::identity(3, 3) * 1e-300)
+                .lu()
+                .solve(&rhs)
+                .unwrap_or_else(|| DVector::zeros(3));
+            let st = &s - winv_ct * y;
+            let norm = |v: &DVector<f64>| v.component_mul(&wdiag).dot(v);
+            let hv = model.hessian_vector(kappa, &self.multiplier(), st.as_slice())?;
+            let q = DVector::from_vec(hv).dot(&st) / norm(&st);
+            symmetry.push(q);
+            tangency.push((norm(&st) / norm(&s)).sqrt());
         }
-        let m = n - start;
-        let block = a.view((start, start), (m, m)).into_owned();
-        // Symmetrise against rounding before diagonalising.
-        let block = (&block + block.transpose()) * 0.5;
-        let mut eig: Vec<f64> = block.symmetric_eigenvalues().iter().copied().collect();
-        eig.sort_by(f64::total_cmp);
-        let index = eig.iter().filter(|&&e| e < -opts.tolerance).count();
         Ok(Stability {
             index,
-            eigenvalues: eig.into_iter().take(opts.count).collect(),
+            eigenvalues,
             symmetry_eigenvalues: symmetry,
             symmetry_tangency: tangency,
-            dimension: m,
+            dimension,
             tolerance: opts.tolerance,
         })
     }
 
-    /// Constrained Hessian spectrum with eigenvectors, for diagnostics and tests: returns
-    /// the eigenvalues (ascending, units of `D0`) and the corresponding directions `δκ` in
-    /// the original unknowns (each satisfying `∇c δκ = 0`, normalised to `δκᵀWδκ = 1`). The
-    /// shift mode is not removed here.
+    /// Constrained Hessian spectrum with eigenvectors (dense; for diagnostics, tests and
+    /// small problems): the eigenvalues (ascending, units of `D0`) of the Hessian on the
+    /// closure tangent space (the shift mode is not removed here) and the corresponding
+    /// directions `δκ`, each with `∇c δκ = 0` and `δκᵀWδκ = 1`.
     pub fn constrained_modes(&self) -> Result<(Vec<f64>, Vec<DVector<f64>>), SolverError> {
         let model = self.model();
         let kappa = self.kappa();
-        let n = model.n_kappa();
-        let w = model.weight();
-        let d0 = model.stiffness().kind().reference();
-        let mut a = model.lagrangian_hessian(kappa, &self.multiplier())? / (w * d0);
-        let cj = model.closure_jacobian(kappa)? / w.sqrt();
-        let mut ct: Vec<DVector<f64>> = (0..3).map(|k| cj.row(k).transpose()).collect();
-        let mut refl = Vec::new();
-        for k in 0..3 {
-            if let Some(v) = householder(&ct[k], refl.len()) {
-                for col in ct.iter_mut().skip(k) {
-                    reflect_vec(col, &v);
-                }
-                reflect_both(&mut a, &v);
-                refl.push(v);
-            }
-        }
-        let start = refl.len();
-        let m = n - start;
-        let block = a.view((start, start), (m, m)).into_owned();
-        let block = (&block + block.transpose()) * 0.5;
-        let se = block.symmetric_eigen();
-        let mut order: Vec<usize> = (0..m).collect();
+        let h = model.lagrangian_hessian(kappa, &self.multiplier())?;
+        let red = TangentReduction::new(&model.closure_jacobian(kappa)?, &metric(model), 0.0)?;
+        let se = red.reduce(&h).symmetric_eigen();
+        let mut order: Vec<usize> = (0..se.eigenvalues.len()).collect();
         order.sort_by(|&i, &j| se.eigenvalues[i].total_cmp(&se.eigenvalues[j]));
-        let mut vals = Vec::with_capacity(m);
-        let mut vecs = Vec::with_capacity(m);
-        for i in order {
-            vals.push(se.eigenvalues[i]);
-            let mut u = DVector::zeros(n);
-            u.rows_mut(start, m).copy_from(&se.eigenvectors.column(i));
-            for v in refl.iter().rev() {
-                reflect_vec(&mut u, v);
-            }
-            vecs.push(u / w.sqrt());
-        }
+        let vals = order.iter().map(|&i| se.eigenvalues[i]).collect();
+        let vecs = order
+            .iter()
+            .map(|&i| red.lift(&se.eigenvectors.column(i).into_owned()))
+            .collect();
         Ok((vals, vecs))
     }
 }
