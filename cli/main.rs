@@ -15,6 +15,7 @@ macro_rules! outln {
 
 mod analytic;
 mod compare;
+mod converge;
 mod diagram;
 mod euler;
 mod numeric_diagram;
@@ -54,6 +55,9 @@ enum Command {
     /// The paper's printed values (critical lengths, buckling loads, winding numbers) next to
     /// rodloop's, with deviations.
     Compare(compare::Args),
+    /// One state on a ladder of resolutions: error against cells and time, observed order
+    /// of convergence (the speed/accuracy trade).
+    Converge(converge::Args),
 }
 
 fn main() -> ExitCode {
@@ -64,6 +68,7 @@ fn main() -> ExitCode {
         Command::Euler(a) => euler::run(&a),
         Command::Diagram(a) => diagram::run(&a),
         Command::Compare(a) => compare::run(&a),
+        Command::Converge(a) => converge::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

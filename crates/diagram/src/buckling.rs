@@ -36,13 +36,13 @@
 //! circle is not uniform and Eqs. 33–34 do not apply).
 
 use nalgebra::DVector;
+use rodloop_solver::stability::TangentReduction;
 use rodloop_solver::{
     solve, Accuracy, Equilibrium, Globalization, SolveOptions, SolverError, SurfaceModel,
 };
 use serde::{Deserialize, Serialize};
 
 use crate::refine::resolve;
-use crate::stability::{householder, reflect_both, reflect_vec};
 use crate::trace::{newton_options, periods_of, TracedBranch};
 use crate::DiagramOptions;
 
@@ -151,33 +151,15 @@ fn circle_modes(
     let model = SurfaceModel::new(opts.radius, mf, cells, &opts.stiffness)?;
     let n = model.n_kappa();
     let zero = vec![0.0; n];
-    let w = model.weight();
     let d = opts.stiffness.reference();
     let h0 = model.lagrangian_hessian(&zero, &[0.0; 3])?;
     let h1 = model.lagrangian_hessian(&zero, &[0.0, 1.0, 0.0])? - &h0;
-    // B = W^{-1/2} (−∇²c_g) W^{-1/2}; h1 = −∇²c_g.
-    let mut b = h1 / w;
-    let cj = model.closure_jacobian(&zero)? / w.sqrt();
-    let norms: Vec<f64> = (0..3).map(|k| cj.row(k).norm()).collect();
-    let big = norms.iter().copied().fold(0.0, f64::max);
-    let mut cols: Vec<DVector<f64>> = (0..3)
-        .filter(|&k| norms[k] > 1e-8 * big)
-        .map(|k| cj.row(k).transpose())
-        .collect();
-    let mut refl = Vec::new();
-    for k in 0..cols.len() {
-        if let Some(v) = householder(&cols[k], refl.len()) {
-            for col in cols.iter_mut().skip(k) {
-                reflect_vec(col, &v);
-            }
-            reflect_both(&mut b, &v);
-            refl.push(v);
-        }
-    }
-    let p = refl.len();
-    let r = n - p;
-    let block = b.view((p, p), (r, r)).into_owned();
-    let block = (&block + block.transpose()) * 0.5;
+    // B = W^{-1/2} (−∇²c_g) W^{-1/2} on the closure tangent space (h1 = −∇²c_g); a great
+    // circle's closure has rank 2, so rows below 1e-8 of the largest are dropped.
+    let weights = DVector::from_fn(n, |a, _| model.cell_weight(a / 2));
+    let red = TangentReduction::new(&model.closure_jacobian(&zero)?, &weights, 1e-8)?;
+    let block = red.reduce(&h1);
+    let r = block.nrows();
     if !vectors {
         let mut vals: Vec<f64> = block.symmetric_eigenvalues().iter().copied().collect();
         vals.sort_by(f64::total_cmp);
@@ -227,12 +209,7 @@ fn circle_modes(
         if beta.abs() < 1e-12 {
             continue;
         }
-        let mut u = DVector::zeros(n);
-        u.rows_mut(p, r).copy_from(&eig.eigenvectors.column(g[0]));
-        for v in refl.iter().rev() {
-            reflect_vec(&mut u, v);
-        }
-        let vector = u / w.sqrt();
+        let vector = red.lift(&eig.eigenvectors.column(g[0]).into_owned());
         out.push(Mode {
             end,
             multiplier: -d / beta,

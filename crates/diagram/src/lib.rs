@@ -44,7 +44,6 @@ pub mod critical;
 mod diagram;
 mod labels;
 pub mod refine;
-mod stability;
 pub mod trace;
 
 use std::time::Instant;

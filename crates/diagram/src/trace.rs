@@ -34,7 +34,11 @@ use rodloop_solver::{
 };
 use serde::{Deserialize, Serialize};
 
-use crate::{stability, DiagramError, DiagramOptions, Progress};
+use crate::{DiagramError, DiagramOptions, Progress};
+
+/// Threshold below which an eigenvalue (units of `D0`) counts as negative (the solver's
+/// default, [`rodloop_solver::StabilityOptions`]).
+const INDEX_TOLERANCE: f64 = 1e-6;
 
 /// Distance from a great-circle end at which the pseudo-arclength run hands over to the
 /// end approach.
@@ -552,7 +556,7 @@ pub fn compute_branch(
     let index_fn = |x: &[f64], p: f64| -> usize {
         problem
             .model_at(p)
-            .and_then(|m| stability::index(&m, x))
+            .and_then(|m| rodloop_solver::stability::index(&m, x, INDEX_TOLERANCE))
             .unwrap_or(usize::MAX)
     };
     let seed_index = index_fn(x0.as_slice(), p0);
@@ -1054,7 +1058,9 @@ fn finish_point(opts: &DiagramOptions, problem: &LbarProblem, raw: &Raw) -> Opti
         .fold(0.0f64, |a, v| a.max(v.abs() * opts.radius));
     let index = match raw.index {
         Some(i) if i != usize::MAX => i,
-        _ => stability::index(eq.model(), &z).unwrap_or(usize::MAX),
+        _ => {
+            rodloop_solver::stability::index(eq.model(), &z, INDEX_TOLERANCE).unwrap_or(usize::MAX)
+        }
     };
     let cells = eq.model().cells();
     let partner = if cells / 2 >= crate::profile_cells(&opts.stiffness) {

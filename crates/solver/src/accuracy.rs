@@ -46,19 +46,20 @@ impl std::str::FromStr for Accuracy {
 }
 
 /// Cells per period of `κ_g` (plus one) at the default accuracy.
-pub const DEFAULT_CELLS_PER_PERIOD: usize = 40;
+pub const DEFAULT_CELLS_PER_PERIOD: usize = 56;
 /// Cells per period of `κ_g` (plus one) at the fast accuracy.
-pub const FAST_CELLS_PER_PERIOD: usize = 16;
+pub const FAST_CELLS_PER_PERIOD: usize = 20;
 
 impl Accuracy {
     /// Number of cells of the main solve for a loop whose geodesic curvature has `periods`
     /// oscillation periods (`η` of the branch; see [`StartShape::periods`]):
-    /// `N = c (1 + η)` with `c = 40` (default, high) or `16` (fast). The discretisation error
-    /// grows with the number of oscillations, not with `L̄`: the measured requirement for an
-    /// energy error of 5e-7 is `N ≈ 70, 110, 131, 148` for `η = 1..4` (worst `L̄` of each
-    /// branch; `tests/convergence.rs`). Non-uniform profiles also need their own features
-    /// resolved: at least `2γ` cells for Eq. (51) (`γ` for `Fast`), two per table point.
-    /// Rounded up to a multiple of 4. For `High` this is the coarse one of the pair `(N, 2N)`.
+    /// `N = c (1 + η)` with `c = 56` (default, high) or `20` (fast). The discretisation error
+    /// grows with the number of oscillations, not with `L̄`; `c = 56` keeps the energy error
+    /// of the homogeneous branches η = 1..4 below 1e-7 relative (`tests/convergence.rs`,
+    /// `rodloop converge`). Sharp profiles (Eq. (51) with `γ > 20`) are resolved by the
+    /// graded mesh ([`crate::MeshMap::for_profile`]), which needs no extra cells; smooth
+    /// ones get at least `2γ` cells (`γ` for `Fast`), tables two per point. Rounded up to a
+    /// multiple of 4. For `High` this is the coarse one of the pair `(N, 2N)`.
     pub fn cells(self, periods: usize, stiffness: &Stiffness) -> usize {
         let per = match self {
             Accuracy::Fast => FAST_CELLS_PER_PERIOD,
@@ -67,11 +68,11 @@ impl Accuracy {
         let mut n = per * (1 + periods.max(1));
         let factor = if self == Accuracy::Fast { 1.0 } else { 2.0 };
         match stiffness {
-            Stiffness::Tanh { gamma, .. } => {
-                n = n.max((factor * gamma).ceil().min(4096.0) as usize);
+            Stiffness::Tanh { gamma, .. } if *gamma <= 20.0 => {
+                n = n.max((factor * gamma).ceil() as usize);
             }
             Stiffness::Table { s, .. } => n = n.max(s.len() * factor as usize),
-            Stiffness::Uniform { .. } => {}
+            _ => {}
         }
         n.div_ceil(4) * 4
     }
@@ -96,7 +97,11 @@ pub struct AccurateEquilibrium {
     pub accuracy: Accuracy,
 }
 
-fn solve_at(
+/// Solve at exactly `cells` cells (on the mesh [`crate::MeshMap::for_profile`] chooses) from
+/// `start`, or from `initial` resampled when given. For a uniform rod the phase condition
+/// comes from `start`, so that solutions at different resolutions share their arclength
+/// origin.
+pub fn solve_cells(
     radius: f64,
     lbar: f64,
     cells: usize,
@@ -131,14 +136,14 @@ pub fn solve_with_accuracy(
 ) -> Result<AccurateEquilibrium, SolverError> {
     let periods = start.periods(lbar)?;
     let n = accuracy.cells(periods, stiffness);
-    let main = solve_at(radius, lbar, n, stiffness, start, None, opts)?;
+    let main = solve_cells(radius, lbar, n, stiffness, start, None, opts)?;
     let (fine, coarse) = match accuracy {
         Accuracy::High => {
-            let fine = solve_at(radius, lbar, 2 * n, stiffness, start, Some(&main), opts)?;
+            let fine = solve_cells(radius, lbar, 2 * n, stiffness, start, Some(&main), opts)?;
             (fine, main)
         }
         _ => {
-            let coarse = solve_at(radius, lbar, n / 2, stiffness, start, Some(&main), opts)?;
+            let coarse = solve_cells(radius, lbar, n / 2, stiffness, start, Some(&main), opts)?;
             (main, coarse)
         }
     };

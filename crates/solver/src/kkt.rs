@@ -378,15 +378,39 @@ impl KktFactor {
     }
 
     /// Number of negative eigenvalues of the dense Newton matrix `J`.
+    ///
+    /// Only the `(η, η)` part of a pivot block is changed by the elimination of the block
+    /// before it, so `D_c = [[−S, −I, 0], [−I, 0, Bᵀ], [0, B, Q]]`, whose inertia is that of
+    /// the pair, `(3, 3, 0)`, plus that of `Σ_c = Q − B S Bᵀ` (2×2); the last block gives
+    /// `(3, 3, 0)` plus the inertia of `−B_cl S B_clᵀ` (3×3, `B_cl` the closure map).
     pub fn negative_eigenvalues(&self) -> usize {
+        let n = self.cells;
         let mut neg = 0usize;
-        for b in &self.blocks {
-            neg +=
-                b.d.clone()
-                    .symmetric_eigenvalues()
+        for (c, b) in self.blocks.iter().enumerate() {
+            let d = &b.d;
+            if c == 0 {
+                neg += negatives_2x2(d[(0, 0)], d[(0, 1)], d[(1, 1)]);
+                continue;
+            }
+            // S = −D[η, η]; Σ = D[κκ] + D[κξ] D[ηη] D[ξκ] (κ: rows 6.., ξ: 3..6, η: 0..3).
+            let dee = d.view((0, 0), (3, 3));
+            let tail = d.nrows() - 6;
+            let dkx = d.view((6, 3), (tail, 3));
+            let sigma = d.view((6, 6), (tail, tail)) + dkx * dee * dkx.transpose();
+            neg += 3;
+            neg += if c < n {
+                negatives_2x2(
+                    sigma[(0, 0)],
+                    0.5 * (sigma[(0, 1)] + sigma[(1, 0)]),
+                    sigma[(1, 1)],
+                )
+            } else {
+                let sym = (&sigma + sigma.transpose()) * 0.5;
+                sym.symmetric_eigenvalues()
                     .iter()
                     .filter(|v| **v < 0.0)
-                    .count();
+                    .count()
+            };
         }
         if let Some((_, _, s)) = &self.border {
             if *s < 0.0 {
@@ -401,6 +425,22 @@ impl KktFactor {
     /// when the shift is `−tolerance`.
     pub fn reduced_negative_count(&self) -> usize {
         self.negative_eigenvalues().saturating_sub(self.n_mult)
+    }
+}
+
+/// Number of negative eigenvalues of the symmetric 2×2 matrix `[[a, b], [b, c]]`.
+fn negatives_2x2(a: f64, b: f64, c: f64) -> usize {
+    let det = a * c - b * b;
+    if det < 0.0 {
+        1
+    } else if a + c < 0.0 {
+        if det > 0.0 {
+            2
+        } else {
+            1
+        }
+    } else {
+        0
     }
 }
 
@@ -428,5 +468,32 @@ impl SurfaceModel {
         )?;
         let ch = self.chain(kappa);
         Ok(CellTerms::new(self, &ch, kappa.len(), &V3::from(*mu)).hessian_vector(v))
+    }
+}
+
+impl SurfaceModel {
+    /// The Newton matrix applied to a vector, `J dz` (layout `(κ, μ, ν)`), in `O(N)`:
+    /// `(∇²ℒ dκ − ∇cᵀdμ − ∇φ dν, −∇c dκ, −∇φᵀdκ)`.
+    pub fn kkt_apply(&self, z: &[f64], dz: &[f64]) -> Result<DVector<f64>, SolverError> {
+        let (kappa, mu, _) = self.split(z)?;
+        let (dk, dmu, dnu) = self.split(dz)?;
+        let hv = self.hessian_vector(kappa, &mu, dk)?;
+        let cj = self.closure_jacobian(kappa)?;
+        let n = self.n_kappa();
+        let mut out = DVector::zeros(self.dim());
+        for a in 0..n {
+            out[a] = hv[a] - (0..3).map(|k| cj[(k, a)] * dmu[k]).sum::<f64>();
+        }
+        for k in 0..3 {
+            out[n + k] = -(0..n).map(|a| cj[(k, a)] * dk[a]).sum::<f64>();
+        }
+        if let Some(ph) = self.phase() {
+            let g = ph.gradient();
+            for a in 0..n {
+                out[a] -= g[a] * dnu;
+            }
+            out[n + 3] = -g.iter().zip(dk).map(|(g, d)| g * d).sum::<f64>();
+        }
+        Ok(out)
     }
 }

@@ -37,7 +37,7 @@ pub mod stability;
 pub mod start;
 pub mod stiffness;
 
-pub use accuracy::{solve_with_accuracy, Accuracy, AccurateEquilibrium};
+pub use accuracy::{solve_cells, solve_with_accuracy, Accuracy, AccurateEquilibrium};
 pub use continuation::LbarProblem;
 pub use kkt::KktFactor;
 pub use mesh::MeshMap;

@@ -378,16 +378,24 @@ fn relax(
     Ok((kappa, opts.max_relax_iterations))
 }
 
-/// The Newton step `−J⁻¹F` at `z`: the `O(N)` block factorisation ([`KktFactor`]), or
+/// The Newton step `−J⁻¹F` at `z`: the `O(N)` block factorisation ([`KktFactor`]) with
+/// one step of iterative refinement, or
 /// the dense matrix if a pivot block is singular. `None` if both fail.
 fn newton_step(model: &SurfaceModel, z: &[f64], f: &DVector<f64>) -> Option<DVector<f64>> {
     let finite = |d: &DVector<f64>| d.iter().all(|v| v.is_finite());
-    if let Some(d) = KktFactor::new(model, z, 0.0)
-        .ok()
-        .and_then(|k| k.solve(&(-f)))
-        .filter(finite)
-    {
-        return Some(d);
+    if let Ok(k) = KktFactor::new(model, z, 0.0) {
+        if let Some(mut d) = k.solve(&(-f)).filter(finite) {
+            // One step of iterative refinement with the exact O(N) product J d: near a
+            // great circle the closure is nearly rank-deficient and the block elimination
+            // loses digits that the refinement recovers.
+            if let Ok(jd) = model.kkt_apply(z, d.as_slice()) {
+                let r = -f - jd;
+                if let Some(c) = k.solve(&r).filter(finite) {
+                    d += c;
+                }
+            }
+            return Some(d);
+        }
     }
     model.kkt_jacobian(z).ok()?.lu().solve(&(-f)).filter(finite)
 }

@@ -242,7 +242,8 @@ fn shift_mode(kappa: &[f64], cells: usize) -> Result<DVector<f64>, SolverError> 
     Ok(d)
 }
 
-/// Lowest `count` eigenvalues of the constrained pencil by shift-invert Lanczos.
+/// Lowest `count` eigenvalues of the constrained pencil by shift-invert Lanczos; stops when
+/// the wanted Ritz values change by less than `1e-7` (relative) over five steps.
 fn lanczos_lowest(
     model: &SurfaceModel,
     z: &[f64],
@@ -251,8 +252,9 @@ fn lanczos_lowest(
 ) -> Result<Vec<f64>, SolverError> {
     let wdiag = metric(model);
     let n = model.n_kappa();
-    // A shift below the spectrum.
-    let mut sigma = -1.0;
+    // A shift below the spectrum, as close as the inertia allows (clusters of eigenvalues
+    // separate better the closer the shift).
+    let mut sigma = -0.05;
     let mut factor = None;
     for _ in 0..40 {
         match KktFactor::new(model, z, sigma) {
@@ -300,29 +302,25 @@ fn lanczos_lowest(
             }
         }
         let b = mdot(&w, &w).sqrt();
-        // Ritz values of the tridiagonal matrix.
         let k = alpha.len();
-        let mut t = DMatrix::zeros(k, k);
-        for i in 0..k {
-            t[(i, i)] = alpha[i];
-            if i + 1 < k {
-                t[(i, i + 1)] = beta[i];
-                t[(i + 1, i)] = beta[i];
-            }
+        let last = b <= 1e-14 * a.abs().max(1e-300) || j + 1 == max_steps;
+        // Ritz values of the tridiagonal matrix, every fifth step (an eigen-decomposition of
+        // the k×k matrix each step would cost more than the Lanczos steps themselves).
+        if !(last || (k >= count.min(dim) && k % 5 == 0)) {
+            beta.push(b);
+            basis.push(w / b);
+            continue;
         }
-        let eig = t.symmetric_eigen();
-        let mut pairs: Vec<(f64, f64)> = (0..k)
-            .map(|i| (eig.eigenvalues[i], (b * eig.eigenvectors[(k - 1, i)]).abs()))
-            .collect();
-        pairs.sort_by(|x, y| y.0.total_cmp(&x.0));
-        let want = count.min(k);
-        ritz = pairs.iter().take(want).map(|p| p.0).collect();
-        let converged = k >= count.min(dim)
-            && pairs
+        let theta = tridiagonal_largest(&alpha, &beta, count.min(k));
+        // Converged when the wanted Ritz values moved by less than 1e-7 (relative) since
+        // the previous check (five steps earlier).
+        let converged = theta.len() == ritz.len()
+            && theta
                 .iter()
-                .take(want)
-                .all(|(th, res)| *res <= 1e-12 * th.abs().max(1e-300));
-        if converged || b <= 1e-14 * a.abs().max(1e-300) || j + 1 == max_steps {
+                .zip(&ritz)
+                .all(|(a, b)| (a - b).abs() <= 1e-7 * a.abs().max(1e-300));
+        ritz = theta;
+        if converged || last {
             break;
         }
         beta.push(b);
@@ -335,6 +333,60 @@ fn lanczos_lowest(
         .collect();
     vals.sort_by(f64::total_cmp);
     Ok(vals)
+}
+
+/// The `count` largest eigenvalues (descending) of the symmetric tridiagonal matrix with
+/// diagonal `alpha` and off-diagonal `beta`, by bisection on Sturm counts (W. Givens 1954;
+/// Golub & Van Loan §8.4.1), `O(k)` per count.
+fn tridiagonal_largest(alpha: &[f64], beta: &[f64], count: usize) -> Vec<f64> {
+    let k = alpha.len();
+    // Number of eigenvalues below x (LDLᵀ pivots of T − xI).
+    let below = |x: f64| -> usize {
+        let mut n = 0;
+        let mut d = 1.0;
+        for i in 0..k {
+            let b2 = if i > 0 {
+                beta[i - 1] * beta[i - 1]
+            } else {
+                0.0
+            };
+            d = alpha[i] - x - if i > 0 { b2 / d } else { 0.0 };
+            if d == 0.0 {
+                d = -f64::EPSILON * (alpha[i].abs() + x.abs()).max(f64::MIN_POSITIVE);
+            }
+            if d < 0.0 {
+                n += 1;
+            }
+        }
+        n
+    };
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for i in 0..k {
+        let r = if i > 0 { beta[i - 1].abs() } else { 0.0 }
+            + if i + 1 < k { beta[i].abs() } else { 0.0 };
+        lo = lo.min(alpha[i] - r);
+        hi = hi.max(alpha[i] + r);
+    }
+    let mut out = Vec::with_capacity(count);
+    for j in 0..count.min(k) {
+        // The eigenvalue with exactly k − 1 − j eigenvalues below it.
+        let target = k - 1 - j;
+        let (mut a, mut b) = (lo, hi);
+        for _ in 0..200 {
+            let m = 0.5 * (a + b);
+            if m <= a || m >= b || (b - a) <= 1e-15 * m.abs().max(1e-300) {
+                break;
+            }
+            if below(m) <= target {
+                a = m;
+            } else {
+                b = m;
+            }
+        }
+        out.push(0.5 * (a + b));
+    }
+    out
 }
 
 /// Problems up to this many curvature unknowns use the dense reduction for the eigenvalues.

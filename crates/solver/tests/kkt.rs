@@ -149,3 +149,19 @@ fn hessian_vector_product_matches_the_dense_hessian() {
         assert!(err < 1e-12, "Hv differs by {err:e}");
     }
 }
+
+#[test]
+fn matrix_vector_product_matches_the_dense_matrix() {
+    let mut seed = 5;
+    let m = SurfaceModel::new(1.0, 1.4, 16, &Stiffness::uniform(1.0)).unwrap();
+    let k0 = StartShape::Euler { l: 2 }.gauss_values(&m).unwrap();
+    let m = m
+        .with_phase(Phase::from_gauss_values(&k0, 16).unwrap())
+        .unwrap();
+    let z = state(&m, &mut seed);
+    let dz = DVector::from_fn(m.dim(), |_, _| lcg(&mut seed));
+    let jd = m.kkt_apply(&z, dz.as_slice()).unwrap();
+    let dense = m.kkt_jacobian(&z).unwrap() * &dz;
+    let err = (jd - &dense).amax() / dense.amax();
+    assert!(err < 1e-12, "J dz differs by {err:e}");
+}

@@ -1,0 +1,241 @@
+//! `rodloop converge`: one state solved on a ladder of resolutions, to measure the
+//! speed/accuracy trade (error against cells and time, observed order of convergence).
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use rodloop_exact::eta_of_branch;
+use rodloop_scene::StiffnessSpec;
+use rodloop_solver::{solve_cells, Accuracy, SolveOptions, StartShape};
+use serde_json::json;
+
+use crate::output::{ensure_dir, write_json, Cell, Table};
+use crate::solve::{load_scene, stiffness_of};
+
+/// Arguments of `rodloop converge`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Normalised length L/(2 pi R).
+    #[arg(long, allow_negative_numbers = true)]
+    pub lbar: f64,
+    /// Paper branch number (1: saddle, eta = 2; 2: figure-eight, eta = 1; B >= 3: eta = B).
+    #[arg(long)]
+    pub branch: u32,
+    /// Scene file (TOML; see data/scenes/). Default: homogeneous loop on the unit sphere.
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// Coarsest number of cells of the ladder (default: a quarter of the `default`
+    /// accuracy's cells).
+    #[arg(long)]
+    pub min_cells: Option<usize>,
+    /// Number of resolutions (each doubles the cells), 3 to 9.
+    #[arg(long, default_value_t = 6)]
+    pub levels: usize,
+    /// Output directory.
+    #[arg(long, default_value = "out/converge")]
+    pub out: PathBuf,
+}
+
+/// One rung of the ladder.
+struct Rung {
+    cells: usize,
+    energy: f64,
+    lambda: (f64, f64),
+    seconds: f64,
+}
+
+/// Run the subcommand.
+pub fn run(args: &Args) -> Result<()> {
+    let scene = load_scene(args.scene.as_deref())?;
+    if args.branch == 0 || args.branch > 1000 {
+        bail!("--branch must be from 1 to 1000 (got {})", args.branch);
+    }
+    if !(3..=9).contains(&args.levels) {
+        bail!("--levels must be from 3 to 9 (got {})", args.levels);
+    }
+    let eta = eta_of_branch(args.branch);
+    let e = f64::from(eta);
+    if !(args.lbar.is_finite() && args.lbar > e - 1.0 && args.lbar < e + 1.0) {
+        bail!(
+            "branch {} (eta = {eta}) exists only for {} < lbar < {}; got lbar = {}",
+            args.branch,
+            e - 1.0,
+            e + 1.0,
+            args.lbar
+        );
+    }
+    let stiffness = stiffness_of(&scene.stiffness);
+    let start = StartShape::Euler { l: eta };
+    let default_cells = Accuracy::Default.cells(eta as usize, &stiffness);
+    let base = args.min_cells.unwrap_or(default_cells / 4).max(8);
+    let finest = base << (args.levels - 1);
+    if finest > 65_536 {
+        bail!(
+            "the finest rung would have {finest} cells (cap 65536): lower --min-cells or --levels"
+        );
+    }
+    let opts = SolveOptions::default();
+    let mut rungs: Vec<Rung> = Vec::new();
+    let mut prev = None;
+    for k in 0..args.levels {
+        let cells = base << k;
+        let t0 = Instant::now();
+        // Each rung is solved from the Euler start (so its time is that of a user's solve),
+        // the coarse solution only serving as a fallback start.
+        let eq = match solve_cells(
+            scene.radius,
+            args.lbar,
+            cells,
+            &stiffness,
+            &start,
+            None,
+            &opts,
+        ) {
+            Ok(eq) => eq,
+            Err(first) => solve_cells(
+                scene.radius,
+                args.lbar,
+                cells,
+                &stiffness,
+                &start,
+                prev.as_ref(),
+                &opts,
+            )
+            .with_context(|| format!("solving at {cells} cells (from the Euler start: {first})"))?,
+        };
+        let seconds = t0.elapsed().as_secs_f64();
+        rungs.push(Rung {
+            cells,
+            energy: eq.energy().total,
+            lambda: eq.lambda_range(),
+            seconds,
+        });
+        prev = Some(eq);
+    }
+    let exact = match (&scene.stiffness, scene.radius) {
+        (StiffnessSpec::Uniform { .. }, _) => rodloop_exact::paper_branch_loop(eta, args.lbar)
+            .ok()
+            .and_then(|l| l.energy().ok()),
+        _ => None,
+    };
+    let finest_e = rungs.last().map(|r| r.energy).unwrap_or(f64::NAN);
+    let reference = exact.unwrap_or(finest_e);
+    let mut table = Table::new(
+        "converge.csv",
+        &[
+            "nodes",
+            "energy",
+            "error_estimate",
+            "error_vs_finest",
+            "error_vs_exact",
+            "observed_order",
+            "lambda_min",
+            "lambda_max",
+            "seconds",
+        ],
+    );
+    outln!(
+        "branch {} (eta = {eta}) at lbar = {}, scene {}: energy E R/(pi D0) on {} resolutions{}",
+        args.branch,
+        args.lbar,
+        scene.name,
+        rungs.len(),
+        if exact.is_some() {
+            format!(" (exact value {:.15})", reference)
+        } else {
+            String::new()
+        }
+    );
+    outln!(
+        "{:>7} {:>19} {:>10} {:>10} {:>10} {:>6} {:>12} {:>12} {:>9}",
+        "nodes",
+        "energy",
+        "estimate",
+        "vs finest",
+        "vs exact",
+        "order",
+        "lambda_min",
+        "lambda_max",
+        "seconds"
+    );
+    let mut rows = Vec::new();
+    for (i, r) in rungs.iter().enumerate() {
+        let estimate = (i > 0).then(|| (r.energy - rungs[i - 1].energy).abs() / 15.0);
+        let vs_finest = (i + 1 < rungs.len()).then(|| (r.energy - finest_e).abs());
+        let vs_exact = exact.map(|x| (r.energy - x).abs());
+        // Order from three consecutive rungs: log2(|E_{N/2} − E_N| / |E_N − E_{2N}|).
+        let order = (i > 0 && i + 1 < rungs.len())
+            .then(|| {
+                let a = (rungs[i - 1].energy - r.energy).abs();
+                let b = (r.energy - rungs[i + 1].energy).abs();
+                (a / b).log2()
+            })
+            .filter(|o| o.is_finite());
+        let opt = |v: Option<f64>| v.map(Cell::F).unwrap_or(Cell::S(String::new()));
+        table.push(vec![
+            Cell::I(r.cells as i64),
+            Cell::F(r.energy),
+            opt(estimate),
+            opt(vs_finest),
+            opt(vs_exact),
+            opt(order),
+            Cell::F(r.lambda.0),
+            Cell::F(r.lambda.1),
+            Cell::F(r.seconds),
+        ])?;
+        let show = |v: Option<f64>, w: usize| match v {
+            Some(x) => format!("{x:>w$.1e}"),
+            None => format!("{:>w$}", "-"),
+        };
+        outln!(
+            "{:>7} {:>19.15} {} {} {} {:>6} {:>12.6} {:>12.6} {:>9.4}",
+            r.cells,
+            r.energy,
+            show(estimate, 10),
+            show(vs_finest, 10),
+            show(vs_exact, 10),
+            order
+                .map(|o| format!("{o:.2}"))
+                .unwrap_or_else(|| "-".into()),
+            r.lambda.0,
+            r.lambda.1,
+            r.seconds
+        );
+        rows.push(json!({
+            "nodes": r.cells, "energy": r.energy, "error_estimate": estimate,
+            "error_vs_finest": vs_finest, "error_vs_exact": vs_exact, "observed_order": order,
+            "lambda_min": r.lambda.0, "lambda_max": r.lambda.1, "seconds": r.seconds,
+        }));
+    }
+    let fast = Accuracy::Fast.cells(eta as usize, &stiffness);
+    outln!(
+        "accuracy levels: fast = {fast} cells (estimate from {}), default = {default_cells} cells (estimate from {}), high = {} and {} cells Richardson-extrapolated",
+        fast / 2,
+        default_cells / 2,
+        default_cells,
+        2 * default_cells
+    );
+    let summary = json!({
+        "scene": scene.name,
+        "lbar": args.lbar,
+        "branch": args.branch,
+        "eta": eta,
+        "exact_energy": exact,
+        "rungs": rows,
+        "accuracy_cells": {"fast": fast, "default": default_cells, "high": [default_cells, 2 * default_cells]},
+        "units": "energy E R/(pi D0); lambda in units of D0/R^3; seconds of wall time per solve",
+    });
+    ensure_dir(&args.out)?;
+    table.write(&args.out)?;
+    write_json(
+        &args.out,
+        "summary.json",
+        &crate::output::strip_nulls(summary),
+    )?;
+    outln!(
+        "wrote converge.csv and summary.json to {}",
+        args.out.display()
+    );
+    Ok(())
+}
