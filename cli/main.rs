@@ -16,6 +16,7 @@ macro_rules! outln {
 mod analytic;
 mod compare;
 mod diagram;
+mod draw;
 mod euler;
 mod numeric_diagram;
 mod output;
@@ -54,6 +55,9 @@ enum Command {
     /// The paper's printed values (critical lengths, buckling loads, winding numbers) next to
     /// rodloop's, with deviations.
     Compare(compare::Args),
+    /// Pictures of a loop (four views on the sphere, coloured by a column, self-contacts
+    /// marked) or of a diagram's branches.csv, as SVG and PNG.
+    Draw(draw::Args),
 }
 
 fn main() -> ExitCode {
@@ -64,6 +68,7 @@ fn main() -> ExitCode {
         Command::Euler(a) => euler::run(&a),
         Command::Diagram(a) => diagram::run(&a),
         Command::Compare(a) => compare::run(&a),
+        Command::Draw(a) => draw::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
