@@ -6,6 +6,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use rodloop_figures::data::LoopData;
+use rodloop_figures::diagram::{energy_figure, energy_split_figure, lambda_figure, DiagramData};
 use rodloop_figures::loops::{loop_picture, point_group, LoopPictureOptions};
 use rodloop_figures::raster::svg_to_png;
 use serde_json::json;
@@ -141,6 +142,29 @@ pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
     Ok(written)
 }
 
+/// Draw the figures of a diagram directory (`branches.csv`, `critical.csv`) into
+/// `set.out`: `diagram` (Fig. 3a), `diagram_split` (Fig. 3b), `diagram_lambda` (Fig. 7).
+pub fn draw_diagram(dir: &Path, set: &DrawSettings) -> Result<Vec<String>> {
+    let d = DiagramData::read(dir)?;
+    let w = f64::from(set.width.unwrap_or(960));
+    let h = f64::from(set.height.unwrap_or(620));
+    ensure_dir(&set.out)?;
+    let mut names = write_figure(&set.out, "diagram", &energy_figure(&d, w, h)?, set.format)?;
+    names.extend(write_figure(
+        &set.out,
+        "diagram_split",
+        &energy_split_figure(&d, w, h)?,
+        set.format,
+    )?);
+    names.extend(write_figure(
+        &set.out,
+        "diagram_lambda",
+        &lambda_figure(&d, w, h)?,
+        set.format,
+    )?);
+    Ok(names)
+}
+
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
     let meta = std::fs::metadata(&args.file)
@@ -161,7 +185,13 @@ pub fn run(args: &Args) -> Result<()> {
         width: args.width,
         height: args.height,
     };
-    let written = draw_loop(&args.file, &set)?;
+    let is_diagram = args.file.file_name().is_some_and(|n| n == "branches.csv");
+    let written = if is_diagram {
+        let dir = args.file.parent().unwrap_or(Path::new("."));
+        draw_diagram(dir, &set)?
+    } else {
+        draw_loop(&args.file, &set)?
+    };
     outln!("wrote {} to {}", written.join(", "), set.out.display());
     Ok(())
 }

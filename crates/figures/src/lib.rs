@@ -10,8 +10,10 @@ mod error;
 
 pub mod color;
 pub mod data;
+pub mod diagram;
 pub mod geometry;
 pub mod loops;
+pub mod plot;
 pub mod raster;
 pub mod svg;
 pub mod view;
