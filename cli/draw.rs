@@ -13,6 +13,11 @@ use serde_json::json;
 
 use crate::output::{ensure_dir, write_atomic, write_json};
 
+/// RMS tolerance (fraction of R) of the point-group detector: a symmetry element is accepted
+/// when it maps the resampled loop onto itself to this accuracy (the resampling of a coarse
+/// `--accuracy fast` table is accurate to a few 1e-4 R).
+pub const POINT_GROUP_TOL: f64 = 1e-3;
+
 /// Which files to write.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Format {
@@ -117,7 +122,7 @@ pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
     let pic = loop_picture(&data, &opts)?;
     ensure_dir(&set.out)?;
     let mut written = write_figure(&set.out, &stem, &pic.svg, set.format)?;
-    let group = point_group(&data, 1e-4);
+    let group = point_group(&data, POINT_GROUP_TOL);
     let note = json!({
         "file": path.display().to_string(),
         "points": data.len(),
@@ -133,7 +138,7 @@ pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
         "apparent_crossings_per_view": pic.apparent_crossings.iter().map(|(v, k)| json!({"view": v, "crossings": k})).collect::<Vec<_>>(),
         "point_group": group.as_ref().map(|g| g.0.clone()),
         "point_group_order": group.as_ref().map(|g| g.1),
-        "point_group_tolerance": 1e-4,
+        "point_group_tolerance": POINT_GROUP_TOL,
         "seconds": t0.elapsed().as_secs_f64(),
     });
     let name = format!("{stem}-draw.json");

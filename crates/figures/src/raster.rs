@@ -52,3 +52,10 @@ pub fn svg_to_png(svg: &str, scale: f32) -> Result<Vec<u8>, FigureError> {
         .encode_png()
         .map_err(|e| FigureError::Raster(e.to_string()))
 }
+
+/// Width and height of a PNG image (decodes it fully, so it also checks the file).
+pub fn png_size(bytes: &[u8]) -> Result<(u32, u32), FigureError> {
+    let p = resvg::tiny_skia::Pixmap::decode_png(bytes)
+        .map_err(|e| FigureError::Raster(format!("not a readable PNG: {e}")))?;
+    Ok((p.width(), p.height()))
+}
