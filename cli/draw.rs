@@ -8,6 +8,7 @@ use anyhow::{bail, Context, Result};
 use rodloop_figures::data::LoopData;
 use rodloop_figures::diagram::{energy_figure, energy_split_figure, lambda_figure, DiagramData};
 use rodloop_figures::loops::{loop_picture, point_group, LoopPictureOptions};
+use rodloop_figures::profiles::profiles_figure;
 use rodloop_figures::raster::svg_to_png;
 use serde_json::json;
 
@@ -122,6 +123,18 @@ pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
     let pic = loop_picture(&data, &opts)?;
     ensure_dir(&set.out)?;
     let mut written = write_figure(&set.out, &stem, &pic.svg, set.format)?;
+    let profiles = profiles_figure(
+        &data,
+        480.0,
+        260.0,
+        &format!("{}: quantities along the loop (Figs. 5, 6)", path.display()),
+    )?;
+    written.extend(write_figure(
+        &set.out,
+        &format!("{stem}-profiles"),
+        &profiles,
+        set.format,
+    )?);
     let group = point_group(&data, POINT_GROUP_TOL);
     let note = json!({
         "file": path.display().to_string(),

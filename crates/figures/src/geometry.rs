@@ -75,7 +75,7 @@ fn cyclic_gap(a: usize, b: usize, n: usize) -> usize {
 /// one contact and are merged; the representative is the closest pair.
 pub fn self_contacts(points: &[Vector3<f64>], tol: f64) -> Vec<Contact> {
     let n = points.len();
-    if n < 4 || !(tol > 0.0) {
+    if n < 4 || tol.is_nan() || tol <= 0.0 {
         return Vec::new();
     }
     let seg = |i: usize| (&points[i], &points[(i + 1) % n]);

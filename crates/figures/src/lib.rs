@@ -14,6 +14,7 @@ pub mod diagram;
 pub mod geometry;
 pub mod loops;
 pub mod plot;
+pub mod profiles;
 pub mod raster;
 pub mod svg;
 pub mod view;
