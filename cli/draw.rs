@@ -123,6 +123,7 @@ pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
     let pic = loop_picture(&data, &opts)?;
     ensure_dir(&set.out)?;
     let mut written = write_figure(&set.out, &stem, &pic.svg, set.format)?;
+    let t_picture = t0.elapsed().as_secs_f64();
     let profiles = profiles_figure(
         &data,
         480.0,
@@ -152,6 +153,7 @@ pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
         "point_group": group.as_ref().map(|g| g.0.clone()),
         "point_group_order": group.as_ref().map(|g| g.1),
         "point_group_tolerance": POINT_GROUP_TOL,
+        "seconds_picture": t_picture,
         "seconds": t0.elapsed().as_secs_f64(),
     });
     let name = format!("{stem}-draw.json");
