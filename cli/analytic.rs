@@ -26,6 +26,9 @@ pub struct Args {
     /// Number of points per loop, uniform in arclength.
     #[arg(long, default_value_t = 512)]
     pub points: usize,
+    /// Also draw every loop (four views, SVG and PNG) next to its CSV (see `rodloop draw`).
+    #[arg(long)]
+    pub draw: bool,
     /// Output directory.
     #[arg(long, default_value = "out/analytic")]
     pub out: PathBuf,
@@ -108,6 +111,10 @@ pub fn run(args: &Args) -> Result<()> {
             ])?;
         }
         table.write(&args.out)?;
+        if args.draw {
+            let set = crate::draw::DrawSettings::beside(&args.out);
+            crate::draw::draw_loop(&args.out.join(&name), &set)?;
+        }
         let energy = lp.energy()?;
         let (lambda_min, lambda_max) = lp.lambda_range();
         let family = match lp.family {

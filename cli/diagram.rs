@@ -51,6 +51,21 @@ pub struct Args {
     /// Output directory.
     #[arg(long, default_value = "out/diagram")]
     pub out: PathBuf,
+    /// Width of the diagram figures in pixels.
+    #[arg(long, default_value_t = 960)]
+    pub width: u32,
+    /// Height of the diagram figures in pixels.
+    #[arg(long, default_value_t = 620)]
+    pub height: u32,
+}
+
+/// The figures of `draw_diagram` (diagram, diagram_split, diagram_lambda; SVG and PNG).
+fn draw_figures(args: &Args) -> Result<()> {
+    let mut set = crate::draw::DrawSettings::beside(&args.out);
+    set.width = Some(args.width);
+    set.height = Some(args.height);
+    crate::draw::draw_diagram(&args.out, &set)?;
+    Ok(())
 }
 
 /// Run the subcommand.
@@ -140,6 +155,7 @@ pub fn run(args: &Args) -> Result<()> {
         let fig = figure(&d, energy_g);
         write_atomic(&args.out, name, svg::render(&fig).as_bytes())?;
     }
+    draw_figures(args)?;
     let summary = json!({
         "model": "exact",
         "lbar_min": lbar_min,
@@ -175,7 +191,7 @@ pub fn run(args: &Args) -> Result<()> {
         );
     }
     outln!(
-        "{} states on {} branches, {} continuation points, computed in {:.3} s; wrote branches.csv, critical.csv, diagram.svg, diagram_g.svg, summary.json to {}",
+        "{} states on {} branches, {} continuation points, computed in {:.3} s; wrote branches.csv, critical.csv, diagram.svg/.png, diagram_g.svg, diagram_split.svg/.png, diagram_lambda.svg/.png, summary.json to {}",
         d.points.len(),
         d.points.iter().map(|p| p.branch).collect::<std::collections::BTreeSet<_>>().len(),
         d.continuation_steps,
@@ -204,6 +220,7 @@ fn run_numeric(
     opts.validate()?;
     let d = crate::numeric_diagram::run_numeric(&opts, &args.out, args.resume, args.quiet)?;
     crate::numeric_diagram::write_outputs(&d, &opts, &scene.name, &args.out)?;
+    draw_figures(args)?;
     // For homogeneous scenes, show the exact layer's critical lengths next to the numeric ones.
     let exact = if scene.stiffness.is_uniform() {
         compute(&DiagramSettings {
@@ -276,7 +293,7 @@ fn run_numeric(
         eprintln!("warning: {w}");
     }
     outln!(
-        "{} states on {} branches in {:.2} s (tracing {:.2} s); wrote branches.csv, critical.csv, diagram.svg, summary.json to {}",
+        "{} states on {} branches in {:.2} s (tracing {:.2} s); wrote branches.csv, critical.csv, diagram.svg/.png, diagram_split.svg/.png, diagram_lambda.svg/.png, summary.json to {}",
         d.rows().len(),
         d.branches.len(),
         d.timings.total,

@@ -20,6 +20,9 @@ pub struct Args {
     /// Number of points, uniform in arclength.
     #[arg(long, default_value_t = 512)]
     pub points: usize,
+    /// Also draw the loop (four views, SVG and PNG) next to the CSV (see `rodloop draw`).
+    #[arg(long)]
+    pub draw: bool,
     /// Output directory.
     #[arg(long, default_value = "out/euler")]
     pub out: PathBuf,
@@ -78,6 +81,10 @@ pub fn run(args: &Args) -> Result<()> {
         "units": "R = 1; energy is E R/(pi D)",
     });
     write_json(&args.out, "summary.json", &summary)?;
+    if args.draw {
+        let set = crate::draw::DrawSettings::beside(&args.out);
+        crate::draw::draw_loop(&args.out.join("curve.csv"), &set)?;
+    }
     outln!(
         "Euler rotation curve l = {}, lbar = {}: alpha = {:.15}, energy E R/(pi D) = {:.12} (quadrature error <= {:.1e})",
         args.l, args.lbar, curve.alpha, energy.value, energy.error_estimate

@@ -17,6 +17,7 @@ mod analytic;
 mod compare;
 mod converge;
 mod diagram;
+mod draw;
 mod euler;
 mod numeric_diagram;
 mod output;
@@ -58,6 +59,9 @@ enum Command {
     /// One state on a ladder of resolutions: error against cells and time, observed order
     /// of convergence (the speed/accuracy trade).
     Converge(converge::Args),
+    /// Pictures of a loop (four views on the sphere, coloured by a column, self-contacts
+    /// marked) or of a diagram's branches.csv, as SVG and PNG.
+    Draw(draw::Args),
 }
 
 fn main() -> ExitCode {
@@ -69,6 +73,7 @@ fn main() -> ExitCode {
         Command::Diagram(a) => diagram::run(&a),
         Command::Compare(a) => compare::run(&a),
         Command::Converge(a) => converge::run(&a),
+        Command::Draw(a) => draw::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -30,6 +30,9 @@ pub struct Args {
     /// Accuracy: fast, default or high (overrides the scene's).
     #[arg(long)]
     pub accuracy: Option<String>,
+    /// Also draw the loop (four views, SVG and PNG) next to the CSV (see `rodloop draw`).
+    #[arg(long)]
+    pub draw: bool,
     /// Output directory.
     #[arg(long, default_value = "out/solve")]
     pub out: PathBuf,
@@ -253,6 +256,10 @@ pub fn run(args: &Args) -> Result<()> {
     ensure_dir(&args.out)?;
     table.write(&args.out)?;
     write_json(&args.out, "summary.json", &summary)?;
+    if args.draw {
+        let set = crate::draw::DrawSettings::beside(&args.out);
+        crate::draw::draw_loop(&args.out.join("config.csv"), &set)?;
+    }
     outln!(
         "branch {} (eta = {eta}) at lbar = {}: E R/(pi D0) = {:.10} ± {:.1e}, index {} ({}), lambda in [{:.6}, {:.6}] ± {:.1e}",
         args.branch,

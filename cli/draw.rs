@@ -1,0 +1,217 @@
+//! `rodloop draw`: pictures of a loop (`config.csv`, `loop-NN.csv`, `curve.csv`) or of a
+//! diagram directory's `branches.csv`, as SVG and/or PNG.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use rodloop_figures::data::LoopData;
+use rodloop_figures::diagram::{energy_figure, energy_split_figure, lambda_figure, DiagramData};
+use rodloop_figures::loops::{loop_picture, point_group, LoopPictureOptions};
+use rodloop_figures::profiles::profiles_figure;
+use rodloop_figures::raster::svg_to_png;
+use serde_json::json;
+
+use crate::output::{ensure_dir, write_atomic, write_json};
+
+/// RMS tolerance (fraction of R) of the point-group detector: a symmetry element is accepted
+/// when it maps the resampled loop onto itself to this accuracy (the resampling of a coarse
+/// `--accuracy fast` table is accurate to a few 1e-4 R).
+pub const POINT_GROUP_TOL: f64 = 1e-3;
+
+/// Which files to write.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// SVG only.
+    Svg,
+    /// PNG only.
+    Png,
+    /// Both.
+    Both,
+}
+
+/// Arguments of `rodloop draw`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// A loop table (config.csv from solve, loop-NN.csv from analytic, curve.csv from euler, or
+    /// any CSV with columns s,x,y,z) or a diagram's branches.csv.
+    pub file: PathBuf,
+    /// Output directory (default: the file's directory).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Column to colour the loop by (D, lambda, kappa_g, gap, kappa, tau, s, …; default:
+    /// lambda when present, else gap, else kappa_g).
+    #[arg(long)]
+    pub color: Option<String>,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = Format::Both)]
+    pub format: Format,
+    /// Self-contact tolerance as a fraction of the sphere radius: non-adjacent strands closer
+    /// than this are marked as touching.
+    #[arg(long, default_value_t = 1e-3)]
+    pub tol: f64,
+    /// Figure width in pixels for diagrams (loop pictures: the side of one view is width/2.5).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Figure height in pixels for diagrams.
+    #[arg(long)]
+    pub height: Option<u32>,
+}
+
+/// Resolved settings shared by `draw` and the `--draw` flags of other commands.
+#[derive(Clone, Debug)]
+pub struct DrawSettings {
+    /// Output directory.
+    pub out: PathBuf,
+    /// Colour column.
+    pub color: Option<String>,
+    /// Formats.
+    pub format: Format,
+    /// Contact tolerance (fraction of R).
+    pub tol: f64,
+    /// Width hint in pixels.
+    pub width: Option<u32>,
+    /// Height hint in pixels.
+    pub height: Option<u32>,
+}
+
+impl DrawSettings {
+    /// Defaults for `--draw`: both formats, next to the CSV.
+    pub fn beside(dir: &Path) -> Self {
+        Self {
+            out: dir.to_path_buf(),
+            color: None,
+            format: Format::Both,
+            tol: 1e-3,
+            width: None,
+            height: None,
+        }
+    }
+}
+
+/// Write `stem.svg` and/or `stem.png`; returns the names written.
+pub fn write_figure(dir: &Path, stem: &str, svg: &str, format: Format) -> Result<Vec<String>> {
+    let mut names = Vec::new();
+    if format != Format::Png {
+        write_atomic(dir, &format!("{stem}.svg"), svg.as_bytes())?;
+        names.push(format!("{stem}.svg"));
+    }
+    if format != Format::Svg {
+        let png = svg_to_png(svg, 1.0).with_context(|| format!("rendering {stem}.png"))?;
+        write_atomic(dir, &format!("{stem}.png"), &png)?;
+        names.push(format!("{stem}.png"));
+    }
+    Ok(names)
+}
+
+/// Draw one loop file: the four-view picture, and a JSON note of what was found.
+pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
+    let t0 = Instant::now();
+    let data = LoopData::read(path)?;
+    let stem = path
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("loop")
+        .to_string();
+    let panel = set.width.map_or(380.0, |w| f64::from(w) / 2.5);
+    let opts = LoopPictureOptions {
+        color: set.color.clone(),
+        tol: set.tol,
+        panel,
+        title: format!("{}", path.display()),
+    };
+    let pic = loop_picture(&data, &opts)?;
+    ensure_dir(&set.out)?;
+    let mut written = write_figure(&set.out, &stem, &pic.svg, set.format)?;
+    let t_picture = t0.elapsed().as_secs_f64();
+    let profiles = profiles_figure(
+        &data,
+        480.0,
+        260.0,
+        &format!("{}: quantities along the loop (Figs. 5, 6)", path.display()),
+    )?;
+    written.extend(write_figure(
+        &set.out,
+        &format!("{stem}-profiles"),
+        &profiles,
+        set.format,
+    )?);
+    let group = point_group(&data, POINT_GROUP_TOL);
+    let note = json!({
+        "file": path.display().to_string(),
+        "points": data.len(),
+        "radius": data.radius(),
+        "length": data.length(),
+        "lbar": data.lbar(),
+        "eta": data.eta(),
+        "color_column": pic.color_column,
+        "color_range": [pic.scale.min, pic.scale.max],
+        "self_intersections": pic.contacts.len(),
+        "self_intersection_tolerance": pic.tol,
+        "self_intersection_points": pic.contacts.iter().map(|c| json!({"x": c.point.x, "y": c.point.y, "z": c.point.z, "distance": c.distance})).collect::<Vec<_>>(),
+        "apparent_crossings_per_view": pic.apparent_crossings.iter().map(|(v, k)| json!({"view": v, "crossings": k})).collect::<Vec<_>>(),
+        "point_group": group.as_ref().map(|g| g.0.clone()),
+        "point_group_order": group.as_ref().map(|g| g.1),
+        "point_group_tolerance": POINT_GROUP_TOL,
+        "seconds_picture": t_picture,
+        "seconds": t0.elapsed().as_secs_f64(),
+    });
+    let name = format!("{stem}-draw.json");
+    write_json(&set.out, &name, &crate::output::strip_nulls(note))?;
+    written.push(name);
+    Ok(written)
+}
+
+/// Draw the figures of a diagram directory (`branches.csv`, `critical.csv`) into
+/// `set.out`: `diagram` (Fig. 3a), `diagram_split` (Fig. 3b), `diagram_lambda` (Fig. 7).
+pub fn draw_diagram(dir: &Path, set: &DrawSettings) -> Result<Vec<String>> {
+    let d = DiagramData::read(dir)?;
+    let w = f64::from(set.width.unwrap_or(960));
+    let h = f64::from(set.height.unwrap_or(620));
+    ensure_dir(&set.out)?;
+    let mut names = write_figure(&set.out, "diagram", &energy_figure(&d, w, h)?, set.format)?;
+    names.extend(write_figure(
+        &set.out,
+        "diagram_split",
+        &energy_split_figure(&d, w, h)?,
+        set.format,
+    )?);
+    names.extend(write_figure(
+        &set.out,
+        "diagram_lambda",
+        &lambda_figure(&d, w, h)?,
+        set.format,
+    )?);
+    Ok(names)
+}
+
+/// Run the subcommand.
+pub fn run(args: &Args) -> Result<()> {
+    let meta = std::fs::metadata(&args.file)
+        .with_context(|| format!("cannot read {}", args.file.display()))?;
+    if !meta.is_file() {
+        bail!("{} is not a file", args.file.display());
+    }
+    let dir = args
+        .file
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| PathBuf::from("."));
+    let set = DrawSettings {
+        out: args.out.clone().unwrap_or(dir),
+        color: args.color.clone(),
+        format: args.format,
+        tol: args.tol,
+        width: args.width,
+        height: args.height,
+    };
+    let is_diagram = args.file.file_name().is_some_and(|n| n == "branches.csv");
+    let written = if is_diagram {
+        let dir = args.file.parent().unwrap_or(Path::new("."));
+        draw_diagram(dir, &set)?
+    } else {
+        draw_loop(&args.file, &set)?
+    };
+    outln!("wrote {} to {}", written.join(", "), set.out.display());
+    Ok(())
+}

@@ -1,0 +1,497 @@
+//! The branch diagram drawn from a diagram directory's `branches.csv` and `critical.csv`
+//! (either model): energy against length (Fig. 3a), the geodesic / normal energy split
+//! (Fig. 3b), and the contact-force extremes with the great-circle buckling loads of
+//! Eqs. (33)–(34) (Fig. 7).
+//!
+//! Line styles mean the same in both models: solid = stable (lowest energy at that length),
+//! dashed = higher energy and not known to be unstable (metastable in the numeric model,
+//! where the Hessian index is 0; the exact model computes no index), dotted = unstable
+//! (Hessian index > 0, numeric model only).
+
+use std::collections::BTreeSet;
+use std::path::Path;
+
+use crate::color::branch_color;
+use crate::plot::{LegendItem, Mark, Plot, Series, Shape};
+use crate::svg::Svg;
+use crate::FigureError;
+
+/// Stability of a state, as far as the model knows it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Stability {
+    /// Lowest energy at its length.
+    Stable,
+    /// A local minimum with a higher energy.
+    Metastable,
+    /// Higher energy, index not computed (exact model).
+    Higher,
+    /// Not a local minimum.
+    Unstable,
+}
+
+impl Stability {
+    fn style(self) -> (f64, &'static str) {
+        match self {
+            Stability::Stable => (2.6, ""),
+            Stability::Metastable | Stability::Higher => (1.4, "7 4"),
+            Stability::Unstable => (1.4, "1.5 3"),
+        }
+    }
+
+    fn legend(self) -> &'static str {
+        match self {
+            Stability::Stable => "stable (lowest energy)",
+            Stability::Metastable => "metastable (local min., higher E)",
+            Stability::Higher => "higher E (index not computed)",
+            Stability::Unstable => "unstable (Hessian index > 0)",
+        }
+    }
+}
+
+/// One traced state of a branch.
+#[derive(Clone, Debug)]
+pub struct DiagramPoint {
+    /// Paper branch number.
+    pub branch: u32,
+    /// Periods of κ_g.
+    pub eta: u32,
+    /// `L̄`.
+    pub lbar: f64,
+    /// `E R/(πD₀)`.
+    pub energy: f64,
+    /// Geodesic part `E_g R/(πD₀)`.
+    pub energy_g: f64,
+    /// Smallest `λR³/D₀`.
+    pub lambda_min: f64,
+    /// Largest `λR³/D₀`.
+    pub lambda_max: f64,
+    /// Stability label.
+    pub stability: Stability,
+}
+
+/// A critical length.
+#[derive(Clone, Debug)]
+pub struct CriticalPoint {
+    /// `L̄_icr`.
+    pub lbar_cr: f64,
+    /// `crossing` (two branches' energies equal) or `collapse` (onto a great circle).
+    pub kind: String,
+    /// Energy there.
+    pub energy: f64,
+    /// Index `i`.
+    pub index: usize,
+}
+
+/// A diagram read back from its CSV files.
+#[derive(Clone, Debug)]
+pub struct DiagramData {
+    /// `exact` (a `lowest` column) or `numeric` (a `stability` column).
+    pub model: String,
+    /// States.
+    pub points: Vec<DiagramPoint>,
+    /// Critical lengths.
+    pub critical: Vec<CriticalPoint>,
+}
+
+/// Read a CSV as named text columns.
+fn read_text(path: &Path) -> Result<(Vec<String>, Vec<Vec<String>>), FigureError> {
+    let src = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|source| FigureError::Io {
+        path: src.clone(),
+        source,
+    })?;
+    let mut rdr = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_reader(&bytes[..]);
+    let e = |e: csv::Error| FigureError::Csv {
+        path: src.clone(),
+        message: e.to_string(),
+    };
+    let names: Vec<String> = rdr
+        .headers()
+        .map_err(e)?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    let mut rows = Vec::new();
+    for r in rdr.records() {
+        rows.push(r.map_err(e)?.iter().map(str::to_string).collect());
+    }
+    Ok((names, rows))
+}
+
+fn num_col(
+    names: &[String],
+    rows: &[Vec<String>],
+    col: &str,
+    src: &str,
+) -> Result<Vec<f64>, FigureError> {
+    let i = names
+        .iter()
+        .position(|n| n == col)
+        .ok_or_else(|| FigureError::MissingColumn {
+            path: src.into(),
+            column: col.into(),
+            found: names.join(", "),
+        })?;
+    rows.iter()
+        .enumerate()
+        .map(|(r, row)| {
+            let cell = row.get(i).map(String::as_str).unwrap_or("");
+            match cell.parse::<f64>() {
+                Ok(v) if v.is_finite() => Ok(v),
+                _ => Err(FigureError::NotFinite {
+                    path: src.into(),
+                    row: r + 2,
+                    column: col.into(),
+                    value: cell.into(),
+                }),
+            }
+        })
+        .collect()
+}
+
+impl DiagramData {
+    /// Read `branches.csv` and `critical.csv` from a diagram directory.
+    pub fn read(dir: &Path) -> Result<Self, FigureError> {
+        let bpath = dir.join("branches.csv");
+        let src = bpath.display().to_string();
+        let (names, rows) = read_text(&bpath)?;
+        if rows.is_empty() {
+            return Err(FigureError::TooFewRows {
+                path: src,
+                needed: 1,
+                found: 0,
+            });
+        }
+        let col = |c: &str| num_col(&names, &rows, c, &src);
+        let (branch, eta, lbar, energy, energy_g, lmin, lmax) = (
+            col("branch")?,
+            col("eta")?,
+            col("lbar")?,
+            col("energy")?,
+            col("energy_g")?,
+            col("lambda_min")?,
+            col("lambda_max")?,
+        );
+        let (model, stability): (String, Vec<Stability>) = if let Some(i) =
+            names.iter().position(|n| n == "stability")
+        {
+            let mut v = Vec::new();
+            for (r, row) in rows.iter().enumerate() {
+                v.push(match row.get(i).map(String::as_str) {
+                        Some("stable") => Stability::Stable,
+                        Some("metastable") => Stability::Metastable,
+                        Some("unstable") => Stability::Unstable,
+                        other => {
+                            return Err(FigureError::Invalid(format!(
+                                "{src}: row {}: stability must be stable, metastable or unstable (got {:?})",
+                                r + 2,
+                                other.unwrap_or("")
+                            )))
+                        }
+                    });
+            }
+            ("numeric".into(), v)
+        } else {
+            let lowest = col("lowest")?;
+            (
+                "exact".into(),
+                lowest
+                    .iter()
+                    .map(|&l| {
+                        if l != 0.0 {
+                            Stability::Stable
+                        } else {
+                            Stability::Higher
+                        }
+                    })
+                    .collect(),
+            )
+        };
+        let points = (0..rows.len())
+            .map(|k| DiagramPoint {
+                branch: branch[k] as u32,
+                eta: eta[k] as u32,
+                lbar: lbar[k],
+                energy: energy[k],
+                energy_g: energy_g[k],
+                lambda_min: lmin[k],
+                lambda_max: lmax[k],
+                stability: stability[k],
+            })
+            .collect();
+        let cpath = dir.join("critical.csv");
+        let mut critical = Vec::new();
+        if cpath.exists() {
+            let csrc = cpath.display().to_string();
+            let (cn, cr) = read_text(&cpath)?;
+            let lb = num_col(&cn, &cr, "lbar_cr", &csrc)?;
+            let en = num_col(&cn, &cr, "energy", &csrc)?;
+            let ix = num_col(&cn, &cr, "index", &csrc)?;
+            let ki =
+                cn.iter()
+                    .position(|n| n == "kind")
+                    .ok_or_else(|| FigureError::MissingColumn {
+                        path: csrc.clone(),
+                        column: "kind".into(),
+                        found: cn.join(", "),
+                    })?;
+            for (k, row) in cr.iter().enumerate() {
+                critical.push(CriticalPoint {
+                    lbar_cr: lb[k],
+                    energy: en[k],
+                    index: ix[k] as usize,
+                    kind: row.get(ki).cloned().unwrap_or_default(),
+                });
+            }
+        }
+        Ok(DiagramData {
+            model,
+            points,
+            critical,
+        })
+    }
+
+    fn branches(&self) -> Vec<(u32, u32)> {
+        let set: BTreeSet<(u32, u32)> = self.points.iter().map(|p| (p.branch, p.eta)).collect();
+        set.into_iter().collect()
+    }
+
+    /// Series of one quantity per branch, split where the stability changes; also returns
+    /// the stabilities drawn.
+    fn lines(
+        &self,
+        f: impl Fn(&DiagramPoint) -> f64,
+        used: &mut BTreeSet<Stability>,
+    ) -> Vec<Series> {
+        let mut out = Vec::new();
+        for (b, _) in self.branches() {
+            let mut pts: Vec<&DiagramPoint> =
+                self.points.iter().filter(|p| p.branch == b).collect();
+            pts.sort_by(|a, c| a.lbar.total_cmp(&c.lbar));
+            let mut start = 0;
+            for i in 1..=pts.len() {
+                if i == pts.len() || pts[i].stability != pts[start].stability {
+                    let end = (i + 1).min(pts.len());
+                    let st = pts[start].stability;
+                    used.insert(st);
+                    let (w, dash) = st.style();
+                    out.push(Series {
+                        color: branch_color(b).into(),
+                        width: w,
+                        dash: dash.into(),
+                        points: pts[start..end].iter().map(|p| (p.lbar, f(p))).collect(),
+                    });
+                    start = i;
+                }
+            }
+        }
+        out
+    }
+
+    fn legend(&self, used: &BTreeSet<Stability>) -> Vec<LegendItem> {
+        let mut legend: Vec<LegendItem> = self
+            .branches()
+            .into_iter()
+            .map(|(b, eta)| LegendItem::Line {
+                label: format!("branch {b} (η = {eta})"),
+                color: branch_color(b).into(),
+                width: 2.6,
+                dash: String::new(),
+            })
+            .collect();
+        for &st in used {
+            let (w, dash) = st.style();
+            legend.push(LegendItem::Line {
+                label: st.legend().into(),
+                color: "#222".into(),
+                width: w,
+                dash: dash.into(),
+            });
+        }
+        legend
+    }
+}
+
+/// Figure size check shared by the diagram figures.
+pub fn check_size(w: f64, h: f64) -> Result<(), FigureError> {
+    if !(300.0..=6000.0).contains(&w) || !(200.0..=6000.0).contains(&h) {
+        return Err(FigureError::Invalid(format!(
+            "figure size must be 300–6000 × 200–6000 pixels, got {w} × {h}"
+        )));
+    }
+    Ok(())
+}
+
+/// Fig. 3a: `E R/(πD₀)` against `L̄`, critical points marked (◆ crossing of two branches,
+/// □ collapse onto an m-fold great circle).
+pub fn energy_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, FigureError> {
+    check_size(w, h)?;
+    let mut used = BTreeSet::new();
+    let series = d.lines(|p| p.energy, &mut used);
+    let mut legend = d.legend(&used);
+    let mut marks = Vec::new();
+    let mut kinds = BTreeSet::new();
+    for c in &d.critical {
+        let shape = if c.kind == "crossing" {
+            Shape::Diamond
+        } else {
+            Shape::OpenSquare
+        };
+        kinds.insert(c.kind == "crossing");
+        marks.push(Mark {
+            at: (c.lbar_cr, c.energy),
+            shape,
+            color: "#111".into(),
+            size: 5.5,
+        });
+    }
+    if kinds.contains(&true) {
+        legend.push(LegendItem::Mark {
+            label: "crossing: E_a = E_b".into(),
+            shape: Shape::Diamond,
+            color: "#111".into(),
+        });
+    }
+    if kinds.contains(&false) {
+        legend.push(LegendItem::Mark {
+            label: "collapse onto a great circle".into(),
+            shape: Shape::OpenSquare,
+            color: "#111".into(),
+        });
+    }
+    let plot = Plot {
+        title: format!("Bending energy of the branches ({} model)", d.model),
+        xlabel: "L̄ = L/(2πR)".into(),
+        ylabel: "E R/(πD₀)".into(),
+        series,
+        marks,
+        vlines: d
+            .critical
+            .iter()
+            .map(|c| (c.lbar_cr, format!("{:.4}", c.lbar_cr)))
+            .collect(),
+        legend,
+        legend_width: 270.0,
+        note: "critical lengths L̄_icr at the top (dotted lines)".into(),
+        ..Default::default()
+    };
+    let mut svg = Svg::new(w, h);
+    plot.render(&mut svg, 0.0, 0.0, w, h, "energy");
+    Ok(svg.finish())
+}
+
+/// Fig. 3b: the split `E = E_g + E_n` (`E_n = L̄` for a uniform rod on the unit sphere), two
+/// panels.
+pub fn energy_split_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, FigureError> {
+    check_size(w, h)?;
+    let mut svg = Svg::new(w, h);
+    for (k, (title, ylabel, f)) in [
+        (
+            "Geodesic-curvature energy",
+            "E_g R/(πD₀)",
+            (|p: &DiagramPoint| p.energy_g) as fn(&DiagramPoint) -> f64,
+        ),
+        (
+            "Normal-curvature energy",
+            "E_n R/(πD₀)",
+            (|p: &DiagramPoint| p.energy - p.energy_g) as fn(&DiagramPoint) -> f64,
+        ),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let mut used = BTreeSet::new();
+        let series = d.lines(f, &mut used);
+        let plot = Plot {
+            title: title.into(),
+            xlabel: "L̄ = L/(2πR)".into(),
+            ylabel: ylabel.into(),
+            series,
+            legend: if k == 0 { d.legend(&used) } else { Vec::new() },
+            vlines: d
+                .critical
+                .iter()
+                .map(|c| (c.lbar_cr, String::new()))
+                .collect(),
+            ..Default::default()
+        };
+        plot.render(
+            &mut svg,
+            k as f64 * w / 2.0,
+            0.0,
+            w / 2.0,
+            h,
+            &format!("split{k}"),
+        );
+    }
+    Ok(svg.finish())
+}
+
+/// Fig. 7: the largest and smallest contact force `λR³/D₀` of each state against `L̄`, with
+/// the great-circle buckling loads at `L̄ = m`: Eq. (33) `(m + 1)²/m²` (■) and Eq. (34)
+/// `(m − 1)²/m²`, `m ≥ 2` (▲).
+pub fn lambda_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, FigureError> {
+    check_size(w, h)?;
+    let mut used = BTreeSet::new();
+    let mut series = d.lines(|p| p.lambda_max, &mut used);
+    series.extend(d.lines(|p| p.lambda_min, &mut used));
+    let mut legend = d.legend(&used);
+    let (lo, hi) = d
+        .points
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+            (a.min(p.lbar), b.max(p.lbar))
+        });
+    let mut marks = Vec::new();
+    let mut m = lo.ceil().max(1.0) as u32;
+    while f64::from(m) <= hi + 1e-9 {
+        let mf = f64::from(m);
+        marks.push(Mark {
+            at: (mf, (mf + 1.0).powi(2) / (mf * mf)),
+            shape: Shape::Square,
+            color: "#111".into(),
+            size: 5.0,
+        });
+        if m >= 2 {
+            marks.push(Mark {
+                at: (mf, (mf - 1.0).powi(2) / (mf * mf)),
+                shape: Shape::Triangle,
+                color: "#111".into(),
+                size: 5.5,
+            });
+        }
+        m += 1;
+    }
+    if !marks.is_empty() {
+        legend.push(LegendItem::Mark {
+            label: "Eq. (33): (m+1)²/m² at L̄ = m".into(),
+            shape: Shape::Square,
+            color: "#111".into(),
+        });
+    }
+    if marks.iter().any(|k| k.shape == Shape::Triangle) {
+        legend.push(LegendItem::Mark {
+            label: "Eq. (34): (m−1)²/m² at L̄ = m".into(),
+            shape: Shape::Triangle,
+            color: "#111".into(),
+        });
+    }
+    let plot = Plot {
+        title: "Extreme contact forces along the branches".into(),
+        xlabel: "L̄ = L/(2πR)".into(),
+        ylabel: "λ_max and λ_min, λR³/D₀".into(),
+        series,
+        marks,
+        hlines: vec![0.0],
+        legend,
+        legend_width: 270.0,
+        note: "upper curves: max λ; lower curves: min λ (λ < 0 would pull the loop off the wall)"
+            .into(),
+        ..Default::default()
+    };
+    let mut svg = Svg::new(w, h);
+    plot.render(&mut svg, 0.0, 0.0, w, h, "lambda");
+    Ok(svg.finish())
+}

@@ -1,0 +1,22 @@
+//! Figures for rodloop: pictures of loops on the sphere (four views, depth shading, colour
+//! by any column, self-contacts), line plots of forces and shapes along a loop, and the
+//! branch diagram with its critical points (the paper's Figs. 2, 3, 5, 6, 7).
+//!
+//! Everything is drawn as SVG by this crate (a few primitives suffice, and text stays text,
+//! with Unicode symbols such as L̄, λ, η); PNGs are rasterised from that SVG by `resvg` with
+//! the DejaVu Sans font bundled in `fonts/`, so no system font is ever needed.
+
+mod error;
+
+pub mod color;
+pub mod data;
+pub mod diagram;
+pub mod geometry;
+pub mod loops;
+pub mod plot;
+pub mod profiles;
+pub mod raster;
+pub mod svg;
+pub mod view;
+
+pub use error::FigureError;

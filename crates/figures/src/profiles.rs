@@ -1,0 +1,71 @@
+//! Quantities along the loop against arclength: position `x, y, z`, curvature `κ`, torsion
+//! `τ`, geodesic curvature `κ_g` (paper Fig. 5) and the contact force `λ(s)` (Fig. 6; Eq. 38
+//! for a uniform rod), one panel each, for the columns the table has.
+
+use crate::data::{column_label, LoopData};
+use crate::plot::{Plot, Series};
+use crate::svg::{Anchor, Svg};
+use crate::FigureError;
+
+/// Columns drawn, in order, when present.
+pub const PROFILE_COLUMNS: [&str; 9] = [
+    "x", "y", "z", "kappa", "tau", "kappa_g", "lambda", "D", "gap",
+];
+
+/// The profiles figure: a grid of panels, two per row, `panel_w × panel_h` pixels each.
+pub fn profiles_figure(
+    data: &LoopData,
+    panel_w: f64,
+    panel_h: f64,
+    title: &str,
+) -> Result<String, FigureError> {
+    if !(200.0..=3000.0).contains(&panel_w) || !(150.0..=3000.0).contains(&panel_h) {
+        return Err(FigureError::Invalid(format!(
+            "profile panels must be 200–3000 × 150–3000 pixels, got {panel_w} × {panel_h}"
+        )));
+    }
+    let cols: Vec<&str> = PROFILE_COLUMNS
+        .iter()
+        .copied()
+        .filter(|c| data.column(c).is_some())
+        .collect();
+    let rows = cols.len().div_ceil(2).max(1);
+    let top = 40.0;
+    let mut svg = Svg::new(2.0 * panel_w, top + rows as f64 * panel_h);
+    svg.text_bold(12.0, 26.0, 16.0, Anchor::Start, title);
+    let s = data.s();
+    let length = data.length();
+    for (k, c) in cols.iter().enumerate() {
+        let v = data.column(c).unwrap_or(&[]);
+        // Close the loop: repeat the first point at s = L.
+        let mut pts: Vec<(f64, f64)> = s.iter().zip(v).map(|(&a, &b)| (a / length, b)).collect();
+        if let (Some(&first), Some(&s0)) = (v.first(), s.first()) {
+            pts.push((s0 / length + 1.0, first));
+        }
+        let plot = Plot {
+            title: column_label(c),
+            xlabel: "s/L".into(),
+            ylabel: column_label(c)
+                .split(" (")
+                .next()
+                .unwrap_or_default()
+                .to_string(),
+            series: vec![Series {
+                color: "#1f4fd1".into(),
+                width: 1.8,
+                dash: String::new(),
+                points: pts,
+            }],
+            hlines: if *c == "lambda" || *c == "kappa_g" || *c == "tau" {
+                vec![0.0]
+            } else {
+                Vec::new()
+            },
+            range: None,
+            ..Default::default()
+        };
+        let (px, py) = ((k % 2) as f64 * panel_w, top + (k / 2) as f64 * panel_h);
+        plot.render(&mut svg, px, py, panel_w, panel_h, &format!("prof{k}"));
+    }
+    Ok(svg.finish())
+}
