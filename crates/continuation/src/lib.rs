@@ -63,6 +63,7 @@ mod linalg;
 mod newton;
 mod problem;
 mod settings;
+mod stepper;
 mod switching;
 mod tracker;
 
@@ -71,4 +72,5 @@ pub use error::{BoxError, ContinuationError, SharedError};
 pub use newton::{newton, solve_all_at, solve_at, NewtonReport};
 pub use problem::{fd_dparam, fd_jacobian, Problem, Stability};
 pub use settings::{Direction, PseudoArclength};
+pub use stepper::{Step, Stepper};
 pub use tracker::Continuation;
