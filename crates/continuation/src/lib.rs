@@ -59,6 +59,7 @@
 
 mod branch;
 mod error;
+mod factorization;
 mod linalg;
 mod newton;
 mod problem;
@@ -69,6 +70,7 @@ mod tracker;
 
 pub use branch::{Branch, Point, SpecialKind, SpecialPoint, StopReason};
 pub use error::{BoxError, ContinuationError, SharedError};
+pub use factorization::{DenseLu, Factorization};
 pub use newton::{newton, solve_all_at, solve_at, NewtonReport};
 pub use problem::{fd_dparam, fd_jacobian, Problem, Stability};
 pub use settings::{Direction, PseudoArclength};
