@@ -8,10 +8,16 @@ use crate::error::ContinuationError;
 use crate::factorization::Factorization;
 use crate::problem::Problem;
 
-/// Relative size `‖δz‖∞ ≤ REFINE_NOISE ‖z‖∞` of a refinement correction below which a
-/// block-elimination solution counts as accurate even if the refinement did not
-/// reduce the residual (both residuals are then at rounding level).
-const REFINE_NOISE: f64 = 1e-12;
+/// Relative size `‖δz‖∞ ≤ REFINE_NOISE ‖z‖∞` (`√ε`) of a refinement correction below
+/// which a block-elimination solution counts as accurate although the refinement did
+/// not reduce the residual: both residuals are then at rounding level (when the first
+/// solution is off by more than rounding, the refinement reduces its residual by the
+/// factor `≈ ε cond(J)`, and the correction is as large as that error).
+const REFINE_NOISE: f64 = 1.4901161193847656e-8;
+
+/// Reduction `‖r₂‖ ≤ REFINE_CONTRACTION ‖r₁‖` of the bordered residual by the
+/// refinement step that shows that block elimination works (`ε cond(J) ≲ ½`).
+const REFINE_CONTRACTION: f64 = 0.5;
 
 /// Evaluates a [`Problem`] on points `y = (x, p) ∈ Rⁿ⁺¹`, checking output shapes and
 /// converting errors.
@@ -281,9 +287,11 @@ pub(crate) fn tangent<P: Problem + ?Sized>(
 /// iterative refinement on the full bordered residual, reusing `a` and `δ`, repairs
 /// this as long as `ε cond(J)` is well below 1 (W. Govaerts, *Numerical Methods for
 /// Bifurcations of Dynamical Equilibria*, SIAM 2000, ch. 3). The refined solution is
-/// accepted if the refinement reduced the residual, or if its correction was at
-/// rounding level (`≤ REFINE_NOISE` relative); otherwise, and whenever the
-/// factorisation fails, the system is solved by dense LU of the bordered matrix.
+/// accepted if the refinement at least halved the residual, or if its correction was
+/// at rounding level (`≤ √ε` relative, the residuals being rounding noise);
+/// otherwise, and whenever the factorisation fails or is singular, the system is
+/// solved by dense LU of the bordered matrix (`Problem::jacobian`), which also gives
+/// the determinant.
 pub(crate) fn bordered_solve<P: Problem + ?Sized>(
     ev: &Evaluator<'_, P>,
     y: &DVector<f64>,
@@ -365,7 +373,7 @@ fn block_elimination<P: Problem + ?Sized>(
     let z2 = &z1 + &dz;
     let r2 = residual(&z2)?;
     let (n1, n2) = (max_abs(&r1), max_abs(&r2));
-    let accurate = n2 <= n1 || dz.amax() <= REFINE_NOISE * z2.amax();
+    let accurate = n2 <= REFINE_CONTRACTION * n1 || dz.amax() <= REFINE_NOISE * z2.amax();
     if !(accurate && n2.is_finite()) {
         return Ok(None);
     }
