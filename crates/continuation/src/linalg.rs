@@ -5,7 +5,7 @@
 use nalgebra::{DMatrix, DVector, LU, SVD};
 
 use crate::error::ContinuationError;
-use crate::factorization::Factorization;
+use crate::factorization::{DenseLu, Factorization};
 use crate::problem::Problem;
 
 /// Relative size `‖δz‖∞ ≤ REFINE_NOISE ‖z‖∞` (`√ε`) of a refinement correction below
@@ -112,8 +112,9 @@ impl<'a, P: Problem + ?Sized> Evaluator<'a, P> {
             .map_err(ContinuationError::problem)
     }
 
-    /// Solves `J(x, p) dx = b` with the problem's factorisation; `Ok(None)` if it is
-    /// singular.
+    /// Solves `J(x, p) dx = b` with the problem's factorisation, falling back to the
+    /// dense LU of [`Problem::jacobian`] if it fails; `Ok(None)` if both fail (`J`
+    /// singular).
     pub fn solve_jacobian(
         &self,
         x: &DVector<f64>,
@@ -121,13 +122,14 @@ impl<'a, P: Problem + ?Sized> Evaluator<'a, P> {
         b: &DVector<f64>,
     ) -> Result<Option<DVector<f64>>, ContinuationError> {
         let fact = self.factorize(x, p)?;
-        match fact.solve(b) {
-            Some(z) => {
-                self.check_vec("factorization solve", &z)?;
-                Ok(z.iter().all(|v| v.is_finite()).then_some(z))
+        if let Some(z) = fact.solve(b) {
+            self.check_vec("factorization solve", &z)?;
+            if z.iter().all(|v| v.is_finite()) {
+                return Ok(Some(z));
             }
-            None => Ok(None),
         }
+        let j = self.jacobian(x, p)?;
+        Ok(DenseLu::new(j).solve(b))
     }
 
     /// The augmented Jacobian `[J F_p]`, `n × (n+1)`, at `y`.

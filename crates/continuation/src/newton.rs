@@ -23,7 +23,8 @@ pub struct NewtonReport {
 /// Newton's method for `F(x, p) = 0` at fixed `p`, starting from `x0`.
 ///
 /// Iterates `x ← x − J(x, p)⁻¹ F(x, p)`, with the problem's factorisation of `J`
-/// ([`Problem::factorize`], dense LU with partial pivoting by default), until
+/// ([`Problem::factorize`], dense LU with partial pivoting by default; if a custom
+/// factorisation fails, the dense LU of [`Problem::jacobian`] is tried), until
 /// `‖F(x, p)‖∞ ≤ tol`, for at most `max_iter` iterations. Convergence is quadratic near
 /// a regular solution (`J` invertible); at a fold or branch point (`J` singular) it
 /// degrades or fails, which is why the continuation itself corrects on the bordered

@@ -514,3 +514,71 @@ fn bratu_timing_report() {
         }
     }
 }
+
+/// A factorisation that always fails (as a structured solver might on a pivot
+/// breakdown).
+struct Broken;
+
+impl Factorization for Broken {
+    fn solve(&self, _b: &DVector<f64>) -> Option<DVector<f64>> {
+        None
+    }
+    fn apply(&self, v: &DVector<f64>) -> DVector<f64> {
+        v.map(|_| f64::NAN)
+    }
+    fn det_sign(&self) -> f64 {
+        1.0
+    }
+    fn log_abs_det(&self) -> f64 {
+        0.0
+    }
+}
+
+/// Bratu whose factorisation always fails.
+struct BrokenBratu(Discretised);
+
+impl Problem for BrokenBratu {
+    type Error = Infallible;
+    fn dim(&self) -> usize {
+        self.0.dim()
+    }
+    fn residual(&self, x: &DVector<f64>, p: f64) -> Result<DVector<f64>, Infallible> {
+        self.0.residual(x, p)
+    }
+    fn jacobian(&self, x: &DVector<f64>, p: f64) -> Result<DMatrix<f64>, Infallible> {
+        self.0.jacobian(x, p)
+    }
+    fn dparam(&self, x: &DVector<f64>, p: f64) -> Result<DVector<f64>, Infallible> {
+        self.0.dparam(x, p)
+    }
+    fn factorize(
+        &self,
+        _x: &DVector<f64>,
+        _p: f64,
+    ) -> Result<Box<dyn Factorization + '_>, Infallible> {
+        Ok(Box::new(Broken))
+    }
+}
+
+#[test]
+fn failing_factorisation_falls_back_to_dense_bordered_lu() {
+    let n = 60;
+    let broken = BrokenBratu(Discretised::new(n, Nonlinearity::Bratu, true));
+    let fine = Discretised::new(n, Nonlinearity::Bratu, true);
+    // The continuation itself still works (dense bordered LU throughout) …
+    let bb = bratu_settings(n)
+        .run(&broken, &DVector::zeros(n), 0.5)
+        .unwrap();
+    let bf = bratu_settings(n)
+        .run(&fine, &DVector::zeros(n), 0.5)
+        .unwrap();
+    assert!(broken.0.dense_jacobians.get() > 0);
+    assert_eq!(bb.stop, StopReason::LeftRange { boundary: 0.5 });
+    let (fb, ff) = (bb.folds().next().unwrap(), bf.folds().next().unwrap());
+    assert!((fb.p - ff.p).abs() < 1e-12 && (&fb.x - &ff.x).amax() < 1e-8);
+    // … and so does Newton at fixed p (dense LU of the Jacobian).
+    let (xb, _) = newton(&broken, &DVector::zeros(n), 1.0, 1e-10, 20).unwrap();
+    let (xf, _) = newton(&fine, &DVector::zeros(n), 1.0, 1e-10, 20).unwrap();
+    assert!((xb - xf).amax() < 1e-12);
+    assert_eq!(fine.dense_jacobians.get(), 0);
+}
