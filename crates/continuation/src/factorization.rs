@@ -92,8 +92,9 @@ impl DenseLu {
             }
             log_abs_det += d.abs().ln();
         }
-        // A zero pivot makes the matrix singular; a NaN one leaves the sign unknown.
-        if !(log_abs_det > f64::NEG_INFINITY) {
+        // A zero pivot makes the matrix singular; a NaN or infinite one (non-finite
+        // entries) leaves it unusable.
+        if !log_abs_det.is_finite() {
             sign = 0.0;
             log_abs_det = f64::NEG_INFINITY;
         }

@@ -48,7 +48,7 @@ impl<F: Fn(&DVector<f64>, f64) -> usize> Stability for FnStability<F> {
 ///    or if the tangent turns by more than `max_turn`; after an accepted step, `ds`
 ///    grows by `growth` if the corrector needed fewer than `target_iterations`
 ///    iterations and shrinks by `max(shrink, target/iterations)` if it needed more.
-///    The run stops with [`StopReason::StepTooSmall`] when `ds < ds_min`.
+///    The run stops with [`StopReason::StepTooSmall`](crate::StopReason::StepTooSmall) when `ds < ds_min`.
 ///
 /// # Detection along the branch
 /// Between consecutive points, sign changes of test functions are located on the
@@ -60,7 +60,26 @@ impl<F: Fn(&DVector<f64>, f64) -> usize> Stability for FnStability<F> {
 /// * **Folds**: the `p`-component of the tangent changes sign.
 /// * **Simple branch points**: the sign of `det [A(y); tᵀ]` changes (the orientation of
 ///   the curve flips through a simple bifurcation, Allgower & Georg, Thm. 8.1.14); the
-///   determinant comes from the LU factors of the tangent computation.
+///   determinant comes from the tangent computation, as
+///   `det J · (t_p − t_xᵀ J⁻¹ F_p)` with the sign and `ln|det J|` of the problem's
+///   [`Factorization`](crate::Factorization).
+///
+/// # Linear algebra
+/// The bordered systems `[J F_p; cᵀ] z = r` of steps 1 and 3 and of the location
+/// loops are solved by block elimination with the factorisation of `J` returned by
+/// [`Problem::factorize`]: `J a = F_p`, `J w = r_x`, then the scalar Schur complement
+/// `δ = c_p − c_xᵀ a` gives `z`, and `det [J F_p; cᵀ] = det J · δ`. Since `J` is
+/// singular at folds and branch points, where block elimination loses accuracy, each
+/// solve is followed by one step of iterative refinement on the full bordered
+/// residual (W. Govaerts, *Numerical Methods for Bifurcations of Dynamical
+/// Equilibria*, SIAM 2000, ch. 3); if the factorisation fails or the refinement does
+/// not reduce the residual (beyond rounding), the system is solved by dense LU of the
+/// bordered matrix built from [`Problem::jacobian`].
+///
+/// # Stepping
+/// [`Continuation::run`] is [`Continuation::start`] followed by
+/// [`Stepper::step`] until a stop; callers wanting control between steps use the
+/// [`Stepper`] directly.
 /// * **Index changes** (with a stability callback): the integer index differs between
 ///   the points.
 /// * **Events**: a user function `g(x, p)` changes sign.
@@ -156,7 +175,7 @@ impl<'a, P: Problem + ?Sized> Continuation<'a, P> {
     }
 
     /// Monitors a stability index (see [`Stability`]): it is stored in every
-    /// [`Point::index`], and its changes are located by bisection on the arclength to
+    /// [`Point::index`](crate::Point::index), and its changes are located by bisection on the arclength to
     /// `locate_tol` and reported as [`SpecialKind::IndexChange`] (several changes
     /// within one step are reported one by one). Replaces a previous callback.
     pub fn with_stability<S: Stability + 'a>(mut self, stability: S) -> Self {
@@ -206,7 +225,7 @@ impl<'a, P: Problem + ?Sized> Continuation<'a, P> {
     /// # Errors
     /// Invalid settings, a wrong `x0` length, `p0` outside the range, failure of the
     /// initial Newton correction, and errors of the problem or the stability callback.
-    /// Difficulties met later end the run with a [`StopReason`] instead.
+    /// Difficulties met later end the run with a [`StopReason`](crate::StopReason) instead.
     pub fn run(&self, x0: &DVector<f64>, p0: f64) -> Result<Branch, ContinuationError> {
         let mut stepper = self.start(x0, p0)?;
         while stepper.step()?.stop.is_none() {}
