@@ -107,6 +107,12 @@ pub enum StopReason {
     },
     /// The branch came back to its first point; the last point is a copy of the first.
     ClosedLoop,
+    /// The caller ended the run before it stopped by itself: a
+    /// [`Stepper`](crate::Stepper) that was [stopped](crate::Stepper::stop),
+    /// [finished](crate::Stepper::finish), [restarted](crate::Stepper::restart) or
+    /// [reversed](crate::Stepper::reverse) early. [`Continuation::run`](crate::Continuation::run)
+    /// never returns it.
+    Interrupted,
 }
 
 /// A computed solution branch.

@@ -12,17 +12,25 @@
 //! * [`Continuation`] runs it, with optional [`Stability`] index and event functions,
 //!   and returns a [`Branch`] of [`Point`]s, [`SpecialPoint`]s and a [`StopReason`];
 //!   [`Continuation::switch_branch`] follows the second branch at a branch point.
+//! * [`Continuation::start`] (and [`Continuation::start_switch`]) return a [`Stepper`]
+//!   that advances one accepted step per call, reporting each [`Step`]'s point,
+//!   special points and stop; `run` and `switch_branch` are loops over it.
 //! * [`newton`] solves at a fixed parameter; [`solve_at`] re-solves a computed branch
 //!   at an exact parameter value.
 //!
-//! Dense linear algebra (nalgebra LU and SVD) is used throughout: the crate targets
-//! problems of up to a few hundred unknowns.
+//! Linear algebra: every solve with the Jacobian goes through
+//! [`Problem::factorize`], which returns a [`Factorization`] of `J = ∂F/∂x` — by
+//! default the dense LU [`DenseLu`], replaceable by a structured (banded, block
+//! tridiagonal, sparse) `O(n)` solver. The bordered systems of the continuation are
+//! solved by block elimination with it, refined once, with dense bordered LU as the
+//! fallback near singular `J`. Branch switching uses dense SVDs of `[J F_p]`.
 //!
 //! References: H. B. Keller, *Numerical solution of bifurcation and nonlinear
 //! eigenvalue problems*, in Applications of Bifurcation Theory, Academic Press 1977;
 //! E. L. Allgower & K. Georg, *Introduction to Numerical Continuation Methods*, SIAM
 //! 2003; Yu. A. Kuznetsov, *Elements of Applied Bifurcation Theory*, 3rd ed., Springer
-//! 2004, ch. 10.
+//! 2004, ch. 10; W. Govaerts, *Numerical Methods for Bifurcations of Dynamical
+//! Equilibria*, SIAM 2000, ch. 3 (bordered systems).
 //!
 //! ```
 //! use nalgebra::{DMatrix, DVector};
@@ -59,16 +67,20 @@
 
 mod branch;
 mod error;
+mod factorization;
 mod linalg;
 mod newton;
 mod problem;
 mod settings;
+mod stepper;
 mod switching;
 mod tracker;
 
 pub use branch::{Branch, Point, SpecialKind, SpecialPoint, StopReason};
 pub use error::{BoxError, ContinuationError, SharedError};
+pub use factorization::{DenseLu, Factorization};
 pub use newton::{newton, solve_all_at, solve_at, NewtonReport};
 pub use problem::{fd_dparam, fd_jacobian, Problem, Stability};
 pub use settings::{Direction, PseudoArclength};
+pub use stepper::{Step, Stepper};
 pub use tracker::Continuation;

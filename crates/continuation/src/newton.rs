@@ -1,7 +1,7 @@
 //! Newton correctors: at fixed parameter (public) and on the pseudo-arclength
 //! hyperplane (internal), plus re-solving a computed branch at a given parameter.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
 use crate::branch::Branch;
 use crate::error::ContinuationError;
@@ -22,7 +22,9 @@ pub struct NewtonReport {
 
 /// Newton's method for `F(x, p) = 0` at fixed `p`, starting from `x0`.
 ///
-/// Iterates `x ← x − J(x, p)⁻¹ F(x, p)` (dense LU with partial pivoting) until
+/// Iterates `x ← x − J(x, p)⁻¹ F(x, p)`, with the problem's factorisation of `J`
+/// ([`Problem::factorize`], dense LU with partial pivoting by default; if a custom
+/// factorisation fails, the dense LU of [`Problem::jacobian`] is tried), until
 /// `‖F(x, p)‖∞ ≤ tol`, for at most `max_iter` iterations. Convergence is quadratic near
 /// a regular solution (`J` invertible); at a fold or branch point (`J` singular) it
 /// degrades or fails, which is why the continuation itself corrects on the bordered
@@ -86,8 +88,9 @@ pub(crate) fn newton_fixed<P: Problem + ?Sized>(
                 residual: res,
             });
         }
-        let j = ev.jacobian(&x, p)?;
-        let dx = linalg::solve(j, &(-r)).ok_or(ContinuationError::SingularMatrix { p })?;
+        let dx = ev
+            .solve_jacobian(&x, p, &(-r))?
+            .ok_or(ContinuationError::SingularMatrix { p })?;
         step_norm = dx.amax();
         x += dx;
     }
@@ -147,13 +150,10 @@ pub(crate) fn correct_bordered<P: Problem + ?Sized>(
         if it == tol.max_iter {
             return Ok(Corrected::Failed);
         }
-        let j: DMatrix<f64> = ev.jacobian(&x, p)?;
-        let fp = ev.dparam(&x, p)?;
-        let m = linalg::bordered_matrix(&j, &fp, normal);
         rhs.rows_mut(0, n).copy_from(&r);
         rhs[n] = g;
         rhs.neg_mut();
-        let Some(dy) = linalg::solve(m, &rhs) else {
+        let Some(dy) = linalg::bordered_solve(ev, &y, normal, &rhs)?.map(|s| s.z) else {
             return Ok(Corrected::Failed);
         };
         let step = dy.amax();

@@ -3,6 +3,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use crate::error::BoxError;
+use crate::factorization::{DenseLu, Factorization};
 
 /// A parameter-dependent system of `n` equations in `n` unknowns, `F(x, p) = 0`,
 /// with `F: Rⁿ × R → Rⁿ`.
@@ -34,6 +35,28 @@ pub trait Problem {
 
     /// The parameter derivative `∂F/∂p (x, p)`, a vector of length `n`.
     fn dparam(&self, x: &DVector<f64>, p: f64) -> Result<DVector<f64>, Self::Error>;
+
+    /// A factorisation of the Jacobian `J = ∂F/∂x (x, p)`, used for every linear
+    /// solve of the continuation's hot paths: Newton at fixed `p` ([`crate::newton`]),
+    /// and the bordered systems `[J F_p; cᵀ] z = r` of the tangent, the corrector and
+    /// the location of special points, which are solved by block elimination with it.
+    ///
+    /// The default is the dense LU factorisation [`DenseLu`] of
+    /// [`Problem::jacobian`]; override it when `J` has structure (banded,
+    /// block-tridiagonal, sparse) that an `O(n)` solver can exploit. The returned
+    /// factorisation may borrow from `self`.
+    ///
+    /// [`Problem::jacobian`] stays required: the dense path is the fallback where
+    /// block elimination is inaccurate (near-singular `J` at folds and branch points,
+    /// see [`Continuation`](crate::Continuation)), and branch switching uses dense
+    /// SVDs.
+    fn factorize(
+        &self,
+        x: &DVector<f64>,
+        p: f64,
+    ) -> Result<Box<dyn Factorization + '_>, Self::Error> {
+        Ok(Box::new(DenseLu::new(self.jacobian(x, p)?)))
+    }
 }
 
 impl<P: Problem + ?Sized> Problem for &P {
@@ -53,6 +76,14 @@ impl<P: Problem + ?Sized> Problem for &P {
 
     fn dparam(&self, x: &DVector<f64>, p: f64) -> Result<DVector<f64>, Self::Error> {
         (**self).dparam(x, p)
+    }
+
+    fn factorize(
+        &self,
+        x: &DVector<f64>,
+        p: f64,
+    ) -> Result<Box<dyn Factorization + '_>, Self::Error> {
+        (**self).factorize(x, p)
     }
 }
 

@@ -8,6 +8,7 @@ use crate::linalg::{self, Evaluator, Tangent};
 use crate::newton::{correct_bordered, Corrected};
 use crate::problem::Problem;
 use crate::settings::Direction;
+use crate::stepper::Stepper;
 use crate::tracker::Continuation;
 
 impl<'a, P: Problem + ?Sized> Continuation<'a, P> {
@@ -66,6 +67,23 @@ impl<'a, P: Problem + ?Sized> Continuation<'a, P> {
         bp: &SpecialPoint,
         direction: Direction,
     ) -> Result<Branch, ContinuationError> {
+        let mut stepper = self.start_switch(bp, direction)?;
+        while stepper.step()?.stop.is_none() {}
+        Ok(stepper.finish())
+    }
+
+    /// Prepares the continuation of the second branch through the simple branch point
+    /// `bp` as a [`Stepper`]: takes the first step off `bp` as described at
+    /// [`Continuation::switch_branch`] (which is this function followed by stepping to
+    /// the end) and returns a stepper holding `bp` and that first point.
+    ///
+    /// # Errors
+    /// As [`Continuation::switch_branch`].
+    pub fn start_switch(
+        &self,
+        bp: &SpecialPoint,
+        direction: Direction,
+    ) -> Result<Stepper<'_, 'a, P>, ContinuationError> {
         let st = self.settings();
         st.validate()?;
         let tau = self.secondary_tangent(bp)? * direction.sign();
@@ -102,7 +120,12 @@ impl<'a, P: Problem + ?Sized> Continuation<'a, P> {
         };
         let node0 = self.make_node(&ev, y_bp, tan0, 0.0, 0.0)?;
         let node1 = self.make_node(&ev, y1, tan1, h, h)?;
-        self.march(&ev, vec![node0, node1], ds.min(st.ds_max()), 1)
+        Ok(Stepper::from_nodes(
+            self,
+            vec![node0, node1],
+            ds.min(st.ds_max()),
+            1,
+        ))
     }
 }
 

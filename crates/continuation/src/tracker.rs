@@ -3,12 +3,13 @@
 
 use nalgebra::DVector;
 
-use crate::branch::{Branch, Point, SpecialKind, SpecialPoint, StopReason};
+use crate::branch::{Branch, SpecialKind, SpecialPoint};
 use crate::error::{BoxError, ContinuationError};
 use crate::linalg::{self, Evaluator, Tangent};
 use crate::newton::{correct_bordered, newton_fixed, Corrected, CorrectorTol};
 use crate::problem::{Problem, Stability};
 use crate::settings::PseudoArclength;
+use crate::stepper::Stepper;
 
 /// Type of a user event function `g(x, p)`.
 type EventFn<'a> = Box<dyn Fn(&DVector<f64>, f64) -> f64 + 'a>;
@@ -47,7 +48,7 @@ impl<F: Fn(&DVector<f64>, f64) -> usize> Stability for FnStability<F> {
 ///    or if the tangent turns by more than `max_turn`; after an accepted step, `ds`
 ///    grows by `growth` if the corrector needed fewer than `target_iterations`
 ///    iterations and shrinks by `max(shrink, target/iterations)` if it needed more.
-///    The run stops with [`StopReason::StepTooSmall`] when `ds < ds_min`.
+///    The run stops with [`StopReason::StepTooSmall`](crate::StopReason::StepTooSmall) when `ds < ds_min`.
 ///
 /// # Detection along the branch
 /// Between consecutive points, sign changes of test functions are located on the
@@ -59,7 +60,26 @@ impl<F: Fn(&DVector<f64>, f64) -> usize> Stability for FnStability<F> {
 /// * **Folds**: the `p`-component of the tangent changes sign.
 /// * **Simple branch points**: the sign of `det [A(y); tᵀ]` changes (the orientation of
 ///   the curve flips through a simple bifurcation, Allgower & Georg, Thm. 8.1.14); the
-///   determinant comes from the LU factors of the tangent computation.
+///   determinant comes from the tangent computation, as
+///   `det J · (t_p − t_xᵀ J⁻¹ F_p)` with the sign and `ln|det J|` of the problem's
+///   [`Factorization`](crate::Factorization).
+///
+/// # Linear algebra
+/// The bordered systems `[J F_p; cᵀ] z = r` of steps 1 and 3 and of the location
+/// loops are solved by block elimination with the factorisation of `J` returned by
+/// [`Problem::factorize`]: `J a = F_p`, `J w = r_x`, then the scalar Schur complement
+/// `δ = c_p − c_xᵀ a` gives `z`, and `det [J F_p; cᵀ] = det J · δ`. Since `J` is
+/// singular at folds and branch points, where block elimination loses accuracy, each
+/// solve is followed by one step of iterative refinement on the full bordered
+/// residual (W. Govaerts, *Numerical Methods for Bifurcations of Dynamical
+/// Equilibria*, SIAM 2000, ch. 3); if the factorisation fails or the refinement does
+/// not reduce the residual (beyond rounding), the system is solved by dense LU of the
+/// bordered matrix built from [`Problem::jacobian`].
+///
+/// # Stepping
+/// [`Continuation::run`] is [`Continuation::start`] followed by
+/// [`Stepper::step`] until a stop; callers wanting control between steps use the
+/// [`Stepper`] directly.
 /// * **Index changes** (with a stability callback): the integer index differs between
 ///   the points.
 /// * **Events**: a user function `g(x, p)` changes sign.
@@ -123,11 +143,11 @@ impl SegEval {
 }
 
 /// A step between two accepted points.
-struct Segment<'n> {
-    a: &'n Node,
-    b: &'n Node,
-    h: f64,
-    index: usize,
+pub(crate) struct Segment<'n> {
+    pub a: &'n Node,
+    pub b: &'n Node,
+    pub h: f64,
+    pub index: usize,
 }
 
 impl PseudoArclength {
@@ -155,7 +175,7 @@ impl<'a, P: Problem + ?Sized> Continuation<'a, P> {
     }
 
     /// Monitors a stability index (see [`Stability`]): it is stored in every
-    /// [`Point::index`], and its changes are located by bisection on the arclength to
+    /// [`Point::index`](crate::Point::index), and its changes are located by bisection on the arclength to
     /// `locate_tol` and reported as [`SpecialKind::IndexChange`] (several changes
     /// within one step are reported one by one). Replaces a previous callback.
     pub fn with_stability<S: Stability + 'a>(mut self, stability: S) -> Self {
@@ -205,8 +225,30 @@ impl<'a, P: Problem + ?Sized> Continuation<'a, P> {
     /// # Errors
     /// Invalid settings, a wrong `x0` length, `p0` outside the range, failure of the
     /// initial Newton correction, and errors of the problem or the stability callback.
-    /// Difficulties met later end the run with a [`StopReason`] instead.
+    /// Difficulties met later end the run with a [`StopReason`](crate::StopReason) instead.
     pub fn run(&self, x0: &DVector<f64>, p0: f64) -> Result<Branch, ContinuationError> {
+        let mut stepper = self.start(x0, p0)?;
+        while stepper.step()?.stop.is_none() {}
+        Ok(stepper.finish())
+    }
+
+    /// Prepares a run from the solution near `(x0, p0)` without taking a step: the
+    /// returned [`Stepper`] holds the corrected first point and its tangent, and
+    /// advances one accepted step per [`Stepper::step`].
+    ///
+    /// `x0` is corrected and the first tangent oriented exactly as in
+    /// [`Continuation::run`], which is this function followed by calls of
+    /// [`Stepper::step`] until one reports a stop, and [`Stepper::finish`].
+    ///
+    /// # Errors
+    /// As [`Continuation::run`] for the set-up: invalid settings, a wrong `x0` length,
+    /// `p0` outside the range, failure of the initial Newton correction, and errors of
+    /// the problem or the stability callback.
+    pub fn start(
+        &self,
+        x0: &DVector<f64>,
+        p0: f64,
+    ) -> Result<Stepper<'_, 'a, P>, ContinuationError> {
         let st = &self.settings;
         st.validate()?;
         let ev = Evaluator::new(self.problem);
@@ -219,7 +261,7 @@ impl<'a, P: Problem + ?Sized> Continuation<'a, P> {
         border[n] = st.direction.sign();
         let tan = linalg::tangent(&ev, &y0, &border)?;
         let node0 = self.make_node(&ev, y0, tan, 0.0, 0.0)?;
-        self.march(&ev, vec![node0], st.ds, 0)
+        Ok(Stepper::from_nodes(self, vec![node0], st.ds, 0))
     }
 
     pub(crate) fn check_in_range(&self, p: f64) -> Result<(), ContinuationError> {
@@ -285,162 +327,6 @@ impl<'a, P: Problem + ?Sized> Continuation<'a, P> {
         })
     }
 
-    /// The continuation loop, from the accepted `nodes` (at least one) with step `ds`.
-    /// Detection runs on the segments starting at `detect_from` and later.
-    pub(crate) fn march(
-        &self,
-        ev: &Evaluator<'_, P>,
-        mut nodes: Vec<Node>,
-        mut ds: f64,
-        detect_from: usize,
-    ) -> Result<Branch, ContinuationError> {
-        let st = &self.settings;
-        let n = ev.n;
-        let tol = self.corrector_tol();
-        let cos_max = st.max_turn.cos();
-        let y_start = nodes[0].y.clone();
-        let t_start = nodes[0].t.clone();
-        let mut max_dist = nodes
-            .iter()
-            .map(|nd| (&nd.y - &y_start).norm())
-            .fold(0.0, f64::max);
-        let mut special = Vec::new();
-        let mut steps = 0;
-
-        let stop = loop {
-            if steps >= st.max_steps {
-                break StopReason::MaxSteps;
-            }
-            let last = nodes.last().expect("at least one node");
-            if ds < st.ds_min {
-                break StopReason::StepTooSmall { ds, p: last.y[n] };
-            }
-
-            // Predictor and corrector.
-            let pred = &last.y + &last.t * ds;
-            let c = last.t.dot(&last.y) + ds;
-            let (y1, iterations) = match correct_bordered(ev, pred.clone(), &last.t, c, tol)? {
-                Corrected::Converged { y, iterations } => (y, iterations),
-                Corrected::Failed => {
-                    ds *= st.shrink;
-                    continue;
-                }
-            };
-            if (&y1 - &pred).norm() > ds {
-                ds *= st.shrink;
-                continue;
-            }
-            let tan1 = linalg::tangent(ev, &y1, &last.t)?;
-            if tan1.t.dot(&last.t) < cos_max {
-                ds *= st.shrink;
-                continue;
-            }
-
-            // Range boundary and loop closure.
-            let (mut y1, mut tan1) = (y1, tan1);
-            let mut stop = None;
-            let p1 = y1[n];
-            if p1 > st.p_max || p1 < st.p_min {
-                let pb = if p1 > st.p_max { st.p_max } else { st.p_min };
-                let (xk, pk) = ev.split(&last.y);
-                let (x1, _) = ev.split(&y1);
-                let th = (pb - pk) / (p1 - pk);
-                let guess = &xk + (x1 - &xk) * th;
-                match newton_fixed(ev, guess, pb, st.tol, st.max_iterations) {
-                    Ok((xb, _)) => {
-                        y1 = ev.join(&xb, pb);
-                        tan1 = linalg::tangent(ev, &y1, &last.t)?;
-                        stop = Some(StopReason::LeftRange { boundary: pb });
-                    }
-                    Err(e @ ContinuationError::Problem(_)) => return Err(e),
-                    Err(_) => {
-                        ds *= st.shrink;
-                        continue;
-                    }
-                }
-            } else if st.detect_loops && nodes.len() >= 2 {
-                let d = &y1 - &last.y;
-                let w = &y_start - &last.y;
-                let dn = d.norm();
-                let tau = w.dot(&d) / (dn * dn);
-                if tau > 0.0
-                    && tau <= 1.0
-                    && max_dist > 3.0 * dn
-                    && tan1.t.dot(&t_start) >= cos_max
-                    && (&w - &d * tau).norm() <= 0.1 * dn
-                {
-                    y1 = y_start.clone();
-                    tan1 = Tangent {
-                        t: t_start.clone(),
-                        det_sign: nodes[0].det_sign,
-                        log_det: nodes[0].log_det,
-                    };
-                    stop = Some(StopReason::ClosedLoop);
-                }
-            }
-
-            // A start exactly on the boundary, heading out: nothing to add.
-            if let Some(reason) = stop {
-                if (&y1 - &last.y).amax() <= 1e-14 * (1.0 + last.y.amax()) {
-                    break reason;
-                }
-            }
-
-            // Accept.
-            steps += 1;
-            let h = last.t.dot(&(&y1 - &last.y));
-            let node1 = self.make_node(ev, y1, tan1, last.s + h.max(0.0), h)?;
-            let seg = nodes.len() - 1;
-            if seg >= detect_from && h > 0.0 {
-                let found = self.detect(
-                    ev,
-                    &Segment {
-                        a: &nodes[seg],
-                        b: &node1,
-                        h,
-                        index: seg,
-                    },
-                )?;
-                special.extend(found);
-            }
-            max_dist = max_dist.max((&node1.y - &y_start).norm());
-            nodes.push(node1);
-            if let Some(stop) = stop {
-                break stop;
-            }
-
-            // Step control.
-            let target = st.target_iterations;
-            if iterations < target {
-                ds *= st.growth;
-            } else if iterations > target {
-                ds *= st.shrink.max(target as f64 / iterations as f64);
-            }
-            ds = ds.clamp(st.ds_min, st.ds_max);
-        };
-
-        special.sort_by(|a: &SpecialPoint, b: &SpecialPoint| a.s.total_cmp(&b.s));
-        let points = nodes
-            .into_iter()
-            .map(|nd| {
-                let (x, p) = ev.split(&nd.y);
-                Point {
-                    x,
-                    p,
-                    tangent: nd.t,
-                    ds: nd.ds,
-                    s: nd.s,
-                    index: nd.index,
-                }
-            })
-            .collect();
-        Ok(Branch {
-            points,
-            special,
-            stop,
-        })
-    }
-
     /// The curve point at arclength `sigma` within the segment, or `None` if the
     /// corrector fails there.
     fn eval_at(
@@ -487,7 +373,7 @@ impl<'a, P: Problem + ?Sized> Continuation<'a, P> {
     }
 
     /// Detects and locates all special points of one step.
-    fn detect(
+    pub(crate) fn detect(
         &self,
         ev: &Evaluator<'_, P>,
         seg: &Segment<'_>,

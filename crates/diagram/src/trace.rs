@@ -830,6 +830,8 @@ fn trace_side(
                     "the continuation used up its budget of {MAX_STEPS_PER_SIDE} steps"
                 )),
                 StopReason::ClosedLoop => Some("the continuation closed a loop".into()),
+                // `Continuation::run` never returns it.
+                StopReason::Interrupted => Some("the continuation was interrupted".into()),
             };
         }
     }
