@@ -101,20 +101,6 @@ impl Table {
         }
         w.into_inner().context("csv buffer")
     }
-
-    /// Write atomically to `dir/name`.
-    pub fn write(&self, dir: &Path) -> Result<PathBuf> {
-        write_atomic(dir, &self.name, &self.to_bytes()?)
-    }
-}
-
-/// Serialise a JSON summary and write it atomically. Its numbers must have been checked for
-/// finiteness on their typed values before they became JSON ([`checked_json!`],
-/// [`check_finite`]): serde_json turns a non-finite float into `null`, which cannot be told
-/// apart from an absent value afterwards (and a scene may well be called "nullable").
-pub fn write_json(dir: &Path, name: &str, value: &serde_json::Value) -> Result<PathBuf> {
-    let text = serde_json::to_string_pretty(value)?;
-    write_atomic(dir, name, format!("{text}\n").as_bytes())
 }
 
 /// Drop the keys whose value is `null` from a JSON summary: they stand for absent optional
@@ -212,11 +198,13 @@ macro_rules! checked_json {
 }
 pub(crate) use checked_json;
 
-/// Singular or plural: `1 period`, `2 periods`.
+/// Singular or plural: `1 period`, `2 periods`, `3 branches`.
 pub fn plural(n: impl Into<u64>, word: &str) -> String {
     let n = n.into();
     if n == 1 {
         format!("1 {word}")
+    } else if word.ends_with("ch") || word.ends_with('s') {
+        format!("{n} {word}es")
     } else {
         format!("{n} {word}s")
     }
@@ -533,16 +521,6 @@ impl OutputRun {
         }
     }
 
-    /// The run id recorded in `summary.json`.
-    pub fn run_id(&self) -> &str {
-        &self.run_id
-    }
-
-    /// The output directory.
-    pub fn dir(&self) -> &Path {
-        &self.dir
-    }
-
     /// Stage a file.
     pub fn write_bytes(&self, name: &str, bytes: &[u8]) -> Result<()> {
         write_atomic(&self.stage, name, bytes)?;
@@ -604,4 +582,27 @@ impl Drop for OutputRun {
         }
         let _ = self.committed;
     }
+}
+
+/// Default cap on `--points` (sampled points per curve); the environment variable
+/// `RODLOOP_MAX_POINTS` raises or lowers it.
+pub const MAX_POINTS: u64 = 1_000_000;
+
+/// Check `--points`: at least 8, at most the cap (so that a huge value is a clear error, not an
+/// allocation failure).
+pub fn check_points(points: u64) -> Result<usize> {
+    let cap = std::env::var("RODLOOP_MAX_POINTS")
+        .ok()
+        .and_then(|v| v.trim().parse::<u64>().ok())
+        .unwrap_or(MAX_POINTS);
+    if points < 8 {
+        bail!("--points must be at least 8 (got {points})");
+    }
+    if points > cap {
+        bail!(
+            "--points {points} is above the cap of {cap} points (each point is a CSV row of about 200 bytes); set the environment variable RODLOOP_MAX_POINTS to raise the cap"
+        );
+    }
+    usize::try_from(points)
+        .map_err(|_| anyhow::anyhow!("--points {points} does not fit this machine"))
 }
