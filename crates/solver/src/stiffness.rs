@@ -510,7 +510,10 @@ mod tests {
         // Continuity of D and D' across every knot (D'' may jump there).
         for &x in &s {
             let (a, b) = (p.eval(x - 1e-12), p.eval(x + 1e-12));
-            assert!((a.d - b.d).abs() < 1e-9 && (a.d1 - b.d1).abs() < 1e-6, "{x}");
+            assert!(
+                (a.d - b.d).abs() < 1e-9 && (a.d1 - b.d1).abs() < 1e-6,
+                "{x}"
+            );
         }
         // Between knots, the derivatives agree with finite differences.
         for &sigma in &[0.027, 0.31, 0.333, 0.79, 0.812, 0.97] {
