@@ -95,7 +95,7 @@ pub fn run_numeric(
             None => todo.push(eta),
         }
     }
-    if !retrace.is_empty() && !quiet {
+    if !retrace.is_empty() {
         eprintln!(
             "note: --resume: the saved branch files of {} were traced with other settings (scene, range or accuracy); re-tracing them",
             retrace
