@@ -279,6 +279,7 @@ pub fn run(args: &Args) -> Result<()> {
         "disagreements_numeric": numeric_disagreements,
         "numeric_model": "rodloop diagram --model numeric, default scene, default accuracy",
         "values": rows,
+        "units": "lengths lbar = L/(2 pi R); energy E R/(pi D); lambda R^3/D",
     })?;
     run.write_json("summary.json", &crate::output::strip_nulls(summary))?;
     run.commit()?;

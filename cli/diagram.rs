@@ -72,10 +72,11 @@ pub fn etas_in(lbar_min: f64, lbar_max: f64) -> Vec<u32> {
 }
 
 /// The exact diagram restricted to `[lbar_min, lbar_max]`, equal to the full diagram there:
-/// every branch that meets the window is sampled on it, the critical lengths are those of the
-/// diagram over the whole natural range of those branches (from `min(lbar_min, 1)`, so that
-/// the indices are the paper's `L̄_icr`) that fall in the window, and below `L̄ = 1` a state is
-/// the lowest only if it lies below the circle (branch 0, `E R/(πD) = 1/L̄`).
+/// every branch that meets the window is sampled on it; the critical lengths are those of the
+/// diagram from `min(lbar_min, 1)` to `lbar_max` with the same branches (so that the indices
+/// are the paper's `L̄_icr`, counted from `L̄_1cr = 1`) that fall in the window; and below
+/// `L̄ = 1` a state is the lowest only if it lies below the circle (branch 0,
+/// `E R/(πD) = 1/L̄`).
 pub fn exact_window(lbar_min: f64, lbar_max: f64, step: f64) -> Result<Diagram> {
     let etas = etas_in(lbar_min, lbar_max);
     let eta_max = etas.iter().copied().max().unwrap_or(1);
@@ -85,18 +86,20 @@ pub fn exact_window(lbar_min: f64, lbar_max: f64, step: f64) -> Result<Diagram> 
         eta_max,
         step,
     })?;
-    let full = compute(&DiagramSettings {
-        lbar_min: lbar_min.min(1.0),
-        lbar_max: f64::from(eta_max) + 1.0,
-        eta_max,
-        step,
-    })?;
-    let tol = 1e-12;
-    d.critical = full
-        .critical
-        .into_iter()
-        .filter(|c| c.lbar_cr >= lbar_min - tol && c.lbar_cr <= lbar_max + tol)
-        .collect();
+    if lbar_min > 1.0 {
+        let from_one = compute(&DiagramSettings {
+            lbar_min: 1.0,
+            lbar_max,
+            eta_max,
+            step: step.max(0.01),
+        })?;
+        let tol = 1e-12;
+        d.critical = from_one
+            .critical
+            .into_iter()
+            .filter(|c| c.lbar_cr >= lbar_min - tol && c.lbar_cr <= lbar_max + tol)
+            .collect();
+    }
     for p in &mut d.points {
         if p.lbar < 1.0 && 1.0 / p.lbar < p.energy {
             p.lowest = false;

@@ -13,27 +13,86 @@ use proptest::prelude::*;
 /// Cheap valid commands (each runs in well under a second).
 const BASES: &[&[&str]] = &[
     &["analytic", "--lbar", "1.2", "--eta", "2", "--points", "16"],
-    &["analytic", "--lbar", "2.5", "--branch", "3", "--points", "16"],
+    &[
+        "analytic", "--lbar", "2.5", "--branch", "3", "--points", "16",
+    ],
     &["euler", "--l", "2", "--lbar", "1.2", "--points", "16"],
     &["euler", "--branch", "2", "--lbar", "0.7", "--points", "16"],
-    &["solve", "--lbar", "1.2", "--branch", "1", "--accuracy", "fast"],
+    &[
+        "solve",
+        "--lbar",
+        "1.2",
+        "--branch",
+        "1",
+        "--accuracy",
+        "fast",
+    ],
     &["solve", "--lbar", "1.7", "--eta", "1", "--accuracy", "fast"],
-    &["diagram", "--model", "exact", "--lbar-min", "1", "--lbar-max", "2"],
-    &["diagram", "--model", "exact", "--branch", "1,2", "--step", "0.05"],
+    &[
+        "diagram",
+        "--model",
+        "exact",
+        "--lbar-min",
+        "1",
+        "--lbar-max",
+        "2",
+    ],
+    &[
+        "diagram", "--model", "exact", "--branch", "1,2", "--step", "0.05",
+    ],
 ];
 
 /// Replacement values: extremes, junk, and small valid numbers.
 const VALUES: &[&str] = &[
-    "-1", "0", "nan", "NaN", "inf", "-inf", "1e308", "1e-308", "18446744073709551615",
-    "4294967296", "-0", "", "abc", "1,2", "2", "1.5", "0.5", "3", "fast", "high", "exact",
-    "numeric", "--", "-", "1e400", "0x10", "1.2.3", "é",
+    "-1",
+    "0",
+    "nan",
+    "NaN",
+    "inf",
+    "-inf",
+    "1e308",
+    "1e-308",
+    "18446744073709551615",
+    "4294967296",
+    "-0",
+    "",
+    "abc",
+    "1,2",
+    "2",
+    "1.5",
+    "0.5",
+    "3",
+    "fast",
+    "high",
+    "exact",
+    "numeric",
+    "--",
+    "-",
+    "1e400",
+    "0x10",
+    "1.2.3",
+    "é",
 ];
 
 /// Flags that may be added (never --out, which the harness sets, and never a switch to the
 /// numeric diagram model, whose cost is the solver's to bound).
 const FLAGS: &[&str] = &[
-    "--lbar", "--eta", "--branch", "--l", "--points", "--accuracy", "--from", "--scene",
-    "--step", "--lbar-min", "--lbar-max", "--resume", "--quiet", "--bogus", "-x", "--help",
+    "--lbar",
+    "--eta",
+    "--branch",
+    "--l",
+    "--points",
+    "--accuracy",
+    "--from",
+    "--scene",
+    "--step",
+    "--lbar-min",
+    "--lbar-max",
+    "--resume",
+    "--quiet",
+    "--bogus",
+    "-x",
+    "--help",
 ];
 
 #[derive(Clone, Debug)]
@@ -155,9 +214,18 @@ fn run_case(args: &[String]) -> Result<(), TestCaseError> {
     } else {
         prop_assert!(err.starts_with("error"), "{:?}: {}", args, err);
         prop_assert!(err.len() < 4000, "{:?}: {} bytes", args, err.len());
-        prop_assert!(!out.join("summary.json").exists(), "{:?}: summary after error", args);
+        prop_assert!(
+            !out.join("summary.json").exists(),
+            "{:?}: summary after error",
+            args
+        );
     }
-    prop_assert!(leftovers(&out).is_empty(), "{:?}: {:?}", args, leftovers(&out));
+    prop_assert!(
+        leftovers(&out).is_empty(),
+        "{:?}: {:?}",
+        args,
+        leftovers(&out)
+    );
     Ok(())
 }
 
