@@ -3,10 +3,9 @@
 use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
-use rodloop_exact::{all_loops, branch_of_eta, Family};
-use serde_json::json;
+use rodloop_exact::{all_loops, branch_of_eta, eta_of_branch, Family};
 
-use crate::output::{ensure_dir, write_json, Cell, Table};
+use crate::output::{checked_json, Cell, OutputRun, Table};
 
 /// Largest `--eta` accepted: beyond it `p` reaches ~1e3 and the closure loses the digits
 /// needed for a 1e-10 residual.
@@ -21,11 +20,15 @@ pub struct Args {
     #[arg(long)]
     pub lbar: f64,
     /// Number of periods of the geodesic curvature (eta = 2 is branch 1, eta = 1 branch 2).
+    #[arg(long, required_unless_present = "branch", conflicts_with = "branch")]
+    pub eta: Option<u64>,
+    /// Alternative to --eta: the paper's branch number (1: eta = 2, 2: eta = 1, B >= 3: eta = B).
     #[arg(long)]
-    pub eta: u32,
-    /// Number of points per loop, uniform in arclength.
+    pub branch: Option<u64>,
+    /// Number of points per loop, uniform in arclength (at most 1,000,000; the environment
+    /// variable RODLOOP_MAX_POINTS raises the cap).
     #[arg(long, default_value_t = 512)]
-    pub points: usize,
+    pub points: u64,
     /// Also draw every loop (four views, SVG and PNG) next to its CSV (see `rodloop draw`).
     #[arg(long)]
     pub draw: bool,
@@ -36,45 +39,53 @@ pub struct Args {
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
-    if args.eta == 0 || args.eta > MAX_ETA {
+    let eta = match (args.eta, args.branch) {
+        (Some(e), _) => {
+            if e == 0 || e > u64::from(MAX_ETA) {
+                bail!("--eta must be an integer from 1 to {MAX_ETA} (got {e})");
+            }
+            e as u32
+        }
+        (None, Some(b)) => {
+            if b == 0 || b > u64::from(MAX_ETA) {
+                bail!("--branch must be an integer from 1 to {MAX_ETA} (got {b})");
+            }
+            eta_of_branch(b as u32)
+        }
+        (None, None) => bail!("give --eta N (or --branch B)"),
+    };
+    crate::output::check_lbar(args.lbar)?;
+    if args.lbar > MAX_LBAR {
         bail!(
-            "--eta must be an integer from 1 to {MAX_ETA} (got {})",
-            args.eta
-        );
-    }
-    if !(args.lbar.is_finite() && args.lbar > 0.0 && args.lbar <= MAX_LBAR) {
-        bail!(
-            "--lbar must be a number in (0, {MAX_LBAR}] (got {})",
+            "lbar must be at most {MAX_LBAR} (got {}): beyond it the closure loses the digits needed for a 1e-10 residual",
             args.lbar
         );
     }
-    if args.points < 8 {
-        bail!("--points must be at least 8 (got {})", args.points);
-    }
-    let loops = all_loops(args.eta, args.lbar).with_context(|| {
+    let points = crate::output::check_points(args.points)?;
+    let loops = all_loops(eta, args.lbar).with_context(|| {
         format!(
             "solving the closure for eta = {} at lbar = {}",
-            args.eta, args.lbar
+            eta, args.lbar
         )
     })?;
     if loops.is_empty() {
         bail!(
             "no closed loop with eta = {} at lbar = {} (the paper's branch for this eta exists for {} < lbar < {})",
-            args.eta,
+            eta,
             args.lbar,
-            args.eta - 1,
-            args.eta + 1
+            eta - 1,
+            eta + 1
         );
     }
-    ensure_dir(&args.out)?;
+    let run = OutputRun::begin(&args.out)?;
     let mut summaries = Vec::new();
     outln!(
         "{} closed loop(s) with eta = {} at lbar = {} (branch {} is q = {}):",
         loops.len(),
-        args.eta,
+        eta,
         args.lbar,
-        branch_of_eta(args.eta),
-        -(args.eta as i32 + 1)
+        branch_of_eta(eta),
+        -(eta as i32 + 1)
     );
     outln!(
         "  {:>3} {:>6} {:>4} {:>4} {:>20} {:>20} {:>20} {:>10}",
@@ -95,7 +106,7 @@ pub fn run(args: &Args) -> Result<()> {
                 "s", "x", "y", "z", "kappa", "tau", "kappa_g", "lambda", "F_t", "F_n", "F_b",
             ],
         );
-        for p in lp.sample(args.points)? {
+        for p in lp.sample(points)? {
             table.push(vec![
                 Cell::F(p.s),
                 Cell::F(p.x),
@@ -110,18 +121,14 @@ pub fn run(args: &Args) -> Result<()> {
                 Cell::F(p.f_b),
             ])?;
         }
-        table.write(&args.out)?;
-        if args.draw {
-            let set = crate::draw::DrawSettings::beside(&args.out);
-            crate::draw::draw_loop(&args.out.join(&name), &set)?;
-        }
+        run.write_table(&table)?;
         let energy = lp.energy()?;
         let (lambda_min, lambda_max) = lp.lambda_range();
         let family = match lp.family {
             Family::Wave => "wave",
             Family::Orbit => "orbit",
         };
-        let paper_branch = lp.family == Family::Wave && lp.q == -(args.eta as i32 + 1);
+        let paper_branch = lp.family == Family::Wave && lp.q == -(eta as i32 + 1);
         let k2_small = lp.k2_small();
         outln!(
             "  {:>3} {:>6} {:>4} {:>4} {:>20.15} {:>20.15} {:>20.15} {:>10.1e}{}",
@@ -139,11 +146,11 @@ pub fn run(args: &Args) -> Result<()> {
                 ""
             }
         );
-        summaries.push(json!({
+        summaries.push(checked_json!({
             "file": name,
             "family": family,
             "paper_branch": paper_branch,
-            "branch": if paper_branch { Some(branch_of_eta(args.eta)) } else { None },
+            "branch": if paper_branch { Some(branch_of_eta(eta)) } else { None },
             "lbar": lp.lbar,
             "eta": lp.eta,
             "p": lp.p,
@@ -159,18 +166,25 @@ pub fn run(args: &Args) -> Result<()> {
             "closure_residual": lp.closure_residual,
             "k2_small_b4": if lp.family == Family::Wave { Some(k2_small) } else { None },
             "k2_small_b4_error": if lp.family == Family::Wave { Some(k2_small - lp.k * lp.k) } else { None },
-        }));
+        })?);
     }
-    let summary = json!({
+    let summary = checked_json!({
         "lbar": args.lbar,
-        "eta": args.eta,
+        "eta": eta,
         "units": "R = 1, D = 1: energy E R/(pi D), lambda R^3/D, forces F R^2/D",
         "search": "all integers q crossed by the continuous closure p_cont(m), 0 < m <= 1 - 1e-6, both families",
         "loops": summaries,
-    });
+    })?;
     // serde_json writes None as null; our NaN guard would reject that, so drop the nulls.
     let summary = crate::output::strip_nulls(summary);
-    write_json(&args.out, "summary.json", &summary)?;
+    run.write_json("summary.json", &summary)?;
+    run.commit()?;
+    if args.draw {
+        let set = crate::draw::DrawSettings::beside(&args.out);
+        for i in 0..loops.len() {
+            crate::draw::draw_loop(&args.out.join(format!("loop-{:02}.csv", i + 1)), &set)?;
+        }
+    }
     outln!(
         "wrote {} loop file(s) and summary.json to {}",
         loops.len(),

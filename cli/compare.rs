@@ -8,9 +8,8 @@ use std::path::PathBuf;
 use anyhow::{bail, Context, Result};
 use rodloop_exact::diagram::{compute, CriticalKind, DiagramSettings};
 use rodloop_exact::{eta_of_branch, paper_branch_loop};
-use serde_json::json;
 
-use crate::output::{ensure_dir, write_json, Cell, Table};
+use crate::output::{checked_json, Cell, OutputRun, Table};
 
 const PAPER_VALUES: &str = include_str!("../data/reference/paper_values.csv");
 
@@ -262,7 +261,7 @@ pub fn run(args: &Args) -> Result<()> {
             Cell::S(opt(numeric_vs_exact)),
             Cell::S(pv.source.clone()),
         ])?;
-        rows.push(json!({
+        rows.push(checked_json!({
             "id": pv.id,
             "paper": pv.value,
             "exact": symmetry.clone().map(serde_json::Value::from).unwrap_or_else(|| exact.into()),
@@ -270,22 +269,20 @@ pub fn run(args: &Args) -> Result<()> {
             "agrees_exact": agrees,
             "agrees_numeric": nagrees,
             "numeric_minus_exact": numeric_vs_exact,
-        }));
+        })?);
     }
-    ensure_dir(&args.out)?;
-    table.write(&args.out)?;
-    let summary = json!({
+    let run = OutputRun::begin(&args.out)?;
+    run.write_table(&table)?;
+    let summary = checked_json!({
         "rows": values.len(),
         "disagreements_exact": disagreements,
         "disagreements_numeric": numeric_disagreements,
         "numeric_model": "rodloop diagram --model numeric, default scene, default accuracy",
         "values": rows,
-    });
-    write_json(
-        &args.out,
-        "summary.json",
-        &crate::output::strip_nulls(summary),
-    )?;
+        "units": "lengths lbar = L/(2 pi R); energy E R/(pi D); lambda R^3/D",
+    })?;
+    run.write_json("summary.json", &crate::output::strip_nulls(summary))?;
+    run.commit()?;
     outln!(
         "{} paper values; beyond the printed resolution {} disagree with the exact layer and {} with the numeric model (winding numbers and symmetries: exact layer only). Wrote compare.csv and summary.json to {}",
         values.len(),

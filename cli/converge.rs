@@ -10,7 +10,7 @@ use rodloop_scene::StiffnessSpec;
 use rodloop_solver::{solve_cells, Accuracy, SolveOptions, StartShape};
 use serde_json::json;
 
-use crate::output::{ensure_dir, write_json, Cell, Table};
+use crate::output::{Cell, OutputRun, Table};
 use crate::solve::{load_scene, stiffness_of};
 
 /// Arguments of `rodloop converge`.
@@ -226,13 +226,12 @@ pub fn run(args: &Args) -> Result<()> {
         "accuracy_cells": {"fast": fast, "default": default_cells, "high": [default_cells, 2 * default_cells]},
         "units": "energy E R/(pi D0); lambda in units of D0/R^3; seconds of wall time per solve",
     });
-    ensure_dir(&args.out)?;
-    table.write(&args.out)?;
-    write_json(
-        &args.out,
-        "summary.json",
-        &crate::output::strip_nulls(summary),
-    )?;
+    let summary = crate::output::strip_nulls(summary);
+    crate::output::check_finite("summary.json", &summary)?;
+    let run = OutputRun::begin(&args.out)?;
+    run.write_table(&table)?;
+    run.write_json("summary.json", &summary)?;
+    run.commit()?;
     outln!(
         "wrote converge.csv and summary.json to {}",
         args.out.display()

@@ -5,11 +5,8 @@ use std::time::Instant;
 
 use anyhow::{bail, Result};
 use rodloop_exact::diagram::{compute, Diagram, DiagramSettings};
-use serde_json::json;
 
-use crate::output::{
-    critical_table, ensure_dir, write_atomic, write_json, Cell, CriticalRow, Table,
-};
+use crate::output::{checked_json, critical_table, Cell, CriticalRow, OutputRun, Table};
 use crate::svg::{self, branch_color, Curve, Figure, LegendEntry, LineStyle, Marker};
 
 /// Which model computes the diagram.
@@ -30,7 +27,7 @@ pub struct Args {
     /// Scene file (TOML; see data/scenes/). Default: homogeneous loops on the unit sphere.
     #[arg(long)]
     pub scene: Option<PathBuf>,
-    /// Accuracy: fast, default or high (overrides the scene's; numeric model).
+    /// Accuracy: fast, default or high (overrides the scene's; numeric model only).
     #[arg(long)]
     pub accuracy: Option<String>,
     /// Smallest normalised length (default: the scene's, 1).
@@ -39,13 +36,18 @@ pub struct Args {
     /// Largest normalised length (default: the scene's, 5).
     #[arg(long)]
     pub lbar_max: Option<f64>,
-    /// Spacing of the sampled lengths in branches.csv (exact model).
-    #[arg(long, default_value_t = 0.01)]
-    pub step: f64,
-    /// Continue an interrupted numeric run from the branch files in OUT/branches.
+    /// Only these paper branches (comma-separated, e.g. 1,2); default: every branch that meets
+    /// the length range.
+    #[arg(long, value_delimiter = ',')]
+    pub branch: Vec<u64>,
+    /// Spacing of the sampled lengths in branches.csv (exact model only; default 0.01).
+    #[arg(long)]
+    pub step: Option<f64>,
+    /// Continue an interrupted numeric run from the branch files in OUT/branches (numeric
+    /// model only).
     #[arg(long)]
     pub resume: bool,
-    /// No progress bars (they are also hidden when stderr is not a terminal).
+    /// No progress output on stderr (bars on a terminal, one line per branch otherwise).
     #[arg(long)]
     pub quiet: bool,
     /// Output directory.
@@ -68,6 +70,88 @@ fn draw_figures(args: &Args) -> Result<()> {
     Ok(())
 }
 
+/// Units of the diagram outputs.
+pub const UNITS: &str =
+    "lengths lbar = L/(2 pi R); energy E R/(pi D0) (D0 = D for a uniform rod); lambda R^3/D0";
+
+/// The branches `η` that meet the open length window `(lbar_min, lbar_max)`: branch `η`
+/// lives for `η − 1 < L̄ < η + 1`.
+pub fn etas_in(lbar_min: f64, lbar_max: f64) -> Vec<u32> {
+    let top = lbar_max.ceil() as u32 + 1;
+    (1..=top)
+        .filter(|&e| {
+            let e = f64::from(e);
+            e - 1.0 < lbar_max && e + 1.0 > lbar_min
+        })
+        .collect()
+}
+
+/// The exact diagram restricted to `[lbar_min, lbar_max]`, equal to the full diagram there:
+/// every branch that meets the window is sampled on it; the critical lengths are those of the
+/// diagram from `min(lbar_min, 1)` to `lbar_max` with the same branches (so that the indices
+/// are the paper's `L̄_icr`, counted from `L̄_1cr = 1`) that fall in the window; and below
+/// `L̄ = 1` a state is the lowest only if it lies below the circle (branch 0,
+/// `E R/(πD) = 1/L̄`).
+pub fn exact_window(lbar_min: f64, lbar_max: f64, step: f64) -> Result<Diagram> {
+    let etas = etas_in(lbar_min, lbar_max);
+    let eta_max = etas.iter().copied().max().unwrap_or(1);
+    let mut d = compute(&DiagramSettings {
+        lbar_min,
+        lbar_max,
+        eta_max,
+        step,
+    })?;
+    if lbar_min > 1.0 {
+        let from_one = compute(&DiagramSettings {
+            lbar_min: 1.0,
+            lbar_max,
+            eta_max,
+            step: step.max(0.01),
+        })?;
+        let tol = 1e-12;
+        d.critical = from_one
+            .critical
+            .into_iter()
+            .filter(|c| c.lbar_cr >= lbar_min - tol && c.lbar_cr <= lbar_max + tol)
+            .collect();
+    }
+    for p in &mut d.points {
+        if p.lbar < 1.0 && 1.0 / p.lbar < p.energy {
+            p.lowest = false;
+        }
+    }
+    Ok(d)
+}
+
+/// The selected branch numbers, checked against the window.
+fn selected_branches(args: &Args, lbar_min: f64, lbar_max: f64) -> Result<Option<Vec<u32>>> {
+    if args.branch.is_empty() {
+        return Ok(None);
+    }
+    let available: Vec<u32> = etas_in(lbar_min, lbar_max)
+        .into_iter()
+        .map(rodloop_exact::branch_of_eta)
+        .collect();
+    let mut out = Vec::new();
+    for &b in &args.branch {
+        let ok = u32::try_from(b).ok().filter(|b| available.contains(b));
+        match ok {
+            Some(b) => out.push(b),
+            None => bail!(
+                "--branch {b}: no such branch in the length range [{lbar_min}, {lbar_max}] (branches there: {})",
+                available
+                    .iter()
+                    .map(|b| b.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        }
+    }
+    out.sort_unstable();
+    out.dedup();
+    Ok(Some(out))
+}
+
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
     let scene = crate::solve::load_scene(args.scene.as_deref())?;
@@ -80,8 +164,24 @@ pub fn run(args: &Args) -> Result<()> {
             lbar_max
         );
     }
+    let selection = selected_branches(args, lbar_min, lbar_max)?;
     if args.model == Model::Numeric {
-        return run_numeric(args, &scene, lbar_min, lbar_max);
+        if let Some(step) = args.step {
+            bail!(
+                "--step {step} applies to --model exact only: the numeric model reports the states its continuation lands on (their spacing adapts to the branch)"
+            );
+        }
+        return run_numeric(args, &scene, lbar_min, lbar_max, selection.as_deref());
+    }
+    if let Some(a) = &args.accuracy {
+        bail!(
+            "--accuracy {a} applies to --model numeric only: the exact model solves the closed-form closure to machine precision"
+        );
+    }
+    if args.resume {
+        bail!(
+            "--resume applies to --model numeric only: the exact diagram takes milliseconds and is always computed afresh"
+        );
     }
     // Energies and lengths are normalised (E R/(pi D), L/(2 pi R)), so R does not matter.
     if !scene.stiffness.is_uniform() {
@@ -90,20 +190,18 @@ pub fn run(args: &Args) -> Result<()> {
             scene.name
         );
     }
-    if !(args.step > 0.0 && (lbar_max - lbar_min) / args.step <= 1e6) {
-        bail!(
-            "--step must be positive and give at most 1e6 samples (got {})",
-            args.step
-        );
+    let step = args.step.unwrap_or(0.01);
+    if !(step.is_finite() && step > 0.0 && (lbar_max - lbar_min) / step <= 1e6) {
+        bail!("--step must be a positive number giving at most 1e6 samples (got {step})");
     }
+    let run = OutputRun::begin(&args.out)?;
     let t0 = Instant::now();
-    let settings = DiagramSettings {
-        lbar_min,
-        lbar_max,
-        eta_max: (lbar_max.floor() as u32).max(1),
-        step: args.step,
-    };
-    let d = compute(&settings)?;
+    let mut d = exact_window(lbar_min, lbar_max, step)?;
+    if let Some(sel) = &selection {
+        d.points.retain(|p| sel.contains(&p.branch));
+        d.critical
+            .retain(|c| sel.contains(&c.from_branch) || sel.contains(&c.to_branch));
+    }
     let elapsed = t0.elapsed();
 
     let mut branches = Table::new(
@@ -111,12 +209,12 @@ pub fn run(args: &Args) -> Result<()> {
         &[
             "branch",
             "eta",
-            "p",
             "lbar",
             "energy",
             "energy_g",
             "lambda_min",
             "lambda_max",
+            "p",
             "k",
             "c",
             "closure_residual",
@@ -127,12 +225,12 @@ pub fn run(args: &Args) -> Result<()> {
         branches.push(vec![
             Cell::I(p.branch.into()),
             Cell::I(p.eta.into()),
-            Cell::I(p.p.into()),
             Cell::F(p.lbar),
             Cell::F(p.energy),
             Cell::F(p.energy_g),
             Cell::F(p.lambda_min),
             Cell::F(p.lambda_max),
+            Cell::I(p.p.into()),
             Cell::F(p.k),
             Cell::F(p.c),
             Cell::F(p.closure_residual),
@@ -148,25 +246,34 @@ pub fn run(args: &Args) -> Result<()> {
         energy: c.energy,
         error_estimate: c.error_estimate,
     }))?;
-    ensure_dir(&args.out)?;
-    branches.write(&args.out)?;
-    critical.write(&args.out)?;
+    run.write_table(&branches)?;
+    run.write_table(&critical)?;
     for (name, energy_g) in [("diagram.svg", false), ("diagram_g.svg", true)] {
         let fig = figure(&d, energy_g);
-        write_atomic(&args.out, name, svg::render(&fig).as_bytes())?;
+        run.write_bytes(name, svg::render(&fig).as_bytes())?;
     }
-    draw_figures(args)?;
-    let summary = json!({
+    let branch_count = d
+        .points
+        .iter()
+        .map(|p| p.branch)
+        .collect::<std::collections::BTreeSet<_>>()
+        .len();
+    let summary = checked_json!({
         "model": "exact",
+        "scene": scene.name,
         "lbar_min": lbar_min,
         "lbar_max": lbar_max,
-        "step": args.step,
-        "branches": d.points.len(),
+        "step": step,
+        "branches": branch_count,
+        "states": d.points.len(),
         "continuation_points": d.continuation_steps,
         "critical": d.critical,
         "seconds": elapsed.as_secs_f64(),
-    });
-    write_json(&args.out, "summary.json", &summary)?;
+        "units": UNITS,
+    })?;
+    run.write_json("summary.json", &summary)?;
+    run.commit()?;
+    draw_figures(args)?;
 
     outln!("Critical lengths (exact model, homogeneous loops on the sphere):");
     outln!(
@@ -191,9 +298,9 @@ pub fn run(args: &Args) -> Result<()> {
         );
     }
     outln!(
-        "{} states on {} branches, {} continuation points, computed in {:.3} s; wrote branches.csv, critical.csv, diagram.svg/.png, diagram_g.svg, diagram_split.svg/.png, diagram_lambda.svg/.png, summary.json to {}",
-        d.points.len(),
-        d.points.iter().map(|p| p.branch).collect::<std::collections::BTreeSet<_>>().len(),
+        "{} on {}, {} continuation points, computed in {:.3} s; wrote branches.csv, critical.csv, diagram.svg/.png, diagram_g.svg, diagram_split.svg/.png, diagram_lambda.svg/.png, summary.json to {}",
+        crate::output::plural(d.points.len() as u64, "state"),
+        crate::output::plural(branch_count as u64, "branch"),
         d.continuation_steps,
         elapsed.as_secs_f64(),
         args.out.display()
@@ -207,6 +314,7 @@ fn run_numeric(
     scene: &rodloop_scene::Scene,
     lbar_min: f64,
     lbar_max: f64,
+    selection: Option<&[u32]>,
 ) -> Result<()> {
     let accuracy = crate::solve::accuracy_of(scene, args.accuracy.as_deref())?;
     let opts = rodloop_diagram::DiagramOptions {
@@ -218,18 +326,16 @@ fn run_numeric(
         ..Default::default()
     };
     opts.validate()?;
-    let d = crate::numeric_diagram::run_numeric(&opts, &args.out, args.resume, args.quiet)?;
-    crate::numeric_diagram::write_outputs(&d, &opts, &scene.name, &args.out)?;
+    let run = OutputRun::begin(&args.out)?;
+    let d =
+        crate::numeric_diagram::run_numeric(&opts, &args.out, args.resume, args.quiet, selection)?;
+    crate::numeric_diagram::write_outputs(&d, &opts, &scene.name, &run)?;
+    run.commit()?;
     draw_figures(args)?;
-    // For homogeneous scenes, show the exact layer's critical lengths next to the numeric ones.
+    // For homogeneous scenes, show the exact layer's critical lengths next to the numeric ones:
+    // the same critical length (same kind, same branches) of the exact diagram of this window.
     let exact = if scene.stiffness.is_uniform() {
-        compute(&DiagramSettings {
-            lbar_min,
-            lbar_max,
-            eta_max: (lbar_max.floor() as u32).max(1),
-            step: 0.01,
-        })
-        .ok()
+        exact_window(lbar_min, lbar_max, 0.01).ok()
     } else {
         None
     };
@@ -256,6 +362,12 @@ fn run_numeric(
         let dev = exact.as_ref().and_then(|e| {
             e.critical
                 .iter()
+                .filter(|x| {
+                    x.kind == c.kind
+                        && x.from_branch == c.from_branch
+                        && x.to_branch == c.to_branch
+                        && (x.lbar_cr - c.lbar_cr).abs() < 0.05
+                })
                 .min_by(|a, b| {
                     (a.lbar_cr - c.lbar_cr)
                         .abs()
@@ -272,16 +384,20 @@ fn run_numeric(
             c.to_branch,
             c.energy,
             c.error_estimate,
-            dev.map(|x| format!("  {x:>17.1e}")).unwrap_or_default()
+            match (dev, exact.is_some()) {
+                (Some(x), _) => format!("  {x:>17.1e}"),
+                (None, true) => format!("  {:>17}", "no exact match"),
+                (None, false) => String::new(),
+            }
         );
     }
     if let Some(gc) = &d.great_circles {
         for l in &gc.loads {
             if let (Some(f), Some(eq)) = (l.lambda_formula, &l.equation) {
                 outln!(
-                    "  buckling of the {}-fold great circle (mode with {} periods of kappa_g): lambda R^3/D = {:.10} ± {:.1e}, Eq. ({eq}) {:.10}",
+                    "  buckling of the {}-fold great circle (mode with {} of kappa_g): lambda R^3/D = {:.10} ± {:.1e}, Eq. ({eq}) {:.10}",
                     l.m,
-                    l.mode_periods,
+                    crate::output::plural(l.mode_periods as u64, "period"),
                     l.lambda_numeric,
                     l.lambda_error,
                     f
@@ -293,9 +409,9 @@ fn run_numeric(
         eprintln!("warning: {w}");
     }
     outln!(
-        "{} states on {} branches in {:.2} s (tracing {:.2} s); wrote branches.csv, critical.csv, diagram.svg/.png, diagram_split.svg/.png, diagram_lambda.svg/.png, summary.json to {}",
-        d.rows().len(),
-        d.branches.len(),
+        "{} on {} in {:.2} s (tracing {:.2} s); wrote branches.csv, critical.csv, diagram.svg/.png, diagram_split.svg/.png, diagram_lambda.svg/.png, summary.json to {}",
+        crate::output::plural(d.rows().len() as u64, "state"),
+        crate::output::plural(d.branches.len() as u64, "branch"),
         d.timings.total,
         d.timings.tracing,
         args.out.display()

@@ -12,7 +12,7 @@ use rodloop_figures::profiles::profiles_figure;
 use rodloop_figures::raster::svg_to_png;
 use serde_json::json;
 
-use crate::output::{ensure_dir, write_atomic, write_json};
+use crate::output::{check_finite, ensure_dir, write_atomic};
 
 /// RMS tolerance (fraction of R) of the point-group detector: a symmetry element is accepted
 /// when it maps the resampled loop onto itself to this accuracy (the resampling of a coarse
@@ -157,7 +157,11 @@ pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
         "seconds": t0.elapsed().as_secs_f64(),
     });
     let name = format!("{stem}-draw.json");
-    write_json(&set.out, &name, &crate::output::strip_nulls(note))?;
+    let note = crate::output::strip_nulls(note);
+    check_finite(&name, &note)?;
+    let mut bytes = serde_json::to_vec_pretty(&note)?;
+    bytes.push(b'\n');
+    write_atomic(&set.out, &name, &bytes)?;
     written.push(name);
     Ok(written)
 }

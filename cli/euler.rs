@@ -2,24 +2,31 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
+use rodloop_exact::eta_of_branch;
 use rodloop_exact::euler::EulerCurve;
-use serde_json::json;
 
-use crate::output::{ensure_dir, write_json, Cell, Table};
+use crate::output::{checked_json, Cell, OutputRun, Table};
+
+/// Largest `--l` accepted (as for `analytic --eta`).
+const MAX_L: u64 = 1000;
 
 /// Arguments of `rodloop euler`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Integer periodicity l of Eq. (4) (l = 1 hippopede, l = 2 tennis-ball seam).
+    /// Integer periodicity l of Eq. (4) (l = 1 hippopede, l = 2 tennis-ball seam); l = eta.
+    #[arg(long, required_unless_present = "branch", conflicts_with = "branch")]
+    pub l: Option<u64>,
+    /// Alternative to --l: the paper's branch number (its curve has l = eta(B)).
     #[arg(long)]
-    pub l: u32,
+    pub branch: Option<u64>,
     /// Normalised length L/(2 pi R), in (l - 1, l + 1).
     #[arg(long)]
     pub lbar: f64,
-    /// Number of points, uniform in arclength.
+    /// Number of points, uniform in arclength (at most 1,000,000; the environment variable
+    /// RODLOOP_MAX_POINTS raises the cap).
     #[arg(long, default_value_t = 512)]
-    pub points: usize,
+    pub points: u64,
     /// Also draw the loop (four views, SVG and PNG) next to the CSV (see `rodloop draw`).
     #[arg(long)]
     pub draw: bool,
@@ -30,31 +37,54 @@ pub struct Args {
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
-    if args.points < 8 {
-        anyhow::bail!("--points must be at least 8 (got {})", args.points);
+    let l = match (args.l, args.branch) {
+        (Some(l), _) => {
+            if l == 0 || l > MAX_L {
+                bail!("--l must be an integer from 1 to {MAX_L} (got {l})");
+            }
+            l as u32
+        }
+        (None, Some(b)) => {
+            if b == 0 || b > MAX_L {
+                bail!("--branch must be an integer from 1 to {MAX_L} (got {b})");
+            }
+            eta_of_branch(b as u32)
+        }
+        (None, None) => bail!("give --l N (or --branch B)"),
+    };
+    crate::output::check_lbar(args.lbar)?;
+    let points = crate::output::check_points(args.points)?;
+    let lf = f64::from(l);
+    if !(args.lbar > lf - 1.0 && args.lbar < lf + 1.0) {
+        bail!(
+            "the Euler curve with l = {l} exists only for {} < lbar < {}; got lbar = {}",
+            lf - 1.0,
+            lf + 1.0,
+            args.lbar
+        );
     }
-    let curve = EulerCurve::from_lbar(args.l, args.lbar).with_context(|| {
+    let curve = EulerCurve::from_lbar(l, args.lbar).with_context(|| {
         format!(
-            "no Euler rotation curve with l = {} at lbar = {}",
-            args.l, args.lbar
+            "no Euler rotation curve with l = {l} at lbar = {}",
+            args.lbar
         )
     })?;
     let energy = curve.bending_energy();
     let energy_g = curve.energy_g();
     if !energy.converged || !energy_g.converged {
-        anyhow::bail!(
-            "the Euler curve with l = {} at lbar = {} is too close to degenerate for the energy quadrature to converge ({} points); choose lbar further from {}",
-            args.l,
+        bail!(
+            "the Euler curve with l = {l} at lbar = {} is too close to degenerate for the energy quadrature to converge ({} points); choose lbar further from {}",
             args.lbar,
             energy.points,
-            args.l.saturating_sub(1)
+            l.saturating_sub(1)
         );
     }
+    let run = OutputRun::begin(&args.out)?;
     let mut table = Table::new(
         "curve.csv",
         &["s", "x", "y", "z", "kappa", "tau", "kappa_g"],
     );
-    for p in curve.sample(args.points) {
+    for p in curve.sample(points) {
         table.push(vec![
             Cell::F(p.s),
             Cell::F(p.x),
@@ -65,29 +95,38 @@ pub fn run(args: &Args) -> Result<()> {
             Cell::F(p.kappa_g),
         ])?;
     }
-    ensure_dir(&args.out)?;
-    table.write(&args.out)?;
-    let summary = json!({
-        "l": args.l,
+    run.write_table(&table)?;
+    // The quadrature's own estimate can be 0 when successive refinements agree to the last
+    // bit; the rounding of the sum (a few ulps of the value) is then the bound.
+    let bound = energy
+        .error_estimate
+        .max(4.0 * f64::EPSILON * energy.value.abs());
+    let summary = checked_json!({
+        "l": l,
         "lbar": args.lbar,
         "alpha": curve.alpha,
         "length": curve.length(),
         "energy": energy.value,
-        "energy_error_estimate": energy.error_estimate,
+        "energy_error_estimate": bound,
         "energy_n": curve.energy_n(),
         "energy_g": energy_g.value,
         "total_torsion": curve.total_torsion().value,
         "quadrature_points": energy.points,
-        "units": "R = 1; energy is E R/(pi D)",
-    });
-    write_json(&args.out, "summary.json", &summary)?;
+        "units": "lengths in units of R; kappa, tau, kappa_g in 1/R; energy E R/(pi D)",
+    })?;
+    run.write_json("summary.json", &summary)?;
+    run.commit()?;
     if args.draw {
         let set = crate::draw::DrawSettings::beside(&args.out);
         crate::draw::draw_loop(&args.out.join("curve.csv"), &set)?;
     }
     outln!(
-        "Euler rotation curve l = {}, lbar = {}: alpha = {:.15}, energy E R/(pi D) = {:.12} (quadrature error <= {:.1e})",
-        args.l, args.lbar, curve.alpha, energy.value, energy.error_estimate
+        "Euler rotation curve l = {l}, lbar = {}: alpha = {:.15}, energy E R/(pi D) = {:.12} (quadrature error <= {:.1e}{})",
+        args.lbar,
+        curve.alpha,
+        energy.value,
+        bound,
+        if energy.error_estimate < bound { ", the rounding of the sum" } else { "" }
     );
     outln!("wrote {}/curve.csv and summary.json", args.out.display());
     Ok(())

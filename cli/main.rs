@@ -45,16 +45,21 @@ struct Cli {
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Every exact closed loop with eta periods of geodesic curvature at one length (Sec. 4.3).
+    #[command(allow_negative_numbers = true)]
     Analytic(analytic::Args),
     /// One numerical equilibrium for any stiffness profile: shape, energy, forces, Hessian
     /// stability (index), with an error estimate.
+    #[command(allow_negative_numbers = true)]
     Solve(solve::Args),
     /// The Euler rotation curve approximation (Eqs. 4-6) at one length.
+    #[command(allow_negative_numbers = true)]
     Euler(euler::Args),
     /// The energy-versus-length diagram with its critical lengths (Fig. 3a).
+    #[command(allow_negative_numbers = true)]
     Diagram(diagram::Args),
     /// The paper's printed values (critical lengths, buckling loads, winding numbers) next to
     /// rodloop's, with deviations.
+    #[command(allow_negative_numbers = true)]
     Compare(compare::Args),
     /// One state on a ladder of resolutions: error against cells and time, observed order
     /// of convergence (the speed/accuracy trade).

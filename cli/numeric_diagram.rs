@@ -2,8 +2,9 @@
 //! continuation, critical lengths on re-solved equilibria, stable / metastable / unstable
 //! labels from the Hessian index, great-circle buckling loads.
 //!
-//! Each branch is written to `DIR/branches/eta-N.json` as soon as it is traced, so that an
-//! interrupted run continues with `--resume` from the branches already there.
+//! Each branch is written to `DIR/branches/branch-B.json` (B the paper's branch number) as
+//! soon as it is traced, so that an interrupted run continues with `--resume` from the
+//! branches already there (files of older versions, `eta-N.json`, are read too).
 
 use std::path::Path;
 use std::sync::mpsc;
@@ -13,10 +14,10 @@ use anyhow::{bail, Context, Result};
 use rodloop_diagram::{
     assemble, compute_branch, DiagramOptions, Label, NumericDiagram, Progress, TracedBranch,
 };
-use serde_json::json;
+use rodloop_exact::branch_of_eta;
 
 use crate::output::{
-    critical_table, ensure_dir, write_atomic, write_json, Cell, CriticalRow, Table,
+    checked_json, critical_table, ensure_dir, write_atomic, Cell, CriticalRow, OutputRun, Table,
 };
 use crate::progress::Progress as Bar;
 use crate::svg::{self, branch_color, Curve, Figure, LegendEntry, LineStyle, Marker};
@@ -30,7 +31,7 @@ enum Msg {
     ),
 }
 
-/// Load the branches of an interrupted run (`DIR/branches/eta-N.json`).
+/// Load the branches of an interrupted run (`DIR/branches/*.json`).
 fn load_resume(dir: &Path) -> Result<Vec<TracedBranch>> {
     let bdir = dir.join("branches");
     let mut out = Vec::new();
@@ -60,8 +61,8 @@ pub fn run_numeric(
     out: &Path,
     resume: bool,
     quiet: bool,
+    selection: Option<&[u32]>,
 ) -> Result<NumericDiagram> {
-    ensure_dir(out)?;
     ensure_dir(&out.join("branches"))?;
     let t0 = Instant::now();
     let previous = if resume {
@@ -70,7 +71,10 @@ pub fn run_numeric(
         Vec::new()
     };
     let fingerprint = opts.fingerprint();
-    let etas = opts.etas();
+    let mut etas = opts.etas();
+    if let Some(sel) = selection {
+        etas.retain(|&e| sel.contains(&branch_of_eta(e)));
+    }
     if etas.is_empty() {
         bail!(
             "no branch meets the length range [{}, {}]",
@@ -80,16 +84,31 @@ pub fn run_numeric(
     }
     let mut have = Vec::new();
     let mut todo = Vec::new();
+    let mut retrace = Vec::new();
     for &eta in &etas {
         match previous.iter().find(|b| b.eta == eta) {
             Some(b) if b.fingerprint == fingerprint && !b.points.is_empty() => have.push(b.clone()),
-            _ => todo.push(eta),
+            Some(b) => {
+                retrace.push(b.branch);
+                todo.push(eta)
+            }
+            None => todo.push(eta),
         }
+    }
+    if !retrace.is_empty() {
+        eprintln!(
+            "note: --resume: the saved branch files of {} were traced with other settings (scene, range or accuracy); re-tracing them",
+            retrace
+                .iter()
+                .map(|b| format!("branch {b}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
     }
     let bar = Bar::new(etas.len() as u64, "branches", quiet);
     bar.set_length(etas.len() as u64);
     for b in &have {
-        bar.step(format!(
+        bar.done(format!(
             "branch {} resumed ({} states)",
             b.branch,
             b.points.len()
@@ -127,10 +146,14 @@ pub fn run_numeric(
                         let text = serde_json::to_string(&b)?;
                         write_atomic(
                             &out.join("branches"),
-                            &format!("eta-{eta}.json"),
+                            &format!("branch-{}.json", b.branch),
                             text.as_bytes(),
                         )?;
-                        bar.step(format!(
+                        // The file name of older versions (by eta) is superseded.
+                        let _ = std::fs::remove_file(
+                            out.join("branches").join(format!("eta-{eta}.json")),
+                        );
+                        bar.done(format!(
                             "branch {} traced ({} states, {:.2} s)",
                             b.branch,
                             b.points.len(),
@@ -139,7 +162,7 @@ pub fn run_numeric(
                         have.push(b);
                     }
                     Err(e) => {
-                        bar.step(format!("eta {eta} failed"));
+                        bar.done(format!("branch {} failed", branch_of_eta(eta)));
                         failures.push(format!("branch with eta = {eta} left out: {e}"));
                     }
                 },
@@ -158,6 +181,10 @@ pub fn run_numeric(
             bar.message(format!("{kind} at {lbar_cr:.9}"));
         }
     })?;
+    bar.done(format!(
+        "critical lengths located ({} found)",
+        d.critical.len()
+    ));
     bar.finish();
     d.warnings.splice(0..0, failures);
     d.timings.tracing = tracing;
@@ -170,8 +197,9 @@ pub fn write_outputs(
     d: &NumericDiagram,
     opts: &DiagramOptions,
     scene: &str,
-    out: &Path,
+    run: &OutputRun,
 ) -> Result<()> {
+    // The common columns first, in the order of the exact model's branches.csv.
     let mut branches = Table::new(
         "branches.csv",
         &[
@@ -180,13 +208,15 @@ pub fn write_outputs(
             "lbar",
             "energy",
             "energy_g",
+            "lambda_min",
+            "lambda_max",
             "energy_error",
             "stability",
             "index",
-            "lambda_min",
-            "lambda_max",
         ],
     );
+    // The model works in the scene's R and D; report lambda R^3/D0.
+    let lam_unit = opts.radius.powi(3) / opts.stiffness.reference();
     for r in d.rows() {
         branches.push(vec![
             Cell::I(r.branch.into()),
@@ -194,14 +224,14 @@ pub fn write_outputs(
             Cell::F(r.lbar),
             Cell::F(r.energy),
             Cell::F(r.energy_g),
+            Cell::F(r.lambda_min * lam_unit),
+            Cell::F(r.lambda_max * lam_unit),
             match r.energy_error {
                 Some(e) => Cell::F(e),
                 None => Cell::S(String::new()),
             },
             Cell::S(r.stability.as_str().into()),
             Cell::I(r.index as i64),
-            Cell::F(r.lambda_min),
-            Cell::F(r.lambda_max),
         ])?;
     }
     let critical = critical_table(d.critical.iter().map(|c| CriticalRow {
@@ -213,24 +243,20 @@ pub fn write_outputs(
         energy: c.energy,
         error_estimate: c.error_estimate,
     }))?;
-    branches.write(out)?;
-    critical.write(out)?;
-    write_atomic(
-        out,
-        "diagram.svg",
-        svg::render(&figure(d, scene)).as_bytes(),
-    )?;
-    let ends: Vec<_> = d
+    run.write_table(&branches)?;
+    run.write_table(&critical)?;
+    run.write_bytes("diagram.svg", svg::render(&figure(d, scene)).as_bytes())?;
+    let ends = d
         .branches
         .iter()
         .map(|b| {
-            json!({
+            checked_json!({
                 "branch": b.branch, "eta": b.eta, "states": b.points.len(), "cells": b.cells,
                 "low_end": b.stop_low, "high_end": b.stop_high, "seed": b.seed, "seconds": b.seconds,
             })
         })
-        .collect();
-    let summary = json!({
+        .collect::<Result<Vec<_>>>()?;
+    let summary = checked_json!({
         "model": "numeric",
         "scene": scene,
         "description": d.scene,
@@ -242,8 +268,9 @@ pub fn write_outputs(
         "great_circles": d.great_circles,
         "warnings": d.warnings,
         "timings": d.timings,
-    });
-    write_json(out, "summary.json", &crate::output::strip_nulls(summary))?;
+        "units": crate::diagram::UNITS,
+    })?;
+    run.write_json("summary.json", &crate::output::strip_nulls(summary))?;
     Ok(())
 }
 

@@ -17,16 +17,21 @@ pub fn ensure_dir(dir: &Path) -> Result<()> {
 pub fn write_atomic(dir: &Path, name: &str, bytes: &[u8]) -> Result<PathBuf> {
     let target = dir.join(name);
     let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    {
+    let result = (|| -> Result<()> {
         let mut f =
             fs::File::create(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
         f.write_all(bytes)
             .with_context(|| format!("cannot write {}", tmp.display()))?;
         f.sync_all().ok();
+        drop(f);
+        fs::rename(&tmp, &target)
+            .with_context(|| format!("cannot move {} to {}", tmp.display(), target.display()))
+    })();
+    if result.is_err() {
+        // No temporary file is left behind on any exit path.
+        let _ = fs::remove_file(&tmp);
     }
-    fs::rename(&tmp, &target)
-        .with_context(|| format!("cannot move {} to {}", tmp.display(), target.display()))?;
-    Ok(target)
+    result.map(|()| target)
 }
 
 /// A CSV table held in memory until it is complete and checked.
@@ -96,21 +101,6 @@ impl Table {
         }
         w.into_inner().context("csv buffer")
     }
-
-    /// Write atomically to `dir/name`.
-    pub fn write(&self, dir: &Path) -> Result<PathBuf> {
-        write_atomic(dir, &self.name, &self.to_bytes()?)
-    }
-}
-
-/// Serialise a JSON value after checking that it holds no non-finite number (serde_json
-/// would write them as `null`), then write it atomically.
-pub fn write_json(dir: &Path, name: &str, value: &serde_json::Value) -> Result<PathBuf> {
-    let text = serde_json::to_string_pretty(value)?;
-    if text.contains("null") {
-        bail!("{name}: a value is not finite (would be written as null); nothing was written");
-    }
-    write_atomic(dir, name, format!("{text}\n").as_bytes())
 }
 
 /// Drop the keys whose value is `null` from a JSON summary: they stand for absent optional
@@ -177,4 +167,442 @@ pub fn critical_table(rows: impl IntoIterator<Item = CriticalRow>) -> Result<Tab
         ])?;
     }
     Ok(t)
+}
+
+/// Check that a typed value holds no non-finite float anywhere (fields, vectors, options),
+/// before it is turned into JSON; `what` names it in the error.
+pub fn check_finite<T: serde::Serialize + ?Sized>(what: &str, value: &T) -> Result<()> {
+    value
+        .serialize(finite::FiniteCheck)
+        .map_err(|e| anyhow::anyhow!("{what}: {e}; nothing was written"))
+}
+
+/// A JSON object like `serde_json::json!({"key": value, …})` (flat, string-literal keys),
+/// except that each value is first checked with [`check_finite`] on its typed form.
+/// Evaluates to `anyhow::Result<serde_json::Value>`.
+macro_rules! checked_json {
+    ({ $($key:literal : $val:expr),* $(,)? }) => {
+        (|| -> anyhow::Result<serde_json::Value> {
+            #[allow(unused_mut)]
+            let mut map = serde_json::Map::new();
+            $(
+                {
+                    let v = &$val;
+                    $crate::output::check_finite(concat!("summary value ", $key), v)?;
+                    map.insert($key.to_string(), serde_json::to_value(v)?);
+                }
+            )*
+            Ok(serde_json::Value::Object(map))
+        })()
+    };
+}
+pub(crate) use checked_json;
+
+/// Singular or plural: `1 period`, `2 periods`, `3 branches`.
+pub fn plural(n: impl Into<u64>, word: &str) -> String {
+    let n = n.into();
+    if n == 1 {
+        format!("1 {word}")
+    } else if word.ends_with("ch") || word.ends_with('s') {
+        format!("{n} {word}es")
+    } else {
+        format!("{n} {word}s")
+    }
+}
+
+/// Check a normalised length given on the command line.
+pub fn check_lbar(lbar: f64) -> Result<()> {
+    if !lbar.is_finite() {
+        bail!("lbar must be a finite number (got {lbar})");
+    }
+    if lbar <= 0.0 {
+        bail!("lbar must be positive (got {lbar})");
+    }
+    Ok(())
+}
+
+/// A serde serializer that only checks floats for finiteness.
+mod finite {
+    use serde::ser::{self, Serialize};
+
+    /// The error: a non-finite number.
+    #[derive(Debug)]
+    pub struct NotFinite(pub String);
+
+    impl std::fmt::Display for NotFinite {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            f.write_str(&self.0)
+        }
+    }
+    impl std::error::Error for NotFinite {}
+    impl ser::Error for NotFinite {
+        fn custom<T: std::fmt::Display>(msg: T) -> Self {
+            NotFinite(msg.to_string())
+        }
+    }
+
+    /// Walks a value; fails on the first NaN or infinity.
+    pub struct FiniteCheck;
+
+    type R = Result<(), NotFinite>;
+
+    fn float(v: f64) -> R {
+        if v.is_finite() {
+            Ok(())
+        } else {
+            Err(NotFinite(format!("a value is not finite ({v})")))
+        }
+    }
+
+    macro_rules! ok_fns {
+        ($($name:ident($t:ty)),*) => { $( fn $name(self, _v: $t) -> R { Ok(()) } )* };
+    }
+
+    impl ser::Serializer for FiniteCheck {
+        type Ok = ();
+        type Error = NotFinite;
+        type SerializeSeq = Self;
+        type SerializeTuple = Self;
+        type SerializeTupleStruct = Self;
+        type SerializeTupleVariant = Self;
+        type SerializeMap = Self;
+        type SerializeStruct = Self;
+        type SerializeStructVariant = Self;
+        ok_fns!(
+            serialize_bool(bool),
+            serialize_i8(i8),
+            serialize_i16(i16),
+            serialize_i32(i32),
+            serialize_i64(i64),
+            serialize_u8(u8),
+            serialize_u16(u16),
+            serialize_u32(u32),
+            serialize_u64(u64),
+            serialize_char(char),
+            serialize_str(&str),
+            serialize_bytes(&[u8]),
+            serialize_unit_struct(&'static str)
+        );
+        fn serialize_f32(self, v: f32) -> R {
+            float(v.into())
+        }
+        fn serialize_f64(self, v: f64) -> R {
+            float(v)
+        }
+        fn serialize_none(self) -> R {
+            Ok(())
+        }
+        fn serialize_some<T: Serialize + ?Sized>(self, v: &T) -> R {
+            v.serialize(self)
+        }
+        fn serialize_unit(self) -> R {
+            Ok(())
+        }
+        fn serialize_unit_variant(self, _: &'static str, _: u32, _: &'static str) -> R {
+            Ok(())
+        }
+        fn serialize_newtype_struct<T: Serialize + ?Sized>(self, _: &'static str, v: &T) -> R {
+            v.serialize(self)
+        }
+        fn serialize_newtype_variant<T: Serialize + ?Sized>(
+            self,
+            _: &'static str,
+            _: u32,
+            _: &'static str,
+            v: &T,
+        ) -> R {
+            v.serialize(self)
+        }
+        fn serialize_seq(self, _: Option<usize>) -> Result<Self, NotFinite> {
+            Ok(self)
+        }
+        fn serialize_tuple(self, _: usize) -> Result<Self, NotFinite> {
+            Ok(self)
+        }
+        fn serialize_tuple_struct(self, _: &'static str, _: usize) -> Result<Self, NotFinite> {
+            Ok(self)
+        }
+        fn serialize_tuple_variant(
+            self,
+            _: &'static str,
+            _: u32,
+            _: &'static str,
+            _: usize,
+        ) -> Result<Self, NotFinite> {
+            Ok(self)
+        }
+        fn serialize_map(self, _: Option<usize>) -> Result<Self, NotFinite> {
+            Ok(self)
+        }
+        fn serialize_struct(self, _: &'static str, _: usize) -> Result<Self, NotFinite> {
+            Ok(self)
+        }
+        fn serialize_struct_variant(
+            self,
+            _: &'static str,
+            _: u32,
+            _: &'static str,
+            _: usize,
+        ) -> Result<Self, NotFinite> {
+            Ok(self)
+        }
+    }
+
+    macro_rules! compound {
+        ($tr:ident, $method:ident $(, $key:ty)?) => {
+            impl ser::$tr for FiniteCheck {
+                type Ok = ();
+                type Error = NotFinite;
+                fn $method<T: Serialize + ?Sized>(&mut self, $(_: $key,)? v: &T) -> R {
+                    v.serialize(FiniteCheck)
+                }
+                fn end(self) -> R {
+                    Ok(())
+                }
+            }
+        };
+    }
+    compound!(SerializeSeq, serialize_element);
+    compound!(SerializeTuple, serialize_element);
+    compound!(SerializeTupleStruct, serialize_field);
+    compound!(SerializeTupleVariant, serialize_field);
+    compound!(SerializeStruct, serialize_field, &'static str);
+    compound!(SerializeStructVariant, serialize_field, &'static str);
+
+    impl ser::SerializeMap for FiniteCheck {
+        type Ok = ();
+        type Error = NotFinite;
+        fn serialize_key<T: Serialize + ?Sized>(&mut self, k: &T) -> R {
+            k.serialize(FiniteCheck)
+        }
+        fn serialize_value<T: Serialize + ?Sized>(&mut self, v: &T) -> R {
+            v.serialize(FiniteCheck)
+        }
+        fn end(self) -> R {
+            Ok(())
+        }
+    }
+}
+
+/// Names of every file a rodloop command writes into its output directory (and `loop-NN.csv`):
+/// a run removes those of a previous run that it does not write itself, so that a directory
+/// never mixes the outputs of two runs (e.g. a stale `diagram_g.svg` after switching model).
+const KNOWN_OUTPUTS: &[&str] = &[
+    "config.csv",
+    "summary.json",
+    "branches.csv",
+    "critical.csv",
+    "diagram.svg",
+    "diagram_g.svg",
+    "curve.csv",
+    "compare.csv",
+];
+
+fn is_known_output(name: &str) -> bool {
+    KNOWN_OUTPUTS.contains(&name)
+        || (name.starts_with("loop-")
+            && name.ends_with(".csv")
+            && name[5..name.len() - 4].chars().all(|c| c.is_ascii_digit()))
+}
+
+/// Name of the lock file that marks an output directory as in use.
+pub const LOCK_NAME: &str = ".rodloop.lock";
+
+/// Whether process `pid` is running (Linux: `/proc/PID`; elsewhere assumed running).
+fn pid_alive(pid: u32) -> bool {
+    if pid == std::process::id() {
+        return true;
+    }
+    let proc_root = Path::new("/proc");
+    if proc_root.join("self").exists() {
+        proc_root.join(pid.to_string()).exists()
+    } else {
+        true
+    }
+}
+
+/// One run's output set: the directory is locked (a lock file holding the pid), files are
+/// written into a staging directory inside it and moved into place by [`OutputRun::commit`],
+/// `summary.json` last and with the run id. Dropping a run that was not committed removes the
+/// staging directory and the lock, so that an error leaves no temporary file and no partial set
+/// that looks complete.
+pub struct OutputRun {
+    dir: PathBuf,
+    stage: PathBuf,
+    lock: PathBuf,
+    run_id: String,
+    written: std::cell::RefCell<Vec<String>>,
+    committed: bool,
+}
+
+impl OutputRun {
+    /// Create and lock `dir`, clean what dead runs left behind (temporary files, staging
+    /// directories, stale locks), and open a staging directory.
+    pub fn begin(dir: &Path) -> Result<Self> {
+        ensure_dir(dir)?;
+        let lock = dir.join(LOCK_NAME);
+        let me = std::process::id();
+        let mut attempts = 0;
+        loop {
+            attempts += 1;
+            match fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&lock)
+            {
+                Ok(mut f) => {
+                    f.write_all(format!("{me}\n").as_bytes())
+                        .with_context(|| format!("cannot write {}", lock.display()))?;
+                    break;
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && attempts < 5 => {
+                    let text = fs::read_to_string(&lock).unwrap_or_default();
+                    match text.trim().parse::<u32>() {
+                        Ok(pid) if pid_alive(pid) => bail!(
+                            "output directory {} is in use by another rodloop run (process {pid}, lock file {}); wait for it to finish or choose another --out",
+                            dir.display(),
+                            lock.display()
+                        ),
+                        // A lock of a dead process (or an unreadable one being written right
+                        // now: retry once it is complete).
+                        Ok(_) => {
+                            let _ = fs::remove_file(&lock);
+                        }
+                        Err(_) => std::thread::sleep(std::time::Duration::from_millis(50)),
+                    }
+                }
+                Err(e) => {
+                    return Err(e).with_context(|| {
+                        format!(
+                            "cannot lock output directory {} (lock file {}); if no rodloop run uses it, remove the lock file",
+                            dir.display(),
+                            lock.display()
+                        )
+                    })
+                }
+            }
+        }
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.as_nanos())
+            .unwrap_or(0);
+        let run_id = format!("{nanos:x}-{me}");
+        let stage = dir.join(format!(".staging-{run_id}"));
+        let run = OutputRun {
+            dir: dir.to_path_buf(),
+            stage,
+            lock,
+            run_id,
+            written: std::cell::RefCell::new(Vec::new()),
+            committed: false,
+        };
+        run.clean_leftovers();
+        fs::create_dir(&run.stage)
+            .with_context(|| format!("cannot create {}", run.stage.display()))?;
+        Ok(run)
+    }
+
+    /// Remove temporaries and staging directories of dead runs (we hold the lock, so no live
+    /// run owns them), here and in `branches/`.
+    fn clean_leftovers(&self) {
+        for d in [self.dir.clone(), self.dir.join("branches")] {
+            let Ok(entries) = fs::read_dir(&d) else {
+                continue;
+            };
+            for e in entries.flatten() {
+                let name = e.file_name().to_string_lossy().to_string();
+                let path = e.path();
+                if name.starts_with(".staging-") && path.is_dir() {
+                    let _ = fs::remove_dir_all(&path);
+                } else if name.starts_with('.') && name.ends_with(".tmp") {
+                    let _ = fs::remove_file(&path);
+                }
+            }
+        }
+    }
+
+    /// Stage a file.
+    pub fn write_bytes(&self, name: &str, bytes: &[u8]) -> Result<()> {
+        write_atomic(&self.stage, name, bytes)?;
+        self.written.borrow_mut().push(name.to_string());
+        Ok(())
+    }
+
+    /// Stage a table.
+    pub fn write_table(&self, table: &Table) -> Result<()> {
+        self.write_bytes(&table.name, &table.to_bytes()?)
+    }
+
+    /// Stage a JSON summary (an object gets the key `run_id`).
+    pub fn write_json(&self, name: &str, value: &serde_json::Value) -> Result<()> {
+        let mut value = value.clone();
+        if let serde_json::Value::Object(map) = &mut value {
+            map.insert("run_id".into(), self.run_id.clone().into());
+        }
+        let text = serde_json::to_string_pretty(&value)?;
+        self.write_bytes(name, format!("{text}\n").as_bytes())
+    }
+
+    /// Move the staged files into place: first the old `summary.json` and every output of a
+    /// previous run that this run does not write are removed, then the new files are renamed
+    /// in, `summary.json` last, so that a complete-looking set is always one run's.
+    pub fn commit(mut self) -> Result<()> {
+        let mut names = self.written.borrow().clone();
+        names.sort_by_key(|n| n == "summary.json");
+        let _ = fs::remove_file(self.dir.join("summary.json"));
+        if let Ok(entries) = fs::read_dir(&self.dir) {
+            for e in entries.flatten() {
+                let name = e.file_name().to_string_lossy().to_string();
+                if is_known_output(&name) && !names.contains(&name) && e.path().is_file() {
+                    fs::remove_file(e.path()).with_context(|| {
+                        format!("cannot remove stale output {}", e.path().display())
+                    })?;
+                }
+            }
+        }
+        for name in &names {
+            let (from, to) = (self.stage.join(name), self.dir.join(name));
+            fs::rename(&from, &to)
+                .with_context(|| format!("cannot move {} to {}", from.display(), to.display()))?;
+        }
+        self.committed = true;
+        Ok(())
+    }
+}
+
+impl Drop for OutputRun {
+    fn drop(&mut self) {
+        let _ = fs::remove_dir_all(&self.stage);
+        let ours = fs::read_to_string(&self.lock)
+            .ok()
+            .and_then(|t| t.trim().parse::<u32>().ok())
+            == Some(std::process::id());
+        if ours {
+            let _ = fs::remove_file(&self.lock);
+        }
+        let _ = self.committed;
+    }
+}
+
+/// Default cap on `--points` (sampled points per curve); the environment variable
+/// `RODLOOP_MAX_POINTS` raises or lowers it.
+pub const MAX_POINTS: u64 = 1_000_000;
+
+/// Check `--points`: at least 8, at most the cap (so that a huge value is a clear error, not an
+/// allocation failure).
+pub fn check_points(points: u64) -> Result<usize> {
+    let cap = std::env::var("RODLOOP_MAX_POINTS")
+        .ok()
+        .and_then(|v| v.trim().parse::<u64>().ok())
+        .unwrap_or(MAX_POINTS);
+    if points < 8 {
+        bail!("--points must be at least 8 (got {points})");
+    }
+    if points > cap {
+        bail!(
+            "--points {points} is above the cap of {cap} points (each point is a CSV row of about 200 bytes); set the environment variable RODLOOP_MAX_POINTS to raise the cap"
+        );
+    }
+    usize::try_from(points)
+        .map_err(|_| anyhow::anyhow!("--points {points} does not fit this machine"))
 }

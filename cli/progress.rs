@@ -1,5 +1,5 @@
-//! Progress reporting on stderr (indicatif): shown only when stderr is a terminal and
-//! `--quiet` was not given, so that logs and pipes stay clean.
+//! Progress reporting on stderr (indicatif): bars when stderr is a terminal; when it is not
+//! (logs, pipes), one line per finished branch or stage; nothing with `--quiet`.
 
 use std::io::IsTerminal;
 
@@ -8,6 +8,8 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 /// A progress bar that is hidden when it should not draw.
 pub struct Progress {
     bar: ProgressBar,
+    /// Print one line per finished stage instead (stderr is not a terminal, not `--quiet`).
+    lines: bool,
 }
 
 impl Progress {
@@ -26,7 +28,19 @@ impl Progress {
             bar
         };
         bar.set_prefix(what.to_string());
-        Self { bar }
+        Self {
+            bar,
+            lines: !quiet && !std::io::stderr().is_terminal(),
+        }
+    }
+
+    /// Report a finished branch or stage: one line on stderr when there is no bar to show it
+    /// (stderr is not a terminal), the bar's message otherwise; nothing with `--quiet`.
+    pub fn done(&self, msg: String) {
+        if self.lines {
+            eprintln!("{msg}");
+        }
+        self.step(msg);
     }
 
     /// Advance by one step with a message.

@@ -5,11 +5,17 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 use rodloop_exact::{branch_of_eta, eta_of_branch};
 use rodloop_scene::{Confinement, Scene, StiffnessSpec};
+use rodloop_solver::identify::identify_equilibrium;
 use rodloop_solver::start::from_points;
 use rodloop_solver::{solve_with_accuracy, Accuracy, SolveOptions, StartShape, Stiffness};
-use serde_json::json;
 
-use crate::output::{ensure_dir, write_json, Cell, Table};
+use crate::output::{checked_json, plural, Cell, OutputRun, Table};
+
+/// Largest branch number (or eta) accepted.
+const MAX_BRANCH: u64 = 1000;
+
+/// Units of every `solve` output.
+const UNITS: &str = "lengths (s, x, y, z) in units of R; kappa, tau, kappa_g in 1/R; energy E R/(pi D0); lambda R^3/D0; F_t, F_n, F_b R^2/D0; D/D0; eigenvalues in units of D0";
 
 /// Arguments of `rodloop solve`.
 #[derive(clap::Args, Debug)]
@@ -18,8 +24,11 @@ pub struct Args {
     #[arg(long)]
     pub lbar: f64,
     /// Paper branch number (1: saddle, eta = 2; 2: figure-eight, eta = 1; B >= 3: eta = B).
+    #[arg(long, required_unless_present = "eta", conflicts_with = "eta")]
+    pub branch: Option<u64>,
+    /// Alternative to --branch: the number of periods eta of the geodesic curvature.
     #[arg(long)]
-    pub branch: u32,
+    pub eta: Option<u64>,
     /// Scene file (TOML; see data/scenes/). Default: homogeneous loop on the unit sphere.
     #[arg(long)]
     pub scene: Option<PathBuf>,
@@ -109,7 +118,13 @@ fn number(cell: Option<&str>, path: &Path, row: usize, name: &str) -> Result<f64
 }
 
 /// Read a starting shape from a CSV file (see [`Args::from`]).
-fn start_from_file(path: &Path, radius: f64) -> Result<StartShape> {
+fn start_from_file(path: &Path) -> Result<StartShape> {
+    if path.is_dir() {
+        bail!(
+            "--from {} is a directory; give a file: a config.csv saved by `rodloop solve` or a CSV of points with columns x,y,z",
+            path.display()
+        );
+    }
     let mut rdr = csv::ReaderBuilder::new()
         .comment(Some(b'#'))
         .trim(csv::Trim::All)
@@ -124,7 +139,7 @@ fn start_from_file(path: &Path, radius: f64) -> Result<StartShape> {
     if let Some(k) = col("kappa_g") {
         let mut kg = Vec::with_capacity(rows.len());
         for (i, r) in rows.iter().enumerate() {
-            kg.push(number(r.get(k), path, i, "kappa_g")? * radius);
+            kg.push(number(r.get(k), path, i, "kappa_g")?);
         }
         if kg.len() < 8 {
             bail!(
@@ -133,7 +148,12 @@ fn start_from_file(path: &Path, radius: f64) -> Result<StartShape> {
                 kg.len()
             );
         }
-        return Ok(StartShape::from_kappa_g_samples(&kg)?);
+        return StartShape::from_kappa_g_samples(&kg).with_context(|| {
+            format!(
+                "{}: the kappa_g column is not a usable start",
+                path.display()
+            )
+        });
     }
     let (Some(cx), Some(cy), Some(cz)) = (col("x"), col("y"), col("z")) else {
         bail!(
@@ -157,31 +177,49 @@ fn start_from_file(path: &Path, radius: f64) -> Result<StartShape> {
             pts.len()
         );
     }
-    let (shape, _lbar, _rho) = from_points(&pts)?;
+    let (shape, _lbar, _rho) = from_points(&pts).with_context(|| {
+        format!(
+            "{}: the points do not describe a usable closed curve",
+            path.display()
+        )
+    })?;
     Ok(shape)
 }
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
-    let scene = load_scene(args.scene.as_deref())?;
-    let accuracy = accuracy_of(&scene, args.accuracy.as_deref())?;
-    if args.branch == 0 || args.branch > 1000 {
-        bail!("--branch must be from 1 to 1000 (got {})", args.branch);
-    }
-    let eta = eta_of_branch(args.branch);
+    let (branch, eta) = match (args.branch, args.eta) {
+        (Some(b), _) => {
+            if b == 0 || b > MAX_BRANCH {
+                bail!("--branch must be from 1 to {MAX_BRANCH} (got {b})");
+            }
+            (b as u32, eta_of_branch(b as u32))
+        }
+        (None, Some(e)) => {
+            if e == 0 || e > MAX_BRANCH {
+                bail!("--eta must be from 1 to {MAX_BRANCH} (got {e})");
+            }
+            (branch_of_eta(e as u32), e as u32)
+        }
+        (None, None) => bail!("give --branch B (or --eta N)"),
+    };
+    crate::output::check_lbar(args.lbar)?;
     let e = f64::from(eta);
-    if !(args.lbar.is_finite() && args.lbar > e - 1.0 && args.lbar < e + 1.0) {
+    if !(args.lbar > e - 1.0 && args.lbar < e + 1.0) {
         bail!(
-            "branch {} (eta = {eta}) exists only for {} < lbar < {}; got lbar = {}",
-            args.branch,
+            "branch {branch} (eta = {eta}) exists only for {} < lbar < {}; got lbar = {}",
             e - 1.0,
             e + 1.0,
             args.lbar
         );
     }
+    let scene = load_scene(args.scene.as_deref())?;
+    let accuracy = accuracy_of(&scene, args.accuracy.as_deref())?;
     let stiffness = stiffness_of(&scene.stiffness);
+    // Lock the output directory before the work, so that a concurrent run is refused at once.
+    let run = OutputRun::begin(&args.out)?;
     let start = match &args.from {
-        Some(p) => start_from_file(p, scene.radius)?,
+        Some(p) => start_from_file(p)?,
         None => StartShape::Euler { l: eta },
     };
     let res = solve_with_accuracy(
@@ -192,7 +230,7 @@ pub fn run(args: &Args) -> Result<()> {
         accuracy,
         &SolveOptions::default(),
     )
-    .with_context(|| format!("solving branch {} at lbar = {}", args.branch, args.lbar))?;
+    .with_context(|| format!("solving branch {branch} at lbar = {}", args.lbar))?;
     let eq = &res.equilibrium;
     let report = eq.report();
     if !report.converged {
@@ -203,8 +241,30 @@ pub fn run(args: &Args) -> Result<()> {
             report.iterations
         );
     }
+    // The start (a --from file above all) carries no branch label: identify the branch of the
+    // converged state from its own geodesic curvature and refuse a state of another branch.
+    let periods =
+        identify_equilibrium(eq).context("cannot tell which branch the converged state is on")?;
+    if periods.eta != eta {
+        bail!(
+            "the converged state has {} of kappa_g, so it is branch {} (eta = {}), not the requested branch {branch} (eta = {eta}); nothing was written. {}",
+            plural(periods.eta, "period"),
+            branch_of_eta(periods.eta),
+            periods.eta,
+            if args.from.is_some() {
+                "The --from start lies on another branch: start from a state of the requested branch, or drop --from to start from the Euler curve"
+            } else {
+                "Try another accuracy or start --from a nearby state of the requested branch"
+            }
+        );
+    }
     let stab = eq.stability()?;
     let profile = eq.profile();
+    // Normalised outputs: lengths in units of R, curvatures in 1/R, lambda R^3/D0, F R^2/D0,
+    // D/D0 (the model works in the scene's dimensional R and D).
+    let r = scene.radius;
+    let d0 = scene.stiffness.reference();
+    let (lam_unit, f_unit) = (r * r * r / d0, r * r / d0);
     let mut table = Table::new(
         "config.csv",
         &[
@@ -213,26 +273,28 @@ pub fn run(args: &Args) -> Result<()> {
     );
     for p in &profile {
         table.push(vec![
-            Cell::F(p.s),
-            Cell::F(p.x),
-            Cell::F(p.y),
-            Cell::F(p.z),
-            Cell::F(p.kappa),
-            Cell::F(p.tau),
-            Cell::F(p.kappa_g),
-            Cell::F(p.lambda),
-            Cell::F(p.f_t),
-            Cell::F(p.f_n),
-            Cell::F(p.f_b),
-            Cell::F(p.d),
+            Cell::F(p.s / r),
+            Cell::F(p.x / r),
+            Cell::F(p.y / r),
+            Cell::F(p.z / r),
+            Cell::F(p.kappa * r),
+            Cell::F(p.tau * r),
+            Cell::F(p.kappa_g * r),
+            Cell::F(p.lambda * lam_unit),
+            Cell::F(p.f_t * f_unit),
+            Cell::F(p.f_n * f_unit),
+            Cell::F(p.f_b * f_unit),
+            Cell::F(p.d / d0),
         ])?;
     }
-    let (lambda_min, lambda_max) = res.lambda_range;
-    let summary = json!({
+    let (lambda_min, lambda_max) = (res.lambda_range.0 * lam_unit, res.lambda_range.1 * lam_unit);
+    let lambda_error = res.lambda_error * lam_unit;
+    let summary = checked_json!({
         "scene": scene.name,
         "lbar": args.lbar,
-        "branch": branch_of_eta(eta),
+        "branch": branch,
         "eta": eta,
+        "identified_eta": periods.eta,
         "radius": scene.radius,
         "accuracy": format!("{accuracy:?}").to_lowercase(),
         "energy": res.energy.total,
@@ -245,24 +307,23 @@ pub fn run(args: &Args) -> Result<()> {
         "symmetry_eigenvalues": stab.symmetry_eigenvalues,
         "lambda_min": lambda_min,
         "lambda_max": lambda_max,
-        "lambda_error_estimate": res.lambda_error,
+        "lambda_error_estimate": lambda_error,
         "residual": report.residual,
         "closure": report.closure,
         "nodes": profile.len(),
         "iterations": report.iterations,
         "relax_iterations": report.relax_iterations,
-        "units": "energy E R/(pi D0); lambda, F in units of D0/R^3, D0/R^2; eigenvalues in units of D0",
-    });
-    ensure_dir(&args.out)?;
-    table.write(&args.out)?;
-    write_json(&args.out, "summary.json", &summary)?;
+        "units": UNITS,
+    })?;
+    run.write_table(&table)?;
+    run.write_json("summary.json", &summary)?;
+    run.commit()?;
     if args.draw {
         let set = crate::draw::DrawSettings::beside(&args.out);
         crate::draw::draw_loop(&args.out.join("config.csv"), &set)?;
     }
     outln!(
-        "branch {} (eta = {eta}) at lbar = {}: E R/(pi D0) = {:.10} ± {:.1e}, index {} ({}), lambda in [{:.6}, {:.6}] ± {:.1e}",
-        args.branch,
+        "branch {branch} (eta = {eta}) at lbar = {}: E R/(pi D0) = {:.10} ± {:.1e}, index {} ({}), lambda R^3/D0 in [{:.6}, {:.6}] ± {:.1e}",
         args.lbar,
         res.energy.total,
         res.energy_error,
@@ -270,7 +331,7 @@ pub fn run(args: &Args) -> Result<()> {
         if stab.index == 0 { "local minimum" } else { "unstable" },
         lambda_min,
         lambda_max,
-        res.lambda_error
+        lambda_error
     );
     outln!(
         "{} nodes, {} Newton iterations, KKT residual {:.1e}; wrote config.csv and summary.json to {}",

@@ -392,10 +392,11 @@ fn solve_bad_input_is_reported_clearly() {
     }
 }
 
-/// A start that Newton cannot bring to this branch: the error names the residual and no
-/// result files are written.
+/// A start that cannot be brought to the requested branch (a figure-eight asked to be a
+/// saddle): the run fails with a one-line explanation that names what to do, and no result
+/// files are written.
 #[test]
-fn non_converged_solve_writes_nothing() {
+fn solve_from_a_far_start_fails_cleanly() {
     let fig8 = tmp("fig8");
     let o = rodloop(&[
         "solve",
@@ -423,7 +424,7 @@ fn non_converged_solve_writes_nothing() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
     assert!(
-        err.contains("did not converge") && err.contains("residual"),
+        err.starts_with("error: ") && err.contains("start from") && !err.contains("panicked"),
         "{err}"
     );
     assert!(!out.join("summary.json").exists() && !out.join("config.csv").exists());
@@ -437,6 +438,9 @@ fn numeric_diagram_of_the_default_scene() {
     let out = tmp("numeric");
     let o = rodloop(&["diagram", "--out", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("mode with 1 period of kappa_g"), "{stdout}");
+    assert!(!stdout.contains("1 periods"), "grammar: {stdout}");
     for f in [
         "branches.csv",
         "critical.csv",
@@ -521,7 +525,7 @@ fn numeric_diagram_resumes_from_branch_files() {
     assert_eq!(branches.len(), 5, "one file per branch");
     // Simulate an interruption: the summary and one branch are missing.
     std::fs::remove_file(out.join("summary.json")).unwrap();
-    std::fs::remove_file(out.join("branches").join("eta-3.json")).unwrap();
+    std::fs::remove_file(out.join("branches").join("branch-3.json")).unwrap();
     let mut resumed = args.to_vec();
     resumed.push("--resume");
     let o = rodloop(&resumed);
@@ -534,7 +538,7 @@ fn numeric_diagram_resumes_from_branch_files() {
         std::fs::read_to_string(out.join("critical.csv")).unwrap(),
         first
     );
-    assert!(out.join("branches").join("eta-3.json").exists());
+    assert!(out.join("branches").join("branch-3.json").exists());
 }
 
 #[test]
@@ -555,4 +559,709 @@ fn exact_model_rejects_inhomogeneous_scenes() {
     ]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("homogeneous"));
+}
+
+fn ok(o: &Output) -> String {
+    assert!(
+        o.status.success(),
+        "{}\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8_lossy(&o.stdout).to_string()
+}
+
+fn fails(o: &Output, words: &[&str]) -> String {
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(!o.status.success(), "should fail: {err}");
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    for w in words {
+        assert!(err.contains(w), "expected {w:?} in: {err}");
+    }
+    err
+}
+
+/// Leftovers of a run: temporary files, staging directories, the lock.
+fn leftovers(dir: &Path) -> Vec<String> {
+    let mut out = Vec::new();
+    for d in [dir.to_path_buf(), dir.join("branches")] {
+        if let Ok(entries) = std::fs::read_dir(&d) {
+            for e in entries.flatten() {
+                let n = e.file_name().to_string_lossy().to_string();
+                if n.starts_with('.') {
+                    out.push(n);
+                }
+            }
+        }
+    }
+    out
+}
+
+fn write_scene(name: &str, text: &str) -> PathBuf {
+    let dir = tmp(&format!("scene-{name}"));
+    std::fs::create_dir_all(&dir).unwrap();
+    let p = dir.join(format!("{name}.toml"));
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// Issue 11, item 0: a state of another branch given with --from is refused (the exact
+/// commands of the issue), and nothing is written.
+#[test]
+fn solve_refuses_a_state_of_another_branch() {
+    let xa = tmp("xa");
+    ok(&rodloop(&[
+        "solve",
+        "--lbar",
+        "1.2",
+        "--branch",
+        "1",
+        "--out",
+        xa.to_str().unwrap(),
+    ]));
+    let xm = tmp("xm");
+    let cfg = xa.join("config.csv");
+    let o = rodloop(&[
+        "solve",
+        "--lbar",
+        "1.5",
+        "--branch",
+        "2",
+        "--from",
+        cfg.to_str().unwrap(),
+        "--out",
+        xm.to_str().unwrap(),
+    ]);
+    fails(&o, &["branch 1 (eta = 2)", "not the requested branch 2"]);
+    assert!(!xm.join("summary.json").exists() && !xm.join("config.csv").exists());
+    assert!(leftovers(&xm).is_empty(), "{:?}", leftovers(&xm));
+    // An eta = 2 state at 2.5 given as a start of branch 3.
+    let xb = tmp("xb");
+    ok(&rodloop(&[
+        "solve",
+        "--lbar",
+        "2.5",
+        "--branch",
+        "1",
+        "--out",
+        xb.to_str().unwrap(),
+    ]));
+    let x3 = tmp("x3");
+    let cfg = xb.join("config.csv");
+    let o = rodloop(&[
+        "solve",
+        "--lbar",
+        "2.5",
+        "--branch",
+        "3",
+        "--from",
+        cfg.to_str().unwrap(),
+        "--out",
+        x3.to_str().unwrap(),
+    ]);
+    fails(&o, &["branch 1 (eta = 2)", "not the requested branch 3"]);
+    // Without --from, branch 2 at 1.5 is the figure-eight: its energy is the exact loop's.
+    let x2 = tmp("x2");
+    ok(&rodloop(&[
+        "solve",
+        "--lbar",
+        "1.5",
+        "--branch",
+        "2",
+        "--out",
+        x2.to_str().unwrap(),
+    ]));
+    let s = read_json(&x2.join("summary.json"));
+    assert_eq!(s["branch"], 2);
+    assert_eq!(s["identified_eta"], 1);
+    let exact = rodloop_exact::paper_branch_loop(1, 1.5)
+        .unwrap()
+        .energy()
+        .unwrap();
+    assert!((s["energy"].as_f64().unwrap() - exact).abs() < 1e-6);
+}
+
+/// Issue 11, item 1: forces and lengths are normalised by D0 and R, so that a uniform scene
+/// with d = 2 or radius = 2 gives the default scene's numbers.
+#[test]
+fn outputs_are_normalised_by_d0_and_r() {
+    let run = |scene: Option<&Path>, name: &str| {
+        let out = tmp(name);
+        let mut a = vec![
+            "solve",
+            "--lbar",
+            "1.2",
+            "--branch",
+            "1",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        if let Some(s) = scene {
+            a.extend(["--scene", s.to_str().unwrap()]);
+        }
+        ok(&rodloop(&a));
+        (
+            read_json(&out.join("summary.json")),
+            read_csv(&out.join("config.csv")),
+        )
+    };
+    let (base, (h, rows0)) = run(None, "units-default");
+    let d2 = write_scene(
+        "d2",
+        "name = \"d2\"\n[stiffness]\nkind = \"uniform\"\nd = 2.0\n",
+    );
+    let r2 = write_scene("r2", "name = \"r2\"\nradius = 2.0\n");
+    // The exact loop's contact-force range (Eq. 38), independent of the solver.
+    let (lmin, lmax) = rodloop_exact::paper_branch_loop(2, 1.2)
+        .unwrap()
+        .lambda_range();
+    for (scene, name) in [(&d2, "units-d2"), (&r2, "units-r2")] {
+        let (s, (_, rows)) = run(Some(scene), name);
+        for key in ["lambda_min", "lambda_max", "energy"] {
+            let (a, b) = (s[key].as_f64().unwrap(), base[key].as_f64().unwrap());
+            assert!(
+                (a - b).abs() < 1e-9 * b.abs().max(1.0),
+                "{name} {key}: {a} vs {b}"
+            );
+        }
+        assert!(
+            (s["lambda_min"].as_f64().unwrap() - lmin).abs() < 1e-4,
+            "{name}"
+        );
+        assert!(
+            (s["lambda_max"].as_f64().unwrap() - lmax).abs() < 1e-4,
+            "{name}"
+        );
+        // Every CSV column agrees with the default scene's (positions on the unit sphere,
+        // kappa in 1/R, forces in D0/R^2, D/D0).
+        assert_eq!(rows.len(), rows0.len());
+        for (r, r0) in rows.iter().zip(&rows0) {
+            for (j, col) in h.iter().enumerate() {
+                let (a, b): (f64, f64) = (r[j].parse().unwrap(), r0[j].parse().unwrap());
+                assert!(
+                    (a - b).abs() < 1e-8 * b.abs().max(1.0),
+                    "{name} {col}: {a} vs {b}"
+                );
+            }
+        }
+    }
+}
+
+/// The full exact diagram (default range, computed by the library directly).
+fn full_exact() -> rodloop_exact::diagram::Diagram {
+    rodloop_exact::diagram::compute(&rodloop_exact::diagram::DiagramSettings::default()).unwrap()
+}
+
+/// Issue 11, item 2: the issue's three exact sub-ranges give the full diagram's branches,
+/// critical lengths (with their indices) and labels restricted to the window.
+#[test]
+fn exact_sub_ranges_match_the_full_diagram() {
+    let full = full_exact();
+    for (lo, hi, branches) in [
+        (1.0, 1.5, vec![1u32, 2]),
+        (1.2, 2.6, vec![1, 2, 3]),
+        (0.5, 1.5, vec![1, 2]),
+    ] {
+        let out = tmp(&format!("sub-{lo}-{hi}"));
+        let o = rodloop(&[
+            "diagram",
+            "--model",
+            "exact",
+            "--lbar-min",
+            &lo.to_string(),
+            "--lbar-max",
+            &hi.to_string(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        ok(&o);
+        let (ch, crows) = read_csv(&out.join("critical.csv"));
+        let k = |n: &str| ch.iter().position(|h| h == n).unwrap();
+        let want: Vec<_> = full
+            .critical
+            .iter()
+            .filter(|c| c.lbar_cr >= lo && c.lbar_cr <= hi)
+            .collect();
+        assert_eq!(crows.len(), want.len(), "[{lo}, {hi}]: {crows:?}");
+        for (r, c) in crows.iter().zip(&want) {
+            assert_eq!(r[k("index")], c.index.to_string());
+            assert_eq!(r[k("from_branch")], c.from_branch.to_string());
+            assert_eq!(r[k("to_branch")], c.to_branch.to_string());
+            let x: f64 = r[k("lbar_cr")].parse().unwrap();
+            assert!((x - c.lbar_cr).abs() < 1e-12, "{x} vs {}", c.lbar_cr);
+        }
+        let (bh, brows) = read_csv(&out.join("branches.csv"));
+        let b = |n: &str| bh.iter().position(|h| h == n).unwrap();
+        let mut seen: Vec<u32> = brows
+            .iter()
+            .map(|r| r[b("branch")].parse().unwrap())
+            .collect();
+        seen.sort_unstable();
+        seen.dedup();
+        assert_eq!(seen, branches, "[{lo}, {hi}]");
+        let summary = read_json(&out.join("summary.json"));
+        assert_eq!(summary["branches"], branches.len());
+        assert_eq!(summary["states"], brows.len());
+        assert!(summary["units"].as_str().unwrap().contains("R^3/D0"));
+        for r in &brows {
+            let l: f64 = r[b("lbar")].parse().unwrap();
+            let e: f64 = r[b("energy")].parse().unwrap();
+            let lowest = &r[b("lowest")] == "1";
+            if l < 1.0 {
+                // The circle, E R/(pi D) = 1/lbar, lies below every branch there.
+                assert!(1.0 / l < e, "{l}");
+                assert!(!lowest, "branch {} flagged lowest at {l}", r[b("branch")]);
+            } else if let Some(p) = full
+                .points
+                .iter()
+                .find(|p| (p.lbar - l).abs() < 1e-9 && p.branch.to_string() == r[b("branch")])
+            {
+                assert_eq!(p.lowest, lowest, "label at {l}, branch {}", p.branch);
+            }
+        }
+    }
+}
+
+/// Issue 11, item 2 (numeric) and item 5 (progress): on a sub-range the "exact deviation" is
+/// computed against the same critical length only; stderr that is not a terminal gets one
+/// line per traced branch; --resume with another accuracy says it re-traces.
+#[test]
+fn numeric_sub_range_progress_and_resume_note() {
+    let out = tmp("numeric-sub");
+    let o = rodloop(&[
+        "diagram",
+        "--accuracy",
+        "fast",
+        "--lbar-max",
+        "1.5",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stdout = ok(&o);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("branch 1 traced") && stderr.contains("branch 2 traced"),
+        "{stderr}"
+    );
+    let line = stdout
+        .lines()
+        .find(|l| l.contains("crossing") && l.contains("1->2"))
+        .unwrap_or_else(|| panic!("{stdout}"));
+    let dev: f64 = line.split_whitespace().last().unwrap().parse().unwrap();
+    assert!(dev.abs() < 1e-5, "{line}");
+    let s = read_json(&out.join("summary.json"));
+    assert!(s["units"].as_str().is_some() && s["run_id"].as_str().is_some());
+    let o = rodloop(&[
+        "diagram",
+        "--accuracy",
+        "default",
+        "--lbar-max",
+        "1.5",
+        "--resume",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    ok(&o);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("re-tracing"));
+}
+
+/// Issue 11, item 3: options that do not apply are rejected, --branch works everywhere, the
+/// two branches.csv share their common columns.
+#[test]
+fn flags_work_or_are_rejected() {
+    let out = tmp("flags");
+    let o_ = out.to_str().unwrap();
+    fails(
+        &rodloop(&["diagram", "--step", "0.001", "--out", o_]),
+        &["--step", "exact"],
+    );
+    fails(
+        &rodloop(&[
+            "diagram",
+            "--model",
+            "exact",
+            "--accuracy",
+            "high",
+            "--out",
+            o_,
+        ]),
+        &["--accuracy", "numeric"],
+    );
+    fails(
+        &rodloop(&["diagram", "--model", "exact", "--resume", "--out", o_]),
+        &["--resume", "numeric"],
+    );
+    fails(
+        &rodloop(&["diagram", "--model", "exact", "--branch", "9", "--out", o_]),
+        &["--branch 9"],
+    );
+    ok(&rodloop(&[
+        "diagram", "--model", "exact", "--branch", "1,3", "--out", o_,
+    ]));
+    let (eh, erows) = read_csv(&out.join("branches.csv"));
+    let mut seen: Vec<&str> = erows.iter().map(|r| r[0].as_str()).collect();
+    seen.dedup();
+    assert_eq!(seen, ["1", "3"]);
+    let (ch, crows) = read_csv(&out.join("critical.csv"));
+    let (f, t) = (
+        ch.iter().position(|h| h == "from_branch").unwrap(),
+        ch.iter().position(|h| h == "to_branch").unwrap(),
+    );
+    assert!(crows
+        .iter()
+        .all(|r| ["1", "3"].contains(&r[f].as_str()) || ["1", "3"].contains(&r[t].as_str())));
+    let nout = tmp("flags-numeric");
+    ok(&rodloop(&[
+        "diagram",
+        "--accuracy",
+        "fast",
+        "--lbar-max",
+        "1.5",
+        "--quiet",
+        "--out",
+        nout.to_str().unwrap(),
+    ]));
+    let (nh, _) = read_csv(&nout.join("branches.csv"));
+    let common = [
+        "branch",
+        "eta",
+        "lbar",
+        "energy",
+        "energy_g",
+        "lambda_min",
+        "lambda_max",
+    ];
+    assert_eq!(&eh[..7], common);
+    assert_eq!(&nh[..7], common);
+    // analytic --branch 1 is --eta 2; euler --branch 1 is --l 2.
+    let (a1, a2) = (tmp("an-b"), tmp("an-e"));
+    ok(&rodloop(&[
+        "analytic",
+        "--lbar",
+        "1.2",
+        "--branch",
+        "1",
+        "--out",
+        a1.to_str().unwrap(),
+    ]));
+    ok(&rodloop(&[
+        "analytic",
+        "--lbar",
+        "1.2",
+        "--eta",
+        "2",
+        "--out",
+        a2.to_str().unwrap(),
+    ]));
+    assert_eq!(
+        std::fs::read_to_string(a1.join("loop-01.csv")).unwrap(),
+        std::fs::read_to_string(a2.join("loop-01.csv")).unwrap()
+    );
+    let (e1, e2) = (tmp("eu-b"), tmp("eu-l"));
+    ok(&rodloop(&[
+        "euler",
+        "--lbar",
+        "1.2",
+        "--branch",
+        "1",
+        "--out",
+        e1.to_str().unwrap(),
+    ]));
+    let stdout = ok(&rodloop(&[
+        "euler",
+        "--lbar",
+        "1.2",
+        "--l",
+        "2",
+        "--out",
+        e2.to_str().unwrap(),
+    ]));
+    assert_eq!(
+        std::fs::read_to_string(e1.join("curve.csv")).unwrap(),
+        std::fs::read_to_string(e2.join("curve.csv")).unwrap()
+    );
+    // Item 9: no "quadrature error <= 0.0e0".
+    assert!(!stdout.contains("<= 0.0e0"), "{stdout}");
+    // solve accepts --eta as the alternative to --branch.
+    let (s1, s2) = (tmp("so-b"), tmp("so-e"));
+    ok(&rodloop(&[
+        "solve",
+        "--lbar",
+        "1.2",
+        "--branch",
+        "1",
+        "--accuracy",
+        "fast",
+        "--out",
+        s1.to_str().unwrap(),
+    ]));
+    ok(&rodloop(&[
+        "solve",
+        "--lbar",
+        "1.2",
+        "--eta",
+        "2",
+        "--accuracy",
+        "fast",
+        "--out",
+        s2.to_str().unwrap(),
+    ]));
+    assert_eq!(
+        std::fs::read_to_string(s1.join("config.csv")).unwrap(),
+        std::fs::read_to_string(s2.join("config.csv")).unwrap()
+    );
+}
+
+/// Issue 11, items 5 and 9: sizes and values the commands cannot honour are clear errors.
+#[test]
+fn huge_and_negative_values_are_clear_errors() {
+    let out = tmp("huge");
+    let o_ = out.to_str().unwrap();
+    let cases: Vec<(Vec<&str>, Vec<&str>)> = vec![
+        (
+            vec![
+                "analytic",
+                "--lbar",
+                "1.2",
+                "--eta",
+                "2",
+                "--points",
+                "100000000",
+            ],
+            vec!["cap of 1000000", "RODLOOP_MAX_POINTS"],
+        ),
+        (
+            vec![
+                "euler",
+                "--l",
+                "2",
+                "--lbar",
+                "1.2",
+                "--points",
+                "100000000",
+            ],
+            vec!["cap of 1000000"],
+        ),
+        (
+            vec![
+                "euler",
+                "--l",
+                "2",
+                "--lbar",
+                "1.2",
+                "--points",
+                "18446744073709551615",
+            ],
+            vec!["cap"],
+        ),
+        (
+            vec!["euler", "--l", "4294967295", "--lbar", "4294967295"],
+            vec!["--l must be"],
+        ),
+        (
+            vec!["euler", "--l", "2", "--lbar", "4294967295"],
+            vec!["exists only for 1 < lbar < 3"],
+        ),
+        (
+            vec!["solve", "--lbar", "-1", "--branch", "1"],
+            vec!["lbar must be positive"],
+        ),
+        (
+            vec!["euler", "--l", "2", "--lbar", "-1"],
+            vec!["lbar must be positive"],
+        ),
+        (
+            vec!["analytic", "--lbar", "-1", "--eta", "2"],
+            vec!["lbar must be positive"],
+        ),
+        (
+            vec!["solve", "--lbar", "1.2", "--branch", "18446744073709551615"],
+            vec!["--branch must be"],
+        ),
+        (
+            vec!["diagram", "--model", "exact", "--step", "inf"],
+            vec!["--step"],
+        ),
+    ];
+    for (args, words) in cases {
+        let mut a = args.clone();
+        a.extend(["--out", o_]);
+        fails(&rodloop(&a), &words);
+        assert!(!out.join("summary.json").exists(), "{args:?}");
+        assert!(
+            leftovers(&out).is_empty(),
+            "{args:?}: {:?}",
+            leftovers(&out)
+        );
+    }
+}
+
+/// Issue 11, item 9: --from a directory, non-finite or unusable coordinates name the file.
+#[test]
+fn from_file_errors_name_the_file() {
+    let dir = tmp("from-bad");
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = tmp("from-bad-out");
+    let o_ = out.to_str().unwrap();
+    fails(
+        &rodloop(&[
+            "solve",
+            "--lbar",
+            "1.2",
+            "--branch",
+            "1",
+            "--from",
+            dir.to_str().unwrap(),
+            "--out",
+            o_,
+        ]),
+        &["is a directory"],
+    );
+    let inf = dir.join("inf.csv");
+    let mut text = String::from("x,y,z\n");
+    for i in 0..20 {
+        let t = i as f64 * 0.3;
+        text.push_str(&format!("{},{},0\n", t.cos(), t.sin()));
+    }
+    text.push_str("1e400,0,0\n");
+    std::fs::write(&inf, &text).unwrap();
+    fails(
+        &rodloop(&[
+            "solve",
+            "--lbar",
+            "1.2",
+            "--branch",
+            "1",
+            "--from",
+            inf.to_str().unwrap(),
+            "--out",
+            o_,
+        ]),
+        &["inf.csv", "row 22", "not finite"],
+    );
+    let big = dir.join("big.csv");
+    std::fs::write(&big, text.replace("1e400", "1e300")).unwrap();
+    fails(
+        &rodloop(&[
+            "solve",
+            "--lbar",
+            "1.2",
+            "--branch",
+            "1",
+            "--from",
+            big.to_str().unwrap(),
+            "--out",
+            o_,
+        ]),
+        &["big.csv"],
+    );
+}
+
+/// Issue 11, item 8: a scene called "nullable" works (finiteness is checked on typed values);
+/// a run removes the outputs of a previous run it does not write (diagram_g.svg after
+/// switching model), records a run id, and leaves no temporary file.
+#[test]
+fn outputs_are_one_consistent_set() {
+    let scene = write_scene("nullable", "name = \"nullable\"\n");
+    let out = tmp("nullable");
+    ok(&rodloop(&[
+        "solve",
+        "--lbar",
+        "1.2",
+        "--branch",
+        "1",
+        "--accuracy",
+        "fast",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+    let s = read_json(&out.join("summary.json"));
+    assert_eq!(s["scene"], "nullable");
+    let dir = tmp("switch");
+    ok(&rodloop(&[
+        "diagram",
+        "--model",
+        "exact",
+        "--out",
+        dir.to_str().unwrap(),
+    ]));
+    assert!(dir.join("diagram_g.svg").exists());
+    let id1 = read_json(&dir.join("summary.json"))["run_id"].clone();
+    ok(&rodloop(&[
+        "diagram",
+        "--accuracy",
+        "fast",
+        "--lbar-max",
+        "1.5",
+        "--quiet",
+        "--out",
+        dir.to_str().unwrap(),
+    ]));
+    assert!(!dir.join("diagram_g.svg").exists(), "stale diagram_g.svg");
+    let s2 = read_json(&dir.join("summary.json"));
+    assert_eq!(s2["model"], "numeric");
+    assert_ne!(s2["run_id"], id1);
+    assert!(leftovers(&dir).is_empty(), "{:?}", leftovers(&dir));
+}
+
+/// Issue 11, item 8: a directory locked by a running rodloop process is refused; a lock left
+/// by a dead process is taken over; --resume removes temporaries of a killed run.
+#[test]
+fn output_directory_lock_and_cleanup() {
+    let dir = tmp("locked");
+    std::fs::create_dir_all(dir.join("branches")).unwrap();
+    // A live process: this test itself.
+    std::fs::write(
+        dir.join(".rodloop.lock"),
+        format!("{}\n", std::process::id()),
+    )
+    .unwrap();
+    fails(
+        &rodloop(&[
+            "diagram",
+            "--model",
+            "exact",
+            "--out",
+            dir.to_str().unwrap(),
+        ]),
+        &[
+            "in use by another rodloop run",
+            &std::process::id().to_string(),
+        ],
+    );
+    assert!(!dir.join("summary.json").exists());
+    // A dead process: a child that has exited.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rodloop"))
+        .arg("--version")
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let dead = child.id();
+    child.wait().unwrap();
+    std::fs::write(dir.join(".rodloop.lock"), format!("{dead}\n")).unwrap();
+    // Leftovers of a killed run.
+    std::fs::write(dir.join(".branches.csv.99999.tmp"), "partial").unwrap();
+    std::fs::write(
+        dir.join("branches").join(".branch-1.json.99999.tmp"),
+        "partial",
+    )
+    .unwrap();
+    std::fs::create_dir_all(dir.join(".staging-dead-99999")).unwrap();
+    ok(&rodloop(&[
+        "diagram",
+        "--accuracy",
+        "fast",
+        "--lbar-max",
+        "1.5",
+        "--resume",
+        "--quiet",
+        "--out",
+        dir.to_str().unwrap(),
+    ]));
+    assert!(dir.join("summary.json").exists());
+    assert!(leftovers(&dir).is_empty(), "{:?}", leftovers(&dir));
 }

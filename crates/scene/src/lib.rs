@@ -46,6 +46,16 @@ pub enum SceneError {
         /// The parser's message, with line and column.
         message: String,
     },
+    /// A required key is absent.
+    #[error("scene file {path}: missing key {key}: {reason}")]
+    Missing {
+        /// The path (or `<string>`).
+        path: String,
+        /// The missing key.
+        key: String,
+        /// Why it is needed.
+        reason: String,
+    },
     /// A value outside its domain.
     #[error("scene file {path}: {key} = {value}: {reason}")]
     Invalid {
@@ -147,8 +157,13 @@ impl RawStiffness {
             value: String::new(),
             reason,
         };
+        let missing = |key: &str, reason: String| SceneError::Missing {
+            path: origin.to_string(),
+            key: format!("stiffness.{key}"),
+            reason,
+        };
         let need = |key: &str, v: Option<f64>| {
-            v.ok_or_else(|| bad(key, format!("is required for kind = \"{kind}\"")))
+            v.ok_or_else(|| missing(key, format!("required for kind = \"{kind}\"")))
         };
         let allowed: &[&str] = match kind.as_str() {
             "uniform" => &["d"],
@@ -196,16 +211,24 @@ impl RawStiffness {
                 gamma: need("gamma", self.gamma)?,
             },
             _ => StiffnessSpec::Table {
-                s: self
-                    .s
-                    .ok_or_else(|| bad("s", "is required for kind = \"table\"".into()))?,
+                s: self.s.ok_or_else(|| {
+                    missing(
+                        "s",
+                        "required for kind = \"table\" (an array of positions s/L)".into(),
+                    )
+                })?,
                 d: match self.d {
                     Some(NumberOrArray::Array(v)) => v,
-                    _ => {
+                    Some(NumberOrArray::Number(_)) => {
                         return Err(bad(
                             "d",
-                            "is required for kind = \"table\" as an array of stiffness values"
-                                .into(),
+                            "must be an array of stiffness values for kind = \"table\"".into(),
+                        ))
+                    }
+                    None => {
+                        return Err(missing(
+                            "d",
+                            "required for kind = \"table\" (an array of stiffness values)".into(),
                         ))
                     }
                 },
@@ -247,6 +270,18 @@ pub enum StiffnessSpec {
 
 fn one() -> f64 {
     1.0
+}
+
+/// At most `max` characters of `text`, with an ellipsis and the full length when cut (so that
+/// an error never echoes a long array whole).
+fn truncate(text: &str, max: usize) -> String {
+    let count = text.chars().count();
+    if count <= max {
+        text.to_string()
+    } else {
+        let head: String = text.chars().take(max).collect();
+        format!("{head}… ({count} characters)")
+    }
 }
 
 impl Default for StiffnessSpec {
@@ -319,7 +354,13 @@ impl Scene {
     pub fn from_toml(text: &str, origin: &str) -> Result<Self, SceneError> {
         let raw: RawScene = toml::from_str(text).map_err(|e| SceneError::Parse {
             path: origin.to_string(),
-            message: e.to_string().trim_end().replace('\n', "\n  "),
+            message: e
+                .to_string()
+                .trim_end()
+                .lines()
+                .map(|l| truncate(l, 160))
+                .collect::<Vec<_>>()
+                .join("\n  "),
         })?;
         let stiffness = raw.stiffness.unwrap_or_default().resolve(origin)?;
         let scene = Scene {
@@ -349,7 +390,7 @@ impl Scene {
         let bad = |key: &str, value: String, reason: &str| SceneError::Invalid {
             path: origin.to_string(),
             key: key.to_string(),
-            value,
+            value: truncate(&value, 80),
             reason: reason.to_string(),
         };
         let positive = |key: &str, v: f64| {
@@ -407,20 +448,43 @@ impl Scene {
                         "stiffness.s",
                         format!("{} values", s.len()),
                         &format!(
-                            "needs 1 value (constant) or at least 3 (periodic cubic spline), as many as stiffness.d ({})",
+                            "needs 1 value (constant) or at least 3 (periodic interpolant), as many as stiffness.d ({})",
                             d.len()
                         ),
                     ));
                 }
-                if s.windows(2).any(|w| w[1] <= w[0]) || s[0] < 0.0 || s[s.len() - 1] >= 1.0 {
-                    return Err(bad(
-                        "stiffness.s",
-                        format!("{s:?}"),
-                        "must increase strictly within [0, 1)",
-                    ));
+                for (i, &x) in s.iter().enumerate() {
+                    let key = format!("stiffness.s[{i}]");
+                    if !x.is_finite() {
+                        return Err(bad(&key, x.to_string(), "must be a finite number"));
+                    }
+                    if !(0.0..1.0).contains(&x) {
+                        return Err(bad(
+                            &key,
+                            x.to_string(),
+                            "must lie in [0, 1) (a fraction of L)",
+                        ));
+                    }
+                    if i > 0 && x <= s[i - 1] {
+                        return Err(bad(
+                            &key,
+                            x.to_string(),
+                            &format!(
+                                "must exceed stiffness.s[{}] = {} (s must increase strictly)",
+                                i - 1,
+                                s[i - 1]
+                            ),
+                        ));
+                    }
                 }
-                for v in d {
-                    positive("stiffness.d", *v)?;
+                for (i, &v) in d.iter().enumerate() {
+                    if !(v.is_finite() && v > 0.0) {
+                        return Err(bad(
+                            &format!("stiffness.d[{i}]"),
+                            v.to_string(),
+                            "must be a positive finite number",
+                        ));
+                    }
                 }
             }
         }

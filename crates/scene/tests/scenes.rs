@@ -85,3 +85,78 @@ fn table_profile_parses() {
         .to_string()
         .contains("stiffness.s"));
 }
+
+/// Issue 11: table entries are checked at load time and the message names the entry.
+#[test]
+fn table_entries_are_validated_by_name() {
+    for (s, d, want) in [
+        (
+            "[0.0, nan, 0.5]",
+            "[1, 1, 1]",
+            "stiffness.s[1] = NaN: must be a finite number",
+        ),
+        (
+            "[0.0, 0.5, 0.4]",
+            "[1, 1, 1]",
+            "stiffness.s[2] = 0.4: must exceed stiffness.s[1] = 0.5",
+        ),
+        (
+            "[0.0, 0.5, 1.0]",
+            "[1, 1, 1]",
+            "stiffness.s[2] = 1: must lie in [0, 1)",
+        ),
+        (
+            "[0.0, 0.3, 0.6]",
+            "[1, -0.5, 1]",
+            "stiffness.d[1] = -0.5: must be a positive",
+        ),
+        (
+            "[0.0, 0.3, 0.6]",
+            "[1, 1, 0]",
+            "stiffness.d[2] = 0: must be a positive",
+        ),
+        (
+            "[0.0, 0.3, 0.6]",
+            "[1, 1, inf]",
+            "stiffness.d[2] = inf: must be a positive",
+        ),
+    ] {
+        let text = format!("[stiffness]\nkind = \"table\"\ns = {s}\nd = {d}\n");
+        let msg = Scene::from_toml(&text, "t.toml").unwrap_err().to_string();
+        assert!(msg.contains(want), "{text:?}: {msg}");
+    }
+}
+
+/// Issue 11: a missing key is named as missing (not "stiffness.s0 = : is required").
+#[test]
+fn missing_keys_are_named() {
+    let text = "[stiffness]\nkind = \"tanh\"\nd0 = 1\nd1 = 0.5\ns1 = 0.8\ngamma = 200\n";
+    let msg = Scene::from_toml(text, "t.toml").unwrap_err().to_string();
+    assert!(msg.contains("missing key stiffness.s0"), "{msg}");
+    assert!(!msg.contains(" = :"), "{msg}");
+    let text = "[stiffness]\nkind = \"table\"\ns = [0.0, 0.5, 0.7]\n";
+    let msg = Scene::from_toml(text, "t.toml").unwrap_err().to_string();
+    assert!(msg.contains("missing key stiffness.d"), "{msg}");
+}
+
+/// Issue 11: errors do not echo long arrays whole.
+#[test]
+fn long_arrays_are_not_echoed_whole() {
+    let n = 3000;
+    let s: Vec<String> = (0..n).map(|i| format!("{}", i as f64 / n as f64)).collect();
+    let d: Vec<String> = (0..n - 1).map(|_| "1.0".to_string()).collect();
+    let text = format!(
+        "[stiffness]\nkind = \"table\"\ns = [{}]\nd = [{}]\n",
+        s.join(", "),
+        d.join(", ")
+    );
+    let msg = Scene::from_toml(&text, "t.toml").unwrap_err().to_string();
+    assert!(msg.len() < 500, "{} bytes: {msg}", msg.len());
+    // A syntax error on a long line is cut too.
+    let text = format!(
+        "[stiffness]\nkind = \"table\"\ns = [{}, oops]\n",
+        s.join(", ")
+    );
+    let msg = Scene::from_toml(&text, "t.toml").unwrap_err().to_string();
+    assert!(msg.len() < 1000, "{} bytes: {msg}", msg.len());
+}

@@ -159,6 +159,20 @@ pub struct KktFactor {
     det_sign: f64,
     log_abs_det: f64,
     n_mult: usize,
+    regularized: bool,
+}
+
+/// `min |U_ii| / max |U_ii|` of an LU factorisation (0 if not finite).
+fn pivot_ratio(lu: &nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>) -> f64 {
+    let diag = lu.u().diagonal();
+    let big = diag.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let small = diag.iter().fold(f64::INFINITY, |m, v| m.min(v.abs()));
+    let r = small / big;
+    if r.is_finite() {
+        r
+    } else {
+        0.0
+    }
 }
 
 fn block_size(c: usize, cells: usize) -> usize {
@@ -200,6 +214,7 @@ impl KktFactor {
         let mut blocks: Vec<Block> = Vec::with_capacity(n + 1);
         let mut det_sign = 1.0;
         let mut log_abs_det = 0.0;
+        let mut regularized = false;
         for c in 0..=n {
             let size = block_size(c, n);
             let mut k = DMatrix::zeros(size, size);
@@ -256,15 +271,26 @@ impl KktFactor {
             } else {
                 DMatrix::zeros(0, 0)
             };
-            let d = (&k + k.transpose()) * 0.5;
-            let lu = d.clone().lu();
-            let u = lu.u();
-            let diag = u.diagonal();
-            let big = diag.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            let small = diag.iter().fold(f64::INFINITY, |m, v| m.min(v.abs()));
-            if !(small.is_finite() && big.is_finite() && small > PIVOT_RATIO * big) {
+            let mut d = (&k + k.transpose()) * 0.5;
+            let mut lu = d.clone().lu();
+            let mut ratio = pivot_ratio(&lu);
+            if c == n && ratio <= PIVOT_RATIO {
+                // Closure constraints of deficient rank (a great circle, or a planar start):
+                // regularise the multiplier block by −δI (δ = 1e-10 of the block's scale),
+                // as interior-point codes do for degenerate equality constraints. The
+                // rank-deficient direction then counts as a constraint in the inertia.
+                let scale = d.amax().max(f64::MIN_POSITIVE);
+                for i in 6..9 {
+                    d[(i, i)] -= 1e-10 * scale;
+                }
+                lu = d.clone().lu();
+                ratio = pivot_ratio(&lu);
+                regularized = true;
+            }
+            if ratio <= PIVOT_RATIO {
                 return Err(SolverError::SingularJacobian { iteration: 0 });
             }
+            let diag = lu.u().diagonal();
             let mut sign = lu.p().determinant::<f64>();
             for v in diag.iter() {
                 if *v < 0.0 {
@@ -282,6 +308,7 @@ impl KktFactor {
             det_sign,
             log_abs_det,
             n_mult: model.n_multipliers(),
+            regularized,
         };
         if let Some(ph) = model.phase() {
             let mut b = DVector::zeros(2 * n + 3);
@@ -370,6 +397,12 @@ impl KktFactor {
         // −I on its diagonal).
         let pairs_sign = if self.cells % 2 == 1 { -1.0 } else { 1.0 };
         self.det_sign * pairs_sign
+    }
+
+    /// Whether the closure block had to be regularised (constraints of deficient rank);
+    /// solves are then least-squares-like in the deficient direction.
+    pub fn is_regularized(&self) -> bool {
+        self.regularized
     }
 
     /// `ln |det J|` (the pairs have `|det| = 1`).

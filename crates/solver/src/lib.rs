@@ -28,6 +28,7 @@
 pub mod accuracy;
 pub mod continuation;
 pub mod frame;
+pub mod identify;
 pub mod kkt;
 pub mod mesh;
 pub mod model;

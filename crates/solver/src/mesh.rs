@@ -173,7 +173,7 @@ impl MeshMap {
                 }
             })
             .collect();
-        if b.windows(2).any(|w| !(w[1] > w[0])) {
+        if b.windows(2).any(|w| w[1] <= w[0] || w[1].is_nan()) {
             return Err(SolverError::InvalidInput(format!(
                 "mesh of {cells} cells is degenerate (a cell has no length)"
             )));

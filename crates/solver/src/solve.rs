@@ -274,7 +274,16 @@ fn restore(model: &SurfaceModel, kappa: &[f64]) -> Result<Vec<f64>, SolverError>
         }
     }
     let (c, _) = constraints(model, &k)?;
-    if c.norm() < 1e-10 {
+    // vee(skew H) also vanishes when the holonomy is a half-turn: that is no loop.
+    let hol = model.holonomy(&k)?;
+    let angle = ((hol.trace() - 1.0) / 2.0).clamp(-1.0, 1.0).acos();
+    if c.norm() < 1e-10 && angle > 1e-6 {
+        Err(SolverError::InvalidInput(format!(
+            "the start cannot be closed at this length: the nearest closure leaves the frame \
+             turned by {angle:.3} rad (a half-turn), so the start is too far from a loop of \
+             this length; start from an Euler curve or from a state solved at a nearby length"
+        )))
+    } else if c.norm() < 1e-10 {
         Ok(k)
     } else {
         Err(SolverError::InvalidInput(format!(

@@ -34,9 +34,13 @@ pub enum Stiffness {
         /// Sharpness `γ` of the transitions.
         gamma: f64,
     },
-    /// A user table `(s/L, D)` interpolated by the periodic cubic spline (period 1): `D`,
-    /// `D'` and `D''` are continuous, `D''` is piecewise linear. The abscissae must be
-    /// strictly increasing in `[0, 1)`; at least three points, or one point (constant).
+    /// A user table `(s/L, D)` interpolated by a shape-preserving periodic cubic Hermite
+    /// interpolant (period 1; Fritsch–Carlson type, slopes by the weighted harmonic mean of
+    /// Fritsch & Butland): between two table points `D` is monotone, so it never leaves the
+    /// range of its two end values (no overshoot; a positive table gives a positive `D`), and
+    /// a local extremum of the data stays an extremum. `D` and `D'` are continuous; `D''` is
+    /// piecewise linear and may jump at the table points. The abscissae must be strictly
+    /// increasing in `[0, 1)`; at least three points, or one point (constant).
     Table {
         /// Abscissae `s/L ∈ [0, 1)`, strictly increasing.
         s: Vec<f64>,
@@ -64,12 +68,12 @@ impl StiffnessValue {
     }
 }
 
-/// A validated stiffness profile, ready for evaluation (spline coefficients precomputed).
+/// A validated stiffness profile, ready for evaluation (interpolant slopes precomputed).
 #[derive(Clone, Debug, PartialEq)]
 pub struct StiffnessProfile {
     kind: Stiffness,
-    /// Second derivatives of the periodic spline at the table knots (tables only).
-    spline_m: Vec<f64>,
+    /// Slopes `dD/dσ` of the shape-preserving interpolant at the table knots (tables only).
+    slopes: Vec<f64>,
 }
 
 impl Stiffness {
@@ -99,8 +103,8 @@ impl Stiffness {
 
     /// Validate the parameters and precompute the interpolant.
     ///
-    /// Errors ([`SolverError::InvalidProfile`]): non-finite numbers, `D ≤ 0` anywhere (for
-    /// tables checked on a fine sampling of the spline, which can undershoot), `s0* ≥ s1*`,
+    /// Errors ([`SolverError::InvalidProfile`]): non-finite numbers, `D ≤ 0` anywhere (the
+    /// table interpolant cannot undershoot, but the check on a fine sampling is kept), `s0* ≥ s1*`,
     /// `s0*, s1*` outside `[0, 1]`, `γ ≤ 0`, table abscissae not strictly increasing in
     /// `[0, 1)`, mismatched table lengths, or a table of two points.
     pub fn validate(&self) -> Result<StiffnessProfile, SolverError> {
@@ -114,7 +118,7 @@ impl Stiffness {
                 }
                 Ok(StiffnessProfile {
                     kind: self.clone(),
-                    spline_m: Vec::new(),
+                    slopes: Vec::new(),
                 })
             }
             Stiffness::Tanh {
@@ -145,7 +149,7 @@ impl Stiffness {
                 }
                 let p = StiffnessProfile {
                     kind: self.clone(),
-                    spline_m: Vec::new(),
+                    slopes: Vec::new(),
                 };
                 // The periodised profile lies between min(D0, D1) and max(D0, D1) up to the
                 // image tails; check positivity anyway.
@@ -187,14 +191,14 @@ impl Stiffness {
                 if let Some(v) = d.iter().find(|&&v| v <= 0.0) {
                     return bad(format!("stiffness table contains D = {v} <= 0"));
                 }
-                let spline_m = if s.len() >= 3 {
-                    periodic_spline_moments(s, d)
+                let slopes = if s.len() >= 3 {
+                    monotone_slopes(s, d)
                 } else {
                     vec![0.0]
                 };
                 let p = StiffnessProfile {
                     kind: self.clone(),
-                    spline_m,
+                    slopes,
                 };
                 p.check_positive()?;
                 Ok(p)
@@ -267,7 +271,7 @@ impl StiffnessProfile {
                         d2: 0.0,
                     };
                 }
-                eval_periodic_spline(s, d, &self.spline_m, sigma)
+                eval_hermite(s, d, &self.slopes, sigma)
             }
         }
     }
@@ -290,6 +294,68 @@ fn locate(s: &[f64], sigma: f64) -> (usize, f64, f64) {
     }
 }
 
+/// Slopes `m_i` at the knots of the periodic shape-preserving cubic Hermite interpolant:
+/// with the secants `δ_{i−1}`, `δ_i` on either side (cyclically, period 1), `m_i = 0` where
+/// they differ in sign or one vanishes (a local extremum of the data stays one), otherwise
+/// the weighted harmonic mean `m_i = 3(h_{i−1} + h_i) / ((2h_i + h_{i−1})/δ_{i−1} +
+/// (h_i + 2h_{i−1})/δ_i)` (Fritsch & Butland 1984), which lies between the two secants and
+/// below `3 min(|δ_{i−1}|, |δ_i|)`, so each cubic piece is monotone (Fritsch & Carlson 1980).
+pub(crate) fn monotone_slopes(s: &[f64], d: &[f64]) -> Vec<f64> {
+    let n = s.len();
+    let h = |i: usize| {
+        if i + 1 < n {
+            s[i + 1] - s[i]
+        } else {
+            s[0] + 1.0 - s[n - 1]
+        }
+    };
+    let delta = |i: usize| (d[(i + 1) % n] - d[i]) / h(i);
+    (0..n)
+        .map(|i| {
+            let im = (i + n - 1) % n;
+            let (d0, d1) = (delta(im), delta(i));
+            let (h0, h1) = (h(im), h(i));
+            if d0 * d1 <= 0.0 {
+                0.0
+            } else {
+                3.0 * (h0 + h1) / ((2.0 * h1 + h0) / d0 + (h1 + 2.0 * h0) / d1)
+            }
+        })
+        .collect()
+}
+
+/// The cubic Hermite piece through the knots around `σ` with slopes `m`: `D`, `dD/dσ`,
+/// `d²D/dσ²`.
+fn eval_hermite(s: &[f64], d: &[f64], m: &[f64], sigma: f64) -> StiffnessValue {
+    let n = s.len();
+    let (i, x, h) = locate(s, sigma);
+    let j = (i + 1) % n;
+    let (y0, y1, m0, m1) = (d[i], d[j], m[i] * h, m[j] * h);
+    let t = x / h;
+    let (t2, t3) = (t * t, t * t * t);
+    let v = (2.0 * t3 - 3.0 * t2 + 1.0) * y0
+        + (t3 - 2.0 * t2 + t) * m0
+        + (-2.0 * t3 + 3.0 * t2) * y1
+        + (t3 - t2) * m1;
+    let v1 = ((6.0 * t2 - 6.0 * t) * y0
+        + (3.0 * t2 - 4.0 * t + 1.0) * m0
+        + (-6.0 * t2 + 6.0 * t) * y1
+        + (3.0 * t2 - 2.0 * t) * m1)
+        / h;
+    let v2 = ((12.0 * t - 6.0) * y0
+        + (6.0 * t - 4.0) * m0
+        + (-12.0 * t + 6.0) * y1
+        + (6.0 * t - 2.0) * m1)
+        / (h * h);
+    StiffnessValue {
+        d: v,
+        d1: v1,
+        d2: v2,
+    }
+}
+
+/// The periodic cubic spline (used to resample point clouds, not for stiffness tables, where
+/// it can overshoot).
 pub(crate) fn eval_periodic_spline(s: &[f64], d: &[f64], m: &[f64], sigma: f64) -> StiffnessValue {
     let n = s.len();
     let (i, x, h) = locate(s, sigma);
@@ -411,6 +477,74 @@ mod tests {
             fd_check(&p, sigma);
             let exact = 1.0 + 0.3 * (2.0 * std::f64::consts::PI * sigma).sin();
             assert!((p.eval(sigma).d - exact).abs() < 1e-3);
+        }
+    }
+
+    /// A step table between 1 and 0.01 (issue 11): the periodic cubic spline undershot to
+    /// D = −0.0041 near s/L = 0.32; the shape-preserving interpolant stays within the data
+    /// range between every pair of knots, and is continuous with a continuous slope.
+    #[test]
+    fn step_table_does_not_overshoot() {
+        let s: Vec<f64> = (0..20).map(|i| i as f64 / 20.0).collect();
+        let d: Vec<f64> = s
+            .iter()
+            .map(|&x| if (0.3..0.8).contains(&x) { 0.01 } else { 1.0 })
+            .collect();
+        let p = Stiffness::Table {
+            s: s.clone(),
+            d: d.clone(),
+        }
+        .validate()
+        .unwrap();
+        let n = s.len();
+        for k in 0..20_000 {
+            let sigma = k as f64 / 20_000.0;
+            let (i, _, _) = locate(&s, sigma);
+            let (lo, hi) = (d[i].min(d[(i + 1) % n]), d[i].max(d[(i + 1) % n]));
+            let v = p.eval(sigma).d;
+            assert!(
+                v >= lo - 1e-15 && v <= hi + 1e-15,
+                "D = {v} at {sigma} outside [{lo}, {hi}]"
+            );
+        }
+        // Continuity of D and D' across every knot (D'' may jump there).
+        for &x in &s {
+            let (a, b) = (p.eval(x - 1e-12), p.eval(x + 1e-12));
+            assert!(
+                (a.d - b.d).abs() < 1e-9 && (a.d1 - b.d1).abs() < 1e-6,
+                "{x}"
+            );
+        }
+        // Between knots, the derivatives agree with finite differences.
+        for &sigma in &[0.027, 0.31, 0.333, 0.79, 0.812, 0.97] {
+            fd_check(&p, sigma);
+        }
+    }
+
+    /// The interpolant passes through the knots, and monotone stretches of the data give a
+    /// monotone interpolant.
+    #[test]
+    fn monotone_data_monotone_interpolant() {
+        let s = vec![0.0, 0.1, 0.35, 0.5, 0.9];
+        let d = vec![1.0, 1.5, 4.0, 4.1, 2.0];
+        let p = Stiffness::Table {
+            s: s.clone(),
+            d: d.clone(),
+        }
+        .validate()
+        .unwrap();
+        for (i, (&x, &y)) in s.iter().zip(&d).enumerate() {
+            assert!((p.eval(x).d - y).abs() < 1e-14, "knot {i}");
+        }
+        // Increasing on [0, 0.5], decreasing on [0.5, 1): check the slope's sign.
+        for k in 1..1000 {
+            let sigma = k as f64 / 1000.0;
+            let v = p.eval(sigma);
+            if sigma < 0.5 {
+                assert!(v.d1 >= -1e-12, "{sigma}: {}", v.d1);
+            } else {
+                assert!(v.d1 <= 1e-12, "{sigma}: {}", v.d1);
+            }
         }
     }
 
