@@ -1,4 +1,6 @@
-//! The KKT system as a [`rodloop_continuation::Problem`] with parameter `L̄`.
+//! The KKT system as a [`rodloop_continuation::Problem`] with parameter `L̄` (the
+//! [`ParamProblem`] of [`SurfaceModel`] and [`Param::Lbar`], with helpers to start from and
+//! return to [`Equilibrium`]s).
 //!
 //! State `x = z = (κ, μ, ν)` (see [`SurfaceModel::kkt_residual`]), parameter `p = L̄`. The
 //! number of cells, the stiffness profile (a function of `σ = s/L`) and the phase condition
@@ -8,13 +10,15 @@
 use nalgebra::{DMatrix, DVector};
 
 use crate::model::SurfaceModel;
+use crate::param::Param;
+use crate::seam::ParamProblem;
 use crate::solve::{solve_from_state, Equilibrium, SolveOptions};
 use crate::SolverError;
 
 /// Continuation problem in `L̄` for a fixed discretisation.
 #[derive(Clone, Debug)]
 pub struct LbarProblem {
-    model: SurfaceModel,
+    inner: ParamProblem<SurfaceModel>,
 }
 
 impl LbarProblem {
@@ -22,7 +26,9 @@ impl LbarProblem {
     /// uniform rod the model should carry a phase condition, e.g. the one of an
     /// [`Equilibrium`] ([`LbarProblem::from_equilibrium`]).
     pub fn new(model: SurfaceModel) -> Self {
-        Self { model }
+        Self {
+            inner: ParamProblem::new(model, Param::Lbar).expect("every model has an L̄"),
+        }
     }
 
     /// The problem of an equilibrium's model and its state `(x, L̄)` to start from.
@@ -36,7 +42,7 @@ impl LbarProblem {
 
     /// The model at parameter `lbar`.
     pub fn model_at(&self, lbar: f64) -> Result<SurfaceModel, SolverError> {
-        self.model.with_lbar(lbar)
+        self.inner.model_at(lbar)
     }
 
     /// Re-solve at `(x, L̄)` (e.g. a continuation point) and return the equilibrium with its
@@ -55,18 +61,26 @@ impl rodloop_continuation::Problem for LbarProblem {
     type Error = SolverError;
 
     fn dim(&self) -> usize {
-        self.model.dim()
+        self.inner.dim()
     }
 
     fn residual(&self, x: &DVector<f64>, p: f64) -> Result<DVector<f64>, SolverError> {
-        self.model_at(p)?.kkt_residual(x.as_slice())
+        self.inner.residual(x, p)
     }
 
     fn jacobian(&self, x: &DVector<f64>, p: f64) -> Result<DMatrix<f64>, SolverError> {
-        self.model_at(p)?.kkt_jacobian(x.as_slice())
+        self.inner.jacobian(x, p)
     }
 
     fn dparam(&self, x: &DVector<f64>, p: f64) -> Result<DVector<f64>, SolverError> {
-        self.model_at(p)?.kkt_dlbar(x.as_slice())
+        self.inner.dparam(x, p)
+    }
+
+    fn factorize(
+        &self,
+        x: &DVector<f64>,
+        p: f64,
+    ) -> Result<Box<dyn rodloop_continuation::Factorization + '_>, SolverError> {
+        self.inner.factorize(x, p)
     }
 }

@@ -32,7 +32,9 @@ pub mod identify;
 pub mod kkt;
 pub mod mesh;
 pub mod model;
+pub mod param;
 pub mod periodic;
+pub mod seam;
 pub mod solve;
 pub mod stability;
 pub mod start;
@@ -43,6 +45,8 @@ pub use continuation::LbarProblem;
 pub use kkt::KktFactor;
 pub use mesh::MeshMap;
 pub use model::{Phase, SurfaceModel};
+pub use param::Param;
+pub use seam::{Confinement, ModelFactor, ParamProblem};
 pub use solve::{
     solve, solve_from_state, ConvergenceReport, EnergyReport, Equilibrium, Globalization,
     ProfilePoint, SolveOptions,

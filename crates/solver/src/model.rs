@@ -511,7 +511,7 @@ impl SurfaceModel {
         Ok(self.closure_jacobian_from(&ch))
     }
 
-    fn closure_jacobian_from(&self, ch: &Chain) -> DMatrix<f64> {
+    pub(crate) fn closure_jacobian_from(&self, ch: &Chain) -> DMatrix<f64> {
         let mut j = DMatrix::zeros(3, self.n_kappa());
         for c in 0..self.cells {
             for i in 0..2 {
@@ -731,6 +731,58 @@ impl SurfaceModel {
         let nk = self.n_kappa();
         for k in 0..3 {
             out[nk + k] = -dc[k];
+        }
+        Ok(out)
+    }
+
+    /// The value of a named parameter ([`crate::Param`]).
+    pub fn param(&self, p: crate::Param) -> Result<f64, SolverError> {
+        match p {
+            crate::Param::Lbar => Ok(self.lbar),
+            _ => self.stiffness.kind().param(p),
+        }
+    }
+
+    /// The same model (same mesh and phase condition) with a named parameter changed. A
+    /// model with a phase condition must stay uniform (the condition fixes a symmetry that a
+    /// non-uniform rod does not have).
+    pub fn with_param(&self, p: crate::Param, value: f64) -> Result<Self, SolverError> {
+        if p == crate::Param::Lbar {
+            return self.with_lbar(value);
+        }
+        if !value.is_finite() {
+            return Err(SolverError::InvalidInput(format!(
+                "parameter {} must be finite (got {value})",
+                p.name()
+            )));
+        }
+        let kind = self.stiffness.kind().with_param(p, value)?;
+        if self.phase.is_some() && !kind.is_uniform() {
+            return Err(SolverError::InvalidInput(
+                "a model with a phase condition (uniform rod) cannot be continued into a non-uniform one; drop the phase condition first".into(),
+            ));
+        }
+        let mut m = self.clone();
+        m.stiffness = kind.validate()?;
+        m.d_gauss = (0..2 * m.cells)
+            .map(|a| m.stiffness.eval(m.sigma_of(a)).d)
+            .collect();
+        Ok(m)
+    }
+
+    /// `∂F/∂θ` at fixed `z` for a named parameter: [`SurfaceModel::kkt_dlbar`] for `lbar`;
+    /// for a stiffness parameter only the energy gradient depends on it,
+    /// `∂F_a/∂θ = w_a (∂D/∂θ)(σ_a) κ_a`.
+    pub fn kkt_dparam(&self, z: &[f64], p: crate::Param) -> Result<DVector<f64>, SolverError> {
+        if p == crate::Param::Lbar {
+            return self.kkt_dlbar(z);
+        }
+        let (kappa, _, _) = self.split(z)?;
+        self.check_kappa(kappa)?;
+        let kind = self.stiffness.kind();
+        let mut out = DVector::zeros(self.dim());
+        for (a, k) in kappa.iter().enumerate() {
+            out[a] = self.cell_weight(a / 2) * kind.dparam(p, self.sigma_of(a))? * k;
         }
         Ok(out)
     }

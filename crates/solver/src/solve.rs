@@ -397,11 +397,9 @@ fn newton_step(model: &SurfaceModel, z: &[f64], f: &DVector<f64>) -> Option<DVec
             // One step of iterative refinement with the exact O(N) product J d: near a
             // great circle the closure is nearly rank-deficient and the block elimination
             // loses digits that the refinement recovers.
-            if let Ok(jd) = model.kkt_apply(z, d.as_slice()) {
-                let r = -f - jd;
-                if let Some(c) = k.solve(&r).filter(finite) {
-                    d += c;
-                }
+            let r = -f - k.apply(&d);
+            if let Some(c) = k.solve(&r).filter(finite) {
+                d += c;
             }
             return Some(d);
         }

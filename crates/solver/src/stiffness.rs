@@ -91,6 +91,89 @@ impl Stiffness {
         }
     }
 
+    /// The value of a named scene parameter of this profile (`d1` = `D1/D0`, `gamma`, `s0`,
+    /// `s1`; Eq. (51) profiles only).
+    pub fn param(&self, p: crate::param::Param) -> Result<f64, SolverError> {
+        use crate::param::Param;
+        match (self, p) {
+            (Stiffness::Tanh { d0, d1, .. }, Param::D1) => Ok(d1 / d0),
+            (Stiffness::Tanh { gamma, .. }, Param::Gamma) => Ok(*gamma),
+            (Stiffness::Tanh { s0, .. }, Param::S0) => Ok(*s0),
+            (Stiffness::Tanh { s1, .. }, Param::S1) => Ok(*s1),
+            (_, Param::Lbar) => Err(SolverError::InvalidInput(
+                "lbar is a parameter of the model, not of the stiffness profile".into(),
+            )),
+            (_, p) => Err(SolverError::InvalidInput(format!(
+                "parameter {} needs a two-segment (tanh, Eq. (51)) stiffness profile",
+                p.name()
+            ))),
+        }
+    }
+
+    /// The same profile with a named parameter set to `value` (validated by
+    /// [`Stiffness::validate`] when a model is built).
+    pub fn with_param(&self, p: crate::param::Param, value: f64) -> Result<Self, SolverError> {
+        use crate::param::Param;
+        self.param(p)?;
+        let mut out = self.clone();
+        if let Stiffness::Tanh {
+            d0,
+            d1,
+            s0,
+            s1,
+            gamma,
+        } = &mut out
+        {
+            match p {
+                Param::D1 => *d1 = value * *d0,
+                Param::Gamma => *gamma = value,
+                Param::S0 => *s0 = value,
+                Param::S1 => *s1 = value,
+                Param::Lbar => {}
+            }
+        }
+        Ok(out)
+    }
+
+    /// `∂D/∂θ` at `σ` for a named parameter `θ` of an Eq. (51) profile (analytic; `θ = d1`
+    /// is `D1/D0`, so `∂D/∂θ = D0 ∂D/∂D1`).
+    pub fn dparam(&self, p: crate::param::Param, sigma: f64) -> Result<f64, SolverError> {
+        use crate::param::Param;
+        self.param(p)?;
+        let Stiffness::Tanh {
+            d0,
+            d1,
+            s0,
+            s1,
+            gamma,
+        } = self
+        else {
+            return Ok(0.0);
+        };
+        let sigma = sigma - sigma.floor();
+        let half = 0.5 * (d0 - d1);
+        let mut bracket = 0.0;
+        let mut acc = 0.0;
+        for j in -2..=2 {
+            let x = sigma + j as f64;
+            for (sign, c, which) in [(1.0, *s0, Param::S0), (-1.0, *s1, Param::S1)] {
+                let t = (gamma * (x - c)).tanh();
+                let sech2 = 1.0 - t * t;
+                bracket += sign * t;
+                acc += match p {
+                    Param::Gamma => sign * (x - c) * sech2,
+                    q if q == which => -sign * gamma * sech2,
+                    _ => 0.0,
+                };
+            }
+        }
+        Ok(match p {
+            // D = D0 − (D0 − D1)/2 · bracket ⇒ ∂D/∂D1 = bracket/2.
+            Param::D1 => d0 * 0.5 * bracket,
+            _ => -half * acc,
+        })
+    }
+
     /// Reference stiffness `D0` used to normalise energies (`E R/(π D0)`) and forces: `d` for
     /// uniform rods, `D0` (the stiffer segment) for Eq. (51), the largest value of a table.
     pub fn reference(&self) -> f64 {

@@ -217,3 +217,34 @@ fn derivatives_at_a_solution() {
     let eq = rodloop_solver::solve(&model, &start, &Default::default()).unwrap();
     check_model(eq.model(), eq.kappa(), eq.multiplier(), 1e-7);
 }
+
+#[test]
+fn parameter_derivatives_match_finite_differences() {
+    use rodloop_solver::{Confinement, Param, ParamProblem};
+    // A sharp profile (graded mesh) and a smooth one (uniform mesh), every named parameter.
+    for gamma in [12.0, 60.0] {
+        let st = Stiffness::Tanh {
+            d0: 1.0,
+            d1: 0.3,
+            s0: 0.3,
+            s1: 0.8,
+            gamma,
+        };
+        let m = SurfaceModel::new(1.0, 1.4, 24, &st).unwrap();
+        let mut seed = 9;
+        let mut z = StartShape::Euler { l: 2 }.gauss_values(&m).unwrap();
+        for v in z.iter_mut() {
+            *v += 0.1 * lcg(&mut seed);
+        }
+        z.extend([0.2, -0.1, 0.3]);
+        let x = DVector::from_vec(z.clone());
+        for p in Param::ALL {
+            let prob = ParamProblem::new(m.clone(), p).unwrap();
+            let v = Confinement::param(&m, p).unwrap();
+            let an = prob.dparam(&x, v).unwrap();
+            let fd = fd_dparam(|q| prob.residual(&x, q), v).unwrap();
+            let err = (&an - &fd).amax() / fd.amax().max(1e-12);
+            assert!(err < 1e-7, "γ = {gamma}, ∂F/∂{p}: relative error {err:e}");
+        }
+    }
+}

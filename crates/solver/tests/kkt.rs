@@ -165,3 +165,21 @@ fn matrix_vector_product_matches_the_dense_matrix() {
     let err = (jd - &dense).amax() / dense.amax();
     assert!(err < 1e-12, "J dz differs by {err:e}");
 }
+
+#[test]
+fn factor_apply_is_the_shifted_matrix() {
+    let mut seed = 21;
+    let m = SurfaceModel::new(1.0, 1.3, 20, &sharp()).unwrap();
+    let z = state(&m, &mut seed);
+    let shift = 0.7;
+    let f = KktFactor::new(&m, &z, shift).unwrap();
+    let mut dense = m.kkt_jacobian(&z).unwrap();
+    for a in 0..m.n_kappa() {
+        dense[(a, a)] -= shift * m.cell_weight(a / 2);
+    }
+    let v = DVector::from_fn(m.dim(), |_, _| lcg(&mut seed));
+    let err = (f.apply(&v) - &dense * &v).amax() / (&dense * &v).amax();
+    assert!(err < 1e-12, "apply differs by {err:e}");
+    let x = f.solve(&v).unwrap();
+    assert!((&dense * &x - &v).amax() < 1e-9 * v.amax());
+}
