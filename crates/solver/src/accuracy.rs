@@ -57,7 +57,8 @@ impl Accuracy {
     /// grows with the number of oscillations, not with `L̄`; `c = 56` keeps the energy error
     /// of the homogeneous branches η = 1..4 below 1e-7 relative (`tests/convergence.rs`,
     /// `rodloop converge`). Sharp profiles (Eq. (51) with `γ > 20`) are resolved by the
-    /// graded mesh ([`crate::MeshMap::for_profile`]), which needs no extra cells; smooth
+    /// graded mesh ([`crate::MeshMap::for_profile`]) with `N = c (2 + η)` cells, whatever
+    /// `γ` (measured: energy error ≤ 1e-7 relative for η = 1, 2 at `D1/D0 = 0.5`); smooth
     /// ones get at least `2γ` cells (`γ` for `Fast`), tables two per point. Rounded up to a
     /// multiple of 4. For `High` this is the coarse one of the pair `(N, 2N)`.
     pub fn cells(self, periods: usize, stiffness: &Stiffness) -> usize {
@@ -67,6 +68,9 @@ impl Accuracy {
         };
         let mut n = per * (1 + periods.max(1));
         let factor = if self == Accuracy::Fast { 1.0 } else { 2.0 };
+        if !crate::MeshMap::for_profile(stiffness).is_uniform() {
+            n += per;
+        }
         match stiffness {
             Stiffness::Tanh { gamma, .. } if *gamma <= 20.0 => {
                 n = n.max((factor * gamma).ceil() as usize);
@@ -137,15 +141,37 @@ pub fn solve_with_accuracy(
     let periods = start.periods(lbar)?;
     let n = accuracy.cells(periods, stiffness);
     let main = solve_cells(radius, lbar, n, stiffness, start, None, opts)?;
+    finish_with_accuracy(main, radius, stiffness, start, accuracy, opts)
+}
+
+/// Complete a solve at the main resolution of `accuracy` (`main`, at
+/// [`Accuracy::cells`] cells) with its companion solve and the error estimate (see the
+/// module docs); the companion starts from `main` resampled.
+pub fn finish_with_accuracy(
+    main: Equilibrium,
+    radius: f64,
+    stiffness: &Stiffness,
+    start: &StartShape,
+    accuracy: Accuracy,
+    opts: &SolveOptions,
+) -> Result<AccurateEquilibrium, SolverError> {
+    let n = main.model().cells();
+    let lbar = main.lbar();
+    // The companion at half the cells (or twice, for High). If the coarse companion does not
+    // converge (a sharp profile at few cells), a fine one at 2N is solved instead: the values
+    // are then those at 2N, with the estimate |X_2N − X_N|/15 of their error.
     let (fine, coarse) = match accuracy {
         Accuracy::High => {
             let fine = solve_cells(radius, lbar, 2 * n, stiffness, start, Some(&main), opts)?;
             (fine, main)
         }
-        _ => {
-            let coarse = solve_cells(radius, lbar, n / 2, stiffness, start, Some(&main), opts)?;
-            (main, coarse)
-        }
+        _ => match solve_cells(radius, lbar, n / 2, stiffness, start, Some(&main), opts) {
+            Ok(coarse) => (main, coarse),
+            Err(_) => {
+                let fine = solve_cells(radius, lbar, 2 * n, stiffness, start, Some(&main), opts)?;
+                (fine, main)
+            }
+        },
     };
     let (ef, ec) = (fine.energy(), coarse.energy());
     let (lf, lc) = (fine.lambda_range(), coarse.lambda_range());

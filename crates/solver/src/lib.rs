@@ -34,18 +34,22 @@ pub mod mesh;
 pub mod model;
 pub mod param;
 pub mod periodic;
+pub mod robust;
 pub mod seam;
 pub mod solve;
 pub mod stability;
 pub mod start;
 pub mod stiffness;
 
-pub use accuracy::{solve_cells, solve_with_accuracy, Accuracy, AccurateEquilibrium};
+pub use accuracy::{
+    finish_with_accuracy, solve_cells, solve_with_accuracy, Accuracy, AccurateEquilibrium,
+};
 pub use continuation::LbarProblem;
 pub use kkt::KktFactor;
 pub use mesh::MeshMap;
 pub use model::{Phase, SurfaceModel};
 pub use param::Param;
+pub use robust::{solve_robust, Strategy};
 pub use seam::{Confinement, ModelFactor, ParamProblem};
 pub use solve::{
     solve, solve_from_state, ConvergenceReport, EnergyReport, Equilibrium, Globalization,

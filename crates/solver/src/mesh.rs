@@ -57,7 +57,7 @@ impl MeshMap {
             } if *gamma > 20.0 && (d0 - d1).abs() > 1e-12 * d0.abs() => MeshMap::Graded {
                 centers: vec![*s0, *s1],
                 sharpness: *gamma,
-                amplitude: gamma / 80.0,
+                amplitude: gamma / 40.0,
             },
             _ => MeshMap::Uniform,
         }
@@ -229,8 +229,8 @@ mod tests {
         };
         let ratio = width(0.55) / width(0.3);
         // The density ratio between the middle of a segment and a transition is 1 + A
-        // (tails of the bumps aside): A = γ/80 = 2.5.
-        assert!((ratio - 3.5).abs() < 0.1, "ratio {ratio}");
+        // (tails of the bumps aside): A = γ/40 = 5.
+        assert!((ratio - 6.0).abs() < 0.2, "ratio {ratio}");
         assert!(MeshMap::Uniform.bounds(8).unwrap()[3] == 3.0 / 8.0);
     }
 }

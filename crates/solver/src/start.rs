@@ -82,6 +82,21 @@ impl StartShape {
         Ok(StartShape::Profile(TrigInterpolant::new(&kg)?))
     }
 
+    /// The same start with its arclength origin moved by `shift` (a fraction of the length):
+    /// the shape is the same, but a non-uniform stiffness profile meets it at another
+    /// place.
+    pub fn shifted(&self, lbar: f64, shift: f64) -> Result<StartShape, SolverError> {
+        if shift == 0.0 {
+            return Ok(self.clone());
+        }
+        let t = self.interpolant(lbar)?;
+        let m = 2 * Self::samples(lbar);
+        let kg: Vec<f64> = (0..m)
+            .map(|j| t.eval(j as f64 / m as f64 + shift))
+            .collect();
+        Ok(StartShape::Profile(TrigInterpolant::new(&kg)?))
+    }
+
     /// Number of oscillation periods of `κ_g` (half the number of sign changes of
     /// `κ_g − mean` over the loop, at least 1): `η` for the exact and Euler loops.
     pub fn periods(&self, lbar: f64) -> Result<usize, SolverError> {
