@@ -61,7 +61,7 @@ impl BranchHook for BranchFiles<'_> {
         &mut self,
         b: &TracedBranch,
         origin: Origin,
-    ) -> std::result::Result<(), rodloop_continuation::BoxError> {
+    ) -> std::result::Result<(), rodloop_diagram::BoxError> {
         if origin == Origin::Resumed {
             self.bar.done(format!(
                 "branch {} resumed ({} states)",

@@ -74,6 +74,8 @@ pub use critical::{CriticalKind, CriticalLength};
 pub use diagram::{assemble, BranchSummary, DiagramRow, DiagramSummary, NumericDiagram, Timings};
 pub use labels::Label;
 pub use march::{march, FoldPolicy, March, MarchPoint, MarchSettings, MarchSpecial, MarchStop};
+/// The error type a [`BranchHook`] returns.
+pub use rodloop_continuation::BoxError;
 pub use trace::compute_branch;
 pub use types::{BranchEnd, BranchTimings, IndexChange, PointSource, TracedBranch, TracedPoint};
 
