@@ -58,7 +58,7 @@ pub mod buckling;
 mod compute;
 pub mod critical;
 mod diagram;
-pub mod ends;
+mod ends;
 mod labels;
 pub mod march;
 mod parallel;

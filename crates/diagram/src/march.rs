@@ -1,8 +1,8 @@
-//! The stepping loop: one [`Stepper`] from a solved state towards a limit of the continued
+//! The stepping loop: one [`Stepper`](rodloop_continuation::Stepper) from a solved state towards a limit of the continued
 //! parameter, for any confinement model ([`Confinement`]) and any named parameter
 //! ([`ParamProblem`]).
 //!
-//! [`march`] takes one pseudo-arclength step per [`Stepper::step`] and reacts to what each
+//! [`march`] takes one pseudo-arclength step per [`Stepper::step`](rodloop_continuation::Stepper::step) and reacts to what each
 //! step reports:
 //!
 //! * **index changes** (located by the continuation's bisection on the stability index of

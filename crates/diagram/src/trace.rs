@@ -1,6 +1,6 @@
-//! Tracing one branch of the diagram: seed ([`crate::seed`]), one pseudo-arclength march in
-//! `L̄` in each direction ([`crate::march`]), the approach to the great-circle ends
-//! ([`crate::ends`]), and the quantities of every traced state ([`crate::states`]).
+//! Tracing one branch of the diagram: seed (`seed.rs`), one pseudo-arclength march in
+//! `L̄` in each direction ([`march()`](crate::march::march)), the approach to the great-circle ends
+//! (`ends.rs`), and the quantities of every traced state (`states.rs`).
 //!
 //! # Resolution and scaling
 //!
@@ -13,10 +13,10 @@
 //! # Ends
 //!
 //! Each direction is one [`Stepper`](rodloop_continuation::Stepper) run up to
-//! [`SWITCH_DISTANCE`](crate::ends::SWITCH_DISTANCE) from a great-circle end (or to the end
+//! `SWITCH_DISTANCE` (0.05) from a great-circle end (or to the end
 //! of the range); a fold of `L̄` ends the march there (it is located by the continuation and
 //! not followed). The last stretch to a great circle is the end approach of
-//! [`crate::ends`]. The reason for stopping is recorded for each end ([`BranchEnd`],
+//! `ends.rs`. The reason for stopping is recorded for each end ([`BranchEnd`],
 //! [`TracedBranch::stop_low`]).
 
 use std::time::Instant;
