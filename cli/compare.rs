@@ -146,7 +146,7 @@ pub fn run(args: &Args) -> Result<()> {
     let d = compute(&DiagramSettings::default())?;
     let nd = rodloop_diagram::compute(
         &rodloop_diagram::DiagramOptions::default(),
-        &[],
+        &mut (),
         &mut |_| {},
     )
     .context("numeric diagram of the default scene")?;

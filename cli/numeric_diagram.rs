@@ -7,12 +7,10 @@
 //! branches already there (files of older versions, `eta-N.json`, are read too).
 
 use std::path::Path;
-use std::sync::mpsc;
-use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use rodloop_diagram::{
-    assemble, compute_branch, DiagramOptions, Label, NumericDiagram, Progress, TracedBranch,
+    BranchHook, DiagramOptions, Label, NumericDiagram, Origin, Progress, TracedBranch,
 };
 use rodloop_exact::branch_of_eta;
 
@@ -21,15 +19,6 @@ use crate::output::{
 };
 use crate::progress::Progress as Bar;
 use crate::svg::{self, branch_color, Curve, Figure, LegendEntry, LineStyle, Marker};
-
-/// Messages from the tracing threads to the main thread.
-enum Msg {
-    Event(Progress),
-    Done(
-        u32,
-        Box<Result<TracedBranch, rodloop_diagram::DiagramError>>,
-    ),
-}
 
 /// Load the branches of an interrupted run (`DIR/branches/*.json`).
 fn load_resume(dir: &Path) -> Result<Vec<TracedBranch>> {
@@ -55,7 +44,52 @@ fn load_resume(dir: &Path) -> Result<Vec<TracedBranch>> {
     Ok(out)
 }
 
-/// Trace every branch (in parallel), writing each branch file when it is done, then assemble.
+/// The CLI's per-branch hook: resume from the branch files of an interrupted run, and write
+/// each branch file as soon as its branch is traced.
+struct BranchFiles<'a> {
+    dir: std::path::PathBuf,
+    previous: Vec<TracedBranch>,
+    bar: &'a Bar,
+}
+
+impl BranchHook for BranchFiles<'_> {
+    fn resume(&mut self, eta: u32) -> Option<TracedBranch> {
+        self.previous.iter().find(|b| b.eta == eta).cloned()
+    }
+
+    fn finished(
+        &mut self,
+        b: &TracedBranch,
+        origin: Origin,
+    ) -> std::result::Result<(), rodloop_diagram::BoxError> {
+        if origin == Origin::Resumed {
+            self.bar.done(format!(
+                "branch {} resumed ({} states)",
+                b.branch,
+                b.points.len()
+            ));
+            return Ok(());
+        }
+        let text = serde_json::to_string(b)?;
+        write_atomic(
+            &self.dir,
+            &format!("branch-{}.json", b.branch),
+            text.as_bytes(),
+        )?;
+        // The file name of older versions (by eta) is superseded.
+        let _ = std::fs::remove_file(self.dir.join(format!("eta-{}.json", b.eta)));
+        self.bar.done(format!(
+            "branch {} traced ({} states, {:.2} s)",
+            b.branch,
+            b.points.len(),
+            b.seconds
+        ));
+        Ok(())
+    }
+}
+
+/// Trace every branch with [`rodloop_diagram::compute`] (in parallel), writing each branch
+/// file when it is done, resuming from the files already there with `resume`; then assemble.
 pub fn run_numeric(
     opts: &DiagramOptions,
     out: &Path,
@@ -63,18 +97,18 @@ pub fn run_numeric(
     quiet: bool,
     selection: Option<&[u32]>,
 ) -> Result<NumericDiagram> {
-    ensure_dir(&out.join("branches"))?;
-    let t0 = Instant::now();
+    let dir = out.join("branches");
+    ensure_dir(&dir)?;
     let previous = if resume {
         load_resume(out)?
     } else {
         Vec::new()
     };
-    let fingerprint = opts.fingerprint();
-    let mut etas = opts.etas();
-    if let Some(sel) = selection {
-        etas.retain(|&e| sel.contains(&branch_of_eta(e)));
-    }
+    let opts = DiagramOptions {
+        only_branches: selection.map(<[u32]>::to_vec),
+        ..opts.clone()
+    };
+    let etas = opts.etas();
     if etas.is_empty() {
         bail!(
             "no branch meets the length range [{}, {}]",
@@ -82,113 +116,67 @@ pub fn run_numeric(
             opts.lbar_max
         );
     }
-    let mut have = Vec::new();
-    let mut todo = Vec::new();
-    let mut retrace = Vec::new();
-    for &eta in &etas {
-        match previous.iter().find(|b| b.eta == eta) {
-            Some(b) if b.fingerprint == fingerprint && !b.points.is_empty() => have.push(b.clone()),
-            Some(b) => {
-                retrace.push(b.branch);
-                todo.push(eta)
-            }
-            None => todo.push(eta),
-        }
-    }
-    if !retrace.is_empty() {
-        eprintln!(
-            "note: --resume: the saved branch files of {} were traced with other settings (scene, range or accuracy); re-tracing them",
-            retrace
-                .iter()
-                .map(|b| format!("branch {b}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
-    }
     let bar = Bar::new(etas.len() as u64, "branches", quiet);
     bar.set_length(etas.len() as u64);
-    for b in &have {
-        bar.done(format!(
-            "branch {} resumed ({} states)",
-            b.branch,
-            b.points.len()
-        ));
-    }
-    // Largest η first: they take longest.
-    todo.sort_by_key(|&e| std::cmp::Reverse(e));
-    let threads = opts.worker_threads().max(1).min(todo.len().max(1));
-    let (tx, rx) = mpsc::channel::<Msg>();
-    let queue = std::sync::Mutex::new(todo.clone());
-    let mut failures = Vec::new();
-    std::thread::scope(|scope| -> Result<()> {
-        for _ in 0..threads {
-            let tx = tx.clone();
-            let queue = &queue;
-            scope.spawn(move || loop {
-                let next = queue.lock().ok().and_then(|mut q| q.pop());
-                let Some(eta) = next else { break };
-                let txe = tx.clone();
-                let r = compute_branch(opts, eta, &mut |p| {
-                    let _ = txe.send(Msg::Event(p));
-                });
-                let _ = tx.send(Msg::Done(eta, Box::new(r)));
-            });
+    let mut hook = BranchFiles {
+        dir,
+        previous,
+        bar: &bar,
+    };
+    // Progress: branches re-traced because their files do not match are named in one note;
+    // the critical lengths get a bar of their own once the tracing is done.
+    let mut retrace: Vec<u32> = Vec::new();
+    let mut critical_bar: Option<Bar> = None;
+    let note = |retrace: &mut Vec<u32>| {
+        if !retrace.is_empty() {
+            eprintln!(
+                "note: --resume: the saved branch files of {} were traced with other settings (scene, range or accuracy); re-tracing them",
+                retrace
+                    .iter()
+                    .map(|b| format!("branch {b}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+            retrace.clear();
         }
-        drop(tx);
-        for msg in rx {
-            match msg {
-                Msg::Event(Progress::BranchStarted { branch, .. }) => {
-                    bar.message(format!("tracing branch {branch}"))
-                }
-                Msg::Event(_) => {}
-                Msg::Done(eta, r) => match *r {
-                    Ok(b) => {
-                        let text = serde_json::to_string(&b)?;
-                        write_atomic(
-                            &out.join("branches"),
-                            &format!("branch-{}.json", b.branch),
-                            text.as_bytes(),
-                        )?;
-                        // The file name of older versions (by eta) is superseded.
-                        let _ = std::fs::remove_file(
-                            out.join("branches").join(format!("eta-{eta}.json")),
-                        );
-                        bar.done(format!(
-                            "branch {} traced ({} states, {:.2} s)",
-                            b.branch,
-                            b.points.len(),
-                            b.seconds
-                        ));
-                        have.push(b);
-                    }
-                    Err(e) => {
-                        bar.done(format!("branch {} failed", branch_of_eta(eta)));
-                        failures.push(format!("branch with eta = {eta} left out: {e}"));
-                    }
-                },
+    };
+    let result = rodloop_diagram::compute(&opts, &mut hook, &mut |p| match p {
+        Progress::BranchResumeRejected { eta, .. } => retrace.push(branch_of_eta(eta)),
+        Progress::BranchStarted { branch, .. } => {
+            note(&mut retrace);
+            bar.message(format!("tracing branch {branch}"))
+        }
+        Progress::BranchFailed { eta, .. } => {
+            bar.done(format!("branch {} failed", branch_of_eta(eta)))
+        }
+        Progress::AssemblyPlanned { .. } => {
+            note(&mut retrace);
+            bar.finish();
+            critical_bar = Some(Bar::new(1, "critical", quiet));
+        }
+        Progress::CriticalLocated { lbar_cr, kind, .. } => {
+            if let Some(b) = &critical_bar {
+                b.message(format!("{kind} at {lbar_cr:.9}"));
             }
         }
-        Ok(())
-    })?;
+        Progress::Planned { .. } | Progress::BranchResumed { .. } => {}
+        _ => note(&mut retrace),
+    });
+    note(&mut retrace);
     bar.finish();
-    if have.is_empty() {
-        bail!("no branch could be traced: {}", failures.join("; "));
-    }
-    let tracing = t0.elapsed().as_secs_f64();
-    let bar = Bar::new(1, "critical", quiet);
-    let mut d = assemble(opts, have, &mut |p| {
-        if let Progress::CriticalLocated { lbar_cr, kind, .. } = p {
-            bar.message(format!("{kind} at {lbar_cr:.9}"));
+    let d = result.map_err(|e| match e {
+        rodloop_diagram::DiagramError::InvalidOptions(m) if m.starts_with("no branch could") => {
+            anyhow::anyhow!(m)
         }
+        e => e.into(),
     })?;
-    bar.done(format!(
-        "critical lengths located ({} found)",
-        d.critical.len()
-    ));
-    bar.finish();
-    d.warnings.splice(0..0, failures);
-    d.timings.tracing = tracing;
-    d.timings.total = t0.elapsed().as_secs_f64();
+    if let Some(b) = critical_bar {
+        b.done(format!(
+            "critical lengths located ({} found)",
+            d.critical.len()
+        ));
+        b.finish();
+    }
     Ok(d)
 }
 
@@ -297,15 +285,15 @@ fn figure(d: &NumericDiagram, scene: &str) -> Figure {
                 if let Some(c) = d
                     .critical
                     .iter()
-                    .find(|c| c.lbar_cr > q.lbar.min(p.lbar) && c.lbar_cr < q.lbar.max(p.lbar))
+                    .find(|c| c.lbar_cr > q.value.min(p.value) && c.lbar_cr < q.value.max(p.value))
                 {
-                    let t = (c.lbar_cr - q.lbar) / (p.lbar - q.lbar);
+                    let t = (c.lbar_cr - q.value) / (p.value - q.value);
                     let e = q.energy + t * (p.energy - q.energy);
                     pts.push((c.lbar_cr, e, labels[k - 1]));
                     pts.push((c.lbar_cr, e, labels[k]));
                 }
             }
-            pts.push((p.lbar, p.energy, labels[k]));
+            pts.push((p.value, p.energy, labels[k]));
         }
         curves.extend(svg::runs(&pts, |label, points| {
             let (style, width) = style_of(label);

@@ -33,7 +33,7 @@ fn main() {
         let mut last: Option<NumericDiagram> = None;
         for _ in 0..runs {
             let t = Instant::now();
-            let d = compute(&opts, &[], &mut |_| {}).expect("diagram");
+            let d = compute(&opts, &mut (), &mut |_| {}).expect("diagram");
             times.push(t.elapsed().as_secs_f64());
             last = Some(d);
         }
@@ -67,7 +67,7 @@ fn main() {
             .iter()
             .flat_map(|b| {
                 b.points.iter().map(move |p| {
-                    let e = rodloop_exact::paper_branch_loop(b.eta, p.lbar)
+                    let e = rodloop_exact::paper_branch_loop(b.eta, p.value)
                         .and_then(|l| l.energy())
                         .expect("exact loop");
                     ((p.energy - e) / e).abs()

@@ -43,7 +43,9 @@ use rodloop_solver::{
 use serde::{Deserialize, Serialize};
 
 use crate::refine::resolve;
-use crate::trace::{newton_options, periods_of, TracedBranch};
+use crate::seed::periods_of;
+use crate::states::newton_options;
+use crate::types::TracedBranch;
 use crate::DiagramOptions;
 
 /// Distance `|Δ|` from the great circle at which the switched branch is solved.

@@ -19,7 +19,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::refine::BranchRefiner;
-use crate::trace::TracedBranch;
+use crate::types::TracedBranch;
 use crate::{DiagramError, DiagramOptions};
 
 /// Kind of a critical length: the exact layer's, shared so both models use one vocabulary.
@@ -91,7 +91,7 @@ pub(crate) fn detect_crossings(
 ) -> (Vec<Candidate>, Vec<String>) {
     let mut grid: Vec<f64> = branches
         .iter()
-        .flat_map(|b| b.points.iter().map(|p| p.lbar))
+        .flat_map(|b| b.points.iter().map(|p| p.value))
         .filter(|&l| l >= opts.lbar_min && l <= opts.lbar_max)
         .collect();
     grid.sort_by(f64::total_cmp);
@@ -285,12 +285,12 @@ pub(crate) fn collapses(
                 continue;
             };
             if let Some(p) = p {
-                let extrap = p.energy + p.slope * (mf - p.lbar);
+                let extrap = p.energy + p.slope * (mf - p.value);
                 checks.push(format!(
                     "branch {} ({end} end at L̄ = {:.6}, E = {:.9}) extrapolates to E = {:.9} \
                      at L̄ = {m} (difference {:.1e})",
                     b.branch,
-                    p.lbar,
+                    p.value,
                     p.energy,
                     extrap,
                     (extrap - circle).abs()

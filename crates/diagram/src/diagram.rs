@@ -1,7 +1,5 @@
 //! The assembled diagram: critical lengths, labels, great circles.
 
-use std::collections::VecDeque;
-use std::sync::{mpsc, Mutex};
 use std::time::Instant;
 
 use rodloop_solver::Accuracy;
@@ -10,7 +8,8 @@ use serde::Serialize;
 use crate::buckling::{self, BucklingReport};
 use crate::critical::{self, CriticalKind, CriticalLength};
 use crate::labels::{self, Label};
-use crate::trace::TracedBranch;
+use crate::parallel::run_parallel;
+use crate::types::TracedBranch;
 use crate::{DiagramError, DiagramOptions, Progress};
 
 /// Work of the assembly phase.
@@ -188,7 +187,7 @@ impl NumericDiagram {
                 b.points.iter().zip(ls).map(move |(p, &l)| DiagramRow {
                     branch: b.branch,
                     eta: b.eta,
-                    lbar: p.lbar,
+                    lbar: p.value,
                     energy: p.energy,
                     energy_g: p.energy_g,
                     energy_error: p.energy_error,
@@ -211,11 +210,11 @@ impl NumericDiagram {
         let i = self.branches.iter().position(|b| b.eta == eta)?;
         let b = &self.branches[i];
         let k = (0..b.points.len()).min_by(|&x, &y| {
-            (b.points[x].lbar - lbar)
+            (b.points[x].value - lbar)
                 .abs()
-                .total_cmp(&(b.points[y].lbar - lbar).abs())
+                .total_cmp(&(b.points[y].value - lbar).abs())
         })?;
-        Some((b.points[k].lbar, self.labels[i][k]))
+        Some((b.points[k].value, self.labels[i][k]))
     }
 
     /// Paper branch numbers lowest at `lbar` (two exactly at a critical length).
@@ -225,65 +224,6 @@ impl NumericDiagram {
             .map(rodloop_exact::branch_of_eta)
             .collect()
     }
-}
-
-/// Run `f` on every item on up to `threads` threads (largest first as given), forwarding the
-/// progress events to `progress` on the calling thread; results in the order of `items`.
-pub(crate) fn run_parallel<T, R, F>(
-    threads: usize,
-    items: Vec<T>,
-    progress: &mut dyn FnMut(Progress),
-    f: F,
-) -> Vec<R>
-where
-    T: Send,
-    R: Send,
-    F: Fn(T, &dyn Fn(Progress)) -> R + Sync,
-{
-    let count = items.len();
-    if threads <= 1 || count <= 1 {
-        let cell = std::cell::RefCell::new(progress);
-        return items
-            .into_iter()
-            .map(|it| f(it, &|p| (cell.borrow_mut())(p)))
-            .collect();
-    }
-    enum Msg<R> {
-        Progress(Progress),
-        Done(usize, R),
-    }
-    let queue = Mutex::new(items.into_iter().enumerate().collect::<VecDeque<_>>());
-    let (tx, rx) = mpsc::channel::<Msg<R>>();
-    let mut results: Vec<Option<R>> = (0..count).map(|_| None).collect();
-    std::thread::scope(|scope| {
-        for _ in 0..threads.min(count) {
-            let tx = tx.clone();
-            let queue = &queue;
-            let f = &f;
-            scope.spawn(move || loop {
-                let next = queue.lock().map(|mut q| q.pop_front()).unwrap_or(None);
-                let Some((i, item)) = next else { break };
-                let txp = tx.clone();
-                let r = f(item, &move |p| {
-                    let _ = txp.send(Msg::Progress(p));
-                });
-                if tx.send(Msg::Done(i, r)).is_err() {
-                    break;
-                }
-            });
-        }
-        drop(tx);
-        for msg in rx {
-            match msg {
-                Msg::Progress(p) => progress(p),
-                Msg::Done(i, r) => results[i] = Some(r),
-            }
-        }
-    });
-    results
-        .into_iter()
-        .map(|r| r.expect("every item is processed"))
-        .collect()
 }
 
 /// Everything after tracing: critical lengths (located on re-solved equilibria), labels,
@@ -316,31 +256,37 @@ pub fn assemble(
     let total_circles = circles.len();
     let mut tasks: Vec<Task> = circles.into_iter().map(Task::Circle).collect();
     tasks.extend(candidates.into_iter().map(Task::Crossing));
-    let results = run_parallel(opts.worker_threads(), tasks, progress, |task, tx| {
-        let t = Instant::now();
-        match task {
-            Task::Circle(m) => {
-                let r = buckling::analyse_circle(opts, m, &branches);
-                tx(Progress::GreatCircleDone {
-                    m,
-                    total: total_circles,
-                });
-                Done::Circle(m, r, t.elapsed().as_secs_f64())
-            }
-            Task::Crossing(cand) => {
-                let r = critical::locate_crossing(opts, &branches, &cand);
-                if let Ok(c) = &r {
-                    tx(Progress::CriticalLocated {
-                        kind: c.kind,
-                        lbar_cr: c.lbar_cr,
-                        from_branch: c.from_branch,
-                        to_branch: c.to_branch,
+    let results = run_parallel(
+        opts.worker_threads(),
+        tasks,
+        progress,
+        &mut |_| {},
+        |task, tx| {
+            let t = Instant::now();
+            match task {
+                Task::Circle(m) => {
+                    let r = buckling::analyse_circle(opts, m, &branches);
+                    tx(Progress::GreatCircleDone {
+                        m,
+                        total: total_circles,
                     });
+                    Done::Circle(m, r, t.elapsed().as_secs_f64())
                 }
-                Done::Crossing(Box::new(r), t.elapsed().as_secs_f64())
+                Task::Crossing(cand) => {
+                    let r = critical::locate_crossing(opts, &branches, &cand);
+                    if let Ok(c) = &r {
+                        tx(Progress::CriticalLocated {
+                            kind: c.kind,
+                            lbar_cr: c.lbar_cr,
+                            from_branch: c.from_branch,
+                            to_branch: c.to_branch,
+                        });
+                    }
+                    Done::Crossing(Box::new(r), t.elapsed().as_secs_f64())
+                }
             }
-        }
-    });
+        },
+    );
     let mut critical = Vec::new();
     let mut circle_results = Vec::new();
     for r in results {
@@ -440,6 +386,9 @@ pub fn assemble(
 
 fn check_branch(b: &TracedBranch) -> Result<(), DiagramError> {
     let bad = |reason: String| Err(DiagramError::InvalidBranch { eta: b.eta, reason });
+    if b.param != rodloop_solver::Param::Lbar {
+        return bad(format!("traced in {}, not in lbar", b.param));
+    }
     if b.points.is_empty() {
         return bad("no traced states".into());
     }
@@ -451,10 +400,10 @@ fn check_branch(b: &TracedBranch) -> Result<(), DiagramError> {
                 p.state.len()
             ));
         }
-        if !(p.lbar.is_finite() && p.energy.is_finite() && p.slope.is_finite()) {
+        if !(p.value.is_finite() && p.energy.is_finite() && p.slope.is_finite()) {
             return bad(format!("state {k} has non-finite values"));
         }
-        if k > 0 && p.lbar < b.points[k - 1].lbar {
+        if k > 0 && p.value < b.points[k - 1].value {
             return bad("states are not in increasing L̄".into());
         }
     }

@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::critical::{lowest_interpolated, CriticalKind, CriticalLength};
-use crate::trace::TracedBranch;
+use crate::types::TracedBranch;
 
 /// Stability label of an equilibrium (GUIDE §1, paper Sec. 3.1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -92,7 +92,7 @@ pub(crate) fn label_all(branches: &[TracedBranch], critical: &[CriticalLength]) 
                 .map(|p| {
                     if p.index > 0 {
                         Label::Unstable
-                    } else if lowest_etas(branches, critical, p.lbar).contains(&b.eta) {
+                    } else if lowest_etas(branches, critical, p.value).contains(&b.eta) {
                         Label::Stable
                     } else {
                         Label::Metastable

@@ -32,31 +32,54 @@
 //!    m-fold great circle becomes singular (Eqs. 33–34), and branch switching from the null
 //!    vectors onto the traced branches (merged when they coincide).
 //!
-//! [`compute`] runs it all; a caller that wants to save branches as they finish (and resume an
-//! interrupted run) calls [`compute_branch`] per branch and [`assemble`] at the end.
+//! [`compute`] runs it all, calling a [`BranchHook`] as each branch is ready (to save it) and
+//! asking it for branches traced before (to resume an interrupted run); [`compute_branch`]
+//! and [`assemble`] are the two halves for callers that schedule branches themselves.
+//!
+//! # Files
+//!
+//! | file | holds |
+//! |---|---|
+//! | `types.rs` | the serialisable [`TracedBranch`], [`TracedPoint`], [`BranchEnd`], [`IndexChange`] |
+//! | `seed.rs` | seeding a branch from the Euler rotation curve |
+//! | `march.rs` | [`march()`]: the stepping loop (one `Stepper`, any model and parameter) |
+//! | `ends.rs` | the approach to the great-circle ends |
+//! | `states.rs` | quantities of a traced state (Richardson partner, slope, index) |
+//! | `trace.rs` | [`compute_branch`]: seed, march both ways, ends, states |
+//! | `compute.rs` | [`compute`] with its [`BranchHook`] (resume, save) |
+//! | `parallel.rs` | the thread pool |
+//! | `refine.rs`, `critical.rs`, `labels.rs`, `buckling.rs`, `diagram.rs` | the assembly |
 //!
 //! Energies are `E R/(π D0)`, forces `λR³/D0` (with `R`, `D0` of the scene), as in the paper.
 
 #![warn(missing_docs)]
 
 pub mod buckling;
+mod compute;
 pub mod critical;
 mod diagram;
+mod ends;
 mod labels;
+pub mod march;
+mod parallel;
 pub mod refine;
+mod seed;
+mod states;
 pub mod trace;
-
-use std::time::Instant;
+pub mod types;
 
 pub use buckling::{Buckling, BucklingReport, Switching};
+pub use compute::{compute, BranchHook, Origin, Resume};
 pub use critical::{CriticalKind, CriticalLength};
 pub use diagram::{assemble, BranchSummary, DiagramRow, DiagramSummary, NumericDiagram, Timings};
 pub use labels::Label;
-pub use trace::{
-    compute_branch, BranchEnd, BranchTimings, IndexChange, PointSource, TracedBranch, TracedPoint,
-};
+pub use march::{march, FoldPolicy, March, MarchPoint, MarchSettings, MarchSpecial, MarchStop};
+/// The error type a [`BranchHook`] returns.
+pub use rodloop_continuation::BoxError;
+pub use trace::compute_branch;
+pub use types::{BranchEnd, BranchTimings, IndexChange, PointSource, TracedBranch, TracedPoint};
 
-use rodloop_solver::{Accuracy, SolverError, Stiffness};
+use rodloop_solver::{Accuracy, Param, SolverError, Stiffness};
 
 /// Errors of the diagram engine.
 #[derive(Debug, thiserror::Error)]
@@ -120,6 +143,9 @@ pub enum DiagramError {
         /// What is wrong with it.
         reason: String,
     },
+    /// The per-branch hook of [`compute`] failed (e.g. a branch file could not be written).
+    #[error("branch hook: {0}")]
+    Hook(#[source] rodloop_continuation::BoxError),
     /// An error of the solver outside the cases above.
     #[error("solver: {0}")]
     Solver(#[from] SolverError),
@@ -153,6 +179,14 @@ pub struct DiagramOptions {
     pub great_circles: bool,
     /// Worker threads for tracing and refinement (0: the available parallelism).
     pub threads: usize,
+    /// The continued parameter of the branches. Only [`Param::Lbar`] makes a branch diagram
+    /// (critical lengths, great circles); [`DiagramOptions::validate`] rejects the others.
+    /// Continuing a branch in another parameter (e.g. `d1` at fixed `L̄`) is done with
+    /// [`march()`] on a [`rodloop_solver::ParamProblem`].
+    pub param: Param,
+    /// Only these paper branch numbers ([`rodloop_exact::branch_of_eta`]); `None`: all of
+    /// [`DiagramOptions::etas`]. Not part of the fingerprint.
+    pub only_branches: Option<Vec<u32>>,
 }
 
 impl Default for DiagramOptions {
@@ -168,6 +202,8 @@ impl Default for DiagramOptions {
             end_distance: 5e-5,
             great_circles: true,
             threads: 0,
+            param: Param::Lbar,
+            only_branches: None,
         }
     }
 }
@@ -213,11 +249,18 @@ impl DiagramOptions {
                 ));
             }
         }
+        if self.param != Param::Lbar {
+            return bad(format!(
+                "a branch diagram is continued in lbar (got {}); use march() for other parameters",
+                self.param
+            ));
+        }
         self.stiffness.validate()?;
         Ok(())
     }
 
-    /// The branches `η` of the diagram, ascending.
+    /// The branches `η` of the diagram, ascending (those of
+    /// [`DiagramOptions::only_branches`] if given).
     pub fn etas(&self) -> Vec<u32> {
         let top = self.lbar_max.ceil() as u32 + 1;
         let max = self.eta_max.unwrap_or(top);
@@ -225,6 +268,11 @@ impl DiagramOptions {
             .filter(|&eta| {
                 let e = f64::from(eta);
                 e - 1.0 < self.lbar_max && e + 1.0 > self.lbar_min
+            })
+            .filter(|&eta| {
+                self.only_branches
+                    .as_ref()
+                    .is_none_or(|b| b.contains(&rodloop_exact::branch_of_eta(eta)))
             })
             .collect()
     }
@@ -313,8 +361,8 @@ pub enum Progress {
         /// Periods of `κ_g`.
         eta: u32,
     },
-    /// Tracing of a branch progressed (after every run of 25 continuation steps, and at the
-    /// end of each direction).
+    /// Tracing of a branch progressed (every 25 continuation steps, and at the end of each
+    /// direction).
     BranchStep {
         /// Periods of `κ_g`.
         eta: u32,
@@ -384,96 +432,4 @@ pub enum Progress {
         /// Of this many.
         total: usize,
     },
-}
-
-/// Compute the whole numeric diagram: [`compute_branch`] for every branch of
-/// [`DiagramOptions::etas`] not found (with a matching fingerprint) in `resume`, then
-/// [`assemble`]. Branches are traced on [`DiagramOptions::worker_threads`] threads; the
-/// progress callback is always called from the calling thread.
-pub fn compute(
-    opts: &DiagramOptions,
-    resume: &[TracedBranch],
-    progress: &mut dyn FnMut(Progress),
-) -> Result<NumericDiagram, DiagramError> {
-    opts.validate()?;
-    let start = Instant::now();
-    let etas = opts.etas();
-    if etas.is_empty() {
-        return Err(DiagramError::InvalidOptions(
-            "no branch meets the length range".into(),
-        ));
-    }
-    let fingerprint = opts.fingerprint();
-    let mut have: Vec<TracedBranch> = Vec::new();
-    let mut todo: Vec<u32> = Vec::new();
-    let mut rejected = Vec::new();
-    for &eta in &etas {
-        match resume.iter().find(|b| b.eta == eta) {
-            Some(b) if b.fingerprint == fingerprint && !b.points.is_empty() => have.push(b.clone()),
-            Some(b) => {
-                rejected.push(Progress::BranchResumeRejected {
-                    eta,
-                    reason: if b.points.is_empty() {
-                        "no traced points".into()
-                    } else {
-                        format!(
-                            "traced with other options ({} ≠ {})",
-                            b.fingerprint, fingerprint
-                        )
-                    },
-                });
-                todo.push(eta);
-            }
-            None => todo.push(eta),
-        }
-    }
-    progress(Progress::Planned {
-        etas: etas.clone(),
-        resumed: have.len(),
-    });
-    for r in rejected {
-        progress(r);
-    }
-    for b in &have {
-        progress(Progress::BranchResumed {
-            branch: b.branch,
-            eta: b.eta,
-            points: b.points.len(),
-        });
-    }
-    // Largest branches first, for the balance of the threads.
-    todo.sort_by_key(|&eta| std::cmp::Reverse(eta));
-    let traced = diagram::run_parallel(opts.worker_threads(), todo, progress, |eta, tx| {
-        let r = compute_branch(opts, eta, &mut |p| tx(p));
-        if let Err(e) = &r {
-            tx(Progress::BranchFailed {
-                eta,
-                reason: e.to_string(),
-            });
-        }
-        r
-    });
-    // A branch that cannot be traced at all is left out with a warning (the others still make
-    // a diagram); invalid options fail everything.
-    let mut failures = Vec::new();
-    for t in traced {
-        match t {
-            Ok(b) => have.push(b),
-            Err(e @ DiagramError::InvalidOptions(_)) => return Err(e),
-            Err(e) => failures.push(format!("branch left out of the diagram: {e}")),
-        }
-    }
-    if have.is_empty() {
-        return Err(DiagramError::InvalidOptions(format!(
-            "no branch could be traced: {}",
-            failures.join("; ")
-        )));
-    }
-    have.sort_by_key(|b| b.eta);
-    let tracing_seconds = start.elapsed().as_secs_f64();
-    let mut d = assemble(opts, have, progress)?;
-    d.warnings.splice(0..0, failures);
-    d.timings.tracing = tracing_seconds;
-    d.timings.total = start.elapsed().as_secs_f64();
-    Ok(d)
 }

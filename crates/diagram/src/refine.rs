@@ -16,7 +16,8 @@
 
 use rodloop_solver::{solve, solve_from_state, Accuracy, Equilibrium, SolverError};
 
-use crate::trace::{energy_slope, model_with_phase, newton_options, TracedBranch};
+use crate::states::{energy_slope, model_with_phase, newton_options};
+use crate::types::TracedBranch;
 use crate::DiagramOptions;
 
 /// `(N_f, N_c)`: the two reporting resolutions (cells) of branch `eta` (see the table above).

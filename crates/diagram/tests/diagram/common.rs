@@ -9,7 +9,7 @@ use rodloop_solver::Accuracy;
 pub fn default_diagram() -> &'static NumericDiagram {
     static D: OnceLock<NumericDiagram> = OnceLock::new();
     D.get_or_init(|| {
-        compute(&DiagramOptions::default(), &[], &mut |_| {}).expect("default diagram")
+        compute(&DiagramOptions::default(), &mut (), &mut |_| {}).expect("default diagram")
     })
 }
 
@@ -19,7 +19,7 @@ pub fn fast_diagram() -> &'static NumericDiagram {
     D.get_or_init(|| {
         compute(
             &DiagramOptions::with_accuracy(Accuracy::Fast),
-            &[],
+            &mut (),
             &mut |_| {},
         )
         .expect("fast diagram")

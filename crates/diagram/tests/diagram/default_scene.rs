@@ -99,19 +99,19 @@ fn labels_agree_with_the_exact_lowest_branch() {
     for (b, labels) in d.branches.iter().zip(&d.labels) {
         for (p, &l) in b.points.iter().zip(labels) {
             // Lowest exact branch at this length (skip lengths at a critical value).
-            if crit.iter().any(|c| (c - p.lbar).abs() < 1e-6) {
+            if crit.iter().any(|c| (c - p.value).abs() < 1e-6) {
                 continue;
             }
             let lowest = (1..=5)
-                .filter(|&e| rodloop_exact::paper_branch_loop(e, p.lbar).is_ok())
-                .min_by(|&a, &c| exact_energy(a, p.lbar).total_cmp(&exact_energy(c, p.lbar)))
+                .filter(|&e| rodloop_exact::paper_branch_loop(e, p.value).is_ok())
+                .min_by(|&a, &c| exact_energy(a, p.value).total_cmp(&exact_energy(c, p.value)))
                 .unwrap();
             let want = if lowest == b.eta {
                 Label::Stable
             } else {
                 Label::Metastable
             };
-            assert_eq!(l, want, "branch {} at L̄ = {}", b.branch, p.lbar);
+            assert_eq!(l, want, "branch {} at L̄ = {}", b.branch, p.value);
         }
     }
 }
@@ -121,7 +121,7 @@ fn traced_energies_forces_and_slopes_match_the_exact_loops() {
     let d = default_diagram();
     for b in &d.branches {
         for p in &b.points {
-            let ex = rodloop_exact::paper_branch_loop(b.eta, p.lbar).unwrap();
+            let ex = rodloop_exact::paper_branch_loop(b.eta, p.value).unwrap();
             let e = ex.energy().unwrap();
             let err = (p.energy - e).abs();
             let est = p.energy_error.expect("error estimate");
@@ -129,13 +129,13 @@ fn traced_energies_forces_and_slopes_match_the_exact_loops() {
                 err <= est + 1e-12,
                 "branch {} at {}: error {err:e} > estimate {est:e}",
                 b.branch,
-                p.lbar
+                p.value
             );
             assert!(
                 err <= 5e-6 * e,
                 "branch {} at {}: {err:e}",
                 b.branch,
-                p.lbar
+                p.value
             );
             assert!((p.energy_g - ex.energy_g().unwrap()).abs() <= 5e-6 * e);
             let (lo, hi) = ex.lambda_range();
@@ -144,26 +144,26 @@ fn traced_energies_forces_and_slopes_match_the_exact_loops() {
                 (p.lambda_min - lo).abs() <= 1e-3 * scale,
                 "λ_min of {} at {}",
                 b.branch,
-                p.lbar
+                p.value
             );
             assert!(
                 (p.lambda_max - hi).abs() <= 1e-3 * scale,
                 "λ_max of {} at {}",
                 b.branch,
-                p.lbar
+                p.value
             );
             // dE/dL̄ from the multiplier against a difference quotient of the exact energies
             // (away from the ends, where the exact branch is not resolved by ±h).
             let h = 1e-4;
             let (e0, e1) = (f64::from(b.eta) - 1.0, f64::from(b.eta) + 1.0);
-            if p.lbar - h > e0.max(0.0) + 1e-3 && p.lbar + h < e1 - 1e-3 {
-                let fd =
-                    (exact_energy(b.eta, p.lbar + h) - exact_energy(b.eta, p.lbar - h)) / (2.0 * h);
+            if p.value - h > e0.max(0.0) + 1e-3 && p.value + h < e1 - 1e-3 {
+                let fd = (exact_energy(b.eta, p.value + h) - exact_energy(b.eta, p.value - h))
+                    / (2.0 * h);
                 assert!(
                     (p.slope - fd).abs() <= 1e-3 * fd.abs().max(1.0),
                     "slope of {} at {}: {} vs {fd}",
                     b.branch,
-                    p.lbar,
+                    p.value,
                     p.slope
                 );
             }
@@ -181,8 +181,8 @@ fn every_branch_end_is_reached_and_explained() {
     for b in &d.branches {
         let e = f64::from(b.eta);
         for (end, stop, lbar) in [
-            (&b.low_end, &b.stop_low, b.points[0].lbar),
-            (&b.high_end, &b.stop_high, b.points.last().unwrap().lbar),
+            (&b.low_end, &b.stop_low, b.points[0].value),
+            (&b.high_end, &b.stop_high, b.points.last().unwrap().value),
         ] {
             println!("branch {} (η = {}): {stop}", b.branch, b.eta);
             assert!(!stop.is_empty());
@@ -190,7 +190,7 @@ fn every_branch_end_is_reached_and_explained() {
                 BranchEnd::GreatCircle {
                     m,
                     distance,
-                    lbar: at,
+                    value: at,
                 } => {
                     assert!(*m == b.eta - 1 || *m == b.eta + 1);
                     assert!(*distance <= 1e-4 && *distance > 0.0);
@@ -198,7 +198,7 @@ fn every_branch_end_is_reached_and_explained() {
                     assert!((lbar - f64::from(*m)).abs() <= 1e-4);
                     assert!(stop.contains("great circle"));
                 }
-                BranchEnd::Range { lbar: at } => {
+                BranchEnd::Range { value: at } => {
                     assert!(*at == 1.0 || *at == 5.0, "range end at {at}");
                     assert_eq!(*at, lbar);
                     // Only η = 1 (starts at L̄ → 0) and η = 5 (ends at 6) meet the range ends.
@@ -207,10 +207,10 @@ fn every_branch_end_is_reached_and_explained() {
                 BranchEnd::Failed { reason, .. } => panic!("branch {} failed: {reason}", b.branch),
             }
         }
-        assert!(b.points.windows(2).all(|w| w[0].lbar < w[1].lbar));
+        assert!(b.points.windows(2).all(|w| w[0].value < w[1].value));
         assert!(
-            b.points[0].lbar >= (e - 1.0).max(1.0)
-                && b.points.last().unwrap().lbar <= (e + 1.0).min(5.0)
+            b.points[0].value >= (e - 1.0).max(1.0)
+                && b.points.last().unwrap().value <= (e + 1.0).min(5.0)
         );
     }
     assert!(d.warnings.is_empty(), "{:#?}", d.warnings);

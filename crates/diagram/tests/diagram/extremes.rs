@@ -40,7 +40,7 @@ fn invalid_options_are_rejected() {
             ..fast()
         },
     ] {
-        let err = compute(&opts, &[], &mut |_| {}).unwrap_err();
+        let err = compute(&opts, &mut (), &mut |_| {}).unwrap_err();
         println!("{err}");
         assert!(matches!(
             err,
@@ -77,7 +77,7 @@ fn ends_within_the_end_distance_of_every_great_circle() {
         // The amplitude vanishes like √|L̄ − m| at the ends.
         let (p0, p1) = (&b.points[0], &b.points[1]);
         let ratio = p1.amplitude / p0.amplitude;
-        let expect = ((p1.lbar - f64::from(eta - 1)) / (p0.lbar - f64::from(eta - 1))).sqrt();
+        let expect = ((p1.value - f64::from(eta - 1)) / (p0.value - f64::from(eta - 1))).sqrt();
         assert!((ratio / expect - 1.0).abs() < 0.05, "{ratio} vs {expect}");
         assert!(b.points.iter().all(|p| p.index == 0));
     }
@@ -92,7 +92,7 @@ fn narrow_range_across_a_great_circle_and_a_range_below_one() {
         ..fast()
     };
     assert_eq!(opts.etas(), vec![2, 3, 4]);
-    let d = compute(&opts, &[], &mut |_| {}).unwrap();
+    let d = compute(&opts, &mut (), &mut |_| {}).unwrap();
     assert!(d.warnings.is_empty(), "{:#?}", d.warnings);
     assert_eq!(d.critical.len(), 1);
     assert_eq!(
@@ -110,10 +110,10 @@ fn narrow_range_across_a_great_circle_and_a_range_below_one() {
         ..fast()
     };
     assert_eq!(opts.etas(), vec![1, 2]);
-    let d = compute(&opts, &[], &mut |_| {}).unwrap();
+    let d = compute(&opts, &mut (), &mut |_| {}).unwrap();
     let fig8 = d.branch_by_eta(1).unwrap();
-    assert!(matches!(fig8.low_end, BranchEnd::Range { lbar } if lbar == 0.6));
-    assert!((fig8.points[0].lbar - 0.6).abs() < 1e-12);
+    assert!(matches!(fig8.low_end, BranchEnd::Range { value } if value == 0.6));
+    assert!((fig8.points[0].value - 0.6).abs() < 1e-12);
     // The collapse at L̄ = 1 (from the circle, lowest below L̄ = 1, to the saddle that
     // emanates from the great circle) and the crossing.
     let kinds: Vec<_> = d

@@ -15,7 +15,7 @@ fn tanh_profile_diagram_runs_through() {
         },
         ..DiagramOptions::with_accuracy(Accuracy::Fast)
     };
-    let d = compute(&opts, &[], &mut |_| {}).unwrap();
+    let d = compute(&opts, &mut (), &mut |_| {}).unwrap();
     println!("{:#?}", d.warnings);
     assert_eq!(d.branches.len(), 5);
     // Mean stiffness 0.75 D0: a great circle at L̄ = m has E R/(π D0) = 0.75 m.
@@ -50,20 +50,20 @@ fn tanh_profile_diagram_runs_through() {
             assert!(p.energy.is_finite() && p.energy > 0.0);
             // Energies are bounded below by the great-circle (normal) part and lie above
             // the geodesic part.
-            assert!(p.energy >= 0.75 * p.lbar - 1e-6 && p.energy_g >= 0.0);
+            assert!(p.energy >= 0.75 * p.value - 1e-6 && p.energy_g >= 0.0);
             assert!(p.energy_g < p.energy);
             assert_eq!(labels[k] == Label::Unstable, p.index > 0);
             // The slopes integrate to the energy differences (trapezoidal rule).
             if k > 0 {
                 let q = &b.points[k - 1];
-                let h = p.lbar - q.lbar;
+                let h = p.value - q.value;
                 let de = p.energy - q.energy;
                 let trap = 0.5 * h * (p.slope + q.slope);
                 assert!(
                     (de - trap).abs() <= 0.05 * h * (p.slope.abs() + q.slope.abs()) + 1e-4,
                     "branch {} at {}: {de} vs {trap}",
                     b.branch,
-                    p.lbar
+                    p.value
                 );
             }
         }

@@ -8,3 +8,4 @@ mod great_circles;
 mod inhomogeneous;
 mod resolution;
 mod resume;
+mod stepping;

@@ -26,8 +26,8 @@ fn coarse_and_fine_tracing_give_the_same_labels_and_critical_lengths() {
         trace_cells_per_period: Some(40),
         ..DiagramOptions::with_accuracy(Accuracy::Fast)
     };
-    let dc = compute(&coarse, &[], &mut |_| {}).unwrap();
-    let df = compute(&fine, &[], &mut |_| {}).unwrap();
+    let dc = compute(&coarse, &mut (), &mut |_| {}).unwrap();
+    let df = compute(&fine, &mut (), &mut |_| {}).unwrap();
     let d0 = fast_diagram();
     for d in [&dc, &df] {
         assert!(d.warnings.is_empty(), "{:#?}", d.warnings);

@@ -1,6 +1,8 @@
 //! Resuming from serialised branches gives identical results.
 
-use rodloop_diagram::{assemble, compute, compute_branch, DiagramOptions, Progress, TracedBranch};
+use rodloop_diagram::{
+    assemble, compute, compute_branch, DiagramOptions, Progress, Resume, TracedBranch,
+};
 use rodloop_solver::Accuracy;
 
 use crate::common::fast_diagram;
@@ -35,7 +37,7 @@ fn resume_from_all_or_some_branches_reproduces_the_diagram() {
         .collect();
     // All branches resumed: nothing is traced again.
     let mut events = Vec::new();
-    let r = compute(&opts, &saved, &mut |p| events.push(p)).unwrap();
+    let r = compute(&opts, &mut Resume(&saved), &mut |p| events.push(p)).unwrap();
     assert!(!events
         .iter()
         .any(|e| matches!(e, Progress::BranchStarted { .. })));
@@ -52,7 +54,7 @@ fn resume_from_all_or_some_branches_reproduces_the_diagram() {
     assert_eq!(r.great_circles, d.great_circles);
     // Two branches resumed, the others traced again (deterministically).
     let partial = vec![saved[1].clone(), saved[3].clone()];
-    let r = compute(&opts, &partial, &mut |_| {}).unwrap();
+    let r = compute(&opts, &mut Resume(&partial), &mut |_| {}).unwrap();
     assert_eq!(r.critical, d.critical);
     assert_eq!(r.labels, d.labels);
     for (a, b) in r.branches.iter().zip(&d.branches) {
@@ -86,7 +88,7 @@ fn branches_traced_with_other_options_are_not_reused() {
         ..options()
     };
     let mut rejected = 0;
-    let r = compute(&opts, &d.branches, &mut |p| {
+    let r = compute(&opts, &mut Resume(&d.branches), &mut |p| {
         if matches!(p, Progress::BranchResumeRejected { .. }) {
             rejected += 1;
         }

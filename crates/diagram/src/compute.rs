@@ -1,0 +1,175 @@
+//! [`compute`]: every branch (traced in parallel, or supplied by a [`BranchHook`] to
+//! resume), then the assembly.
+
+use std::time::Instant;
+
+use rodloop_continuation::BoxError;
+
+use crate::diagram::{assemble, NumericDiagram};
+use crate::parallel::run_parallel;
+use crate::trace::compute_branch;
+use crate::types::TracedBranch;
+use crate::{DiagramError, DiagramOptions, Progress};
+
+/// How a branch handed to [`BranchHook::finished`] came about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Origin {
+    /// Traced by this call of [`compute`].
+    Traced,
+    /// Supplied by [`BranchHook::resume`] (and accepted: same fingerprint).
+    Resumed,
+}
+
+/// Per-branch hook of [`compute`]: supplies branches traced earlier and is told about every
+/// branch of the diagram when it is ready. Both methods are called on the thread that called
+/// [`compute`].
+pub trait BranchHook {
+    /// A branch traced earlier for `eta` (e.g. read from a file), to use instead of tracing
+    /// it. [`compute`] accepts it only if its [`TracedBranch::fingerprint`] matches
+    /// [`DiagramOptions::fingerprint`] and it has states; otherwise it reports
+    /// [`Progress::BranchResumeRejected`] and traces the branch. Default: none.
+    fn resume(&mut self, eta: u32) -> Option<TracedBranch> {
+        let _ = eta;
+        None
+    }
+
+    /// Called once for every branch of the diagram as soon as it is ready: traced
+    /// ([`Origin::Traced`], in the order the threads finish) or resumed
+    /// ([`Origin::Resumed`], before tracing starts). Not called for a branch that could
+    /// not be traced. An error makes [`compute`] fail with [`DiagramError::Hook`] (the
+    /// branches already being traced finish first; the hook is not called again).
+    /// Default: nothing.
+    fn finished(&mut self, branch: &TracedBranch, origin: Origin) -> Result<(), BoxError> {
+        let _ = (branch, origin);
+        Ok(())
+    }
+}
+
+/// No hook: trace every branch.
+impl BranchHook for () {}
+
+/// Resume from branches in memory (e.g. deserialised from files); nothing is saved.
+#[derive(Clone, Copy, Debug)]
+pub struct Resume<'a>(pub &'a [TracedBranch]);
+
+impl BranchHook for Resume<'_> {
+    fn resume(&mut self, eta: u32) -> Option<TracedBranch> {
+        self.0.iter().find(|b| b.eta == eta).cloned()
+    }
+}
+
+/// Compute the whole numeric diagram: for every branch of [`DiagramOptions::etas`], the
+/// branch the hook supplies ([`BranchHook::resume`], if its fingerprint matches) or
+/// [`compute_branch`], then [`assemble`]. Branches are traced on
+/// [`DiagramOptions::worker_threads`] threads, largest `η` first; the progress callback and
+/// the hook are always called from the calling thread.
+///
+/// A branch that cannot be traced is left out with a warning; the call fails if none is
+/// left, on invalid options, or if the hook fails.
+pub fn compute(
+    opts: &DiagramOptions,
+    hook: &mut dyn BranchHook,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<NumericDiagram, DiagramError> {
+    opts.validate()?;
+    let start = Instant::now();
+    let etas = opts.etas();
+    if etas.is_empty() {
+        return Err(DiagramError::InvalidOptions(
+            "no branch meets the length range".into(),
+        ));
+    }
+    let fingerprint = opts.fingerprint();
+    let mut have: Vec<TracedBranch> = Vec::new();
+    let mut todo: Vec<u32> = Vec::new();
+    let mut rejected = Vec::new();
+    for &eta in &etas {
+        match hook.resume(eta) {
+            Some(b) if b.fingerprint == fingerprint && b.eta == eta && !b.points.is_empty() => {
+                have.push(b)
+            }
+            Some(b) => {
+                rejected.push(Progress::BranchResumeRejected {
+                    eta,
+                    reason: if b.points.is_empty() {
+                        "no traced points".into()
+                    } else if b.eta != eta {
+                        format!("the hook supplied branch eta = {} for eta = {eta}", b.eta)
+                    } else {
+                        format!(
+                            "traced with other options ({} ≠ {})",
+                            b.fingerprint, fingerprint
+                        )
+                    },
+                });
+                todo.push(eta);
+            }
+            None => todo.push(eta),
+        }
+    }
+    progress(Progress::Planned {
+        etas: etas.clone(),
+        resumed: have.len(),
+    });
+    for r in rejected {
+        progress(r);
+    }
+    for b in &have {
+        progress(Progress::BranchResumed {
+            branch: b.branch,
+            eta: b.eta,
+            points: b.points.len(),
+        });
+        hook.finished(b, Origin::Resumed)
+            .map_err(DiagramError::Hook)?;
+    }
+    // Largest branches first, for the balance of the threads.
+    todo.sort_by_key(|&eta| std::cmp::Reverse(eta));
+    let mut hook_error = None;
+    let traced = run_parallel(
+        opts.worker_threads(),
+        todo,
+        progress,
+        &mut |r: &Result<TracedBranch, DiagramError>| {
+            if let (Ok(b), None) = (r, &hook_error) {
+                hook_error = hook.finished(b, Origin::Traced).err();
+            }
+        },
+        |eta, tx| {
+            let r = compute_branch(opts, eta, &mut |p| tx(p));
+            if let Err(e) = &r {
+                tx(Progress::BranchFailed {
+                    eta,
+                    reason: e.to_string(),
+                });
+            }
+            r
+        },
+    );
+    if let Some(e) = hook_error {
+        return Err(DiagramError::Hook(e));
+    }
+    // A branch that cannot be traced at all is left out with a warning (the others still make
+    // a diagram); invalid options fail everything.
+    let mut failures = Vec::new();
+    for t in traced {
+        match t {
+            Ok(b) => have.push(b),
+            Err(e @ DiagramError::InvalidOptions(_)) => return Err(e),
+            Err(e) => failures.push(format!("branch left out of the diagram: {e}")),
+        }
+    }
+    if have.is_empty() {
+        return Err(DiagramError::InvalidOptions(format!(
+            "no branch could be traced: {}",
+            failures.join("; ")
+        )));
+    }
+    have.sort_by_key(|b| b.eta);
+    let tracing_seconds = start.elapsed().as_secs_f64();
+    let mut d = assemble(opts, have, progress)?;
+    d.warnings.splice(0..0, failures);
+    d.timings.tracing = tracing_seconds;
+    d.timings.total = start.elapsed().as_secs_f64();
+    Ok(d)
+}

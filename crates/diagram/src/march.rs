@@ -1,0 +1,438 @@
+//! The stepping loop: one [`Stepper`](rodloop_continuation::Stepper) from a solved state towards a limit of the continued
+//! parameter, for any confinement model ([`Confinement`]) and any named parameter
+//! ([`ParamProblem`]).
+//!
+//! [`march`] takes one pseudo-arclength step per [`Stepper::step`](rodloop_continuation::Stepper::step) and reacts to what each
+//! step reports:
+//!
+//! * **index changes** (located by the continuation's bisection on the stability index of
+//!   [`Confinement::index`]) become points of the march and [`IndexChange`]s;
+//! * **folds** (turning points of the parameter, located by the continuation): with
+//!   [`FoldPolicy::Stop`] the march ends before the step that turned (what the branch
+//!   diagram does today); with [`FoldPolicy::Follow`] the fold is recorded and the stepper
+//!   simply goes on, so the march comes back in the parameter on the other sheet;
+//! * **branch points** (when [`MarchSettings::detect_branch_points`] is on) are recorded with
+//!   their state and tangent in [`March::branch_points`], unscaled: a caller switches onto
+//!   the second branch with [`rodloop_continuation::Continuation::start_switch`] there and
+//!   marches it with the same loop;
+//! * **evaluation errors** of the model (a trial iterate it cannot evaluate, a stability
+//!   index that fails) do not end the march: the step is retried with half the step size
+//!   (the stepper stays at its last accepted point), down to `ds_min`.
+//!
+//! # Scaling
+//!
+//! The stepper works on the model's unknowns with the first [`MarchSettings::scaled`] of them
+//! (the shape unknowns, e.g. the curvatures) multiplied by [`MarchSettings::scale`]; for the
+//! surface model `R/√(2N)` makes the Euclidean norm of that part the root-mean-square of
+//! `κ_g R`, so that step sizes do not depend on the resolution. The scaling is applied to
+//! the model's own factorisation too ([`Confinement::factorize`], `O(N)`), not by forming a
+//! dense matrix.
+
+use nalgebra::{DMatrix, DVector};
+use rodloop_continuation::{
+    BoxError, Continuation, Direction, Factorization, Problem, PseudoArclength, SpecialKind,
+    Stability, StopReason,
+};
+use rodloop_solver::{Confinement, ParamProblem, SolverError};
+
+use crate::types::{IndexChange, PointSource};
+
+/// What [`march`] does at a fold (turning point) of the continued parameter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FoldPolicy {
+    /// End the march before the step that turned back (the points beyond are dropped).
+    Stop,
+    /// Record the fold and keep stepping through it.
+    Follow,
+}
+
+/// Settings of one [`march`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct MarchSettings {
+    /// The value of the continued parameter where the march ends; its side of the start
+    /// value gives the direction.
+    pub limit: f64,
+    /// First step size (scaled norm).
+    pub ds: f64,
+    /// Smallest step size: below it the march stops.
+    pub ds_min: f64,
+    /// Largest step size.
+    pub ds_max: f64,
+    /// Budget of accepted steps.
+    pub max_steps: usize,
+    /// Corrector tolerance (max-norm of the residual).
+    pub tol: f64,
+    /// Width to which special points are located (arclength).
+    pub locate_tol: f64,
+    /// Number of leading unknowns scaled by [`MarchSettings::scale`].
+    pub scaled: usize,
+    /// Scale of the leading unknowns (positive).
+    pub scale: f64,
+    /// What to do at a fold.
+    pub folds: FoldPolicy,
+    /// Whether to detect and locate simple branch points.
+    pub detect_branch_points: bool,
+    /// Eigenvalues below `−index_tolerance` count as negative in the stability index.
+    pub index_tolerance: f64,
+    /// Steps between two calls of the progress callback (which is also called at the end).
+    pub progress_every: usize,
+}
+
+/// A state reached by the march (unscaled).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MarchPoint {
+    /// The model's unknowns.
+    pub x: Vec<f64>,
+    /// Value of the continued parameter.
+    pub value: f64,
+    /// Stability index, if known.
+    pub index: Option<usize>,
+    /// How it was obtained.
+    pub source: PointSource,
+}
+
+/// A located special point that the march recorded (fold or branch point), unscaled.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MarchSpecial {
+    /// What it is.
+    pub kind: SpecialKind,
+    /// The model's unknowns there.
+    pub x: Vec<f64>,
+    /// Value of the continued parameter.
+    pub value: f64,
+    /// Unit tangent `(ẋ, ṗ)` in the scaled unknowns, oriented in the marching direction.
+    pub tangent: Vec<f64>,
+}
+
+/// Why a march ended.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MarchStop {
+    /// The limit was reached; the last point lies on it.
+    Reached,
+    /// A fold with [`FoldPolicy::Stop`]: the parameter turned back at `value`.
+    Fold {
+        /// Where the parameter turned (the located fold, or the last point kept).
+        value: f64,
+    },
+    /// The step size fell below its minimum.
+    StepTooSmall {
+        /// The rejected step size.
+        ds: f64,
+        /// Value of the last accepted point.
+        value: f64,
+        /// The last evaluation error, if errors shrank the step.
+        cause: Option<String>,
+    },
+    /// The step budget was used up.
+    MaxSteps,
+    /// The branch closed a loop.
+    ClosedLoop,
+}
+
+/// The outcome of [`march`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct March {
+    /// The states reached, in marching order, without the start; located index changes
+    /// are among them ([`PointSource::IndexChange`]).
+    pub points: Vec<MarchPoint>,
+    /// The located index changes, with `below`/`above` in increasing parameter.
+    pub index_changes: Vec<IndexChange>,
+    /// Located folds (followed or not) and branch points.
+    pub special: Vec<MarchSpecial>,
+    /// Accepted continuation steps.
+    pub steps: usize,
+    /// Why the march ended.
+    pub stop: MarchStop,
+}
+
+impl March {
+    /// The located branch points.
+    pub fn branch_points(&self) -> impl Iterator<Item = &MarchSpecial> {
+        self.special
+            .iter()
+            .filter(|s| s.kind == SpecialKind::BranchPoint)
+    }
+}
+
+/// The continuation problem of a [`ParamProblem`] with the leading unknowns scaled.
+struct Scaled<'a, M> {
+    inner: &'a ParamProblem<M>,
+    k: usize,
+    s: f64,
+}
+
+impl<M> Scaled<'_, M> {
+    fn unscale(&self, xt: &DVector<f64>) -> DVector<f64> {
+        let mut x = xt.clone();
+        x.rows_mut(0, self.k).scale_mut(1.0 / self.s);
+        x
+    }
+
+    fn scale(&self, x: &[f64]) -> DVector<f64> {
+        let mut xt = DVector::from_column_slice(x);
+        xt.rows_mut(0, self.k).scale_mut(self.s);
+        xt
+    }
+}
+
+impl<M: Confinement> Problem for Scaled<'_, M> {
+    type Error = SolverError;
+
+    fn dim(&self) -> usize {
+        self.inner.dim()
+    }
+
+    fn residual(&self, x: &DVector<f64>, p: f64) -> Result<DVector<f64>, SolverError> {
+        self.inner.residual(&self.unscale(x), p)
+    }
+
+    fn jacobian(&self, x: &DVector<f64>, p: f64) -> Result<DMatrix<f64>, SolverError> {
+        let mut j = self.inner.jacobian(&self.unscale(x), p)?;
+        j.columns_mut(0, self.k).scale_mut(1.0 / self.s);
+        Ok(j)
+    }
+
+    fn dparam(&self, x: &DVector<f64>, p: f64) -> Result<DVector<f64>, SolverError> {
+        self.inner.dparam(&self.unscale(x), p)
+    }
+
+    fn factorize(
+        &self,
+        x: &DVector<f64>,
+        p: f64,
+    ) -> Result<Box<dyn Factorization + '_>, SolverError> {
+        Ok(Box::new(ScaledFactor {
+            inner: self.inner.factorize(&self.unscale(x), p)?,
+            k: self.k,
+            s: self.s,
+        }))
+    }
+}
+
+/// `J D` with `D = diag(1/s, …, 1/s, 1, …)` (`k` entries `1/s`), from a factorisation of `J`.
+struct ScaledFactor<'a> {
+    inner: Box<dyn Factorization + 'a>,
+    k: usize,
+    s: f64,
+}
+
+impl Factorization for ScaledFactor<'_> {
+    fn solve(&self, b: &DVector<f64>) -> Option<DVector<f64>> {
+        // (J D) y = b  ⇔  y = D⁻¹ J⁻¹ b.
+        let mut y = self.inner.solve(b)?;
+        y.rows_mut(0, self.k).scale_mut(self.s);
+        Some(y)
+    }
+
+    fn apply(&self, v: &DVector<f64>) -> DVector<f64> {
+        let mut w = v.clone();
+        w.rows_mut(0, self.k).scale_mut(1.0 / self.s);
+        self.inner.apply(&w)
+    }
+
+    fn det_sign(&self) -> f64 {
+        self.inner.det_sign()
+    }
+
+    fn log_abs_det(&self) -> f64 {
+        self.inner.log_abs_det() - self.k as f64 * self.s.ln()
+    }
+}
+
+/// The model's stability index at a scaled state.
+struct Index<'a, M> {
+    scaled: &'a Scaled<'a, M>,
+    tolerance: f64,
+}
+
+impl<M: Confinement> Stability for Index<'_, M> {
+    fn index(&self, x: &DVector<f64>, p: f64) -> Result<usize, BoxError> {
+        let model = self.scaled.inner.model_at(p)?;
+        Ok(model.index(self.scaled.unscale(x).as_slice(), self.tolerance)?)
+    }
+}
+
+/// Errors of [`march`]: the settings, or a start the continuation cannot correct.
+fn start_error(e: impl std::fmt::Display) -> SolverError {
+    SolverError::InvalidInput(format!("the march cannot start: {e}"))
+}
+
+/// March from the solved state `(x0, p0)` of `problem` towards `settings.limit` (see the
+/// module docs). `progress(value, steps)` is called every
+/// [`MarchSettings::progress_every`] steps and at the end.
+///
+/// Nothing is marched (an empty [`March`] that has [`MarchStop::Reached`]) if `p0` already
+/// lies on the limit.
+///
+/// # Errors
+/// Invalid settings, a state of the wrong length, or a start that the continuation cannot
+/// correct or whose stability index cannot be computed. Trouble after the start ends the
+/// march with a [`MarchStop`] instead.
+pub fn march<M: Confinement>(
+    problem: &ParamProblem<M>,
+    x0: &[f64],
+    p0: f64,
+    settings: &MarchSettings,
+    progress: &mut dyn FnMut(f64, usize),
+) -> Result<March, SolverError> {
+    let st = settings;
+    if !(st.scale.is_finite() && st.scale > 0.0) || st.scaled > problem.dim() {
+        return Err(SolverError::InvalidInput(format!(
+            "march scaling: {} unknowns by {} (dimension {})",
+            st.scaled,
+            st.scale,
+            problem.dim()
+        )));
+    }
+    if x0.len() != problem.dim() {
+        return Err(SolverError::WrongLength {
+            expected: problem.dim(),
+            found: x0.len(),
+        });
+    }
+    let mut out = March {
+        points: Vec::new(),
+        index_changes: Vec::new(),
+        special: Vec::new(),
+        steps: 0,
+        stop: MarchStop::Reached,
+    };
+    let side = if st.limit > p0 {
+        1.0
+    } else if st.limit < p0 {
+        -1.0
+    } else {
+        return Ok(out);
+    };
+    let scaled = Scaled {
+        inner: problem,
+        k: st.scaled,
+        s: st.scale,
+    };
+    let (p_min, p_max) = if side < 0.0 {
+        (st.limit, f64::INFINITY)
+    } else {
+        (f64::NEG_INFINITY, st.limit)
+    };
+    let direction = if side < 0.0 {
+        Direction::Backward
+    } else {
+        Direction::Forward
+    };
+    let cont_settings = PseudoArclength::new()
+        .with_ds(st.ds)
+        .and_then(|s| s.with_ds_bounds(st.ds_min, st.ds_max))
+        .and_then(|s| s.with_range(p_min, p_max))
+        .and_then(|s| s.with_direction(direction))
+        .and_then(|s| s.with_max_steps(st.max_steps))
+        .and_then(|s| s.with_tol(st.tol))
+        .and_then(|s| s.with_locate_tol(st.locate_tol))
+        .and_then(|s| s.with_detect_folds(true))
+        .and_then(|s| s.with_detect_branch_points(st.detect_branch_points))
+        .and_then(|s| s.with_detect_loops(false))
+        .map_err(start_error)?;
+    let cont = Continuation::new(&scaled, cont_settings).with_stability(Index {
+        scaled: &scaled,
+        tolerance: st.index_tolerance,
+    });
+    let mut stepper = cont.start(&scaled.scale(x0), p0).map_err(start_error)?;
+    let unscaled = |x: &DVector<f64>| scaled.unscale(x).as_slice().to_vec();
+    let mut last_value = p0;
+    let mut cause: Option<String> = None;
+    let every = st.progress_every.max(1);
+    let stop = loop {
+        let step = match stepper.step() {
+            Ok(step) => step,
+            Err(e) => {
+                // The stepper stays at its last accepted point: retry with a smaller step.
+                let ds = stepper.ds() * 0.5;
+                cause = Some(e.to_string());
+                if stepper.set_ds(ds).is_err() {
+                    break MarchStop::StepTooSmall {
+                        ds,
+                        value: last_value,
+                        cause,
+                    };
+                }
+                continue;
+            }
+        };
+        let Some(point) = step.point else {
+            break stop_of(step.stop, cause.take());
+        };
+        let n = point.x.len();
+        let turned = point.tangent[n] * side <= 0.0 || (point.p - last_value) * side <= 0.0;
+        let fold = step.special.iter().find(|s| s.kind == SpecialKind::Fold);
+        if st.folds == FoldPolicy::Stop && (turned || fold.is_some()) {
+            // The step crossed a turning point of the parameter: keep what came before.
+            out.special.extend(fold.map(|f| MarchSpecial {
+                kind: f.kind.clone(),
+                x: unscaled(&f.x),
+                value: f.p,
+                tangent: f.tangent.as_slice().to_vec(),
+            }));
+            break MarchStop::Fold { value: last_value };
+        }
+        for sp in &step.special {
+            match &sp.kind {
+                SpecialKind::IndexChange { old, new } => {
+                    // Orientation from the tangent there (a followed fold reverses it).
+                    let up = sp.tangent[n] > 0.0;
+                    let (below, above) = if up { (*old, *new) } else { (*new, *old) };
+                    out.index_changes.push(IndexChange {
+                        value: sp.p,
+                        below,
+                        above,
+                    });
+                    out.points.push(MarchPoint {
+                        x: unscaled(&sp.x),
+                        value: sp.p,
+                        index: Some(*new),
+                        source: PointSource::IndexChange,
+                    });
+                }
+                SpecialKind::Fold | SpecialKind::BranchPoint => out.special.push(MarchSpecial {
+                    kind: sp.kind.clone(),
+                    x: unscaled(&sp.x),
+                    value: sp.p,
+                    tangent: sp.tangent.as_slice().to_vec(),
+                }),
+                SpecialKind::Event { .. } => {}
+            }
+        }
+        out.points.push(MarchPoint {
+            x: unscaled(&point.x),
+            value: point.p,
+            index: point.index,
+            source: PointSource::Continuation,
+        });
+        last_value = point.p;
+        cause = None;
+        if stepper.steps() % every == 0 {
+            progress(last_value, stepper.steps());
+        }
+        if step.stop.is_some() {
+            break stop_of(step.stop, None);
+        }
+    };
+    out.steps = stepper.steps();
+    out.stop = stop;
+    progress(last_value, out.steps);
+    Ok(out)
+}
+
+/// The [`MarchStop`] of a stepper's stop reason.
+fn stop_of(reason: Option<StopReason>, cause: Option<String>) -> MarchStop {
+    match reason {
+        Some(StopReason::LeftRange { .. }) => MarchStop::Reached,
+        Some(StopReason::StepTooSmall { ds, p }) => MarchStop::StepTooSmall {
+            ds,
+            value: p,
+            cause,
+        },
+        Some(StopReason::ClosedLoop) => MarchStop::ClosedLoop,
+        // A step without a point always carries a reason; the march never interrupts the
+        // stepper.
+        Some(StopReason::MaxSteps) | Some(StopReason::Interrupted) | None => MarchStop::MaxSteps,
+    }
+}
