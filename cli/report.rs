@@ -18,17 +18,20 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
-use rodloop_diagram::{CriticalLength, DiagramOptions, NumericDiagram};
+use rodloop_diagram::{DiagramOptions, DiagramRow, Label, NumericDiagram};
 use rodloop_exact::diagram::Diagram;
 use rodloop_figures::color::branch_color;
 use rodloop_figures::data::LoopData;
 use rodloop_figures::diagram::{energy_figure, energy_split_figure, lambda_figure, DiagramData};
 use rodloop_figures::loops::{loop_picture, point_group, LoopPictureOptions};
-use rodloop_figures::plot::{LegendItem, Plot, Series};
+use rodloop_figures::plot::{Plot, Series};
 use rodloop_figures::svg::{esc, Svg};
 use rodloop_scene::Scene;
 use rodloop_solver::identify::identify_equilibrium;
-use rodloop_solver::{solve_with_accuracy, Accuracy, SolveOptions, StartShape};
+use rodloop_solver::start::from_points;
+use rodloop_solver::{
+    solve_with_accuracy, Accuracy, AccurateEquilibrium, SolveOptions, StartShape,
+};
 
 use crate::compare::CompareRow;
 use crate::output::{checked_json, OutputRun};
@@ -37,8 +40,14 @@ use crate::output::{checked_json, OutputRun};
 const FIG_W: f64 = 960.0;
 /// Height of the diagram figures in the page, pixels.
 const FIG_H: f64 = 560.0;
-/// Side of one view of a loop picture, pixels (four views per picture).
-const PANEL: f64 = 200.0;
+/// Side of one view of a loop picture, pixels (four views per picture): the smallest at which
+/// the view titles and the legend of [`loop_picture`] fit, so that its text is drawn at its
+/// own size (the picture is 2·PANEL + 208 pixels wide).
+const PANEL: f64 = 300.0;
+/// Size of the force plot beside each loop picture, pixels.
+const FORCE_W: f64 = 360.0;
+/// Height of the force plot beside each loop picture, pixels.
+const FORCE_H: f64 = 300.0;
 
 /// Arguments of `rodloop report`.
 #[derive(clap::Args, Debug)]
@@ -77,36 +86,28 @@ struct SolvedState {
     lambda_range: (f64, f64),
     lambda_error: f64,
     cells: usize,
+    /// Where the solve started.
+    start: String,
     point_group: Option<String>,
     self_contacts: usize,
-    /// `(s/L, λR³/D0)` samples, closed (the first point repeated at `s/L = 1`).
-    lambda_curve: Vec<(f64, f64)>,
+    /// The loop picture (SVG).
     picture: String,
+    /// `λ(s)` along the loop (SVG).
+    force: String,
     seconds: f64,
 }
 
-/// Stable ranges of a branch inside `[lo, hi]`: between consecutive critical lengths the
-/// lowest branch is the `to_branch` of the lower one (before the first: its `from_branch`).
-fn stable_ranges(critical: &[CriticalLength], branch: u32, lo: f64, hi: f64) -> Vec<(f64, f64)> {
-    let mut cuts: Vec<&CriticalLength> = critical.iter().collect();
-    cuts.sort_by(|a, b| a.lbar_cr.total_cmp(&b.lbar_cr));
-    let mut out = Vec::new();
-    let Some(first) = cuts.first() else {
-        return out;
-    };
-    if first.from_branch == branch && first.lbar_cr > lo {
-        out.push((lo, first.lbar_cr));
-    }
-    for (k, c) in cuts.iter().enumerate() {
-        if c.to_branch != branch {
-            continue;
-        }
-        let end = cuts.get(k + 1).map_or(hi, |n| n.lbar_cr);
-        if end > c.lbar_cr {
-            out.push((c.lbar_cr, end));
-        }
-    }
-    out
+/// The first stretch of a branch that the diagram labels stable (lowest energy): the lengths
+/// of its first and last consecutive stable traced states, in increasing `L̄`.
+fn first_stable_stretch(rows: &[DiagramRow], branch: u32) -> Option<(f64, f64)> {
+    let mut pts: Vec<&DiagramRow> = rows.iter().filter(|r| r.branch == branch).collect();
+    pts.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
+    let start = pts.iter().position(|r| r.stability == Label::Stable)?;
+    let len = pts[start..]
+        .iter()
+        .take_while(|r| r.stability == Label::Stable)
+        .count();
+    Some((pts[start].lbar, pts[start + len - 1].lbar))
 }
 
 /// The middle of `(a, b)`, rounded to 0.01 when that stays well inside.
@@ -120,41 +121,80 @@ fn middle(a: f64, b: f64) -> f64 {
     }
 }
 
-/// Solve branch `eta` at `lbar` from the Euler curve `l = η` (as `rodloop solve` does), check
-/// that it converged onto that branch, and draw it.
-fn solve_state(
+/// An accurate equilibrium at `lbar` from `start`, checked to have converged onto branch
+/// `eta` (identified from the periods of its own `κ_g`, as `rodloop solve` does).
+fn solve_checked(
     scene: &Scene,
     accuracy: Accuracy,
-    d: &NumericDiagram,
-    branch: u32,
     eta: u32,
     lbar: f64,
-) -> Result<SolvedState> {
-    let t0 = Instant::now();
+    start: &StartShape,
+) -> Result<AccurateEquilibrium> {
     let stiffness = crate::solve::stiffness_of(&scene.stiffness);
     let res = solve_with_accuracy(
         scene.radius,
         lbar,
         &stiffness,
-        &StartShape::Euler { l: eta },
+        start,
         accuracy,
         &SolveOptions::default(),
     )?;
-    let eq = &res.equilibrium;
-    let report = eq.report();
+    let report = res.equilibrium.report();
     if !report.converged {
         bail!(
             "the solve did not converge (KKT residual {:.1e})",
             report.residual
         );
     }
-    let periods = identify_equilibrium(eq)?;
+    let periods = identify_equilibrium(&res.equilibrium)?;
     if periods.eta != eta {
         bail!(
-            "the Euler start converged onto a state with eta = {} instead",
+            "the solve converged onto a state with eta = {} instead of {eta}",
             periods.eta
         );
     }
+    Ok(res)
+}
+
+/// Solve branch `eta` at `lbar` from the Euler curve `l = η` (as `rodloop solve` does) or,
+/// when that fails, from the diagram's own state of the branch there (re-solved at the tracing
+/// resolution and passed on as points, as `solve --from` takes them); then draw it.
+fn solve_state(
+    scene: &Scene,
+    accuracy: Accuracy,
+    opts: &DiagramOptions,
+    d: &NumericDiagram,
+    branch: u32,
+    eta: u32,
+    lbar: f64,
+) -> Result<SolvedState> {
+    let t0 = Instant::now();
+    let (res, start) =
+        match solve_checked(scene, accuracy, eta, lbar, &StartShape::Euler { l: eta }) {
+            Ok(r) => (r, format!("the Euler curve l = {eta}")),
+            Err(euler) => {
+                let traced = d
+                    .branch_by_eta(eta)
+                    .context("the branch is not traced")
+                    .and_then(|b| Ok(b.solve_at(opts, lbar)?))
+                    .and_then(|eq| {
+                        let pts: Vec<[f64; 3]> =
+                            eq.profile().iter().map(|p| [p.x, p.y, p.z]).collect();
+                        Ok(from_points(&pts)?.0)
+                    })
+                    .and_then(|start| solve_checked(scene, accuracy, eta, lbar, &start));
+                match traced {
+                    Ok(r) => (
+                        r,
+                        format!("the diagram's traced state (from the Euler curve: {euler:#})"),
+                    ),
+                    Err(e) => bail!(
+                        "from the Euler curve: {euler:#}; from the diagram's traced state: {e:#}"
+                    ),
+                }
+            }
+        };
+    let eq = &res.equilibrium;
     let index = eq.stability()?.index;
     let label = if index > 0 {
         "unstable"
@@ -170,20 +210,21 @@ fn solve_state(
     let pic = loop_picture(
         &data,
         &LoopPictureOptions {
-            color: Some("lambda".into()),
+            // Uniform rods: the contact force; otherwise the stiffness (where the soft segment is).
+            color: Some(
+                if scene.stiffness.is_uniform() {
+                    "lambda"
+                } else {
+                    "D"
+                }
+                .into(),
+            ),
             tol: 1e-3,
             panel: PANEL,
             title: format!("Branch {branch} (η = {eta}) at L̄ = {lbar}: {label}"),
         },
     )?;
-    let length = data.length();
-    let s = data.s();
-    let lam = data.column("lambda").unwrap_or(&[]);
-    let mut lambda_curve: Vec<(f64, f64)> =
-        s.iter().zip(lam).map(|(&a, &b)| (a / length, b)).collect();
-    if let (Some(&s0), Some(&l0)) = (s.first(), lam.first()) {
-        lambda_curve.push((s0 / length + 1.0, l0));
-    }
+    let force = force_figure(&data, branch)?;
     let lam_unit = scene.radius.powi(3) / scene.stiffness.reference();
     Ok(SolvedState {
         energy: res.energy.total,
@@ -193,10 +234,11 @@ fn solve_state(
         lambda_range: (res.lambda_range.0 * lam_unit, res.lambda_range.1 * lam_unit),
         lambda_error: res.lambda_error * lam_unit,
         cells: profile.len(),
+        start,
         point_group: point_group(&data, crate::draw::POINT_GROUP_TOL).map(|g| g.0),
         self_contacts: pic.contacts.len(),
-        lambda_curve,
         picture: pic.svg,
+        force,
         seconds: t0.elapsed().as_secs_f64(),
     })
 }
@@ -209,27 +251,25 @@ fn representative_states(
     opts: &DiagramOptions,
     d: &NumericDiagram,
 ) -> Vec<StateEntry> {
+    let rows = d.rows();
     let mut plan: Vec<(u32, u32, f64, String)> = d
         .branches
         .iter()
-        .map(|b| {
-            let ranges = stable_ranges(&d.critical, b.branch, opts.lbar_min, opts.lbar_max);
-            match ranges.first() {
-                Some(&(a, c)) => (
+        .map(|b| match first_stable_stretch(&rows, b.branch) {
+            Some((a, c)) => (
+                b.branch,
+                b.eta,
+                middle(a, c),
+                format!("middle of its first stable stretch (traced states at {a:.4} ≤ L̄ ≤ {c:.4})"),
+            ),
+            None => {
+                let (a, c) = b.span();
+                (
                     b.branch,
                     b.eta,
                     middle(a, c),
-                    format!("middle of its first stable range {a:.4} < L̄ < {c:.4}"),
-                ),
-                None => {
-                    let (a, c) = b.span();
-                    (
-                        b.branch,
-                        b.eta,
-                        middle(a, c),
-                        format!("middle of its traced range {a:.4} ≤ L̄ ≤ {c:.4} (never the lowest branch there)"),
-                    )
-                }
+                    format!("middle of its traced range {a:.4} ≤ L̄ ≤ {c:.4} (never the lowest branch there)"),
+                )
             }
         })
         .collect();
@@ -248,7 +288,7 @@ fn representative_states(
                 let Some((branch, eta, lbar, _)) = plan.get(k) else {
                     break;
                 };
-                let r = solve_state(scene, accuracy, d, *branch, *eta, *lbar)
+                let r = solve_state(scene, accuracy, opts, d, *branch, *eta, *lbar)
                     .map_err(|e| format!("{e:#}"));
                 if let Ok(mut s) = slots.lock() {
                     s[k] = Some(r);
@@ -268,47 +308,34 @@ fn representative_states(
         .collect()
 }
 
-/// The contact force along each representative state, one colour per branch (Fig. 6).
-fn force_figure(states: &[StateEntry]) -> Option<String> {
-    let mut series = Vec::new();
-    let mut legend = Vec::new();
-    for st in states {
-        if let Ok(s) = &st.outcome {
-            let color = branch_color(st.branch).to_string();
-            series.push(Series {
-                color: color.clone(),
-                width: 2.0,
-                dash: String::new(),
-                points: s.lambda_curve.clone(),
-            });
-            legend.push(LegendItem::Line {
-                label: format!(
-                    "branch {} (η = {}), L̄ = {}, {}",
-                    st.branch, st.eta, st.lbar, s.label
-                ),
-                color,
-                width: 2.0,
-                dash: String::new(),
-            });
-        }
-    }
-    if series.is_empty() {
-        return None;
+/// The contact force `λR³/D0` against `s/L` along one state (the paper's Fig. 6), from the
+/// `lambda` column of its loop table, closed at `s/L = 1`.
+fn force_figure(data: &LoopData, branch: u32) -> Result<String> {
+    let length = data.length();
+    let s = data.s();
+    let lam = data
+        .column("lambda")
+        .context("the loop table has no lambda column")?;
+    let mut points: Vec<(f64, f64)> = s.iter().zip(lam).map(|(&a, &b)| (a / length, b)).collect();
+    if let (Some(&s0), Some(&l0)) = (s.first(), lam.first()) {
+        points.push((s0 / length + 1.0, l0));
     }
     let plot = Plot {
         title: "Contact force along the loop".into(),
-        xlabel: "s/L".into(),
+        xlabel: "s/L (s = 0 as marked on the loop)".into(),
         ylabel: "λR³/D₀".into(),
-        series,
+        series: vec![Series {
+            color: branch_color(branch).to_string(),
+            width: 2.0,
+            dash: String::new(),
+            points,
+        }],
         hlines: vec![0.0],
-        legend,
-        legend_width: 300.0,
-        note: "s = 0 as marked on the loop pictures; λ < 0 would pull the loop off the wall".into(),
         ..Default::default()
     };
-    let mut svg = Svg::new(FIG_W, 440.0);
-    plot.render(&mut svg, 0.0, 0.0, FIG_W, 440.0, "force");
-    Some(svg.finish())
+    let mut svg = Svg::new(FORCE_W, FORCE_H);
+    plot.render(&mut svg, 0.0, 0.0, FORCE_W, FORCE_H, "force");
+    Ok(svg.finish())
 }
 
 /// Prepare a standalone SVG document for inlining into HTML: ids (clip paths, gradients) get
@@ -429,7 +456,7 @@ figcaption{font-size:13px;color:#444;margin-top:4px;max-width:960px}
 table{border-collapse:collapse;font-size:13px;margin:10px 0}th,td{border:1px solid #d5dae3;padding:3px 8px;text-align:left;vertical-align:top}
 th{background:#f0f3f8}td.num{text-align:right;font-family:'DejaVu Sans Mono',Menlo,Consolas,monospace;white-space:nowrap}
 td.ok{color:#1b7a1b}td.bad{color:#c01818;font-weight:bold}td.src{color:#555;font-size:12px}
-.grid{display:flex;flex-wrap:wrap;gap:14px}.grid figure{flex:0 1 600px;margin:0}
+.state{display:flex;flex-wrap:wrap;gap:0 18px;align-items:flex-start;margin-top:18px}.state figure{margin:0;display:table}.state figcaption{display:table-caption;caption-side:bottom}
 .note{background:#fff6e0;border-left:4px solid #e0a800;padding:6px 10px;font-size:13px}
 dl{display:grid;grid-template-columns:max-content auto;gap:2px 16px;font-size:14px}dt{font-weight:bold}dd{margin:0}
 pre{background:#f6f8fa;padding:8px;font-size:12px;overflow-x:auto}";
@@ -488,7 +515,6 @@ pub fn run(args: &Args) -> Result<()> {
     // 4. One state per branch, its picture and its contact force.
     let t = Instant::now();
     let states = representative_states(&scene, accuracy, &opts, &d);
-    let fig_force = force_figure(&states);
     let t_states = t.elapsed().as_secs_f64();
 
     // 5. The page.
@@ -506,7 +532,7 @@ pub fn run(args: &Args) -> Result<()> {
     let mut h = String::with_capacity(1 << 20);
     let _ = write!(
         h,
-        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>rodloop report: {name}</title>\n<style>\n{STYLE}\n</style>\n</head>\n<body>\n<h1>rodloop report: scene {name}</h1>\n<p class=\"lead\">{desc}. Numeric branch diagram for {lo} ≤ L̄ ≤ {hi} at accuracy <b>{acc}</b>: {nstates} traced states on {nbranches} branches, {ncrit} critical lengths. Elastic rod loops in a sphere after Wang, Li &amp; Yi, J. Mech. Phys. Solids (2024); equation and figure numbers refer to that paper.</p>\n<nav><a href=\"#diagram\">Diagram</a><a href=\"#critical\">Critical lengths</a><a href=\"#paper\">Paper values</a><a href=\"#states\">States</a><a href=\"#settings\">Settings</a><a href=\"#timings\">Timings</a></nav>\n",
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>rodloop report: {name}</title>\n<style>\n{STYLE}\n</style>\n</head>\n<body>\n<h1>rodloop report: scene {name}</h1>\n<p class=\"lead\">{desc}. Numeric branch diagram for {lo} ≤ L̄ ≤ {hi} at accuracy <b>{acc}</b>: {nstates} traced states on {nbranches} branches, {ncrit} critical lengths. Elastic rod loops in a sphere after Wang, Li &amp; Yi, J. Mech. Phys. Solids (2024); equation and figure numbers refer to that paper.</p>\n<nav><a href=\"#diagram\">Diagram</a><a href=\"#critical\">Critical lengths</a><a href=\"#states\">States</a><a href=\"#paper\">Paper values</a><a href=\"#settings\">Settings</a><a href=\"#timings\">Timings</a></nav>\n",
         name = esc(&scene.name),
         desc = esc(&d.scene),
         lo = opts.lbar_min,
@@ -572,26 +598,19 @@ pub fn run(args: &Args) -> Result<()> {
     }
     h.push_str("</section>\n");
 
-    h.push_str("<section id=\"paper\">\n<h2>3. Comparison with the paper's printed values</h2>\n<p>Values printed in the paper (<code>data/reference/paper_values.csv</code>, with their sources), next to rodloop's. “Agrees” means within half a unit of the last printed digit (exact statements: within 1e−6).");
-    if !uniform {
-        h.push_str(" The paper's values are for homogeneous loops; this scene's stiffness is not uniform, so only the exact (homogeneous) layer is compared.");
-    }
-    h.push_str(" Winding numbers and symmetries are compared on the exact layer only.</p>\n");
-    h.push_str(&compare_html(&compare, uniform));
-    h.push_str("</section>\n");
-
-    h.push_str("<section id=\"states\">\n<h2>4. The stable state of each branch</h2>\n<p>Each branch solved at one length (the middle of the first range where it is the lowest branch), from the Euler rotation curve with l = η at the report's accuracy, as <code>rodloop solve</code> does; the converged state's branch is checked from the periods of its κ<sub>g</sub>. Each picture shows the loop on the sphere from an oblique view and along the three axes, coloured by the contact force λR³/D₀; nearer strands are darker and thicker. Red circles: self-contacts in 3-D.</p>\n");
-    h.push_str("<table id=\"states-table\"><thead><tr><th>branch</th><th>η</th><th>L̄</th><th>chosen as</th><th>E R/(πD₀)</th><th>error</th><th>index</th><th>state</th><th>λR³/D₀ range</th><th>point group</th><th>self-contacts</th><th>cells</th></tr></thead><tbody>\n");
+    h.push_str("<section id=\"states\">\n<h2>3. The stable state of each branch</h2>\n<p>Each branch solved at one length (the middle of the first stretch where the diagram finds it the lowest branch), from the Euler rotation curve with l = η at the report's accuracy, as <code>rodloop solve</code> does; the converged state's branch is checked from the periods of its κ<sub>g</sub>. Each picture shows the loop on the sphere from an oblique view and along the three axes, coloured by the contact force λR³/D₀ (uniform rods) or by the stiffness D/D₀ (other profiles); nearer strands are darker and thicker. Red circles: self-contacts in 3-D.</p>\n");
+    h.push_str("<table id=\"states-table\"><thead><tr><th>branch</th><th>η</th><th>L̄</th><th>chosen as</th><th>solved from</th><th>E R/(πD₀)</th><th>error</th><th>index</th><th>state</th><th>λR³/D₀ range</th><th>point group</th><th>self-contacts</th><th>cells</th></tr></thead><tbody>\n");
     for st in &states {
         match &st.outcome {
             Ok(s) => {
                 let _ = writeln!(
                     h,
-                    "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"num\">{:.10}</td><td class=\"num\">{}</td><td>{}</td><td>{}</td><td class=\"num\">[{:.6}, {:.6}] ± {}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                    "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"num\">{:.10}</td><td class=\"num\">{}</td><td>{}</td><td>{}</td><td class=\"num\">[{:.6}, {:.6}] ± {}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
                     st.branch,
                     st.eta,
                     st.lbar,
                     esc(&st.why),
+                    esc(&s.start),
                     s.energy,
                     sci(s.energy_error),
                     s.index,
@@ -607,7 +626,7 @@ pub fn run(args: &Args) -> Result<()> {
             Err(e) => {
                 let _ = writeln!(
                     h,
-                    "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td colspan=\"8\" class=\"bad\">not solved: {}</td></tr>",
+                    "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td colspan=\"9\" class=\"bad\">not solved: {}</td></tr>",
                     st.branch,
                     st.eta,
                     st.lbar,
@@ -617,38 +636,53 @@ pub fn run(args: &Args) -> Result<()> {
             }
         }
     }
-    h.push_str("</tbody></table>\n<div class=\"grid\">\n");
+    h.push_str("</tbody></table>\n");
     for st in &states {
         if let Ok(s) = &st.outcome {
-            let caption = format!(
-                "Branch {} (η = {}) at L̄ = {}: {}, E R/(πD₀) = {:.8}{}.",
-                st.branch,
-                st.eta,
-                st.lbar,
-                s.label,
-                s.energy,
-                s.point_group
-                    .as_deref()
-                    .map(|g| format!(", point group {}", esc(g)))
-                    .unwrap_or_default()
-            );
+            let _ = writeln!(h, "<div class=\"state\" id=\"state-{}\">", st.branch);
             h.push_str(&fig(
                 &s.picture,
                 &format!("loop of branch {} at length {}", st.branch, st.lbar),
-                &caption,
+                &format!(
+                    "Branch {} (η = {}) at L̄ = {}: {}, E R/(πD₀) = {:.8} ± {}{}, {}.",
+                    st.branch,
+                    st.eta,
+                    st.lbar,
+                    s.label,
+                    s.energy,
+                    sci(s.energy_error),
+                    s.point_group
+                        .as_deref()
+                        .map(|g| format!(", point group {}", esc(g)))
+                        .unwrap_or_default(),
+                    crate::output::plural(s.self_contacts as u64, "self-contact"),
+                ),
                 &format!("fig-loop-{}", st.branch),
             ));
+            h.push_str(&fig(
+                &s.force,
+                &format!("contact force along the loop of branch {}", st.branch),
+                &format!(
+                    "Contact force λR³/D₀ along the loop of branch {} at L̄ = {} (paper Fig. 6): from {:.6} to {:.6} ± {}.",
+                    st.branch,
+                    st.lbar,
+                    s.lambda_range.0,
+                    s.lambda_range.1,
+                    sci(s.lambda_error)
+                ),
+                &format!("fig-force-{}", st.branch),
+            ));
+            h.push_str("</div>\n");
         }
     }
-    h.push_str("</div>\n");
-    if let Some(ff) = &fig_force {
-        h.push_str(&fig(
-            ff,
-            "contact force along the loop",
-            "Contact force λR³/D₀ against s/L for the states above (paper Fig. 6).",
-            "fig-force",
-        ));
+    h.push_str("</section>\n");
+
+    h.push_str("<section id=\"paper\">\n<h2>4. Comparison with the paper's printed values</h2>\n<p>Values printed in the paper (<code>data/reference/paper_values.csv</code>, with their sources), next to rodloop's. “Agrees” means within half a unit of the last printed digit (exact statements: within 1e−6).");
+    if !uniform {
+        h.push_str(" The paper's values are for homogeneous loops; this scene's stiffness is not uniform, so only the exact (homogeneous) layer is compared.");
     }
+    h.push_str(" Winding numbers and symmetries are compared on the exact layer only.</p>\n");
+    h.push_str(&compare_html(&compare, uniform));
     h.push_str("</section>\n");
 
     let t_page = t.elapsed().as_secs_f64();
@@ -762,7 +796,7 @@ pub fn run(args: &Args) -> Result<()> {
                 "branch": st.branch, "eta": st.eta, "lbar": st.lbar, "energy": s.energy,
                 "energy_error": s.energy_error, "index": s.index, "state": s.label,
                 "lambda_min": s.lambda_range.0, "lambda_max": s.lambda_range.1,
-                "point_group": s.point_group, "self_contacts": s.self_contacts,
+                "point_group": s.point_group, "self_contacts": s.self_contacts, "start": s.start,
                 "seconds": s.seconds,
             }),
             Err(e) => {
@@ -801,7 +835,7 @@ pub fn run(args: &Args) -> Result<()> {
         );
     }
     outln!(
-        "wrote report.html ({} KB, {} figures: diagram, energy split, lambda extremes, {}, force plot), branches.csv, critical.csv, diagram.svg, summary.json to {} in {:.2} s",
+        "wrote report.html ({} KB, {} figures: diagram, energy split, lambda extremes, {} with their force plots), branches.csv, critical.csv, diagram.svg, summary.json to {} in {:.2} s",
         h.len().div_ceil(1024),
         figures,
         crate::output::plural((states.len() - failed) as u64, "loop picture"),
