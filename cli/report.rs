@@ -339,12 +339,15 @@ fn force_figure(data: &LoopData, branch: u32) -> Result<String> {
 }
 
 /// Prepare a standalone SVG document for inlining into HTML: ids (clip paths, gradients) get
-/// a per-figure prefix so that figures cannot take each other's definitions, and the root
-/// element gets a class and an accessible name.
+/// a per-figure prefix so that figures cannot take each other's definitions, the namespace
+/// declaration goes (the HTML parser supplies it), and the root element gets a class and an
+/// accessible name.
 pub fn inline_svg(svg: &str, prefix: &str, label: &str) -> String {
     let body = svg
         .trim_start()
         .trim_start_matches(|c| c != '<')
+        // HTML puts <svg> in the SVG namespace itself; the page names no URL at all.
+        .replace(" xmlns=\"http://www.w3.org/2000/svg\"", "")
         .replace("id=\"", &format!("id=\"{prefix}-"))
         .replace("url(#", &format!("url(#{prefix}-"))
         .replace("href=\"#", &format!("href=\"#{prefix}-"));
