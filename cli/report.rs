@@ -445,7 +445,7 @@ fn compare_html(rows: &[CompareRow], numeric: bool) -> String {
                 yes(r.agrees_numeric)
             );
         }
-        let _ = write!(h, "<td class=\"src\">{}</td></tr>\n", esc(&r.source));
+        let _ = writeln!(h, "<td class=\"src\">{}</td></tr>", esc(&r.source));
     }
     h.push_str("</tbody></table>\n");
     h
