@@ -440,7 +440,10 @@ fn compare_html(rows: &[CompareRow], numeric: bool) -> String {
             let _ = write!(
                 h,
                 "<td class=\"num\">{}</td><td class=\"num\">{}</td>{}",
-                esc(&r.numeric_text()).replace('-', "–"),
+                match r.numeric_text().as_str() {
+                    "-" => "–".to_string(),
+                    t => esc(t),
+                },
                 opt_sci(r.numeric_deviation),
                 yes(r.agrees_numeric)
             );
