@@ -119,13 +119,19 @@ fn exact_symmetry(pv: &PaperValue) -> Result<String> {
 /// The numeric model's value for a paper row: critical lengths from the numeric diagram,
 /// buckling loads from its great-circle analysis (Eq. 33 rows: the mode with m + 1 periods,
 /// Eq. 34 rows: m − 1). Winding numbers and symmetries are compared on the exact layer only.
+/// Critical lengths outside the diagram's length range have no numeric value.
 fn numeric_value(pv: &PaperValue, nd: &rodloop_diagram::NumericDiagram) -> Option<f64> {
     match pv.kind.as_str() {
-        "critical_length" => nearest_critical(
-            pv,
-            pv.value.parse().ok()?,
-            nd.critical.iter().map(|c| (c.kind, c.lbar_cr)),
-        ),
+        "critical_length" => {
+            // Only a printed length inside the diagram's range has a numeric counterpart
+            // (a diagram of a sub-range must not be matched to a neighbour outside it).
+            let target: f64 = pv.value.parse().ok()?;
+            let (lo, hi) = nd.range;
+            if target < lo - 1e-9 || target > hi + 1e-9 {
+                return None;
+            }
+            nearest_critical(pv, target, nd.critical.iter().map(|c| (c.kind, c.lbar_cr)))
+        }
         "buckling_load" => {
             let m = pv.lbar? as u32;
             let eq = if pv.side == "above" { "33" } else { "34" };
@@ -137,19 +143,131 @@ fn numeric_value(pv: &PaperValue, nd: &rodloop_diagram::NumericDiagram) -> Optio
     }
 }
 
-/// Run the subcommand.
-pub fn run(args: &Args) -> Result<()> {
+/// One of the paper's printed values next to the exact layer's and the numeric model's.
+#[derive(Debug, Clone)]
+pub struct CompareRow {
+    /// Row id of `paper_values.csv` (`L2cr`, `eq33_m2`, …).
+    pub id: String,
+    /// `critical_length`, `buckling_load`, `winding` or `symmetry`.
+    pub kind: String,
+    /// Paper branch number.
+    pub branch: u32,
+    /// Length of the row, when it has one.
+    pub lbar: Option<f64>,
+    /// The value as printed.
+    pub paper: String,
+    /// Half a unit of the last printed digit (0 for exact statements).
+    pub resolution: Option<f64>,
+    /// Where the paper prints it.
+    pub source: String,
+    /// The exact layer's value (numeric kinds).
+    pub exact: Option<f64>,
+    /// The exact layer's point group (symmetry rows).
+    pub symmetry: Option<String>,
+    /// `exact − paper`.
+    pub exact_deviation: Option<f64>,
+    /// Whether the exact value agrees within the printed resolution.
+    pub agrees_exact: Option<bool>,
+    /// The numeric model's value (critical lengths and buckling loads).
+    pub numeric: Option<f64>,
+    /// `numeric − paper`.
+    pub numeric_deviation: Option<f64>,
+    /// Whether the numeric value agrees within the printed resolution.
+    pub agrees_numeric: Option<bool>,
+    /// `numeric − exact`.
+    pub numeric_minus_exact: Option<f64>,
+}
+
+impl CompareRow {
+    /// The exact layer's value as text (`-` when there is none).
+    pub fn exact_text(&self) -> String {
+        self.symmetry
+            .clone()
+            .unwrap_or_else(|| self.shown(self.exact))
+    }
+
+    /// The numeric model's value as text (`-` when there is none).
+    pub fn numeric_text(&self) -> String {
+        self.shown(self.numeric)
+    }
+
+    fn shown(&self, v: Option<f64>) -> String {
+        match (self.kind.as_str(), v) {
+            ("winding", Some(x)) => format!("{x}"),
+            (_, Some(x)) => format!("{x:.12}"),
+            (_, None) => "-".into(),
+        }
+    }
+}
+
+/// Every paper value of `data/reference/paper_values.csv` next to the exact layer's value
+/// and, when `nd` is given, the numeric diagram's (critical lengths inside the diagram's
+/// length range, buckling loads of its great-circle analysis), with deviations and
+/// agreement within the printed resolution.
+pub fn compare_rows(nd: Option<&rodloop_diagram::NumericDiagram>) -> Result<Vec<CompareRow>> {
     let values = paper_values()?;
     if values.is_empty() {
         bail!("no paper values compiled in");
     }
     let d = compute(&DiagramSettings::default())?;
+    let mut rows = Vec::with_capacity(values.len());
+    for pv in values {
+        let exact = exact_value(&pv, &d.critical)?;
+        let numeric = nd.and_then(|nd| numeric_value(&pv, nd));
+        let paper_num: Option<f64> = pv.value.parse().ok();
+        let symmetry = if pv.kind == "symmetry" {
+            Some(exact_symmetry(&pv)?)
+        } else {
+            None
+        };
+        // Deviation from the paper and agreement within its printed resolution.
+        let judge = |v: Option<f64>| match (v, paper_num) {
+            (Some(x), Some(p)) => {
+                let dev = x - p;
+                let tol = pv.resolution.unwrap_or(0.0).max(1e-6 * p.abs().max(1.0));
+                (Some(dev), Some(dev.abs() <= tol))
+            }
+            _ => (None, None),
+        };
+        let (dev, agrees) = match &symmetry {
+            Some(sym) => (None, Some(*sym == pv.value)),
+            None => judge(exact),
+        };
+        let (ndev, nagrees) = judge(numeric);
+        let numeric_minus_exact = match (numeric, exact) {
+            (Some(n), Some(e)) => Some(n - e),
+            _ => None,
+        };
+        rows.push(CompareRow {
+            id: pv.id,
+            kind: pv.kind,
+            branch: pv.branch,
+            lbar: pv.lbar,
+            paper: pv.value,
+            resolution: pv.resolution,
+            source: pv.source,
+            exact,
+            symmetry,
+            exact_deviation: dev,
+            agrees_exact: agrees,
+            numeric,
+            numeric_deviation: ndev,
+            agrees_numeric: nagrees,
+            numeric_minus_exact,
+        });
+    }
+    Ok(rows)
+}
+
+/// Run the subcommand.
+pub fn run(args: &Args) -> Result<()> {
     let nd = rodloop_diagram::compute(
         &rodloop_diagram::DiagramOptions::default(),
         &mut (),
         &mut |_| {},
     )
     .context("numeric diagram of the default scene")?;
+    let values = compare_rows(Some(&nd))?;
     let mut table = Table::new(
         "compare.csv",
         &[
@@ -186,40 +304,9 @@ pub fn run(args: &Args) -> Result<()> {
     );
     let mut disagreements = 0;
     let mut numeric_disagreements = 0;
-    for pv in &values {
-        let exact = exact_value(pv, &d.critical)?;
-        let numeric = numeric_value(pv, &nd);
-        let paper_num: Option<f64> = pv.value.parse().ok();
-        let symmetry = if pv.kind == "symmetry" {
-            Some(exact_symmetry(pv)?)
-        } else {
-            None
-        };
-        // Deviation from the paper and agreement within its printed resolution.
-        let judge = |v: Option<f64>| match (v, paper_num) {
-            (Some(x), Some(p)) => {
-                let dev = x - p;
-                let tol = pv.resolution.unwrap_or(0.0).max(1e-6 * p.abs().max(1.0));
-                (Some(dev), Some(dev.abs() <= tol))
-            }
-            _ => (None, None),
-        };
-        let (dev, agrees) = match &symmetry {
-            Some(sym) => (None, Some(*sym == pv.value)),
-            None => judge(exact),
-        };
-        let (ndev, nagrees) = judge(numeric);
-        disagreements += usize::from(agrees == Some(false));
-        numeric_disagreements += usize::from(nagrees == Some(false));
-        let numeric_vs_exact = match (numeric, exact) {
-            (Some(n), Some(e)) => Some(n - e),
-            _ => None,
-        };
-        let shown = |v: Option<f64>| match (pv.kind.as_str(), v) {
-            ("winding", Some(x)) => format!("{x}"),
-            (_, Some(x)) => format!("{x:.12}"),
-            (_, None) => "-".into(),
-        };
+    for r in &values {
+        disagreements += usize::from(r.agrees_exact == Some(false));
+        numeric_disagreements += usize::from(r.agrees_numeric == Some(false));
         let yes = |a: Option<bool>| match a {
             Some(true) => "yes",
             Some(false) => "NO",
@@ -228,47 +315,47 @@ pub fn run(args: &Args) -> Result<()> {
         let sci = |v: Option<f64>| v.map(|x| format!("{x:.1e}")).unwrap_or_else(|| "-".into());
         outln!(
             "{:<11} {:<15} {:>6} {:>5} {:>9} {:>17} {:>9} {:>6} {:>17} {:>9} {:>6}",
-            pv.id,
-            pv.kind,
-            pv.branch,
-            pv.lbar.map(|l| l.to_string()).unwrap_or_default(),
-            if pv.value.len() > 9 {
-                &pv.value[..9]
+            r.id,
+            r.kind,
+            r.branch,
+            r.lbar.map(|l| l.to_string()).unwrap_or_default(),
+            if r.paper.len() > 9 {
+                &r.paper[..9]
             } else {
-                &pv.value
+                &r.paper
             },
-            symmetry.clone().unwrap_or_else(|| shown(exact)),
-            sci(dev),
-            yes(agrees),
-            shown(numeric),
-            sci(ndev),
-            yes(nagrees),
+            r.exact_text(),
+            sci(r.exact_deviation),
+            yes(r.agrees_exact),
+            r.numeric_text(),
+            sci(r.numeric_deviation),
+            yes(r.agrees_numeric),
         );
         let opt = |v: Option<f64>| v.map(|x| x.to_string()).unwrap_or_default();
         table.push(vec![
-            Cell::S(pv.id.clone()),
-            Cell::S(pv.kind.clone()),
-            Cell::I(pv.branch.into()),
-            Cell::S(opt(pv.lbar)),
-            Cell::S(pv.value.clone()),
-            Cell::S(opt(pv.resolution)),
-            Cell::S(symmetry.clone().unwrap_or_else(|| opt(exact))),
-            Cell::S(opt(dev)),
-            Cell::S(agrees.map(|a| a.to_string()).unwrap_or_default()),
-            Cell::S(opt(numeric)),
-            Cell::S(opt(ndev)),
-            Cell::S(nagrees.map(|a| a.to_string()).unwrap_or_default()),
-            Cell::S(opt(numeric_vs_exact)),
-            Cell::S(pv.source.clone()),
+            Cell::S(r.id.clone()),
+            Cell::S(r.kind.clone()),
+            Cell::I(r.branch.into()),
+            Cell::S(opt(r.lbar)),
+            Cell::S(r.paper.clone()),
+            Cell::S(opt(r.resolution)),
+            Cell::S(r.symmetry.clone().unwrap_or_else(|| opt(r.exact))),
+            Cell::S(opt(r.exact_deviation)),
+            Cell::S(r.agrees_exact.map(|a| a.to_string()).unwrap_or_default()),
+            Cell::S(opt(r.numeric)),
+            Cell::S(opt(r.numeric_deviation)),
+            Cell::S(r.agrees_numeric.map(|a| a.to_string()).unwrap_or_default()),
+            Cell::S(opt(r.numeric_minus_exact)),
+            Cell::S(r.source.clone()),
         ])?;
         rows.push(checked_json!({
-            "id": pv.id,
-            "paper": pv.value,
-            "exact": symmetry.clone().map(serde_json::Value::from).unwrap_or_else(|| exact.into()),
-            "numeric": numeric,
-            "agrees_exact": agrees,
-            "agrees_numeric": nagrees,
-            "numeric_minus_exact": numeric_vs_exact,
+            "id": r.id,
+            "paper": r.paper,
+            "exact": r.symmetry.clone().map(serde_json::Value::from).unwrap_or_else(|| r.exact.into()),
+            "numeric": r.numeric,
+            "agrees_exact": r.agrees_exact,
+            "agrees_numeric": r.agrees_numeric,
+            "numeric_minus_exact": r.numeric_minus_exact,
         })?);
     }
     let run = OutputRun::begin(&args.out)?;

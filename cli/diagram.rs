@@ -123,6 +123,28 @@ pub fn exact_window(lbar_min: f64, lbar_max: f64, step: f64) -> Result<Diagram> 
     Ok(d)
 }
 
+/// The exact diagram's counterpart of a numeric critical length: the same kind between the
+/// same branches, within 0.05 in `L̄`, the nearest one.
+pub fn exact_match<'a>(
+    c: &rodloop_diagram::CriticalLength,
+    exact: &'a Diagram,
+) -> Option<&'a rodloop_exact::diagram::Critical> {
+    exact
+        .critical
+        .iter()
+        .filter(|x| {
+            x.kind == c.kind
+                && x.from_branch == c.from_branch
+                && x.to_branch == c.to_branch
+                && (x.lbar_cr - c.lbar_cr).abs() < 0.05
+        })
+        .min_by(|a, b| {
+            (a.lbar_cr - c.lbar_cr)
+                .abs()
+                .total_cmp(&(b.lbar_cr - c.lbar_cr).abs())
+        })
+}
+
 /// The selected branch numbers, checked against the window.
 fn selected_branches(args: &Args, lbar_min: f64, lbar_max: f64) -> Result<Option<Vec<u32>>> {
     if args.branch.is_empty() {
@@ -359,22 +381,10 @@ fn run_numeric(
         }
     );
     for c in &d.critical {
-        let dev = exact.as_ref().and_then(|e| {
-            e.critical
-                .iter()
-                .filter(|x| {
-                    x.kind == c.kind
-                        && x.from_branch == c.from_branch
-                        && x.to_branch == c.to_branch
-                        && (x.lbar_cr - c.lbar_cr).abs() < 0.05
-                })
-                .min_by(|a, b| {
-                    (a.lbar_cr - c.lbar_cr)
-                        .abs()
-                        .total_cmp(&(b.lbar_cr - c.lbar_cr).abs())
-                })
-                .map(|x| c.lbar_cr - x.lbar_cr)
-        });
+        let dev = exact
+            .as_ref()
+            .and_then(|e| exact_match(c, e))
+            .map(|x| c.lbar_cr - x.lbar_cr);
         outln!(
             "  {:>2}  {:>18.12}  {:>9}  {:>3}->{:<3}  {:>16.10}  {:>9.1e}{}",
             c.index,

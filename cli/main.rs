@@ -22,6 +22,7 @@ mod euler;
 mod numeric_diagram;
 mod output;
 mod progress;
+mod report;
 mod solve;
 mod svg;
 
@@ -67,6 +68,11 @@ enum Command {
     /// Pictures of a loop (four views on the sphere, coloured by a column, self-contacts
     /// marked) or of a diagram's branches.csv, as SVG and PNG.
     Draw(draw::Args),
+    /// One self-contained HTML page: the numeric diagram and its figures, the critical
+    /// lengths with errors (and exact values for homogeneous scenes), the paper's values, a
+    /// picture and the contact force of each branch's stable state, settings and timings.
+    #[command(allow_negative_numbers = true)]
+    Report(report::Args),
 }
 
 fn main() -> ExitCode {
@@ -79,6 +85,7 @@ fn main() -> ExitCode {
         Command::Compare(a) => compare::run(&a),
         Command::Converge(a) => converge::run(&a),
         Command::Draw(a) => draw::run(&a),
+        Command::Report(a) => report::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -396,6 +396,7 @@ const KNOWN_OUTPUTS: &[&str] = &[
     "diagram_g.svg",
     "curve.csv",
     "compare.csv",
+    "report.html",
 ];
 
 fn is_known_output(name: &str) -> bool {
@@ -521,11 +522,25 @@ impl OutputRun {
         }
     }
 
-    /// Stage a file.
+    /// Stage a file (staging the same name again replaces it).
     pub fn write_bytes(&self, name: &str, bytes: &[u8]) -> Result<()> {
         write_atomic(&self.stage, name, bytes)?;
-        self.written.borrow_mut().push(name.to_string());
+        let mut written = self.written.borrow_mut();
+        if !written.iter().any(|n| n == name) {
+            written.push(name.to_string());
+        }
         Ok(())
+    }
+
+    /// The run id (`summary.json` carries it).
+    pub fn run_id(&self) -> &str {
+        &self.run_id
+    }
+
+    /// The staging directory: files staged so far can be read back from it before
+    /// [`OutputRun::commit`], and scratch files written into it vanish with the run.
+    pub fn stage_dir(&self) -> &Path {
+        &self.stage
     }
 
     /// Stage a table.

@@ -186,6 +186,38 @@ fn start_from_file(path: &Path) -> Result<StartShape> {
     Ok(shape)
 }
 
+/// The `config.csv` table of an equilibrium's profile, normalised by the scene's `R` and
+/// `D0`: lengths in units of `R`, curvatures in `1/R`, `λR³/D0`, `F R²/D0`, `D/D0` (the model
+/// works in the scene's dimensional `R` and `D`).
+pub fn config_table(profile: &[rodloop_solver::ProfilePoint], scene: &Scene) -> Result<Table> {
+    let r = scene.radius;
+    let d0 = scene.stiffness.reference();
+    let (lam_unit, f_unit) = (r * r * r / d0, r * r / d0);
+    let mut table = Table::new(
+        "config.csv",
+        &[
+            "s", "x", "y", "z", "kappa", "tau", "kappa_g", "lambda", "F_t", "F_n", "F_b", "D",
+        ],
+    );
+    for p in profile {
+        table.push(vec![
+            Cell::F(p.s / r),
+            Cell::F(p.x / r),
+            Cell::F(p.y / r),
+            Cell::F(p.z / r),
+            Cell::F(p.kappa * r),
+            Cell::F(p.tau * r),
+            Cell::F(p.kappa_g * r),
+            Cell::F(p.lambda * lam_unit),
+            Cell::F(p.f_t * f_unit),
+            Cell::F(p.f_n * f_unit),
+            Cell::F(p.f_b * f_unit),
+            Cell::F(p.d / d0),
+        ])?;
+    }
+    Ok(table)
+}
+
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
     let (branch, eta) = match (args.branch, args.eta) {
@@ -264,33 +296,10 @@ pub fn run(args: &Args) -> Result<()> {
     }
     let stab = eq.stability()?;
     let profile = eq.profile();
-    // Normalised outputs: lengths in units of R, curvatures in 1/R, lambda R^3/D0, F R^2/D0,
-    // D/D0 (the model works in the scene's dimensional R and D).
+    let table = config_table(&profile, &scene)?;
     let r = scene.radius;
     let d0 = scene.stiffness.reference();
-    let (lam_unit, f_unit) = (r * r * r / d0, r * r / d0);
-    let mut table = Table::new(
-        "config.csv",
-        &[
-            "s", "x", "y", "z", "kappa", "tau", "kappa_g", "lambda", "F_t", "F_n", "F_b", "D",
-        ],
-    );
-    for p in &profile {
-        table.push(vec![
-            Cell::F(p.s / r),
-            Cell::F(p.x / r),
-            Cell::F(p.y / r),
-            Cell::F(p.z / r),
-            Cell::F(p.kappa * r),
-            Cell::F(p.tau * r),
-            Cell::F(p.kappa_g * r),
-            Cell::F(p.lambda * lam_unit),
-            Cell::F(p.f_t * f_unit),
-            Cell::F(p.f_n * f_unit),
-            Cell::F(p.f_b * f_unit),
-            Cell::F(p.d / d0),
-        ])?;
-    }
+    let lam_unit = r * r * r / d0;
     let (lambda_min, lambda_max) = (res.lambda_range.0 * lam_unit, res.lambda_range.1 * lam_unit);
     let lambda_error = res.lambda_error * lam_unit;
     let summary = checked_json!({

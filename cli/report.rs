@@ -1,0 +1,852 @@
+//! `rodloop report`: one self-contained HTML page with everything a run of the numeric
+//! diagram produces: the energy diagram and its companions (Figs. 3a, 3b, 7), the critical
+//! lengths with their error estimates (and, for homogeneous scenes, the exact values), the
+//! comparison with the paper's printed values, a picture and the contact force `λ(s)` of the
+//! stable state of every branch at one length, the run's settings and its timings.
+//!
+//! The page needs no network and no file beside it: every figure is an inline `<svg>`, the
+//! style sheet is inline, there is no script and no external font (the figures name
+//! DejaVu Sans with a generic sans-serif fallback). Nothing here recomputes what other
+//! commands compute: the diagram comes from [`crate::numeric_diagram::run_numeric`] and
+//! [`crate::numeric_diagram::write_outputs`], the figures from [`rodloop_figures`] (read back
+//! from the staged `branches.csv`/`critical.csv`, as `rodloop draw` reads them), the paper
+//! comparison from [`crate::compare::compare_rows`], the states from
+//! [`rodloop_solver::solve_with_accuracy`] as `rodloop solve` calls it.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use rodloop_diagram::{DiagramOptions, DiagramRow, Label, NumericDiagram};
+use rodloop_exact::diagram::Diagram;
+use rodloop_figures::color::branch_color;
+use rodloop_figures::data::LoopData;
+use rodloop_figures::diagram::{energy_figure, energy_split_figure, lambda_figure, DiagramData};
+use rodloop_figures::loops::{loop_picture, point_group, LoopPictureOptions};
+use rodloop_figures::plot::{Plot, Series};
+use rodloop_figures::svg::{esc, Svg};
+use rodloop_scene::Scene;
+use rodloop_solver::identify::identify_equilibrium;
+use rodloop_solver::start::from_points;
+use rodloop_solver::{
+    solve_with_accuracy, Accuracy, AccurateEquilibrium, SolveOptions, StartShape,
+};
+
+use crate::compare::CompareRow;
+use crate::output::{checked_json, OutputRun};
+
+/// Width of the diagram figures in the page, pixels.
+const FIG_W: f64 = 960.0;
+/// Height of the diagram figures in the page, pixels.
+const FIG_H: f64 = 560.0;
+/// Side of one view of a loop picture, pixels (four views per picture): the smallest at which
+/// the view titles and the legend of [`loop_picture`] fit, so that its text is drawn at its
+/// own size (the picture is 2·PANEL + 208 pixels wide).
+const PANEL: f64 = 300.0;
+/// Size of the force plot beside each loop picture, pixels.
+const FORCE_W: f64 = 360.0;
+/// Height of the force plot beside each loop picture, pixels.
+const FORCE_H: f64 = 300.0;
+
+/// Arguments of `rodloop report`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Scene file (TOML; see data/scenes/). Default: homogeneous loops on the unit sphere.
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// Accuracy: fast, default or high (overrides the scene's).
+    #[arg(long)]
+    pub accuracy: Option<String>,
+    /// No progress output on stderr.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Output directory: report.html, with the diagram's branches.csv, critical.csv,
+    /// diagram.svg and summary.json.
+    #[arg(long, default_value = "out/report")]
+    pub out: PathBuf,
+}
+
+/// The representative state of one branch: where it was taken and what came out.
+struct StateEntry {
+    branch: u32,
+    eta: u32,
+    lbar: f64,
+    /// Why this length: "middle of its first stable range …" or "middle of its traced range …".
+    why: String,
+    outcome: Result<SolvedState, String>,
+}
+
+/// A solved representative state with its picture.
+struct SolvedState {
+    energy: f64,
+    energy_error: f64,
+    index: usize,
+    label: &'static str,
+    lambda_range: (f64, f64),
+    lambda_error: f64,
+    cells: usize,
+    /// Where the solve started.
+    start: String,
+    point_group: Option<String>,
+    self_contacts: usize,
+    /// The loop picture (SVG).
+    picture: String,
+    /// `λ(s)` along the loop (SVG).
+    force: String,
+    seconds: f64,
+}
+
+/// The first stretch of a branch that the diagram labels stable (lowest energy): the lengths
+/// of its first and last consecutive stable traced states, in increasing `L̄`.
+fn first_stable_stretch(rows: &[DiagramRow], branch: u32) -> Option<(f64, f64)> {
+    let mut pts: Vec<&DiagramRow> = rows.iter().filter(|r| r.branch == branch).collect();
+    pts.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
+    let start = pts.iter().position(|r| r.stability == Label::Stable)?;
+    let len = pts[start..]
+        .iter()
+        .take_while(|r| r.stability == Label::Stable)
+        .count();
+    Some((pts[start].lbar, pts[start + len - 1].lbar))
+}
+
+/// The middle of `(a, b)`, rounded to 0.01 when that stays well inside.
+fn middle(a: f64, b: f64) -> f64 {
+    let m = 0.5 * (a + b);
+    let r = (m * 100.0).round() / 100.0;
+    if r > a + 0.25 * (b - a) && r < b - 0.25 * (b - a) {
+        r
+    } else {
+        m
+    }
+}
+
+/// An accurate equilibrium at `lbar` from `start`, checked to have converged onto branch
+/// `eta` (identified from the periods of its own `κ_g`, as `rodloop solve` does).
+fn solve_checked(
+    scene: &Scene,
+    accuracy: Accuracy,
+    eta: u32,
+    lbar: f64,
+    start: &StartShape,
+) -> Result<AccurateEquilibrium> {
+    let stiffness = crate::solve::stiffness_of(&scene.stiffness);
+    let res = solve_with_accuracy(
+        scene.radius,
+        lbar,
+        &stiffness,
+        start,
+        accuracy,
+        &SolveOptions::default(),
+    )?;
+    let report = res.equilibrium.report();
+    if !report.converged {
+        bail!(
+            "the solve did not converge (KKT residual {:.1e})",
+            report.residual
+        );
+    }
+    let periods = identify_equilibrium(&res.equilibrium)?;
+    if periods.eta != eta {
+        bail!(
+            "the solve converged onto a state with eta = {} instead of {eta}",
+            periods.eta
+        );
+    }
+    Ok(res)
+}
+
+/// Solve branch `eta` at `lbar` from the Euler curve `l = η` (as `rodloop solve` does) or,
+/// when that fails, from the diagram's own state of the branch there (re-solved at the tracing
+/// resolution and passed on as points, as `solve --from` takes them); then draw it.
+fn solve_state(
+    scene: &Scene,
+    accuracy: Accuracy,
+    opts: &DiagramOptions,
+    d: &NumericDiagram,
+    branch: u32,
+    eta: u32,
+    lbar: f64,
+) -> Result<SolvedState> {
+    let t0 = Instant::now();
+    let (res, start) =
+        match solve_checked(scene, accuracy, eta, lbar, &StartShape::Euler { l: eta }) {
+            Ok(r) => (r, format!("the Euler curve l = {eta}")),
+            Err(euler) => {
+                let traced = d
+                    .branch_by_eta(eta)
+                    .context("the branch is not traced")
+                    .and_then(|b| Ok(b.solve_at(opts, lbar)?))
+                    .and_then(|eq| {
+                        let pts: Vec<[f64; 3]> =
+                            eq.profile().iter().map(|p| [p.x, p.y, p.z]).collect();
+                        Ok(from_points(&pts)?.0)
+                    })
+                    .and_then(|start| solve_checked(scene, accuracy, eta, lbar, &start));
+                match traced {
+                    Ok(r) => (
+                        r,
+                        format!("the diagram's traced state (from the Euler curve: {euler:#})"),
+                    ),
+                    Err(e) => bail!(
+                        "from the Euler curve: {euler:#}; from the diagram's traced state: {e:#}"
+                    ),
+                }
+            }
+        };
+    let eq = &res.equilibrium;
+    let index = eq.stability()?.index;
+    let label = if index > 0 {
+        "unstable"
+    } else if d.lowest_at(lbar).contains(&branch) {
+        "stable"
+    } else {
+        "metastable"
+    };
+    let profile = eq.profile();
+    let table = crate::solve::config_table(&profile, scene)?;
+    let source = format!("branch {branch} at L̄ = {lbar}");
+    let data = LoopData::parse(&source, &table.to_bytes()?)?;
+    let pic = loop_picture(
+        &data,
+        &LoopPictureOptions {
+            // Uniform rods: the contact force; otherwise the stiffness (where the soft segment is).
+            color: Some(
+                if scene.stiffness.is_uniform() {
+                    "lambda"
+                } else {
+                    "D"
+                }
+                .into(),
+            ),
+            tol: 1e-3,
+            panel: PANEL,
+            title: format!("Branch {branch} (η = {eta}) at L̄ = {lbar}: {label}"),
+        },
+    )?;
+    let force = force_figure(&data, branch)?;
+    let lam_unit = scene.radius.powi(3) / scene.stiffness.reference();
+    Ok(SolvedState {
+        energy: res.energy.total,
+        energy_error: res.energy_error,
+        index,
+        label,
+        lambda_range: (res.lambda_range.0 * lam_unit, res.lambda_range.1 * lam_unit),
+        lambda_error: res.lambda_error * lam_unit,
+        cells: profile.len(),
+        start,
+        point_group: point_group(&data, crate::draw::POINT_GROUP_TOL).map(|g| g.0),
+        self_contacts: pic.contacts.len(),
+        picture: pic.svg,
+        force,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// One representative state per traced branch: the middle of its first stable range in the
+/// diagram, or of its traced range when it is never the lowest. The solves run in parallel.
+fn representative_states(
+    scene: &Scene,
+    accuracy: Accuracy,
+    opts: &DiagramOptions,
+    d: &NumericDiagram,
+) -> Vec<StateEntry> {
+    let rows = d.rows();
+    let mut plan: Vec<(u32, u32, f64, String)> = d
+        .branches
+        .iter()
+        .map(|b| match first_stable_stretch(&rows, b.branch) {
+            Some((a, c)) => (
+                b.branch,
+                b.eta,
+                middle(a, c),
+                format!("middle of its first stable stretch (traced states at {a:.4} ≤ L̄ ≤ {c:.4})"),
+            ),
+            None => {
+                let (a, c) = b.span();
+                (
+                    b.branch,
+                    b.eta,
+                    middle(a, c),
+                    format!("middle of its traced range {a:.4} ≤ L̄ ≤ {c:.4} (never the lowest branch there)"),
+                )
+            }
+        })
+        .collect();
+    plan.sort_by_key(|p| p.0);
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(plan.len().max(1));
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let mut results: Vec<Option<Result<SolvedState, String>>> =
+        (0..plan.len()).map(|_| None).collect();
+    let slots = std::sync::Mutex::new(&mut results);
+    std::thread::scope(|scope| {
+        for _ in 0..threads {
+            scope.spawn(|| loop {
+                let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let Some((branch, eta, lbar, _)) = plan.get(k) else {
+                    break;
+                };
+                let r = solve_state(scene, accuracy, opts, d, *branch, *eta, *lbar)
+                    .map_err(|e| format!("{e:#}"));
+                if let Ok(mut s) = slots.lock() {
+                    s[k] = Some(r);
+                }
+            });
+        }
+    });
+    plan.into_iter()
+        .zip(results)
+        .map(|((branch, eta, lbar, why), r)| StateEntry {
+            branch,
+            eta,
+            lbar,
+            why,
+            outcome: r.unwrap_or_else(|| Err("the solve thread did not report".into())),
+        })
+        .collect()
+}
+
+/// The contact force `λR³/D0` against `s/L` along one state (the paper's Fig. 6), from the
+/// `lambda` column of its loop table, closed at `s/L = 1`.
+fn force_figure(data: &LoopData, branch: u32) -> Result<String> {
+    let length = data.length();
+    let s = data.s();
+    let lam = data
+        .column("lambda")
+        .context("the loop table has no lambda column")?;
+    let mut points: Vec<(f64, f64)> = s.iter().zip(lam).map(|(&a, &b)| (a / length, b)).collect();
+    if let (Some(&s0), Some(&l0)) = (s.first(), lam.first()) {
+        points.push((s0 / length + 1.0, l0));
+    }
+    let plot = Plot {
+        title: "Contact force along the loop".into(),
+        xlabel: "s/L (s = 0 as marked on the loop)".into(),
+        ylabel: "λR³/D₀".into(),
+        series: vec![Series {
+            color: branch_color(branch).to_string(),
+            width: 2.0,
+            dash: String::new(),
+            points,
+        }],
+        hlines: vec![0.0],
+        ..Default::default()
+    };
+    let mut svg = Svg::new(FORCE_W, FORCE_H);
+    plot.render(&mut svg, 0.0, 0.0, FORCE_W, FORCE_H, "force");
+    Ok(svg.finish())
+}
+
+/// Prepare a standalone SVG document for inlining into HTML: ids (clip paths, gradients) get
+/// a per-figure prefix so that figures cannot take each other's definitions, the namespace
+/// declaration goes (the HTML parser supplies it), and the root element gets a class and an
+/// accessible name.
+pub fn inline_svg(svg: &str, prefix: &str, label: &str) -> String {
+    let body = svg
+        .trim_start()
+        .trim_start_matches(|c| c != '<')
+        // HTML puts <svg> in the SVG namespace itself; the page names no URL at all.
+        .replace(" xmlns=\"http://www.w3.org/2000/svg\"", "")
+        .replace("id=\"", &format!("id=\"{prefix}-"))
+        .replace("url(#", &format!("url(#{prefix}-"))
+        .replace("href=\"#", &format!("href=\"#{prefix}-"));
+    body.replacen(
+        "<svg ",
+        &format!(
+            "<svg class=\"fig\" role=\"img\" aria-label=\"{}\" ",
+            esc(label)
+        ),
+        1,
+    )
+}
+
+/// A number in scientific notation for error columns (`0` stays `0`).
+fn sci(v: f64) -> String {
+    if v == 0.0 {
+        "0".into()
+    } else {
+        format!("{v:.1e}")
+    }
+}
+
+/// The critical-length table.
+fn critical_html(d: &NumericDiagram, exact: Option<&Diagram>) -> String {
+    let mut h = String::new();
+    h.push_str("<table id=\"critical-table\">\n<thead><tr><th>i</th><th>L̄<sub>cr</sub></th><th>kind</th><th>from → to</th><th>E R/(πD₀)</th><th>error estimate of L̄<sub>cr</sub></th>");
+    if exact.is_some() {
+        h.push_str("<th>exact L̄<sub>cr</sub></th><th>numeric − exact</th>");
+    }
+    h.push_str("</tr></thead>\n<tbody>\n");
+    for c in &d.critical {
+        let _ = write!(
+            h,
+            "<tr><td>{}</td><td class=\"num\">{:.12}</td><td>{}</td><td>{} → {}</td><td class=\"num\">{:.10}</td><td class=\"num\">{}</td>",
+            c.index,
+            c.lbar_cr,
+            c.kind,
+            c.from_branch,
+            c.to_branch,
+            c.energy,
+            sci(c.error_estimate)
+        );
+        if let Some(e) = exact {
+            match crate::diagram::exact_match(c, e) {
+                Some(x) => {
+                    let _ = write!(
+                        h,
+                        "<td class=\"num\">{:.12}</td><td class=\"num\">{}</td>",
+                        x.lbar_cr,
+                        sci(c.lbar_cr - x.lbar_cr)
+                    );
+                }
+                None => h.push_str("<td colspan=\"2\">no exact match</td>"),
+            }
+        }
+        h.push_str("</tr>\n");
+    }
+    h.push_str("</tbody></table>\n");
+    h
+}
+
+/// The comparison with the paper's printed values.
+fn compare_html(rows: &[CompareRow], numeric: bool) -> String {
+    let yes = |a: Option<bool>| match a {
+        Some(true) => "<td class=\"ok\">yes</td>",
+        Some(false) => "<td class=\"bad\">NO</td>",
+        None => "<td>–</td>",
+    };
+    let opt_sci = |v: Option<f64>| v.map(sci).unwrap_or_else(|| "–".into());
+    let mut h = String::new();
+    h.push_str("<table id=\"compare-table\">\n<thead><tr><th>id</th><th>quantity</th><th>branch</th><th>L̄</th><th>paper</th><th>exact layer</th><th>exact − paper</th><th>agrees</th>");
+    if numeric {
+        h.push_str("<th>numeric</th><th>numeric − paper</th><th>agrees</th>");
+    }
+    h.push_str("<th>source in the paper</th></tr></thead>\n<tbody>\n");
+    for r in rows {
+        let _ = write!(
+            h,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td>{}",
+            esc(&r.id),
+            esc(&r.kind.replace('_', " ")),
+            r.branch,
+            r.lbar.map(|l| l.to_string()).unwrap_or_default(),
+            esc(&r.paper),
+            esc(&r.exact_text()),
+            opt_sci(r.exact_deviation),
+            yes(r.agrees_exact),
+        );
+        if numeric {
+            let _ = write!(
+                h,
+                "<td class=\"num\">{}</td><td class=\"num\">{}</td>{}",
+                match r.numeric_text().as_str() {
+                    "-" => "–".to_string(),
+                    t => esc(t),
+                },
+                opt_sci(r.numeric_deviation),
+                yes(r.agrees_numeric)
+            );
+        }
+        let _ = writeln!(h, "<td class=\"src\">{}</td></tr>", esc(&r.source));
+    }
+    h.push_str("</tbody></table>\n");
+    h
+}
+
+const STYLE: &str = "body{font-family:'DejaVu Sans',Verdana,Arial,sans-serif;margin:0 auto;max-width:1240px;padding:16px 20px 40px;color:#1a1a1a;background:#fff;line-height:1.45}
+h1{font-size:26px;margin:8px 0 4px}h2{font-size:20px;border-bottom:2px solid #d8dee8;padding-bottom:4px;margin-top:34px}
+p.lead{color:#444;margin:4px 0 10px}nav a{margin-right:14px;color:#1f4fd1;text-decoration:none}
+figure{margin:14px 0;padding:0}figure svg.fig{max-width:100%;height:auto;border:1px solid #e2e6ee;display:block}
+figcaption{font-size:13px;color:#444;margin-top:4px;max-width:960px}
+table{border-collapse:collapse;font-size:13px;margin:10px 0}th,td{border:1px solid #d5dae3;padding:3px 8px;text-align:left;vertical-align:top}
+th{background:#f0f3f8}td.num{text-align:right;font-family:'DejaVu Sans Mono',Menlo,Consolas,monospace;white-space:nowrap}
+td.ok{color:#1b7a1b}td.bad{color:#c01818;font-weight:bold}td.src{color:#555;font-size:12px}
+.state{display:flex;flex-wrap:wrap;gap:0 18px;align-items:flex-start;margin-top:18px}.state figure{margin:0;display:table}.state figcaption{display:table-caption;caption-side:bottom}
+.note{background:#fff6e0;border-left:4px solid #e0a800;padding:6px 10px;font-size:13px}
+dl{display:grid;grid-template-columns:max-content auto;gap:2px 16px;font-size:14px}dt{font-weight:bold}dd{margin:0}
+pre{background:#f6f8fa;padding:8px;font-size:12px;overflow-x:auto}";
+
+/// Run the subcommand.
+pub fn run(args: &Args) -> Result<()> {
+    let t_start = Instant::now();
+    let scene = crate::solve::load_scene(args.scene.as_deref())?;
+    let scene_text = match &args.scene {
+        Some(p) => Some(
+            std::fs::read_to_string(p).with_context(|| format!("cannot read {}", p.display()))?,
+        ),
+        None => None,
+    };
+    let accuracy = crate::solve::accuracy_of(&scene, args.accuracy.as_deref())?;
+    let opts = DiagramOptions {
+        radius: scene.radius,
+        stiffness: crate::solve::stiffness_of(&scene.stiffness),
+        lbar_min: scene.lbar_min,
+        lbar_max: scene.lbar_max,
+        accuracy,
+        ..Default::default()
+    };
+    opts.validate()?;
+    let run = OutputRun::begin(&args.out)?;
+
+    // 1. The numeric diagram (branch files go to the staging directory and vanish with it).
+    let t = Instant::now();
+    let d = crate::numeric_diagram::run_numeric(&opts, run.stage_dir(), false, args.quiet, None)?;
+    crate::numeric_diagram::write_outputs(&d, &opts, &scene.name, &run)?;
+    let t_diagram = t.elapsed().as_secs_f64();
+
+    // 2. The diagram figures, from the staged CSV files as `rodloop draw` reads them.
+    let t = Instant::now();
+    let dd = DiagramData::read(run.stage_dir())?;
+    let fig_energy = energy_figure(&dd, FIG_W, FIG_H)?;
+    let fig_split = energy_split_figure(&dd, FIG_W, 480.0)?;
+    let fig_lambda = lambda_figure(&dd, FIG_W, FIG_H)?;
+    let t_diagram_figures = t.elapsed().as_secs_f64();
+
+    // 3. Exact critical lengths (homogeneous scenes) and the paper's values.
+    let t = Instant::now();
+    let uniform = scene.stiffness.is_uniform();
+    let exact = if uniform {
+        Some(crate::diagram::exact_window(
+            opts.lbar_min,
+            opts.lbar_max,
+            0.01,
+        )?)
+    } else {
+        None
+    };
+    let compare = crate::compare::compare_rows(uniform.then_some(&d))?;
+    let t_exact = t.elapsed().as_secs_f64();
+
+    // 4. One state per branch, its picture and its contact force.
+    let t = Instant::now();
+    let states = representative_states(&scene, accuracy, &opts, &d);
+    let t_states = t.elapsed().as_secs_f64();
+
+    // 5. The page.
+    let t = Instant::now();
+    let version = env!("CARGO_PKG_VERSION");
+    let command: Vec<String> = std::env::args().collect();
+    let mut figures = 0usize;
+    let mut fig = |svg: &str, label: &str, caption: &str, id: &str| {
+        figures += 1;
+        format!(
+            "<figure id=\"{id}\">\n{}\n<figcaption>{caption}</figcaption></figure>\n",
+            inline_svg(svg, &format!("f{figures}"), label)
+        )
+    };
+    let mut h = String::with_capacity(1 << 20);
+    let _ = write!(
+        h,
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>rodloop report: {name}</title>\n<style>\n{STYLE}\n</style>\n</head>\n<body>\n<h1>rodloop report: scene {name}</h1>\n<p class=\"lead\">{desc}. Numeric branch diagram for {lo} ≤ L̄ ≤ {hi} at accuracy <b>{acc}</b>: {nstates} traced states on {nbranches} branches, {ncrit} critical lengths. Elastic rod loops in a sphere after Wang, Li &amp; Yi, J. Mech. Phys. Solids (2024); equation and figure numbers refer to that paper.</p>\n<nav><a href=\"#diagram\">Diagram</a><a href=\"#critical\">Critical lengths</a><a href=\"#states\">States</a><a href=\"#paper\">Paper values</a><a href=\"#settings\">Settings</a><a href=\"#timings\">Timings</a></nav>\n",
+        name = esc(&scene.name),
+        desc = esc(&d.scene),
+        lo = opts.lbar_min,
+        hi = opts.lbar_max,
+        acc = format!("{accuracy:?}").to_lowercase(),
+        nstates = d.rows().len(),
+        nbranches = d.branches.len(),
+        ncrit = d.critical.len(),
+    );
+    for w in &d.warnings {
+        let _ = writeln!(h, "<p class=\"note\">warning: {}</p>", esc(w));
+    }
+
+    h.push_str("<section id=\"diagram\">\n<h2>1. Energy against length</h2>\n");
+    h.push_str(&fig(
+        &fig_energy,
+        "bending energy against normalised length",
+        "Bending energy E R/(πD₀) of every traced state against L̄ = L/(2πR) (paper Fig. 3a). One colour per branch; solid: stable (lowest energy), dashed: metastable (a local minimum with higher energy), dotted: unstable (Hessian index &gt; 0). Diamonds: crossings E<sub>a</sub> = E<sub>b</sub>; open squares: collapses onto an m-fold great circle.",
+        "fig-energy",
+    ));
+    h.push_str(&fig(
+        &fig_split,
+        "geodesic and normal energy split",
+        "The energy split E = E<sub>g</sub> + E<sub>n</sub> into its geodesic-curvature and normal-curvature parts (paper Fig. 3b).",
+        "fig-split",
+    ));
+    h.push_str(&fig(
+        &fig_lambda,
+        "contact force extremes against length",
+        "Largest and smallest contact force λR³/D₀ of every state (paper Fig. 7), with the great-circle buckling loads of Eqs. (33)–(34) at L̄ = m.",
+        "fig-lambda",
+    ));
+    h.push_str("</section>\n");
+
+    h.push_str("<section id=\"critical\">\n<h2>2. Critical lengths</h2>\n<p>Where the globally stable branch changes: crossings solve E<sub>a</sub>(L̄) = E<sub>b</sub>(L̄) on re-solved, Richardson-extrapolated equilibria; collapses are the lengths L̄ = m where the lowest branch ends on the m-fold great circle. Branch 0 is the planar circle below L̄ = 1. The error estimate is that of L̄<sub>cr</sub> itself.");
+    if exact.is_some() {
+        h.push_str(" For this homogeneous scene the exact layer (closed-form elliptic-function loops, error ≈ 1e−14) gives the exact values.");
+    }
+    h.push_str(" The same numbers are in <code>critical.csv</code>.</p>\n");
+    h.push_str(&critical_html(&d, exact.as_ref()));
+    if let Some(gc) = &d.great_circles {
+        let loads: Vec<_> = gc
+            .loads
+            .iter()
+            .filter_map(|l| Some((l, l.lambda_formula?, l.equation.as_ref()?)))
+            .collect();
+        if !loads.is_empty() {
+            h.push_str("<p>Buckling loads of the m-fold great circles, found numerically where the constrained Hessian becomes singular, against Eqs. (33)–(34):</p>\n<table id=\"buckling-table\"><thead><tr><th>m</th><th>mode (periods of κ<sub>g</sub>)</th><th>numeric λR³/D₀</th><th>error estimate</th><th>formula</th><th>value</th></tr></thead><tbody>\n");
+            for (l, f, eq) in loads {
+                let _ = writeln!(
+                    h,
+                    "<tr><td>{}</td><td>{}</td><td class=\"num\">{:.10}</td><td class=\"num\">{}</td><td>Eq. ({})</td><td class=\"num\">{:.10}</td></tr>",
+                    l.m,
+                    l.mode_periods,
+                    l.lambda_numeric,
+                    sci(l.lambda_error),
+                    esc(eq),
+                    f
+                );
+            }
+            h.push_str("</tbody></table>\n");
+        }
+    }
+    h.push_str("</section>\n");
+
+    h.push_str("<section id=\"states\">\n<h2>3. The stable state of each branch</h2>\n<p>Each branch solved at one length (the middle of the first stretch where the diagram finds it the lowest branch), from the Euler rotation curve with l = η at the report's accuracy, as <code>rodloop solve</code> does; the converged state's branch is checked from the periods of its κ<sub>g</sub>. Each picture shows the loop on the sphere from an oblique view and along the three axes, coloured by the contact force λR³/D₀ (uniform rods) or by the stiffness D/D₀ (other profiles); nearer strands are darker and thicker. Red circles: self-contacts in 3-D.</p>\n");
+    h.push_str("<table id=\"states-table\"><thead><tr><th>branch</th><th>η</th><th>L̄</th><th>chosen as</th><th>solved from</th><th>E R/(πD₀)</th><th>error</th><th>index</th><th>state</th><th>λR³/D₀ range</th><th>point group</th><th>self-contacts</th><th>cells</th></tr></thead><tbody>\n");
+    for st in &states {
+        match &st.outcome {
+            Ok(s) => {
+                let _ = writeln!(
+                    h,
+                    "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"num\">{:.10}</td><td class=\"num\">{}</td><td>{}</td><td>{}</td><td class=\"num\">[{:.6}, {:.6}] ± {}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                    st.branch,
+                    st.eta,
+                    st.lbar,
+                    esc(&st.why),
+                    esc(&s.start),
+                    s.energy,
+                    sci(s.energy_error),
+                    s.index,
+                    s.label,
+                    s.lambda_range.0,
+                    s.lambda_range.1,
+                    sci(s.lambda_error),
+                    s.point_group.as_deref().map(esc).unwrap_or_else(|| "–".into()),
+                    s.self_contacts,
+                    s.cells
+                );
+            }
+            Err(e) => {
+                let _ = writeln!(
+                    h,
+                    "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td colspan=\"9\" class=\"bad\">not solved: {}</td></tr>",
+                    st.branch,
+                    st.eta,
+                    st.lbar,
+                    esc(&st.why),
+                    esc(e)
+                );
+            }
+        }
+    }
+    h.push_str("</tbody></table>\n");
+    for st in &states {
+        if let Ok(s) = &st.outcome {
+            let _ = writeln!(h, "<div class=\"state\" id=\"state-{}\">", st.branch);
+            h.push_str(&fig(
+                &s.picture,
+                &format!("loop of branch {} at length {}", st.branch, st.lbar),
+                &format!(
+                    "Branch {} (η = {}) at L̄ = {}: {}, E R/(πD₀) = {:.8} ± {}{}, {}.",
+                    st.branch,
+                    st.eta,
+                    st.lbar,
+                    s.label,
+                    s.energy,
+                    sci(s.energy_error),
+                    s.point_group
+                        .as_deref()
+                        .map(|g| format!(", point group {}", esc(g)))
+                        .unwrap_or_default(),
+                    crate::output::plural(s.self_contacts as u64, "self-contact"),
+                ),
+                &format!("fig-loop-{}", st.branch),
+            ));
+            h.push_str(&fig(
+                &s.force,
+                &format!("contact force along the loop of branch {}", st.branch),
+                &format!(
+                    "Contact force λR³/D₀ along the loop of branch {} at L̄ = {} (paper Fig. 6): from {:.6} to {:.6} ± {}.",
+                    st.branch,
+                    st.lbar,
+                    s.lambda_range.0,
+                    s.lambda_range.1,
+                    sci(s.lambda_error)
+                ),
+                &format!("fig-force-{}", st.branch),
+            ));
+            h.push_str("</div>\n");
+        }
+    }
+    h.push_str("</section>\n");
+
+    h.push_str("<section id=\"paper\">\n<h2>4. Comparison with the paper's printed values</h2>\n<p>Values printed in the paper (<code>data/reference/paper_values.csv</code>, with their sources), next to rodloop's. “Agrees” means within half a unit of the last printed digit (exact statements: within 1e−6).");
+    if !uniform {
+        h.push_str(" The paper's values are for homogeneous loops; this scene's stiffness is not uniform, so only the exact (homogeneous) layer is compared.");
+    }
+    h.push_str(" Winding numbers and symmetries are compared on the exact layer only.</p>\n");
+    h.push_str(&compare_html(&compare, uniform));
+    h.push_str("</section>\n");
+
+    let t_page = t.elapsed().as_secs_f64();
+    let total = t_start.elapsed().as_secs_f64();
+    h.push_str("<section id=\"settings\">\n<h2>5. Settings</h2>\n<dl>\n");
+    let mut dl = |k: &str, v: &str| {
+        let _ = writeln!(h, "<dt>{k}</dt><dd>{v}</dd>");
+    };
+    dl("scene", &esc(&scene.name));
+    dl(
+        "scene file",
+        &args
+            .scene
+            .as_ref()
+            .map(|p| format!("<code>{}</code>", esc(&p.display().to_string())))
+            .unwrap_or_else(|| "built-in default".into()),
+    );
+    dl("description", &esc(&d.scene));
+    dl("sphere radius R", &scene.radius.to_string());
+    dl(
+        "length range",
+        &format!("{} ≤ L̄ ≤ {}", opts.lbar_min, opts.lbar_max),
+    );
+    dl(
+        "accuracy",
+        &format!(
+            "{}{}",
+            format!("{accuracy:?}").to_lowercase(),
+            if args.accuracy.is_some() {
+                " (--accuracy)"
+            } else {
+                " (scene)"
+            }
+        ),
+    );
+    dl("rodloop version", version);
+    dl(
+        "platform",
+        &format!("{}-{}", std::env::consts::ARCH, std::env::consts::OS),
+    );
+    dl(
+        "command",
+        &format!("<code>{}</code>", esc(&command.join(" "))),
+    );
+    dl("run id", &format!("<code>{}</code>", esc(run.run_id())));
+    dl(
+        "units",
+        "lengths in R, L̄ = L/(2πR), energies E R/(πD₀), contact force λR³/D₀ (D₀ = D for a uniform rod)",
+    );
+    h.push_str("</dl>\n");
+    if let Some(text) = &scene_text {
+        let _ = writeln!(h, "<pre>{}</pre>", esc(text));
+    }
+    h.push_str("</section>\n");
+
+    h.push_str("<section id=\"timings\">\n<h2>6. Timings</h2>\n<table id=\"timings-table\"><thead><tr><th>stage</th><th>wall time (s)</th></tr></thead><tbody>\n");
+    let mut row = |k: &str, v: f64| {
+        let _ = writeln!(h, "<tr><td>{k}</td><td class=\"num\">{v:.3}</td></tr>");
+    };
+    row("diagram: tracing the branches", d.timings.tracing);
+    row("diagram: critical lengths", d.timings.critical);
+    row("diagram: great circles", d.timings.great_circles);
+    row("diagram total (with writing the CSV files)", t_diagram);
+    row("diagram figures", t_diagram_figures);
+    row("exact layer and paper comparison", t_exact);
+    row(
+        &format!(
+            "representative states ({} solves, in parallel)",
+            states.len()
+        ),
+        t_states,
+    );
+    for st in &states {
+        if let Ok(s) = &st.outcome {
+            row(
+                &format!(
+                    "&nbsp;&nbsp;branch {} at L̄ = {} (solve and picture)",
+                    st.branch, st.lbar
+                ),
+                s.seconds,
+            );
+        }
+    }
+    row("page assembly", t_page);
+    row("total", total);
+    h.push_str("</tbody></table>\n</section>\n");
+    let _ = writeln!(
+        h,
+        "<footer><p class=\"lead\">Written by rodloop {version}. This page is self-contained: no scripts, no external style sheets, fonts or images.</p></footer>\n</body>\n</html>"
+    );
+
+    // Every number above comes from checked outputs; this is the last line of defence.
+    if let Some(bad) = h
+        .split(|c: char| !c.is_alphanumeric())
+        .find(|t| *t == "NaN" || *t == "inf")
+    {
+        bail!(
+            "internal error: the report contains a non-finite number ({bad}); nothing was written"
+        );
+    }
+    run.write_bytes("report.html", h.as_bytes())?;
+
+    // The summary: the diagram's, with what the report adds.
+    let staged = std::fs::read_to_string(run.stage_dir().join("summary.json"))
+        .context("reading the staged summary.json")?;
+    let mut summary: serde_json::Value = serde_json::from_str(&staged)?;
+    let state_notes = states
+        .iter()
+        .map(|st| match &st.outcome {
+            Ok(s) => checked_json!({
+                "branch": st.branch, "eta": st.eta, "lbar": st.lbar, "energy": s.energy,
+                "energy_error": s.energy_error, "index": s.index, "state": s.label,
+                "lambda_min": s.lambda_range.0, "lambda_max": s.lambda_range.1,
+                "point_group": s.point_group, "self_contacts": s.self_contacts, "start": s.start,
+                "seconds": s.seconds,
+            }),
+            Err(e) => {
+                checked_json!({"branch": st.branch, "eta": st.eta, "lbar": st.lbar, "error": e})
+            }
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let report = checked_json!({
+        "file": "report.html",
+        "bytes": h.len(),
+        "figures": figures,
+        "states": state_notes,
+        "paper_disagreements_exact": compare.iter().filter(|r| r.agrees_exact == Some(false)).count(),
+        "paper_disagreements_numeric": compare.iter().filter(|r| r.agrees_numeric == Some(false)).count(),
+        "version": version,
+        "seconds": serde_json::json!({
+            "diagram": t_diagram,
+            "diagram_figures": t_diagram_figures,
+            "exact_and_paper": t_exact,
+            "states": t_states,
+            "page": t_page,
+            "total": total,
+        }),
+    })?;
+    if let serde_json::Value::Object(map) = &mut summary {
+        map.insert("report".into(), crate::output::strip_nulls(report));
+    }
+    run.write_json("summary.json", &summary)?;
+    run.commit()?;
+    let failed = states.iter().filter(|s| s.outcome.is_err()).count();
+    if failed > 0 {
+        eprintln!(
+            "warning: {} of {} representative states could not be solved (see the report)",
+            failed,
+            states.len()
+        );
+    }
+    outln!(
+        "wrote report.html ({} KB, {} figures: diagram, energy split, lambda extremes, {} with their force plots), branches.csv, critical.csv, diagram.svg, summary.json to {} in {:.2} s",
+        h.len().div_ceil(1024),
+        figures,
+        crate::output::plural((states.len() - failed) as u64, "loop picture"),
+        args.out.display(),
+        t_start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}

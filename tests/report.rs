@@ -1,0 +1,504 @@
+//! `rodloop report` on the default scene: the HTML page is checked structurally (every
+//! figure an inline `<svg>` that parses, the critical-length table equal to `critical.csv`
+//! and to the independent mpmath reference, the states equal to the exact loops, nothing
+//! fetched from the network, no NaN), and, when `chromium` is installed, loaded in headless
+//! Chromium (no console error, every figure in the rendered DOM). CI has no Chromium: the
+//! structural checks carry the weight there.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::sync::OnceLock;
+use std::time::{Duration, Instant};
+
+fn rodloop(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_rodloop"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(args)
+        .output()
+        .expect("run rodloop")
+}
+
+/// The report of the default scene, made once for every test of this file.
+fn report() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-default");
+        let _ = std::fs::remove_dir_all(&dir);
+        let o = rodloop(&["report", "--quiet", "--out", dir.to_str().unwrap()]);
+        assert!(
+            o.status.success(),
+            "rodloop report failed: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(stdout.contains("wrote report.html"), "{stdout}");
+        dir
+    })
+}
+
+fn html() -> String {
+    std::fs::read_to_string(report().join("report.html")).unwrap()
+}
+
+/// Rows of a CSV file without quoted fields (`#` lines are comments): header, rows.
+fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
+    let header = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows = lines
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect();
+    (header, rows)
+}
+
+fn col(header: &[String], name: &str) -> usize {
+    header
+        .iter()
+        .position(|h| h == name)
+        .unwrap_or_else(|| panic!("no column {name} in {header:?}"))
+}
+
+/// The text between `start` (inclusive) and the next `end` (inclusive).
+fn between<'a>(text: &'a str, start: &str, end: &str) -> &'a str {
+    let a = text
+        .find(start)
+        .unwrap_or_else(|| panic!("{start} not found"));
+    let b = text[a..]
+        .find(end)
+        .unwrap_or_else(|| panic!("{end} not found after {start}"));
+    &text[a..a + b + end.len()]
+}
+
+/// Every `<svg …>…</svg>` element of the page.
+fn svgs(html: &str) -> Vec<&str> {
+    let mut out = Vec::new();
+    let mut rest = html;
+    while let Some(a) = rest.find("<svg") {
+        let b = rest[a..].find("</svg>").expect("unclosed <svg>");
+        out.push(&rest[a..a + b + 6]);
+        rest = &rest[a + b + 6..];
+    }
+    out
+}
+
+/// Cells of the body rows of a `<table id="ID">`, tags inside cells removed.
+fn table_rows(html: &str, id: &str) -> Vec<Vec<String>> {
+    let table = between(html, &format!("<table id=\"{id}\">"), "</table>");
+    let body = between(table, "<tbody>", "</tbody>");
+    body.split("<tr>")
+        .skip(1)
+        .map(|row| {
+            row.split("<td")
+                .skip(1)
+                .map(|cell| {
+                    let content = &cell[cell.find('>').unwrap() + 1..];
+                    let content = &content[..content.find("</td>").unwrap()];
+                    let mut text = String::new();
+                    let mut in_tag = false;
+                    for c in content.chars() {
+                        match c {
+                            '<' => in_tag = true,
+                            '>' => in_tag = false,
+                            c if !in_tag => text.push(c),
+                            _ => {}
+                        }
+                    }
+                    text.trim().to_string()
+                })
+                .collect()
+        })
+        .collect()
+}
+
+fn num(s: &str) -> f64 {
+    s.parse()
+        .unwrap_or_else(|_| panic!("{s:?} is not a number"))
+}
+
+/// The paper branches of `branches.csv`.
+fn branches() -> BTreeSet<u32> {
+    let (h, rows) = read_csv(&report().join("branches.csv"));
+    let b = col(&h, "branch");
+    rows.iter().map(|r| r[b].parse().unwrap()).collect()
+}
+
+/// The figures the page must show: the three diagram figures and, for every branch of the
+/// diagram, its loop picture and its force plot.
+fn expected_figures() -> Vec<String> {
+    let mut ids: Vec<String> = ["fig-energy", "fig-split", "fig-lambda"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    for b in branches() {
+        ids.push(format!("fig-loop-{b}"));
+        ids.push(format!("fig-force-{b}"));
+    }
+    ids
+}
+
+#[test]
+fn every_figure_is_an_inline_svg_and_nothing_is_fetched() {
+    let html = html();
+    assert!(html.starts_with("<!DOCTYPE html>"));
+    assert!(html.trim_end().ends_with("</html>"));
+    let expected = expected_figures();
+    // The default scene has branches 1 to 5 between L̄ = 1 and 5 (each lives for
+    // η − 1 < L̄ < η + 1).
+    assert_eq!(branches(), (1..=5).collect::<BTreeSet<u32>>());
+    for id in &expected {
+        let fig = between(&html, &format!("<figure id=\"{id}\">"), "</figure>");
+        assert_eq!(fig.matches("<svg").count(), 1, "figure {id}");
+        assert!(
+            fig.contains("</svg>") && fig.contains("<figcaption>"),
+            "{id}"
+        );
+    }
+    let all = svgs(&html);
+    assert_eq!(all.len(), expected.len(), "one <svg> per figure, no other");
+    for svg in &all {
+        let doc = roxmltree::Document::parse(svg)
+            .unwrap_or_else(|e| panic!("an inline SVG does not parse: {e}"));
+        let root = doc.root_element();
+        let size = |a: &str| num(root.attribute(a).unwrap());
+        assert!(size("width") >= 300.0 && size("height") >= 200.0);
+        // Drawn content, not an empty frame: axes or views, at least one curve, labels.
+        let count = |tag: &str| doc.descendants().filter(|n| n.has_tag_name(tag)).count();
+        assert!(
+            count("line") >= 10 && count("path") >= 1,
+            "an SVG without drawing"
+        );
+        assert!(count("text") >= 5, "an SVG without labels");
+    }
+    // Ids are unique in the page, so no figure takes another's clip path or gradient.
+    let mut ids = BTreeSet::new();
+    for part in html.split(" id=\"").skip(1) {
+        let id = &part[..part.find('"').unwrap()];
+        assert!(ids.insert(id.to_string()), "duplicate id {id}");
+    }
+    for part in html.split("url(#").skip(1) {
+        let id = &part[..part.find(')').unwrap()];
+        assert!(ids.contains(id), "url(#{id}) has no target");
+    }
+    // Self-contained: no network, no external resource of any kind.
+    for bad in [
+        "http://",
+        "https://",
+        "<script",
+        "<link",
+        "<img",
+        "<iframe",
+        "<object",
+        "@import",
+        "@font-face",
+        " src=",
+        "url(\"",
+        "url('",
+    ] {
+        assert!(!html.contains(bad), "the page contains {bad}");
+    }
+    for part in html.split("url(").skip(1) {
+        assert!(
+            part.starts_with('#'),
+            "url({}…",
+            &part[..20.min(part.len())]
+        );
+    }
+    for part in html.split("href=\"").skip(1) {
+        assert!(
+            part.starts_with('#'),
+            "href=\"{}…",
+            &part[..20.min(part.len())]
+        );
+    }
+    // No non-finite number anywhere (Rust prints them as NaN, inf).
+    for token in html.split(|c: char| !c.is_alphanumeric()) {
+        assert!(
+            !matches!(token, "NaN" | "nan" | "inf" | "Infinity"),
+            "the page contains {token}"
+        );
+    }
+    // The run's settings and timings are on the page, and the summary says what was written.
+    for needle in [
+        "id=\"settings\"",
+        "id=\"timings\"",
+        "rodloop version",
+        env!("CARGO_PKG_VERSION"),
+        "built-in default",
+    ] {
+        assert!(html.contains(needle), "{needle}");
+    }
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(report().join("summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(summary["report"]["figures"], expected.len());
+    assert!(summary["run_id"].is_string());
+    assert!(summary["report"]["seconds"]["total"].as_f64().unwrap() > 0.0);
+    // Only the outputs: no staging directory, no lock, no branch scratch files left.
+    let mut names: Vec<String> = std::fs::read_dir(report())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        [
+            "branches.csv",
+            "critical.csv",
+            "diagram.svg",
+            "report.html",
+            "summary.json"
+        ]
+    );
+}
+
+#[test]
+fn critical_table_is_critical_csv_and_the_exact_values() {
+    let html = html();
+    let (h, rows) = read_csv(&report().join("critical.csv"));
+    let table = table_rows(&html, "critical-table");
+    assert_eq!(
+        table.len(),
+        rows.len(),
+        "one table row per critical.csv row"
+    );
+    assert_eq!(rows.len(), 9, "L̄_1cr … L̄_9cr between 1 and 5");
+    // Independent reference: the crossings computed with mpmath at 30 digits.
+    let (rh, reference) =
+        read_csv(&Path::new(env!("CARGO_MANIFEST_DIR")).join("data/reference/exact_critical.csv"));
+    let ref_crossings: Vec<f64> = reference
+        .iter()
+        .map(|r| num(&r[col(&rh, "lbar_cr")]))
+        .collect();
+    for (cells, row) in table.iter().zip(&rows) {
+        let csv = |name: &str| row[col(&h, name)].as_str();
+        assert_eq!(cells.len(), 8, "{cells:?}");
+        assert_eq!(cells[0], csv("index"));
+        let lbar = num(&cells[1]);
+        assert!(
+            (lbar - num(csv("lbar_cr"))).abs() <= 1e-12,
+            "{cells:?} vs {row:?}"
+        );
+        assert_eq!(cells[2], csv("kind"));
+        assert_eq!(
+            cells[3],
+            format!("{} → {}", csv("from_branch"), csv("to_branch"))
+        );
+        assert!((num(&cells[4]) - num(csv("energy"))).abs() <= 1e-10);
+        let err = num(csv("error_estimate"));
+        let shown = num(&cells[5]);
+        assert!(
+            (shown - err).abs() <= 0.06 * err,
+            "error estimate {shown} vs {err}"
+        );
+        // The exact column: collapses at integer lengths, crossings as the mpmath reference.
+        let exact = num(&cells[6]);
+        if csv("kind") == "collapse" {
+            assert_eq!(exact, exact.round(), "{cells:?}");
+        } else {
+            let r = ref_crossings
+                .iter()
+                .copied()
+                .min_by(|a, b| (a - exact).abs().total_cmp(&(b - exact).abs()))
+                .unwrap();
+            assert!((exact - r).abs() < 1e-12, "exact {exact} vs reference {r}");
+        }
+        // The numeric critical length is within its own error estimate of the exact one, and
+        // the deviation column says by how much.
+        assert!(
+            (lbar - exact).abs() <= err.max(1e-12),
+            "{lbar} − {exact} exceeds the error estimate {err}"
+        );
+        let dev = num(&cells[7]);
+        assert!((dev - (lbar - exact)).abs() <= 0.06 * (lbar - exact).abs() + 1e-13);
+    }
+    // The paper's printed values are compared, and agree within their printed resolution.
+    let compare = table_rows(&html, "compare-table");
+    let l2 = compare.iter().find(|r| r[0] == "L2cr").expect("row L2cr");
+    assert_eq!(l2[4], "1.38");
+    assert_eq!(l2[7], "yes", "{l2:?}");
+    assert_eq!(l2[10], "yes", "numeric L2cr vs the paper: {l2:?}");
+}
+
+#[test]
+fn each_branch_is_drawn_at_a_length_where_it_is_stable_and_equals_the_exact_loop() {
+    let html = html();
+    let states = table_rows(&html, "states-table");
+    assert_eq!(
+        states
+            .iter()
+            .map(|r| num(&r[0]) as u32)
+            .collect::<BTreeSet<_>>(),
+        branches()
+    );
+    // The point groups of the paper's branches (paper_values.csv: sym_b1 … sym_b4).
+    let groups = [(1, "D2d"), (2, "C2v"), (3, "D3h"), (4, "D4d")];
+    for r in &states {
+        let (branch, eta, lbar) = (num(&r[0]) as u32, num(&r[1]) as u32, num(&r[2]));
+        assert_eq!(r[8], "stable", "branch {branch}: {r:?}");
+        assert_eq!(r[7], "0", "index of a stable state");
+        let energy = num(&r[5]);
+        let error = num(&r[6]);
+        let exact = rodloop_exact::paper_branch_loop(eta, lbar)
+            .unwrap()
+            .energy()
+            .unwrap();
+        assert!(
+            (energy - exact).abs() <= 10.0 * error + 1e-9,
+            "branch {branch} at {lbar}: {energy} ± {error} vs exact {exact}"
+        );
+        if let Some((_, g)) = groups.iter().find(|(b, _)| *b == branch) {
+            assert_eq!(r[10], *g, "branch {branch}");
+        }
+    }
+}
+
+/// The first `chromium` on PATH.
+fn chromium() -> Option<PathBuf> {
+    let path = std::env::var_os("PATH")?;
+    std::env::split_paths(&path)
+        .map(|d| d.join("chromium"))
+        .find(|p| p.is_file())
+}
+
+/// Run a command with a time limit; `None` when it had to be killed.
+fn run_with_timeout(cmd: &mut Command, limit: Duration) -> Option<Output> {
+    let mut child = cmd
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .ok()?;
+    let t0 = Instant::now();
+    // Read both pipes on threads so that a large DOM cannot block the child.
+    let mut out = child.stdout.take()?;
+    let mut err = child.stderr.take()?;
+    let to = std::thread::spawn(move || {
+        let mut v = Vec::new();
+        let _ = std::io::Read::read_to_end(&mut out, &mut v);
+        v
+    });
+    let te = std::thread::spawn(move || {
+        let mut v = Vec::new();
+        let _ = std::io::Read::read_to_end(&mut err, &mut v);
+        v
+    });
+    loop {
+        if let Ok(Some(status)) = child.try_wait() {
+            return Some(Output {
+                status,
+                stdout: to.join().ok()?,
+                stderr: te.join().ok()?,
+            });
+        }
+        if t0.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            return None;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+#[test]
+fn page_loads_in_headless_chromium_without_console_errors() {
+    let Some(chromium) = chromium() else {
+        println!("skipped: chromium not installed (run scripts/screenshot_report.sh)");
+        return;
+    };
+    let page = format!(
+        "file://{}",
+        std::fs::canonicalize(report().join("report.html"))
+            .unwrap()
+            .display()
+    );
+    let profile = Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-chromium-profile");
+    let _ = std::fs::remove_dir_all(&profile);
+    let o = run_with_timeout(
+        Command::new(&chromium).args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            &format!("--user-data-dir={}", profile.display()),
+            "--enable-logging=stderr",
+            "--v=0",
+            "--dump-dom",
+            &page,
+        ]),
+        Duration::from_secs(120),
+    )
+    .expect("chromium did not finish within 120 s");
+    let _ = std::fs::remove_dir_all(&profile);
+    let log = String::from_utf8_lossy(&o.stderr);
+    let dom = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "chromium failed: {log}");
+    // Chromium logs every console message, errors included, as `INFO:CONSOLE` (an uncaught
+    // exception as "Uncaught …"); the page has no script, so any console line is a fault.
+    for bad in [":CONSOLE", "Uncaught", "Failed to load resource"] {
+        assert!(
+            !log.contains(bad),
+            "console error while loading the page:\n{log}"
+        );
+    }
+    // The page as Chromium parsed it: every figure present, with its drawing.
+    for id in expected_figures() {
+        let fig = between(&dom, &format!("<figure id=\"{id}\">"), "</figure>");
+        assert_eq!(fig.matches("<svg").count(), 1, "{id} in the rendered DOM");
+        assert!(
+            fig.matches("<line").count() >= 10 && fig.matches("<path").count() >= 1,
+            "{id} has no drawing in the rendered DOM"
+        );
+    }
+    assert_eq!(dom.matches("<svg").count(), expected_figures().len());
+    assert!(dom.contains("<title>rodloop report: homogeneous-surface</title>"));
+}
+
+#[test]
+fn bad_input_is_one_line_and_writes_nothing() {
+    let base = Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-bad");
+    let _ = std::fs::remove_dir_all(&base);
+    let enclosed =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("data/scenes/homogeneous-enclosed.toml");
+    let broken = base.join("broken.toml");
+    std::fs::create_dir_all(&base).unwrap();
+    std::fs::write(&broken, "radius = -1\n").unwrap();
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (
+            vec![
+                "--scene".into(),
+                base.join("missing.toml").display().to_string(),
+            ],
+            "missing.toml",
+        ),
+        (
+            vec!["--scene".into(), broken.display().to_string()],
+            "radius",
+        ),
+        (
+            vec!["--scene".into(), enclosed.display().to_string()],
+            "enclosed",
+        ),
+        (vec!["--accuracy".into(), "sloppy".into()], "sloppy"),
+    ];
+    for (k, (args, word)) in cases.iter().enumerate() {
+        let out = base.join(format!("out-{k}"));
+        let mut all: Vec<&str> = vec!["report", "--quiet", "--out", out.to_str().unwrap()];
+        all.extend(args.iter().map(String::as_str));
+        let o = rodloop(&all);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(
+            err.starts_with("error: ") && err.contains(word),
+            "{args:?}: {err}"
+        );
+        let first = err.lines().next().unwrap_or_default();
+        assert!(first.len() < 400, "{first}");
+        assert!(!out.join("report.html").exists());
+        assert!(!out.join("summary.json").exists());
+    }
+}
