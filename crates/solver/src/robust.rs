@@ -104,16 +104,17 @@ pub fn solve_robust(
             format!("converged, but not its companion solve for the error estimate ({e})")
         })
     };
+    if stiffness.is_uniform() {
+        // Nothing to gain from other arrangements or a homotopy: the result as it is (a
+        // state on another branch is the caller's to refuse, with its own message).
+        let main = solve_cells(radius, lbar, n, stiffness, start, None, opts)?;
+        let acc = finish_with_accuracy(main, radius, stiffness, start, accuracy, opts)?;
+        return Ok((acc, Strategy::Direct));
+    }
     let reason = match attempt(start) {
         Ok(acc) => return Ok((acc, Strategy::Direct)),
         Err(r) => r,
     };
-    if stiffness.is_uniform() {
-        return Err(SolverError::InvalidInput(format!(
-            "the solve {reason}; try --from a state of this branch at a nearby length, or \
-             another accuracy"
-        )));
-    }
     // The start with its origin moved along the loop: a non-uniform rod meets the shape
     // elsewhere, and another arrangement may be within Newton's reach.
     let per = 1.0 / periods.max(1) as f64;
