@@ -121,6 +121,12 @@ impl MeshMap {
 
     /// `σ(u)`, the inverse of [`MeshMap::u_of_sigma`].
     pub fn sigma_of_u(&self, u: f64) -> f64 {
+        self.sigma_of_u_near(u, None)
+    }
+
+    /// [`MeshMap::sigma_of_u`] with a first guess for `σ − floor(u)` (Newton then needs two
+    /// or three steps when the guess comes from the neighbouring grid point).
+    fn sigma_of_u_near(&self, u: f64, guess: Option<f64>) -> f64 {
         if self.is_uniform() {
             return u;
         }
@@ -128,9 +134,10 @@ impl MeshMap {
         if u == k {
             return u;
         }
-        let target = (u - k) * self.integral(1.0);
+        let total = self.integral(1.0);
+        let target = (u - k) * total;
         let (mut lo, mut hi) = (0.0, 1.0);
-        let mut s = u - k;
+        let mut s = guess.filter(|g| *g > 0.0 && *g < 1.0).unwrap_or(u - k);
         let mut f = self.integral(s) - target;
         // Newton's method, safeguarded: a step that leaves the bracket or does not halve
         // |f| is replaced by bisection.
@@ -164,15 +171,22 @@ impl MeshMap {
 
     /// Cell boundaries `σ_0 = 0 < σ_1 < … < σ_N = 1` of an `N`-cell mesh.
     pub fn bounds(&self, cells: usize) -> Result<Vec<f64>, SolverError> {
-        let b: Vec<f64> = (0..=cells)
-            .map(|i| {
-                if i == cells {
-                    1.0
-                } else {
-                    self.sigma_of_u(i as f64 / cells as f64)
-                }
-            })
-            .collect();
+        let total = self.integral(1.0);
+        let mut b = Vec::with_capacity(cells + 1);
+        let mut prev = 0.0f64;
+        for i in 0..=cells {
+            let v = if i == cells {
+                1.0
+            } else if i == 0 {
+                0.0
+            } else {
+                // Guess: one grid step of u at the local density.
+                let guess = prev + total / (cells as f64 * self.density(prev));
+                self.sigma_of_u_near(i as f64 / cells as f64, Some(guess))
+            };
+            b.push(v);
+            prev = v;
+        }
         if b.windows(2).any(|w| w[1] <= w[0] || w[1].is_nan()) {
             return Err(SolverError::InvalidInput(format!(
                 "mesh of {cells} cells is degenerate (a cell has no length)"

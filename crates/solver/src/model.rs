@@ -457,6 +457,17 @@ impl SurfaceModel {
         Ok(out)
     }
 
+    /// Closure residual and its Jacobian from one pass over the cells.
+    pub fn closure_with_jacobian(
+        &self,
+        kappa: &[f64],
+    ) -> Result<([f64; 3], DMatrix<f64>), SolverError> {
+        self.check_kappa(kappa)?;
+        let ch = self.chain(kappa);
+        let v = vee_skew(&ch.prefix[self.cells]);
+        Ok(([v[0], v[1], v[2]], self.closure_jacobian_from(&ch)))
+    }
+
     /// Closure residual `c(κ) = vee(skew H)`.
     pub fn closure(&self, kappa: &[f64]) -> Result<[f64; 3], SolverError> {
         let h = self.holonomy(kappa)?;

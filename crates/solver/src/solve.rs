@@ -231,8 +231,7 @@ fn constraints(
     model: &SurfaceModel,
     kappa: &[f64],
 ) -> Result<(DVector<f64>, DMatrix<f64>), SolverError> {
-    let c = model.closure(kappa)?;
-    let j = model.closure_jacobian(kappa)?;
+    let (c, j) = model.closure_with_jacobian(kappa)?;
     let m = model.n_multipliers();
     let n = model.n_kappa();
     let mut cv = DVector::zeros(m);
