@@ -21,7 +21,7 @@ impl Progress {
             let bar = ProgressBar::new(len);
             bar.set_draw_target(ProgressDrawTarget::stderr());
             if let Ok(style) = ProgressStyle::with_template(
-                "{prefix:>10} [{bar:30}] {pos}/{len} {elapsed_precise} {msg}",
+                "{prefix:>10} [{bar:30}] {pos}/{len} {elapsed_precise} (about {eta} left) {msg}",
             ) {
                 bar.set_style(style.progress_chars("=> "));
             }
