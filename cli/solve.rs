@@ -263,7 +263,18 @@ pub fn run(args: &Args) -> Result<()> {
         Some(eta),
         &SolveOptions::default(),
     )
-    .with_context(|| format!("solving branch {branch} at lbar = {}", args.lbar))?;
+    .map_err(|e| {
+        let advice = if matches!(e, rodloop_solver::SolverError::NewtonNotConverged { .. }) {
+            " (tried: Newton with relaxation from the start; next: --from a state solved at a \
+             nearby length, another --accuracy, or for a two-segment rod a milder D1/D0 first)"
+        } else {
+            ""
+        };
+        anyhow::Error::new(e).context(format!(
+            "solving branch {branch} at lbar = {}{advice}",
+            args.lbar
+        ))
+    })?;
     let eq = &res.equilibrium;
     let report = eq.report();
     if !report.converged {
