@@ -67,6 +67,10 @@ impl Strategy {
     }
 }
 
+/// Wall-clock budget of the fallback strategies (the direct solve is not limited): past it,
+/// no new attempt is started and a running continuation stops, with a message.
+const BUDGET: std::time::Duration = std::time::Duration::from_secs(8);
+
 /// Mild contrasts tried as homotopy starts, in order.
 const MILD: [f64; 2] = [0.9, 0.6];
 
@@ -119,7 +123,12 @@ pub fn solve_robust(
     // elsewhere, and another arrangement may be within Newton's reach.
     let per = 1.0 / periods.max(1) as f64;
     let shifts: Vec<f64> = [0.25, 0.5, 0.75].iter().map(|f| f * per).collect();
+    let t0 = std::time::Instant::now();
+    let deadline = t0 + BUDGET;
     for &shift in &shifts {
+        if std::time::Instant::now() > deadline {
+            break;
+        }
         let shifted = start.shifted(lbar, shift)?;
         if let Ok(acc) = attempt(&shifted) {
             return Ok((acc, Strategy::Shifted { shift, reason }));
@@ -138,9 +147,16 @@ pub fn solve_robust(
     let mut seen: Vec<f64> = Vec::new();
     for &from in MILD.iter().filter(|&&m| m > target) {
         for shift in std::iter::once(0.0).chain(shifts.iter().copied()) {
+            if std::time::Instant::now() > deadline {
+                tried.push(format!(
+                    "stopped after {:.0} s, the time budget of the fallbacks",
+                    BUDGET.as_secs_f64()
+                ));
+                break;
+            }
             let shifted = start.shifted(lbar, shift)?;
             let outcome = homotopy(
-                radius, lbar, n, stiffness, &shifted, from, target, eta, opts, &mut seen,
+                radius, lbar, n, stiffness, &shifted, from, target, eta, opts, &mut seen, deadline,
             );
             match outcome {
                 Ok(Some((main, steps))) => {
@@ -218,6 +234,7 @@ fn homotopy(
     eta: Option<u32>,
     opts: &SolveOptions,
     seen: &mut Vec<f64>,
+    deadline: std::time::Instant,
 ) -> Result<Option<(Equilibrium, usize)>, SolverError> {
     let mild = stiffness.with_param(Param::D1, from)?;
     let eq0 = solve_cells(radius, lbar, cells, &mild, start, None, opts)?;
@@ -258,6 +275,12 @@ fn homotopy(
     let mut folds = Vec::new();
     let mut lowest = from;
     loop {
+        if std::time::Instant::now() > deadline {
+            return Err(SolverError::InvalidInput(format!(
+                "continuation in D1/D0 ran out of its time budget at D1/D0 = {:.4}",
+                prev.1
+            )));
+        }
         let step = stepper
             .step()
             .map_err(|e| SolverError::InvalidInput(format!("continuation in D1/D0: {e}")))?;
