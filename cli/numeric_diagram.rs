@@ -75,7 +75,10 @@ impl BranchHook for BranchFiles<'_> {
         let name = if b.family == 0 {
             format!("branch-{}.json", b.branch)
         } else {
-            format!("branch-{}-family-{}-sheet-{}.json", b.branch, b.family, b.sheet)
+            format!(
+                "branch-{}-family-{}-sheet-{}.json",
+                b.branch, b.family, b.sheet
+            )
         };
         write_atomic(&self.dir, &name, text.as_bytes())?;
         // The file name of older versions (by eta) is superseded.

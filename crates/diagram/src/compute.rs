@@ -6,8 +6,8 @@ use std::time::Instant;
 use rodloop_continuation::BoxError;
 
 use crate::diagram::{assemble, NumericDiagram};
-use crate::parallel::run_parallel;
 use crate::families::{compute_families, Families};
+use crate::parallel::run_parallel;
 use crate::trace::compute_branch;
 use crate::types::TracedBranch;
 use crate::{DiagramError, DiagramOptions, Progress};

@@ -198,22 +198,30 @@ impl NumericDiagram {
             .zip(&self.labels)
             .flat_map(|(b, ls)| {
                 let n = b.points.len() as u64;
-                b.points.iter().zip(ls).enumerate().map(move |(k, (p, &l))| DiagramRow {
-                    branch: b.branch,
-                    eta: b.eta,
-                    family: b.family,
-                    arc: u64::from(b.sheet) * 1_000_000
-                        + if b.reversed { n - 1 - k as u64 } else { k as u64 },
-                    multiplicity: b.multiplicity,
-                    lbar: p.value,
-                    energy: p.energy,
-                    energy_g: p.energy_g,
-                    energy_error: p.energy_error,
-                    stability: l,
-                    index: p.index,
-                    lambda_min: p.lambda_min,
-                    lambda_max: p.lambda_max,
-                })
+                b.points
+                    .iter()
+                    .zip(ls)
+                    .enumerate()
+                    .map(move |(k, (p, &l))| DiagramRow {
+                        branch: b.branch,
+                        eta: b.eta,
+                        family: b.family,
+                        arc: u64::from(b.sheet) * 1_000_000
+                            + if b.reversed {
+                                n - 1 - k as u64
+                            } else {
+                                k as u64
+                            },
+                        multiplicity: b.multiplicity,
+                        lbar: p.value,
+                        energy: p.energy,
+                        energy_g: p.energy_g,
+                        energy_error: p.energy_error,
+                        stability: l,
+                        index: p.index,
+                        lambda_min: p.lambda_min,
+                        lambda_max: p.lambda_max,
+                    })
             })
             .collect()
     }
@@ -233,6 +241,12 @@ impl NumericDiagram {
                 .total_cmp(&(b.points[y].value - lbar).abs())
         })?;
         Some((b.points[k].value, self.labels[i][k]))
+    }
+
+    /// Positions in [`NumericDiagram::branches`] of the sheets lowest at `lbar` (two exactly
+    /// at a critical length, none at a collapse).
+    pub fn lowest_sheets_at(&self, lbar: f64) -> Vec<usize> {
+        labels::lowest_sheets(&self.branches, &self.critical, lbar)
     }
 
     /// Paper branch numbers lowest at `lbar` (two exactly at a critical length).
@@ -359,8 +373,7 @@ pub fn assemble(
         // lowest state passes continuously from one to the other there).
         let connected = match (w[0].to_sheet, w[1].from_sheet) {
             (Some(a), Some(b)) => {
-                a == b
-                    || critical::touch(&branches[a], &branches[b], w[0].lbar_cr, w[1].lbar_cr)
+                a == b || critical::touch(&branches[a], &branches[b], w[0].lbar_cr, w[1].lbar_cr)
             }
             _ => w[0].to_eta == w[1].from_eta,
         };
@@ -444,9 +457,7 @@ fn no_minimum_warnings(opts: &DiagramOptions, branches: &[TracedBranch]) -> Vec<
             }
         })
     };
-    let skip = |l: f64| {
-        (l - l.round()).abs() < 2e-3 || (opts.stiffness.is_uniform() && l < 1.0)
-    };
+    let skip = |l: f64| (l - l.round()).abs() < 2e-3 || (opts.stiffness.is_uniform() && l < 1.0);
     let mut out = Vec::new();
     let mut run: Option<(f64, f64)> = None;
     for &l in &grid {
@@ -487,7 +498,10 @@ fn special_points(branches: &[TracedBranch], critical: &[CriticalLength]) -> Vec
             let (p, q) = if at_low {
                 (b.points.first(), b.points.get(1))
             } else {
-                (b.points.last(), b.points.len().checked_sub(2).and_then(|k| b.points.get(k)))
+                (
+                    b.points.last(),
+                    b.points.len().checked_sub(2).and_then(|k| b.points.get(k)),
+                )
             };
             let (Some(p), Some(q)) = (p, q) else { continue };
             let value = p.value;

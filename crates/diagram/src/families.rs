@@ -225,7 +225,11 @@ pub fn compute_families(
     let seed_lengths: Vec<f64> = [0.5, 0.25, 0.75]
         .iter()
         .map(|f| lo + f * span)
-        .filter(|l| circles.iter().all(|m| (l - m).abs() > 2.0 * SWITCH_DISTANCE))
+        .filter(|l| {
+            circles
+                .iter()
+                .all(|m| (l - m).abs() > 2.0 * SWITCH_DISTANCE)
+        })
         .collect();
     let end_ctx = EndContext {
         opts,
@@ -242,7 +246,13 @@ pub fn compute_families(
             seeds_tried += 1;
             let ts = Instant::now();
             let seeded = seed_state(&model_l, eta, lbar, shift);
-            debug(|| format!("eta {eta} seed at {lbar:.3} shift {shift:.3}: {} in {:.3} s", seeded.is_some(), ts.elapsed().as_secs_f64()));
+            debug(|| {
+                format!(
+                    "eta {eta} seed at {lbar:.3} shift {shift:.3}: {} in {:.3} s",
+                    seeded.is_some(),
+                    ts.elapsed().as_secs_f64()
+                )
+            });
             let Some(x0) = seeded else {
                 continue;
             };
@@ -259,9 +269,12 @@ pub fn compute_families(
             seed_note.push(format!("L̄ = {lbar:.4}, origin moved by {shift:.4}"));
             let ts = Instant::now();
             let curve = follow_seed(&end_ctx, &settings, &x0, lbar, &mut pending, &mut steps)?;
-            let (cmin, cmax) = curve.points.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-                (a.min(p.value), b.max(p.value))
-            });
+            let (cmin, cmax) = curve
+                .points
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                    (a.min(p.value), b.max(p.value))
+                });
             if cmax - cmin < 1e-3 {
                 notes.push(format!(
                     "branch {branch} (η = {eta}): a seed at L̄ = {lbar:.4} (origin moved by \
@@ -270,13 +283,15 @@ pub fn compute_families(
                 ));
                 continue;
             }
-            debug(|| format!("eta {eta} followed seed: {} points in {:.3} s", curve.points.len(), ts.elapsed().as_secs_f64()));
-            curves.push(curve);
-            progress(Progress::BranchStep {
-                eta,
-                lbar,
-                steps,
+            debug(|| {
+                format!(
+                    "eta {eta} followed seed: {} points in {:.3} s",
+                    curve.points.len(),
+                    ts.elapsed().as_secs_f64()
+                )
             });
+            curves.push(curve);
+            progress(Progress::BranchStep { eta, lbar, steps });
             // Switch at every new branch point before the next seed (the seed may then
             // lie on a family found by switching).
             switch_all(
@@ -733,7 +748,16 @@ fn switch_all(
             s.far_limit = Some(ctx.lo);
             let ts = Instant::now();
             let run = march_switch(ctx.problem, &bp, dir, &s, &known, &mut |_, _| {});
-            debug(|| format!("switch at {:.5} {dir:?}: {:?} in {:.3} s", bp.value, run.as_ref().map(|r| (r.points.len(), r.stop.clone())).map_err(|e| e.to_string()), ts.elapsed().as_secs_f64()));
+            debug(|| {
+                format!(
+                    "switch at {:.5} {dir:?}: {:?} in {:.3} s",
+                    bp.value,
+                    run.as_ref()
+                        .map(|r| (r.points.len(), r.stop.clone()))
+                        .map_err(|e| e.to_string()),
+                    ts.elapsed().as_secs_f64()
+                )
+            });
             let run = match run {
                 Ok(r) => r,
                 Err(e) => {
@@ -749,11 +773,8 @@ fn switch_all(
             }
             // From a symmetric branch point onto an asymmetric branch: the other direction
             // is its mirror image.
-            let mirror_pair = bp_symmetric
-                && run
-                    .points
-                    .get(1)
-                    .is_some_and(|p| !images.symmetric(&p.x));
+            let mirror_pair =
+                bp_symmetric && run.points.get(1).is_some_and(|p| !images.symmetric(&p.x));
             *steps += run.steps;
             for b in run.branch_points() {
                 if (b.value - bp.value).abs() > 1e-6 {

@@ -66,8 +66,7 @@ pub(crate) fn lowest_sheets(
         if k > 0 && (critical[k - 1].lbar_cr - lbar).abs() <= tol {
             out.push(critical[k - 1].from_sheet);
         }
-        if sheet.is_none() && k == 0 && critical[0].kind == CriticalKind::Collapse && lbar < 1.0
-        {
+        if sheet.is_none() && k == 0 && critical[0].kind == CriticalKind::Collapse && lbar < 1.0 {
             return Vec::new();
         }
         out.push(sheet);

@@ -77,7 +77,9 @@ pub use diagram::{
     Timings,
 };
 pub use labels::Label;
-pub use march::{march, march_switch, FoldPolicy, March, MarchPoint, MarchSettings, MarchSpecial, MarchStop};
+pub use march::{
+    march, march_switch, FoldPolicy, March, MarchPoint, MarchSettings, MarchSpecial, MarchStop,
+};
 /// The error type a [`BranchHook`] returns.
 pub use rodloop_continuation::BoxError;
 pub use trace::compute_branch;

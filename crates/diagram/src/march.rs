@@ -339,10 +339,7 @@ pub fn march<M: Confinement>(
 }
 
 /// The continuation settings of a march heading to `side` from `p0`.
-fn continuation_settings(
-    st: &MarchSettings,
-    side: f64,
-) -> Result<PseudoArclength, SolverError> {
+fn continuation_settings(st: &MarchSettings, side: f64) -> Result<PseudoArclength, SolverError> {
     let (p_min, p_max) = match (st.folds, st.far_limit) {
         (FoldPolicy::Follow, Some(far)) => (st.limit.min(far), st.limit.max(far)),
         _ if side < 0.0 => (st.limit, f64::INFINITY),
@@ -406,7 +403,11 @@ pub fn march_switch<M: Confinement>(
         k: st.scaled,
         s: st.scale,
     };
-    let side = if direction == Direction::Forward { 1.0 } else { -1.0 };
+    let side = if direction == Direction::Forward {
+        1.0
+    } else {
+        -1.0
+    };
     let cont_settings = continuation_settings(st, side)?;
     let cont = Continuation::new(&scaled, cont_settings).with_stability(Index {
         scaled: &scaled,
@@ -468,112 +469,112 @@ fn run_loop<M: Confinement>(
     let mut last_value = p0;
     let mut cause: Option<String> = None;
     let every = st.progress_every.max(1);
-    let stop = loop {
-        let step = match stepper.step() {
-            Ok(step) => step,
-            Err(e) => {
-                // The stepper stays at its last accepted point: retry with a smaller step.
-                let ds = stepper.ds() * 0.5;
-                cause = Some(e.to_string());
-                if stepper.set_ds(ds).is_err() {
-                    break MarchStop::StepTooSmall {
-                        ds,
-                        value: last_value,
-                        cause,
-                    };
+    let stop =
+        loop {
+            let step = match stepper.step() {
+                Ok(step) => step,
+                Err(e) => {
+                    // The stepper stays at its last accepted point: retry with a smaller step.
+                    let ds = stepper.ds() * 0.5;
+                    cause = Some(e.to_string());
+                    if stepper.set_ds(ds).is_err() {
+                        break MarchStop::StepTooSmall {
+                            ds,
+                            value: last_value,
+                            cause,
+                        };
+                    }
+                    continue;
                 }
-                continue;
+            };
+            let Some(point) = step.point else {
+                break stop_of(step.stop, cause.take());
+            };
+            let n = point.x.len();
+            let turned = point.tangent[n] * side <= 0.0 || (point.p - last_value) * side <= 0.0;
+            let fold = step.special.iter().find(|s| s.kind == SpecialKind::Fold);
+            if st.folds == FoldPolicy::Stop && (turned || fold.is_some()) {
+                // The step crossed a turning point of the parameter: keep what came before.
+                out.special.extend(fold.map(|f| MarchSpecial {
+                    kind: f.kind.clone(),
+                    x: unscaled(&f.x),
+                    value: f.p,
+                    tangent: f.tangent.as_slice().to_vec(),
+                }));
+                break MarchStop::Fold { value: last_value };
             }
-        };
-        let Some(point) = step.point else {
-            break stop_of(step.stop, cause.take());
-        };
-        let n = point.x.len();
-        let turned = point.tangent[n] * side <= 0.0 || (point.p - last_value) * side <= 0.0;
-        let fold = step.special.iter().find(|s| s.kind == SpecialKind::Fold);
-        if st.folds == FoldPolicy::Stop && (turned || fold.is_some()) {
-            // The step crossed a turning point of the parameter: keep what came before.
-            out.special.extend(fold.map(|f| MarchSpecial {
-                kind: f.kind.clone(),
-                x: unscaled(&f.x),
-                value: f.p,
-                tangent: f.tangent.as_slice().to_vec(),
-            }));
-            break MarchStop::Fold { value: last_value };
-        }
-        for sp in &step.special {
-            match &sp.kind {
-                SpecialKind::IndexChange { old, new } => {
-                    // Orientation from the tangent there (a followed fold reverses it).
-                    let up = sp.tangent[n] > 0.0;
-                    let (below, above) = if up { (*old, *new) } else { (*new, *old) };
-                    out.index_changes.push(IndexChange {
-                        value: sp.p,
-                        below,
-                        above,
-                    });
-                    out.points.push(MarchPoint {
-                        x: unscaled(&sp.x),
-                        value: sp.p,
-                        index: Some(*new),
-                        source: PointSource::IndexChange,
-                    });
-                }
-                SpecialKind::Fold | SpecialKind::BranchPoint => {
-                    out.special.push(MarchSpecial {
-                        kind: sp.kind.clone(),
-                        x: unscaled(&sp.x),
-                        value: sp.p,
-                        tangent: sp.tangent.as_slice().to_vec(),
-                    });
-                    // Followed folds and branch points are states of the march too (the
-                    // ends of the monotone pieces of a followed branch).
-                    if st.folds == FoldPolicy::Follow {
+            for sp in &step.special {
+                match &sp.kind {
+                    SpecialKind::IndexChange { old, new } => {
+                        // Orientation from the tangent there (a followed fold reverses it).
+                        let up = sp.tangent[n] > 0.0;
+                        let (below, above) = if up { (*old, *new) } else { (*new, *old) };
+                        out.index_changes.push(IndexChange {
+                            value: sp.p,
+                            below,
+                            above,
+                        });
                         out.points.push(MarchPoint {
                             x: unscaled(&sp.x),
                             value: sp.p,
-                            index: None,
-                            source: if sp.kind == SpecialKind::Fold {
-                                PointSource::Fold
-                            } else {
-                                PointSource::BranchPoint
-                            },
+                            index: Some(*new),
+                            source: PointSource::IndexChange,
                         });
                     }
+                    SpecialKind::Fold | SpecialKind::BranchPoint => {
+                        out.special.push(MarchSpecial {
+                            kind: sp.kind.clone(),
+                            x: unscaled(&sp.x),
+                            value: sp.p,
+                            tangent: sp.tangent.as_slice().to_vec(),
+                        });
+                        // Followed folds and branch points are states of the march too (the
+                        // ends of the monotone pieces of a followed branch).
+                        if st.folds == FoldPolicy::Follow {
+                            out.points.push(MarchPoint {
+                                x: unscaled(&sp.x),
+                                value: sp.p,
+                                index: None,
+                                source: if sp.kind == SpecialKind::Fold {
+                                    PointSource::Fold
+                                } else {
+                                    PointSource::BranchPoint
+                                },
+                            });
+                        }
+                    }
+                    SpecialKind::Event { .. } => {}
                 }
-                SpecialKind::Event { .. } => {}
             }
-        }
-        out.points.push(MarchPoint {
-            x: unscaled(&point.x),
-            value: point.p,
-            index: point.index,
-            source: PointSource::Continuation,
-        });
-        last_value = point.p;
-        cause = None;
-        if stepper.steps() % every == 0 {
-            progress(last_value, stepper.steps());
-        }
-        if step.stop.is_some() {
-            break stop_of(step.stop, None);
-        }
-        let heading = point.tangent[n];
-        if let Some(&m) = st.circles.iter().find(|&&m| {
-            (point.p - m).abs() < st.circle_distance && heading * (m - point.p) > 0.0
-        }) {
-            break MarchStop::NearCircle {
-                circle: m,
+            out.points.push(MarchPoint {
+                x: unscaled(&point.x),
                 value: point.p,
-            };
-        }
-    };
+                index: point.index,
+                source: PointSource::Continuation,
+            });
+            last_value = point.p;
+            cause = None;
+            if stepper.steps() % every == 0 {
+                progress(last_value, stepper.steps());
+            }
+            if step.stop.is_some() {
+                break stop_of(step.stop, None);
+            }
+            let heading = point.tangent[n];
+            if let Some(&m) = st.circles.iter().find(|&&m| {
+                (point.p - m).abs() < st.circle_distance && heading * (m - point.p) > 0.0
+            }) {
+                break MarchStop::NearCircle {
+                    circle: m,
+                    value: point.p,
+                };
+            }
+        };
     out.steps = stepper.steps();
     out.stop = stop;
     progress(last_value, out.steps);
     out
 }
-
 
 /// The [`MarchStop`] of a stepper's stop reason.
 fn stop_of(reason: Option<StopReason>, cause: Option<String>) -> MarchStop {
