@@ -799,6 +799,13 @@ fn switch_all(
     }
 }
 
+/// Diagnostics on stderr when `RODLOOP_DEBUG_FAMILIES` is set.
+fn debug(msg: impl FnOnce() -> String) {
+    if std::env::var_os("RODLOOP_DEBUG_FAMILIES").is_some() {
+        eprintln!("[families] {}", msg());
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -846,12 +853,5 @@ mod tests {
                 vec![0.9, 1.0, 1.5]
             ]
         );
-    }
-}
-
-/// Diagnostics on stderr when `RODLOOP_DEBUG_FAMILIES` is set.
-fn debug(msg: impl FnOnce() -> String) {
-    if std::env::var_os("RODLOOP_DEBUG_FAMILIES").is_some() {
-        eprintln!("[families] {}", msg());
     }
 }
