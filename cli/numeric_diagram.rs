@@ -71,11 +71,16 @@ impl BranchHook for BranchFiles<'_> {
             return Ok(());
         }
         let text = serde_json::to_string(b)?;
-        write_atomic(
-            &self.dir,
-            &format!("branch-{}.json", b.branch),
-            text.as_bytes(),
-        )?;
+        // A non-uniform rod's branch has several families and sheets, one file each.
+        let name = if b.family == 0 {
+            format!("branch-{}.json", b.branch)
+        } else {
+            format!(
+                "branch-{}-family-{}-sheet-{}.json",
+                b.branch, b.family, b.sheet
+            )
+        };
+        write_atomic(&self.dir, &name, text.as_bytes())?;
         // The file name of older versions (by eta) is superseded.
         let _ = std::fs::remove_file(self.dir.join(format!("eta-{}.json", b.eta)));
         self.bar.done(format!(
@@ -201,6 +206,9 @@ pub fn write_outputs(
             "energy_error",
             "stability",
             "index",
+            "family",
+            "arc",
+            "multiplicity",
         ],
     );
     // The model works in the scene's R and D; report lambda R^3/D0.
@@ -220,6 +228,32 @@ pub fn write_outputs(
             },
             Cell::S(r.stability.as_str().into()),
             Cell::I(r.index as i64),
+            Cell::I(r.family.into()),
+            Cell::I(r.arc as i64),
+            Cell::I(r.multiplicity.into()),
+        ])?;
+    }
+    let mut special = Table::new(
+        "special_points.csv",
+        &[
+            "kind",
+            "lbar",
+            "energy",
+            "branch",
+            "family",
+            "index_before",
+            "index_after",
+        ],
+    );
+    for p in &d.special {
+        special.push(vec![
+            Cell::S(p.kind.as_str().into()),
+            Cell::F(p.lbar),
+            Cell::F(p.energy),
+            Cell::I(p.branch.into()),
+            Cell::I(p.family.into()),
+            Cell::I(p.index_before as i64),
+            Cell::I(p.index_after as i64),
         ])?;
     }
     let critical = critical_table(d.critical.iter().map(|c| CriticalRow {
@@ -233,13 +267,16 @@ pub fn write_outputs(
     }))?;
     run.write_table(&branches)?;
     run.write_table(&critical)?;
+    run.write_table(&special)?;
     run.write_bytes("diagram.svg", svg::render(&figure(d, scene)).as_bytes())?;
     let ends = d
         .branches
         .iter()
         .map(|b| {
             checked_json!({
-                "branch": b.branch, "eta": b.eta, "states": b.points.len(), "cells": b.cells,
+                "branch": b.branch, "eta": b.eta, "family": b.family, "sheet": b.sheet,
+                "multiplicity": b.multiplicity, "span": [b.span().0, b.span().1],
+                "states": b.points.len(), "cells": b.cells,
                 "low_end": b.stop_low, "high_end": b.stop_high, "seed": b.seed, "seconds": b.seconds,
             })
         })
@@ -252,6 +289,7 @@ pub fn write_outputs(
         "lbar_min": opts.lbar_min,
         "lbar_max": opts.lbar_max,
         "critical": d.critical,
+        "special_points": d.special,
         "branches": ends,
         "great_circles": d.great_circles,
         "warnings": d.warnings,

@@ -392,6 +392,7 @@ const KNOWN_OUTPUTS: &[&str] = &[
     "summary.json",
     "branches.csv",
     "critical.csv",
+    "special_points.csv",
     "diagram.svg",
     "diagram_g.svg",
     "curve.csv",

@@ -247,6 +247,7 @@ fn every_figure_is_an_inline_svg_and_nothing_is_fetched() {
             "critical.csv",
             "diagram.svg",
             "report.html",
+            "special_points.csv",
             "summary.json"
         ]
     );

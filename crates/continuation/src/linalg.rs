@@ -220,6 +220,40 @@ pub(crate) fn right_singular_pairs(a: &DMatrix<f64>) -> Vec<(f64, DVector<f64>)>
     pairs
 }
 
+/// The right singular pairs of the `n × (n+1)` matrix `a` (ascending, as
+/// [`right_singular_pairs`]) and its left singular vector for the smallest singular value
+/// (as [`left_null_vector`]), from one SVD of the square matrix `[a; 0]`.
+pub(crate) fn kernels(a: &DMatrix<f64>) -> (Vec<(f64, DVector<f64>)>, DVector<f64>) {
+    let (n, m) = a.shape();
+    let mut sq = DMatrix::zeros(m, m);
+    sq.view_mut((0, 0), (n, m)).copy_from(a);
+    let svd = SVD::new(sq, true, true);
+    let v_t = svd.v_t.expect("V requested");
+    let u = svd.u.expect("U requested");
+    let mut order: Vec<usize> = (0..m).collect();
+    order.sort_by(|&i, &j| svd.singular_values[i].total_cmp(&svd.singular_values[j]));
+    let pairs: Vec<(f64, DVector<f64>)> = order
+        .iter()
+        .map(|&i| (svd.singular_values[i], v_t.row(i).transpose()))
+        .collect();
+    // The zero row adds the left vector e_{n+1} to the two smallest: remove it.
+    let (u1, u2) = (u.column(order[0]), u.column(order[1]));
+    let (c1, c2) = (u1[n], u2[n]);
+    let comb: DVector<f64> = if c1.abs() <= c2.abs() {
+        u1 * c2 - u2 * c1
+    } else {
+        u2 * c1 - u1 * c2
+    };
+    let mut psi = comb.rows(0, n).into_owned();
+    let norm = psi.norm();
+    if norm > 0.0 {
+        psi /= norm;
+    } else {
+        psi = left_null_vector(a);
+    }
+    (pairs, psi)
+}
+
 /// Left singular vector of the `n × (n+1)` matrix `a` for its smallest singular value
 /// (a unit vector `ψ ∈ Rⁿ` with `ψᵀ a ≈ 0` at a simple branch point).
 pub(crate) fn left_null_vector(a: &DMatrix<f64>) -> DVector<f64> {

@@ -137,7 +137,10 @@ fn secondary_tangent_at<P: Problem + ?Sized>(
 ) -> Result<DVector<f64>, ContinuationError> {
     let n = ev.n;
     let a = ev.augmented(y)?;
-    let pairs = linalg::right_singular_pairs(&a);
+    // One SVD of the square matrix [A; 0] gives both kernels: its two smallest right
+    // singular vectors span the kernel of A, and the left vectors of its two smallest
+    // singular values span {(ψ, 0), e_{n+1}}.
+    let (pairs, psi) = linalg::kernels(&a);
     let (v0, v1) = (&pairs[0].1, &pairs[1].1);
     let (c0, c1) = (t1.dot(v0), t1.dot(v1));
     let norm = c0.hypot(c1);
@@ -146,7 +149,6 @@ fn secondary_tangent_at<P: Problem + ?Sized>(
     } else {
         (v0.clone(), v1.clone())
     };
-    let psi = linalg::left_null_vector(&a);
 
     // Directional derivatives of A along φ₁ and φ₂ (central differences).
     let h = f64::EPSILON.cbrt() * (1.0 + y.amax());

@@ -6,6 +6,7 @@ use std::time::Instant;
 use rodloop_continuation::BoxError;
 
 use crate::diagram::{assemble, NumericDiagram};
+use crate::families::{compute_families, Families};
 use crate::parallel::run_parallel;
 use crate::trace::compute_branch;
 use crate::types::TracedBranch;
@@ -84,7 +85,13 @@ pub fn compute(
     let mut todo: Vec<u32> = Vec::new();
     let mut rejected = Vec::new();
     for &eta in &etas {
-        match hook.resume(eta) {
+        // Non-uniform rods have several sheets per branch: traced afresh.
+        let resumed = if opts.stiffness.is_uniform() {
+            hook.resume(eta)
+        } else {
+            None
+        };
+        match resumed {
             Some(b) if b.fingerprint == fingerprint && b.eta == eta && !b.points.is_empty() => {
                 have.push(b)
             }
@@ -126,17 +133,29 @@ pub fn compute(
     // Largest branches first, for the balance of the threads.
     todo.sort_by_key(|&eta| std::cmp::Reverse(eta));
     let mut hook_error = None;
+    let uniform = opts.stiffness.is_uniform();
     let traced = run_parallel(
         opts.worker_threads(),
         todo,
         progress,
-        &mut |r: &Result<TracedBranch, DiagramError>| {
-            if let (Ok(b), None) = (r, &hook_error) {
-                hook_error = hook.finished(b, Origin::Traced).err();
+        &mut |r: &Result<Families, DiagramError>| {
+            if let Ok(f) = r {
+                for b in &f.sheets {
+                    if hook_error.is_none() {
+                        hook_error = hook.finished(b, Origin::Traced).err();
+                    }
+                }
             }
         },
         |eta, tx| {
-            let r = compute_branch(opts, eta, &mut |p| tx(p));
+            let r = if uniform {
+                compute_branch(opts, eta, &mut |p| tx(p)).map(|b| Families {
+                    sheets: vec![b],
+                    notes: Vec::new(),
+                })
+            } else {
+                compute_families(opts, eta, &mut |p| tx(p))
+            };
             if let Err(e) = &r {
                 tx(Progress::BranchFailed {
                     eta,
@@ -154,7 +173,10 @@ pub fn compute(
     let mut failures = Vec::new();
     for t in traced {
         match t {
-            Ok(b) => have.push(b),
+            Ok(f) => {
+                have.extend(f.sheets);
+                failures.extend(f.notes);
+            }
             Err(e @ DiagramError::InvalidOptions(_)) => return Err(e),
             Err(e) => failures.push(format!("branch left out of the diagram: {e}")),
         }
@@ -165,7 +187,7 @@ pub fn compute(
             failures.join("; ")
         )));
     }
-    have.sort_by_key(|b| b.eta);
+    have.sort_by_key(|b| (b.eta, b.family, b.sheet));
     let tracing_seconds = start.elapsed().as_secs_f64();
     let mut d = assemble(opts, have, progress)?;
     d.warnings.splice(0..0, failures);

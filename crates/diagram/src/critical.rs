@@ -53,6 +53,14 @@ pub struct CriticalLength {
     pub iterations: usize,
     /// How the number was obtained and checked (human-readable).
     pub note: String,
+    /// Position in [`crate::NumericDiagram::branches`] of the sheet lowest just below (not
+    /// serialised).
+    #[serde(skip)]
+    pub from_sheet: Option<usize>,
+    /// Position in [`crate::NumericDiagram::branches`] of the sheet lowest just above (not
+    /// serialised).
+    #[serde(skip)]
+    pub to_sheet: Option<usize>,
 }
 
 /// A crossing found on the samples, before location.
@@ -111,6 +119,11 @@ pub(crate) fn detect_crossings(
         }
         let (l0, l1) = (grid[k - 1], grid[k]);
         let (ba, bb) = (&branches[a], &branches[b]);
+        // Two sheets that meet at a fold or a branch point in the interval (the lowest
+        // state changes continuously there): no crossing.
+        if touch(ba, bb, l0, l1) {
+            continue;
+        }
         if ba.covers(l0) && ba.covers(l1) && bb.covers(l0) && bb.covers(l1) {
             let diff =
                 |l: f64| ba.energy_at(l).unwrap_or(f64::NAN) - bb.energy_at(l).unwrap_or(f64::NAN);
@@ -146,6 +159,39 @@ pub(crate) fn detect_crossings(
         }
     }
     (out, warnings)
+}
+
+/// Whether two sheets share an end state (same length and energy) within `[l0, l1]`: a
+/// fold joining two sheets of one family, or a branch point where a family meets another.
+pub(crate) fn touch(a: &TracedBranch, b: &TracedBranch, l0: f64, l1: f64) -> bool {
+    let ends = |t: &TracedBranch| [t.points.first().cloned(), t.points.last().cloned()];
+    let mut found = false;
+    for pa in ends(a).into_iter().flatten() {
+        for pb in ends(b).into_iter().flatten() {
+            let l = pa.value;
+            if l >= l0 - 1e-9
+                && l <= l1 + 1e-9
+                && (pa.value - pb.value).abs() <= 1e-8
+                && (pa.energy - pb.energy).abs() <= 1e-6 * pa.energy.abs().max(1.0)
+            {
+                found = true;
+            }
+        }
+    }
+    // A branch point in the middle of the other sheet (the symmetric family passes through
+    // the pitchfork where the asymmetric pair ends).
+    for (x, y) in [(a, b), (b, a)] {
+        for pe in ends(x).into_iter().flatten() {
+            if pe.value >= l0 - 1e-9 && pe.value <= l1 + 1e-9 {
+                if let Some(e) = y.points.iter().find(|q| (q.value - pe.value).abs() <= 1e-8) {
+                    if (e.energy - pe.energy).abs() <= 1e-6 * pe.energy.abs().max(1.0) {
+                        found = true;
+                    }
+                }
+            }
+        }
+    }
+    found
 }
 
 /// Locate a crossing on re-solved equilibria (see the module docs).
@@ -215,6 +261,8 @@ pub(crate) fn locate_crossing(
         error_estimate,
         slope_difference,
         iterations,
+        from_sheet: Some(cand.a),
+        to_sheet: Some(cand.b),
         note: format!(
             "E_{} = E_{} solved by Newton in L̄ on equilibria re-solved with {} and {} / {} and \
              {} cells, Richardson-extrapolated; energy error estimates {:.1e}, {:.1e}",
@@ -330,6 +378,8 @@ pub(crate) fn collapses(
             slope_difference: 0.0,
             iterations: 0,
             note,
+            from_sheet: below.map(|(i, _)| i),
+            to_sheet: above.map(|(i, _)| i),
         });
     }
     out

@@ -57,6 +57,8 @@ pub struct NumericDiagram {
     pub labels: Vec<Vec<Label>>,
     /// Critical lengths in increasing order.
     pub critical: Vec<CriticalLength>,
+    /// Folds, branch points, crossings and collapses, in increasing `L̄`.
+    pub special: Vec<SpecialPoint>,
     /// Great-circle analysis (`None` if disabled).
     pub great_circles: Option<BucklingReport>,
     /// Anything suspicious met on the way.
@@ -72,6 +74,14 @@ pub struct DiagramRow {
     pub branch: u32,
     /// Periods of `κ_g`.
     pub eta: u32,
+    /// Family within the branch ([`TracedBranch::family`]).
+    pub family: u32,
+    /// Position along the family: sheet number times 10⁶ plus the point's rank in the
+    /// family's arclength order, so that sorting a family's rows by it draws the family
+    /// as one path through its folds.
+    pub arc: u64,
+    /// Mirror multiplicity ([`TracedBranch::multiplicity`]).
+    pub multiplicity: u32,
     /// Normalised length.
     pub lbar: f64,
     /// `E R/(π D0)`.
@@ -103,6 +113,8 @@ pub struct DiagramSummary<'a> {
     pub branches: Vec<BranchSummary<'a>>,
     /// Critical lengths.
     pub critical: &'a [CriticalLength],
+    /// Special points.
+    pub special: &'a [SpecialPoint],
     /// Great-circle analysis.
     pub great_circles: Option<&'a BucklingReport>,
     /// Warnings.
@@ -172,6 +184,7 @@ impl NumericDiagram {
                 })
                 .collect(),
             critical: &self.critical,
+            special: &self.special,
             great_circles: self.great_circles.as_ref(),
             warnings: &self.warnings,
             timings: self.timings,
@@ -184,18 +197,31 @@ impl NumericDiagram {
             .iter()
             .zip(&self.labels)
             .flat_map(|(b, ls)| {
-                b.points.iter().zip(ls).map(move |(p, &l)| DiagramRow {
-                    branch: b.branch,
-                    eta: b.eta,
-                    lbar: p.value,
-                    energy: p.energy,
-                    energy_g: p.energy_g,
-                    energy_error: p.energy_error,
-                    stability: l,
-                    index: p.index,
-                    lambda_min: p.lambda_min,
-                    lambda_max: p.lambda_max,
-                })
+                let n = b.points.len() as u64;
+                b.points
+                    .iter()
+                    .zip(ls)
+                    .enumerate()
+                    .map(move |(k, (p, &l))| DiagramRow {
+                        branch: b.branch,
+                        eta: b.eta,
+                        family: b.family,
+                        arc: u64::from(b.sheet) * 1_000_000
+                            + if b.reversed {
+                                n - 1 - k as u64
+                            } else {
+                                k as u64
+                            },
+                        multiplicity: b.multiplicity,
+                        lbar: p.value,
+                        energy: p.energy,
+                        energy_g: p.energy_g,
+                        energy_error: p.energy_error,
+                        stability: l,
+                        index: p.index,
+                        lambda_min: p.lambda_min,
+                        lambda_max: p.lambda_max,
+                    })
             })
             .collect()
     }
@@ -217,6 +243,12 @@ impl NumericDiagram {
         Some((b.points[k].value, self.labels[i][k]))
     }
 
+    /// Positions in [`NumericDiagram::branches`] of the sheets lowest at `lbar` (two exactly
+    /// at a critical length, none at a collapse).
+    pub fn lowest_sheets_at(&self, lbar: f64) -> Vec<usize> {
+        labels::lowest_sheets(&self.branches, &self.critical, lbar)
+    }
+
     /// Paper branch numbers lowest at `lbar` (two exactly at a critical length).
     pub fn lowest_at(&self, lbar: f64) -> Vec<u32> {
         labels::lowest_etas(&self.branches, &self.critical, lbar)
@@ -235,7 +267,7 @@ pub fn assemble(
 ) -> Result<NumericDiagram, DiagramError> {
     opts.validate()?;
     let start = Instant::now();
-    branches.sort_by_key(|b| b.eta);
+    branches.sort_by_key(|b| (b.eta, b.family, b.sheet));
     for b in &branches {
         check_branch(b)?;
     }
@@ -297,7 +329,12 @@ pub fn assemble(
             }
             Done::Crossing(r, secs) => {
                 timings.critical += secs;
-                critical.push((*r)?);
+                match *r {
+                    Ok(c) => critical.push(c),
+                    // A uniform rod's crossings are all regular: a failure is an error.
+                    Err(e) if opts.stiffness.is_uniform() => return Err(e),
+                    Err(e) => warnings.push(format!("a crossing was not located: {e}")),
+                }
             }
         }
     }
@@ -332,7 +369,15 @@ pub fn assemble(
         c.index = i + 1;
     }
     for w in critical.windows(2) {
-        if w[0].to_eta != w[1].from_eta {
+        // The same sheet, or sheets that meet at a fold or branch point in between (the
+        // lowest state passes continuously from one to the other there).
+        let connected = match (w[0].to_sheet, w[1].from_sheet) {
+            (Some(a), Some(b)) => {
+                a == b || critical::touch(&branches[a], &branches[b], w[0].lbar_cr, w[1].lbar_cr)
+            }
+            _ => w[0].to_eta == w[1].from_eta,
+        };
+        if !connected {
             warnings.push(format!(
                 "critical lengths {} (L̄ = {:.6}, to branch {}) and {} (L̄ = {:.6}, from branch \
                  {}) do not connect",
@@ -350,6 +395,8 @@ pub fn assemble(
     let t = Instant::now();
     let labels = labels::label_all(&branches, &critical);
     timings.labels = t.elapsed().as_secs_f64();
+    warnings.extend(no_minimum_warnings(opts, &branches));
+    let special = special_points(&branches, &critical);
 
     for b in &branches {
         for (end, stop) in [(&b.low_end, &b.stop_low), (&b.high_end, &b.stop_high)] {
@@ -378,10 +425,172 @@ pub fn assemble(
         branches,
         labels,
         critical,
+        special,
         great_circles: great,
         warnings,
         timings,
     })
+}
+
+/// The stretches of the range where no traced state has stability index 0 (checked on a
+/// grid of step 0.005 and at every traced length; the great-circle lengths themselves and,
+/// for a uniform rod, `L̄ < 1` (the circle) are left out), one warning per stretch.
+fn no_minimum_warnings(opts: &DiagramOptions, branches: &[TracedBranch]) -> Vec<String> {
+    let mut grid: Vec<f64> = Vec::new();
+    let n = ((opts.lbar_max - opts.lbar_min) / 0.005).ceil() as usize;
+    for k in 0..=n {
+        grid.push(opts.lbar_min + (opts.lbar_max - opts.lbar_min) * k as f64 / n.max(1) as f64);
+    }
+    grid.sort_by(f64::total_cmp);
+    let has_minimum = |l: f64| {
+        branches.iter().any(|b| {
+            b.covers(l) && {
+                let k = b.points.partition_point(|p| p.value < l);
+                let near = |i: usize| b.points.get(i).map(|p| p.index == 0);
+                // Index 0 on both neighbouring states (or the state itself).
+                match (k.checked_sub(1).and_then(near), near(k)) {
+                    (Some(a), Some(c)) => a && c,
+                    (None, Some(c)) => c,
+                    (Some(a), None) => a,
+                    _ => false,
+                }
+            }
+        })
+    };
+    let skip = |l: f64| (l - l.round()).abs() < 2e-3 || (opts.stiffness.is_uniform() && l < 1.0);
+    let mut out = Vec::new();
+    let mut run: Option<(f64, f64)> = None;
+    for &l in &grid {
+        let bad = !skip(l) && !has_minimum(l);
+        match (bad, run) {
+            (true, None) => run = Some((l, l)),
+            (true, Some((a, _))) => run = Some((a, l)),
+            (false, Some((a, b))) => {
+                out.push((a, b));
+                run = None;
+            }
+            (false, None) => {}
+        }
+    }
+    if let Some(r) = run {
+        out.push(r);
+    }
+    out.into_iter()
+        .map(|(a, b)| {
+            format!(
+                "NO STABLE STATE FOUND: on {a:.4} ≤ L̄ ≤ {b:.4} no traced state has stability                  index 0 (the lowest state there was not found; labels there are incomplete)"
+            )
+        })
+        .collect()
+}
+
+/// Special points of the diagram: folds and branch points (the ends of sheets), crossings
+/// and collapses (the critical lengths), in increasing `L̄`.
+fn special_points(branches: &[TracedBranch], critical: &[CriticalLength]) -> Vec<SpecialPoint> {
+    let mut out: Vec<SpecialPoint> = Vec::new();
+    for b in branches {
+        for (end, at_low) in [(&b.low_end, true), (&b.high_end, false)] {
+            let kind = match end {
+                crate::BranchEnd::Fold { .. } => SpecialKind::Fold,
+                crate::BranchEnd::BranchPoint { .. } => SpecialKind::BranchPoint,
+                _ => continue,
+            };
+            let (p, q) = if at_low {
+                (b.points.first(), b.points.get(1))
+            } else {
+                (
+                    b.points.last(),
+                    b.points.len().checked_sub(2).and_then(|k| b.points.get(k)),
+                )
+            };
+            let (Some(p), Some(q)) = (p, q) else { continue };
+            let value = p.value;
+            // One record per point: a fold is the end of two sheets, a branch point of
+            // several.
+            if let Some(s) = out.iter_mut().find(|s| {
+                s.kind == kind
+                    && (s.lbar - value).abs() < 1e-8
+                    && (s.energy - p.energy).abs() < 1e-6 * p.energy.abs().max(1.0)
+            }) {
+                s.index_after = s.index_after.max(q.index);
+                s.index_before = s.index_before.min(q.index);
+                continue;
+            }
+            out.push(SpecialPoint {
+                kind,
+                lbar: value,
+                energy: p.energy,
+                branch: b.branch,
+                family: b.family,
+                index_before: q.index,
+                index_after: q.index,
+            });
+        }
+    }
+    // Before/after: the two sides of a fold are its two sheets, the lower index first.
+    for c in critical {
+        out.push(SpecialPoint {
+            kind: match c.kind {
+                CriticalKind::Crossing => SpecialKind::Crossing,
+                CriticalKind::Collapse => SpecialKind::Collapse,
+            },
+            lbar: c.lbar_cr,
+            energy: c.energy,
+            branch: c.to_branch,
+            family: c.to_sheet.map_or(0, |i| branches[i].family),
+            index_before: 0,
+            index_after: 0,
+        });
+    }
+    out.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
+    out
+}
+
+/// Kind of a [`SpecialPoint`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SpecialKind {
+    /// A turning point in `L̄` of a followed family (two sheets meet).
+    Fold,
+    /// A simple branch point: a mirror-symmetric family meets a pair of mirror-image
+    /// asymmetric ones (pitchfork).
+    BranchPoint,
+    /// An exchange of the lowest state between two sheets (`E_a = E_b`).
+    Crossing,
+    /// The lowest state collapses onto a great circle (`L̄ = m`).
+    Collapse,
+}
+
+impl SpecialKind {
+    /// `fold`, `branch_point`, `crossing` or `collapse`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            SpecialKind::Fold => "fold",
+            SpecialKind::BranchPoint => "branch_point",
+            SpecialKind::Crossing => "crossing",
+            SpecialKind::Collapse => "collapse",
+        }
+    }
+}
+
+/// A special point of the diagram (`special_points.csv`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SpecialPoint {
+    /// What it is.
+    pub kind: SpecialKind,
+    /// Where.
+    pub lbar: f64,
+    /// Energy `E R/(π D0)` there.
+    pub energy: f64,
+    /// Paper branch (crossings and collapses: the branch lowest above).
+    pub branch: u32,
+    /// Family within the branch (0: uniform rod, or none).
+    pub family: u32,
+    /// Stability index on one side (folds and branch points: the smaller of the indices of
+    /// the sheets that meet there; crossings and collapses: of the lowest state, 0).
+    pub index_before: usize,
+    /// Stability index on the other side (the larger).
+    pub index_after: usize,
 }
 
 fn check_branch(b: &TracedBranch) -> Result<(), DiagramError> {

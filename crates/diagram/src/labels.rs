@@ -34,65 +34,80 @@ impl std::fmt::Display for Label {
     }
 }
 
-/// The `η` values of the lowest branch at `lbar` (two at a critical length).
+/// The sheets (positions in `branches`) of the lowest state at `lbar` (two at a critical
+/// length).
 ///
-/// Between consecutive critical lengths the lowest branch is the one the left critical
+/// Between consecutive critical lengths the lowest sheet is the one the left critical
 /// length hands over to (so labels agree with the located critical lengths, not with the
-/// coarser sample energies); where that branch was not computed (`η = 0`, e.g. the circle
-/// below `L̄ = 1`) or does not cover `lbar`, the branch of lowest interpolated energy.
-/// Exactly at a collapse length the lowest state is the great circle, which is not a traced
-/// state: the result is empty.
-pub(crate) fn lowest_etas(
+/// coarser sample energies); where that sheet was not computed (e.g. the circle below
+/// `L̄ = 1`) or does not cover `lbar`, the sheet of lowest interpolated energy. Exactly at
+/// a collapse length the lowest state is the great circle, which is not a traced state:
+/// the result is empty.
+pub(crate) fn lowest_sheets(
     branches: &[TracedBranch],
     critical: &[CriticalLength],
     lbar: f64,
-) -> Vec<u32> {
+) -> Vec<usize> {
     let tol = 1e-12 * lbar.abs().max(1.0);
-    let mut out = Vec::new();
-    // Exactly at a collapse the great circle itself is the lowest state: no traced branch.
+    let mut out: Vec<Option<usize>> = Vec::new();
     if critical
         .iter()
         .any(|c| c.kind == CriticalKind::Collapse && (c.lbar_cr - lbar).abs() <= tol)
     {
-        return out;
+        return Vec::new();
     }
     if !critical.is_empty() {
         let k = critical.partition_point(|c| c.lbar_cr <= lbar + tol);
-        let eta = if k == 0 {
-            critical[0].from_eta
+        let sheet = if k == 0 {
+            critical[0].from_sheet
         } else {
-            critical[k - 1].to_eta
+            critical[k - 1].to_sheet
         };
         if k > 0 && (critical[k - 1].lbar_cr - lbar).abs() <= tol {
-            out.push(critical[k - 1].from_eta);
+            out.push(critical[k - 1].from_sheet);
         }
-        // Before a collapse from "branch 0" (the circle below L̄ = 1) the lowest state is
-        // not a traced one.
-        if eta == 0 && k == 0 && critical[0].kind == CriticalKind::Collapse && lbar < 1.0 {
+        if sheet.is_none() && k == 0 && critical[0].kind == CriticalKind::Collapse && lbar < 1.0 {
             return Vec::new();
         }
-        out.push(eta);
+        out.push(sheet);
     }
-    out.retain(|&eta| eta != 0 && branches.iter().any(|b| b.eta == eta && b.covers(lbar)));
+    let mut out: Vec<usize> = out
+        .into_iter()
+        .flatten()
+        .filter(|&i| i < branches.len() && branches[i].covers(lbar))
+        .collect();
     if out.is_empty() {
         if let Some((i, _)) = lowest_interpolated(branches, lbar) {
-            out.push(branches[i].eta);
+            out.push(i);
         }
     }
     out
 }
 
-/// Labels of every traced state of every branch.
+/// The `η` values of the lowest sheets at `lbar` ([`lowest_sheets`]).
+pub(crate) fn lowest_etas(
+    branches: &[TracedBranch],
+    critical: &[CriticalLength],
+    lbar: f64,
+) -> Vec<u32> {
+    lowest_sheets(branches, critical, lbar)
+        .into_iter()
+        .map(|i| branches[i].eta)
+        .collect()
+}
+
+/// Labels of every traced state of every sheet.
 pub(crate) fn label_all(branches: &[TracedBranch], critical: &[CriticalLength]) -> Vec<Vec<Label>> {
     branches
         .iter()
-        .map(|b| {
+        .enumerate()
+        .map(|(i, b)| {
             b.points
                 .iter()
                 .map(|p| {
                     if p.index > 0 {
                         Label::Unstable
-                    } else if lowest_etas(branches, critical, p.value).contains(&b.eta) {
+                    } else if lowest_sheets(branches, critical, p.value).contains(&i) {
                         Label::Stable
                     } else {
                         Label::Metastable

@@ -59,6 +59,7 @@ mod compute;
 pub mod critical;
 mod diagram;
 mod ends;
+pub mod families;
 mod labels;
 pub mod march;
 mod parallel;
@@ -71,9 +72,14 @@ pub mod types;
 pub use buckling::{Buckling, BucklingReport, Switching};
 pub use compute::{compute, BranchHook, Origin, Resume};
 pub use critical::{CriticalKind, CriticalLength};
-pub use diagram::{assemble, BranchSummary, DiagramRow, DiagramSummary, NumericDiagram, Timings};
+pub use diagram::{
+    assemble, BranchSummary, DiagramRow, DiagramSummary, NumericDiagram, SpecialKind, SpecialPoint,
+    Timings,
+};
 pub use labels::Label;
-pub use march::{march, FoldPolicy, March, MarchPoint, MarchSettings, MarchSpecial, MarchStop};
+pub use march::{
+    march, march_switch, FoldPolicy, March, MarchPoint, MarchSettings, MarchSpecial, MarchStop,
+};
 /// The error type a [`BranchHook`] returns.
 pub use rodloop_continuation::BoxError;
 pub use trace::compute_branch;

@@ -76,6 +76,16 @@ pub struct MarchSettings {
     pub index_tolerance: f64,
     /// Steps between two calls of the progress callback (which is also called at the end).
     pub progress_every: usize,
+    /// With [`FoldPolicy::Follow`]: the far end of the range (the march then stays within
+    /// `[min(limit, far_limit), max(limit, far_limit)]` whichever way it turns). `None`: the
+    /// range is open beyond the start, as with [`FoldPolicy::Stop`].
+    pub far_limit: Option<f64>,
+    /// Values of the parameter the march must not run into (great-circle ends at integer
+    /// `L̄`): it stops ([`MarchStop::NearCircle`]) at the first point within
+    /// [`MarchSettings::circle_distance`] of one of them while heading towards it.
+    pub circles: Vec<f64>,
+    /// See [`MarchSettings::circles`].
+    pub circle_distance: f64,
 }
 
 /// A state reached by the march (unscaled).
@@ -127,6 +137,16 @@ pub enum MarchStop {
     MaxSteps,
     /// The branch closed a loop.
     ClosedLoop,
+    /// [`march_switch`]: the first point off the branch point lies on a known branch.
+    Known,
+    /// The march came within [`MarchSettings::circle_distance`] of one of
+    /// [`MarchSettings::circles`], heading towards it.
+    NearCircle {
+        /// The value it approaches.
+        circle: f64,
+        /// Value of the last point.
+        value: f64,
+    },
 }
 
 /// The outcome of [`march`].
@@ -290,7 +310,7 @@ pub fn march<M: Confinement>(
             found: x0.len(),
         });
     }
-    let mut out = March {
+    let out = March {
         points: Vec::new(),
         index_changes: Vec::new(),
         special: Vec::new(),
@@ -309,17 +329,28 @@ pub fn march<M: Confinement>(
         k: st.scaled,
         s: st.scale,
     };
-    let (p_min, p_max) = if side < 0.0 {
-        (st.limit, f64::INFINITY)
-    } else {
-        (f64::NEG_INFINITY, st.limit)
+    let cont_settings = continuation_settings(st, side)?;
+    let cont = Continuation::new(&scaled, cont_settings).with_stability(Index {
+        scaled: &scaled,
+        tolerance: st.index_tolerance,
+    });
+    let stepper = cont.start(&scaled.scale(x0), p0).map_err(start_error)?;
+    Ok(run_loop(stepper, &scaled, st, side, p0, out, progress))
+}
+
+/// The continuation settings of a march heading to `side` from `p0`.
+fn continuation_settings(st: &MarchSettings, side: f64) -> Result<PseudoArclength, SolverError> {
+    let (p_min, p_max) = match (st.folds, st.far_limit) {
+        (FoldPolicy::Follow, Some(far)) => (st.limit.min(far), st.limit.max(far)),
+        _ if side < 0.0 => (st.limit, f64::INFINITY),
+        _ => (f64::NEG_INFINITY, st.limit),
     };
     let direction = if side < 0.0 {
         Direction::Backward
     } else {
         Direction::Forward
     };
-    let cont_settings = PseudoArclength::new()
+    PseudoArclength::new()
         .with_ds(st.ds)
         .and_then(|s| s.with_ds_bounds(st.ds_min, st.ds_max))
         .and_then(|s| s.with_range(p_min, p_max))
@@ -329,96 +360,220 @@ pub fn march<M: Confinement>(
         .and_then(|s| s.with_locate_tol(st.locate_tol))
         .and_then(|s| s.with_detect_folds(true))
         .and_then(|s| s.with_detect_branch_points(st.detect_branch_points))
-        .and_then(|s| s.with_detect_loops(false))
-        .map_err(start_error)?;
+        .and_then(|s| s.with_detect_loops(st.folds == FoldPolicy::Follow))
+        .map_err(start_error)
+}
+
+/// March on the second branch through the branch point `bp` (recorded by an earlier
+/// [`march`] of `problem` with the same [`MarchSettings::scaled`] and
+/// [`MarchSettings::scale`]), leaving it along `±` the secondary tangent
+/// (`direction`), with the continuation's branch switching
+/// ([`Continuation::start_switch`]). The branch point itself is the first point of the
+/// result ([`PointSource::BranchPoint`]). If `known(x, value)` holds for the first point off
+/// the branch point, the march ends there with [`MarchStop::Known`]. `settings.limit` and `settings.far_limit` give the
+/// range (the direction comes from `direction`).
+///
+/// # Errors
+/// As [`march`], and when no first step off the branch point succeeds.
+pub fn march_switch<M: Confinement>(
+    problem: &ParamProblem<M>,
+    bp: &MarchSpecial,
+    direction: Direction,
+    settings: &MarchSettings,
+    known: &dyn Fn(&[f64], f64) -> bool,
+    progress: &mut dyn FnMut(f64, usize),
+) -> Result<March, SolverError> {
+    let st = settings;
+    if !(st.scale.is_finite() && st.scale > 0.0) || st.scaled > problem.dim() {
+        return Err(SolverError::InvalidInput(format!(
+            "march scaling: {} unknowns by {} (dimension {})",
+            st.scaled,
+            st.scale,
+            problem.dim()
+        )));
+    }
+    if bp.x.len() != problem.dim() || bp.tangent.len() != problem.dim() + 1 {
+        return Err(SolverError::WrongLength {
+            expected: problem.dim(),
+            found: bp.x.len(),
+        });
+    }
+    let scaled = Scaled {
+        inner: problem,
+        k: st.scaled,
+        s: st.scale,
+    };
+    let side = if direction == Direction::Forward {
+        1.0
+    } else {
+        -1.0
+    };
+    let cont_settings = continuation_settings(st, side)?;
     let cont = Continuation::new(&scaled, cont_settings).with_stability(Index {
         scaled: &scaled,
         tolerance: st.index_tolerance,
     });
-    let mut stepper = cont.start(&scaled.scale(x0), p0).map_err(start_error)?;
+    let special = rodloop_continuation::SpecialPoint {
+        kind: SpecialKind::BranchPoint,
+        x: scaled.scale(&bp.x),
+        p: bp.value,
+        tangent: DVector::from_column_slice(&bp.tangent),
+        s: 0.0,
+        segment: 0,
+        accuracy: 0.0,
+    };
+    let stepper = cont
+        .start_switch(&special, direction)
+        .map_err(|e| SolverError::InvalidInput(format!("branch switching failed: {e}")))?;
+    let out = March {
+        points: vec![MarchPoint {
+            x: bp.x.clone(),
+            value: bp.value,
+            index: None,
+            source: PointSource::BranchPoint,
+        }],
+        index_changes: Vec::new(),
+        special: Vec::new(),
+        steps: 0,
+        stop: MarchStop::Reached,
+    };
+    // The first point off the branch point is already accepted by the stepper.
+    let first = stepper.current();
+    let mut out = out;
+    out.points.push(MarchPoint {
+        x: scaled.unscale(&first.x).as_slice().to_vec(),
+        value: first.p,
+        index: first.index,
+        source: PointSource::Continuation,
+    });
+    let n = first.x.len();
+    if known(&out.points[1].x, first.p) {
+        out.stop = MarchStop::Known;
+        return Ok(out);
+    }
+    let side = if first.tangent[n] >= 0.0 { 1.0 } else { -1.0 };
+    Ok(run_loop(stepper, &scaled, st, side, first.p, out, progress))
+}
+
+/// The stepping loop of [`march`] and [`march_switch`].
+fn run_loop<M: Confinement>(
+    mut stepper: rodloop_continuation::Stepper<'_, '_, Scaled<'_, M>>,
+    scaled: &Scaled<'_, M>,
+    st: &MarchSettings,
+    side: f64,
+    p0: f64,
+    mut out: March,
+    progress: &mut dyn FnMut(f64, usize),
+) -> March {
     let unscaled = |x: &DVector<f64>| scaled.unscale(x).as_slice().to_vec();
     let mut last_value = p0;
     let mut cause: Option<String> = None;
     let every = st.progress_every.max(1);
-    let stop = loop {
-        let step = match stepper.step() {
-            Ok(step) => step,
-            Err(e) => {
-                // The stepper stays at its last accepted point: retry with a smaller step.
-                let ds = stepper.ds() * 0.5;
-                cause = Some(e.to_string());
-                if stepper.set_ds(ds).is_err() {
-                    break MarchStop::StepTooSmall {
-                        ds,
-                        value: last_value,
-                        cause,
-                    };
+    let stop =
+        loop {
+            let step = match stepper.step() {
+                Ok(step) => step,
+                Err(e) => {
+                    // The stepper stays at its last accepted point: retry with a smaller step.
+                    let ds = stepper.ds() * 0.5;
+                    cause = Some(e.to_string());
+                    if stepper.set_ds(ds).is_err() {
+                        break MarchStop::StepTooSmall {
+                            ds,
+                            value: last_value,
+                            cause,
+                        };
+                    }
+                    continue;
                 }
-                continue;
+            };
+            let Some(point) = step.point else {
+                break stop_of(step.stop, cause.take());
+            };
+            let n = point.x.len();
+            let turned = point.tangent[n] * side <= 0.0 || (point.p - last_value) * side <= 0.0;
+            let fold = step.special.iter().find(|s| s.kind == SpecialKind::Fold);
+            if st.folds == FoldPolicy::Stop && (turned || fold.is_some()) {
+                // The step crossed a turning point of the parameter: keep what came before.
+                out.special.extend(fold.map(|f| MarchSpecial {
+                    kind: f.kind.clone(),
+                    x: unscaled(&f.x),
+                    value: f.p,
+                    tangent: f.tangent.as_slice().to_vec(),
+                }));
+                break MarchStop::Fold { value: last_value };
+            }
+            for sp in &step.special {
+                match &sp.kind {
+                    SpecialKind::IndexChange { old, new } => {
+                        // Orientation from the tangent there (a followed fold reverses it).
+                        let up = sp.tangent[n] > 0.0;
+                        let (below, above) = if up { (*old, *new) } else { (*new, *old) };
+                        out.index_changes.push(IndexChange {
+                            value: sp.p,
+                            below,
+                            above,
+                        });
+                        out.points.push(MarchPoint {
+                            x: unscaled(&sp.x),
+                            value: sp.p,
+                            index: Some(*new),
+                            source: PointSource::IndexChange,
+                        });
+                    }
+                    SpecialKind::Fold | SpecialKind::BranchPoint => {
+                        out.special.push(MarchSpecial {
+                            kind: sp.kind.clone(),
+                            x: unscaled(&sp.x),
+                            value: sp.p,
+                            tangent: sp.tangent.as_slice().to_vec(),
+                        });
+                        // Followed folds and branch points are states of the march too (the
+                        // ends of the monotone pieces of a followed branch).
+                        if st.folds == FoldPolicy::Follow {
+                            out.points.push(MarchPoint {
+                                x: unscaled(&sp.x),
+                                value: sp.p,
+                                index: None,
+                                source: if sp.kind == SpecialKind::Fold {
+                                    PointSource::Fold
+                                } else {
+                                    PointSource::BranchPoint
+                                },
+                            });
+                        }
+                    }
+                    SpecialKind::Event { .. } => {}
+                }
+            }
+            out.points.push(MarchPoint {
+                x: unscaled(&point.x),
+                value: point.p,
+                index: point.index,
+                source: PointSource::Continuation,
+            });
+            last_value = point.p;
+            cause = None;
+            if stepper.steps() % every == 0 {
+                progress(last_value, stepper.steps());
+            }
+            if step.stop.is_some() {
+                break stop_of(step.stop, None);
+            }
+            let heading = point.tangent[n];
+            if let Some(&m) = st.circles.iter().find(|&&m| {
+                (point.p - m).abs() < st.circle_distance && heading * (m - point.p) > 0.0
+            }) {
+                break MarchStop::NearCircle {
+                    circle: m,
+                    value: point.p,
+                };
             }
         };
-        let Some(point) = step.point else {
-            break stop_of(step.stop, cause.take());
-        };
-        let n = point.x.len();
-        let turned = point.tangent[n] * side <= 0.0 || (point.p - last_value) * side <= 0.0;
-        let fold = step.special.iter().find(|s| s.kind == SpecialKind::Fold);
-        if st.folds == FoldPolicy::Stop && (turned || fold.is_some()) {
-            // The step crossed a turning point of the parameter: keep what came before.
-            out.special.extend(fold.map(|f| MarchSpecial {
-                kind: f.kind.clone(),
-                x: unscaled(&f.x),
-                value: f.p,
-                tangent: f.tangent.as_slice().to_vec(),
-            }));
-            break MarchStop::Fold { value: last_value };
-        }
-        for sp in &step.special {
-            match &sp.kind {
-                SpecialKind::IndexChange { old, new } => {
-                    // Orientation from the tangent there (a followed fold reverses it).
-                    let up = sp.tangent[n] > 0.0;
-                    let (below, above) = if up { (*old, *new) } else { (*new, *old) };
-                    out.index_changes.push(IndexChange {
-                        value: sp.p,
-                        below,
-                        above,
-                    });
-                    out.points.push(MarchPoint {
-                        x: unscaled(&sp.x),
-                        value: sp.p,
-                        index: Some(*new),
-                        source: PointSource::IndexChange,
-                    });
-                }
-                SpecialKind::Fold | SpecialKind::BranchPoint => out.special.push(MarchSpecial {
-                    kind: sp.kind.clone(),
-                    x: unscaled(&sp.x),
-                    value: sp.p,
-                    tangent: sp.tangent.as_slice().to_vec(),
-                }),
-                SpecialKind::Event { .. } => {}
-            }
-        }
-        out.points.push(MarchPoint {
-            x: unscaled(&point.x),
-            value: point.p,
-            index: point.index,
-            source: PointSource::Continuation,
-        });
-        last_value = point.p;
-        cause = None;
-        if stepper.steps() % every == 0 {
-            progress(last_value, stepper.steps());
-        }
-        if step.stop.is_some() {
-            break stop_of(step.stop, None);
-        }
-    };
     out.steps = stepper.steps();
     out.stop = stop;
     progress(last_value, out.steps);
-    Ok(out)
+    out
 }
 
 /// The [`MarchStop`] of a stepper's stop reason.

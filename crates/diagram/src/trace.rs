@@ -49,7 +49,7 @@ fn step_bounds(opts: &DiagramOptions) -> (f64, f64) {
 
 /// The march settings of the diagram towards `limit` for a model with `shape` shape
 /// unknowns.
-fn march_settings(opts: &DiagramOptions, limit: f64, shape: usize) -> MarchSettings {
+pub(crate) fn march_settings(opts: &DiagramOptions, limit: f64, shape: usize) -> MarchSettings {
     let (ds_max, ds) = step_bounds(opts);
     MarchSettings {
         limit,
@@ -65,6 +65,9 @@ fn march_settings(opts: &DiagramOptions, limit: f64, shape: usize) -> MarchSetti
         detect_branch_points: false,
         index_tolerance: INDEX_TOLERANCE,
         progress_every: PROGRESS_EVERY,
+        far_limit: None,
+        circles: Vec::new(),
+        circle_distance: SWITCH_DISTANCE,
     }
 }
 
@@ -180,6 +183,10 @@ pub fn compute_branch(
         branch,
         eta,
         param: Param::Lbar,
+        family: 0,
+        sheet: 0,
+        reversed: false,
+        multiplicity: 1,
         fingerprint: opts.fingerprint(),
         cells,
         phase: opts.stiffness.is_uniform(),
@@ -273,6 +280,10 @@ fn trace_side(
                 "the continuation used up its budget of {MAX_STEPS_PER_SIDE} steps"
             )),
             MarchStop::ClosedLoop => Some("the continuation closed a loop".into()),
+            MarchStop::Known => Some("the continuation met a known branch".into()),
+            MarchStop::NearCircle { value, .. } => Some(format!(
+                "the continuation came close to a great circle at L̄ = {value:.6}"
+            )),
         };
     }
     let last_p = points.last().map_or(p0, |r| r.value);

@@ -37,6 +37,20 @@ pub enum BranchEnd {
         #[serde(rename = "lbar")]
         value: f64,
     },
+    /// A fold (turning point in `L̄`) of a followed branch: the family goes on, on the
+    /// next sheet ([`TracedBranch::sheet`]).
+    Fold {
+        /// Where the parameter turns (`lbar` in files).
+        #[serde(rename = "lbar")]
+        value: f64,
+    },
+    /// A simple branch point (pitchfork) where this sheet starts or ends on another
+    /// family.
+    BranchPoint {
+        /// Where (`lbar` in files).
+        #[serde(rename = "lbar")]
+        value: f64,
+    },
     /// Tracing stopped before its target.
     Failed {
         /// Last traced value of the continued parameter (`lbar` in files).
@@ -55,6 +69,8 @@ impl BranchEnd {
         match self {
             BranchEnd::GreatCircle { value, .. }
             | BranchEnd::Range { value }
+            | BranchEnd::Fold { value }
+            | BranchEnd::BranchPoint { value }
             | BranchEnd::Failed { value, .. } => *value,
         }
     }
@@ -80,6 +96,11 @@ pub enum PointSource {
     IndexChange,
     /// A Newton solve of the approach to a great-circle end.
     EndApproach,
+    /// A located fold (turning point of the continued parameter) of a followed branch.
+    Fold,
+    /// A located simple branch point (e.g. the pitchfork where a mirror-symmetric family
+    /// meets a pair of mirror-image asymmetric ones).
+    BranchPoint,
 }
 
 /// One traced state.
@@ -141,6 +162,26 @@ pub struct TracedBranch {
     /// files of version 1).
     #[serde(default = "default_param")]
     pub param: Param,
+    /// Family of the branch (numbered from 1 within `η`; 0: the single family of a uniform
+    /// rod). A non-uniform rod splits branch `η` into families by where the soft segment
+    /// sits on the shape; a family is one continuous solution curve, followed through its
+    /// folds and cut into sheets monotone in `L̄`.
+    #[serde(default)]
+    pub family: u32,
+    /// Position of this sheet along its family (0, 1, … in the order of the curve's
+    /// arclength).
+    #[serde(default)]
+    pub sheet: u32,
+    /// Whether the curve's arclength runs against increasing `L̄` on this sheet (so that
+    /// a figure draws the family as one path: sheets in order, points reversed where this
+    /// is set).
+    #[serde(default)]
+    pub reversed: bool,
+    /// Number of distinct loops the sheet stands for: 2 for a mirror-asymmetric state (its
+    /// mirror image about the stiffness profile's axis is an equilibrium with the same
+    /// energy, reported once), 1 otherwise.
+    #[serde(default = "one")]
+    pub multiplicity: u32,
     /// [`DiagramOptions::fingerprint`] of the options it was traced with.
     pub fingerprint: String,
     /// Tracing resolution (cells).
@@ -285,6 +326,11 @@ impl TracedBranch {
         let model = self.model_for(opts, lbar, &z)?;
         solve_from_state(model, z, &newton_options())
     }
+}
+
+/// Multiplicity of branch files that do not say.
+fn one() -> u32 {
+    1
 }
 
 /// The parameter of branch files that do not name one.

@@ -67,6 +67,22 @@ pub struct DiagramPoint {
     pub lambda_max: f64,
     /// Stability label.
     pub stability: Stability,
+    /// Family within the branch (`family` column of non-uniform rods; 0 otherwise).
+    pub family: u32,
+    /// Position along the family (`arc` column: sheet · 10⁶ + rank in arclength order);
+    /// `None` without the column (points are then drawn in increasing `L̄`).
+    pub arc: Option<u64>,
+}
+
+/// A special point of `special_points.csv` (fold, branch point, crossing, collapse).
+#[derive(Clone, Debug)]
+pub struct SpecialMark {
+    /// `fold`, `branch_point`, `crossing` or `collapse`.
+    pub kind: String,
+    /// `L̄`.
+    pub lbar: f64,
+    /// Energy there.
+    pub energy: f64,
 }
 
 /// A critical length.
@@ -91,6 +107,8 @@ pub struct DiagramData {
     pub points: Vec<DiagramPoint>,
     /// Critical lengths.
     pub critical: Vec<CriticalPoint>,
+    /// Folds and branch points of `special_points.csv` (empty without the file).
+    pub special: Vec<SpecialMark>,
 }
 
 /// Read a CSV as named text columns.
@@ -209,8 +227,19 @@ impl DiagramData {
                     .collect(),
             )
         };
+        let opt_col = |c: &str| -> Result<Option<Vec<f64>>, FigureError> {
+            if names.iter().any(|n| n == c) {
+                col(c).map(Some)
+            } else {
+                Ok(None)
+            }
+        };
+        let family = opt_col("family")?;
+        let arc = opt_col("arc")?;
         let points = (0..rows.len())
             .map(|k| DiagramPoint {
+                family: family.as_ref().map_or(0, |f| f[k] as u32),
+                arc: arc.as_ref().map(|a| a[k] as u64),
                 branch: branch[k] as u32,
                 eta: eta[k] as u32,
                 lbar: lbar[k],
@@ -246,10 +275,37 @@ impl DiagramData {
                 });
             }
         }
+        let spath = dir.join("special_points.csv");
+        let mut special = Vec::new();
+        if spath.exists() {
+            let ssrc = spath.display().to_string();
+            let (sn, sr) = read_text(&spath)?;
+            let lb = num_col(&sn, &sr, "lbar", &ssrc)?;
+            let en = num_col(&sn, &sr, "energy", &ssrc)?;
+            let ki =
+                sn.iter()
+                    .position(|n| n == "kind")
+                    .ok_or_else(|| FigureError::MissingColumn {
+                        path: ssrc.clone(),
+                        column: "kind".into(),
+                        found: sn.join(", "),
+                    })?;
+            for (k, row) in sr.iter().enumerate() {
+                let kind = row.get(ki).cloned().unwrap_or_default();
+                if kind == "fold" || kind == "branch_point" {
+                    special.push(SpecialMark {
+                        kind,
+                        lbar: lb[k],
+                        energy: en[k],
+                    });
+                }
+            }
+        }
         Ok(DiagramData {
             model,
             points,
             critical,
+            special,
         })
     }
 
@@ -267,23 +323,50 @@ impl DiagramData {
     ) -> Vec<Series> {
         let mut out = Vec::new();
         for (b, _) in self.branches() {
-            let mut pts: Vec<&DiagramPoint> =
-                self.points.iter().filter(|p| p.branch == b).collect();
-            pts.sort_by(|a, c| a.lbar.total_cmp(&c.lbar));
-            let mut start = 0;
-            for i in 1..=pts.len() {
-                if i == pts.len() || pts[i].stability != pts[start].stability {
-                    let end = (i + 1).min(pts.len());
-                    let st = pts[start].stability;
-                    used.insert(st);
-                    let (w, dash) = st.style();
-                    out.push(Series {
-                        color: branch_color(b).into(),
-                        width: w,
-                        dash: dash.into(),
-                        points: pts[start..end].iter().map(|p| (p.lbar, f(p))).collect(),
-                    });
-                    start = i;
+            let mut families: Vec<u32> = self
+                .points
+                .iter()
+                .filter(|p| p.branch == b)
+                .map(|p| p.family)
+                .collect();
+            families.sort_unstable();
+            families.dedup();
+            for fam in families {
+                let mut pts: Vec<&DiagramPoint> = self
+                    .points
+                    .iter()
+                    .filter(|p| p.branch == b && p.family == fam)
+                    .collect();
+                // A family in arclength order (one path through its folds), else by L̄.
+                if pts.iter().all(|p| p.arc.is_some()) {
+                    pts.sort_by_key(|p| p.arc);
+                } else {
+                    pts.sort_by(|a, c| a.lbar.total_cmp(&c.lbar));
+                }
+                // Pieces: split where the stability changes and where the family has a gap
+                // (a sheet left out between two sheets: not adjacent in arclength).
+                let gap = |a: &DiagramPoint, c: &DiagramPoint| match (a.arc, c.arc) {
+                    (Some(x), Some(y)) => y / 1_000_000 > x / 1_000_000 + 1,
+                    _ => false,
+                };
+                let mut start = 0;
+                for i in 1..=pts.len() {
+                    let broken = i < pts.len() && gap(pts[i - 1], pts[i]);
+                    if i == pts.len() || broken || pts[i].stability != pts[start].stability {
+                        let end = if broken { i } else { (i + 1).min(pts.len()) };
+                        let st = pts[start].stability;
+                        used.insert(st);
+                        let (w, dash) = st.style();
+                        if end > start {
+                            out.push(Series {
+                                color: branch_color(b).into(),
+                                width: w,
+                                dash: dash.into(),
+                                points: pts[start..end].iter().map(|p| (p.lbar, f(p))).collect(),
+                            });
+                        }
+                        start = i;
+                    }
                 }
             }
         }
@@ -345,6 +428,31 @@ pub fn energy_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, FigureEr
             shape,
             color: "#111".into(),
             size: 5.5,
+        });
+    }
+    let mut special_kinds = BTreeSet::new();
+    for p in &d.special {
+        let fold = p.kind == "fold";
+        special_kinds.insert(fold);
+        marks.push(Mark {
+            at: (p.lbar, p.energy),
+            shape: if fold { Shape::Triangle } else { Shape::Circle },
+            color: if fold { "#555" } else { "#b00" }.into(),
+            size: 3.5,
+        });
+    }
+    if special_kinds.contains(&true) {
+        legend.push(LegendItem::Mark {
+            label: "fold (turning point in L̄)".into(),
+            shape: Shape::Triangle,
+            color: "#555".into(),
+        });
+    }
+    if special_kinds.contains(&false) {
+        legend.push(LegendItem::Mark {
+            label: "branch point (pitchfork)".into(),
+            shape: Shape::Circle,
+            color: "#b00".into(),
         });
     }
     if kinds.contains(&true) {

@@ -205,6 +205,9 @@ fn every_branch_end_is_reached_and_explained() {
                     assert!((b.eta == 1 && *at == 1.0) || (b.eta == 5 && *at == 5.0));
                 }
                 BranchEnd::Failed { reason, .. } => panic!("branch {} failed: {reason}", b.branch),
+                BranchEnd::Fold { .. } | BranchEnd::BranchPoint { .. } => {
+                    panic!("a uniform rod's branch {} has no fold: {end:?}", b.branch)
+                }
             }
         }
         assert!(b.points.windows(2).all(|w| w[0].value < w[1].value));

@@ -4,6 +4,7 @@
 mod common;
 mod default_scene;
 mod extremes;
+mod families;
 mod great_circles;
 mod inhomogeneous;
 mod resolution;

@@ -82,6 +82,9 @@ fn the_same_march_continues_in_d1_at_fixed_length() {
         detect_branch_points: false,
         index_tolerance: 1e-6,
         progress_every: 5,
+        far_limit: None,
+        circles: Vec::new(),
+        circle_distance: 0.05,
     };
     let mut calls = 0;
     let run = march(&problem, &z0, 0.5, &settings, &mut |_, _| calls += 1).unwrap();

@@ -1,0 +1,148 @@
+//! The paper's two-segment rod (Eq. 51, D1/D0 = 0.5, s0*/L = 0.3, s1*/L = 0.8, γ = 200;
+//! Sec. 5, Fig. 10): families followed through folds and branch points, checked against
+//! independent solves.
+
+use std::sync::OnceLock;
+
+use rodloop_diagram::{compute, BranchEnd, CriticalKind, DiagramOptions, Label, NumericDiagram};
+use rodloop_solver::{solve_robust, Accuracy, SolveOptions, StartShape, Stiffness};
+
+fn paper_rod() -> Stiffness {
+    Stiffness::Tanh {
+        d0: 1.0,
+        d1: 0.5,
+        s0: 0.3,
+        s1: 0.8,
+        gamma: 200.0,
+    }
+}
+
+fn diagram() -> &'static NumericDiagram {
+    static D: OnceLock<NumericDiagram> = OnceLock::new();
+    D.get_or_init(|| {
+        let opts = DiagramOptions {
+            stiffness: paper_rod(),
+            lbar_min: 1.0,
+            lbar_max: 3.0,
+            ..DiagramOptions::default()
+        };
+        compute(&opts, &mut (), &mut |_| {}).expect("diagram of the paper's rod")
+    })
+}
+
+/// At several lengths the diagram's lowest state is stable with index 0, and its energy is
+/// no higher than that of every state `solve_robust` (shifted Euler starts, continuation in
+/// D1/D0; an independent route at another resolution) finds for branches 1–3.
+#[test]
+fn lowest_state_is_no_higher_than_solve() {
+    let d = diagram();
+    for lbar in [1.2, 1.5, 1.7, 1.9, 2.2, 2.5, 2.8] {
+        let sheets = d.lowest_sheets_at(lbar);
+        assert_eq!(sheets.len(), 1, "L̄ = {lbar}: {sheets:?}");
+        let b = &d.branches[sheets[0]];
+        let e_diagram = b.energy_at(lbar).expect("covers");
+        // The label and index of the traced state nearest to lbar on that sheet.
+        let k = (0..b.points.len())
+            .min_by(|&x, &y| {
+                (b.points[x].value - lbar)
+                    .abs()
+                    .total_cmp(&(b.points[y].value - lbar).abs())
+            })
+            .unwrap();
+        assert_eq!(b.points[k].index, 0, "L̄ = {lbar}");
+        assert_eq!(d.labels[sheets[0]][k], Label::Stable, "L̄ = {lbar}");
+        for eta in [1u32, 2, 3] {
+            if !(f64::from(eta) - 1.0 < lbar && lbar < f64::from(eta) + 1.0) {
+                continue;
+            }
+            let Ok((acc, _)) = solve_robust(
+                1.0,
+                lbar,
+                &paper_rod(),
+                &StartShape::Euler { l: eta },
+                Accuracy::Default,
+                Some(eta),
+                &SolveOptions::default(),
+            ) else {
+                continue;
+            };
+            // The diagram's energies are at the tracing resolution (error ≲ 1e-5 here).
+            let tol = 1e-4 + acc.energy_error;
+            assert!(
+                e_diagram <= acc.energy.total + tol,
+                "L̄ = {lbar}: diagram's lowest {e_diagram} (branch {}) above solve's {} for \
+                 η = {eta}",
+                b.branch,
+                acc.energy.total
+            );
+        }
+    }
+}
+
+/// The structure of the diagram: the paper's exchanges (Fig. 10: saddle → figure-eight
+/// near 1.38, orbit-like η = 3 → η = 2 near 2.43) and collapses; every followed family has
+/// sheets monotone in L̄; mirror-asymmetric sheets carry multiplicity 2; folds and branch
+/// points are recorded as special points; no failed ends and no warning that a stable
+/// state is missing.
+#[test]
+fn families_and_special_points() {
+    let d = diagram();
+    let crossings: Vec<_> = d
+        .critical
+        .iter()
+        .filter(|c| c.kind == CriticalKind::Crossing)
+        .collect();
+    assert_eq!(crossings.len(), 2, "{crossings:#?}");
+    assert!((crossings[0].lbar_cr - 1.38).abs() < 0.03);
+    assert_eq!((crossings[0].from_eta, crossings[0].to_eta), (2, 1));
+    assert!((crossings[1].lbar_cr - 2.42).abs() < 0.03);
+    assert_eq!((crossings[1].from_eta, crossings[1].to_eta), (3, 2));
+    for c in &crossings {
+        assert!(c.error_estimate <= 1e-7, "{c:?}");
+    }
+    // Great circles of the mean stiffness 0.75 D0: E R/(π D0) = 0.75 m at L̄ = m.
+    let collapses: Vec<_> = d
+        .critical
+        .iter()
+        .filter(|c| c.kind == CriticalKind::Collapse)
+        .collect();
+    assert_eq!(collapses.len(), 3);
+    for c in &collapses {
+        assert!((c.energy - 0.75 * c.lbar_cr).abs() < 1e-9, "{c:?}");
+    }
+    for b in &d.branches {
+        assert!(b.points.windows(2).all(|w| w[0].value <= w[1].value));
+        assert!(b.multiplicity == 1 || b.multiplicity == 2);
+        for end in [&b.low_end, &b.high_end] {
+            assert!(!matches!(end, BranchEnd::Failed { .. }), "{end:?}");
+        }
+    }
+    assert!(d.branches.iter().any(|b| b.multiplicity == 2));
+    assert!(d
+        .special
+        .iter()
+        .any(|s| s.kind == rodloop_diagram::SpecialKind::BranchPoint));
+    assert!(
+        !d.warnings.iter().any(|w| w.contains("NO STABLE STATE")),
+        "{:#?}",
+        d.warnings
+    );
+    // A fold is the end of a kept sheet (the sheet beyond it may be the mirror half of an
+    // asymmetric family, reported once).
+    for s in d
+        .special
+        .iter()
+        .filter(|s| s.kind == rodloop_diagram::SpecialKind::Fold)
+    {
+        let ends: Vec<_> = d
+            .branches
+            .iter()
+            .filter(|b| {
+                [&b.low_end, &b.high_end].iter().any(
+                    |e| matches!(e, BranchEnd::Fold { value } if (value - s.lbar).abs() < 1e-8),
+                )
+            })
+            .collect();
+        assert!(!ends.is_empty(), "fold at {}", s.lbar);
+    }
+}
