@@ -59,10 +59,10 @@ fn jacobian_matches_finite_differences() {
 #[test]
 fn explore() {
     let d = Stiffness::uniform(1.0);
-    for &(eta, lbar) in &[(2u32, 1.2), (1, 1.2), (1, 1.5), (2, 2.5), (3, 2.5)] {
+    for &(eta, lbar) in &[(1u32, 1.2), (1, 1.4)] {
         let l = paper_branch_loop(eta, lbar).unwrap();
         let e_exact = l.energy().unwrap();
-        for &n in &[24usize, 48, 96] {
+        for &n in &[64usize, 128, 256] {
             let t = std::time::Instant::now();
             let r = solve_branch(1.0, lbar, &d, &SurfaceSource::Exact(l), n, &EnclosedOptions::default());
             match r {
@@ -70,7 +70,8 @@ fn explore() {
                     let c = b.fine.contact(1e-9).unwrap();
                     let opt = b.fine.optimality().unwrap();
                     println!(
-                        "eta {eta} lbar {lbar} N {n}: E {:.12} exact-surface {:.12} diff {:.3e} est {:.1e} it {} res {:.1e} frac {:.3} runs {} gap {:?} lam {:?} opt {:?} {:?}",
+                        "{:?} eta {eta} lbar {lbar} N {n}: E {:.12} exact-surface {:.12} diff {:.3e} est {:.1e} it {} res {:.1e} frac {:.3} runs {} gap {:?} lam {:?} opt {:?} {:?}",
+                        b.fine.contact(1e-9).unwrap().runs,
                         b.energy, e_exact, b.energy - e_exact, b.energy_error, b.fine.iterations, b.fine.residual,
                         c.fraction, c.intervals, c.max_gap, l.lambda_range(), opt, t.elapsed()
                     );
@@ -78,5 +79,39 @@ fn explore() {
                 Err(e) => println!("eta {eta} lbar {lbar} N {n}: {e}"),
             }
         }
+    }
+}
+
+#[test]
+fn explore_mid() {
+    let d = Stiffness::uniform(1.0);
+    let l = paper_branch_loop(1, 1.2).unwrap();
+    for &n in &[64usize, 128, 256] {
+        let b = solve_branch(1.0, 1.2, &d, &SurfaceSource::Exact(l), n, &EnclosedOptions::default()).unwrap();
+        let st = &b.fine;
+        let m = &st.model;
+        let p = m.transforms(&st.z).unwrap();
+        let r0 = m.start_point(&st.z);
+        let mut worst: f64 = 0.0;
+        let mut at = 0.0;
+        for c in 0..m.cells() {
+            let h = m.cell_length(c);
+            for q in 1..8 {
+                let f = q as f64 / 8.0;
+                let sg = |o: f64| st.curvature_at(m.bounds()[c] + (m.bounds()[c + 1] - m.bounds()[c]) * f * o);
+                let (a1, a2) = sg(rodloop_solver::model::GAUSS_OFFSETS[0]);
+                let (b1, b2) = sg(rodloop_solver::model::GAUSS_OFFSETS[1]);
+                let e = rodloop_solver::enclosed::jet::cell_exp(h * f, [a1, a2, b1, b2]);
+                let pm = p[c] * e;
+                let r = r0 + nalgebra::Vector3::new(pm[(0, 3)], pm[(1, 3)], pm[(2, 3)]);
+                if r.norm() - 1.0 > worst {
+                    worst = r.norm() - 1.0;
+                    at = m.bounds()[c];
+                }
+            }
+        }
+        let lam = m.contact_force(&st.z);
+        let lmax = lam.iter().cloned().fold(0.0, f64::max);
+        println!("N {n}: E {:.12} max overshoot between nodes {worst:.3e} at {at}, max lambda density {lmax:.4}", b.energy);
     }
 }

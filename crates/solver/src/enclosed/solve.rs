@@ -184,6 +184,27 @@ pub fn start_from_surface<F: Fn(f64) -> f64>(
     stiffness: &Stiffness,
     kappa_g: F,
 ) -> Result<(EnclosedModel, Vec<f64>), SolverError> {
+    start_from_curvature(
+        radius,
+        lbar,
+        cells,
+        stiffness,
+        |s| (kappa_g(s), -1.0 / radius),
+        [0.0, 0.0, radius],
+    )
+}
+
+/// The starting state from curvature-vector functions `(κ1, κ2)(σ)` and a start point `r0`
+/// (frame at `s = 0` the identity), multipliers by least squares; the gauge takes this
+/// shape as reference (with the arclength phase condition for uniform rods).
+pub fn start_from_curvature<F: Fn(f64) -> (f64, f64)>(
+    radius: f64,
+    lbar: f64,
+    cells: usize,
+    stiffness: &Stiffness,
+    kappa: F,
+    r0: [f64; 3],
+) -> Result<(EnclosedModel, Vec<f64>), SolverError> {
     let probe = EnclosedModel::new(
         radius,
         lbar,
@@ -195,7 +216,7 @@ pub fn start_from_surface<F: Fn(f64) -> f64>(
             pin: None,
         },
     )?;
-    let reference = probe.sample_gauss(|s| (kappa_g(s), -1.0 / radius));
+    let reference = probe.sample_gauss(kappa);
     let slope = if stiffness.is_uniform() && probe.uniform_mesh() {
         phase_slope(&reference, cells)?
     } else {
@@ -214,7 +235,7 @@ pub fn start_from_surface<F: Fn(f64) -> f64>(
     )?;
     let mut z = vec![0.0; model.dim()];
     z[..4 * cells].copy_from_slice(&reference);
-    z[4 * cells + 2] = radius;
+    z[4 * cells..4 * cells + 3].copy_from_slice(&r0);
     least_squares_multipliers(&model, &mut z)?;
     Ok((model, z))
 }
@@ -411,6 +432,75 @@ impl EnclosedState {
         let index = vals.iter().filter(|&&v| v < -1e-9 * scale).count();
         vals.truncate(8);
         Ok((index, vals))
+    }
+
+    /// The curvature vector `(κ1, κ2)` at `σ`, interpolated (periodic four-point Lagrange
+    /// through the nearest Gauss points, error `O(h⁴)`): a start for another resolution.
+    pub fn curvature_at(&self, sigma: f64) -> (f64, f64) {
+        let m = &self.model;
+        let ng = 2 * m.cells();
+        let sig: Vec<f64> = (0..ng).map(|g| m.gauss_sigma(g)).collect();
+        let s = sigma.rem_euclid(1.0);
+        // First Gauss point at or after s (periodically).
+        let k = sig.iter().position(|&x| x >= s).unwrap_or(ng);
+        let z = &self.z;
+        let mut out = (0.0, 0.0);
+        let idx: Vec<(usize, f64)> = (0..4)
+            .map(|q| {
+                let raw = k as isize + q as isize - 2;
+                let wraps = raw.div_euclid(ng as isize) as f64;
+                let g = raw.rem_euclid(ng as isize) as usize;
+                (g, sig[g] + wraps)
+            })
+            .collect();
+        for (q, &(g, xq)) in idx.iter().enumerate() {
+            let mut l = 1.0;
+            for (p, &(_, xp)) in idx.iter().enumerate() {
+                if p != q {
+                    l *= (s - xp) / (xq - xp);
+                }
+            }
+            out.0 += l * z[2 * g];
+            out.1 += l * z[2 * g + 1];
+        }
+        out
+    }
+
+    /// Prolong this state to `2N` cells: curvature by [`Self::curvature_at`], the same start
+    /// point and closure multipliers, the contact force density carried over node by node
+    /// (coarse nodes are every other fine node; new nodes take the mean of their neighbours).
+    pub fn refine(&self) -> Result<(EnclosedModel, Vec<f64>), SolverError> {
+        let m = &self.model;
+        let n = m.cells();
+        let r0 = m.start_point(&self.z);
+        let stiff = m.stiffness().kind().clone();
+        let (fine, mut z) = start_from_curvature(
+            m.radius(),
+            m.lbar(),
+            2 * n,
+            &stiff,
+            |s| self.curvature_at(s),
+            [r0[0], r0[1], r0[2]],
+        )?;
+        let np = m.n_primal();
+        let npf = fine.n_primal();
+        for k in 0..6 {
+            z[npf + k] = self.z[np + k];
+        }
+        for k in 6..fine.n_equalities() {
+            z[npf + k] = 0.0;
+        }
+        let dens = m.contact_force(&self.z);
+        let lo = fine.lambda_offset();
+        for j in 0..2 * n {
+            let d = if j % 2 == 0 {
+                dens[j / 2]
+            } else {
+                0.5 * (dens[j / 2] + dens[(j / 2 + 1) % n])
+            };
+            z[lo + j] = d * fine.node_weight(j) / (2.0 * m.radius());
+        }
+        Ok((fine, z))
     }
 
     /// Node positions `(σ, r)`.
