@@ -4,9 +4,7 @@
 
 use rodloop_exact::ExactLoop;
 
-use super::solve::{
-    solve_enclosed, start_from_surface, EnclosedOptions, EnclosedState,
-};
+use super::solve::{solve_enclosed, start_from_surface, EnclosedOptions, EnclosedState};
 use crate::solve::Equilibrium;
 use crate::stiffness::Stiffness;
 use crate::SolverError;
@@ -97,10 +95,7 @@ pub fn solve_branch(
     let sig: Vec<f64> = (0..2 * n0).map(|g| probe.gauss_sigma(g)).collect();
     let kg = source.kappa_g(radius, &sig)?;
     let lookup = |s: f64| -> f64 {
-        let g = sig
-            .iter()
-            .position(|&x| (x - s).abs() < 1e-15)
-            .unwrap_or(0);
+        let g = sig.iter().position(|&x| (x - s).abs() < 1e-15).unwrap_or(0);
         kg[g]
     };
     let (model, z0) = start_from_surface(radius, lbar, n0, stiffness, lookup)?;

@@ -219,7 +219,10 @@ pub fn cell_exp(h: f64, x: [f64; 4]) -> Matrix4<f64> {
 /// respect to the cell unknowns `x = (κ1a, κ2a, κ1b, κ2b)`.
 pub fn cell_jet(h: f64, x: [f64; 4]) -> CellJet {
     let (om, v) = theta_jets(h, x);
-    let q = om[0].mul(&om[0]).add(&om[1].mul(&om[1])).add(&om[2].mul(&om[2]));
+    let q = om[0]
+        .mul(&om[0])
+        .add(&om[1].mul(&om[1]))
+        .add(&om[2].mul(&om[2]));
     let [a0, a1, a2, b0, b1, b2] = rodrigues_coefficients(q.v);
     let [c0, c1, c2] = third_coefficient(q.v);
     let a = q.compose(a0, a1, a2);
@@ -231,7 +234,10 @@ pub fn cell_jet(h: f64, x: [f64; 4]) -> CellJet {
         [om[2], zero, om[0].scale(-1.0)],
         [om[1].scale(-1.0), om[0], zero],
     ];
-    let ov = om[0].mul(&v[0]).add(&om[1].mul(&v[1])).add(&om[2].mul(&v[2]));
+    let ov = om[0]
+        .mul(&v[0])
+        .add(&om[1].mul(&v[1]))
+        .add(&om[2].mul(&v[2]));
     let cross = [
         om[1].mul(&v[2]).sub(&om[2].mul(&v[1])),
         om[2].mul(&v[0]).sub(&om[0].mul(&v[2])),

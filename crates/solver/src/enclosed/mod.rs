@@ -20,9 +20,7 @@ pub mod jet;
 pub mod model;
 pub mod solve;
 
-pub use branch::{
-    detached_intervals, enclosed_cells, solve_branch, BranchSolve, SurfaceSource,
-};
+pub use branch::{detached_intervals, enclosed_cells, solve_branch, BranchSolve, SurfaceSource};
 pub use model::{EnclosedModel, Gauge};
 pub use solve::{
     free_circle, solve_enclosed, start_from_surface, Contact, EnclosedOptions, EnclosedState,

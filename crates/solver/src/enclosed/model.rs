@@ -309,7 +309,10 @@ impl EnclosedModel {
     pub fn positions(&self, z: &[f64]) -> Result<Vec<V3>, SolverError> {
         let p = self.transforms(z)?;
         let r0 = self.start_point(z);
-        Ok(p[..self.cells].iter().map(|m| r0 + translation(m)).collect())
+        Ok(p[..self.cells]
+            .iter()
+            .map(|m| r0 + translation(m))
+            .collect())
     }
 
     /// Gaps `R − |r_j|` at the nodes.
@@ -396,7 +399,11 @@ impl EnclosedModel {
                 None => {
                     let mut v = 0.0;
                     for a in 0..4 * n {
-                        let zr = if k == 0 { z[a] } else { z[a] - self.gauge.reference[a] };
+                        let zr = if k == 0 {
+                            z[a]
+                        } else {
+                            z[a] - self.gauge.reference[a]
+                        };
                         v += row[a] * zr;
                     }
                     out.push(v);
@@ -595,7 +602,9 @@ impl EnclosedModel {
             }
             for k in 0..3 {
                 let row = jp.row(3 * (j - 1) + k);
-                scaled.row_mut(3 * (j - 1) + k).copy_from(&(row * (2.0 * lam)));
+                scaled
+                    .row_mut(3 * (j - 1) + k)
+                    .copy_from(&(row * (2.0 * lam)));
                 for a in 0..nk {
                     kr[(a, k)] += 2.0 * lam * row[a];
                 }

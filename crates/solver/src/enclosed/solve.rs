@@ -322,7 +322,8 @@ impl EnclosedState {
             .filter(|&j| touch[j])
             .map(|j| m.node_weight(j))
             .sum::<f64>()
-            / total;
+            / total
+            + 0.0;
         let sigma = |j: usize| m.bounds()[j];
         let mut runs = Vec::new();
         if touch.iter().all(|&t| t) {
