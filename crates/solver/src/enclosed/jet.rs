@@ -23,6 +23,8 @@
 //! `a = sin θ/θ`, `b = (1 − cos θ)/θ²`, `c = (θ − sin θ)/θ³`. Frame and position are both
 //! fourth-order accurate (the Magnus scheme applies to any linear matrix ODE).
 
+#![allow(clippy::needless_range_loop)] // index arithmetic over cells, nodes and unknowns
+
 use nalgebra::Matrix4;
 
 use crate::frame::rodrigues_coefficients;

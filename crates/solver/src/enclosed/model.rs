@@ -37,6 +37,8 @@
 //! jets come from [`super::jet::cell_jet`]); checked against finite differences in tests.
 //! Assembly costs `O(N²)` 4×4 products plus one `O(N³)` product for the last term.
 
+#![allow(clippy::needless_range_loop)] // index arithmetic over cells, nodes and unknowns
+
 use std::f64::consts::PI;
 
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix4, Vector3};

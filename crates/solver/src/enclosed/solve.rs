@@ -17,6 +17,8 @@
 //!
 //! Linear algebra is dense (LU of the `(5N + 10)`-square Jacobian): `O(N³)` per iteration.
 
+#![allow(clippy::needless_range_loop)] // index arithmetic over cells, nodes and unknowns
+
 use std::f64::consts::PI;
 
 use nalgebra::{DMatrix, DVector, SymmetricEigen, Vector3};
@@ -485,9 +487,7 @@ impl EnclosedState {
         )?;
         let np = m.n_primal();
         let npf = fine.n_primal();
-        for k in 0..6 {
-            z[npf + k] = self.z[np + k];
-        }
+        z[npf..npf + 6].copy_from_slice(&self.z[np..np + 6]);
         for k in 6..fine.n_equalities() {
             z[npf + k] = 0.0;
         }
