@@ -299,7 +299,7 @@ pub fn run_compare(scene_arg: &str, out: &Path) -> Result<()> {
     let run = OutputRun::begin(out)?;
     let (lo, hi) = (1.0, 3.0);
     let mut table = Table::new(
-        "enclosed.csv",
+        "compare.csv",
         &[
             "branch",
             "eta",
@@ -376,9 +376,9 @@ pub fn run_compare(scene_arg: &str, out: &Path) -> Result<()> {
     let summary =
         checked_json!({"scene": scene.name, "lbar_range": [lo, hi], "detached": json_rows})?;
     run.write_table(&table)?;
-    run.write_json("enclosed.json", &summary)?;
+    run.write_json("summary.json", &summary)?;
     run.commit()?;
-    outln!("wrote enclosed.csv and enclosed.json to {}", out.display());
+    outln!("wrote compare.csv and summary.json to {}", out.display());
     Ok(())
 }
 
