@@ -19,6 +19,10 @@ pub struct Args {
     /// Output directory.
     #[arg(long, default_value = "out/compare")]
     pub out: PathBuf,
+    /// Compare an enclosed scene with the surface: `enclosed` (the built-in homogeneous
+    /// enclosed scene) or a scene file with `confinement = "enclosed"`.
+    #[arg(long)]
+    pub scene: Option<String>,
 }
 
 /// One row of the paper's table.
@@ -261,6 +265,9 @@ pub fn compare_rows(nd: Option<&rodloop_diagram::NumericDiagram>) -> Result<Vec<
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
+    if let Some(s) = &args.scene {
+        return crate::enclosed::run_compare(s, &args.out);
+    }
     let nd = rodloop_diagram::compute(
         &rodloop_diagram::DiagramOptions::default(),
         &mut (),

@@ -18,6 +18,7 @@ mod compare;
 mod converge;
 mod diagram;
 mod draw;
+mod enclosed;
 mod euler;
 mod numeric_diagram;
 mod output;

@@ -220,6 +220,13 @@ pub fn config_table(profile: &[rodloop_solver::ProfilePoint], scene: &Scene) -> 
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
+    // Enclosed scenes (|r| <= R) have their own model and outputs (issue 9).
+    if let Some(p) = args.scene.as_deref() {
+        let scene = Scene::from_file(p)?;
+        if scene.confinement == Confinement::Enclosed {
+            return crate::enclosed::run_solve(args, &scene);
+        }
+    }
     let (branch, eta) = match (args.branch, args.eta) {
         (Some(b), _) => {
             if b == 0 || b > MAX_BRANCH {

@@ -350,9 +350,9 @@ fn solve_bad_input_is_reported_clearly() {
         ),
         (
             vec![
-                "solve", "--lbar", "1.5", "--branch", "1", "--scene", enclosed,
+                "solve", "--lbar", "1.5", "--branch", "0", "--scene", enclosed,
             ],
-            "enclosed",
+            "planar circle",
         ),
         (
             vec![

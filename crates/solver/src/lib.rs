@@ -27,6 +27,7 @@
 
 pub mod accuracy;
 pub mod continuation;
+pub mod enclosed;
 pub mod frame;
 pub mod identify;
 pub mod kkt;

@@ -1,0 +1,436 @@
+//! `rodloop solve` and `rodloop compare --scene enclosed` for enclosed scenes (`|r| ≤ R`,
+//! paper Sec. 3.2; issue 9).
+//!
+//! A branch's enclosed state starts from its surface loop. Where that loop has `λ ≥ 0`
+//! everywhere it satisfies every enclosed KKT condition (the wall may push, the loop
+//! touches, stationarity is the surface equations), so it is the enclosed equilibrium: the
+//! energy reported is the surface one (exact layer for uniform rods) and the 3-D enclosed
+//! model re-solves it as a check. Where `λ < 0` somewhere, the 3-D model's semismooth
+//! Newton finds the lift-off.
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use rodloop_exact::{branch_of_eta, eta_of_branch, paper_branch_loop};
+use rodloop_scene::Scene;
+use rodloop_solver::enclosed::{
+    detached_intervals, enclosed_cells, free_circle, solve_branch, solve_enclosed, EnclosedOptions,
+    EnclosedState, SurfaceSource,
+};
+use rodloop_solver::{solve_robust, Accuracy, SolveOptions, StartShape, Stiffness};
+
+use crate::output::{checked_json, Cell, OutputRun, Table};
+
+const UNITS: &str = "lengths (s, x, y, z, gap = R - |r|) in units of R; kappa in 1/R; energy E R/(pi D0); lambda R^3/D0 (force per unit length); D/D0; eigenvalues mass-normalised in units of D0/R^3";
+
+/// Tolerance on the gap (units of `R`) for "touching".
+const TOUCH: f64 = 1e-9;
+
+/// One enclosed state with everything `solve` reports.
+pub struct EnclosedResult {
+    /// The 3-D state reported (config.csv).
+    pub state: EnclosedState,
+    /// Energy `E R/(π D0)` and its error estimate.
+    pub energy: (f64, f64),
+    /// Surface loop energy and `λ_min` (None for branch 0).
+    pub surface: Option<(f64, f64)>,
+    /// Stability index and lowest eigenvalues (on the `N/2` companion).
+    pub stability: (usize, Vec<f64>),
+    /// How the energy was obtained.
+    pub method: String,
+    /// The 3-D model's own energy (and estimate).
+    pub model_energy: (f64, f64),
+}
+
+/// Solve branch `branch` of an enclosed scene at `lbar`.
+pub fn solve_state(
+    scene: &Scene,
+    stiffness: &Stiffness,
+    lbar: f64,
+    branch: u32,
+    accuracy: Accuracy,
+) -> Result<EnclosedResult> {
+    let r = scene.radius;
+    let opts = EnclosedOptions::default();
+    if branch == 0 {
+        if lbar > 1.0 {
+            bail!("branch 0 (the planar circle) fits in the ball only for lbar <= 1; got lbar = {lbar}");
+        }
+        let cells = enclosed_cells(accuracy, 1);
+        let (model, z0) = free_circle(r, lbar, cells, stiffness)?;
+        let state = solve_enclosed(&model, z0, &opts).context("the free circle")?;
+        let (cm, cz) = free_circle(r, lbar, cells / 2, stiffness)?;
+        let comp = solve_enclosed(&cm, cz, &opts)?;
+        let e = state.energy();
+        let est = (e - comp.energy()).abs() / 15.0;
+        let stability = comp.stability(1e-6)?;
+        let exact = if stiffness.is_uniform() {
+            Some(1.0 / lbar)
+        } else {
+            None
+        };
+        return Ok(EnclosedResult {
+            energy: (exact.unwrap_or(e), if exact.is_some() { 0.0 } else { est }),
+            surface: None,
+            stability,
+            method: if exact.is_some() {
+                "planar circle: E R/(pi D) = 1/lbar exactly; 3-D model solved as a check".into()
+            } else {
+                "planar circle, 3-D model".into()
+            },
+            model_energy: (e, est),
+            state,
+        });
+    }
+    let eta = eta_of_branch(branch);
+    let e = f64::from(eta);
+    if !(lbar > e - 1.0 && lbar < e + 1.0) {
+        bail!(
+            "branch {branch} (eta = {eta}) exists only for {} < lbar < {}; got lbar = {lbar}",
+            e - 1.0,
+            e + 1.0
+        );
+    }
+    let d0 = scene.stiffness.reference();
+    let (source, surface_error) = if stiffness.is_uniform() {
+        let l = paper_branch_loop(eta, lbar)
+            .with_context(|| format!("the exact surface loop of branch {branch}"))?;
+        (SurfaceSource::Exact(l), 0.0)
+    } else {
+        let (res, _) = solve_robust(
+            r,
+            lbar,
+            stiffness,
+            &StartShape::Euler { l: eta },
+            accuracy,
+            Some(eta),
+            &SolveOptions::default(),
+        )
+        .with_context(|| format!("the surface loop of branch {branch}"))?;
+        let err = res.energy_error;
+        (SurfaceSource::Numeric(Box::new(res.equilibrium)), err)
+    };
+    let e_surf = source.energy()?;
+    let lam_min = source.lambda_min(r, d0);
+    let attached = lam_min >= 0.0;
+    // An attached loop's energy is the surface one; the 3-D re-solve is a check, at the
+    // fast resolution.
+    let mut cells = enclosed_cells(if attached { Accuracy::Fast } else { accuracy }, eta);
+    if !stiffness.is_uniform() {
+        // Sharp profiles (Eq. (51), gamma = 200) need the coarsest level of the cascade
+        // (N/4) to resolve the transitions on the graded mesh.
+        cells = cells.max(32 * (2 + eta as usize));
+    }
+    let b = solve_branch(r, lbar, stiffness, &source, cells, &opts)
+        .with_context(|| format!("the enclosed loop of branch {branch} at lbar = {lbar}"))?;
+    let stability = b.coarse.stability(1e-6)?;
+    let (energy, method) = if attached {
+        (
+            (e_surf, surface_error),
+            format!(
+                "surface loop (lambda_min = {lam_min:.6} >= 0: it satisfies the enclosed KKT conditions); 3-D model re-solved at N = {cells} as a check"
+            ),
+        )
+    } else {
+        (
+            (b.energy, b.energy_error),
+            format!(
+                "3-D enclosed model, N = {cells} cells (semismooth Newton from the surface loop, lambda_min = {lam_min:.6} < 0); error from N/4, N/2, N (observed order {:.2})",
+                b.order
+            ),
+        )
+    };
+    Ok(EnclosedResult {
+        model_energy: (b.energy, b.energy_error),
+        state: b.fine,
+        energy,
+        surface: Some((e_surf, lam_min)),
+        stability,
+        method,
+    })
+}
+
+/// `config.csv` of an enclosed state: one row per node.
+fn config_table(st: &EnclosedState, scene: &Scene) -> Result<Table> {
+    let m = &st.model;
+    let r = scene.radius;
+    let d0 = scene.stiffness.reference();
+    let lam = m.contact_force(&st.z);
+    let mut table = Table::new(
+        "config.csv",
+        &[
+            "s", "x", "y", "z", "gap", "kappa", "kappa_1", "kappa_2", "lambda", "D",
+        ],
+    );
+    for (j, (sigma, p)) in st.nodes()?.into_iter().enumerate() {
+        let (k1, k2) = st.node_curvature(j);
+        let d = m.stiffness().eval(sigma).d;
+        table.push(vec![
+            Cell::F(sigma * m.length() / r),
+            Cell::F(p[0] / r),
+            Cell::F(p[1] / r),
+            Cell::F(p[2] / r),
+            Cell::F((r - p.norm()) / r),
+            Cell::F((k1 * k1 + k2 * k2).sqrt() * r),
+            Cell::F(k1 * r),
+            Cell::F(k2 * r),
+            Cell::F(lam[j] * r * r * r / d0),
+            Cell::F(d / d0),
+        ])?;
+    }
+    Ok(table)
+}
+
+/// `rodloop solve` for an enclosed scene.
+pub fn run_solve(args: &crate::solve::Args, scene: &Scene) -> Result<()> {
+    let t0 = Instant::now();
+    if args.from.is_some() {
+        bail!("--from is not supported for enclosed scenes yet (the start is the branch's surface loop)");
+    }
+    if args.draw {
+        bail!("--draw is not supported for enclosed scenes yet");
+    }
+    crate::output::check_lbar(args.lbar)?;
+    let branch = match (args.branch, args.eta) {
+        (Some(b), _) if b <= 1000 => b as u32,
+        (None, Some(e)) if (1..=1000).contains(&e) => branch_of_eta(e as u32),
+        _ => bail!("give --branch B (0 to 1000; 0 = the planar circle) or --eta N (1 to 1000)"),
+    };
+    let accuracy = crate::solve::accuracy_of(scene, args.accuracy.as_deref())?;
+    let stiffness = crate::solve::stiffness_of(&scene.stiffness);
+    let run = OutputRun::begin(&args.out)?;
+    let res = solve_state(scene, &stiffness, args.lbar, branch, accuracy)?;
+    let st = &res.state;
+    let contact = st.contact(TOUCH)?;
+    let (opt_lmin, opt_gmin, opt_comp, opt_stat) = st.optimality()?;
+    let table = config_table(st, scene)?;
+    let eta = if branch == 0 {
+        0
+    } else {
+        eta_of_branch(branch)
+    };
+    let summary = checked_json!({
+        "scene": scene.name,
+        "confinement": "enclosed",
+        "lbar": args.lbar,
+        "branch": branch,
+        "eta": eta,
+        "radius": scene.radius,
+        "accuracy": format!("{accuracy:?}").to_lowercase(),
+        "energy": res.energy.0,
+        "error_estimate": res.energy.1,
+        "model_energy": res.model_energy.0,
+        "model_error_estimate": res.model_energy.1,
+        "surface_energy": res.surface.map(|s| s.0),
+        "surface_lambda_min": res.surface.map(|s| s.1),
+        "energy_below_surface": res.surface.map(|s| s.0 - res.energy.0),
+        "attached": contact.intervals == 1 && contact.fraction >= 1.0,
+        "contact_fraction": contact.fraction,
+        "contact_intervals": contact.intervals,
+        "contact_runs": contact.runs,
+        "max_gap": contact.max_gap.0,
+        "max_gap_at": contact.max_gap.1 * st.model.length() / scene.radius,
+        "lambda_contact_min": contact.lambda_range.0,
+        "lambda_contact_max": contact.lambda_range.1,
+        "index": res.stability.0,
+        "stable_local_minimum": res.stability.0 == 0,
+        "eigenvalues": res.stability.1,
+        "optimality_lambda_min": opt_lmin,
+        "optimality_gap_min": opt_gmin,
+        "optimality_complementarity_max": opt_comp,
+        "optimality_stationarity": opt_stat,
+        "cells": st.model.cells(),
+        "iterations": st.iterations,
+        "residual": st.residual,
+        "method": res.method,
+        "units": UNITS,
+    })?;
+    run.write_table(&table)?;
+    run.write_json("summary.json", &summary)?;
+    run.commit()?;
+    outln!(
+        "enclosed branch {branch} at lbar = {}: E R/(pi D0) = {:.10} ± {:.1e}, index {} ({}), contact fraction {:.4} in {} interval(s), max gap {:.3e} R",
+        args.lbar,
+        res.energy.0,
+        res.energy.1,
+        res.stability.0,
+        if res.stability.0 == 0 { "local minimum" } else { "unstable" },
+        contact.fraction,
+        contact.intervals,
+        contact.max_gap.0
+    );
+    if let Some((es, lm)) = res.surface {
+        outln!(
+            "surface loop: E = {es:.10}, lambda_min R^3/D0 = {lm:.6}; enclosed - surface = {:.3e}",
+            res.energy.0 - es
+        );
+    }
+    outln!(
+        "{}; {:.0} ms; wrote config.csv and summary.json to {}",
+        res.method,
+        t0.elapsed().as_secs_f64() * 1e3,
+        args.out.display()
+    );
+    Ok(())
+}
+
+/// `rodloop compare --scene enclosed`: per branch 1–3 over `1 ≤ L̄ ≤ 3` (homogeneous
+/// rods), the detached intervals (exact lift-off/landing lengths), the largest gap and
+/// energy drop found on a scan, and whether the stable surface loop is detached there.
+pub fn run_compare(scene_arg: &str, out: &Path) -> Result<()> {
+    let scene = if scene_arg == "enclosed" {
+        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/scenes/homogeneous-enclosed.toml");
+        Scene::from_file(&p)
+            .or_else(|_| Scene::from_toml(DEFAULT_ENCLOSED, "built-in enclosed scene"))?
+    } else {
+        Scene::from_file(Path::new(scene_arg))?
+    };
+    if scene.confinement != rodloop_scene::Confinement::Enclosed {
+        bail!(
+            "compare --scene needs an enclosed scene (confinement = \"enclosed\"); {} is not",
+            scene.name
+        );
+    }
+    if !scene.stiffness.is_uniform() {
+        bail!("compare --scene supports homogeneous enclosed scenes (the lift-off lengths come from the exact layer); {} is not homogeneous", scene.name);
+    }
+    let stiffness = crate::solve::stiffness_of(&scene.stiffness);
+    let run = OutputRun::begin(out)?;
+    let (lo, hi) = (1.0, 3.0);
+    let mut table = Table::new(
+        "compare.csv",
+        &[
+            "branch",
+            "eta",
+            "lift_off",
+            "landing",
+            "max_gap",
+            "max_gap_lbar",
+            "max_energy_drop",
+            "max_energy_drop_lbar",
+            "energy_drop_error",
+            "stable_detached_from",
+            "stable_detached_to",
+        ],
+    );
+    let mut json_rows = Vec::new();
+    for branch in 1..=3u32 {
+        let eta = eta_of_branch(branch);
+        let intervals = detached_intervals(eta, lo, hi)?;
+        if intervals.is_empty() {
+            outln!("branch {branch} (eta = {eta}): attached (lambda >= 0) for all of its lengths in [{lo}, {hi}]");
+        }
+        for (a, b) in intervals {
+            let mut best_gap = (0.0f64, a);
+            let mut best_drop = (0.0f64, a, 0.0);
+            let n = 12;
+            for k in 0..=n {
+                let l = a + (b - a) * (0.02 + 0.96 * k as f64 / n as f64);
+                let res = solve_state(&scene, &stiffness, l, branch, Accuracy::Fast)?;
+                let c = res.state.contact(TOUCH)?;
+                if c.max_gap.0 > best_gap.0 {
+                    best_gap = (c.max_gap.0, l);
+                }
+                let drop = res.surface.map(|s| s.0).unwrap_or(0.0) - res.energy.0;
+                if drop > best_drop.0 {
+                    best_drop = (drop, l, res.energy.1);
+                }
+            }
+            // Where is this branch the lowest surface branch (stable)?
+            let stable = stable_stretch(eta, a, b)?;
+            outln!(
+                "branch {branch} (eta = {eta}): detached for {a:.12} < lbar < {b:.12}; largest gap {:.4e} R at lbar ~ {:.3}; largest energy drop below the surface loop {:.4e} ± {:.1e} at lbar ~ {:.3}; {}",
+                best_gap.0,
+                best_gap.1,
+                best_drop.0,
+                best_drop.2,
+                best_drop.1,
+                match stable {
+                    Some((s, t)) => format!("stable on the surface (lowest branch) for {s:.6} < lbar < {t:.6} inside this interval: the Sec. 3.2 hypothesis fails there"),
+                    None => "never the lowest surface branch there".into(),
+                }
+            );
+            table.push(vec![
+                Cell::I(i64::from(branch)),
+                Cell::I(i64::from(eta)),
+                Cell::F(a),
+                Cell::F(b),
+                Cell::F(best_gap.0),
+                Cell::F(best_gap.1),
+                Cell::F(best_drop.0),
+                Cell::F(best_drop.1),
+                Cell::F(best_drop.2),
+                stable.map_or(Cell::S(String::new()), |s| Cell::F(s.0)),
+                stable.map_or(Cell::S(String::new()), |s| Cell::F(s.1)),
+            ])?;
+            json_rows.push(serde_json::json!({
+                "branch": branch, "eta": eta, "lift_off": a, "landing": b,
+                "max_gap": best_gap.0, "max_gap_lbar": best_gap.1,
+                "max_energy_drop": best_drop.0, "max_energy_drop_lbar": best_drop.1,
+                "energy_drop_error": best_drop.2,
+                "stable_detached": stable.map(|s| [s.0, s.1]),
+            }));
+        }
+    }
+    let summary =
+        checked_json!({"scene": scene.name, "lbar_range": [lo, hi], "detached": json_rows})?;
+    run.write_table(&table)?;
+    run.write_json("summary.json", &summary)?;
+    run.commit()?;
+    outln!("wrote compare.csv and summary.json to {}", out.display());
+    Ok(())
+}
+
+/// The sub-interval of `(a, b)` where branch `eta` is the lowest of the paper's homogeneous
+/// surface branches (exact energies; bisection on energy crossings to 1e-12).
+fn stable_stretch(eta: u32, a: f64, b: f64) -> Result<Option<(f64, f64)>> {
+    let lowest = |l: f64| -> Result<bool> {
+        let mine = paper_branch_loop(eta, l)?.energy()?;
+        for other in 1..=5u32 {
+            if other == eta {
+                continue;
+            }
+            let o = f64::from(other);
+            if l > o - 1.0 && l < o + 1.0 && paper_branch_loop(other, l)?.energy()? < mine {
+                return Ok(false);
+            }
+        }
+        Ok(true)
+    };
+    let n = 200;
+    let grid: Vec<f64> = (0..=n)
+        .map(|i| a + (b - a) * (i as f64 + 0.5) / (n as f64 + 1.0))
+        .collect();
+    let flags: Vec<bool> = grid.iter().map(|&l| lowest(l)).collect::<Result<_>>()?;
+    let first = flags.iter().position(|&f| f);
+    let last = flags.iter().rposition(|&f| f);
+    let (Some(i), Some(j)) = (first, last) else {
+        return Ok(None);
+    };
+    let refine = |x0: f64, x1: f64, want_true_at_x1: bool| -> Result<f64> {
+        let (mut p, mut q) = (x0, x1);
+        while q - p > 1e-12 {
+            let m = 0.5 * (p + q);
+            if lowest(m)? == want_true_at_x1 {
+                q = m;
+            } else {
+                p = m;
+            }
+        }
+        Ok(0.5 * (p + q))
+    };
+    let s = if i == 0 {
+        a
+    } else {
+        refine(grid[i - 1], grid[i], true)?
+    };
+    let t = if j == n {
+        b
+    } else {
+        refine(grid[j], grid[j + 1], false)?
+    };
+    Ok(Some((s, t)))
+}
+
+const DEFAULT_ENCLOSED: &str = "name = \"homogeneous-enclosed\"\nradius = 1.0\nconfinement = \"enclosed\"\nlbar_min = 1.0\nlbar_max = 3.0\n[stiffness]\nkind = \"uniform\"\nd = 1.0\n";

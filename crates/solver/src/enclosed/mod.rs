@@ -1,0 +1,27 @@
+//! Loops enclosed in the ball, `|r(s)| ≤ R` (paper Sec. 3.2): contact that can let go.
+//!
+//! The wall can only push (`λ ≥ 0`), so where a surface equilibrium needs `λ < 0` the
+//! enclosed loop lifts off. This model carries 3-D unknowns only because an enclosed scene
+//! needs them: the curvature vector `(κ1, κ2)` in a rotation-minimising (Bishop) frame at
+//! the Gauss points — untwisted isotropic rod, `E = ½∫D(κ1² + κ2²) ds` — plus the start
+//! point; frame and position come from one fourth-order Magnus chain in SE(3)
+//! ([`jet`]), so inextensibility holds by construction and closure is "position and frame
+//! return" (6 equations). The wall is an inequality at the nodes with multipliers `λ ≥ 0`,
+//! solved by semismooth Newton on `min(λ, σg) = 0` ([`solve`]).
+//!
+//! * [`jet`]: second-order jets and the SE(3) cell propagator.
+//! * [`model`]: [`EnclosedModel`] (energy, closure, wall, KKT residual and exact Jacobian).
+//! * [`solve`](mod@solve): semismooth Newton, starts (surface loop, free circle), contact
+//!   summary, stability on the active constraints' tangent space.
+//! * [`branch`]: a paper branch in an enclosed scene with the two-resolution error estimate.
+
+pub mod branch;
+pub mod jet;
+pub mod model;
+pub mod solve;
+
+pub use branch::{detached_intervals, enclosed_cells, solve_branch, BranchSolve, SurfaceSource};
+pub use model::{EnclosedModel, Gauge};
+pub use solve::{
+    free_circle, solve_enclosed, start_from_surface, Contact, EnclosedOptions, EnclosedState,
+};

@@ -1,0 +1,770 @@
+//! The discretised enclosed loop ([`EnclosedModel`]): energy, closure, wall constraints and
+//! the semismooth KKT system with its exact Jacobian.
+//!
+//! # Unknowns
+//!
+//! `N` cells (the mesh of [`crate::MeshMap::for_profile`]); in every cell the curvature
+//! vector `(κ1, κ2)` in the rotation-minimising frame at the two Gauss points (`4N`
+//! values, stored `κ1a, κ2a, κ1b, κ2b` per cell), and the start point `r0` (3 values). The
+//! frame at `s = 0` is the identity (`t = e1, d1 = e2, d2 = e3`): that fixes two of the
+//! three rigid rotations and, with them, the direction of the tangent at `s = 0`. The
+//! rotation about `t(0)` (which turns `r0` about `e1` and the curvature vectors about `t`)
+//! is fixed by the linear gauge `φ_B = Σ_g (κ1ref κ2 − κ2ref κ1)/(2N |κref|_rms) = 0`.
+//! For a uniform rod the shift of the arclength origin is fixed by a phase condition
+//! `φ_S = Σ_g κ̇ref · (κ − κref)/(2N) = 0` as in [`crate::Phase`]; for a loop not touching
+//! the wall (the free circle, `L̄ < 1`) the three translations are fixed by pinning `r0`.
+//!
+//! # Equations
+//!
+//! Positions and frames at the nodes `s_j` (cell boundaries) follow from the SE(3) Magnus
+//! chain `P_{c+1} = P_c exp(Θ_c)` ([`super::jet`]), `r_j = r0 + p_j`. Closure of position
+//! and frame, `C = (vee(skew(X_N)), p_N) = 0` (6 equations). The wall
+//! `g_j = R² − |r_j|² ≥ 0` is imposed at the `N` nodes; its multipliers `λ_j ≥ 0` are the
+//! nodal contact impulses (the force per unit length is `λ(s_j) ≈ 2Rλ_j/w_j`, `w_j` the
+//! node's share of the length; Sec. 3.2 with Eq. (38)'s sign: `λ > 0` pushes inward).
+//! Energy, Eq. (2) with two-point Gauss quadrature, `E = Σ_c (h_c/2) Σ_g ½ D_g |κ_g|²`.
+//! Lagrangian `ℒ = E − μ·C − ν·φ − λ·g`; the KKT conditions are
+//! `∇ℒ = 0, C = 0, φ = 0` and the complementarity `λ ≥ 0, g ≥ 0, λ g = 0`, written with
+//! the min-function `min(λ_j, σ g_j) = 0` (`σ = D0 h/R⁵` balances the units).
+//!
+//! # Derivatives
+//!
+//! `∂P_j/∂κ_a = P_c ∂E_c E_{c+1}⋯E_{j−1}` for an unknown of cell `c < j`. The gradient of
+//! `Ψ = Σ_j λ_j |r_j|² − μ·C` uses the adjoint `A_c = 2λ_{c+1} e4 ρ_{c+1}ᵀ + E_{c+1}A_{c+1}`,
+//! `A_{N−1} = −K` (`μ·C = tr(P_N K)`, `ρ = (r, 0)`): `∂Ψ/∂κ_a = tr(P_c ∂_aE_c A_c)`; its
+//! Hessian is `tr(P_c ∂_aE_c E_{c+1}⋯E_{c'−1} ∂_bE_{c'} A_{c'})` (cells `c < c'`),
+//! `tr(P_c ∂²_{ab}E_c A_c)` (one cell) plus `Σ_j 2λ_j ∂_a p_j·∂_b p_j`. All exact (the cell
+//! jets come from [`super::jet::cell_jet`]); checked against finite differences in tests.
+//! Assembly costs `O(N²)` 4×4 products plus one `O(N³)` product for the last term.
+
+#![allow(clippy::needless_range_loop)] // index arithmetic over cells, nodes and unknowns
+
+use std::f64::consts::PI;
+
+use nalgebra::{DMatrix, DVector, Matrix3, Matrix4, Vector3};
+
+use super::jet::{cell_exp, cell_jet, CellJet};
+use crate::mesh::MeshMap;
+use crate::model::GAUSS_OFFSETS;
+use crate::periodic::TrigInterpolant;
+use crate::stiffness::{Stiffness, StiffnessProfile};
+use crate::SolverError;
+
+type M4 = Matrix4<f64>;
+type V3 = Vector3<f64>;
+
+/// The gauge conditions of an enclosed model (see the module docs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Gauge {
+    /// Reference curvature vectors at the Gauss points (`4N`, per cell `κ1a, κ2a, κ1b, κ2b`).
+    pub reference: Vec<f64>,
+    /// Normalised `dκref/dσ` (`4N`), for the arclength phase condition (uniform rods).
+    pub slope: Option<Vec<f64>>,
+    /// Pinned start point (loops that do not touch the wall).
+    pub pin: Option<[f64; 3]>,
+}
+
+/// The discretised enclosed loop (see the module docs).
+#[derive(Clone, Debug)]
+pub struct EnclosedModel {
+    radius: f64,
+    lbar: f64,
+    cells: usize,
+    stiffness: StiffnessProfile,
+    d_gauss: Vec<f64>,
+    bounds: Vec<f64>,
+    uniform_mesh: bool,
+    gauge: Gauge,
+}
+
+/// The chain of cell propagators with their jets and prefix products.
+struct Chain {
+    jets: Vec<CellJet>,
+    /// `P_c`, `c = 0..=N`.
+    prefix: Vec<M4>,
+}
+
+/// Everything the Jacobian needs, from one evaluation.
+pub struct Evaluation {
+    /// The KKT residual.
+    pub residual: DVector<f64>,
+    /// The semismooth KKT Jacobian.
+    pub jacobian: DMatrix<f64>,
+    /// Indices (into `0..N`) of the nodes whose complementarity row is the wall (`σg ≤ λ`).
+    pub wall_rows: Vec<usize>,
+}
+
+fn vee_skew3(m: &M4) -> V3 {
+    V3::new(
+        0.5 * (m[(2, 1)] - m[(1, 2)]),
+        0.5 * (m[(0, 2)] - m[(2, 0)]),
+        0.5 * (m[(1, 0)] - m[(0, 1)]),
+    )
+}
+
+fn tr4(a: &M4, b: &M4) -> f64 {
+    let mut s = 0.0;
+    for i in 0..4 {
+        for j in 0..4 {
+            s += a[(i, j)] * b[(j, i)];
+        }
+    }
+    s
+}
+
+fn translation(m: &M4) -> V3 {
+    V3::new(m[(0, 3)], m[(1, 3)], m[(2, 3)])
+}
+
+impl EnclosedModel {
+    /// A loop of normalised length `lbar` in a ball of radius `radius`, `cells` cells,
+    /// stiffness `stiffness`, with the gauge `gauge` (reference of length `4·cells`).
+    pub fn new(
+        radius: f64,
+        lbar: f64,
+        cells: usize,
+        stiffness: &Stiffness,
+        gauge: Gauge,
+    ) -> Result<Self, SolverError> {
+        if !(radius.is_finite() && radius > 0.0) {
+            return Err(SolverError::InvalidInput(format!(
+                "sphere radius must be positive and finite (got {radius})"
+            )));
+        }
+        if !(lbar.is_finite() && lbar > 0.0) {
+            return Err(SolverError::InvalidInput(format!(
+                "normalised length L̄ must be positive and finite (got {lbar})"
+            )));
+        }
+        if cells < 8 {
+            return Err(SolverError::InvalidInput(format!(
+                "the enclosed model needs at least 8 cells (got {cells})"
+            )));
+        }
+        if gauge.reference.len() != 4 * cells {
+            return Err(SolverError::WrongLength {
+                expected: 4 * cells,
+                found: gauge.reference.len(),
+            });
+        }
+        if let Some(s) = &gauge.slope {
+            if s.len() != 4 * cells {
+                return Err(SolverError::WrongLength {
+                    expected: 4 * cells,
+                    found: s.len(),
+                });
+            }
+        }
+        let profile = stiffness.validate()?;
+        let map = MeshMap::for_profile(stiffness);
+        let uniform_mesh = map.is_uniform();
+        let bounds = map.bounds(cells)?;
+        let mut m = Self {
+            radius,
+            lbar,
+            cells,
+            stiffness: profile,
+            d_gauss: Vec::new(),
+            bounds,
+            uniform_mesh,
+            gauge,
+        };
+        m.d_gauss = (0..2 * cells)
+            .map(|g| m.stiffness.eval(m.gauss_sigma(g)).d)
+            .collect();
+        Ok(m)
+    }
+
+    /// Normalised arclength `σ = s/L` of Gauss point `g` (`0..2N`).
+    pub fn gauss_sigma(&self, g: usize) -> f64 {
+        let c = g / 2;
+        self.bounds[c] + GAUSS_OFFSETS[g % 2] * (self.bounds[c + 1] - self.bounds[c])
+    }
+
+    /// Cell boundaries in `σ`.
+    pub fn bounds(&self) -> &[f64] {
+        &self.bounds
+    }
+
+    /// `true` when the cells are of equal length.
+    pub fn uniform_mesh(&self) -> bool {
+        self.uniform_mesh
+    }
+
+    /// Number of cells `N`.
+    pub fn cells(&self) -> usize {
+        self.cells
+    }
+
+    /// Sphere radius.
+    pub fn radius(&self) -> f64 {
+        self.radius
+    }
+
+    /// `L̄`.
+    pub fn lbar(&self) -> f64 {
+        self.lbar
+    }
+
+    /// Loop length `L = 2πR L̄`.
+    pub fn length(&self) -> f64 {
+        2.0 * PI * self.radius * self.lbar
+    }
+
+    /// The stiffness profile.
+    pub fn stiffness(&self) -> &StiffnessProfile {
+        &self.stiffness
+    }
+
+    /// The gauge.
+    pub fn gauge(&self) -> &Gauge {
+        &self.gauge
+    }
+
+    /// Length of cell `c`.
+    pub fn cell_length(&self, c: usize) -> f64 {
+        self.length() * (self.bounds[c + 1] - self.bounds[c])
+    }
+
+    /// Length share `w_j = (h_{j−1} + h_j)/2` of node `j`.
+    pub fn node_weight(&self, j: usize) -> f64 {
+        let n = self.cells;
+        0.5 * (self.cell_length((j + n - 1) % n) + self.cell_length(j % n))
+    }
+
+    /// Number of primal unknowns `4N + 3`.
+    pub fn n_primal(&self) -> usize {
+        4 * self.cells + 3
+    }
+
+    /// Number of gauge conditions.
+    pub fn n_gauge(&self) -> usize {
+        1 + usize::from(self.gauge.slope.is_some()) + 3 * usize::from(self.gauge.pin.is_some())
+    }
+
+    /// Number of equality constraints (closure 6 plus gauges).
+    pub fn n_equalities(&self) -> usize {
+        6 + self.n_gauge()
+    }
+
+    /// Size of the KKT system, `5N + 9 + gauges`.
+    pub fn dim(&self) -> usize {
+        self.n_primal() + self.n_equalities() + self.cells
+    }
+
+    /// Offset of the wall multipliers `λ` in the KKT vector.
+    pub fn lambda_offset(&self) -> usize {
+        self.n_primal() + self.n_equalities()
+    }
+
+    /// Scale `σ` of the min-function.
+    pub fn wall_scale(&self) -> f64 {
+        let r = self.radius;
+        self.stiffness.kind().reference() * (self.length() / self.cells as f64) / r.powi(5)
+    }
+
+    fn check(&self, z: &[f64]) -> Result<(), SolverError> {
+        if z.len() != self.dim() {
+            return Err(SolverError::WrongLength {
+                expected: self.dim(),
+                found: z.len(),
+            });
+        }
+        if let Some(i) = z.iter().position(|v| !v.is_finite()) {
+            return Err(SolverError::InvalidInput(format!(
+                "unknown {i} of the enclosed state is not finite"
+            )));
+        }
+        Ok(())
+    }
+
+    fn cell_x(z: &[f64], c: usize) -> [f64; 4] {
+        [z[4 * c], z[4 * c + 1], z[4 * c + 2], z[4 * c + 3]]
+    }
+
+    /// Node transforms `P_j`, `j = 0..=N` (rotation block: columns `t, d1, d2`; last
+    /// column: `p_j = r_j − r0`).
+    pub fn transforms(&self, z: &[f64]) -> Result<Vec<M4>, SolverError> {
+        if z.len() < 4 * self.cells {
+            return Err(SolverError::WrongLength {
+                expected: self.dim(),
+                found: z.len(),
+            });
+        }
+        let mut p = Vec::with_capacity(self.cells + 1);
+        let mut acc = M4::identity();
+        p.push(acc);
+        for c in 0..self.cells {
+            acc *= cell_exp(self.cell_length(c), Self::cell_x(z, c));
+            p.push(acc);
+        }
+        Ok(p)
+    }
+
+    /// Start point `r0`.
+    pub fn start_point(&self, z: &[f64]) -> V3 {
+        let o = 4 * self.cells;
+        V3::new(z[o], z[o + 1], z[o + 2])
+    }
+
+    /// Node positions `r_j`, `j = 0..N` (`r_N` omitted: it equals `r_0` at closure).
+    pub fn positions(&self, z: &[f64]) -> Result<Vec<V3>, SolverError> {
+        let p = self.transforms(z)?;
+        let r0 = self.start_point(z);
+        Ok(p[..self.cells]
+            .iter()
+            .map(|m| r0 + translation(m))
+            .collect())
+    }
+
+    /// Gaps `R − |r_j|` at the nodes.
+    pub fn gaps(&self, z: &[f64]) -> Result<Vec<f64>, SolverError> {
+        Ok(self
+            .positions(z)?
+            .iter()
+            .map(|r| self.radius - r.norm())
+            .collect())
+    }
+
+    /// Closure residual `(vee(skew X_N), p_N)`.
+    pub fn closure(&self, z: &[f64]) -> Result<[f64; 6], SolverError> {
+        let p = self.transforms(z)?;
+        let pn = &p[self.cells];
+        let v = vee_skew3(pn);
+        let t = translation(pn);
+        Ok([v[0], v[1], v[2], t[0], t[1], t[2]])
+    }
+
+    /// Dimensional energy, two-point Gauss quadrature of Eq. (2).
+    pub fn energy_raw(&self, z: &[f64]) -> f64 {
+        let mut e = 0.0;
+        for c in 0..self.cells {
+            let w = 0.5 * self.cell_length(c);
+            for j in 0..2 {
+                let g = 2 * c + j;
+                let (k1, k2) = (z[2 * g], z[2 * g + 1]);
+                e += 0.5 * w * self.d_gauss[g] * (k1 * k1 + k2 * k2);
+            }
+        }
+        e
+    }
+
+    /// Energy `E R/(π D0)`.
+    pub fn energy(&self, z: &[f64]) -> Result<f64, SolverError> {
+        self.check(z)?;
+        Ok(self.energy_raw(z) * self.radius / (PI * self.stiffness.kind().reference()))
+    }
+
+    /// Contact force per unit length at the nodes, `λ(s_j) = 2Rλ_j/w_j`.
+    pub fn contact_force(&self, z: &[f64]) -> Vec<f64> {
+        let o = self.lambda_offset();
+        (0..self.cells)
+            .map(|j| 2.0 * self.radius * z[o + j] / self.node_weight(j))
+            .collect()
+    }
+
+    fn gauge_rows(&self) -> Vec<(Vec<f64>, Option<usize>)> {
+        // Dense gradients over the primal unknowns for the κ gauges, or a pinned index.
+        let n = self.cells;
+        let reference = &self.gauge.reference;
+        let rms = (reference.iter().map(|v| v * v).sum::<f64>() / (2 * n) as f64)
+            .sqrt()
+            .max(1e-300);
+        let mut rows = Vec::new();
+        let mut gb = vec![0.0; self.n_primal()];
+        for g in 0..2 * n {
+            gb[2 * g] = -reference[2 * g + 1] / (2 * n) as f64 / rms;
+            gb[2 * g + 1] = reference[2 * g] / (2 * n) as f64 / rms;
+        }
+        rows.push((gb, None));
+        if let Some(sl) = &self.gauge.slope {
+            let mut gs = vec![0.0; self.n_primal()];
+            for a in 0..4 * n {
+                gs[a] = sl[a] / (2 * n) as f64;
+            }
+            rows.push((gs, None));
+        }
+        if self.gauge.pin.is_some() {
+            for k in 0..3 {
+                rows.push((Vec::new(), Some(4 * n + k)));
+            }
+        }
+        rows
+    }
+
+    /// Gauge values `φ(z)`.
+    fn gauge_values(&self, z: &[f64]) -> Vec<f64> {
+        let n = self.cells;
+        let mut out = Vec::new();
+        for (k, (row, idx)) in self.gauge_rows().into_iter().enumerate() {
+            match idx {
+                None => {
+                    let mut v = 0.0;
+                    for a in 0..4 * n {
+                        let zr = if k == 0 {
+                            z[a]
+                        } else {
+                            z[a] - self.gauge.reference[a]
+                        };
+                        v += row[a] * zr;
+                    }
+                    out.push(v);
+                }
+                Some(i) => {
+                    let pin = self.gauge.pin.unwrap_or([0.0; 3]);
+                    out.push(z[i] - pin[i - 4 * n]);
+                }
+            }
+        }
+        out
+    }
+
+    fn chain(&self, z: &[f64]) -> Chain {
+        let n = self.cells;
+        let mut jets = Vec::with_capacity(n);
+        let mut prefix = Vec::with_capacity(n + 1);
+        let mut acc = M4::identity();
+        prefix.push(acc);
+        for c in 0..n {
+            let j = cell_jet(self.cell_length(c), Self::cell_x(z, c));
+            acc *= j.e;
+            prefix.push(acc);
+            jets.push(j);
+        }
+        Chain { jets, prefix }
+    }
+
+    /// `K` with `μ·C = tr(P_N K)`.
+    fn closure_functional(mu: &[f64]) -> M4 {
+        let mut k = M4::zeros();
+        // Rotation: μ_r·vee(skew X) = −½ tr(hat(μ_r) X).
+        let h = crate::frame::hat(&V3::new(mu[0], mu[1], mu[2]));
+        for i in 0..3 {
+            for j in 0..3 {
+                k[(i, j)] = -0.5 * h[(i, j)];
+            }
+            k[(3, i)] = mu[3 + i];
+        }
+        k
+    }
+
+    /// KKT residual (see the module docs).
+    pub fn residual(&self, z: &[f64]) -> Result<DVector<f64>, SolverError> {
+        self.check(z)?;
+        let ch = self.chain(z);
+        Ok(self.residual_from(&ch, z))
+    }
+
+    fn adjoints(&self, ch: &Chain, z: &[f64]) -> Vec<M4> {
+        let n = self.cells;
+        let r0 = self.start_point(z);
+        let lo = self.lambda_offset();
+        let mu = &z[self.n_primal()..self.n_primal() + 6];
+        let mut a = vec![M4::zeros(); n];
+        a[n - 1] = -Self::closure_functional(mu);
+        for c in (0..n - 1).rev() {
+            let j = c + 1;
+            let r = r0 + translation(&ch.prefix[j]);
+            let lam = z[lo + j];
+            let mut t = ch.jets[j].e * a[j];
+            for k in 0..3 {
+                t[(3, k)] += 2.0 * lam * r[k];
+            }
+            a[c] = t;
+        }
+        a
+    }
+
+    fn residual_from(&self, ch: &Chain, z: &[f64]) -> DVector<f64> {
+        let n = self.cells;
+        let np = self.n_primal();
+        let lo = self.lambda_offset();
+        let mut f = DVector::zeros(self.dim());
+        let adj = self.adjoints(ch, z);
+        for c in 0..n {
+            let w = 0.5 * self.cell_length(c);
+            for i in 0..4 {
+                let a = 4 * c + i;
+                let g = 2 * c + i / 2;
+                f[a] = w * self.d_gauss[g] * z[a] + tr4(&(ch.prefix[c] * ch.jets[c].d[i]), &adj[c]);
+            }
+        }
+        let r0 = self.start_point(z);
+        let sigma = self.wall_scale();
+        let mut fr = V3::zeros();
+        for j in 0..n {
+            let r = r0 + translation(&ch.prefix[j]);
+            let lam = z[lo + j];
+            fr += r * (2.0 * lam);
+            let g = self.radius * self.radius - r.norm_squared();
+            f[lo + j] = lam.min(sigma * g);
+        }
+        for k in 0..3 {
+            f[4 * n + k] = fr[k];
+        }
+        // Closure.
+        let pn = &ch.prefix[n];
+        let v = vee_skew3(pn);
+        let t = translation(pn);
+        for k in 0..3 {
+            f[np + k] = -v[k];
+            f[np + 3 + k] = -t[k];
+        }
+        // Gauges.
+        let nu0 = np + 6;
+        let gv = self.gauge_values(z);
+        for (k, (row, idx)) in self.gauge_rows().into_iter().enumerate() {
+            let nu = z[nu0 + k];
+            match idx {
+                None => {
+                    for a in 0..4 * n {
+                        f[a] -= nu * row[a];
+                    }
+                }
+                Some(i) => f[i] -= nu,
+            }
+            f[nu0 + k] = -gv[k];
+        }
+        f
+    }
+
+    /// Residual and semismooth Jacobian (see the module docs).
+    pub fn evaluate(&self, z: &[f64]) -> Result<Evaluation, SolverError> {
+        self.check(z)?;
+        let n = self.cells;
+        let nk = 4 * n;
+        let np = self.n_primal();
+        let lo = self.lambda_offset();
+        let dim = self.dim();
+        let ch = self.chain(z);
+        let residual = self.residual_from(&ch, z);
+        let adj = self.adjoints(&ch, z);
+        let r0 = self.start_point(z);
+        let pos: Vec<V3> = (0..=n).map(|j| r0 + translation(&ch.prefix[j])).collect();
+        // dp[j] (3 × 4N) for nodes j = 1..=N, and the rotation closure Jacobian.
+        let mut jp = DMatrix::<f64>::zeros(3 * n, nk); // rows 3(j−1)+k, j = 1..=N
+        let mut jrot = DMatrix::<f64>::zeros(3, nk);
+        for c in 0..n {
+            for i in 0..4 {
+                let a = 4 * c + i;
+                let mut m = ch.prefix[c] * ch.jets[c].d[i];
+                for j in c + 1..=n {
+                    let t = translation(&m);
+                    for k in 0..3 {
+                        jp[(3 * (j - 1) + k, a)] = t[k];
+                    }
+                    if j == n {
+                        let v = vee_skew3(&m);
+                        for k in 0..3 {
+                            jrot[(k, a)] = v[k];
+                        }
+                    } else {
+                        m *= ch.jets[j].e;
+                    }
+                }
+            }
+        }
+        let mut jac = DMatrix::<f64>::zeros(dim, dim);
+        // Hessian of the Lagrangian, κκ block: energy + curvature (adjoint) terms.
+        for c in 0..n {
+            let w = 0.5 * self.cell_length(c);
+            for i in 0..4 {
+                let a = 4 * c + i;
+                jac[(a, a)] += w * self.d_gauss[2 * c + i / 2];
+                let pd = ch.prefix[c] * ch.jets[c].d[i];
+                for i2 in i..4 {
+                    let v = tr4(&(ch.prefix[c] * ch.jets[c].dd[i][i2]), &adj[c]);
+                    jac[(a, 4 * c + i2)] += v;
+                    if i2 != i {
+                        jac[(4 * c + i2, a)] += v;
+                    }
+                }
+                let mut rm = pd;
+                for cp in c + 1..n {
+                    for i2 in 0..4 {
+                        let g = ch.jets[cp].d[i2] * adj[cp];
+                        let v = tr4(&rm, &g);
+                        let b = 4 * cp + i2;
+                        jac[(a, b)] += v;
+                        jac[(b, a)] += v;
+                    }
+                    rm *= ch.jets[cp].e;
+                }
+            }
+        }
+        // Gauss–Newton-like term Σ_j 2λ_j ∂p_j·∂p_j (nodes 1..N−1) and the κ–r0 block.
+        let mut scaled = DMatrix::<f64>::zeros(3 * (n - 1), nk);
+        let mut kr = DMatrix::<f64>::zeros(nk, 3);
+        let mut lam_sum = 0.0;
+        for j in 0..n {
+            let lam = z[lo + j];
+            lam_sum += lam;
+            if j == 0 || lam == 0.0 {
+                continue;
+            }
+            for k in 0..3 {
+                let row = jp.row(3 * (j - 1) + k);
+                scaled
+                    .row_mut(3 * (j - 1) + k)
+                    .copy_from(&(row * (2.0 * lam)));
+                for a in 0..nk {
+                    kr[(a, k)] += 2.0 * lam * row[a];
+                }
+            }
+        }
+        let jp_wall = jp.rows(0, 3 * (n - 1));
+        let gn = jp_wall.transpose() * &scaled;
+        {
+            let mut blk = jac.view_mut((0, 0), (nk, nk));
+            blk += gn;
+        }
+        for a in 0..nk {
+            for k in 0..3 {
+                jac[(a, nk + k)] += kr[(a, k)];
+                jac[(nk + k, a)] += kr[(a, k)];
+            }
+        }
+        for k in 0..3 {
+            jac[(nk + k, nk + k)] += 2.0 * lam_sum;
+        }
+        // Closure columns/rows: ∂F_x/∂μ = −∇Cᵀ, F_μ = −C.
+        for a in 0..nk {
+            for k in 0..3 {
+                jac[(a, np + k)] = -jrot[(k, a)];
+                jac[(np + k, a)] = -jrot[(k, a)];
+                let t = jp[(3 * (n - 1) + k, a)];
+                jac[(a, np + 3 + k)] = -t;
+                jac[(np + 3 + k, a)] = -t;
+            }
+        }
+        // Gauges.
+        let nu0 = np + 6;
+        for (k, (row, idx)) in self.gauge_rows().into_iter().enumerate() {
+            match idx {
+                None => {
+                    for a in 0..nk {
+                        jac[(a, nu0 + k)] = -row[a];
+                        jac[(nu0 + k, a)] = -row[a];
+                    }
+                }
+                Some(i) => {
+                    jac[(i, nu0 + k)] = -1.0;
+                    jac[(nu0 + k, i)] = -1.0;
+                }
+            }
+        }
+        // Wall: ∂F_x/∂λ_j = −∇g_j; complementarity rows.
+        let sigma = self.wall_scale();
+        let mut wall_rows = Vec::new();
+        for j in 0..n {
+            let r = pos[j];
+            let lam = z[lo + j];
+            let g = self.radius * self.radius - r.norm_squared();
+            // ∇g_j: κ part −2 r·∂p_j (j ≥ 1), r0 part −2r.
+            let mut grad = vec![0.0; np];
+            if j >= 1 {
+                for a in 0..nk {
+                    let mut s = 0.0;
+                    for k in 0..3 {
+                        s += r[k] * jp[(3 * (j - 1) + k, a)];
+                    }
+                    grad[a] = -2.0 * s;
+                }
+            }
+            for k in 0..3 {
+                grad[nk + k] = -2.0 * r[k];
+            }
+            for a in 0..np {
+                jac[(a, lo + j)] = -grad[a];
+            }
+            if sigma * g <= lam {
+                wall_rows.push(j);
+                for a in 0..np {
+                    jac[(lo + j, a)] = sigma * grad[a];
+                }
+            } else {
+                jac[(lo + j, lo + j)] = 1.0;
+            }
+        }
+        Ok(Evaluation {
+            residual,
+            jacobian: jac,
+            wall_rows,
+        })
+    }
+
+    /// Weights `s_i` of the squared residual norm `Σ s_i F_i²`: stationarity rows as a
+    /// density (`F/(h/2)`, root mean square over the loop, units of `D0/R`), closure and
+    /// gauges as they are, complementarity rows in units of the contact impulse.
+    pub fn residual_scales(&self) -> Vec<f64> {
+        let n = self.cells;
+        let unit = self.radius / self.stiffness.kind().reference();
+        let mut s = Vec::with_capacity(self.dim());
+        for a in 0..4 * n {
+            let w = 0.5 * self.cell_length(a / 4);
+            s.push(unit * unit / (w * w) / (4 * n) as f64);
+        }
+        for _ in 0..3 {
+            s.push(unit * unit / (self.radius * self.radius));
+        }
+        s.extend(std::iter::repeat_n(1.0, self.n_equalities()));
+        let lam_unit = self.radius.powi(3) / self.stiffness.kind().reference();
+        for j in 0..n {
+            let w = self.node_weight(j);
+            let u = 2.0 * self.radius * lam_unit / w;
+            s.push(u * u / n as f64);
+        }
+        s
+    }
+
+    /// Resolution-independent residual norm (see [`Self::residual_scales`]).
+    pub fn residual_norm(&self, f: &DVector<f64>) -> f64 {
+        self.residual_scales()
+            .iter()
+            .zip(f.iter())
+            .map(|(s, v)| s * v * v)
+            .sum::<f64>()
+            .sqrt()
+    }
+
+    /// Curvature unknowns at the Gauss points of `cells` cells on this model's mesh map,
+    /// sampled from periodic functions `κ1(σ), κ2(σ)`.
+    pub fn sample_gauss<F: Fn(f64) -> (f64, f64)>(&self, f: F) -> Vec<f64> {
+        let mut out = Vec::with_capacity(4 * self.cells);
+        for g in 0..2 * self.cells {
+            let (a, b) = f(self.gauss_sigma(g));
+            out.push(a);
+            out.push(b);
+        }
+        out
+    }
+}
+
+/// Normalised slope `dκ/dσ` of Gauss-point curvature vectors on a uniform mesh of `cells`
+/// cells (spectral differentiation on each Gauss sub-grid), unit root-mean-square; `None`
+/// when the curvature is (nearly) constant (a circle has no shift mode).
+pub fn phase_slope(reference: &[f64], cells: usize) -> Result<Option<Vec<f64>>, SolverError> {
+    let mut slope = vec![0.0; 4 * cells];
+    for (j, off) in GAUSS_OFFSETS.iter().enumerate() {
+        for comp in 0..2 {
+            let sub: Vec<f64> = (0..cells)
+                .map(|c| reference[4 * c + 2 * j + comp])
+                .collect();
+            let t = TrigInterpolant::with_offset(&sub, off / cells as f64)?;
+            for c in 0..cells {
+                slope[4 * c + 2 * j + comp] = t.derivative((c as f64 + off) / cells as f64);
+            }
+        }
+    }
+    let rms = (slope.iter().map(|v| v * v).sum::<f64>() / slope.len() as f64).sqrt();
+    let scale = reference.iter().map(|v| v.abs()).fold(0.0, f64::max);
+    if !(rms.is_finite() && rms > 1e-9 * (1.0 + scale)) {
+        return Ok(None);
+    }
+    Ok(Some(slope.into_iter().map(|v| v / rms).collect()))
+}
+
+/// The frame at node transforms: the rotation block of `P`.
+pub fn rotation(p: &M4) -> Matrix3<f64> {
+    p.fixed_view::<3, 3>(0, 0).into_owned()
+}

@@ -1,0 +1,541 @@
+//! Semismooth Newton on the enclosed KKT system, starting shapes, stability on the
+//! tangent space of the active constraints, and the two-resolution error estimate.
+//!
+//! # Solver choice
+//!
+//! The complementarity `λ ≥ 0, g ≥ 0, λg = 0` is written as `min(λ, σg) = 0` and the whole
+//! KKT system is solved by semismooth Newton (equivalently, the primal–dual active-set
+//! method of Hintermüller, Ito & Kunisch, SIAM J. Optim. 13, 2003): each iteration picks the
+//! contact set from the current iterate (`σg ≤ λ`) and takes the Newton step of the
+//! equality-constrained KKT system for that set. Why this and not an interior point: the
+//! converged state satisfies the complementarity exactly (no barrier bias, so the energy is
+//! that of the discrete problem to round-off, which the `≤ 1e-8` target needs); a fully
+//! attached surface equilibrium with `λ > 0` is a fixed point reached in one step; the
+//! local convergence is quadratic once the contact set settles; and the Jacobian at the
+//! solution is the KKT matrix of the active set, which is what stability and continuation
+//! need. Globalisation: backtracking on the scaled residual norm.
+//!
+//! Linear algebra is dense (LU of the `(5N + 10)`-square Jacobian): `O(N³)` per iteration.
+
+#![allow(clippy::needless_range_loop)] // index arithmetic over cells, nodes and unknowns
+
+use std::f64::consts::PI;
+
+use nalgebra::{DMatrix, DVector, SymmetricEigen, Vector3};
+
+use super::model::{phase_slope, EnclosedModel, Gauge};
+use crate::stiffness::Stiffness;
+use crate::SolverError;
+
+/// Options of [`solve_enclosed`].
+#[derive(Clone, Debug)]
+pub struct EnclosedOptions {
+    /// Newton iterations allowed.
+    pub max_iterations: usize,
+    /// Tolerance on [`EnclosedModel::residual_norm`].
+    pub tolerance: f64,
+    /// Step halvings allowed per iteration.
+    pub max_backtracks: usize,
+}
+
+impl Default for EnclosedOptions {
+    fn default() -> Self {
+        Self {
+            max_iterations: 80,
+            tolerance: 1e-10,
+            max_backtracks: 40,
+        }
+    }
+}
+
+/// A converged enclosed state.
+#[derive(Clone, Debug)]
+pub struct EnclosedState {
+    /// The model.
+    pub model: EnclosedModel,
+    /// The KKT vector.
+    pub z: Vec<f64>,
+    /// Newton iterations used.
+    pub iterations: usize,
+    /// Final scaled residual norm.
+    pub residual: f64,
+}
+
+/// Contact summary of a state.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Contact {
+    /// Fraction of the nodes (length-weighted) touching the wall (`gap ≤ tol`).
+    pub fraction: f64,
+    /// Number of maximal runs of touching nodes (periodic).
+    pub intervals: usize,
+    /// The contact runs as `(σ_start, σ_end)` (periodic; `σ = s/L`).
+    pub runs: Vec<(f64, f64)>,
+    /// Largest gap `R − |r|` and its `σ`.
+    pub max_gap: (f64, f64),
+    /// Smallest and largest contact force per unit length on the contact set.
+    pub lambda_range: (f64, f64),
+}
+
+/// Least-squares multipliers `(μ, ν, λ)` for the primal part of `z` (stationarity is linear
+/// in them): a start for Newton from a shape without multipliers.
+pub fn least_squares_multipliers(model: &EnclosedModel, z: &mut [f64]) -> Result<(), SolverError> {
+    let np = model.n_primal();
+    let dim = model.dim();
+    for v in z[np..].iter_mut() {
+        *v = 0.0;
+    }
+    let ev = model.evaluate(z)?;
+    let f0 = ev.residual.rows(0, np).into_owned();
+    let a = ev.jacobian.view((0, np), (np, dim - np)).into_owned();
+    let scales = model.residual_scales();
+    let wv = DVector::from_iterator(np, scales[..np].iter().map(|s| s.sqrt()));
+    let aw = DMatrix::from_fn(np, dim - np, |i, j| a[(i, j)] * wv[i]);
+    let fw = f0.component_mul(&wv);
+    let mut n = aw.transpose() * &aw;
+    let tr = n.trace() / n.nrows() as f64;
+    for i in 0..n.nrows() {
+        n[(i, i)] += 1e-14 * tr;
+    }
+    let rhs = -(aw.transpose() * fw);
+    let y = n
+        .clone()
+        .cholesky()
+        .map(|c| c.solve(&rhs))
+        .or_else(|| n.lu().solve(&rhs))
+        .ok_or(SolverError::SingularJacobian { iteration: 0 })?;
+    for (k, v) in y.iter().enumerate() {
+        z[np + k] = *v;
+    }
+    Ok(())
+}
+
+/// Semismooth Newton from `z0` (see the module docs).
+pub fn solve_enclosed(
+    model: &EnclosedModel,
+    z0: Vec<f64>,
+    opts: &EnclosedOptions,
+) -> Result<EnclosedState, SolverError> {
+    let mut z = z0;
+    let mut norm = f64::INFINITY;
+    for it in 0..=opts.max_iterations {
+        let ev = model.evaluate(&z)?;
+        norm = model.residual_norm(&ev.residual);
+        if !norm.is_finite() {
+            break;
+        }
+        if norm < opts.tolerance {
+            return Ok(EnclosedState {
+                model: model.clone(),
+                z,
+                iterations: it,
+                residual: norm,
+            });
+        }
+        if it == opts.max_iterations {
+            break;
+        }
+        let lu = ev.jacobian.lu();
+        let dz = lu
+            .solve(&(-&ev.residual))
+            .ok_or(SolverError::SingularJacobian { iteration: it })?;
+        let mut t = 1.0;
+        let mut accepted = false;
+        for _ in 0..opts.max_backtracks {
+            let zt: Vec<f64> = z.iter().zip(dz.iter()).map(|(a, b)| a + t * b).collect();
+            if let Ok(f) = model.residual(&zt) {
+                let nt = model.residual_norm(&f);
+                if nt <= (1.0 - 1e-4 * t) * norm {
+                    z = zt;
+                    accepted = true;
+                    break;
+                }
+            }
+            t *= 0.5;
+        }
+        if !accepted {
+            // Round-off floor: accept a state that is already converged to near precision.
+            if norm < 1e3 * opts.tolerance {
+                return Ok(EnclosedState {
+                    model: model.clone(),
+                    z,
+                    iterations: it,
+                    residual: norm,
+                });
+            }
+            break;
+        }
+    }
+    Err(SolverError::NewtonNotConverged {
+        iterations: opts.max_iterations,
+        residual: norm,
+        closure: model
+            .closure(&z)
+            .map(|c| c.iter().map(|v| v * v).sum::<f64>().sqrt())
+            .unwrap_or(f64::NAN),
+    })
+}
+
+/// The starting state built from a loop on the sphere: `κ1 = κ_g(σ)`, `κ2 = −1/R`, `r0 = R e3`
+/// (the Darboux frame is rotation-minimising on a sphere; [`super::jet`]), multipliers by
+/// least squares. The gauge takes this shape as reference; uniform rods get the arclength
+/// phase condition.
+pub fn start_from_surface<F: Fn(f64) -> f64>(
+    radius: f64,
+    lbar: f64,
+    cells: usize,
+    stiffness: &Stiffness,
+    kappa_g: F,
+) -> Result<(EnclosedModel, Vec<f64>), SolverError> {
+    start_from_curvature(
+        radius,
+        lbar,
+        cells,
+        stiffness,
+        |s| (kappa_g(s), -1.0 / radius),
+        [0.0, 0.0, radius],
+    )
+}
+
+/// The starting state from curvature-vector functions `(κ1, κ2)(σ)` and a start point `r0`
+/// (frame at `s = 0` the identity), multipliers by least squares; the gauge takes this
+/// shape as reference (with the arclength phase condition for uniform rods).
+pub fn start_from_curvature<F: Fn(f64) -> (f64, f64)>(
+    radius: f64,
+    lbar: f64,
+    cells: usize,
+    stiffness: &Stiffness,
+    kappa: F,
+    r0: [f64; 3],
+) -> Result<(EnclosedModel, Vec<f64>), SolverError> {
+    let probe = EnclosedModel::new(
+        radius,
+        lbar,
+        cells,
+        stiffness,
+        Gauge {
+            reference: vec![0.0; 4 * cells],
+            slope: None,
+            pin: None,
+        },
+    )?;
+    let reference = probe.sample_gauss(kappa);
+    let slope = if stiffness.is_uniform() && probe.uniform_mesh() {
+        phase_slope(&reference, cells)?
+    } else {
+        None
+    };
+    let model = EnclosedModel::new(
+        radius,
+        lbar,
+        cells,
+        stiffness,
+        Gauge {
+            reference: reference.clone(),
+            slope,
+            pin: None,
+        },
+    )?;
+    let mut z = vec![0.0; model.dim()];
+    z[..4 * cells].copy_from_slice(&reference);
+    z[4 * cells..4 * cells + 3].copy_from_slice(&r0);
+    least_squares_multipliers(&model, &mut z)?;
+    Ok((model, z))
+}
+
+/// Branch 0: the planar circle of length `L = 2πR L̄` centred at the origin, free for
+/// `L̄ < 1` (start point pinned: a free loop can translate), touching everywhere at `L̄ = 1`.
+/// Exact in the discrete model (constant curvature: every Magnus step is an exact arc).
+pub fn free_circle(
+    radius: f64,
+    lbar: f64,
+    cells: usize,
+    stiffness: &Stiffness,
+) -> Result<(EnclosedModel, Vec<f64>), SolverError> {
+    if lbar > 1.0 + 1e-12 {
+        return Err(SolverError::InvalidInput(format!(
+            "the planar circle (branch 0) fits in the ball only for lbar <= 1 (got {lbar})"
+        )));
+    }
+    let rho = radius * lbar;
+    let reference: Vec<f64> = (0..2 * cells).flat_map(|_| [0.0, -1.0 / rho]).collect();
+    let model = EnclosedModel::new(
+        radius,
+        lbar,
+        cells,
+        stiffness,
+        Gauge {
+            reference: reference.clone(),
+            slope: None,
+            pin: Some([0.0, 0.0, rho]),
+        },
+    )?;
+    let mut z = vec![0.0; model.dim()];
+    z[..4 * cells].copy_from_slice(&reference);
+    z[4 * cells + 2] = rho;
+    least_squares_multipliers(&model, &mut z)?;
+    Ok((model, z))
+}
+
+impl EnclosedState {
+    /// Energy `E R/(π D0)`.
+    pub fn energy(&self) -> f64 {
+        self.model.energy(&self.z).unwrap_or(f64::NAN)
+    }
+
+    /// Wall multipliers `λ_j`.
+    pub fn multipliers(&self) -> &[f64] {
+        let o = self.model.lambda_offset();
+        &self.z[o..o + self.model.cells()]
+    }
+
+    /// First-order optimality: `(min λ_j, min g_j, max |λ_j g_j|, stationarity norm)` in
+    /// units of the scene (`λ_j` as a force density `λ(s) R³/D0`, `g` as a gap `/R`).
+    pub fn optimality(&self) -> Result<(f64, f64, f64, f64), SolverError> {
+        let m = &self.model;
+        let r = m.radius();
+        let unit = r.powi(3) / m.stiffness().kind().reference();
+        let force = m.contact_force(&self.z);
+        let gaps = m.gaps(&self.z)?;
+        let lmin = force.iter().fold(f64::INFINITY, |a, &b| a.min(b)) * unit;
+        let gmin = gaps.iter().fold(f64::INFINITY, |a, &b| a.min(b)) / r;
+        let comp = force
+            .iter()
+            .zip(&gaps)
+            .map(|(l, g)| (l * unit * g / r).abs())
+            .fold(0.0, f64::max);
+        let f = m.residual(&self.z)?;
+        let np = m.n_primal();
+        let scales = m.residual_scales();
+        let stat = (0..np).map(|i| scales[i] * f[i] * f[i]).sum::<f64>().sqrt();
+        Ok((lmin, gmin, comp, stat))
+    }
+
+    /// Contact set, gaps and forces (`tol` on the gap in units of `R`).
+    pub fn contact(&self, tol: f64) -> Result<Contact, SolverError> {
+        let m = &self.model;
+        let n = m.cells();
+        let r = m.radius();
+        let gaps = m.gaps(&self.z)?;
+        let force = m.contact_force(&self.z);
+        let unit = r.powi(3) / m.stiffness().kind().reference();
+        let touch: Vec<bool> = gaps.iter().map(|g| *g / r <= tol).collect();
+        let total: f64 = (0..n).map(|j| m.node_weight(j)).sum();
+        let fraction = (0..n)
+            .filter(|&j| touch[j])
+            .map(|j| m.node_weight(j))
+            .sum::<f64>()
+            / total
+            + 0.0;
+        let sigma = |j: usize| m.bounds()[j];
+        let mut runs = Vec::new();
+        if touch.iter().all(|&t| t) {
+            runs.push((0.0, 1.0));
+        } else if touch.iter().any(|&t| t) {
+            // Start the sweep at a free node so that runs do not wrap.
+            let s0 = touch.iter().position(|&t| !t).unwrap_or(0);
+            let mut start: Option<usize> = None;
+            for k in 1..=n {
+                let j = (s0 + k) % n;
+                match (touch[j], start) {
+                    (true, None) => start = Some(j),
+                    (false, Some(a)) => {
+                        let b = (j + n - 1) % n;
+                        runs.push((sigma(a), sigma(b)));
+                        start = None;
+                    }
+                    _ => {}
+                }
+            }
+            if let Some(a) = start {
+                runs.push((sigma(a), sigma((s0 + n) % n)));
+            }
+        }
+        let (mut gmax, mut at) = (f64::NEG_INFINITY, 0.0);
+        for (j, g) in gaps.iter().enumerate() {
+            if *g > gmax {
+                gmax = *g;
+                at = sigma(j);
+            }
+        }
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for j in 0..n {
+            if touch[j] {
+                lo = lo.min(force[j] * unit);
+                hi = hi.max(force[j] * unit);
+            }
+        }
+        if lo > hi {
+            (lo, hi) = (0.0, 0.0);
+        }
+        Ok(Contact {
+            fraction,
+            intervals: runs.len(),
+            runs,
+            max_gap: (gmax / r, at),
+            lambda_range: (lo, hi),
+        })
+    }
+
+    /// Stability: eigenvalues (ascending, mass-normalised, units of `D0/R³·R`…) of the
+    /// Hessian of the Lagrangian on the tangent space of the closure, the gauges and the
+    /// strongly active wall constraints (`λ_j > tol·max λ`); returns `(index, lowest
+    /// eigenvalues)`. Symmetry modes are removed by the gauges. Dense symmetric
+    /// eigen-decomposition: `O(N³)`.
+    pub fn stability(&self, tol: f64) -> Result<(usize, Vec<f64>), SolverError> {
+        let m = &self.model;
+        let np = m.n_primal();
+        let n = m.cells();
+        let ev = m.evaluate(&self.z)?;
+        let lam = self.multipliers();
+        let lmax = lam.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        // Mass: node length share for κ (per Gauss point h/2), 1/R² for r0.
+        let mass: Vec<f64> = (0..np)
+            .map(|a| {
+                if a < 4 * n {
+                    0.5 * m.cell_length(a / 4)
+                } else {
+                    m.length() / (m.radius() * m.radius())
+                }
+            })
+            .collect();
+        let s: Vec<f64> = mass.iter().map(|v| 1.0 / v.sqrt()).collect();
+        let w = DMatrix::from_fn(np, np, |i, j| ev.jacobian[(i, j)] * s[i] * s[j]);
+        let lo = m.lambda_offset();
+        let mut rows: Vec<usize> = (np..lo).collect();
+        for j in 0..n {
+            if lam[j] > tol * lmax.max(1e-300) {
+                rows.push(lo + j);
+            }
+        }
+        // Constraint gradients are the (negated) columns ∂F_x/∂y.
+        let a = DMatrix::from_fn(rows.len(), np, |r, i| ev.jacobian[(i, rows[r])] * s[i]);
+        let svd = a.clone().svd(false, true);
+        let vt = svd.v_t.ok_or(SolverError::InvalidInput("svd".into()))?;
+        let smax = svd.singular_values.iter().fold(0.0f64, |x, &y| x.max(y));
+        let rank = svd
+            .singular_values
+            .iter()
+            .filter(|&&v| v > 1e-10 * smax)
+            .count();
+        let mut p = DMatrix::<f64>::identity(np, np);
+        for k in 0..svd.singular_values.len() {
+            if svd.singular_values[k] > 1e-10 * smax {
+                let v = vt.row(k).transpose();
+                p -= &v * v.transpose();
+            }
+        }
+        let wmax = w.amax();
+        let beta = 10.0 * wmax + 1.0;
+        let pw = &p * &w * &p + (DMatrix::<f64>::identity(np, np) - &p) * beta;
+        let eig = SymmetricEigen::new(pw);
+        let mut vals: Vec<f64> = eig.eigenvalues.iter().copied().collect();
+        vals.sort_by(f64::total_cmp);
+        let _ = rank;
+        let scale = vals.iter().fold(0.0f64, |x, y| x.max(y.abs())).max(1e-300);
+        let index = vals.iter().filter(|&&v| v < -1e-9 * scale).count();
+        vals.truncate(8);
+        Ok((index, vals))
+    }
+
+    /// The curvature vector `(κ1, κ2)` at `σ`, interpolated (periodic four-point Lagrange
+    /// through the nearest Gauss points, error `O(h⁴)`): a start for another resolution.
+    pub fn curvature_at(&self, sigma: f64) -> (f64, f64) {
+        let m = &self.model;
+        let ng = 2 * m.cells();
+        let sig: Vec<f64> = (0..ng).map(|g| m.gauss_sigma(g)).collect();
+        let s = sigma.rem_euclid(1.0);
+        // First Gauss point at or after s (periodically).
+        let k = sig.iter().position(|&x| x >= s).unwrap_or(ng);
+        let z = &self.z;
+        let mut out = (0.0, 0.0);
+        let idx: Vec<(usize, f64)> = (0..4)
+            .map(|q| {
+                let raw = k as isize + q as isize - 2;
+                let wraps = raw.div_euclid(ng as isize) as f64;
+                let g = raw.rem_euclid(ng as isize) as usize;
+                (g, sig[g] + wraps)
+            })
+            .collect();
+        for (q, &(g, xq)) in idx.iter().enumerate() {
+            let mut l = 1.0;
+            for (p, &(_, xp)) in idx.iter().enumerate() {
+                if p != q {
+                    l *= (s - xp) / (xq - xp);
+                }
+            }
+            out.0 += l * z[2 * g];
+            out.1 += l * z[2 * g + 1];
+        }
+        out
+    }
+
+    /// Prolong this state to `2N` cells: curvature by [`Self::curvature_at`], the same start
+    /// point and closure multipliers, the contact force density carried over node by node
+    /// (coarse nodes are every other fine node; new nodes take the mean of their neighbours).
+    pub fn refine(&self) -> Result<(EnclosedModel, Vec<f64>), SolverError> {
+        let m = &self.model;
+        let n = m.cells();
+        let r0 = m.start_point(&self.z);
+        let stiff = m.stiffness().kind().clone();
+        let (fine, mut z) = start_from_curvature(
+            m.radius(),
+            m.lbar(),
+            2 * n,
+            &stiff,
+            |s| self.curvature_at(s),
+            [r0[0], r0[1], r0[2]],
+        )?;
+        let np = m.n_primal();
+        let npf = fine.n_primal();
+        z[npf..npf + 6].copy_from_slice(&self.z[np..np + 6]);
+        for k in 6..fine.n_equalities() {
+            z[npf + k] = 0.0;
+        }
+        let dens = m.contact_force(&self.z);
+        let lo = fine.lambda_offset();
+        for j in 0..2 * n {
+            let d = if j % 2 == 0 {
+                dens[j / 2]
+            } else {
+                0.5 * (dens[j / 2] + dens[(j / 2 + 1) % n])
+            };
+            z[lo + j] = d * fine.node_weight(j) / (2.0 * m.radius());
+        }
+        Ok((fine, z))
+    }
+
+    /// Node positions `(σ, r)`.
+    pub fn nodes(&self) -> Result<Vec<(f64, Vector3<f64>)>, SolverError> {
+        let pos = self.model.positions(&self.z)?;
+        Ok(pos
+            .into_iter()
+            .enumerate()
+            .map(|(j, r)| (self.model.bounds()[j], r))
+            .collect())
+    }
+
+    /// Curvature vector `(κ1, κ2)` at node `j`: the linear extrapolations from the two
+    /// adjacent cells' Gauss points, averaged.
+    pub fn node_curvature(&self, j: usize) -> (f64, f64) {
+        let n = self.model.cells();
+        let z = &self.z;
+        let g1 = crate::model::GAUSS_OFFSETS[0];
+        let g2 = crate::model::GAUSS_OFFSETS[1];
+        let ext = |c: usize, at: f64| -> (f64, f64) {
+            let t = (at - g1) / (g2 - g1);
+            (
+                z[4 * c] + t * (z[4 * c + 2] - z[4 * c]),
+                z[4 * c + 1] + t * (z[4 * c + 3] - z[4 * c + 1]),
+            )
+        };
+        let (a1, a2) = ext(j % n, 0.0);
+        let (b1, b2) = ext((j + n - 1) % n, 1.0);
+        (0.5 * (a1 + b1), 0.5 * (a2 + b2))
+    }
+}
+
+/// Energy of the free planar circle of length `2πR L̄`, `E R/(πD) = 1/L̄`.
+pub fn free_circle_energy(lbar: f64) -> f64 {
+    let _ = PI;
+    1.0 / lbar
+}

@@ -1,0 +1,175 @@
+//! The enclosed model (issue 9): exact derivatives, exact states, lift-off, optimality and
+//! the order of convergence.
+
+use rodloop_exact::paper_branch_loop;
+use rodloop_solver::enclosed::{
+    solve_branch, start_from_surface, EnclosedModel, EnclosedOptions, SurfaceSource,
+};
+use rodloop_solver::Stiffness;
+
+fn exact_start(eta: u32, lbar: f64, cells: usize, d: &Stiffness) -> (EnclosedModel, Vec<f64>) {
+    let l = paper_branch_loop(eta, lbar).unwrap();
+    start_from_surface(1.0, lbar, cells, d, |s| {
+        l.point(s * l.length()).unwrap().kappa_g
+    })
+    .unwrap()
+}
+
+/// The semismooth Jacobian against central differences of the residual, at a perturbed
+/// state with mixed contact rows (both branches of the min-function), uniform and Eq. (51).
+#[test]
+fn jacobian_matches_finite_differences() {
+    for stiff in [
+        Stiffness::uniform(1.0),
+        Stiffness::Tanh {
+            d0: 1.0,
+            d1: 0.5,
+            s0: 0.3,
+            s1: 0.8,
+            gamma: 10.0,
+        },
+    ] {
+        let (m, mut z) = exact_start(1, 1.5, 10, &stiff);
+        // Perturb everything, make some multipliers clearly positive/negative.
+        for (i, v) in z.iter_mut().enumerate() {
+            *v += 0.01 * ((i as f64 * 1.7).sin());
+        }
+        let lo = m.lambda_offset();
+        for j in 0..m.cells() {
+            z[lo + j] = if j % 3 == 0 {
+                -0.05
+            } else {
+                0.3 + 0.01 * j as f64
+            };
+        }
+        let ev = m.evaluate(&z).unwrap();
+        let eps = 1e-6;
+        let mut worst: f64 = 0.0;
+        for k in 0..m.dim() {
+            let mut zp = z.clone();
+            let mut zm = z.clone();
+            zp[k] += eps;
+            zm[k] -= eps;
+            let fd = (m.residual(&zp).unwrap() - m.residual(&zm).unwrap()) / (2.0 * eps);
+            for i in 0..m.dim() {
+                let scale = 1.0 + ev.jacobian[(i, k)].abs();
+                worst = worst.max((fd[i] - ev.jacobian[(i, k)]).abs() / scale);
+            }
+        }
+        assert!(worst < 1e-6, "{stiff:?}: worst FD mismatch {worst:e}");
+    }
+}
+
+fn branch(eta: u32, lbar: f64, cells: usize) -> rodloop_solver::enclosed::BranchSolve {
+    let l = paper_branch_loop(eta, lbar).unwrap();
+    solve_branch(
+        1.0,
+        lbar,
+        &Stiffness::uniform(1.0),
+        &SurfaceSource::Exact(l),
+        cells,
+        &EnclosedOptions::default(),
+    )
+    .unwrap()
+}
+
+/// First-order optimality of a returned state: λ ≥ 0, gap ≥ 0, λ·gap = 0, stationarity.
+fn assert_optimal(st: &rodloop_solver::enclosed::EnclosedState) {
+    let (lmin, gmin, comp, stat) = st.optimality().unwrap();
+    assert!(lmin >= -1e-10, "lambda_min {lmin}");
+    assert!(gmin >= -1e-10, "gap_min {gmin}");
+    assert!(comp <= 1e-9, "complementarity {comp}");
+    assert!(stat <= 1e-8, "stationarity {stat}");
+}
+
+/// Where the exact surface loop has λ > 0 everywhere (branch 1 at L̄ = 1.2, branch 3 at
+/// L̄ = 2.5; Eq. (38): λ_min = c²(1 − 2k²) > 0), the enclosed solve stays on the wall and
+/// its energy is the exact layer's within the error estimate; it converges at fourth order.
+#[test]
+fn attached_loops_are_the_surface_loops() {
+    for &(eta, lbar) in &[(2u32, 1.2), (3, 2.5)] {
+        let exact = paper_branch_loop(eta, lbar).unwrap();
+        assert!(exact.lambda_range().0 > 0.0);
+        let e = exact.energy().unwrap();
+        let b = branch(eta, lbar, 96);
+        let c = b.fine.contact(1e-9).unwrap();
+        assert_eq!(c.fraction, 1.0, "eta {eta}");
+        assert!(c.max_gap.0.abs() < 1e-12);
+        let err = (b.energy - e).abs();
+        assert!(
+            err <= 2.0 * b.energy_error + 1e-13,
+            "eta {eta}: {err:e} vs {:e}",
+            b.energy_error
+        );
+        // Measured order from N = 24, 48, 96 against the exact energy.
+        let e48 = (b.coarse.energy() - e).abs();
+        let order = (e48 / err).log2();
+        assert!((order - 4.0).abs() < 0.3, "eta {eta}: order {order}");
+        assert_optimal(&b.fine);
+        // The contact force density reproduces Eq. (38) at the nodes.
+        let lam = b.fine.model.contact_force(&b.fine.z);
+        let (lo, hi) = exact.lambda_range();
+        for v in lam {
+            assert!(v > lo - 1e-2 && v < hi + 1e-2, "{v} outside [{lo}, {hi}]");
+        }
+    }
+}
+
+/// L̄ < 1: the free planar circle, E R/(πD) = 1/L̄ (exact in the discrete model), no contact.
+#[test]
+fn free_circle_below_one() {
+    let d = Stiffness::uniform(1.0);
+    let (m, z) = rodloop_solver::enclosed::free_circle(1.0, 0.7, 32, &d).unwrap();
+    let st = rodloop_solver::enclosed::solve_enclosed(&m, z, &EnclosedOptions::default()).unwrap();
+    assert!((st.energy() - 1.0 / 0.7).abs() < 1e-12);
+    let c = st.contact(1e-9).unwrap();
+    assert_eq!(c.intervals, 0);
+    assert!((c.max_gap.0 - 0.3).abs() < 1e-12);
+    assert_optimal(&st);
+    assert_eq!(st.stability(1e-6).unwrap().0, 0);
+}
+
+/// Branch 2 (figure-eight) at L̄ = 1.4 needs λ < 0 on the surface: the enclosed loop lifts
+/// off there, its energy is lower, the optimality conditions hold, and the energy converges
+/// at fourth order (N = 64, 128, 256).
+#[test]
+fn figure_eight_lifts_off_with_lower_energy() {
+    let exact = paper_branch_loop(1, 1.4).unwrap();
+    assert!(exact.lambda_range().0 < 0.0);
+    let b = branch(1, 1.4, 128);
+    let c = b.fine.contact(1e-9).unwrap();
+    assert!(c.max_gap.0 > 1e-3, "max gap {}", c.max_gap.0);
+    assert!(c.fraction < 1.0 && c.intervals == 2, "{c:?}");
+    let drop = exact.energy().unwrap() - b.energy;
+    assert!(
+        drop > 100.0 * b.energy_error && drop > 1e-5,
+        "drop {drop:e}"
+    );
+    assert_optimal(&b.fine);
+    assert_optimal(&b.coarse);
+    // The contact ends fall between nodes: the order approaches 4 from below (3.06 over
+    // N = 32, 64, 128; 3.87 over 64, 128, 256).
+    let b256 = branch(1, 1.4, 256);
+    let (e64, e128, e256) = (b.coarse.energy(), b.energy, b256.energy);
+    assert!((b256.coarse.energy() - e128).abs() < 1e-10);
+    let order = ((e128 - e64).abs() / (e256 - e128).abs()).log2();
+    assert!(order > 3.5 && order < 4.5, "order {order}");
+}
+
+/// The lift-off and landing lengths are where Eq. (38)'s λ_min = c²(1 − 2k²) vanishes.
+#[test]
+fn detached_interval_ends_have_zero_lambda_min() {
+    let iv = rodloop_solver::enclosed::detached_intervals(1, 1.0, 3.0).unwrap();
+    assert_eq!(iv.len(), 1);
+    let (a, b) = iv[0];
+    assert_eq!(a, 1.0);
+    let l = paper_branch_loop(1, b).unwrap();
+    assert!(l.lambda_range().0.abs() < 1e-10, "{}", l.lambda_range().0);
+    assert!(paper_branch_loop(1, b - 1e-6).unwrap().lambda_range().0 < 0.0);
+    assert!(paper_branch_loop(1, b + 1e-6).unwrap().lambda_range().0 > 0.0);
+    for eta in [2, 3] {
+        assert!(rodloop_solver::enclosed::detached_intervals(eta, 1.0, 3.0)
+            .unwrap()
+            .is_empty());
+    }
+}

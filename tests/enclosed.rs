@@ -1,0 +1,112 @@
+//! `rodloop solve` and `rodloop compare --scene enclosed` on enclosed scenes (issue 9).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn rodloop(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_rodloop"))
+        .args(args)
+        .output()
+        .expect("run rodloop")
+}
+
+fn scene() -> String {
+    concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/data/scenes/homogeneous-enclosed.toml"
+    )
+    .into()
+}
+
+fn out(name: &str) -> PathBuf {
+    let p = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&p);
+    p
+}
+
+/// The figure-eight at L̄ = 1.4 lifts off: config.csv has a gap column with positive gaps,
+/// summary.json the contact fields; its energy is below the exact surface loop's.
+#[test]
+fn solve_lifted_off_state() {
+    let dir = out("enclosed-solve");
+    let o = rodloop(&[
+        "solve",
+        "--scene",
+        &scene(),
+        "--lbar",
+        "1.4",
+        "--branch",
+        "2",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let surface = rodloop_exact::paper_branch_loop(1, 1.4).unwrap();
+    let e = s["energy"].as_f64().unwrap();
+    assert!(e < surface.energy().unwrap() - 1e-5);
+    assert_eq!(s["contact_intervals"].as_u64(), Some(2));
+    let f = s["contact_fraction"].as_f64().unwrap();
+    assert!(f > 0.0 && f < 1.0);
+    assert!(s["max_gap"].as_f64().unwrap() > 1e-3);
+    assert!(s["optimality_lambda_min"].as_f64().unwrap() >= -1e-10);
+    let csv = std::fs::read_to_string(dir.join("config.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let gi = header.iter().position(|h| *h == "gap").expect("gap column");
+    let gmax = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(gi).unwrap().parse::<f64>().unwrap())
+        .fold(f64::MIN, f64::max);
+    assert!((gmax - s["max_gap"].as_f64().unwrap()).abs() < 1e-12);
+}
+
+/// An attached state (branch 1 at L̄ = 1.2, λ > 0): the exact energy, gap 0.
+#[test]
+fn solve_attached_state_is_exact() {
+    let dir = out("enclosed-attached");
+    let o = rodloop(&[
+        "solve",
+        "--scene",
+        &scene(),
+        "--lbar",
+        "1.2",
+        "--branch",
+        "1",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let exact = rodloop_exact::paper_branch_loop(2, 1.2)
+        .unwrap()
+        .energy()
+        .unwrap();
+    assert!((s["energy"].as_f64().unwrap() - exact).abs() <= 1e-8 * exact);
+    assert_eq!(s["contact_fraction"].as_f64(), Some(1.0));
+    assert!(s["max_gap"].as_f64().unwrap().abs() < 1e-12);
+}
+
+/// Bad enclosed inputs: one clear error, non-zero exit, nothing written.
+#[test]
+fn bad_enclosed_input() {
+    for (args, word) in [
+        (vec!["--lbar", "1.5", "--branch", "0"], "planar circle"),
+        (vec!["--lbar", "2.5", "--branch", "2"], "exists only for"),
+        (vec!["--lbar", "-1", "--branch", "1"], "lbar"),
+    ] {
+        let dir = out("enclosed-bad");
+        let mut all = vec!["solve", "--scene"];
+        let sc = scene();
+        all.push(&sc);
+        all.extend(args.iter());
+        all.extend(["--out", dir.to_str().unwrap()]);
+        let o = rodloop(&all);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success());
+        assert!(err.contains(word) && !err.contains("panicked"), "{err}");
+        assert!(!dir.join("summary.json").exists());
+    }
+}
