@@ -21,6 +21,7 @@ mod draw;
 mod euler;
 mod numeric_diagram;
 mod output;
+mod phase;
 mod progress;
 mod report;
 mod solve;
@@ -73,6 +74,10 @@ enum Command {
     /// picture and the contact force of each branch's stable state, settings and timings.
     #[command(allow_negative_numbers = true)]
     Report(report::Args),
+    /// The critical lengths of a two-segment rod as curves in D1/D0 (or gamma, s0, s1):
+    /// continuation of each exchange of the lowest branch, with error estimates.
+    #[command(allow_negative_numbers = true)]
+    Phase(phase::Args),
 }
 
 fn main() -> ExitCode {
@@ -86,6 +91,7 @@ fn main() -> ExitCode {
         Command::Converge(a) => converge::run(&a),
         Command::Draw(a) => draw::run(&a),
         Command::Report(a) => report::run(&a),
+        Command::Phase(a) => phase::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
