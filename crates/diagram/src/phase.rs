@@ -313,7 +313,7 @@ pub fn trace_phase(settings: &PhaseSettings) -> Result<PhaseDiagram, DiagramErro
 /// `1/(2η)` (coarse to fine), keeping the lowest one of the right branch with index 0; the
 /// search ends once two starts have relaxed to the same state (at `D1/D0 = 0.9` every start
 /// that converges reaches the same state, measured for η = 1, 2, 3 near the exchanges).
-fn lowest_placement(
+pub(crate) fn lowest_placement(
     radius: f64,
     lbar: f64,
     eta: u32,
@@ -1161,4 +1161,129 @@ fn add_at_rows(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene(d1: f64) -> Stiffness {
+        Stiffness::Tanh {
+            d0: 1.0,
+            d1,
+            s0: 0.3,
+            s1: 0.8,
+            gamma: 200.0,
+        }
+    }
+
+    fn settings(d1: f64, target: f64, at: Vec<f64>) -> PhaseSettings {
+        PhaseSettings {
+            radius: 1.0,
+            stiffness: scene(d1),
+            param: Param::D1,
+            target,
+            lbar_min: 1.0,
+            lbar_max: 3.0,
+            accuracy: Accuracy::Default,
+            at,
+            solve: SolveOptions::default(),
+        }
+    }
+
+    /// The exact critical lengths of the uniform rod (the exact layer, Sec. 4.3).
+    fn exact_crossings() -> Vec<f64> {
+        let d = rodloop_exact::diagram::compute(&rodloop_exact::diagram::DiagramSettings {
+            lbar_min: 1.0,
+            lbar_max: 3.0,
+            eta_max: 4,
+            step: 0.01,
+        })
+        .unwrap();
+        d.critical
+            .iter()
+            .filter(|c| c.kind == rodloop_exact::diagram::CriticalKind::Crossing)
+            .map(|c| c.lbar_cr)
+            .collect()
+    }
+
+    #[test]
+    fn maxwell_points_approach_the_uniform_critical_lengths() {
+        let d = trace_phase(&settings(0.9, 0.9, vec![])).unwrap();
+        let exact = exact_crossings();
+        assert_eq!(d.curves.len(), 2);
+        for (c, ex) in d.curves.iter().zip(&exact) {
+            let u = c.uniform.expect("limit row");
+            assert!((u.exact - ex).abs() < 1e-12);
+            assert!(
+                u.deviation.abs() <= 2.0 * u.error_estimate,
+                "limit {} vs exact {ex}: deviation {:.2e}, estimate {:.2e}",
+                u.lbar_cr,
+                u.deviation,
+                u.error_estimate
+            );
+            // The ladder 1 − t, t = 8e-3 … 1e-3: each within its estimate plus a term that
+            // vanishes with t, and closer to the limit as t decreases.
+            let ladder: Vec<&PhaseRow> = c
+                .rows
+                .iter()
+                .filter(|r| r.source == RowSource::Fixed && r.value > 0.99)
+                .collect();
+            assert_eq!(ladder.len(), 4);
+            let mut last = f64::INFINITY;
+            for r in ladder {
+                let t = 1.0 - r.value;
+                assert!((r.lbar_cr - ex).abs() <= 2.0 * r.error_estimate + 0.05 * t);
+                let to_limit = (r.lbar_cr - u.lbar_cr).abs();
+                assert!(to_limit < last, "not approaching at t = {t}");
+                last = to_limit;
+            }
+        }
+    }
+
+    #[test]
+    fn at_rows_agree_with_an_independent_secant_solve() {
+        let theta = 0.7;
+        let d = trace_phase(&settings(0.9, 0.65, vec![theta])).unwrap();
+        for c in &d.curves {
+            let row = c
+                .rows
+                .iter()
+                .find(|r| r.source == RowSource::Fixed && r.value == theta)
+                .expect("an --at row");
+            // Independent: the lowest stable states at θ from shifted exact loops, then the
+            // secant method on re-solved equilibria.
+            let st = scene(theta);
+            let (ea, eb) = (
+                eta_of_branch(c.exchange.from_branch),
+                eta_of_branch(c.exchange.to_branch),
+            );
+            let opts = SolveOptions::default();
+            let a = lowest_placement(1.0, row.lbar_cr, ea, c.cells.0, &st, &opts).unwrap();
+            let b = lowest_placement(1.0, row.lbar_cr, eb, c.cells.1, &st, &opts).unwrap();
+            let (ma, _, slope) = maxwell_by_secant(&a, &b, &opts).unwrap();
+            assert!(slope > 0.0);
+            assert!(
+                (ma.lbar() - row.lbar_cr).abs() < 1e-9,
+                "--at row {} vs secant {}",
+                row.lbar_cr,
+                ma.lbar()
+            );
+            assert!((ma.energy().total - row.energy).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn bad_input_gives_clear_errors() {
+        let msg = |s: PhaseSettings| trace_phase(&s).unwrap_err().to_string();
+        assert!(msg(settings(0.5, 2.0, vec![])).contains("crosses the uniform rod"));
+        assert!(msg(settings(0.5, -1.0, vec![])).contains("invalid"));
+        assert!(msg(settings(0.5, 0.1, vec![-0.3])).contains("--at"));
+        let mut s = settings(0.5, 0.1, vec![]);
+        s.stiffness = Stiffness::uniform(1.0);
+        assert!(msg(s).contains("two-segment"));
+        let mut s = settings(0.5, 0.1, vec![]);
+        s.param = Param::Lbar;
+        assert!(msg(s).contains("lbar"));
+    }
 }
