@@ -31,7 +31,7 @@ pub struct Exchange {
 /// The crossings of the uniform rod's exact diagram (Sec. 4.3) in `[lbar_min, lbar_max]`.
 pub fn uniform_exchanges(lbar_min: f64, lbar_max: f64) -> Result<Vec<Exchange>, DiagramError> {
     let lo = lbar_min.max(0.5);
-    if !(lbar_max > lo) {
+    if lbar_max.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
         return Err(DiagramError::InvalidOptions(format!(
             "the length range [{lbar_min}, {lbar_max}] holds no exchange of the lowest branch"
         )));
@@ -237,7 +237,7 @@ pub fn trace_phase(settings: &PhaseSettings) -> Result<PhaseDiagram, DiagramErro
     // The target profile must be valid.
     s.stiffness.with_param(s.param, s.target)?.validate()?;
     if s.param == Param::D1 {
-        if !(s.target > 0.0) {
+        if s.target.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             return Err(DiagramError::InvalidOptions(format!(
                 "--to for d1 = D1/D0 must be positive (got {})",
                 s.target
@@ -267,7 +267,7 @@ pub fn trace_phase(settings: &PhaseSettings) -> Result<PhaseDiagram, DiagramErro
                     s.param
                 ))
             })?;
-        if s.param == Param::D1 && !(v > 0.0) {
+        if s.param == Param::D1 && v.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
             return Err(DiagramError::InvalidOptions(format!(
                 "--at {v}: d1 = D1/D0 must be positive"
             )));
@@ -571,7 +571,7 @@ fn trace_exchange(
     let (ma, mb, slope) =
         maxwell_by_secant(&sa, &sb, &s.solve).map_err(|e| crit(format!("seed: {e}")))?;
     // E_from − E_to increases through L̄_cr when `from` is the lower one below it.
-    if !(slope > 0.0) {
+    if slope.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Err(crit(format!(
             "seed: at D1/D0 = {theta_seed} the energy difference of {} and {} has slope {slope:.3e} at the crossing: {} is not the lower one below it",
             branch_word(ex.from_branch),
