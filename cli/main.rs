@@ -22,6 +22,7 @@ mod enclosed;
 mod euler;
 mod numeric_diagram;
 mod output;
+mod phase;
 mod progress;
 mod report;
 mod solve;
@@ -74,6 +75,10 @@ enum Command {
     /// picture and the contact force of each branch's stable state, settings and timings.
     #[command(allow_negative_numbers = true)]
     Report(report::Args),
+    /// The critical lengths of a two-segment rod as curves in D1/D0 (or gamma, s0, s1):
+    /// continuation of each exchange of the lowest branch, with error estimates.
+    #[command(allow_negative_numbers = true)]
+    Phase(phase::Args),
 }
 
 fn main() -> ExitCode {
@@ -87,6 +92,7 @@ fn main() -> ExitCode {
         Command::Converge(a) => converge::run(&a),
         Command::Draw(a) => draw::run(&a),
         Command::Report(a) => report::run(&a),
+        Command::Phase(a) => phase::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,635 @@
+//! Critical lengths as curves in a scene parameter: two-parameter continuation of a Maxwell
+//! point (paper Sec. 5, Figs. 8–10: how the exchange lengths `L̄_cr` of the lowest branch move
+//! with the stiffness ratio `D1/D0` of Eq. (51)).
+//!
+//! A Maxwell point of branches `a` and `b` at the scene parameter `θ` is a length `L̄` at which
+//! both equilibria exist and have the same energy. With the two discretised KKT systems
+//! `F_a(z_a; L̄, θ) = 0`, `F_b(z_b; L̄, θ) = 0` ([`SurfaceModel::kkt_residual`]) the augmented
+//! system in `x = (z_a, z_b, L̄)` is
+//!
+//! ```text
+//! G(x; θ) = ( F_a(z_a; L̄, θ),  F_b(z_b; L̄, θ),  E_a(z_a; L̄, θ) − E_b(z_b; L̄, θ) ) = 0,
+//! ```
+//!
+//! energies `E R/(π D0)`. [`MaxwellProblem`] implements it as a
+//! [`rodloop_continuation::Problem`] in `p = ln θ` (for `d1`, three decades at even steps) or
+//! `p = θ` (other parameters), with the analytic derivatives
+//!
+//! * `∂E/∂z = (w_a D_a κ_a, 0)·R/(πD0)` (the energy gradient; zero on the multipliers),
+//! * `∂E/∂L̄ = E/L̄` (every quadrature weight `w_a = h_c/2` is proportional to `L̄` at fixed
+//!   `σ = s/L`, the profile being a function of `σ`),
+//! * `∂E/∂θ = Σ_a ½ w_a (∂D/∂θ)(σ_a) (κ_a² + 1/R²)·R/(πD0)` (Eq. (2) with Eq. (51)),
+//!
+//! and a factorisation by bordering ([`Factorization`]): the Jacobian
+//! `[[J_a, 0, F_a,L̄], [0, J_b, F_b,L̄], [∇E_aᵀ, −∇E_bᵀ, E_a,L̄ − E_b,L̄]]` is solved with the
+//! two models' own `O(N)` block factorisations ([`ModelFactor`]) and one scalar Schur
+//! complement (Govaerts 2000, ch. 3).
+//!
+//! [`trace_phase`] seeds every exchange of the uniform rod that lies in the scene's range just
+//! below `D1/D0 = 1` (at `1 − 10⁻³`, where the arclength-shift symmetry of the uniform rod is
+//! broken: the lowest placement of the soft segment is chosen among shifted exact loops),
+//! solves `E_a = E_b` there by the secant method on re-solved equilibria, and continues the
+//! Maxwell point in the parameter down to the lower end of the requested range and up
+//! towards `D1/D0 = 1`, where the limit is extrapolated and compared with the uniform rod.
+//! Along the way the stability index of both states is monitored: a curve ends where one of
+//! them stops being a local minimum (a lower, asymmetric state then exists, so the Maxwell
+//! point no longer separates lowest branches), at a fold in `θ` (a branch ceases to exist),
+//! or when the continuation fails; the reason is returned with the curve.
+//!
+//! Every reported `L̄_cr` carries an error estimate from a companion Maxwell point at half the
+//! resolution (`|L̄_N − L̄_{N/2}|/15`, the scheme converging like `h⁴`; `High`: `N` and `2N`,
+//! Richardson-extrapolated), like the rest of rodloop.
+
+use std::f64::consts::PI;
+
+use nalgebra::{DMatrix, DVector};
+use rodloop_continuation::{DenseLu, Factorization, Problem};
+use rodloop_solver::{
+    solve_from_state, Confinement, Equilibrium, Globalization, ModelFactor, Param, SolveOptions,
+    SolverError, SurfaceModel,
+};
+
+/// Stability tolerance of the monitored indices (eigenvalues of the constrained Hessian
+/// below `−INDEX_TOL` in the model's energy metric count as negative). Small: next to the
+/// uniform rod the shift mode has an eigenvalue of order `10⁻⁴ (1 − D1/D0)²`-ish (measured
+/// `±9·10⁻⁸` at `D1/D0 = 0.999`), and its sign decides which placement is the minimum.
+pub const INDEX_TOL: f64 = 1e-10;
+
+/// Distance below (or above) `D1/D0 = 1` at which the exchanges of the uniform rod are
+/// seeded. Closer to 1 the placement of the soft segment is selected only at second order in
+/// `1 − D1/D0` and energy minimisation does not find it reliably (measured: most starts fail
+/// at 0.999, 0.99 and, for η = 2, 3 near L̄ = 2.43, at 0.95; all branches work at 0.9).
+pub const SEED_OFFSET: f64 = 0.1;
+
+/// Distances `t = |1 − D1/D0|` of the Maxwell points used to extrapolate the limit
+/// `D1/D0 → 1`: quadratic in `t` through the three smallest, checked against the quadratic
+/// through the three largest.
+pub const LIMIT_OFFSETS: [f64; 4] = [1e-3, 2e-3, 4e-3, 8e-3];
+
+fn energy_scale(model: &SurfaceModel) -> f64 {
+    model.radius() / (PI * model.stiffness().kind().reference())
+}
+
+/// Energy `E R/(π D0)` of the KKT state `z` (Eq. (2), two-point Gauss quadrature).
+pub fn energy(model: &SurfaceModel, z: &[f64]) -> Result<f64, SolverError> {
+    Confinement::energy(model, z)
+}
+
+/// `∂E/∂z` of [`energy`]: `w_a D_a κ_a R/(πD0)` on the curvatures, zero on the multipliers.
+pub fn energy_gradient(model: &SurfaceModel, z: &[f64]) -> Result<DVector<f64>, SolverError> {
+    let (kappa, _, _) = model.split(z)?;
+    let g = model.energy_gradient(kappa)?;
+    let s = energy_scale(model);
+    let mut out = DVector::zeros(model.dim());
+    for (a, v) in g.iter().enumerate() {
+        out[a] = v * s;
+    }
+    Ok(out)
+}
+
+/// `∂E/∂θ` of [`energy`] at fixed `z`: `E/L̄` for `lbar` (the weights scale with `L̄`), and
+/// `Σ_a ½ w_a (∂D/∂θ)(σ_a)(κ_a² + 1/R²) R/(πD0)` for a stiffness parameter.
+pub fn energy_dparam(model: &SurfaceModel, z: &[f64], p: Param) -> Result<f64, SolverError> {
+    if p == Param::Lbar {
+        return Ok(energy(model, z)? / model.lbar());
+    }
+    let (kappa, _, _) = model.split(z)?;
+    let kind = model.stiffness().kind();
+    let sigma = model.gauss_sigma();
+    let r2 = 1.0 / (model.radius() * model.radius());
+    let mut acc = 0.0;
+    for (a, (k, s)) in kappa.iter().zip(&sigma).enumerate() {
+        acc += 0.5 * model.cell_weight(a / 2) * kind.dparam(p, *s)? * (k * k + r2);
+    }
+    Ok(acc * energy_scale(model))
+}
+
+/// The augmented system of a Maxwell point (see the module docs) as a continuation problem
+/// in `p = ln θ` (`d1`) or `p = θ` (`gamma`, `s0`, `s1`).
+#[derive(Clone, Debug)]
+pub struct MaxwellProblem {
+    a: SurfaceModel,
+    b: SurfaceModel,
+    param: Param,
+    log: bool,
+}
+
+impl MaxwellProblem {
+    /// The Maxwell point of the states of models `a` and `b` (their own resolutions, same
+    /// stiffness profile), continued in `param`. Fails for `lbar` (the length is an unknown)
+    /// and for a parameter the profile does not have.
+    pub fn new(a: SurfaceModel, b: SurfaceModel, param: Param) -> Result<Self, SolverError> {
+        if param == Param::Lbar {
+            return Err(SolverError::InvalidInput(
+                "a Maxwell point is continued in a stiffness parameter (d1, gamma, s0, s1); \
+                 lbar is one of its unknowns"
+                    .into(),
+            ));
+        }
+        a.param(param)?;
+        b.param(param)?;
+        Ok(Self {
+            a,
+            b,
+            param,
+            log: param == Param::D1,
+        })
+    }
+
+    /// The continued parameter.
+    pub fn param(&self) -> Param {
+        self.param
+    }
+
+    /// `θ` of the continuation variable `p`.
+    pub fn theta(&self, p: f64) -> f64 {
+        if self.log {
+            p.exp()
+        } else {
+            p
+        }
+    }
+
+    /// The continuation variable `p` of `θ` (`ln θ` for `d1`).
+    pub fn p_of(&self, theta: f64) -> f64 {
+        if self.log {
+            theta.ln()
+        } else {
+            theta
+        }
+    }
+
+    /// Sizes `(dim z_a, dim z_b)`.
+    pub fn dims(&self) -> (usize, usize) {
+        (self.a.dim(), self.b.dim())
+    }
+
+    /// The models of the two branches (cells, mesh).
+    pub fn models(&self) -> (&SurfaceModel, &SurfaceModel) {
+        (&self.a, &self.b)
+    }
+
+    /// Split `x = (z_a, z_b, L̄)`.
+    pub fn split<'x>(&self, x: &'x [f64]) -> Result<(&'x [f64], &'x [f64], f64), SolverError> {
+        let (na, nb) = self.dims();
+        if x.len() != na + nb + 1 {
+            return Err(SolverError::WrongLength {
+                expected: na + nb + 1,
+                found: x.len(),
+            });
+        }
+        Ok((&x[..na], &x[na..na + nb], x[na + nb]))
+    }
+
+    /// Assemble `x = (z_a, z_b, L̄)`.
+    pub fn join(za: &[f64], zb: &[f64], lbar: f64) -> DVector<f64> {
+        let mut v = Vec::with_capacity(za.len() + zb.len() + 1);
+        v.extend_from_slice(za);
+        v.extend_from_slice(zb);
+        v.push(lbar);
+        DVector::from_vec(v)
+    }
+
+    /// The two models at length `lbar` and continuation variable `p`.
+    pub fn models_at(
+        &self,
+        lbar: f64,
+        p: f64,
+    ) -> Result<(SurfaceModel, SurfaceModel), SolverError> {
+        let theta = self.theta(p);
+        let at = |m: &SurfaceModel| -> Result<SurfaceModel, SolverError> {
+            m.with_lbar(lbar)?.with_param(self.param, theta)
+        };
+        Ok((at(&self.a)?, at(&self.b)?))
+    }
+
+    /// Energies `(E_a, E_b)` at `(x, p)`.
+    pub fn energies(&self, x: &DVector<f64>, p: f64) -> Result<(f64, f64), SolverError> {
+        let (za, zb, lbar) = self.split(x.as_slice())?;
+        let (ma, mb) = self.models_at(lbar, p)?;
+        Ok((energy(&ma, za)?, energy(&mb, zb)?))
+    }
+
+    /// Stability indices `(index_a, index_b)` at `(x, p)` (tolerance [`INDEX_TOL`]).
+    pub fn indices(&self, x: &DVector<f64>, p: f64) -> Result<(usize, usize), SolverError> {
+        let (za, zb, lbar) = self.split(x.as_slice())?;
+        let (ma, mb) = self.models_at(lbar, p)?;
+        Ok((ma.index(za, INDEX_TOL)?, mb.index(zb, INDEX_TOL)?))
+    }
+
+    /// `(d(E_a − E_b)/dL̄, sign det J_a, sign det J_b)` at `(x, p)`. The first is the slope of
+    /// the energy difference along the two equilibrium branches at fixed `θ` (states
+    /// re-solved as `L̄` moves), which is the Schur complement `d − cᵀA⁻¹u` of the bordered
+    /// factorisation: positive when branch `a` is the lower one below the crossing, zero
+    /// where the two energy curves touch (a fold of the Maxwell curve in `θ`). A change of a
+    /// determinant sign means the state itself passed a fold or branch point in `L̄`.
+    pub fn crossing_slope(&self, x: &DVector<f64>, p: f64) -> Result<(f64, f64, f64), SolverError> {
+        let (za, zb, lbar) = self.split(x.as_slice())?;
+        let (ma, mb) = self.models_at(lbar, p)?;
+        let slope_of = |m: &SurfaceModel, z: &[f64]| -> Result<(f64, f64), SolverError> {
+            let f = m.factorize(z, 0.0)?;
+            let dz = Factorization::solve(&f, &m.kkt_dlbar(z)?)
+                .ok_or(SolverError::SingularJacobian { iteration: 0 })?;
+            // dE/dL̄ = ∂E/∂L̄ − ∇E·J⁻¹F_L̄.
+            let de = energy_dparam(m, z, Param::Lbar)? - energy_gradient(m, z)?.dot(&dz);
+            Ok((de, f.det_sign()))
+        };
+        let (da, sa) = slope_of(&ma, za)?;
+        let (db, sb) = slope_of(&mb, zb)?;
+        Ok((da - db, sa, sb))
+    }
+
+    /// The equilibria of the two branches at `(x, p)` (re-solved by Newton from `x`).
+    pub fn equilibria(
+        &self,
+        x: &DVector<f64>,
+        p: f64,
+        opts: &SolveOptions,
+    ) -> Result<(Equilibrium, Equilibrium), SolverError> {
+        let (za, zb, lbar) = self.split(x.as_slice())?;
+        let (ma, mb) = self.models_at(lbar, p)?;
+        let newton = SolveOptions {
+            globalization: Globalization::Newton,
+            ..opts.clone()
+        };
+        Ok((
+            solve_from_state(ma, za.to_vec(), &newton)?,
+            solve_from_state(mb, zb.to_vec(), &newton)?,
+        ))
+    }
+
+    /// The same Maxwell problem at other resolutions (`cells_a`, `cells_b` cells, same mesh
+    /// map), with a first guess of the state: each curvature profile resampled
+    /// ([`Equilibrium::resample`]), the closure multipliers (the resolution-independent
+    /// moment) carried over. Newton on the augmented system polishes it.
+    pub fn resampled(
+        &self,
+        x: &DVector<f64>,
+        p: f64,
+        cells_a: usize,
+        cells_b: usize,
+        opts: &SolveOptions,
+    ) -> Result<(MaxwellProblem, DVector<f64>), SolverError> {
+        let (ea, eb) = self.equilibria(x, p, opts)?;
+        let lbar = self.split(x.as_slice())?.2;
+        let redo =
+            |eq: &Equilibrium, cells: usize| -> Result<(SurfaceModel, Vec<f64>), SolverError> {
+                let m = SurfaceModel::new(
+                    eq.model().radius(),
+                    lbar,
+                    cells,
+                    eq.model().stiffness().kind(),
+                )?;
+                if m.dim() != 2 * cells + 3 {
+                    return Err(SolverError::InvalidInput(
+                        "resampling a model with a phase condition".into(),
+                    ));
+                }
+                let mut z = eq.resample(cells)?;
+                z.extend_from_slice(&eq.multiplier());
+                Ok((m, z))
+            };
+        let (ma, za) = redo(&ea, cells_a)?;
+        let (mb, zb) = redo(&eb, cells_b)?;
+        let problem = MaxwellProblem::new(ma, mb, self.param)?;
+        Ok((problem, MaxwellProblem::join(&za, &zb, lbar)))
+    }
+}
+
+impl Problem for MaxwellProblem {
+    type Error = SolverError;
+
+    fn dim(&self) -> usize {
+        self.a.dim() + self.b.dim() + 1
+    }
+
+    fn residual(&self, x: &DVector<f64>, p: f64) -> Result<DVector<f64>, SolverError> {
+        let (za, zb, lbar) = self.split(x.as_slice())?;
+        let (ma, mb) = self.models_at(lbar, p)?;
+        let fa = ma.kkt_residual(za)?;
+        let fb = mb.kkt_residual(zb)?;
+        let mut out = DVector::zeros(self.dim());
+        out.rows_mut(0, fa.len()).copy_from(&fa);
+        out.rows_mut(fa.len(), fb.len()).copy_from(&fb);
+        out[fa.len() + fb.len()] = energy(&ma, za)? - energy(&mb, zb)?;
+        Ok(out)
+    }
+
+    fn jacobian(&self, x: &DVector<f64>, p: f64) -> Result<DMatrix<f64>, SolverError> {
+        let (za, zb, lbar) = self.split(x.as_slice())?;
+        let (ma, mb) = self.models_at(lbar, p)?;
+        let (na, nb) = self.dims();
+        let n = na + nb;
+        let mut j = DMatrix::zeros(n + 1, n + 1);
+        j.view_mut((0, 0), (na, na))
+            .copy_from(&ma.kkt_jacobian(za)?);
+        j.view_mut((na, na), (nb, nb))
+            .copy_from(&mb.kkt_jacobian(zb)?);
+        j.view_mut((0, n), (na, 1)).copy_from(&ma.kkt_dlbar(za)?);
+        j.view_mut((na, n), (nb, 1)).copy_from(&mb.kkt_dlbar(zb)?);
+        let ga = energy_gradient(&ma, za)?;
+        let gb = energy_gradient(&mb, zb)?;
+        j.view_mut((n, 0), (1, na)).copy_from(&ga.transpose());
+        j.view_mut((n, na), (1, nb)).copy_from(&(-gb.transpose()));
+        j[(n, n)] = energy_dparam(&ma, za, Param::Lbar)? - energy_dparam(&mb, zb, Param::Lbar)?;
+        Ok(j)
+    }
+
+    fn dparam(&self, x: &DVector<f64>, p: f64) -> Result<DVector<f64>, SolverError> {
+        let (za, zb, lbar) = self.split(x.as_slice())?;
+        let (ma, mb) = self.models_at(lbar, p)?;
+        let (na, nb) = self.dims();
+        let mut out = DVector::zeros(na + nb + 1);
+        out.rows_mut(0, na)
+            .copy_from(&ma.kkt_dparam(za, self.param)?);
+        out.rows_mut(na, nb)
+            .copy_from(&mb.kkt_dparam(zb, self.param)?);
+        out[na + nb] = energy_dparam(&ma, za, self.param)? - energy_dparam(&mb, zb, self.param)?;
+        if self.log {
+            // d/d(ln θ) = θ d/dθ.
+            out *= self.theta(p);
+        }
+        Ok(out)
+    }
+
+    fn factorize(
+        &self,
+        x: &DVector<f64>,
+        p: f64,
+    ) -> Result<Box<dyn Factorization + '_>, SolverError> {
+        match Bordered::new(self, x, p) {
+            Ok(f) => Ok(Box::new(f)),
+            // A singular pivot block or Schur complement: the dense matrix (the
+            // continuation's bordered solves then work where block elimination cannot).
+            Err(SolverError::SingularJacobian { .. }) => {
+                Ok(Box::new(DenseLu::new(self.jacobian(x, p)?)))
+            }
+            Err(e) => Err(e),
+        }
+    }
+}
+
+/// The augmented Jacobian `[[A, u], [cᵀ, d]]`, `A = diag(J_a, J_b)`, factorised by
+/// bordering: `A` by the two models' block factorisations, then the scalar Schur complement
+/// `s = d − cᵀA⁻¹u`; `det = det J_a · det J_b · s`.
+struct Bordered {
+    fa: ModelFactor,
+    fb: ModelFactor,
+    na: usize,
+    nb: usize,
+    u: DVector<f64>,
+    c: DVector<f64>,
+    d: f64,
+    /// `A⁻¹u`.
+    ainv_u: DVector<f64>,
+    schur: f64,
+}
+
+impl Bordered {
+    fn new(pb: &MaxwellProblem, x: &DVector<f64>, p: f64) -> Result<Self, SolverError> {
+        let (za, zb, lbar) = pb.split(x.as_slice())?;
+        let (ma, mb) = pb.models_at(lbar, p)?;
+        let (na, nb) = pb.dims();
+        let fa = ma.factorize(za, 0.0)?;
+        let fb = mb.factorize(zb, 0.0)?;
+        let mut u = DVector::zeros(na + nb);
+        u.rows_mut(0, na).copy_from(&ma.kkt_dlbar(za)?);
+        u.rows_mut(na, nb).copy_from(&mb.kkt_dlbar(zb)?);
+        let mut c = DVector::zeros(na + nb);
+        c.rows_mut(0, na).copy_from(&energy_gradient(&ma, za)?);
+        c.rows_mut(na, nb).copy_from(&(-energy_gradient(&mb, zb)?));
+        let d = energy_dparam(&ma, za, Param::Lbar)? - energy_dparam(&mb, zb, Param::Lbar)?;
+        let mut me = Self {
+            fa,
+            fb,
+            na,
+            nb,
+            u,
+            c,
+            d,
+            ainv_u: DVector::zeros(0),
+            schur: 0.0,
+        };
+        let ainv_u = me
+            .solve_a(&me.u)
+            .ok_or(SolverError::SingularJacobian { iteration: 0 })?;
+        let schur = me.d - me.c.dot(&ainv_u);
+        let scale = me.d.abs() + me.c.norm() * ainv_u.norm();
+        if !schur.is_finite() || schur.abs() <= 1e-14 * scale {
+            return Err(SolverError::SingularJacobian { iteration: 0 });
+        }
+        me.ainv_u = ainv_u;
+        me.schur = schur;
+        Ok(me)
+    }
+
+    fn solve_a(&self, b: &DVector<f64>) -> Option<DVector<f64>> {
+        let xa = Factorization::solve(&self.fa, &b.rows(0, self.na).into_owned())?;
+        let xb = Factorization::solve(&self.fb, &b.rows(self.na, self.nb).into_owned())?;
+        let mut out = DVector::zeros(self.na + self.nb);
+        out.rows_mut(0, self.na).copy_from(&xa);
+        out.rows_mut(self.na, self.nb).copy_from(&xb);
+        Some(out)
+    }
+}
+
+impl Factorization for Bordered {
+    fn solve(&self, b: &DVector<f64>) -> Option<DVector<f64>> {
+        let n = self.na + self.nb;
+        if b.len() != n + 1 {
+            return None;
+        }
+        let x1 = self.solve_a(&b.rows(0, n).into_owned())?;
+        let y = (b[n] - self.c.dot(&x1)) / self.schur;
+        let x = x1 - &self.ainv_u * y;
+        let out = x.insert_row(n, y);
+        out.iter().all(|v| v.is_finite()).then_some(out)
+    }
+
+    fn apply(&self, v: &DVector<f64>) -> DVector<f64> {
+        let n = self.na + self.nb;
+        if v.len() != n + 1 {
+            return DVector::from_element(n + 1, f64::NAN);
+        }
+        let ya = Factorization::apply(&self.fa, &v.rows(0, self.na).into_owned());
+        let yb = Factorization::apply(&self.fb, &v.rows(self.na, self.nb).into_owned());
+        let mut out = DVector::zeros(n + 1);
+        out.rows_mut(0, self.na).copy_from(&ya);
+        out.rows_mut(self.na, self.nb).copy_from(&yb);
+        for i in 0..n {
+            out[i] += self.u[i] * v[n];
+        }
+        out[n] = self.c.dot(&v.rows(0, n)) + self.d * v[n];
+        out
+    }
+
+    fn det_sign(&self) -> f64 {
+        self.fa.det_sign() * self.fb.det_sign() * self.schur.signum()
+    }
+
+    fn log_abs_det(&self) -> f64 {
+        self.fa.log_abs_det() + self.fb.log_abs_det() + self.schur.abs().ln()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    //! Every derivative of the augmented system against central finite differences, and the
+    //! bordered factorisation against the dense LU of the same matrix.
+
+    use super::*;
+    use rodloop_continuation::{fd_dparam, fd_jacobian};
+    use rodloop_solver::{StartShape, Stiffness};
+
+    fn profile(d1: f64) -> Stiffness {
+        Stiffness::Tanh {
+            d0: 1.0,
+            d1,
+            s0: 0.3,
+            s1: 0.8,
+            // Smooth enough for finite differences on a coarse mesh.
+            gamma: 12.0,
+        }
+    }
+
+    /// A non-equilibrium state: exact loops sampled on the models, arbitrary multipliers.
+    fn problem_and_state(param: Param) -> (MaxwellProblem, DVector<f64>, f64) {
+        let st = profile(0.6);
+        let lbar = 1.4;
+        let ma = SurfaceModel::new(1.0, lbar, 12, &st).unwrap();
+        let mb = SurfaceModel::new(1.0, lbar, 10, &st).unwrap();
+        let mut za = StartShape::Exact { eta: 2 }.gauss_values(&ma).unwrap();
+        za.extend_from_slice(&[0.3, -0.2, 0.1]);
+        let mut zb = StartShape::Exact { eta: 1 }
+            .shifted(lbar, 0.17)
+            .unwrap()
+            .gauss_values(&mb)
+            .unwrap();
+        zb.extend_from_slice(&[-0.1, 0.25, 0.05]);
+        let pb = MaxwellProblem::new(ma, mb, param).unwrap();
+        let p = pb.p_of(pb.models().0.param(param).unwrap());
+        (pb, MaxwellProblem::join(&za, &zb, lbar), p)
+    }
+
+    fn rel_err(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {
+        (a - b).amax() / b.amax().max(1e-300)
+    }
+
+    #[test]
+    fn energy_derivatives_match_finite_differences() {
+        let (pb, x, p) = problem_and_state(Param::D1);
+        let (za, _, lbar) = pb.split(x.as_slice()).unwrap();
+        let (ma, _) = pb.models_at(lbar, p).unwrap();
+        // ∂E/∂z.
+        let g = energy_gradient(&ma, za).unwrap();
+        let fd = fd_jacobian(
+            |z: &DVector<f64>| -> Result<DVector<f64>, SolverError> {
+                Ok(DVector::from_element(1, energy(&ma, z.as_slice())?))
+            },
+            &DVector::from_column_slice(za),
+        )
+        .unwrap();
+        let n = g.len();
+        assert!(
+            rel_err(&DMatrix::from_row_slice(1, n, g.as_slice()), &fd) < 1e-8,
+            "∂E/∂z"
+        );
+        // ∂E/∂L̄ and ∂E/∂θ for every stiffness parameter.
+        for param in [Param::Lbar, Param::D1, Param::Gamma, Param::S0, Param::S1] {
+            let v = ma.param(param).unwrap();
+            let an = energy_dparam(&ma, za, param).unwrap();
+            let fd = fd_dparam(
+                |q| -> Result<DVector<f64>, SolverError> {
+                    let m = ma.with_param(param, q)?;
+                    Ok(DVector::from_element(1, energy(&m, za)?))
+                },
+                v,
+            )
+            .unwrap()[0];
+            assert!(
+                (an - fd).abs() <= 1e-7 * fd.abs().max(1e-3),
+                "∂E/∂{param}: analytic {an}, finite differences {fd}"
+            );
+        }
+    }
+
+    #[test]
+    fn augmented_jacobian_and_parameter_derivative_match_finite_differences() {
+        for param in [Param::D1, Param::Gamma, Param::S0, Param::S1] {
+            let (pb, x, p) = problem_and_state(param);
+            let j = pb.jacobian(&x, p).unwrap();
+            let fd = fd_jacobian(|y| pb.residual(y, p), &x).unwrap();
+            assert!(
+                rel_err(&j, &fd) < 1e-7,
+                "{param}: ∂G/∂x {}",
+                rel_err(&j, &fd)
+            );
+            let dp = pb.dparam(&x, p).unwrap();
+            let fdp = fd_dparam(|q| pb.residual(&x, q), p).unwrap();
+            let e = (&dp - &fdp).amax() / fdp.amax();
+            assert!(e < 1e-7, "{param}: ∂G/∂p {e}");
+        }
+    }
+
+    #[test]
+    fn bordered_factorisation_agrees_with_dense_lu() {
+        let (pb, x, p) = problem_and_state(Param::D1);
+        let f = pb.factorize(&x, p).unwrap();
+        let j = pb.jacobian(&x, p).unwrap();
+        let dense = DenseLu::new(j.clone());
+        let b = DVector::from_fn(pb.dim(), |i, _| ((i * 7 + 3) % 11) as f64 - 5.0);
+        let xs = f.solve(&b).unwrap();
+        let xd = dense.solve(&b).unwrap();
+        assert!((&xs - &xd).amax() <= 1e-8 * xd.amax(), "solve");
+        assert!((&j * &xs - &b).amax() <= 1e-8 * b.amax(), "residual");
+        let v = DVector::from_fn(pb.dim(), |i, _| (i as f64 * 0.37).sin());
+        assert!((f.apply(&v) - &j * &v).amax() <= 1e-12 * (&j * &v).amax());
+        assert_eq!(f.det_sign(), dense.det_sign());
+        assert!((f.log_abs_det() - dense.log_abs_det()).abs() < 1e-8);
+    }
+
+    #[test]
+    fn crossing_slope_is_the_derivative_of_the_energy_gap_along_the_equilibria() {
+        // At equilibria the Schur complement is d(E_a − E_b)/dL̄ with both states re-solved:
+        // compare with central differences of re-solved energies.
+        let st = Stiffness::Tanh {
+            d0: 1.0,
+            d1: 0.9,
+            s0: 0.3,
+            s1: 0.8,
+            gamma: 200.0,
+        };
+        let opts = SolveOptions::default();
+        let a = crate::phase::lowest_placement(1.0, 1.4, 2, 112, &st, &opts).unwrap();
+        let b = crate::phase::lowest_placement(1.0, 1.4, 1, 84, &st, &opts).unwrap();
+        let pb = MaxwellProblem::new(a.model().clone(), b.model().clone(), Param::D1).unwrap();
+        let x = MaxwellProblem::join(&a.state(), &b.state(), 1.4);
+        let (slope, _, _) = pb.crossing_slope(&x, pb.p_of(0.9)).unwrap();
+        let h = 1e-4;
+        let newton = SolveOptions {
+            globalization: Globalization::Newton,
+            ..opts.clone()
+        };
+        let gap = |l: f64| {
+            let ea = solve_from_state(a.model().with_lbar(l).unwrap(), a.state(), &newton).unwrap();
+            let eb = solve_from_state(b.model().with_lbar(l).unwrap(), b.state(), &newton).unwrap();
+            ea.energy().total - eb.energy().total
+        };
+        let fd = (gap(1.4 + h) - gap(1.4 - h)) / (2.0 * h);
+        assert!(
+            (slope - fd).abs() < 1e-6 * fd.abs().max(1.0),
+            "{slope} vs {fd}"
+        );
+    }
+
+    #[test]
+    fn bad_input_is_refused() {
+        let st = profile(0.6);
+        let m = SurfaceModel::new(1.0, 1.4, 12, &st).unwrap();
+        assert!(MaxwellProblem::new(m.clone(), m.clone(), Param::Lbar).is_err());
+        let u = SurfaceModel::new(1.0, 1.4, 12, &Stiffness::uniform(1.0)).unwrap();
+        assert!(MaxwellProblem::new(u.clone(), u, Param::D1).is_err());
+        let pb = MaxwellProblem::new(m.clone(), m, Param::D1).unwrap();
+        assert!(pb.residual(&DVector::zeros(3), 0.0).is_err());
+    }
+}

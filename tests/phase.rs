@@ -1,0 +1,172 @@
+//! End-to-end tests of `rodloop phase`: the critical lengths of a two-segment rod as curves
+//! in D1/D0, through the built binary.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn rodloop(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_rodloop"))
+        .args(args)
+        .output()
+        .expect("run rodloop")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+/// The exact critical lengths of the uniform rod in [1, 3] (exact layer, Sec. 4.3).
+fn exact_crossings() -> Vec<f64> {
+    let d = rodloop_exact::diagram::compute(&rodloop_exact::diagram::DiagramSettings {
+        lbar_min: 1.0,
+        lbar_max: 3.0,
+        eta_max: 4,
+        step: 0.01,
+    })
+    .unwrap();
+    d.critical
+        .iter()
+        .filter(|c| c.kind == rodloop_exact::diagram::CriticalKind::Crossing)
+        .map(|c| c.lbar_cr)
+        .collect()
+}
+
+#[test]
+fn phase_follows_both_exchanges_to_the_uniform_rod_and_down() {
+    let out = tmp("phase-d1");
+    let o = rodloop(&[
+        "phase",
+        "--scene",
+        "data/scenes/inhomogeneous-d1-0.5.toml",
+        "--param",
+        "d1",
+        "--to",
+        "0.01",
+        "--at",
+        "0.5,0.05",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(out.join("phase.csv")).unwrap();
+    assert!(!text.to_lowercase().contains("nan") && !text.contains("inf"));
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    for col in [
+        "param",
+        "value",
+        "lbar_cr",
+        "kind",
+        "from_branch",
+        "to_branch",
+        "energy",
+        "error_estimate",
+    ] {
+        assert!(header.contains(&col), "column {col}");
+    }
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let f = |r: &Vec<&str>, name: &str| r[col(name)].parse::<f64>().unwrap();
+    let exact = exact_crossings();
+    for (k, ex) in exact.iter().enumerate() {
+        let curve: Vec<&Vec<&str>> = rows
+            .iter()
+            .filter(|r| r[col("curve")] == (k + 1).to_string())
+            .collect();
+        assert!(curve.len() > 10, "curve {k} has {} rows", curve.len());
+        // The limit at D1/D0 = 1 meets the uniform rod's exact value to its estimate.
+        let lim = curve
+            .iter()
+            .find(|r| r[col("source")] == "limit")
+            .expect("limit row");
+        assert_eq!(f(lim, "value"), 1.0);
+        let dev = (f(lim, "lbar_cr") - ex).abs();
+        assert!(
+            dev <= 2.0 * f(lim, "error_estimate"),
+            "curve {k}: deviation {dev:.2e}"
+        );
+        // --at 0.5 gives a row on both curves, exactly at 0.5.
+        assert!(curve
+            .iter()
+            .any(|r| r[col("source")] == "fixed" && f(r, "value") == 0.5));
+        // Every row's L̄_cr stays near its exchange and has a finite positive estimate.
+        for r in &curve {
+            assert!((f(r, "lbar_cr") - ex).abs() < 0.1);
+            assert!(f(r, "error_estimate") >= 0.0 && f(r, "error_estimate") < 1e-5);
+        }
+    }
+    // The second curve (near 2.43) reaches the target; the first ends at a fold above it,
+    // said in summary.json and on stderr.
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let curves = summary["curves"].as_array().unwrap();
+    assert_eq!(curves.len(), 2);
+    let kinds: Vec<&str> = curves
+        .iter()
+        .map(|c| c["ends"][0]["kind"].as_str().unwrap())
+        .collect();
+    assert_eq!(kinds, ["fold", "reached"]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("fold"), "{stderr}");
+    assert!(
+        stderr.contains("--at 0.05: outside the traced range"),
+        "{stderr}"
+    );
+    let svg = std::fs::read_to_string(out.join("phase.svg")).unwrap();
+    assert!(svg.contains("log₁₀(D1/D0)") && svg.contains("lowest"));
+    assert!(out.join("phase.png").exists());
+}
+
+#[test]
+fn phase_refuses_bad_input() {
+    let out = tmp("phase-bad");
+    let o = out.to_str().unwrap();
+    let scene = "data/scenes/inhomogeneous-d1-0.5.toml";
+    for (args, msg) in [
+        (
+            vec![
+                "phase", "--scene", scene, "--param", "d2", "--to", "0.1", "--out", o,
+            ],
+            "unknown parameter",
+        ),
+        (
+            vec![
+                "phase", "--scene", scene, "--param", "d1", "--to", "2", "--out", o,
+            ],
+            "crosses the uniform rod",
+        ),
+        (
+            vec![
+                "phase", "--scene", scene, "--param", "lbar", "--to", "2", "--out", o,
+            ],
+            "lbar",
+        ),
+        (
+            vec![
+                "phase",
+                "--scene",
+                "data/scenes/homogeneous-surface.toml",
+                "--to",
+                "0.1",
+                "--out",
+                o,
+            ],
+            "two-segment",
+        ),
+        (
+            vec![
+                "phase", "--scene", scene, "--to", "0.1", "--at", "0.2,-1", "--out", o,
+            ],
+            "--at",
+        ),
+    ] {
+        let r = rodloop(&args);
+        assert!(!r.status.success(), "{args:?}");
+        let e = String::from_utf8_lossy(&r.stderr);
+        assert!(e.contains(msg), "{args:?}: {e}");
+        assert!(!e.contains("panicked"), "{e}");
+    }
+    assert!(!out.join("phase.csv").exists());
+}
