@@ -47,6 +47,21 @@ pub struct Args {
     /// model only).
     #[arg(long)]
     pub resume: bool,
+    /// Largest continuation step, in the tracer's scaled arclength (numeric model; default
+    /// 0.6 / 0.25 / 0.2 for fast / default / high).
+    #[arg(long)]
+    pub max_step: Option<f64>,
+    /// Smallest continuation step before a branch end is declared (numeric model; default
+    /// 1e-6).
+    #[arg(long)]
+    pub min_step: Option<f64>,
+    /// Most continuation points per direction of a branch (numeric model; default 1000).
+    #[arg(long)]
+    pub max_points: Option<usize>,
+    /// Newton tolerance of the continuation corrector, max-norm of the scaled residual
+    /// (numeric model; default 1e-10).
+    #[arg(long)]
+    pub newton_tol: Option<f64>,
     /// No progress output on stderr (bars on a terminal, one line per branch otherwise).
     #[arg(long)]
     pub quiet: bool,
@@ -205,6 +220,15 @@ pub fn run(args: &Args) -> Result<()> {
             "--resume applies to --model numeric only: the exact diagram takes milliseconds and is always computed afresh"
         );
     }
+    if args.max_step.is_some()
+        || args.min_step.is_some()
+        || args.max_points.is_some()
+        || args.newton_tol.is_some()
+    {
+        bail!(
+            "--max-step, --min-step, --max-points and --newton-tol control the numeric model's continuation; the exact model samples closed-form loops (use --step)"
+        );
+    }
     // Energies and lengths are normalised (E R/(pi D), L/(2 pi R)), so R does not matter.
     if !scene.stiffness.is_uniform() {
         bail!(
@@ -345,6 +369,12 @@ fn run_numeric(
         lbar_min,
         lbar_max,
         accuracy,
+        controls: rodloop_diagram::TraceControls {
+            max_step: args.max_step,
+            min_step: args.min_step,
+            max_points: args.max_points,
+            newton_tol: args.newton_tol,
+        },
         ..Default::default()
     };
     opts.validate()?;

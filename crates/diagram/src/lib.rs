@@ -73,6 +73,7 @@ pub mod types;
 
 pub use buckling::{Buckling, BucklingReport, Switching};
 pub use compute::{compute, BranchHook, Origin, Resume};
+// (TraceControls is defined in this file.)
 pub use critical::{CriticalKind, CriticalLength};
 pub use diagram::{
     assemble, BranchSummary, DiagramRow, DiagramSummary, NumericDiagram, SpecialKind, SpecialPoint,
@@ -195,6 +196,56 @@ pub struct DiagramOptions {
     /// Only these paper branch numbers ([`rodloop_exact::branch_of_eta`]); `None`: all of
     /// [`DiagramOptions::etas`]. Not part of the fingerprint.
     pub only_branches: Option<Vec<u32>>,
+    /// Continuation controls of the tracing (`None` fields: the accuracy level's values).
+    pub controls: TraceControls,
+}
+
+/// Continuation controls a user may set (`None`: the accuracy level's value). Steps are in
+/// the tracer's scaled pseudo-arclength (unknowns scaled by `R/√n`, plus `L̄`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TraceControls {
+    /// Largest step (default 0.6 / 0.25 / 0.2 for fast / default / high).
+    pub max_step: Option<f64>,
+    /// Smallest step before a branch end is declared (default 1e-6).
+    pub min_step: Option<f64>,
+    /// Most continuation points per direction of a branch (default 1000).
+    pub max_points: Option<usize>,
+    /// Newton tolerance of the corrector, max-norm of the scaled residual (default 1e-10).
+    pub newton_tol: Option<f64>,
+}
+
+impl TraceControls {
+    /// Whether every control is at its default.
+    pub fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
+
+    fn validate(&self) -> Result<(), String> {
+        if let Some(v) = self.max_step {
+            if !(v.is_finite() && v > 0.0 && v <= 10.0) {
+                return Err(format!("max_step must lie in (0, 10] (got {v})"));
+            }
+        }
+        if let Some(v) = self.min_step {
+            let hi = self.max_step.unwrap_or(0.2);
+            if !(v.is_finite() && v > 0.0 && v < hi) {
+                return Err(format!(
+                    "min_step must be positive and below max_step = {hi} (got {v})"
+                ));
+            }
+        }
+        if let Some(v) = self.max_points {
+            if !(10..=100_000).contains(&v) {
+                return Err(format!("max_points must lie in [10, 100000] (got {v})"));
+            }
+        }
+        if let Some(v) = self.newton_tol {
+            if !(v.is_finite() && (1e-14..=1e-4).contains(&v)) {
+                return Err(format!("newton_tol must lie in [1e-14, 1e-4] (got {v})"));
+            }
+        }
+        Ok(())
+    }
 }
 
 impl Default for DiagramOptions {
@@ -212,6 +263,7 @@ impl Default for DiagramOptions {
             threads: 0,
             param: Param::Lbar,
             only_branches: None,
+            controls: TraceControls::default(),
         }
     }
 }
@@ -249,6 +301,9 @@ impl DiagramOptions {
                 "end_distance must lie in (0, 0.01) (got {})",
                 self.end_distance
             ));
+        }
+        if let Err(m) = self.controls.validate() {
+            return bad(m);
         }
         if let Some(c) = self.trace_cells_per_period {
             if !(4..=400).contains(&c) {
@@ -336,7 +391,11 @@ impl DiagramOptions {
             self.accuracy,
             self.trace_cells_per_period(),
             self.end_distance
-        )
+        ) + &if self.controls.is_default() {
+            String::new()
+        } else {
+            format!(";controls={:?}", self.controls)
+        }
     }
 }
 

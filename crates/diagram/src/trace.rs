@@ -51,13 +51,15 @@ fn step_bounds(opts: &DiagramOptions) -> (f64, f64) {
 /// unknowns.
 pub(crate) fn march_settings(opts: &DiagramOptions, limit: f64, shape: usize) -> MarchSettings {
     let (ds_max, ds) = step_bounds(opts);
+    let c = &opts.controls;
+    let ds_max = c.max_step.unwrap_or(ds_max);
     MarchSettings {
         limit,
-        ds,
-        ds_min: 1e-6,
+        ds: ds.min(ds_max),
+        ds_min: c.min_step.unwrap_or(1e-6),
         ds_max,
-        max_steps: MAX_STEPS_PER_SIDE,
-        tol: 1e-10,
+        max_steps: c.max_points.unwrap_or(MAX_STEPS_PER_SIDE),
+        tol: c.newton_tol.unwrap_or(1e-10),
         locate_tol: 1e-8,
         scaled: shape,
         scale: opts.radius / (shape.max(1) as f64).sqrt(),
@@ -277,7 +279,8 @@ fn trace_side(
                 cause.map(|c| format!(" ({c})")).unwrap_or_default()
             )),
             MarchStop::MaxSteps => Some(format!(
-                "the continuation used up its budget of {MAX_STEPS_PER_SIDE} steps"
+                "the continuation used up its budget of {} steps (raise it with --max-points)",
+                opts.controls.max_points.unwrap_or(MAX_STEPS_PER_SIDE)
             )),
             MarchStop::ClosedLoop => Some("the continuation closed a loop".into()),
             MarchStop::Known => Some("the continuation met a known branch".into()),
