@@ -160,12 +160,59 @@ pub struct KktFactor {
     log_abs_det: f64,
     n_mult: usize,
     regularized: bool,
-    /// What `J v` needs: the cell terms, the closure Jacobian, the phase gradient and the
-    /// diagonal shift `shift · D0 · w_a`.
+    /// What `J v` needs (kept so that refinement residuals do not recompute the chain).
+    product: KktProduct,
+}
+
+/// The (shifted) Newton matrix as an operator, `v ↦ J v`, in `O(N)`: the cell terms, the
+/// closure Jacobian, the phase gradient and the diagonal shift `shift · D0 · w_a`.
+struct KktProduct {
     terms: CellTerms,
     closure_jac: DMatrix<f64>,
     phase_grad: Option<Vec<f64>>,
     shift_w: Vec<f64>,
+}
+
+impl KktProduct {
+    fn new(model: &SurfaceModel, z: &[f64], shift: f64) -> Result<Self, SolverError> {
+        let (kappa, mu, _) = model.split(z)?;
+        model.check_kappa(kappa)?;
+        let ch = model.chain(kappa);
+        let d0 = model.stiffness().kind().reference();
+        Ok(Self {
+            terms: CellTerms::new(model, &ch, kappa.len(), &V3::from(mu)),
+            closure_jac: model.closure_jacobian_from(&ch),
+            phase_grad: model.phase().map(|ph| ph.gradient()),
+            shift_w: (0..kappa.len())
+                .map(|a| shift * d0 * model.cell_weight(a / 2))
+                .collect(),
+        })
+    }
+
+    /// `(∇²ℒ dκ − shift·W dκ − ∇cᵀdμ − ∇φ dν, −∇c dκ, −∇φᵀdκ)`.
+    fn apply(&self, v: &DVector<f64>) -> DVector<f64> {
+        let n = self.shift_w.len();
+        let dk = &v.as_slice()[..n];
+        let hv = self.terms.hessian_vector(dk);
+        let cj = &self.closure_jac;
+        let mut out = DVector::zeros(v.len());
+        for a in 0..n {
+            out[a] = hv[a]
+                - self.shift_w[a] * dk[a]
+                - (0..3).map(|k| cj[(k, a)] * v[n + k]).sum::<f64>();
+        }
+        for k in 0..3 {
+            out[n + k] = -(0..n).map(|a| cj[(k, a)] * dk[a]).sum::<f64>();
+        }
+        if let Some(g) = &self.phase_grad {
+            let dnu = v[n + 3];
+            for a in 0..n {
+                out[a] -= g[a] * dnu;
+            }
+            out[n + 3] = -g.iter().zip(dk).map(|(g, d)| g * d).sum::<f64>();
+        }
+        out
+    }
 }
 
 /// `min |U_ii| / max |U_ii|` of an LU factorisation (0 if not finite).
@@ -204,20 +251,15 @@ impl KktFactor {
     /// Factorise the Newton matrix of `model` at the KKT state `z = (κ, μ, ν)`, with the
     /// curvature block shifted by `−shift · W` (`shift = 0` for Newton steps).
     pub fn new(model: &SurfaceModel, z: &[f64], shift: f64) -> Result<Self, SolverError> {
-        let (kappa, mu, _) = model.split(z)?;
-        let ch = model.chain(kappa);
-        let terms = CellTerms::new(model, &ch, kappa.len(), &V3::from(mu));
-        let closure_jac = model.closure_jacobian_from(&ch);
-        Self::from_terms(model, terms, closure_jac, shift)
+        Self::from_product(model, KktProduct::new(model, z, shift)?, shift)
     }
 
-    fn from_terms(
+    fn from_product(
         model: &SurfaceModel,
-        terms: CellTerms,
-        closure_jac: DMatrix<f64>,
+        product: KktProduct,
         shift: f64,
     ) -> Result<Self, SolverError> {
-        let t = &terms;
+        let t = &product.terms;
         let n = model.cells();
         let d0 = model.stiffness().kind().reference();
         let mut blocks: Vec<Block> = Vec::with_capacity(n + 1);
@@ -318,12 +360,7 @@ impl KktFactor {
             log_abs_det,
             n_mult: model.n_multipliers(),
             regularized,
-            phase_grad: model.phase().map(|ph| ph.gradient()),
-            shift_w: (0..2 * n)
-                .map(|a| shift * d0 * model.cell_weight(a / 2))
-                .collect(),
-            closure_jac,
-            terms,
+            product,
         };
         if let Some(ph) = model.phase() {
             let mut b = DVector::zeros(2 * n + 3);
@@ -408,27 +445,7 @@ impl KktFactor {
     /// The factorised (shifted) matrix applied to `v` (layout `(κ, μ, ν)`), in `O(N)`:
     /// the residual of an iterative refinement.
     pub fn apply(&self, v: &DVector<f64>) -> DVector<f64> {
-        let n = 2 * self.cells;
-        let dk = &v.as_slice()[..n];
-        let hv = self.terms.hessian_vector(dk);
-        let cj = &self.closure_jac;
-        let mut out = DVector::zeros(v.len());
-        for a in 0..n {
-            out[a] = hv[a]
-                - self.shift_w[a] * dk[a]
-                - (0..3).map(|k| cj[(k, a)] * v[n + k]).sum::<f64>();
-        }
-        for k in 0..3 {
-            out[n + k] = -(0..n).map(|a| cj[(k, a)] * dk[a]).sum::<f64>();
-        }
-        if let Some(g) = &self.phase_grad {
-            let dnu = v[n + 3];
-            for a in 0..n {
-                out[a] -= g[a] * dnu;
-            }
-            out[n + 3] = -g.iter().zip(dk).map(|(g, d)| g * d).sum::<f64>();
-        }
-        out
+        self.product.apply(v)
     }
 
     /// Sign of `det J`, `J` the dense Newton matrix.
@@ -533,13 +550,7 @@ impl SurfaceModel {
                 found: v.len(),
             });
         }
-        let z: Vec<f64> = kappa.iter().chain(mu.iter()).copied().collect();
-        let _ = self.split(
-            &z.iter()
-                .copied()
-                .chain(std::iter::repeat_n(0.0, self.n_multipliers() - 3))
-                .collect::<Vec<_>>(),
-        )?;
+        self.check_kappa(kappa)?;
         let ch = self.chain(kappa);
         Ok(CellTerms::new(self, &ch, kappa.len(), &V3::from(*mu)).hessian_vector(v))
     }
@@ -549,25 +560,12 @@ impl SurfaceModel {
     /// The Newton matrix applied to a vector, `J dz` (layout `(κ, μ, ν)`), in `O(N)`:
     /// `(∇²ℒ dκ − ∇cᵀdμ − ∇φ dν, −∇c dκ, −∇φᵀdκ)`.
     pub fn kkt_apply(&self, z: &[f64], dz: &[f64]) -> Result<DVector<f64>, SolverError> {
-        let (kappa, mu, _) = self.split(z)?;
-        let (dk, dmu, dnu) = self.split(dz)?;
-        let hv = self.hessian_vector(kappa, &mu, dk)?;
-        let cj = self.closure_jacobian(kappa)?;
-        let n = self.n_kappa();
-        let mut out = DVector::zeros(self.dim());
-        for a in 0..n {
-            out[a] = hv[a] - (0..3).map(|k| cj[(k, a)] * dmu[k]).sum::<f64>();
+        if dz.len() != self.dim() {
+            return Err(SolverError::WrongLength {
+                expected: self.dim(),
+                found: dz.len(),
+            });
         }
-        for k in 0..3 {
-            out[n + k] = -(0..n).map(|a| cj[(k, a)] * dk[a]).sum::<f64>();
-        }
-        if let Some(ph) = self.phase() {
-            let g = ph.gradient();
-            for a in 0..n {
-                out[a] -= g[a] * dnu;
-            }
-            out[n + 3] = -g.iter().zip(dk).map(|(g, d)| g * d).sum::<f64>();
-        }
-        Ok(out)
+        Ok(KktProduct::new(self, z, 0.0)?.apply(&DVector::from_column_slice(dz)))
     }
 }

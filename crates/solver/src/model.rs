@@ -380,7 +380,7 @@ impl SurfaceModel {
         &self.d_gauss
     }
 
-    fn check_kappa(&self, kappa: &[f64]) -> Result<(), SolverError> {
+    pub(crate) fn check_kappa(&self, kappa: &[f64]) -> Result<(), SolverError> {
         check_len(kappa.len(), self.n_kappa())?;
         if let Some(i) = kappa.iter().position(|v| !v.is_finite()) {
             return Err(SolverError::InvalidInput(format!(
