@@ -79,7 +79,7 @@ pub fn load_scene(path: Option<&Path>) -> Result<Scene> {
     };
     if scene.confinement == Confinement::Enclosed {
         bail!(
-            "scene {}: confinement = \"enclosed\" is not modelled yet (the paper finds that stable homogeneous loops stay on the surface for 1 <= lbar <= 3, Sec. 3.2); use confinement = \"surface\"",
+            "scene {}: confinement = \"enclosed\" is solved by `rodloop solve` and compared with the surface by `rodloop compare --scene enclosed`; this command covers surface scenes only (the enclosed branch diagram is not built yet, and the paper's Sec. 3.2 hypothesis that stable loops stay attached fails for 1.3799 < lbar < 1.5061: see the README)",
             scene.name
         );
     }

@@ -9,7 +9,7 @@
 //! # Homogeneous loops on the sphere (paper Secs. 3.1 and 4).
 //! name = "homogeneous-surface"
 //! radius = 1.0                  # sphere radius R
-//! confinement = "surface"       # |r| = R ("enclosed", |r| <= R, is not modelled yet)
+//! confinement = "surface"       # |r| = R ("enclosed": |r| <= R, solve and compare only)
 //! lbar_min = 1.0                # range of L/(2 pi R) for diagrams
 //! lbar_max = 5.0
 //! accuracy = "default"          # fast | default | high
@@ -77,7 +77,7 @@ pub enum Confinement {
     /// On the sphere, `|r| = R`.
     #[default]
     Surface,
-    /// Inside the sphere, `|r| ≤ R` (not modelled yet).
+    /// Inside the sphere, `|r| ≤ R` (`solve` and `compare --scene enclosed`; no diagram yet).
     Enclosed,
 }
 
