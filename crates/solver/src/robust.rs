@@ -13,6 +13,7 @@ use rodloop_continuation::{Continuation, Direction, PseudoArclength};
 
 use crate::accuracy::{finish_with_accuracy, solve_cells, Accuracy, AccurateEquilibrium};
 use crate::identify::identify_equilibrium;
+use crate::model::SurfaceModel;
 use crate::param::Param;
 use crate::seam::ParamProblem;
 use crate::solve::{solve_from_state, Equilibrium, Globalization, SolveOptions};
@@ -32,6 +33,18 @@ pub enum Strategy {
         /// The shift of the start's origin.
         shift: f64,
         /// Why the unshifted start was not used.
+        reason: String,
+    },
+    /// Continuation in `L̄` from another length `from` of the branch (solved directly, at the
+    /// scene's stiffness) to the target.
+    ContinuationInLbar {
+        /// The shift of the start's origin used at `from`.
+        shift: f64,
+        /// The length the branch was solved at first.
+        from: f64,
+        /// Accepted continuation steps.
+        steps: usize,
+        /// Why the direct solve was not used.
         reason: String,
     },
     /// Continuation in `D1/D0` from `from` (solved directly) to the target.
@@ -54,6 +67,14 @@ impl Strategy {
             Strategy::Direct => "Newton from the start".into(),
             Strategy::Shifted { shift, reason } => format!(
                 "Newton from the start with its origin moved by {shift} of the length, because from the start as given the solve {reason}"
+            ),
+            Strategy::ContinuationInLbar {
+                shift,
+                from,
+                steps,
+                reason,
+            } => format!(
+                "continuation in L̄ from {from} ({steps} steps, start origin moved by {shift}), because the direct solve {reason}"
             ),
             Strategy::ContinuationInD1 {
                 shift,
@@ -122,7 +143,10 @@ pub fn solve_robust(
     // The start with its origin moved along the loop: a non-uniform rod meets the shape
     // elsewhere, and another arrangement may be within Newton's reach.
     let per = 1.0 / periods.max(1) as f64;
-    let shifts: Vec<f64> = [0.25, 0.5, 0.75].iter().map(|f| f * per).collect();
+    let shifts: Vec<f64> = [0.125, 0.25, 0.375, 0.5, 0.625, 0.75, 0.875]
+        .iter()
+        .map(|f| f * per)
+        .collect();
     let t0 = std::time::Instant::now();
     let deadline = t0 + BUDGET;
     for &shift in &shifts {
@@ -134,60 +158,105 @@ pub fn solve_robust(
             return Ok((acc, Strategy::Shifted { shift, reason }));
         }
     }
-    let Stiffness::Tanh { d0, d1, .. } = stiffness else {
-        return Err(SolverError::InvalidInput(format!(
-            "the solve {reason} (also with the start's origin moved by {shifts:?}); \
-             try --from a state of this branch at a nearby length"
-        )));
-    };
-    let target = d1 / d0;
     let mut tried = Vec::new();
-    // Energies of the mild-contrast states already followed: starts that relax to the same
-    // state are not followed twice.
-    let mut seen: Vec<f64> = Vec::new();
-    for &from in MILD.iter().filter(|&&m| m > target) {
-        for shift in std::iter::once(0.0).chain(shifts.iter().copied()) {
-            if std::time::Instant::now() > deadline {
-                tried.push(format!(
-                    "stopped after {:.0} s, the time budget of the fallbacks",
-                    BUDGET.as_secs_f64()
-                ));
-                break;
-            }
-            let shifted = start.shifted(lbar, shift)?;
-            let outcome = homotopy(
-                radius, lbar, n, stiffness, &shifted, from, target, eta, opts, &mut seen, deadline,
-            );
-            match outcome {
-                Ok(Some((main, steps))) => {
-                    let acc = match finish_with_accuracy(
-                        main, radius, stiffness, &shifted, accuracy, opts,
-                    ) {
-                        Ok(acc) => acc,
-                        Err(e) => {
-                            tried.push(format!(
-                                "from D1/D0 = {from}, origin moved by {shift}: the companion solve failed ({e})"
-                            ));
-                            continue;
-                        }
-                    };
-                    return Ok((
-                        acc,
-                        Strategy::ContinuationInD1 {
-                            shift,
-                            from,
-                            steps,
-                            reason,
-                        },
+    // Continuation in ln(D1/D0) from a mild contrast, where the start is within reach.
+    if let Stiffness::Tanh { d0, d1, .. } = stiffness {
+        let target = d1 / d0;
+        // Energies of the mild-contrast states already followed: starts that relax to the same
+        // state are not followed twice.
+        let mut seen: Vec<f64> = Vec::new();
+        for &from in MILD.iter().filter(|&&m| m > target) {
+            for shift in std::iter::once(0.0).chain(shifts.iter().copied()) {
+                if std::time::Instant::now() > deadline {
+                    tried.push(format!(
+                        "stopped after {:.0} s, the time budget of the fallbacks",
+                        BUDGET.as_secs_f64()
                     ));
+                    break;
                 }
-                Ok(None) => {}
-                Err(e) => tried.push(format!("from D1/D0 = {from}, origin moved by {shift}: {e}")),
+                let shifted = start.shifted(lbar, shift)?;
+                let outcome = homotopy(
+                    radius, lbar, n, stiffness, &shifted, from, target, eta, opts, &mut seen,
+                    deadline,
+                );
+                match outcome {
+                    Ok(Some((main, steps))) => {
+                        let acc = match finish_with_accuracy(
+                            main, radius, stiffness, &shifted, accuracy, opts,
+                        ) {
+                            Ok(acc) => acc,
+                            Err(e) => {
+                                tried.push(format!(
+                                    "from D1/D0 = {from}, origin moved by {shift}: the companion solve failed ({e})"
+                                ));
+                                continue;
+                            }
+                        };
+                        return Ok((
+                            acc,
+                            Strategy::ContinuationInD1 {
+                                shift,
+                                from,
+                                steps,
+                                reason,
+                            },
+                        ));
+                    }
+                    Ok(None) => {}
+                    Err(e) => {
+                        tried.push(format!("from D1/D0 = {from}, origin moved by {shift}: {e}"))
+                    }
+                }
+            }
+        }
+    }
+    // The same family at other lengths of the branch's range at the scene's stiffness,
+    // followed in L̄ (its own time budget).
+    let deadline = std::time::Instant::now() + BUDGET;
+
+    if let (Some(want), StartShape::Euler { .. } | StartShape::Exact { .. }) = (eta, start) {
+        let e = f64::from(want);
+        let (lo, hi) = (if want == 1 { 0.0 } else { e - 1.0 }, e + 1.0);
+        let mut seeds: Vec<f64> = [0.5, 0.25, 0.75]
+            .iter()
+            .map(|f| lo + f * (hi - lo))
+            .filter(|l| (l - lbar).abs() > 0.02)
+            .collect();
+        seeds.sort_by(|a, b| (a - lbar).abs().total_cmp(&(b - lbar).abs()));
+        let mut seen: Vec<f64> = Vec::new();
+        'seeds: for &from in &seeds {
+            for shift in std::iter::once(0.0).chain(shifts.iter().copied()) {
+                if std::time::Instant::now() > deadline {
+                    break 'seeds;
+                }
+                let shifted = start.shifted(from, shift)?;
+                match lbar_path(
+                    radius, lbar, n, stiffness, &shifted, from, want, opts, &mut seen, deadline,
+                ) {
+                    Ok(Some((main, steps))) => {
+                        if let Ok(acc) = check(Ok(main)).and_then(|main| {
+                            finish_with_accuracy(main, radius, stiffness, start, accuracy, opts)
+                                .map_err(|e| e.to_string())
+                        }) {
+                            return Ok((
+                                acc,
+                                Strategy::ContinuationInLbar {
+                                    shift,
+                                    from,
+                                    steps,
+                                    reason,
+                                },
+                            ));
+                        }
+                    }
+                    Ok(None) => {}
+                    Err(e) => tried.push(format!("from L̄ = {from}, origin moved by {shift}: {e}")),
+                }
             }
         }
     }
     Err(SolverError::InvalidInput(format!(
-        "the direct solve {reason}; continuation in D1/D0 did not reach {target} either: {}. \
+        "the direct solve {reason} (also with the start's origin moved by {shifts:?}); {}. \
          Try --from a state of this branch at a nearby length",
         tried.join("; ")
     )))
@@ -256,75 +325,187 @@ fn homotopy(
         }
     }
     let problem = ParamProblem::new(eq0.model().clone(), Param::D1)?;
-    let log_problem = LogParam(problem.clone());
+    let (eq, steps) = follow_to(&problem, &eq0, from, target, true, opts, deadline).map_err(
+        |Stuck { folds, reached }| match folds.is_empty() {
+            false => SolverError::InvalidInput(format!(
+                "the branch turns back in D1/D0 at {} (folds) and reaches no lower than \
+                 D1/D0 = {reached:.4}: it does not exist at {target} with this arrangement of \
+                 the soft segment",
+                fmt_list(&folds)
+            )),
+            true => SolverError::InvalidInput(format!(
+                "continuation in D1/D0 stopped at {reached:.4} before {target}"
+            )),
+        },
+    )?;
+    Ok(Some((eq, steps)))
+}
+
+/// Solve the branch at another length `from` of its range, at the scene's stiffness, and
+/// continue in `L̄` to `lbar`. `Ok(None)` when the state at `from` was already followed.
+#[allow(clippy::too_many_arguments)]
+fn lbar_path(
+    radius: f64,
+    lbar: f64,
+    cells: usize,
+    stiffness: &Stiffness,
+    start: &StartShape,
+    from: f64,
+    want: u32,
+    opts: &SolveOptions,
+    seen: &mut Vec<f64>,
+    deadline: std::time::Instant,
+) -> Result<Option<(Equilibrium, usize)>, SolverError> {
+    let eq0 = solve_cells(radius, from, cells, stiffness, start, None, opts)?;
+    let e0 = eq0.energy().total;
+    if seen
+        .iter()
+        .any(|e| (e - e0).abs() <= 1e-9 * e0.abs().max(1.0))
+    {
+        return Ok(None);
+    }
+    seen.push(e0);
+    let p = identify_equilibrium(&eq0)?;
+    if p.eta != want {
+        return Err(SolverError::InvalidInput(format!(
+            "at L̄ = {from} the start relaxes to a state with {} periods of κ_g, not {want}",
+            p.eta
+        )));
+    }
+    let problem = ParamProblem::new(eq0.model().clone(), Param::Lbar)?;
+    let (eq, steps) = follow_to(&problem, &eq0, from, lbar, false, opts, deadline).map_err(
+        |Stuck { folds, reached }| {
+            SolverError::InvalidInput(match folds.is_empty() {
+                false => format!(
+                    "the family seeded at L̄ = {from} turns back at L̄ = {} and reaches no \
+                     closer than L̄ = {reached:.4}",
+                    fmt_list(&folds)
+                ),
+                true => format!("continuation in L̄ from {from} stopped at L̄ = {reached:.4}"),
+            })
+        },
+    )?;
+    Ok(Some((eq, steps)))
+}
+
+/// The values to 4 decimals, repeats (a fold passed back and forth) once.
+fn fmt_list(v: &[f64]) -> String {
+    let mut seen: Vec<String> = Vec::new();
+    for f in v {
+        let t = format!("{f:.4}");
+        if !seen.contains(&t) {
+            seen.push(t);
+        }
+    }
+    seen.join(", ")
+}
+
+/// Why [`follow_to`] did not reach its target: the folds passed and the closest parameter
+/// value reached.
+struct Stuck {
+    folds: Vec<f64>,
+    reached: f64,
+}
+
+/// Continue the equilibrium `eq0` of `problem` (a one-parameter family at `from`) until the
+/// parameter reaches `target`, then correct there with Newton. `log`: continue in `ln θ`
+/// (decades of `D1/D0` at even steps). Gives up after 4 folds, when the family turns away
+/// from the target for good, at the deadline or when the continuation stops.
+fn follow_to(
+    problem: &ParamProblem<SurfaceModel>,
+    eq0: &Equilibrium,
+    from: f64,
+    target: f64,
+    log: bool,
+    opts: &SolveOptions,
+    deadline: std::time::Instant,
+) -> Result<(Equilibrium, usize), Stuck> {
+    let (q0, qt) = if log {
+        (from.ln(), target.ln())
+    } else {
+        (from, target)
+    };
+    let value = |q: f64| if log { q.exp() } else { q };
+    let stuck = |folds: Vec<f64>, reached: f64| Stuck { folds, reached };
+    let direction = if qt < q0 {
+        Direction::Backward
+    } else {
+        Direction::Forward
+    };
+    let (ds, ds_max) = if log { (0.05, 0.5) } else { (0.05, 1.0) };
     let settings = PseudoArclength::new()
-        .with_ds(0.05)
-        .and_then(|s| s.with_ds_bounds(1e-7, 0.5))
-        .and_then(|s| s.with_direction(Direction::Backward))
+        .with_ds(ds)
+        .and_then(|s| s.with_ds_bounds(1e-7, ds_max))
+        .and_then(|s| s.with_direction(direction))
         .and_then(|s| s.with_max_steps(400))
         .and_then(|s| s.with_detect_branch_points(false))
-        .map_err(|e| SolverError::InvalidInput(e.to_string()))?;
-    let cont = Continuation::new(&log_problem, settings);
+        .map_err(|_| stuck(vec![], from))?;
     let x0 = DVector::from_vec(eq0.state());
-    let mut stepper = cont
-        .start(&x0, from.ln())
-        .map_err(|e| SolverError::InvalidInput(format!("continuation in D1/D0: {e}")))?;
-    let mut prev = (x0, from);
-    // Folds passed (the branch may turn back in D1/D0 and come down again on its other
-    // side); the lowest D1/D0 reached.
+    let outcome = if log {
+        let lp = LogParam(problem.clone());
+        run_to(&lp, &settings, &x0, q0, qt, deadline)
+    } else {
+        run_to(problem, &settings, &x0, q0, qt, deadline)
+    };
+    let (z, steps) = outcome.map_err(|(folds, reached)| {
+        stuck(folds.into_iter().map(value).collect(), value(reached))
+    })?;
+    let model = problem
+        .model_at(target)
+        .map_err(|_| stuck(vec![], target))?;
+    let newton = SolveOptions {
+        globalization: Globalization::Newton,
+        ..opts.clone()
+    };
+    let eq = solve_from_state(model, z.as_slice().to_vec(), &newton)
+        .map_err(|_| stuck(vec![], target))?;
+    Ok((eq, steps))
+}
+
+/// The stepping loop of [`follow_to`] in the continued parameter `q`: the state linearly
+/// interpolated at `qt` once bracketed, with the number of steps; else the folds passed and
+/// the closest `q` reached.
+fn run_to<P: rodloop_continuation::Problem>(
+    problem: &P,
+    settings: &PseudoArclength,
+    x0: &DVector<f64>,
+    q0: f64,
+    qt: f64,
+    deadline: std::time::Instant,
+) -> Result<(DVector<f64>, usize), (Vec<f64>, f64)> {
+    let cont = Continuation::new(problem, settings.clone());
+    let mut stepper = cont.start(x0, q0).map_err(|_| (vec![], q0))?;
+    let sign = (qt - q0).signum();
+    let mut prev = (x0.clone(), q0);
     let mut folds = Vec::new();
-    let mut lowest = from;
+    let mut closest = q0;
     loop {
         if std::time::Instant::now() > deadline {
-            return Err(SolverError::InvalidInput(format!(
-                "continuation in D1/D0 ran out of its time budget at D1/D0 = {:.4}",
-                prev.1
-            )));
+            return Err((folds, closest));
         }
-        let step = stepper
-            .step()
-            .map_err(|e| SolverError::InvalidInput(format!("continuation in D1/D0: {e}")))?;
+        let step = stepper.step().map_err(|_| (folds.clone(), closest))?;
         folds.extend(
             step.special
                 .iter()
                 .filter(|sp| sp.kind == rodloop_continuation::SpecialKind::Fold)
-                .map(|sp| sp.p.exp()),
+                .map(|sp| sp.p),
         );
         if let Some(pt) = &step.point {
-            let p = pt.p.exp();
-            if p <= target {
-                // Bracketed: interpolate linearly in D1/D0 and correct at the target.
-                let t = (prev.1.ln() - target.ln()) / (prev.1.ln() - pt.p);
-                let z = &prev.0 + (&pt.x - &prev.0) * t;
-                let model = problem.model_at(target)?;
-                let newton = SolveOptions {
-                    globalization: Globalization::Newton,
-                    ..opts.clone()
-                };
-                let eq = solve_from_state(model, z.as_slice().to_vec(), &newton)?;
-                return Ok(Some((eq, stepper.steps())));
+            if (pt.p - qt) * sign >= 0.0 {
+                let t = (qt - prev.1) / (pt.p - prev.1);
+                return Ok((&prev.0 + (&pt.x - &prev.0) * t, stepper.steps()));
             }
-            lowest = lowest.min(p);
-            if p >= from.max(0.999f64.min(from + 0.05)) || folds.len() > 4 {
-                return Err(SolverError::InvalidInput(format!(
-                    "the branch turns back in D1/D0 at {} (folds) and reaches no lower than \
-                     D1/D0 = {lowest:.4}: it does not exist at {target} with this arrangement of \
-                     the soft segment",
-                    folds
-                        .iter()
-                        .map(|f| format!("{f:.4}"))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                )));
+            if (pt.p - closest) * sign > 0.0 {
+                closest = pt.p;
             }
-            prev = (pt.x.clone(), p);
+            // Turned back past the start, or folded too often: this family does not reach.
+            if (pt.p - q0) * sign < -0.05 || folds.len() > 4 {
+                return Err((folds, closest));
+            }
+            prev = (pt.x.clone(), pt.p);
         }
-        if let Some(reason) = step.stop {
-            return Err(SolverError::InvalidInput(format!(
-                "continuation in D1/D0 stopped at {:.4} ({reason:?}; lowest D1/D0 reached \
-                 {lowest:.4}, folds at {folds:?})",
-                prev.1
-            )));
+        if step.stop.is_some() {
+            return Err((folds, closest));
         }
     }
 }

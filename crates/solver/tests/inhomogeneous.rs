@@ -158,3 +158,39 @@ fn table_profile() {
     assert!((eq.energy().total - exact).abs() < 1e-6 * exact);
     assert_eq!(eq.stability().unwrap().symmetry_eigenvalues.len(), 1);
 }
+
+#[test]
+fn robust_solve_reaches_a_state_by_continuation_in_lbar() {
+    // D1/D0 = 0.001, branch 2 (η = 1) at L̄ = 1.2: the Euler start does not converge at any
+    // origin, and the family followed from D1/D0 = 0.9 folds in D1/D0 (at 0.034) before
+    // 0.001. The family solved at L̄ = 1.5 is followed down in L̄ instead.
+    use rodloop_solver::identify::identify_equilibrium;
+    use rodloop_solver::{solve_robust, Accuracy, Strategy};
+    let st = Stiffness::Tanh {
+        d0: 1.0,
+        d1: 0.001,
+        s0: 0.3,
+        s1: 0.8,
+        gamma: 200.0,
+    };
+    let start = StartShape::Euler { l: 1 };
+    let opts = SolveOptions::default();
+    let (acc, strategy) =
+        solve_robust(1.0, 1.2, &st, &start, Accuracy::Default, Some(1), &opts).unwrap();
+    println!("{}", strategy.describe());
+    assert!(
+        matches!(strategy, Strategy::ContinuationInLbar { .. }),
+        "{strategy:?}"
+    );
+    let eq = &acc.equilibrium;
+    assert!((eq.lbar() - 1.2).abs() < 1e-14);
+    assert_eq!(identify_equilibrium(eq).unwrap().eta, 1);
+    // The error estimate is honest: twice the resolution, extrapolated, agrees within it.
+    let (high, _) = solve_robust(1.0, 1.2, &st, &start, Accuracy::High, Some(1), &opts).unwrap();
+    let diff = (high.energy.total - acc.energy.total).abs();
+    println!(
+        "default {:.12} ± {:.1e}, high {:.12}: |diff| {diff:.1e}",
+        acc.energy.total, acc.energy_error, high.energy.total
+    );
+    assert!(diff <= 3.0 * acc.energy_error + 1e-12);
+}
