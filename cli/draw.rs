@@ -7,7 +7,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use rodloop_figures::data::LoopData;
 use rodloop_figures::diagram::{energy_figure, energy_split_figure, lambda_figure, DiagramData};
-use rodloop_figures::loops::{loop_picture, point_group, LoopPictureOptions};
+use rodloop_figures::loops::{loop_picture, LoopPictureOptions};
 use rodloop_figures::profiles::profiles_figure;
 use rodloop_figures::raster::svg_to_png;
 use serde_json::json;
@@ -15,9 +15,38 @@ use serde_json::json;
 use crate::output::{check_finite, ensure_dir, write_atomic};
 
 /// RMS tolerance (fraction of R) of the point-group detector: a symmetry element is accepted
-/// when it maps the resampled loop onto itself to this accuracy (the resampling of a coarse
-/// `--accuracy fast` table is accurate to a few 1e-4 R).
-pub const POINT_GROUP_TOL: f64 = 1e-3;
+/// when it maps the resampled loop onto itself to this accuracy (the states of a coarse
+/// `--accuracy fast` solve are symmetric to a few 1e-5 R).
+pub const POINT_GROUP_TOL: f64 = rodloop_exact::shape::DEFAULT_TOLERANCE;
+
+/// Fields of a `summary.json` for the shape of a loop: `point_group`, `point_group_order`
+/// (absent for D∞h, C∞v), `self_intersections` (`"overlap"` for a multiply covered circle),
+/// `symmetry_residual` and `shape_tolerance` (fractions of R).
+pub fn shape_fields(s: &rodloop_exact::LoopShape) -> serde_json::Value {
+    crate::output::strip_nulls(json!({
+        "point_group": s.point_group,
+        "point_group_order": s.group_order,
+        "self_intersections": shape_count(s),
+        "symmetry_residual": s.symmetry_residual,
+        "shape_tolerance": s.tolerances,
+    }))
+}
+
+/// Insert [`shape_fields`] into a JSON object.
+pub fn add_shape(summary: &mut serde_json::Value, s: &rodloop_exact::LoopShape) {
+    if let (Some(obj), serde_json::Value::Object(fields)) = (summary.as_object_mut(), shape_fields(s)) {
+        obj.extend(fields);
+    }
+}
+
+/// The self-intersection count for JSON: the number, or `"overlap"` for a multiply covered
+/// circle (which overlaps itself everywhere).
+pub fn shape_count(s: &rodloop_exact::LoopShape) -> serde_json::Value {
+    match s.self_intersections {
+        Some(k) => json!(k),
+        None => json!("overlap"),
+    }
+}
 
 /// Which files to write.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -136,7 +165,6 @@ pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
         &profiles,
         set.format,
     )?);
-    let group = point_group(&data, POINT_GROUP_TOL);
     let note = json!({
         "file": path.display().to_string(),
         "points": data.len(),
@@ -146,13 +174,14 @@ pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
         "eta": data.eta(),
         "color_column": pic.color_column,
         "color_range": [pic.scale.min, pic.scale.max],
-        "self_intersections": pic.contacts.len(),
+        "self_intersections": pic.shape.as_ref().map_or(json!(pic.contacts.len()), |s| shape_count(s)),
         "self_intersection_tolerance": pic.tol,
         "self_intersection_points": pic.contacts.iter().map(|c| json!({"x": c.point.x, "y": c.point.y, "z": c.point.z, "distance": c.distance})).collect::<Vec<_>>(),
         "apparent_crossings_per_view": pic.apparent_crossings.iter().map(|(v, k)| json!({"view": v, "crossings": k})).collect::<Vec<_>>(),
-        "point_group": group.as_ref().map(|g| g.0.clone()),
-        "point_group_order": group.as_ref().map(|g| g.1),
-        "point_group_tolerance": POINT_GROUP_TOL,
+        "point_group": pic.shape.as_ref().map(|g| g.point_group.clone()),
+        "point_group_order": pic.shape.as_ref().and_then(|g| g.group_order),
+        "point_group_tolerance": pic.shape.as_ref().map(|g| g.tolerances.symmetry),
+        "symmetry_residual": pic.shape.as_ref().map(|g| g.symmetry_residual),
         "seconds_picture": t_picture,
         "seconds": t0.elapsed().as_secs_f64(),
     });

@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 
+use rodloop_exact::shape::{loop_shape, SampledLoop, ShapeTolerances};
 use anyhow::{bail, Context, Result};
 use rodloop_exact::eta_of_branch;
 use rodloop_exact::euler::EulerCurve;
@@ -84,7 +85,8 @@ pub fn run(args: &Args) -> Result<()> {
         "curve.csv",
         &["s", "x", "y", "z", "kappa", "tau", "kappa_g"],
     );
-    for p in curve.sample(points) {
+    let samples = curve.sample(points);
+    for p in &samples {
         table.push(vec![
             Cell::F(p.s),
             Cell::F(p.x),
@@ -101,7 +103,24 @@ pub fn run(args: &Args) -> Result<()> {
     let bound = energy
         .error_estimate
         .max(4.0 * f64::EPSILON * energy.value.abs());
-    let summary = checked_json!({
+    let s: Vec<f64> = samples.iter().map(|p| p.s).collect();
+    let r: Vec<nalgebra::Vector3<f64>> = samples
+        .iter()
+        .map(|p| nalgebra::Vector3::new(p.x, p.y, p.z))
+        .collect();
+    let kg: Vec<f64> = samples.iter().map(|p| p.kappa_g).collect();
+    let shape = loop_shape(
+        &SampledLoop {
+            length: curve.length(),
+            radius: 1.0,
+            s: &s,
+            points: &r,
+            kappa_g_s: &s,
+            kappa_g: &kg,
+        },
+        ShapeTolerances::default(),
+    )?;
+    let mut summary = checked_json!({
         "l": l,
         "lbar": args.lbar,
         "alpha": curve.alpha,
@@ -114,6 +133,7 @@ pub fn run(args: &Args) -> Result<()> {
         "quadrature_points": energy.points,
         "units": "lengths in units of R; kappa, tau, kappa_g in 1/R; energy E R/(pi D)",
     })?;
+    crate::draw::add_shape(&mut summary, &shape);
     run.write_json("summary.json", &summary)?;
     run.commit()?;
     if args.draw {

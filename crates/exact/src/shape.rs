@@ -22,8 +22,8 @@
 //!
 //! # Self-intersections
 //!
-//! The loop is resampled uniformly (at least 1024 points, so the chords sag by less than
-//! `h²/(8R)`, a few 1e-5 R) and its self-contacts counted by
+//! The loop is resampled uniformly (spacing at most `R/40`, so the chords sag by less than
+//! `h²/(8R) < 1e-4 R`) and its self-contacts counted by
 //! [`crate::topology::self_contacts`]: strands closer than the contact tolerance, away from
 //! each other along the loop. A loop within the symmetry tolerance of a circle covered `m ≥ 2`
 //! times overlaps itself everywhere: its count is `None`.
@@ -65,14 +65,17 @@ pub struct ShapeTolerances {
     pub contact: f64,
 }
 
+/// The default of both tolerances, `1e-3 R`: far above the symmetry residual of the numeric
+/// model's coarsest states (a few 1e-5 R at 8 cells per period, `crates/solver/tests/shape.rs`)
+/// and far below the strand distances of the paper's loops away from their great-circle ends.
+pub const DEFAULT_TOLERANCE: f64 = 1e-3;
+
 impl Default for ShapeTolerances {
-    /// `1e-3 R` for both: far above the discretisation error of a `--accuracy fast` state
-    /// (a few 1e-5 R in position) and far below the smallest strand distances of the paper's
-    /// loops away from their great-circle ends.
+    /// [`DEFAULT_TOLERANCE`] for both.
     fn default() -> Self {
         Self {
-            symmetry: 1e-3,
-            contact: 1e-3,
+            symmetry: DEFAULT_TOLERANCE,
+            contact: DEFAULT_TOLERANCE,
         }
     }
 }
@@ -162,9 +165,13 @@ fn check(l: &SampledLoop, tol: &ShapeTolerances) -> Result<(), ExactError> {
     Ok(())
 }
 
-/// Number of points of the uniform resampling.
+/// Number of points of the uniform resampling: spacing at most `R/40`, so that chords sag
+/// by at most `h²/(8R) < 1e-4 R` (a tenth of the default contact tolerance), and no fewer
+/// points than the data have.
 fn resolution(l: &SampledLoop) -> usize {
-    (2 * l.points.len()).clamp(1024, 16384)
+    ((40.0 * l.length / l.radius).ceil() as usize)
+        .max(l.points.len())
+        .clamp(256, 16384)
 }
 
 /// Point group and self-intersections of `l`.
@@ -185,7 +192,7 @@ pub fn loop_shape(l: &SampledLoop, tol: ShapeTolerances) -> Result<LoopShape, Ex
             tolerances: tol,
         });
     }
-    let (group, order, residual) = point_group_of(l, m, tol.symmetry * r);
+    let (group, order, residual) = point_group_of(l, tol.symmetry * r);
     let h = l.length / m as f64;
     let contacts = self_contacts(&uniform, tol.contact * r)
         .into_iter()
@@ -279,12 +286,14 @@ fn anchors(l: &SampledLoop) -> Vec<f64> {
 
 /// Point group from the anchor maps: `(symbol, order, worst residual in units of R)`.
 ///
-/// The anchors are located only to the accuracy of the `κ_g` interpolant (`O(h³)`, about
-/// 1e-3 R for the diagram's coarsest states), so a candidate map that comes within 30 times
-/// the tolerance is refined: the start of its image is moved by a golden-section search
-/// (within two `κ_g` spacings) to the least residual, on 256 points; the refined map is
-/// then tested on the full resampling. Maps that are not symmetries miss by `O(R)`.
-fn point_group_of(l: &SampledLoop, m: usize, tol: f64) -> (String, usize, f64) {
+/// Residuals are RMS over 256 points uniform in arclength (the RMS of a smooth periodic
+/// function converges exponentially in the number of uniform samples). The anchors are
+/// located only to the accuracy of the `κ_g` interpolant (`O(h³)`, about 1e-3 R for the
+/// diagram's coarsest states), so a candidate map that comes within 30 times the tolerance
+/// but not within 0.3 times it is refined: the start of its image is moved by a
+/// golden-section search (within two `κ_g` spacings, residuals on 64 points) to the least
+/// residual. Maps that are not symmetries miss by `O(R)`.
+fn point_group_of(l: &SampledLoop, tol: f64) -> (String, usize, f64) {
     let marks = anchors(l);
     let len = l.length;
     let sample = |start: f64, dir: f64, count: usize| -> Vec<Vector3<f64>> {
@@ -298,8 +307,10 @@ fn point_group_of(l: &SampledLoop, m: usize, tol: f64) -> (String, usize, f64) {
         return ("C1".into(), 1, 0.0);
     };
     let coarse = 256;
-    let base = sample(first, 1.0, m);
     let base_coarse = sample(first, 1.0, coarse);
+    // The search needs only where the residual is least: 64 points do.
+    const SEARCH: usize = 64;
+    let base_search = sample(first, 1.0, SEARCH);
     let best = |img: &[Vector3<f64>], b: &[Vector3<f64>]| {
         procrustes(b, img)
             .into_iter()
@@ -316,16 +327,19 @@ fn point_group_of(l: &SampledLoop, m: usize, tol: f64) -> (String, usize, f64) {
     for &a in &marks {
         for dir in [1.0, -1.0] {
             let r0 = best(&sample(a, dir, coarse), &base_coarse);
-            let start = if r0 < 0.1 * tol || r0 > 30.0 * tol {
+            if r0 > 30.0 * tol {
+                continue;
+            }
+            let start = if r0 < 0.3 * tol {
                 a
             } else {
-                let f = |x: f64| best(&sample(x, dir, coarse), &base_coarse);
-                golden_min(f, a - 2.0 * spacing, a + 2.0 * spacing, 40)
+                let f = |x: f64| best(&sample(x, dir, SEARCH), &base_search);
+                golden_min(f, a - 2.0 * spacing, a + 2.0 * spacing, 28)
             };
-            found.test(&base, &sample(start, dir, m), tol);
+            found.test(&base_coarse, &sample(start, dir, coarse), tol);
         }
     }
-    let g = found.finish(&base);
+    let g = found.finish(&base_coarse);
     (g.symbol, g.order, g.worst_residual / l.radius)
 }
 
@@ -374,4 +388,68 @@ pub fn exact_loop_shape(
         },
         tol,
     )
+}
+
+/// Shape descriptors of the paper's branch `η` loop at `lbar` with modulus `k` (a point of
+/// the exact diagram, wave family, `m = k²`); `k = 0` is the branch's end, the great circle
+/// covered `L̄` times.
+pub fn branch_point_shape(
+    eta: u32,
+    lbar: f64,
+    k: f64,
+    tol: ShapeTolerances,
+) -> Result<LoopShape, ExactError> {
+    if k == 0.0 {
+        let len = 2.0 * PI * lbar;
+        let n = (256.0 * lbar).ceil() as usize;
+        let s: Vec<f64> = (0..n).map(|i| len * i as f64 / n as f64).collect();
+        let points: Vec<Vector3<f64>> = s.iter().map(|&t| Vector3::new(t.cos(), t.sin(), 0.0)).collect();
+        let kg = vec![0.0; n];
+        return loop_shape(
+            &SampledLoop {
+                length: len,
+                radius: 1.0,
+                s: &s,
+                points: &points,
+                kappa_g_s: &s,
+                kappa_g: &kg,
+            },
+            tol,
+        );
+    }
+    let lp = crate::ExactLoop::from_parameter(crate::Family::Wave, eta, lbar, k * k)?;
+    exact_loop_shape(&lp, tol)
+}
+
+/// [`branch_point_shape`] of every point of an exact diagram, in order, on up to
+/// `threads` threads.
+pub fn diagram_shapes(
+    points: &[crate::diagram::BranchPoint],
+    tol: ShapeTolerances,
+    threads: usize,
+) -> Result<Vec<LoopShape>, ExactError> {
+    let one = |p: &crate::diagram::BranchPoint| branch_point_shape(p.eta, p.lbar, p.k, tol);
+    let threads = threads.clamp(1, 64);
+    if threads == 1 || points.len() < 2 * threads {
+        return points.iter().map(one).collect();
+    }
+    let chunk = points.len().div_ceil(threads);
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = points
+            .chunks(chunk)
+            .map(|c| scope.spawn(move || c.iter().map(one).collect::<Result<Vec<_>, _>>()))
+            .collect();
+        let mut out = Vec::with_capacity(points.len());
+        for h in handles {
+            match h.join() {
+                Ok(r) => out.extend(r?),
+                Err(_) => {
+                    return Err(ExactError::InvalidParameter(
+                        "a shape worker panicked".into(),
+                    ))
+                }
+            }
+        }
+        Ok(out)
+    })
 }

@@ -186,22 +186,18 @@ where
     while s_at(*k) > target {
         *k -= 1;
     }
-    let ks = [*k - 1, *k, *k + 1, *k + 2];
-    let mut acc: Option<T> = None;
-    for (a, &ka) in ks.iter().enumerate() {
+    let ss = [s_at(*k - 1), s_at(*k), s_at(*k + 1), s_at(*k + 2)];
+    let mut acc = v_at(*k - 1) * 0.0;
+    for a in 0..4 {
         let mut w = 1.0;
-        for (b, &kb) in ks.iter().enumerate() {
+        for b in 0..4 {
             if a != b {
-                w *= (target - s_at(kb)) / (s_at(ka) - s_at(kb));
+                w *= (target - ss[b]) / (ss[a] - ss[b]);
             }
         }
-        let term = v_at(ka) * w;
-        acc = Some(match acc {
-            Some(x) => x + term,
-            None => term,
-        });
+        acc = acc + v_at(*k - 1 + a as isize) * w;
     }
-    acc.unwrap_or(values[0])
+    acc
 }
 
 /// Resample a closed curve given at arclengths `s` (increasing, the curve closes after
