@@ -2,8 +2,8 @@
 
 use std::path::PathBuf;
 
-use rodloop_exact::ShapeTolerances;
 use anyhow::{bail, Context, Result};
+use rodloop_exact::ShapeTolerances;
 use rodloop_exact::{all_loops, branch_of_eta, eta_of_branch, Family};
 
 use crate::output::{checked_json, Cell, OutputRun, Table};

@@ -8,8 +8,10 @@ use anyhow::{bail, Context, Result};
 use rodloop_figures::data::LoopData;
 use rodloop_figures::diagram::{energy_figure, energy_split_figure, lambda_figure, DiagramData};
 use rodloop_figures::loops::{loop_picture, LoopPictureOptions};
-use rodloop_figures::profiles::profiles_figure;
+use rodloop_figures::paint::to_png;
+use rodloop_figures::profiles::profiles_document;
 use rodloop_figures::raster::svg_to_png;
+use rodloop_figures::svg::Svg;
 use serde_json::json;
 
 use crate::output::{check_finite, ensure_dir, write_atomic};
@@ -34,7 +36,9 @@ pub fn shape_fields(s: &rodloop_exact::LoopShape) -> serde_json::Value {
 
 /// Insert [`shape_fields`] into a JSON object.
 pub fn add_shape(summary: &mut serde_json::Value, s: &rodloop_exact::LoopShape) {
-    if let (Some(obj), serde_json::Value::Object(fields)) = (summary.as_object_mut(), shape_fields(s)) {
+    if let (Some(obj), serde_json::Value::Object(fields)) =
+        (summary.as_object_mut(), shape_fields(s))
+    {
         obj.extend(fields);
     }
 }
@@ -133,6 +137,21 @@ pub fn write_figure(dir: &Path, stem: &str, svg: &str, format: Format) -> Result
     Ok(names)
 }
 
+/// Write `stem.svg` and/or `stem.png` of a document (the PNG drawn from its operations).
+pub fn write_document(dir: &Path, stem: &str, doc: &Svg, format: Format) -> Result<Vec<String>> {
+    let mut names = Vec::new();
+    if format != Format::Png {
+        write_atomic(dir, &format!("{stem}.svg"), doc.finish().as_bytes())?;
+        names.push(format!("{stem}.svg"));
+    }
+    if format != Format::Svg {
+        let png = to_png(doc, 1.0).with_context(|| format!("rendering {stem}.png"))?;
+        write_atomic(dir, &format!("{stem}.png"), &png)?;
+        names.push(format!("{stem}.png"));
+    }
+    Ok(names)
+}
+
 /// Draw one loop file: the four-view picture, and a JSON note of what was found.
 pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
     let t0 = Instant::now();
@@ -150,21 +169,23 @@ pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
         title: format!("{}", path.display()),
     };
     let pic = loop_picture(&data, &opts)?;
-    ensure_dir(&set.out)?;
-    let mut written = write_figure(&set.out, &stem, &pic.svg, set.format)?;
     let t_picture = t0.elapsed().as_secs_f64();
-    let profiles = profiles_figure(
+    let profiles = profiles_document(
         &data,
         480.0,
         260.0,
         &format!("{}: quantities along the loop (Figs. 5, 6)", path.display()),
     )?;
-    written.extend(write_figure(
-        &set.out,
-        &format!("{stem}-profiles"),
-        &profiles,
-        set.format,
-    )?);
+    ensure_dir(&set.out)?;
+    // The two figures are rasterised at once (each takes tens of milliseconds with PNG).
+    let profiles_stem = format!("{stem}-profiles");
+    let (a, b) = std::thread::scope(|scope| {
+        let other = scope.spawn(|| write_document(&set.out, &profiles_stem, &profiles, set.format));
+        let mine = write_document(&set.out, &stem, &pic.document, set.format);
+        (mine, other.join())
+    });
+    let mut written = a?;
+    written.extend(b.map_err(|_| anyhow::anyhow!("drawing {profiles_stem} failed"))??);
     let note = json!({
         "file": path.display().to_string(),
         "points": data.len(),

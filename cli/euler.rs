@@ -2,10 +2,10 @@
 
 use std::path::PathBuf;
 
-use rodloop_exact::shape::{loop_shape, SampledLoop, ShapeTolerances};
 use anyhow::{bail, Context, Result};
 use rodloop_exact::eta_of_branch;
 use rodloop_exact::euler::EulerCurve;
+use rodloop_exact::shape::{loop_shape, SampledLoop, ShapeTolerances};
 
 use crate::output::{checked_json, Cell, OutputRun, Table};
 

@@ -2,8 +2,8 @@
 
 use std::path::{Path, PathBuf};
 
-use rodloop_exact::ShapeTolerances;
 use anyhow::{bail, Context, Result};
+use rodloop_exact::ShapeTolerances;
 use rodloop_exact::{branch_of_eta, eta_of_branch};
 use rodloop_scene::{Confinement, Scene, StiffnessSpec};
 use rodloop_solver::identify::identify_equilibrium;

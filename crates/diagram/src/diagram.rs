@@ -10,9 +10,9 @@ use crate::critical::{self, CriticalKind, CriticalLength};
 use crate::labels::{self, Label};
 use crate::parallel::run_parallel;
 use crate::shapes::{state_shapes, StateShape};
-use rodloop_exact::shape::ShapeTolerances;
 use crate::types::TracedBranch;
 use crate::{DiagramError, DiagramOptions, Progress};
+use rodloop_exact::shape::ShapeTolerances;
 
 /// Work of the assembly phase.
 enum Task {

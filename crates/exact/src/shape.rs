@@ -403,7 +403,10 @@ pub fn branch_point_shape(
         let len = 2.0 * PI * lbar;
         let n = (256.0 * lbar).ceil() as usize;
         let s: Vec<f64> = (0..n).map(|i| len * i as f64 / n as f64).collect();
-        let points: Vec<Vector3<f64>> = s.iter().map(|&t| Vector3::new(t.cos(), t.sin(), 0.0)).collect();
+        let points: Vec<Vector3<f64>> = s
+            .iter()
+            .map(|&t| Vector3::new(t.cos(), t.sin(), 0.0))
+            .collect();
         let kg = vec![0.0; n];
         return loop_shape(
             &SampledLoop {

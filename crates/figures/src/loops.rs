@@ -42,6 +42,8 @@ impl Default for LoopPictureOptions {
 pub struct LoopPicture {
     /// The SVG document.
     pub svg: String,
+    /// The same picture as drawing operations (for [`crate::paint::to_png`]).
+    pub document: Svg,
     /// Column the loop is coloured by.
     pub color_column: String,
     /// Range of the colour bar (the column's data range).
@@ -157,7 +159,10 @@ pub fn loop_picture(
     let length = data.length();
     let segment_of = |x: f64| {
         let x = s_col[0] + (x - s_col[0]).rem_euclid(length);
-        s_col.partition_point(|&v| v <= x).saturating_sub(1).min(n - 1)
+        s_col
+            .partition_point(|&v| v <= x)
+            .saturating_sub(1)
+            .min(n - 1)
     };
     let contact_segments: Vec<(usize, usize)> = contacts
         .iter()
@@ -171,9 +176,6 @@ pub fn loop_picture(
     let legend_h = 58.0;
     let height = top + 2.0 * p + gap_y + legend_h;
     let mut svg = Svg::new(width.round(), height.round());
-    svg.def(
-        "<radialGradient id=\"sphere\" cx=\"0.42\" cy=\"0.38\" r=\"0.62\"><stop offset=\"0\" stop-color=\"#eef4fb\"/><stop offset=\"0.75\" stop-color=\"#c9d8ea\"/><stop offset=\"1\" stop-color=\"#9fb4cf\"/></radialGradient>",
-    );
     // Title.
     let lbar = data.lbar();
     let title = if opts.title.is_empty() {
@@ -238,12 +240,7 @@ pub fn loop_picture(
             draw_seg(&mut svg, i);
         }
         // The translucent sphere between the back and the front half.
-        svg.raw(&format!(
-            "<circle cx=\"{:.2}\" cy=\"{:.2}\" r=\"{:.2}\" fill=\"url(#sphere)\" fill-opacity=\"0.35\" stroke=\"#7a8ca5\" stroke-width=\"1\"/>",
-            c.0,
-            c.1,
-            r * sc
-        ));
+        svg.sphere(c.0, c.1, r * sc);
         // Equator z = 0 (front half) as an orientation guide, unless seen face-on.
         if view.toward.z.abs() < 0.999 {
             let eq: Vec<(f64, f64)> = (0..=120)
@@ -298,12 +295,14 @@ pub fn loop_picture(
         for ct in &contacts {
             let q = view.project(&ct.point);
             let at = map_px((q.u, q.v), c, sc);
-            svg.raw(&format!(
-                "<circle cx=\"{:.2}\" cy=\"{:.2}\" r=\"8\" fill=\"none\" stroke=\"#e00000\" stroke-width=\"2.2\"{}/>",
-                at.0,
-                at.1,
-                if q.depth < 0.0 { " stroke-dasharray=\"3 2\"" } else { "" }
-            ));
+            svg.circle_styled(
+                (at.0, at.1, 8.0),
+                "none",
+                1.0,
+                "#e00000",
+                2.2,
+                if q.depth < 0.0 { "3 2" } else { "" },
+            );
         }
         // s = 0 and the direction of increasing s.
         let a = map_px((proj[0].u, proj[0].v), c, sc);
@@ -396,6 +395,7 @@ pub fn loop_picture(
     );
     Ok(LoopPicture {
         svg: svg.finish(),
+        document: svg,
         color_column,
         scale,
         contacts,
