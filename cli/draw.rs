@@ -195,7 +195,7 @@ pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
         "eta": data.eta(),
         "color_column": pic.color_column,
         "color_range": [pic.scale.min, pic.scale.max],
-        "self_intersections": pic.shape.as_ref().map_or(json!(pic.contacts.len()), |s| shape_count(s)),
+        "self_intersections": pic.shape.as_ref().map_or(json!(pic.contacts.len()), shape_count),
         "self_intersection_tolerance": pic.tol,
         "self_intersection_points": pic.contacts.iter().map(|c| json!({"x": c.point.x, "y": c.point.y, "z": c.point.z, "distance": c.distance})).collect::<Vec<_>>(),
         "apparent_crossings_per_view": pic.apparent_crossings.iter().map(|(v, k)| json!({"view": v, "crossings": k})).collect::<Vec<_>>(),

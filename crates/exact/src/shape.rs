@@ -151,7 +151,10 @@ fn check(l: &SampledLoop, tol: &ShapeTolerances) -> Result<(), ExactError> {
     }
     for s in [l.s, l.kappa_g_s] {
         let span = s[s.len() - 1] - s[0];
-        if s.windows(2).any(|w| !(w[1] > w[0])) || !(span < l.length) {
+        if s.windows(2)
+            .any(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater))
+            || span.partial_cmp(&l.length) != Some(std::cmp::Ordering::Less)
+        {
             return Err(invalid(
                 "arclengths must increase and span less than one loop length".into(),
             ));
@@ -236,7 +239,7 @@ fn circle_fit(p: &[Vector3<f64>]) -> Option<(Vector3<f64>, f64, f64)> {
         })
         .collect();
     let rho = radial.iter().sum::<f64>() / n;
-    if !(rho > 0.0) {
+    if rho.is_nan() || rho <= 0.0 {
         return None;
     }
     let in_plane = radial.iter().map(|x| (x - rho) * (x - rho)).sum::<f64>() / n;
@@ -286,11 +289,11 @@ fn anchors(l: &SampledLoop) -> Vec<f64> {
 
 /// Point group from the anchor maps: `(symbol, order, worst residual in units of R)`.
 ///
-/// Residuals are RMS over 256 points uniform in arclength (the RMS of a smooth periodic
+/// Residuals are RMS over 128 points uniform in arclength (the RMS of a smooth periodic
 /// function converges exponentially in the number of uniform samples). The anchors are
 /// located only to the accuracy of the `κ_g` interpolant (`O(h³)`, about 1e-3 R for the
 /// diagram's coarsest states), so a candidate map that comes within 30 times the tolerance
-/// but not within 0.3 times it is refined: the start of its image is moved by a
+/// but not within a tenth of it is refined: the start of its image is moved by a
 /// golden-section search (within two `κ_g` spacings, residuals on 64 points) to the least
 /// residual. Maps that are not symmetries miss by `O(R)`.
 fn point_group_of(l: &SampledLoop, tol: f64) -> (String, usize, f64) {
@@ -306,7 +309,7 @@ fn point_group_of(l: &SampledLoop, tol: f64) -> (String, usize, f64) {
     let Some(&first) = marks.first() else {
         return ("C1".into(), 1, 0.0);
     };
-    let coarse = 256;
+    let coarse = 128;
     let base_coarse = sample(first, 1.0, coarse);
     // The search needs only where the residual is least: 64 points do.
     const SEARCH: usize = 64;
@@ -330,7 +333,7 @@ fn point_group_of(l: &SampledLoop, tol: f64) -> (String, usize, f64) {
             if r0 > 30.0 * tol {
                 continue;
             }
-            let start = if r0 < 0.3 * tol {
+            let start = if r0 < 0.1 * tol {
                 a
             } else {
                 let f = |x: f64| best(&sample(x, dir, SEARCH), &base_search);
@@ -367,13 +370,13 @@ fn golden_min(mut f: impl FnMut(f64) -> f64, lo: f64, hi: f64, iters: usize) -> 
     0.5 * (x0 + x3)
 }
 
-/// Shape descriptors of an exact loop (unit sphere), sampled at `64 (η + 1)` points of
-/// Eq. (45) (the interpolation error, `O(h⁴)`, stays below 1e-5 R).
+/// Shape descriptors of an exact loop (unit sphere), sampled at `48 (η + 1)` points of
+/// Eq. (45) (the interpolation error, `O(h⁴)`, stays below 1e-4 R).
 pub fn exact_loop_shape(
     lp: &crate::ExactLoop,
     tol: ShapeTolerances,
 ) -> Result<LoopShape, ExactError> {
-    let pts = lp.sample(64 * (lp.eta as usize + 1))?;
+    let pts = lp.sample(48 * (lp.eta as usize + 1))?;
     let s: Vec<f64> = pts.iter().map(|p| p.s).collect();
     let points: Vec<Vector3<f64>> = pts.iter().map(|p| Vector3::new(p.x, p.y, p.z)).collect();
     let kg: Vec<f64> = pts.iter().map(|p| p.kappa_g).collect();

@@ -138,7 +138,7 @@ pub fn self_contacts(points: &[Vector3<f64>], tol: f64) -> Vec<Contact> {
     // Merge hits on neighbouring pairs (window: a few segments, wider when tol spans more),
     // transitively (union-find).
     let window = 3 + (2.0 * tol / mean.max(1e-300)).ceil() as usize + (hmax / mean) as usize;
-    hits.sort_by(|a, b| (a.i, a.j).cmp(&(b.i, b.j)));
+    hits.sort_by_key(|a| (a.i, a.j));
     let mut parent: Vec<usize> = (0..hits.len()).collect();
     fn root(p: &mut [usize], mut x: usize) -> usize {
         while p[x] != x {
