@@ -124,28 +124,34 @@ impl DrawSettings {
 
 /// Write `stem.svg` and/or `stem.png`; returns the names written.
 pub fn write_figure(dir: &Path, stem: &str, svg: &str, format: Format) -> Result<Vec<String>> {
-    let mut names = Vec::new();
-    if format != Format::Png {
-        write_atomic(dir, &format!("{stem}.svg"), svg.as_bytes())?;
-        names.push(format!("{stem}.svg"));
-    }
-    if format != Format::Svg {
-        let png = svg_to_png(svg, 1.0).with_context(|| format!("rendering {stem}.png"))?;
-        write_atomic(dir, &format!("{stem}.png"), &png)?;
-        names.push(format!("{stem}.png"));
-    }
-    Ok(names)
+    write_pair(
+        dir,
+        stem,
+        format,
+        || svg.to_string(),
+        || svg_to_png(svg, 1.0),
+    )
 }
 
 /// Write `stem.svg` and/or `stem.png` of a document (the PNG drawn from its operations).
 pub fn write_document(dir: &Path, stem: &str, doc: &Svg, format: Format) -> Result<Vec<String>> {
+    write_pair(dir, stem, format, || doc.finish(), || to_png(doc, 1.0))
+}
+
+fn write_pair(
+    dir: &Path,
+    stem: &str,
+    format: Format,
+    svg: impl FnOnce() -> String,
+    png: impl FnOnce() -> Result<Vec<u8>, rodloop_figures::FigureError>,
+) -> Result<Vec<String>> {
     let mut names = Vec::new();
     if format != Format::Png {
-        write_atomic(dir, &format!("{stem}.svg"), doc.finish().as_bytes())?;
+        write_atomic(dir, &format!("{stem}.svg"), svg().as_bytes())?;
         names.push(format!("{stem}.svg"));
     }
     if format != Format::Svg {
-        let png = to_png(doc, 1.0).with_context(|| format!("rendering {stem}.png"))?;
+        let png = png().with_context(|| format!("rendering {stem}.png"))?;
         write_atomic(dir, &format!("{stem}.png"), &png)?;
         names.push(format!("{stem}.png"));
     }

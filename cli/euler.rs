@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Context, Result};
 use rodloop_exact::eta_of_branch;
 use rodloop_exact::euler::EulerCurve;
-use rodloop_exact::shape::{loop_shape, SampledLoop, ShapeTolerances};
+use rodloop_exact::shape::{unit_sphere_shape, ShapeTolerances};
 
 use crate::output::{checked_json, Cell, OutputRun, Table};
 
@@ -103,21 +103,11 @@ pub fn run(args: &Args) -> Result<()> {
     let bound = energy
         .error_estimate
         .max(4.0 * f64::EPSILON * energy.value.abs());
-    let s: Vec<f64> = samples.iter().map(|p| p.s).collect();
-    let r: Vec<nalgebra::Vector3<f64>> = samples
-        .iter()
-        .map(|p| nalgebra::Vector3::new(p.x, p.y, p.z))
-        .collect();
-    let kg: Vec<f64> = samples.iter().map(|p| p.kappa_g).collect();
-    let shape = loop_shape(
-        &SampledLoop {
-            length: curve.length(),
-            radius: 1.0,
-            s: &s,
-            points: &r,
-            kappa_g_s: &s,
-            kappa_g: &kg,
-        },
+    let shape = unit_sphere_shape(
+        curve.length(),
+        samples
+            .iter()
+            .map(|p| (p.s, nalgebra::Vector3::new(p.x, p.y, p.z), p.kappa_g)),
         ShapeTolerances::default(),
     )?;
     let mut summary = checked_json!({

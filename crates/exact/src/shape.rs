@@ -370,6 +370,31 @@ fn golden_min(mut f: impl FnMut(f64) -> f64, lo: f64, hi: f64, iters: usize) -> 
     0.5 * (x0 + x3)
 }
 
+/// [`loop_shape`] of samples `(s, r, κ_g)` of a loop of length `length` on the unit sphere.
+pub fn unit_sphere_shape(
+    length: f64,
+    samples: impl Iterator<Item = (f64, Vector3<f64>, f64)>,
+    tol: ShapeTolerances,
+) -> Result<LoopShape, ExactError> {
+    let (mut s, mut points, mut kg) = (Vec::new(), Vec::new(), Vec::new());
+    for (a, r, k) in samples {
+        s.push(a);
+        points.push(r);
+        kg.push(k);
+    }
+    loop_shape(
+        &SampledLoop {
+            length,
+            radius: 1.0,
+            s: &s,
+            points: &points,
+            kappa_g_s: &s,
+            kappa_g: &kg,
+        },
+        tol,
+    )
+}
+
 /// Shape descriptors of an exact loop (unit sphere), sampled at `48 (η + 1)` points of
 /// Eq. (45) (the interpolation error, `O(h⁴)`, stays below 1e-4 R).
 pub fn exact_loop_shape(
@@ -377,18 +402,10 @@ pub fn exact_loop_shape(
     tol: ShapeTolerances,
 ) -> Result<LoopShape, ExactError> {
     let pts = lp.sample(48 * (lp.eta as usize + 1))?;
-    let s: Vec<f64> = pts.iter().map(|p| p.s).collect();
-    let points: Vec<Vector3<f64>> = pts.iter().map(|p| Vector3::new(p.x, p.y, p.z)).collect();
-    let kg: Vec<f64> = pts.iter().map(|p| p.kappa_g).collect();
-    loop_shape(
-        &SampledLoop {
-            length: lp.length(),
-            radius: 1.0,
-            s: &s,
-            points: &points,
-            kappa_g_s: &s,
-            kappa_g: &kg,
-        },
+    unit_sphere_shape(
+        lp.length(),
+        pts.iter()
+            .map(|p| (p.s, Vector3::new(p.x, p.y, p.z), p.kappa_g)),
         tol,
     )
 }
@@ -405,21 +422,12 @@ pub fn branch_point_shape(
     if k == 0.0 {
         let len = 2.0 * PI * lbar;
         let n = (256.0 * lbar).ceil() as usize;
-        let s: Vec<f64> = (0..n).map(|i| len * i as f64 / n as f64).collect();
-        let points: Vec<Vector3<f64>> = s
-            .iter()
-            .map(|&t| Vector3::new(t.cos(), t.sin(), 0.0))
-            .collect();
-        let kg = vec![0.0; n];
-        return loop_shape(
-            &SampledLoop {
-                length: len,
-                radius: 1.0,
-                s: &s,
-                points: &points,
-                kappa_g_s: &s,
-                kappa_g: &kg,
-            },
+        return unit_sphere_shape(
+            len,
+            (0..n).map(|i| {
+                let t = len * i as f64 / n as f64;
+                (t, Vector3::new(t.cos(), t.sin(), 0.0), 0.0)
+            }),
             tol,
         );
     }

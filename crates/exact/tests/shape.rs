@@ -30,18 +30,7 @@ fn sampled(
         .map(|p| f(Vector3::new(p.x, p.y, p.z), p.s))
         .collect();
     let kg: Vec<f64> = pts.iter().map(|p| p.kappa_g).collect();
-    loop_shape(
-        &SampledLoop {
-            length: len,
-            radius: 1.0,
-            s: &s,
-            points: &r,
-            kappa_g_s: &s,
-            kappa_g: &kg,
-        },
-        tol,
-    )
-    .unwrap()
+    on_unit_sphere(len, &s, &r, &kg, tol)
 }
 
 /// Sec. 3.1: branch 1 D2d (saddle), branch 2 C2v (figure-eight), branch 3 D3h, branch 4
@@ -214,6 +203,27 @@ fn descriptors_are_stable_over_a_decade_of_tolerance() {
     }
 }
 
+fn on_unit_sphere(
+    length: f64,
+    s: &[f64],
+    p: &[Vector3<f64>],
+    kg: &[f64],
+    tol: ShapeTolerances,
+) -> LoopShape {
+    loop_shape(
+        &SampledLoop {
+            length,
+            radius: 1.0,
+            s,
+            points: p,
+            kappa_g_s: s,
+            kappa_g: kg,
+        },
+        tol,
+    )
+    .unwrap()
+}
+
 /// A great circle is D∞h with no crossing; covered twice, it overlaps itself (no count).
 #[test]
 fn circles_have_continuous_groups() {
@@ -226,19 +236,7 @@ fn circles_have_continuous_groups() {
             .iter()
             .map(|&t| Vector3::new(t.cos(), 0.0, t.sin()))
             .collect();
-        let kg = vec![0.0; n];
-        let sh = loop_shape(
-            &SampledLoop {
-                length: len,
-                radius: 1.0,
-                s: &s,
-                points: &p,
-                kappa_g_s: &s,
-                kappa_g: &kg,
-            },
-            tol,
-        )
-        .unwrap();
+        let sh = on_unit_sphere(len, &s, &p, &vec![0.0; n], tol);
         assert_eq!(sh.point_group, "D∞h");
         assert_eq!(sh.self_intersections, want, "{turns} turns");
     }
@@ -251,25 +249,14 @@ fn circles_have_continuous_groups() {
         .iter()
         .map(|&t| Vector3::new(rho * (t / rho).cos(), rho * (t / rho).sin(), 0.5))
         .collect();
-    let kg = vec![0.5 / rho; n];
-    let sh = loop_shape(
-        &SampledLoop {
-            length: len,
-            radius: 1.0,
-            s: &s,
-            points: &p,
-            kappa_g_s: &s,
-            kappa_g: &kg,
-        },
-        tol,
-    )
-    .unwrap();
+    let sh = on_unit_sphere(len, &s, &p, &vec![0.5 / rho; n], tol);
     assert_eq!((sh.point_group.as_str(), sh.group_order), ("C∞v", None));
 }
 
 /// Curves with known crossings: a figure-eight (the lemniscate of Gerono lifted onto the
 /// sphere) crosses itself once at a known point, a limaçon with an inner loop once, a
-/// three-petal rose three times at one point; a trefoil knot never touches itself.
+/// three-petal rose three times at one point (a trefoil knot, which never touches itself,
+/// is in `crates/figures/tests/figures.rs`).
 #[test]
 fn crossings_of_constructed_curves() {
     // Lemniscate of Gerono in the tangent plane at the north pole, projected onto the
@@ -293,18 +280,6 @@ fn crossings_of_constructed_curves() {
         })
         .collect();
     assert_eq!(self_contacts(&limacon, 1e-3).len(), 1);
-    // A trefoil: no contact in 3-D.
-    let knot: Vec<Vector3<f64>> = (0..600)
-        .map(|i| {
-            let t = TAU * i as f64 / 600.0;
-            Vector3::new(
-                t.sin() + 2.0 * (2.0 * t).sin(),
-                t.cos() - 2.0 * (2.0 * t).cos(),
-                -(3.0 * t).sin(),
-            )
-        })
-        .collect();
-    assert_eq!(self_contacts(&knot, 1e-3).len(), 0);
     // The three-petal rose r = cos 3t, t in [0, π), in the tangent plane: all three strands
     // pass through the pole, a triple point, which counts as its three pairwise crossings
     // (what any small generic perturbation splits it into).

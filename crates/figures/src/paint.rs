@@ -64,6 +64,22 @@ fn paint_of(c: Color) -> Paint<'static> {
     p
 }
 
+/// The path through `pts`, closed if `close`.
+fn path_through(pts: &[(f64, f64)], close: bool) -> Option<resvg::tiny_skia::Path> {
+    let mut pb = PathBuilder::new();
+    for (i, p) in pts.iter().enumerate() {
+        if i == 0 {
+            pb.move_to(p.0 as f32, p.1 as f32);
+        } else {
+            pb.line_to(p.0 as f32, p.1 as f32);
+        }
+    }
+    if close {
+        pb.close();
+    }
+    pb.finish()
+}
+
 /// Glyph outline in font units, as a tiny-skia path.
 struct Outline(PathBuilder);
 
@@ -226,15 +242,7 @@ impl Canvas {
                 let Some(c) = color(c, 1.0)? else {
                     return Ok(());
                 };
-                let mut pb = PathBuilder::new();
-                for (i, p) in pts.iter().enumerate() {
-                    if i == 0 {
-                        pb.move_to(p.0 as f32, p.1 as f32);
-                    } else {
-                        pb.line_to(p.0 as f32, p.1 as f32);
-                    }
-                }
-                if let Some(path) = pb.finish() {
+                if let Some(path) = path_through(pts, false) {
                     self.stroke(&path, c, *width, d, LineCap::Butt)?;
                 }
             }
@@ -251,18 +259,7 @@ impl Canvas {
                     Some((cx, cy, r)) => {
                         PathBuilder::from_circle(*cx as f32, *cy as f32, *r as f32)
                     }
-                    None => {
-                        let mut pb = PathBuilder::new();
-                        for (i, p) in pts.iter().enumerate() {
-                            if i == 0 {
-                                pb.move_to(p.0 as f32, p.1 as f32);
-                            } else {
-                                pb.line_to(p.0 as f32, p.1 as f32);
-                            }
-                        }
-                        pb.close();
-                        pb.finish()
-                    }
+                    None => path_through(pts, true),
                 };
                 let Some(path) = path else {
                     return Ok(());

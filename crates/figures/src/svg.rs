@@ -16,6 +16,15 @@ pub fn esc(s: &str) -> String {
 /// (0.42, 0.38), radius 0.62, from near-white to a light steel blue.
 pub const SPHERE_GRADIENT: &str = "<radialGradient id=\"sphere\" cx=\"0.42\" cy=\"0.38\" r=\"0.62\"><stop offset=\"0\" stop-color=\"#eef4fb\"/><stop offset=\"0.75\" stop-color=\"#c9d8ea\"/><stop offset=\"1\" stop-color=\"#9fb4cf\"/></radialGradient>";
 
+/// ` stroke-dasharray="…"`, or nothing for a solid stroke.
+fn dash_attr(dash: &str) -> String {
+    if dash.is_empty() {
+        String::new()
+    } else {
+        format!(" stroke-dasharray=\"{dash}\"")
+    }
+}
+
 /// Horizontal text anchor.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Anchor {
@@ -210,24 +219,18 @@ impl Svg {
         sw: f64,
         dash: &str,
     ) {
-        let dash_attr = if dash.is_empty() {
-            String::new()
-        } else {
-            format!(" stroke-dasharray=\"{dash}\"")
-        };
+        let dash_attr = dash_attr(dash);
         let _ = writeln!(
             self.body,
             "<circle cx=\"{cx:.2}\" cy=\"{cy:.2}\" r=\"{r:.2}\" fill=\"{fill}\" fill-opacity=\"{fill_opacity}\" stroke=\"{stroke}\" stroke-width=\"{sw:.2}\"{dash_attr}/>"
         );
-        self.ops.push(Op::Shape {
-            pts: Vec::new(),
-            circle: Some((cx, cy, r)),
-            fill: fill.into(),
-            fill_opacity,
-            stroke: stroke.into(),
-            width: sw,
-            dash: dash.into(),
-        });
+        self.push_shape(
+            Vec::new(),
+            Some((cx, cy, r)),
+            (fill, fill_opacity),
+            (stroke, sw),
+            dash,
+        );
     }
 
     /// A rectangle with a fill opacity.
@@ -244,15 +247,13 @@ impl Svg {
             self.body,
             "<rect x=\"{x:.2}\" y=\"{y:.2}\" width=\"{w:.2}\" height=\"{h:.2}\" fill=\"{fill}\" fill-opacity=\"{fill_opacity}\" stroke=\"{stroke}\" stroke-width=\"{sw:.2}\"/>"
         );
-        self.ops.push(Op::Shape {
-            pts: vec![(x, y), (x + w, y), (x + w, y + h), (x, y + h)],
-            circle: None,
-            fill: fill.into(),
-            fill_opacity,
-            stroke: stroke.into(),
-            width: sw,
-            dash: String::new(),
-        });
+        self.push_shape(
+            vec![(x, y), (x + w, y), (x + w, y + h), (x, y + h)],
+            None,
+            (fill, fill_opacity),
+            (stroke, sw),
+            "",
+        );
     }
 
     /// A straight line.
@@ -267,11 +268,7 @@ impl Svg {
         width: f64,
         dash: &str,
     ) {
-        let dash_attr = if dash.is_empty() {
-            String::new()
-        } else {
-            format!(" stroke-dasharray=\"{dash}\"")
-        };
+        let dash_attr = dash_attr(dash);
         let _ = writeln!(
             self.body,
             "<line x1=\"{x1:.2}\" y1=\"{y1:.2}\" x2=\"{x2:.2}\" y2=\"{y2:.2}\" stroke=\"{color}\" stroke-width=\"{width:.2}\"{dash_attr}/>"
@@ -321,11 +318,7 @@ impl Svg {
                 p.1
             );
         }
-        let dash_attr = if dash.is_empty() {
-            String::new()
-        } else {
-            format!(" stroke-dasharray=\"{dash}\"")
-        };
+        let dash_attr = dash_attr(dash);
         let _ = writeln!(
             self.body,
             "<path d=\"{d}\" fill=\"none\" stroke=\"{color}\" stroke-width=\"{width:.2}\" stroke-linejoin=\"round\"{dash_attr}/>"
@@ -345,15 +338,13 @@ impl Svg {
             self.body,
             "<rect x=\"{x:.2}\" y=\"{y:.2}\" width=\"{w:.2}\" height=\"{h:.2}\" fill=\"{fill}\" stroke=\"{stroke}\" stroke-width=\"{sw:.2}\"/>"
         );
-        self.ops.push(Op::Shape {
-            pts: vec![(x, y), (x + w, y), (x + w, y + h), (x, y + h)],
-            circle: None,
-            fill: fill.into(),
-            fill_opacity: 1.0,
-            stroke: stroke.into(),
-            width: sw,
-            dash: String::new(),
-        });
+        self.push_shape(
+            vec![(x, y), (x + w, y), (x + w, y + h), (x, y + h)],
+            None,
+            (fill, 1.0),
+            (stroke, sw),
+            "",
+        );
     }
 
     /// A circle.
@@ -362,15 +353,7 @@ impl Svg {
             self.body,
             "<circle cx=\"{cx:.2}\" cy=\"{cy:.2}\" r=\"{r:.2}\" fill=\"{fill}\" stroke=\"{stroke}\" stroke-width=\"{sw:.2}\"/>"
         );
-        self.ops.push(Op::Shape {
-            pts: Vec::new(),
-            circle: Some((cx, cy, r)),
-            fill: fill.into(),
-            fill_opacity: 1.0,
-            stroke: stroke.into(),
-            width: sw,
-            dash: String::new(),
-        });
+        self.push_shape(Vec::new(), Some((cx, cy, r)), (fill, 1.0), (stroke, sw), "");
     }
 
     /// A closed polygon.
@@ -384,15 +367,7 @@ impl Svg {
             "<polygon points=\"{}\" fill=\"{fill}\" stroke=\"{stroke}\" stroke-width=\"{sw:.2}\"/>",
             d.trim_end()
         );
-        self.ops.push(Op::Shape {
-            pts: pts.to_vec(),
-            circle: None,
-            fill: fill.into(),
-            fill_opacity: 1.0,
-            stroke: stroke.into(),
-            width: sw,
-            dash: String::new(),
-        });
+        self.push_shape(pts.to_vec(), None, (fill, 1.0), (stroke, sw), "");
     }
 
     /// Text at `(x, y)` (baseline), `size` pixels.
@@ -404,6 +379,25 @@ impl Svg {
             esc(s)
         );
         self.push_text(x, y, size, anchor, false, false, s);
+    }
+
+    fn push_shape(
+        &mut self,
+        pts: Vec<(f64, f64)>,
+        circle: Option<(f64, f64, f64)>,
+        (fill, fill_opacity): (&str, f64),
+        (stroke, width): (&str, f64),
+        dash: &str,
+    ) {
+        self.ops.push(Op::Shape {
+            pts,
+            circle,
+            fill: fill.into(),
+            fill_opacity,
+            stroke: stroke.into(),
+            width,
+            dash: dash.into(),
+        });
     }
 
     #[allow(clippy::too_many_arguments)]

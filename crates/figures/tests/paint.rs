@@ -10,19 +10,17 @@ use rodloop_figures::profiles::profiles_document;
 use rodloop_figures::raster::svg_to_png;
 use rodloop_figures::svg::{Anchor, Svg};
 
+/// The figure-eight (branch 2 at L̄ = 1.6) as a CSV table, read as `rodloop draw` reads it.
 fn figure_eight() -> LoopData {
     let lp = paper_branch_loop(1, 1.6).unwrap();
-    let pts = lp.sample(400).unwrap();
-    let names = ["s", "x", "y", "z", "kappa_g", "lambda"];
-    let cols: Vec<Vec<f64>> = vec![
-        pts.iter().map(|p| p.s).collect(),
-        pts.iter().map(|p| p.x).collect(),
-        pts.iter().map(|p| p.y).collect(),
-        pts.iter().map(|p| p.z).collect(),
-        pts.iter().map(|p| p.kappa_g).collect(),
-        pts.iter().map(|p| p.lambda).collect(),
-    ];
-    LoopData::new("eight", names.iter().map(|s| s.to_string()).collect(), cols).unwrap()
+    let mut csv = String::from("s,x,y,z,kappa_g,lambda\n");
+    for p in lp.sample(400).unwrap() {
+        csv += &format!(
+            "{},{},{},{},{},{}\n",
+            p.s, p.x, p.y, p.z, p.kappa_g, p.lambda
+        );
+    }
+    LoopData::parse("eight", csv.as_bytes()).unwrap()
 }
 
 fn pixels(png: &[u8]) -> (u32, u32, Vec<u8>) {
