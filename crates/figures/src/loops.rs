@@ -52,7 +52,7 @@ pub struct LoopPicture {
     /// tolerance), from [`LoopPicture::shape`] when the table has `kappa_g`, else from the
     /// polygon through the table's points.
     pub contacts: Vec<LoopContact>,
-    /// Point group and self-intersections ([`shape`]; `None` without `kappa_g`).
+    /// Point group and self-intersections ([`shape`]; `None` without `kappa_g` or `kappa`).
     pub shape: Option<LoopShape>,
     /// Tolerance used for the contacts, in the data's length unit.
     pub tol: f64,
@@ -61,10 +61,12 @@ pub struct LoopPicture {
 }
 
 /// Shape descriptors of a loop table ([`rodloop_exact::shape::loop_shape`]: point group and
-/// self-intersections, `tol` fractions of the sphere radius). `None` without a `kappa_g`
-/// column (the point group needs the peaks of `|κ_g|`) or with too few points.
+/// self-intersections, `tol` fractions of the sphere radius). The symmetry anchors are the
+/// peaks of `|κ_g|`, or of the curvature `κ` for a table without `kappa_g` (an enclosed
+/// state off the sphere): every isometry keeps `κ`, and on the sphere `κ² = κ_g² + 1/R²`
+/// peaks where `|κ_g|` does. `None` without either column or with too few points.
 pub fn shape(data: &LoopData, tol: ShapeTolerances) -> Option<LoopShape> {
-    let kg = data.column("kappa_g")?;
+    let kg = data.column("kappa_g").or_else(|| data.column("kappa"))?;
     let s = data.s();
     let pts = data.points();
     loop_shape(
@@ -83,7 +85,7 @@ pub fn shape(data: &LoopData, tol: ShapeTolerances) -> Option<LoopShape> {
 
 /// The point group of a loop table (Schoenflies symbol; number of elements, `None` for the
 /// continuous groups D∞h and C∞v) with the RMS tolerance `tol` (a fraction of the radius).
-/// `None` without a `kappa_g` column.
+/// `None` without a `kappa_g` or `kappa` column.
 pub fn point_group(data: &LoopData, tol: f64) -> Option<(String, Option<usize>)> {
     let sh = shape(
         data,
