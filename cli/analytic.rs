@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
+use rodloop_exact::ShapeTolerances;
 use rodloop_exact::{all_loops, branch_of_eta, eta_of_branch, Family};
 
 use crate::output::{checked_json, Cell, OutputRun, Table};
@@ -146,7 +147,8 @@ pub fn run(args: &Args) -> Result<()> {
                 ""
             }
         );
-        summaries.push(checked_json!({
+        let shape = rodloop_exact::shape::exact_loop_shape(lp, ShapeTolerances::default())?;
+        let mut entry = checked_json!({
             "file": name,
             "family": family,
             "paper_branch": paper_branch,
@@ -166,7 +168,9 @@ pub fn run(args: &Args) -> Result<()> {
             "closure_residual": lp.closure_residual,
             "k2_small_b4": if lp.family == Family::Wave { Some(k2_small) } else { None },
             "k2_small_b4_error": if lp.family == Family::Wave { Some(k2_small - lp.k * lp.k) } else { None },
-        })?);
+        })?;
+        crate::draw::add_shape(&mut entry, &shape);
+        summaries.push(entry);
     }
     let summary = checked_json!({
         "lbar": args.lbar,

@@ -5,6 +5,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Result};
 use rodloop_exact::diagram::{compute, Diagram, DiagramSettings};
+use rodloop_exact::shape::{diagram_shapes, ShapeTolerances};
 
 use crate::output::{checked_json, critical_table, Cell, CriticalRow, OutputRun, Table};
 use crate::svg::{self, branch_color, Curve, Figure, LegendEntry, LineStyle, Marker};
@@ -265,9 +266,15 @@ pub fn run(args: &Args) -> Result<()> {
             "c",
             "closure_residual",
             "lowest",
+            "point_group",
+            "self_intersections",
         ],
     );
-    for p in &d.points {
+    let t_shapes = Instant::now();
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let shapes = diagram_shapes(&d.points, ShapeTolerances::default(), threads)?;
+    let t_shapes = t_shapes.elapsed().as_secs_f64();
+    for (p, sh) in d.points.iter().zip(&shapes) {
         branches.push(vec![
             Cell::I(p.branch.into()),
             Cell::I(p.eta.into()),
@@ -281,6 +288,8 @@ pub fn run(args: &Args) -> Result<()> {
             Cell::F(p.c),
             Cell::F(p.closure_residual),
             Cell::I(p.lowest.into()),
+            Cell::S(sh.point_group.clone()),
+            Cell::S(sh.self_intersections_label()),
         ])?;
     }
     let critical = critical_table(d.critical.iter().map(|c| CriticalRow {
@@ -315,6 +324,8 @@ pub fn run(args: &Args) -> Result<()> {
         "continuation_points": d.continuation_steps,
         "critical": d.critical,
         "seconds": elapsed.as_secs_f64(),
+        "seconds_shapes": t_shapes,
+        "shape_tolerance": ShapeTolerances::default(),
         "units": UNITS,
     })?;
     run.write_json("summary.json", &summary)?;

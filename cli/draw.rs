@@ -7,17 +7,50 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use rodloop_figures::data::LoopData;
 use rodloop_figures::diagram::{energy_figure, energy_split_figure, lambda_figure, DiagramData};
-use rodloop_figures::loops::{loop_picture, point_group, LoopPictureOptions};
-use rodloop_figures::profiles::profiles_figure;
+use rodloop_figures::loops::{loop_picture, LoopPictureOptions};
+use rodloop_figures::paint::to_png;
+use rodloop_figures::profiles::profiles_document;
 use rodloop_figures::raster::svg_to_png;
+use rodloop_figures::svg::Svg;
 use serde_json::json;
 
 use crate::output::{check_finite, ensure_dir, write_atomic};
 
 /// RMS tolerance (fraction of R) of the point-group detector: a symmetry element is accepted
-/// when it maps the resampled loop onto itself to this accuracy (the resampling of a coarse
-/// `--accuracy fast` table is accurate to a few 1e-4 R).
-pub const POINT_GROUP_TOL: f64 = 1e-3;
+/// when it maps the resampled loop onto itself to this accuracy (the states of a coarse
+/// `--accuracy fast` solve are symmetric to a few 1e-5 R).
+pub const POINT_GROUP_TOL: f64 = rodloop_exact::shape::DEFAULT_TOLERANCE;
+
+/// Fields of a `summary.json` for the shape of a loop: `point_group`, `point_group_order`
+/// (absent for D∞h, C∞v), `self_intersections` (`"overlap"` for a multiply covered circle),
+/// `symmetry_residual` and `shape_tolerance` (fractions of R).
+pub fn shape_fields(s: &rodloop_exact::LoopShape) -> serde_json::Value {
+    crate::output::strip_nulls(json!({
+        "point_group": s.point_group,
+        "point_group_order": s.group_order,
+        "self_intersections": shape_count(s),
+        "symmetry_residual": s.symmetry_residual,
+        "shape_tolerance": s.tolerances,
+    }))
+}
+
+/// Insert [`shape_fields`] into a JSON object.
+pub fn add_shape(summary: &mut serde_json::Value, s: &rodloop_exact::LoopShape) {
+    if let (Some(obj), serde_json::Value::Object(fields)) =
+        (summary.as_object_mut(), shape_fields(s))
+    {
+        obj.extend(fields);
+    }
+}
+
+/// The self-intersection count for JSON: the number, or `"overlap"` for a multiply covered
+/// circle (which overlaps itself everywhere).
+pub fn shape_count(s: &rodloop_exact::LoopShape) -> serde_json::Value {
+    match s.self_intersections {
+        Some(k) => json!(k),
+        None => json!("overlap"),
+    }
+}
 
 /// Which files to write.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -91,13 +124,34 @@ impl DrawSettings {
 
 /// Write `stem.svg` and/or `stem.png`; returns the names written.
 pub fn write_figure(dir: &Path, stem: &str, svg: &str, format: Format) -> Result<Vec<String>> {
+    write_pair(
+        dir,
+        stem,
+        format,
+        || svg.to_string(),
+        || svg_to_png(svg, 1.0),
+    )
+}
+
+/// Write `stem.svg` and/or `stem.png` of a document (the PNG drawn from its operations).
+pub fn write_document(dir: &Path, stem: &str, doc: &Svg, format: Format) -> Result<Vec<String>> {
+    write_pair(dir, stem, format, || doc.finish(), || to_png(doc, 1.0))
+}
+
+fn write_pair(
+    dir: &Path,
+    stem: &str,
+    format: Format,
+    svg: impl FnOnce() -> String,
+    png: impl FnOnce() -> Result<Vec<u8>, rodloop_figures::FigureError>,
+) -> Result<Vec<String>> {
     let mut names = Vec::new();
     if format != Format::Png {
-        write_atomic(dir, &format!("{stem}.svg"), svg.as_bytes())?;
+        write_atomic(dir, &format!("{stem}.svg"), svg().as_bytes())?;
         names.push(format!("{stem}.svg"));
     }
     if format != Format::Svg {
-        let png = svg_to_png(svg, 1.0).with_context(|| format!("rendering {stem}.png"))?;
+        let png = png().with_context(|| format!("rendering {stem}.png"))?;
         write_atomic(dir, &format!("{stem}.png"), &png)?;
         names.push(format!("{stem}.png"));
     }
@@ -121,22 +175,23 @@ pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
         title: format!("{}", path.display()),
     };
     let pic = loop_picture(&data, &opts)?;
-    ensure_dir(&set.out)?;
-    let mut written = write_figure(&set.out, &stem, &pic.svg, set.format)?;
     let t_picture = t0.elapsed().as_secs_f64();
-    let profiles = profiles_figure(
+    let profiles = profiles_document(
         &data,
         480.0,
         260.0,
         &format!("{}: quantities along the loop (Figs. 5, 6)", path.display()),
     )?;
-    written.extend(write_figure(
-        &set.out,
-        &format!("{stem}-profiles"),
-        &profiles,
-        set.format,
-    )?);
-    let group = point_group(&data, POINT_GROUP_TOL);
+    ensure_dir(&set.out)?;
+    // The two figures are rasterised at once (each takes tens of milliseconds with PNG).
+    let profiles_stem = format!("{stem}-profiles");
+    let (a, b) = std::thread::scope(|scope| {
+        let other = scope.spawn(|| write_document(&set.out, &profiles_stem, &profiles, set.format));
+        let mine = write_document(&set.out, &stem, &pic.document, set.format);
+        (mine, other.join())
+    });
+    let mut written = a?;
+    written.extend(b.map_err(|_| anyhow::anyhow!("drawing {profiles_stem} failed"))??);
     let note = json!({
         "file": path.display().to_string(),
         "points": data.len(),
@@ -146,13 +201,14 @@ pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
         "eta": data.eta(),
         "color_column": pic.color_column,
         "color_range": [pic.scale.min, pic.scale.max],
-        "self_intersections": pic.contacts.len(),
+        "self_intersections": pic.shape.as_ref().map_or(json!(pic.contacts.len()), shape_count),
         "self_intersection_tolerance": pic.tol,
         "self_intersection_points": pic.contacts.iter().map(|c| json!({"x": c.point.x, "y": c.point.y, "z": c.point.z, "distance": c.distance})).collect::<Vec<_>>(),
         "apparent_crossings_per_view": pic.apparent_crossings.iter().map(|(v, k)| json!({"view": v, "crossings": k})).collect::<Vec<_>>(),
-        "point_group": group.as_ref().map(|g| g.0.clone()),
-        "point_group_order": group.as_ref().map(|g| g.1),
-        "point_group_tolerance": POINT_GROUP_TOL,
+        "point_group": pic.shape.as_ref().map(|g| g.point_group.clone()),
+        "point_group_order": pic.shape.as_ref().and_then(|g| g.group_order),
+        "point_group_tolerance": pic.shape.as_ref().map(|g| g.tolerances.symmetry),
+        "symmetry_residual": pic.shape.as_ref().map(|g| g.symmetry_residual),
         "seconds_picture": t_picture,
         "seconds": t0.elapsed().as_secs_f64(),
     });

@@ -210,7 +210,10 @@ pub fn run_solve(args: &crate::solve::Args, scene: &Scene) -> Result<()> {
     } else {
         eta_of_branch(branch)
     };
-    let summary = checked_json!({
+    // Point group and self-intersections, from the table as `rodloop draw` reads it.
+    let loop_data = rodloop_figures::data::LoopData::parse("config.csv", &table.to_bytes()?)?;
+    let shape = rodloop_figures::loops::shape(&loop_data, Default::default());
+    let mut summary = checked_json!({
         "scene": scene.name,
         "confinement": "enclosed",
         "lbar": args.lbar,
@@ -246,6 +249,9 @@ pub fn run_solve(args: &crate::solve::Args, scene: &Scene) -> Result<()> {
         "method": res.method,
         "units": UNITS,
     })?;
+    if let Some(sh) = &shape {
+        crate::draw::add_shape(&mut summary, sh);
+    }
     run.write_table(&table)?;
     run.write_json("summary.json", &summary)?;
     run.commit()?;

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Context, Result};
 use rodloop_exact::eta_of_branch;
 use rodloop_exact::euler::EulerCurve;
+use rodloop_exact::shape::{unit_sphere_shape, ShapeTolerances};
 
 use crate::output::{checked_json, Cell, OutputRun, Table};
 
@@ -84,7 +85,8 @@ pub fn run(args: &Args) -> Result<()> {
         "curve.csv",
         &["s", "x", "y", "z", "kappa", "tau", "kappa_g"],
     );
-    for p in curve.sample(points) {
+    let samples = curve.sample(points);
+    for p in &samples {
         table.push(vec![
             Cell::F(p.s),
             Cell::F(p.x),
@@ -101,7 +103,14 @@ pub fn run(args: &Args) -> Result<()> {
     let bound = energy
         .error_estimate
         .max(4.0 * f64::EPSILON * energy.value.abs());
-    let summary = checked_json!({
+    let shape = unit_sphere_shape(
+        curve.length(),
+        samples
+            .iter()
+            .map(|p| (p.s, nalgebra::Vector3::new(p.x, p.y, p.z), p.kappa_g)),
+        ShapeTolerances::default(),
+    )?;
+    let mut summary = checked_json!({
         "l": l,
         "lbar": args.lbar,
         "alpha": curve.alpha,
@@ -114,6 +123,7 @@ pub fn run(args: &Args) -> Result<()> {
         "quadrature_points": energy.points,
         "units": "lengths in units of R; kappa, tau, kappa_g in 1/R; energy E R/(pi D)",
     })?;
+    crate::draw::add_shape(&mut summary, &shape);
     run.write_json("summary.json", &summary)?;
     run.commit()?;
     if args.draw {

@@ -209,6 +209,8 @@ pub fn write_outputs(
             "family",
             "arc",
             "multiplicity",
+            "point_group",
+            "self_intersections",
         ],
     );
     // The model works in the scene's R and D; report lambda R^3/D0.
@@ -231,6 +233,8 @@ pub fn write_outputs(
             Cell::I(r.family.into()),
             Cell::I(r.arc as i64),
             Cell::I(r.multiplicity.into()),
+            Cell::S(r.shape.point_group.clone().unwrap_or_default()),
+            Cell::S(r.shape.self_intersections_label()),
         ])?;
     }
     let mut special = Table::new(
@@ -292,6 +296,7 @@ pub fn write_outputs(
         "special_points": d.special,
         "branches": ends,
         "great_circles": d.great_circles,
+        "shape_tolerance": d.shape_tolerance,
         "warnings": d.warnings,
         "timings": d.timings,
         "units": crate::diagram::UNITS,

@@ -3,6 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
+use rodloop_exact::ShapeTolerances;
 use rodloop_exact::{branch_of_eta, eta_of_branch};
 use rodloop_scene::{Confinement, Scene, StiffnessSpec};
 use rodloop_solver::identify::identify_equilibrium;
@@ -320,7 +321,8 @@ pub fn run(args: &Args) -> Result<()> {
     let lam_unit = r * r * r / d0;
     let (lambda_min, lambda_max) = (res.lambda_range.0 * lam_unit, res.lambda_range.1 * lam_unit);
     let lambda_error = res.lambda_error * lam_unit;
-    let summary = checked_json!({
+    let shape = eq.model().shape(eq.kappa(), ShapeTolerances::default())?;
+    let mut summary = checked_json!({
         "scene": scene.name,
         "lbar": args.lbar,
         "branch": branch,
@@ -347,6 +349,7 @@ pub fn run(args: &Args) -> Result<()> {
         "strategy": strategy.describe(),
         "units": UNITS,
     })?;
+    crate::draw::add_shape(&mut summary, &shape);
     run.write_table(&table)?;
     run.write_json("summary.json", &summary)?;
     run.commit()?;

@@ -9,8 +9,10 @@ use crate::buckling::{self, BucklingReport};
 use crate::critical::{self, CriticalKind, CriticalLength};
 use crate::labels::{self, Label};
 use crate::parallel::run_parallel;
+use crate::shapes::{state_shapes, StateShape};
 use crate::types::TracedBranch;
 use crate::{DiagramError, DiagramOptions, Progress};
+use rodloop_exact::shape::ShapeTolerances;
 
 /// Work of the assembly phase.
 enum Task {
@@ -38,6 +40,8 @@ pub struct Timings {
     pub parallel_wall: f64,
     /// Labels.
     pub labels: f64,
+    /// Shape descriptors of the states (point group, self-intersections).
+    pub shapes: f64,
     /// Everything ([`crate::compute`]) or the assembly alone ([`assemble`]).
     pub total: f64,
 }
@@ -55,6 +59,11 @@ pub struct NumericDiagram {
     pub branches: Vec<TracedBranch>,
     /// Labels of the traced states, `labels[i][k]` for `branches[i].points[k]`.
     pub labels: Vec<Vec<Label>>,
+    /// Point group and self-intersections of the traced states, `shapes[i][k]` for
+    /// `branches[i].points[k]`.
+    pub shapes: Vec<Vec<StateShape>>,
+    /// Tolerances of [`NumericDiagram::shapes`].
+    pub shape_tolerance: ShapeTolerances,
     /// Critical lengths in increasing order.
     pub critical: Vec<CriticalLength>,
     /// Folds, branch points, crossings and collapses, in increasing `L̄`.
@@ -98,6 +107,8 @@ pub struct DiagramRow {
     pub lambda_min: f64,
     /// Maximum of `λR³/D0`.
     pub lambda_max: f64,
+    /// Point group and self-intersections ([`NumericDiagram::shapes`]).
+    pub shape: StateShape,
 }
 
 /// A compact summary of a diagram (no states): what `summary.json` needs.
@@ -196,13 +207,15 @@ impl NumericDiagram {
         self.branches
             .iter()
             .zip(&self.labels)
-            .flat_map(|(b, ls)| {
+            .zip(&self.shapes)
+            .flat_map(|((b, ls), shapes)| {
                 let n = b.points.len() as u64;
                 b.points
                     .iter()
                     .zip(ls)
+                    .zip(shapes)
                     .enumerate()
-                    .map(move |(k, (p, &l))| DiagramRow {
+                    .map(move |(k, ((p, &l), shape))| DiagramRow {
                         branch: b.branch,
                         eta: b.eta,
                         family: b.family,
@@ -221,6 +234,7 @@ impl NumericDiagram {
                         index: p.index,
                         lambda_min: p.lambda_min,
                         lambda_max: p.lambda_max,
+                        shape: shape.clone(),
                     })
             })
             .collect()
@@ -395,6 +409,11 @@ pub fn assemble(
     let t = Instant::now();
     let labels = labels::label_all(&branches, &critical);
     timings.labels = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let shape_tolerance = ShapeTolerances::default();
+    let (shapes, shape_warnings) = state_shapes(opts, &branches, shape_tolerance);
+    timings.shapes = t.elapsed().as_secs_f64();
+    warnings.extend(shape_warnings);
     warnings.extend(no_minimum_warnings(opts, &branches));
     let special = special_points(&branches, &critical);
 
@@ -424,6 +443,8 @@ pub fn assemble(
         range: (opts.lbar_min, opts.lbar_max),
         branches,
         labels,
+        shapes,
+        shape_tolerance,
         critical,
         special,
         great_circles: great,

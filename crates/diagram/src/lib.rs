@@ -67,6 +67,7 @@ mod parallel;
 pub mod phase;
 pub mod refine;
 mod seed;
+pub mod shapes;
 mod states;
 pub mod trace;
 pub mod types;

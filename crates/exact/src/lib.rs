@@ -10,9 +10,12 @@ pub mod diagram;
 pub mod euler;
 pub mod homogeneous;
 pub mod roots;
+pub mod shape;
 pub mod symmetry;
+pub mod topology;
 
 pub use homogeneous::{all_loops, paper_branch_loop, ExactLoop, Family, LoopPoint};
+pub use shape::{loop_shape, LoopShape, SampledLoop, ShapeTolerances};
 
 /// Paper branch number for a loop with `eta` periods of geodesic curvature (Sec. 3.1):
 /// η = 2 → 1 (saddle), η = 1 → 2 (figure-eight), η ≥ 3 → η.

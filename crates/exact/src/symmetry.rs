@@ -34,72 +34,133 @@ pub struct PointGroup {
 /// candidate is accepted.
 pub fn point_group(points: &[Vector3<f64>], tol: f64) -> PointGroup {
     let n = points.len();
-    let mut elements: Vec<Matrix3<f64>> = Vec::new();
-    let mut worst: f64 = 0.0;
+    let mut found = Elements::default();
     for reversed in [false, true] {
         for shift in 0..n {
-            let image = |i: usize| {
-                let j = if reversed {
-                    (shift + n - i % n) % n
-                } else {
-                    (i + shift) % n
-                };
-                points[j]
-            };
-            // Correlation matrix C = Σ r'_i r_iᵀ; the best orthogonal Q is U Vᵀ.
-            let mut c = Matrix3::zeros();
-            for (i, p) in points.iter().enumerate() {
-                c += image(i) * p.transpose();
-            }
-            let svd = c.svd(true, true);
-            let (Some(u), Some(vt)) = (svd.u, svd.v_t) else {
-                continue;
-            };
-            // For a planar curve C has rank 2 and the sign of the third singular direction is
-            // free: both choices (Q and Q followed by the mirror in the plane) are then tested.
-            let sv = svd.singular_values;
-            let (imax, imin) = (sv.imax(), sv.imin());
-            let mut choices = vec![u * vt];
-            if sv[imin] <= 1e-9 * sv[imax] {
-                let mut flip = Matrix3::identity();
-                flip[(imin, imin)] = -1.0;
-                choices.push(u * flip * vt);
-            }
-            for q in choices {
-                let rms = (points
-                    .iter()
-                    .enumerate()
-                    .map(|(i, p)| (q * p - image(i)).norm_squared())
-                    .sum::<f64>()
-                    / n as f64)
-                    .sqrt();
-                if rms < tol && !elements.iter().any(|e| (e - q).norm() < 1e-6) {
-                    worst = worst.max(rms);
-                    elements.push(q);
-                }
+            let image: Vec<Vector3<f64>> = (0..n)
+                .map(|i| {
+                    let j = if reversed {
+                        (shift + n - i % n) % n
+                    } else {
+                        (i + shift) % n
+                    };
+                    points[j]
+                })
+                .collect();
+            found.test(points, &image, tol);
+        }
+    }
+    found.finish(points)
+}
+
+/// Symmetry elements collected from candidate arclength maps.
+#[derive(Default)]
+pub(crate) struct Elements {
+    elements: Vec<Matrix3<f64>>,
+    worst: f64,
+}
+
+impl Elements {
+    /// Test the candidate map `points[i] ↦ image[i]` ([`procrustes`]): its operations are
+    /// kept when their RMS residual is below `tol`.
+    pub(crate) fn test(&mut self, points: &[Vector3<f64>], image: &[Vector3<f64>], tol: f64) {
+        for (q, rms) in procrustes(points, image) {
+            if rms < tol && !self.elements.iter().any(|e| (e - q).norm() < 1e-6) {
+                self.worst = self.worst.max(rms);
+                self.elements.push(q);
             }
         }
     }
-    let symbol = classify(&elements);
-    PointGroup {
-        symbol,
-        order: elements.len(),
-        elements,
-        worst_residual: worst,
+
+    /// The group of the collected elements, named with a matching tolerance that grows with
+    /// the worst residual (relative to the curve's RMS radius): elements found on sampled
+    /// data are orthogonal matrices accurate to about that residual.
+    pub(crate) fn finish(self, points: &[Vector3<f64>]) -> PointGroup {
+        let scale = (points.iter().map(|p| p.norm_squared()).sum::<f64>()
+            / points.len().max(1) as f64)
+            .sqrt();
+        let eps = if scale > 0.0 {
+            (20.0 * self.worst / scale).clamp(1e-6, 2e-2)
+        } else {
+            1e-6
+        };
+        let elements = dedupe(self.elements, eps);
+        let symbol = classify_with(&elements, eps);
+        PointGroup {
+            symbol,
+            order: elements.len(),
+            elements,
+            worst_residual: self.worst,
+        }
     }
 }
 
-/// Axis (unit vector, sign fixed) and rotation order of a proper rotation; `None` for identity.
-fn rotation_axis_order(q: &Matrix3<f64>) -> Option<(Vector3<f64>, usize)> {
+/// The orthogonal `Q` minimising `Σ |Q points_i − image_i|²` (orthogonal Procrustes: SVD of
+/// the 3×3 correlation matrix, Kabsch 1976 without the determinant fix, since reflections
+/// are wanted) with its RMS residual; for a planar curve both solutions (`Q` and `Q`
+/// followed by the mirror in the plane).
+pub(crate) fn procrustes(
+    points: &[Vector3<f64>],
+    image: &[Vector3<f64>],
+) -> Vec<(Matrix3<f64>, f64)> {
+    let n = points.len().max(1);
+    // Correlation matrix C = Σ r'_i r_iᵀ; the best orthogonal Q is U Vᵀ.
+    let mut c = Matrix3::zeros();
+    for (p, q) in points.iter().zip(image) {
+        c += q * p.transpose();
+    }
+    let svd = c.svd(true, true);
+    let (Some(u), Some(vt)) = (svd.u, svd.v_t) else {
+        return Vec::new();
+    };
+    // For a planar curve C has rank 2 and the sign of the third singular direction is free.
+    let sv = svd.singular_values;
+    let (imax, imin) = (sv.imax(), sv.imin());
+    let mut choices = vec![u * vt];
+    if sv[imin] <= 1e-9 * sv[imax] {
+        let mut flip = Matrix3::identity();
+        flip[(imin, imin)] = -1.0;
+        choices.push(u * flip * vt);
+    }
+    choices
+        .into_iter()
+        .map(|q| {
+            let rms = (points
+                .iter()
+                .zip(image)
+                .map(|(p, r)| (q * p - r).norm_squared())
+                .sum::<f64>()
+                / n as f64)
+                .sqrt();
+            (q, rms)
+        })
+        .collect()
+}
+
+/// Drop elements equal to an earlier one within `eps`.
+fn dedupe(elements: Vec<Matrix3<f64>>, eps: f64) -> Vec<Matrix3<f64>> {
+    let mut out: Vec<Matrix3<f64>> = Vec::with_capacity(elements.len());
+    for q in elements {
+        if !out.iter().any(|e| (e - q).norm() < eps) {
+            out.push(q);
+        }
+    }
+    out
+}
+
+/// Axis (unit vector, sign fixed) and rotation order of a proper rotation; `None` for identity
+/// (within `eps`).
+fn rotation_axis_order(q: &Matrix3<f64>, eps: f64) -> Option<(Vector3<f64>, usize)> {
     let c = ((q.trace() - 1.0) / 2.0).clamp(-1.0, 1.0);
     let angle = c.acos();
-    if angle < 1e-6 {
+    if angle < eps {
         return None;
     }
     let order = (2.0 * std::f64::consts::PI / angle).round() as usize;
-    let axis = if (angle - std::f64::consts::PI).abs() < 1e-6 {
-        // Rotation by π: the axis is the eigenvector of (Q + I)/2, any non-zero column.
-        let m = (q + Matrix3::identity()) * 0.5;
+    let axis = if angle > std::f64::consts::FRAC_PI_2 {
+        // Near a half turn the skew part vanishes; the symmetric part is
+        // cos θ I + (1 − cos θ) a aᵀ, so its largest column (less cos θ I) is along the axis.
+        let m = ((q + q.transpose()) * 0.5 - Matrix3::identity() * c) / (1.0 - c);
         let col = (0..3)
             .map(|j| m.column(j).into_owned())
             .max_by(|a, b| a.norm().total_cmp(&b.norm()))
@@ -132,23 +193,29 @@ fn canonical(v: Vector3<f64>) -> Vector3<f64> {
     }
 }
 
-fn same_axis(a: &Vector3<f64>, b: &Vector3<f64>) -> bool {
-    a.cross(b).norm() < 1e-5
+fn same_axis(a: &Vector3<f64>, b: &Vector3<f64>, eps: f64) -> bool {
+    a.cross(b).norm() < 10.0 * eps
 }
 
-/// Name a finite subgroup of O(3) in Schoenflies notation.
+/// Name a finite subgroup of O(3) in Schoenflies notation (elements exact to about 1e-6).
 pub fn classify(elements: &[Matrix3<f64>]) -> String {
+    classify_with(elements, 1e-6)
+}
+
+/// Name a finite subgroup of O(3) in Schoenflies notation; `eps` is the accuracy of the
+/// elements (angles, traces and axes are matched within it).
+pub fn classify_with(elements: &[Matrix3<f64>], eps: f64) -> String {
     let order = elements.len();
     let proper: Vec<&Matrix3<f64>> = elements.iter().filter(|q| q.determinant() > 0.0).collect();
     let improper: Vec<&Matrix3<f64>> = elements.iter().filter(|q| q.determinant() < 0.0).collect();
     let has_inversion = improper
         .iter()
-        .any(|q| (*q + Matrix3::identity()).norm() < 1e-6);
+        .any(|q| (*q + Matrix3::identity()).norm() < eps);
     // Rotation axes with their largest order.
     let mut axes: Vec<(Vector3<f64>, usize)> = Vec::new();
     for q in &proper {
-        if let Some((a, k)) = rotation_axis_order(q) {
-            if let Some(e) = axes.iter_mut().find(|(b, _)| same_axis(&a, b)) {
+        if let Some((a, k)) = rotation_axis_order(q, eps) {
+            if let Some(e) = axes.iter_mut().find(|(b, _)| same_axis(&a, b, eps)) {
                 e.1 = e.1.max(k);
             } else {
                 axes.push((a, k));
@@ -158,7 +225,7 @@ pub fn classify(elements: &[Matrix3<f64>]) -> String {
     // Reflections: improper elements with trace 1 (eigenvalues 1, 1, −1); normal = −1 eigvector.
     let mirror_normals: Vec<Vector3<f64>> = improper
         .iter()
-        .filter(|q| (q.trace() - 1.0).abs() < 1e-6)
+        .filter(|q| (q.trace() - 1.0).abs() < eps)
         .map(|q| {
             let m = (Matrix3::identity() - **q) * 0.5;
             let col = (0..3)
@@ -171,7 +238,7 @@ pub fn classify(elements: &[Matrix3<f64>]) -> String {
     // Improper rotations S_k about an axis: −Q is a proper rotation; S_k with k from its angle.
     let improper_axes: Vec<(Vector3<f64>, usize)> = improper
         .iter()
-        .filter(|q| (q.trace() - 1.0).abs() >= 1e-6 && (**q + Matrix3::identity()).norm() >= 1e-6)
+        .filter(|q| (q.trace() - 1.0).abs() >= eps && (**q + Matrix3::identity()).norm() >= eps)
         .filter_map(|q| {
             // q = −R with R a rotation by θ + π about the same axis; S_k rotates by 2π/k.
             let r = -**q;
@@ -179,7 +246,7 @@ pub fn classify(elements: &[Matrix3<f64>]) -> String {
             let theta_r = c.acos();
             let theta_s = std::f64::consts::PI - theta_r;
             let k = (2.0 * std::f64::consts::PI / theta_s).round() as usize;
-            rotation_axis_order(&r).map(|(a, _)| (a, k))
+            rotation_axis_order(&r, eps).map(|(a, _)| (a, k))
         })
         .collect();
 
@@ -219,26 +286,26 @@ pub fn classify(elements: &[Matrix3<f64>]) -> String {
         .find(|(a, _)| {
             improper_axes
                 .iter()
-                .any(|(b, k)| same_axis(a, b) && *k == 2 * n)
+                .any(|(b, k)| same_axis(a, b, eps) && *k == 2 * n)
         })
         .or_else(|| {
             candidates
                 .iter()
-                .find(|(a, _)| mirror_normals.iter().any(|m| same_axis(a, m)))
+                .find(|(a, _)| mirror_normals.iter().any(|m| same_axis(a, m, eps)))
         })
         .unwrap_or(&candidates[0])
         .0;
     let perp_c2 = axes
         .iter()
-        .filter(|(a, k)| *k >= 2 && a.dot(&principal).abs() < 1e-5)
+        .filter(|(a, k)| *k >= 2 && a.dot(&principal).abs() < 10.0 * eps)
         .count();
-    let sigma_h = mirror_normals.iter().any(|m| same_axis(m, &principal));
+    let sigma_h = mirror_normals.iter().any(|m| same_axis(m, &principal, eps));
     let sigma_v = mirror_normals
         .iter()
-        .any(|m| m.dot(&principal).abs() < 1e-5);
+        .any(|m| m.dot(&principal).abs() < 10.0 * eps);
     let s2n = improper_axes
         .iter()
-        .any(|(a, k)| same_axis(a, &principal) && *k == 2 * n);
+        .any(|(a, k)| same_axis(a, &principal, eps) && *k == 2 * n);
     let sym = if perp_c2 >= n && n >= 2 {
         if sigma_h {
             format!("D{n}h")

@@ -3,8 +3,10 @@
 //! branch diagram with its critical points (the paper's Figs. 2, 3, 5, 6, 7).
 //!
 //! Everything is drawn as SVG by this crate (a few primitives suffice, and text stays text,
-//! with Unicode symbols such as L̄, λ, η); PNGs are rasterised from that SVG by `resvg` with
-//! the DejaVu Sans font bundled in `fonts/`, so no system font is ever needed.
+//! with Unicode symbols such as L̄, λ, η). PNGs are drawn with tiny-skia straight from the
+//! document's drawing operations (`paint`; text shaped by rustybuzz), or rasterised from
+//! the SVG text by `resvg` when a document holds raw markup; both use the DejaVu Sans font
+//! bundled in `fonts/`, so no system font is ever needed.
 
 mod error;
 
@@ -13,6 +15,7 @@ pub mod data;
 pub mod diagram;
 pub mod geometry;
 pub mod loops;
+pub mod paint;
 pub mod plot;
 pub mod profiles;
 pub mod raster;

@@ -6,7 +6,9 @@ use nalgebra::Vector3;
 
 use crate::color::{colormap, Rgb, Scale, WHITE};
 use crate::data::{column_label, LoopData};
-use crate::geometry::{crossings_2d, resample_closed, self_contacts, Contact};
+use rodloop_exact::shape::{loop_shape, LoopContact, LoopShape, SampledLoop, ShapeTolerances};
+
+use crate::geometry::{crossings_2d, cyclic_gap, self_contacts};
 use crate::svg::{tick_label, ticks, Anchor, Svg};
 use crate::view::View;
 use crate::FigureError;
@@ -40,39 +42,59 @@ impl Default for LoopPictureOptions {
 pub struct LoopPicture {
     /// The SVG document.
     pub svg: String,
+    /// The same picture as drawing operations (for [`crate::paint::to_png`]).
+    pub document: Svg,
     /// Column the loop is coloured by.
     pub color_column: String,
     /// Range of the colour bar (the column's data range).
     pub scale: Scale,
-    /// Self-contacts in 3-D (closest approach of non-adjacent segments below the tolerance).
-    pub contacts: Vec<Contact>,
+    /// Self-contacts in 3-D (closest approach of strands apart along the loop below the
+    /// tolerance), from [`LoopPicture::shape`] when the table has `kappa_g`, else from the
+    /// polygon through the table's points.
+    pub contacts: Vec<LoopContact>,
+    /// Point group and self-intersections ([`shape`]; `None` without `kappa_g` or `kappa`).
+    pub shape: Option<LoopShape>,
     /// Tolerance used for the contacts, in the data's length unit.
     pub tol: f64,
     /// For each view, the crossings of its projection that are not 3-D contacts.
     pub apparent_crossings: Vec<(String, usize)>,
 }
 
-/// The point group of a closed curve (Schoenflies symbol, order) with the RMS tolerance used
-/// (a fraction of the radius), found by [`rodloop_exact::symmetry::point_group`] after
-/// resampling the curve uniformly in arclength from a zero of `κ_g` at `4η·k` points (the
-/// sampling that detector needs). `None` without a `kappa_g` column or a periodic `κ_g`.
-pub fn point_group(data: &LoopData, tol: f64) -> Option<(String, usize)> {
-    let eta = data.eta()?;
-    let kg = data.column("kappa_g")?;
+/// Shape descriptors of a loop table ([`rodloop_exact::shape::loop_shape`]: point group and
+/// self-intersections, `tol` fractions of the sphere radius). The symmetry anchors are the
+/// peaks of `|κ_g|`, or of the curvature `κ` for a table without `kappa_g` (an enclosed
+/// state off the sphere): every isometry keeps `κ`, and on the sphere `κ² = κ_g² + 1/R²`
+/// peaks where `|κ_g|` does. `None` without either column or with too few points.
+pub fn shape(data: &LoopData, tol: ShapeTolerances) -> Option<LoopShape> {
+    let kg = data.column("kappa_g").or_else(|| data.column("kappa"))?;
     let s = data.s();
-    let n = s.len();
-    let length = data.length();
-    // First zero of κ_g (linear interpolation between the bracketing samples).
-    let k = (0..n).find(|&i| kg[i] != 0.0 && kg[i].signum() != kg[(i + 1) % n].signum())?;
-    let (s0, s1) = (s[k], if k + 1 < n { s[k + 1] } else { s[0] + length });
-    let (a, b) = (kg[k], kg[(k + 1) % n]);
-    let s_zero = s0 + (s1 - s0) * a / (a - b);
-    let per = 4 * eta as usize;
-    let m = per * (256usize.div_ceil(per)).max(2);
-    let pts = resample_closed(s, &data.points(), length, s_zero, m);
-    let r = data.radius();
-    let g = rodloop_exact::symmetry::point_group(&pts, tol * r);
-    Some((g.symbol, g.order))
+    let pts = data.points();
+    loop_shape(
+        &SampledLoop {
+            length: data.length(),
+            radius: data.radius(),
+            s,
+            points: &pts,
+            kappa_g_s: s,
+            kappa_g: kg,
+        },
+        tol,
+    )
+    .ok()
+}
+
+/// The point group of a loop table (Schoenflies symbol; number of elements, `None` for the
+/// continuous groups D∞h and C∞v) with the RMS tolerance `tol` (a fraction of the radius).
+/// `None` without a `kappa_g` or `kappa` column.
+pub fn point_group(data: &LoopData, tol: f64) -> Option<(String, Option<usize>)> {
+    let sh = shape(
+        data,
+        ShapeTolerances {
+            symmetry: tol,
+            ..ShapeTolerances::default()
+        },
+    )?;
+    Some((sh.point_group, sh.group_order))
 }
 
 fn map_px(p: (f64, f64), c: (f64, f64), scale: f64) -> (f64, f64) {
@@ -113,7 +135,41 @@ pub fn loop_picture(
     let n = pts.len();
     let r = data.radius();
     let tol = opts.tol * r;
-    let contacts = self_contacts(&pts, tol);
+    let s_col = data.s();
+    let shape = shape(
+        data,
+        ShapeTolerances {
+            contact: opts.tol,
+            ..ShapeTolerances::default()
+        },
+    );
+    let contacts: Vec<LoopContact> = match &shape {
+        Some(sh) => sh.contacts.clone(),
+        None => self_contacts(&pts, tol)
+            .into_iter()
+            .map(|c| LoopContact {
+                s: [
+                    s_col[c.i] + c.t * (s_col[(c.i + 1) % n] - s_col[c.i]),
+                    s_col[c.j] + c.u * (s_col[(c.j + 1) % n] - s_col[c.j]),
+                ],
+                point: c.point,
+                distance: c.distance,
+            })
+            .collect(),
+    };
+    // The table's segment holding each contact's strands (for the projected crossings).
+    let length = data.length();
+    let segment_of = |x: f64| {
+        let x = s_col[0] + (x - s_col[0]).rem_euclid(length);
+        s_col
+            .partition_point(|&v| v <= x)
+            .saturating_sub(1)
+            .min(n - 1)
+    };
+    let contact_segments: Vec<(usize, usize)> = contacts
+        .iter()
+        .map(|c| (segment_of(c.s[0]), segment_of(c.s[1])))
+        .collect();
 
     let p = opts.panel;
     let (left, top, gap_x, gap_y) = (20.0, 78.0, 24.0, 40.0);
@@ -122,9 +178,6 @@ pub fn loop_picture(
     let legend_h = 58.0;
     let height = top + 2.0 * p + gap_y + legend_h;
     let mut svg = Svg::new(width.round(), height.round());
-    svg.def(
-        "<radialGradient id=\"sphere\" cx=\"0.42\" cy=\"0.38\" r=\"0.62\"><stop offset=\"0\" stop-color=\"#eef4fb\"/><stop offset=\"0.75\" stop-color=\"#c9d8ea\"/><stop offset=\"1\" stop-color=\"#9fb4cf\"/></radialGradient>",
-    );
     // Title.
     let lbar = data.lbar();
     let title = if opts.title.is_empty() {
@@ -189,12 +242,7 @@ pub fn loop_picture(
             draw_seg(&mut svg, i);
         }
         // The translucent sphere between the back and the front half.
-        svg.raw(&format!(
-            "<circle cx=\"{:.2}\" cy=\"{:.2}\" r=\"{:.2}\" fill=\"url(#sphere)\" fill-opacity=\"0.35\" stroke=\"#7a8ca5\" stroke-width=\"1\"/>",
-            c.0,
-            c.1,
-            r * sc
-        ));
+        svg.sphere(c.0, c.1, r * sc);
         // Equator z = 0 (front half) as an orientation guide, unless seen face-on.
         if view.toward.z.abs() < 0.999 {
             let eq: Vec<(f64, f64)> = (0..=120)
@@ -213,12 +261,9 @@ pub fn loop_picture(
         // Crossings of this projection that are not 3-D contacts.
         let uv: Vec<(f64, f64)> = proj.iter().map(|q| (q.u, q.v)).collect();
         let near_contact = |i: usize, j: usize| {
-            contacts.iter().any(|ct| {
-                let g = |a: usize, b: usize| {
-                    let d = a.abs_diff(b) % n;
-                    d.min(n - d)
-                };
-                (g(ct.i, i) <= 4 && g(ct.j, j) <= 4) || (g(ct.i, j) <= 4 && g(ct.j, i) <= 4)
+            contact_segments.iter().any(|&(ci, cj)| {
+                let g = |a: usize, b: usize| cyclic_gap(a, b, n);
+                (g(ci, i) <= 4 && g(cj, j) <= 4) || (g(ci, j) <= 4 && g(cj, i) <= 4)
             })
         };
         let mut count = 0;
@@ -252,12 +297,14 @@ pub fn loop_picture(
         for ct in &contacts {
             let q = view.project(&ct.point);
             let at = map_px((q.u, q.v), c, sc);
-            svg.raw(&format!(
-                "<circle cx=\"{:.2}\" cy=\"{:.2}\" r=\"8\" fill=\"none\" stroke=\"#e00000\" stroke-width=\"2.2\"{}/>",
-                at.0,
-                at.1,
-                if q.depth < 0.0 { " stroke-dasharray=\"3 2\"" } else { "" }
-            ));
+            svg.circle_styled(
+                (at.0, at.1, 8.0),
+                "none",
+                1.0,
+                "#e00000",
+                2.2,
+                if q.depth < 0.0 { "3 2" } else { "" },
+            );
         }
         // s = 0 and the direction of increasing s.
         let a = map_px((proj[0].u, proj[0].v), c, sc);
@@ -350,9 +397,11 @@ pub fn loop_picture(
     );
     Ok(LoopPicture {
         svg: svg.finish(),
+        document: svg,
         color_column,
         scale,
         contacts,
+        shape,
         tol,
         apparent_crossings: apparent,
     })

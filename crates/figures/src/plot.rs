@@ -267,13 +267,18 @@ impl Plot {
         };
         if boxed {
             let lw = px + pw - 8.0 - lx;
-            svg.raw(&format!(
-                "<rect x=\"{:.2}\" y=\"{:.2}\" width=\"{:.2}\" height=\"{:.2}\" fill=\"white\" fill-opacity=\"0.85\" stroke=\"#bbb\"/>",
-                lx - 4.0,
-                ly - 4.0,
-                lw + 4.0,
-                row_h * self.legend.len() as f64 + 4.0
-            ));
+            svg.rect_translucent(
+                (
+                    lx - 4.0,
+                    ly - 4.0,
+                    lw + 4.0,
+                    row_h * self.legend.len() as f64 + 4.0,
+                ),
+                "white",
+                0.85,
+                "#bbb",
+                1.0,
+            );
         }
         for (k, item) in self.legend.iter().enumerate() {
             let yy = ly + row_h * k as f64 + 10.0;

@@ -19,6 +19,16 @@ pub fn profiles_figure(
     panel_h: f64,
     title: &str,
 ) -> Result<String, FigureError> {
+    Ok(profiles_document(data, panel_w, panel_h, title)?.finish())
+}
+
+/// [`profiles_figure`] as a document (for [`crate::paint::to_png`]).
+pub fn profiles_document(
+    data: &LoopData,
+    panel_w: f64,
+    panel_h: f64,
+    title: &str,
+) -> Result<Svg, FigureError> {
     if !(200.0..=3000.0).contains(&panel_w) || !(150.0..=3000.0).contains(&panel_h) {
         return Err(FigureError::Invalid(format!(
             "profile panels must be 200–3000 × 150–3000 pixels, got {panel_w} × {panel_h}"
@@ -67,5 +77,5 @@ pub fn profiles_figure(
         let (px, py) = ((k % 2) as f64 * panel_w, top + (k / 2) as f64 * panel_h);
         plot.render(&mut svg, px, py, panel_w, panel_h, &format!("prof{k}"));
     }
-    Ok(svg.finish())
+    Ok(svg)
 }

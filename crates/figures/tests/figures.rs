@@ -129,7 +129,7 @@ fn saddle_is_d2d() {
     let d = exact_loop(2, 1.2, 500);
     let (sym, order) = point_group(&d, 1e-4).unwrap();
     assert_eq!(sym, "D2d");
-    assert_eq!(order, 8);
+    assert_eq!(order, Some(8));
 }
 
 #[test]

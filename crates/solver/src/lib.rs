@@ -37,6 +37,7 @@ pub mod param;
 pub mod periodic;
 pub mod robust;
 pub mod seam;
+pub mod shape;
 pub mod solve;
 pub mod stability;
 pub mod start;

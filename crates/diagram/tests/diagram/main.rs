@@ -9,4 +9,5 @@ mod great_circles;
 mod inhomogeneous;
 mod resolution;
 mod resume;
+mod shapes;
 mod stepping;
