@@ -115,7 +115,7 @@ pub fn run(args: &Args) -> Result<()> {
                 ex.from_branch, ex.to_branch, diagram.param, e.value, e.kind, e.reason
             );
         }
-        for t in &c.turns {
+        for t in c.turns.iter().chain(&c.switches) {
             eprintln!(
                 "phase: exchange {} -> {}: {t}",
                 ex.from_branch, ex.to_branch
@@ -146,6 +146,7 @@ pub fn run(args: &Args) -> Result<()> {
             "ends": c.ends,
             "uniform": c.uniform,
             "turns": c.turns,
+            "switches": c.switches,
             "notes": c.notes,
         })).collect::<Vec<_>>(),
         "time_seconds": seconds,
