@@ -23,6 +23,7 @@ mod euler;
 mod numeric_diagram;
 mod output;
 mod phase;
+mod phase_figure;
 mod progress;
 mod report;
 mod solve;
