@@ -22,6 +22,7 @@ mod enclosed;
 mod euler;
 mod numeric_diagram;
 mod output;
+mod param_diagram;
 mod phase;
 mod phase_figure;
 mod progress;

@@ -64,6 +64,7 @@ mod labels;
 pub mod march;
 pub mod maxwell;
 mod parallel;
+pub mod param_sweep;
 pub mod phase;
 pub mod refine;
 mod seed;
