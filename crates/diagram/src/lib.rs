@@ -66,6 +66,7 @@ pub mod maxwell;
 mod parallel;
 pub mod param_sweep;
 pub mod phase;
+mod placements;
 pub mod refine;
 mod seed;
 mod states;

@@ -16,14 +16,14 @@
 
 use rodloop_continuation::{Direction, SpecialKind};
 use rodloop_exact::{branch_of_eta, eta_of_branch};
-use rodloop_solver::identify::identify_equilibrium;
 use rodloop_solver::{
-    solve, solve_from_state, Accuracy, Confinement, Globalization, Param, ParamProblem,
-    SolveOptions, StartShape, Stiffness, SurfaceModel,
+    solve_from_state, Accuracy, Confinement, Globalization, Param, ParamProblem, SolveOptions,
+    Stiffness, SurfaceModel,
 };
 
 use crate::labels::Label;
 use crate::march::{march, march_switch, FoldPolicy, March, MarchSettings, MarchStop};
+use crate::placements::{classify, shift_of, solve_shifted};
 use crate::states::INDEX_TOLERANCE;
 use crate::DiagramError;
 
@@ -181,7 +181,7 @@ fn check(s: &SweepSettings) -> Result<f64, DiagramError> {
                 s.target, s.param
             ))
         })?;
-    if s.param == Param::D1 && !(s.target > 0.0) {
+    if s.param == Param::D1 && s.target <= 0.0 {
         return Err(invalid(format!(
             "--to for d1 = D1/D0 must be positive (got {})",
             s.target
@@ -207,34 +207,21 @@ fn seeds(
     eta: u32,
     opts: &SolveOptions,
 ) -> (Vec<(f64, Vec<f64>)>, Vec<String>) {
-    let auto = SolveOptions {
-        globalization: Globalization::Auto,
-        ..opts.clone()
-    };
     let mut found: Vec<(f64, Vec<f64>)> = Vec::new();
     let mut why = Vec::new();
-    let period = 0.5 / f64::from(eta);
     for k in 0..8 {
-        let shift = period * f64::from(k) / 8.0;
-        let res = StartShape::Exact { eta }
-            .shifted(model.lbar(), shift)
-            .and_then(|st| st.gauss_values(model))
-            .and_then(|z| solve(model, &z, &auto));
-        match res {
-            Ok(eq)
-                if identify_equilibrium(&eq)
-                    .map(|p| p.eta == eta)
-                    .unwrap_or(false) =>
-            {
-                let e = eq.energy().total;
-                if !found.iter().any(|(f, _)| (f - e).abs() < SAME_STATE) {
-                    found.push((e, eq.state()));
+        let shift = shift_of(eta, k);
+        match solve_shifted(model, eta, k, opts) {
+            Ok(eq) => match classify(&eq, eta, INDEX_TOLERANCE) {
+                (true, _, e) => {
+                    if !found.iter().any(|(f, _)| (f - e).abs() < SAME_STATE) {
+                        found.push((e, eq.state()));
+                    }
                 }
-            }
-            Ok(eq) => why.push(format!(
-                "shift {shift:.4}: converged onto another branch (E = {:.8})",
-                eq.energy().total
-            )),
+                (false, _, e) => why.push(format!(
+                    "shift {shift:.4}: converged onto another branch (E = {e:.8})"
+                )),
+            },
             Err(e) => why.push(format!("shift {shift:.4}: {e}")),
         }
     }

@@ -55,13 +55,13 @@ impl Parts {
     fn sweep(
         &mut self,
         s: &PhaseSettings,
-        problem: &MaxwellProblem,
         maker: &mut RowMaker,
         start: &Tracked,
         p_end: f64,
         range: (f64, f64),
         ex: Exchange,
     ) -> Result<(), DiagramError> {
+        let problem = maker.main;
         let name = problem.param();
         let mut start = start.clone();
         for _ in 0..=MAX_SWITCHES {
@@ -90,8 +90,7 @@ impl Parts {
                         .filter(|o| o.arm == last.arm)
                         .cloned()
                         .collect();
-                    let triple =
-                        self.connect(s, problem, maker, &t, &old, leg_start, p_stop, ex)?;
+                    let triple = self.connect(maker, &t, &old, leg_start, p_stop, ex)?;
                     self.switches.push(format!(
                         "past {name} = {:.6} ({}): switched at {name} = {:.6} onto the lowest pair of states, {why}; L̄_cr = {:.8}; {triple}",
                         leg.end.value,
@@ -127,11 +126,8 @@ impl Parts {
     /// [`BACK_RANGE`]); where the two cross (a triple point, [`triple_point`]) the previous
     /// pair stops being the lowest, and its rows beyond are dropped; otherwise the back-traced
     /// rows fill the gap between `p_stop` and the switch. Returns a description.
-    #[allow(clippy::too_many_arguments)]
     fn connect(
         &mut self,
-        s: &PhaseSettings,
-        problem: &MaxwellProblem,
         maker: &mut RowMaker,
         t: &Tracked,
         old: &[Tracked],
@@ -139,7 +135,7 @@ impl Parts {
         p_stop: f64,
         ex: Exchange,
     ) -> Result<String, DiagramError> {
-        let _ = s;
+        let problem = maker.main;
         let name = problem.param();
         let dir = (t.p - p_stop).signum();
         let back_end = if (p_stop - leg_start).abs() > BACK_RANGE {
@@ -272,7 +268,7 @@ pub(super) fn trace_exchange(
     let p_top = d1_problem.p_of(towards(offsets[0]));
     let p_far = d1_problem.p_of(far);
     let range = (p_far.min(p_top), p_far.max(p_top));
-    parts.sweep(s, d1_problem, &mut maker, &seed.start, p_far, range, ex)?;
+    parts.sweep(s, &mut maker, &seed.start, p_far, range, ex)?;
     // Towards the uniform rod: continuation to the largest offset of the ladder, then
     // Newton at the ladder's values, extrapolated to D1/D0 = 1.
     let mut maker = RowMaker::new(d1_problem, ex, s);
@@ -454,15 +450,7 @@ fn trace_other(
     let mut maker = RowMaker::new(&problem, ex, s);
     parts.push(&mut maker, &t0, RowSource::Seed, ex)?;
     let pt = problem.p_of(s.target);
-    parts.sweep(
-        s,
-        &problem,
-        &mut maker,
-        &t0,
-        pt,
-        (pt.min(p0), pt.max(p0)),
-        ex,
-    )?;
+    parts.sweep(s, &mut maker, &t0, pt, (pt.min(p0), pt.max(p0)), ex)?;
     let mut notes = std::mem::take(&mut parts.notes);
     add_at_rows(s, &problem, ex, &parts.states, &mut parts.rows, &mut notes)?;
     notes.push(format!(

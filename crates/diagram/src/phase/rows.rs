@@ -31,7 +31,8 @@ pub(super) fn fixed(
 
 /// A Maxwell point at `p` with its companion, as a row.
 pub(super) struct RowMaker<'a> {
-    main: &'a MaxwellProblem,
+    /// The Maxwell problem of the rows.
+    pub(super) main: &'a MaxwellProblem,
     ex: Exchange,
     accuracy: Accuracy,
     opts: &'a SolveOptions,

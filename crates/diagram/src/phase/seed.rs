@@ -2,15 +2,15 @@
 //! the soft segment, and the Maxwell point of two equilibria by the secant method.
 
 use rodloop_exact::eta_of_branch;
-use rodloop_solver::identify::identify_equilibrium;
 use rodloop_solver::{
-    solve_cells, solve_from_state, Confinement, Equilibrium, Globalization, Param, SolveOptions,
-    SolverError, StartShape, Stiffness,
+    solve_from_state, Equilibrium, Globalization, Param, SolveOptions, SolverError, Stiffness,
+    SurfaceModel,
 };
 
 use super::rows::{branch_word, fixed};
 use super::{Exchange, PhaseSettings, Tracked};
 use crate::maxwell::{MaxwellProblem, INDEX_TOL, SEED_OFFSET};
+use crate::placements::{classify, shift_of, solve_shifted};
 use crate::DiagramError;
 
 /// The crossings of the uniform rod's exact diagram (Sec. 4.3) in `[lbar_min, lbar_max]`.
@@ -62,8 +62,7 @@ pub(crate) fn lowest_placement(
     stiffness: &Stiffness,
     opts: &SolveOptions,
 ) -> Result<Equilibrium, String> {
-    let start = StartShape::Exact { eta };
-    let period = 0.5 / f64::from(eta);
+    let model = SurfaceModel::new(radius, lbar, cells, stiffness).map_err(|e| e.to_string())?;
     let mut best: Option<(f64, Equilibrium)> = None;
     let mut tried = Vec::new();
     let mut agreed = 0;
@@ -71,18 +70,10 @@ pub(crate) fn lowest_placement(
         if agreed >= 2 {
             break;
         }
-        let shift = period * f64::from(k) / 8.0;
-        let st = start.shifted(lbar, shift).map_err(|e| e.to_string())?;
-        match solve_cells(radius, lbar, cells, stiffness, &st, None, opts) {
+        let shift = shift_of(eta, k);
+        match solve_shifted(&model, eta, k, opts) {
             Ok(eq) => {
-                let ok_eta = identify_equilibrium(&eq)
-                    .map(|p| p.eta == eta)
-                    .unwrap_or(false);
-                let idx = eq
-                    .model()
-                    .index(&eq.state(), INDEX_TOL)
-                    .unwrap_or(usize::MAX);
-                let e = eq.energy().total;
+                let (ok_eta, idx, e) = classify(&eq, eta, INDEX_TOL);
                 if ok_eta && idx == 0 {
                     match &best {
                         Some((b, _)) if (e - b).abs() <= 1e-9 * b.abs() => agreed += 1,

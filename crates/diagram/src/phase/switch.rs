@@ -15,15 +15,13 @@
 
 use nalgebra::DVector;
 use rodloop_exact::eta_of_branch;
-use rodloop_solver::identify::identify_equilibrium;
-use rodloop_solver::{
-    solve, Confinement, Equilibrium, Globalization, SolveOptions, StartShape, SurfaceModel,
-};
+use rodloop_solver::{solve, Equilibrium, Globalization, SolveOptions, SurfaceModel};
 
 use super::rows::fixed;
 use super::seed::maxwell_by_secant;
 use super::{Exchange, Tracked};
 use crate::maxwell::{MaxwellProblem, INDEX_TOL};
+use crate::placements::{classify, shift_of, solve_shifted};
 
 /// Size of the push along the softest mode relative to the state, in the metric
 /// `‖δκ‖_W² = δκᵀWδκ` of the modes (quadrature weights `W`).
@@ -48,23 +46,12 @@ fn lowest_state(
         globalization: Globalization::Minimize,
         ..opts.clone()
     };
-    let auto = SolveOptions {
-        globalization: Globalization::Auto,
-        ..opts.clone()
-    };
     let n = model.n_kappa();
     let mut best: Option<Candidate> = None;
     let mut tried = Vec::new();
     let mut consider = |res: Result<Equilibrium, String>, how: String| match res {
         Ok(eq) => {
-            let ok_eta = identify_equilibrium(&eq)
-                .map(|p| p.eta == eta)
-                .unwrap_or(false);
-            let idx = eq
-                .model()
-                .index(&eq.state(), INDEX_TOL)
-                .unwrap_or(usize::MAX);
-            let e = eq.energy().total;
+            let (ok_eta, idx, e) = classify(&eq, eta, INDEX_TOL);
             if ok_eta && idx == 0 {
                 if best.as_ref().is_none_or(|b| e < b.0) {
                     best = Some((e, eq, how));
@@ -106,15 +93,11 @@ fn lowest_state(
     }
     consider(relaxed, "last state relaxed".into());
     // Shifted exact loops.
-    let period = 0.5 / f64::from(eta);
     for k in 0..8 {
-        let shift = period * f64::from(k) / 8.0;
-        let res = StartShape::Exact { eta }
-            .shifted(model.lbar(), shift)
-            .and_then(|st| st.gauss_values(model))
-            .and_then(|z| solve(model, &z, &auto))
-            .map_err(|e| e.to_string());
-        consider(res, format!("exact loop shifted by {shift:.4}"));
+        consider(
+            solve_shifted(model, eta, k, opts).map_err(|e| e.to_string()),
+            format!("exact loop shifted by {:.4}", shift_of(eta, k)),
+        );
     }
     best.ok_or_else(|| {
         format!(
