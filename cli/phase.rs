@@ -120,6 +120,19 @@ pub fn run(args: &Args) -> Result<()> {
                 ex.from_branch, ex.to_branch
             );
         }
+        if !c.checks.is_empty() {
+            eprintln!(
+                "phase: exchange {} -> {}: no lower state of either branch at its length at {} = {} (searched by minimisation from shifted exact loops and the followed states)",
+                ex.from_branch,
+                ex.to_branch,
+                diagram.param,
+                c.checks
+                    .iter()
+                    .map(|v| format!("{v:.6}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
         for n in &c.notes {
             eprintln!(
                 "phase: exchange {} -> {}: note: {n}",
@@ -146,6 +159,7 @@ pub fn run(args: &Args) -> Result<()> {
             "uniform": c.uniform,
             "turns": c.turns,
             "switches": c.switches,
+            "checks": c.checks,
             "notes": c.notes,
         })).collect::<Vec<_>>(),
         "time_seconds": seconds,

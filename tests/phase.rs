@@ -109,6 +109,16 @@ fn phase_follows_both_exchanges_to_the_uniform_rod_and_down() {
         .map(|c| c["ends"][0]["kind"].as_str().unwrap())
         .collect();
     assert_eq!(kinds, ["reached", "reached"]);
+    // At the decade 0.1 on the way a search for lower states of both branches found none.
+    for c in curves {
+        let checks = c["checks"].as_array().unwrap();
+        assert!(
+            checks
+                .iter()
+                .any(|v| (v.as_f64().unwrap() - 0.1).abs() < 1e-9),
+            "{checks:?}"
+        );
+    }
     assert_eq!(curves[0]["switches"].as_array().unwrap().len(), 1);
     assert!(rows
         .iter()

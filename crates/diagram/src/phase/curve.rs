@@ -21,6 +21,29 @@ const MAX_SWITCHES: usize = 8;
 /// switch to look for its crossing with the previous curve.
 const BACK_RANGE: f64 = 0.5;
 
+/// A state of the search at a checkpoint counts as lower than the followed one when its
+/// energy is below by more than this (relative; the energies of re-solved states carry noise
+/// of about 1e-11).
+const LOWER: f64 = 1e-8;
+
+/// The decades `10^k` strictly between `p0` and `p_end` for `d1` (continued in `ln d1`), in
+/// the order the curve meets them; none for the other parameters.
+fn checkpoints(problem: &MaxwellProblem, p0: f64, p_end: f64) -> Vec<f64> {
+    if problem.param() != Param::D1 {
+        return Vec::new();
+    }
+    let (lo, hi) = (p0.min(p_end), p0.max(p_end));
+    let ln10 = std::f64::consts::LN_10;
+    let mut out: Vec<f64> = ((lo / ln10).floor() as i32..=(hi / ln10).ceil() as i32)
+        .map(|k| f64::from(k) * ln10)
+        .filter(|&p| p > lo + SWITCH_STEP && p < hi - SWITCH_STEP)
+        .collect();
+    if p_end < p0 {
+        out.reverse();
+    }
+    out
+}
+
 /// What a curve accumulates while it is traced.
 #[derive(Default)]
 struct Parts {
@@ -30,6 +53,8 @@ struct Parts {
     ends: Vec<CurveEnd>,
     turns: Vec<String>,
     switches: Vec<String>,
+    /// Parameter values at which no lower pair of states was found.
+    checks: Vec<f64>,
     notes: Vec<String>,
     steps: usize,
 }
@@ -51,7 +76,10 @@ impl Parts {
 
     /// Follow the curve from `start` towards `p_end` inside `range`; where it ends at a fold,
     /// a loss of stability or a branch point before `p_end`, switch onto the lowest pair of
-    /// states just beyond ([`switch_pair`]) and go on.
+    /// states just beyond ([`switch_pair`]) and go on. For `d1` the curve also stops at every
+    /// decade on the way ([`checkpoints`]) to search for a lower pair of states at its length
+    /// (a state of another family can become the lowest without any event on the followed
+    /// pair); if one is found, the curve switches there.
     fn sweep(
         &mut self,
         s: &PhaseSettings,
@@ -64,14 +92,62 @@ impl Parts {
         let problem = maker.main;
         let name = problem.param();
         let mut start = start.clone();
-        for _ in 0..=MAX_SWITCHES {
-            let mut leg = follow(problem, &start, p_end, range, ex, &mut self.turns)?;
+        let mut stops = checkpoints(problem, start.p, p_end);
+        stops.push(p_end);
+        let mut next = 0;
+        let mut switches = 0;
+        while switches <= MAX_SWITCHES {
+            let target = stops[next];
+            // The leg's range ends at its target.
+            let leg_range = if target < start.p {
+                (range.0.max(target), range.1)
+            } else {
+                (range.0, range.1.min(target))
+            };
+            let mut leg = follow(problem, &start, target, leg_range, ex, &mut self.turns)?;
             self.steps += leg.points.len();
             for t in &leg.points {
                 self.push(maker, t, RowSource::Continuation, ex)?;
             }
             let last = leg.points.last().cloned().unwrap_or(start.clone());
             let p_stop = problem.p_of(leg.end.value);
+            let old = |start: &Tracked| -> Vec<Tracked> {
+                std::iter::once(start)
+                    .chain(&leg.points)
+                    .filter(|o| o.arm == last.arm)
+                    .cloned()
+                    .collect()
+            };
+            if leg.end.kind == "reached" && target != p_end && (last.p - target).abs() < 1e-9 {
+                // A checkpoint: is there a lower pair at this length?
+                next += 1;
+                let lower = switch_pair(problem, ex, &last, last.p, &s.solve)
+                    .ok()
+                    .filter(|(_, _, (ea, eb))| {
+                        problem.energies(&last.x, last.p).is_ok_and(|(ca, cb)| {
+                            *ea < ca - LOWER * ca.abs() || *eb < cb - LOWER * cb.abs()
+                        })
+                    });
+                match lower {
+                    None => {
+                        self.checks.push(problem.theta(last.p));
+                        start = last;
+                    }
+                    Some((t, why, _)) => {
+                        maker.reset();
+                        let triple = self.connect(maker, &t, &old(&start), start.p, p_stop, ex)?;
+                        self.switches.push(format!(
+                            "at the check {name} = {:.6} a lower pair of states was found, {why}; L̄_cr = {:.8}; {triple}",
+                            problem.theta(last.p),
+                            t.x[t.x.len() - 1],
+                        ));
+                        self.push(maker, &t, RowSource::Switch, ex)?;
+                        switches += 1;
+                        start = t;
+                    }
+                }
+                continue;
+            }
             let left = p_end - p_stop;
             if !matches!(leg.end.kind.as_str(), "fold" | "unstable" | "branch_point")
                 || left.abs() <= SWITCH_STEP
@@ -81,16 +157,10 @@ impl Parts {
             }
             let p = p_stop + SWITCH_STEP * left.signum();
             match switch_pair(problem, ex, &last, p, &s.solve) {
-                Ok((t, why)) => {
+                Ok((t, why, _)) => {
                     // The companion follows the new pair.
                     maker.reset();
-                    let leg_start = start.p;
-                    let old: Vec<Tracked> = std::iter::once(&start)
-                        .chain(&leg.points)
-                        .filter(|o| o.arm == last.arm)
-                        .cloned()
-                        .collect();
-                    let triple = self.connect(maker, &t, &old, leg_start, p_stop, ex)?;
+                    let triple = self.connect(maker, &t, &old(&start), start.p, p_stop, ex)?;
                     self.switches.push(format!(
                         "past {name} = {:.6} ({}): switched at {name} = {:.6} onto the lowest pair of states, {why}; L̄_cr = {:.8}; {triple}",
                         leg.end.value,
@@ -99,6 +169,11 @@ impl Parts {
                         t.x[t.x.len() - 1],
                     ));
                     self.push(maker, &t, RowSource::Switch, ex)?;
+                    switches += 1;
+                    // Checkpoints passed by the switch step are skipped.
+                    while next + 1 < stops.len() && (stops[next] - t.p) * left.signum() <= 0.0 {
+                        next += 1;
+                    }
                     start = t;
                 }
                 Err(e) => {
@@ -137,7 +212,8 @@ impl Parts {
     ) -> Result<String, DiagramError> {
         let problem = maker.main;
         let name = problem.param();
-        let dir = (t.p - p_stop).signum();
+        // The direction of travel.
+        let dir = (p_stop - leg_start).signum();
         let back_end = if (p_stop - leg_start).abs() > BACK_RANGE {
             p_stop - dir * BACK_RANGE
         } else {
@@ -219,6 +295,7 @@ impl Parts {
             cells,
             turns: self.turns,
             switches: self.switches,
+            checks: self.checks,
             notes: self.notes,
         }
     }
@@ -461,4 +538,35 @@ fn trace_other(
     parts.notes = notes;
     let cells = (problem.models().0.cells(), problem.models().1.cells());
     Ok(parts.finish(ex, None, cells))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rodloop_solver::{Stiffness, SurfaceModel};
+
+    #[test]
+    fn checkpoints_are_the_decades_strictly_inside_in_travel_order() {
+        let st = Stiffness::Tanh {
+            d0: 1.0,
+            d1: 0.5,
+            s0: 0.3,
+            s1: 0.8,
+            gamma: 12.0,
+        };
+        let m = SurfaceModel::new(1.0, 1.4, 12, &st).unwrap();
+        let pb = MaxwellProblem::new(m.clone(), m.clone(), Param::D1).unwrap();
+        let down = checkpoints(&pb, 0.9f64.ln(), 0.001f64.ln());
+        let want = [0.1f64.ln(), 0.01f64.ln()];
+        assert_eq!(down.len(), 2);
+        for (a, b) in down.iter().zip(want) {
+            assert!((a - b).abs() < 1e-12);
+        }
+        let up = checkpoints(&pb, 0.001f64.ln(), 0.9f64.ln());
+        assert!((up[0] - 0.01f64.ln()).abs() < 1e-12 && up.len() == 2);
+        // A decade within SWITCH_STEP of an end is not a checkpoint; nor is the end itself.
+        assert!(checkpoints(&pb, 0.5f64.ln(), 0.1f64.ln()).is_empty());
+        let g = MaxwellProblem::new(m.clone(), m, Param::Gamma).unwrap();
+        assert!(checkpoints(&g, 12.0, 100.0).is_empty());
+    }
 }

@@ -158,6 +158,9 @@ pub struct PhaseCurve {
     /// Switches onto another pair of states (where the followed pair stopped being the
     /// lowest: a fold, a loss of stability or a branch point of one of its states).
     pub switches: Vec<String>,
+    /// Parameter values (the decades of `d1` on the way) at which a search for lower states of
+    /// both branches at the curve's length found none.
+    pub checks: Vec<f64>,
     /// Notes (requested `--at` values outside the traced range, …).
     pub notes: Vec<String>,
 }

@@ -109,14 +109,15 @@ fn lowest_state(
 }
 
 /// The Maxwell point of the lowest pair of states at `p` near the last point `last` of a
-/// curve (see the module docs), with a description of the two states for people.
+/// curve (see the module docs), with a description of the two states for people and their
+/// energies at the length of `last`.
 pub(super) fn switch_pair(
     problem: &MaxwellProblem,
     ex: Exchange,
     last: &Tracked,
     p: f64,
     opts: &SolveOptions,
-) -> Result<(Tracked, String), String> {
+) -> Result<(Tracked, String, (f64, f64)), String> {
     let (za, zb, lbar) = problem
         .split(last.x.as_slice())
         .map_err(|e| e.to_string())?;
@@ -141,6 +142,7 @@ pub(super) fn switch_pair(
             arm: last.arm + 1,
         },
         why,
+        (ea, eb),
     ))
 }
 
