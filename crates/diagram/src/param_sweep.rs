@@ -17,8 +17,8 @@
 use rodloop_continuation::{Direction, SpecialKind};
 use rodloop_exact::{branch_of_eta, eta_of_branch};
 use rodloop_solver::{
-    solve_from_state, Accuracy, Confinement, Globalization, Param, ParamProblem, SolveOptions,
-    Stiffness, SurfaceModel,
+    solve_from_state, Accuracy, Confinement, Globalization, ModelFactor, Param, ParamProblem,
+    SolveOptions, SolverError, Stiffness, SurfaceModel,
 };
 
 use crate::labels::Label;
@@ -273,10 +273,14 @@ pub fn sweep_param(s: &SweepSettings) -> Result<ParamSweep, DiagramError> {
         let eta = eta_of_branch(branch);
         let cells = s.accuracy.cells(eta as usize, &s.stiffness);
         let model = SurfaceModel::new(s.radius, s.lbar, cells, &s.stiffness)?;
-        let problem = ParamProblem::new(model.clone(), s.param)?;
+        let cont = Continued {
+            model: model.clone(),
+            log: s.param == Param::D1,
+        };
+        let problem = ParamProblem::new(cont.clone(), s.param)?;
         let shape = model.n_kappa();
         let toward = |limit: f64, far: f64| MarchSettings {
-            limit,
+            limit: cont.p_of(limit),
             ds: 0.05,
             ds_min: 1e-7,
             ds_max: 0.25,
@@ -289,7 +293,7 @@ pub fn sweep_param(s: &SweepSettings) -> Result<ParamSweep, DiagramError> {
             detect_branch_points: true,
             index_tolerance: INDEX_TOLERANCE,
             progress_every: usize::MAX,
-            far_limit: Some(far),
+            far_limit: Some(cont.p_of(far)),
             circles: Vec::new(),
             circle_distance: 0.0,
         };
@@ -355,18 +359,25 @@ pub fn sweep_param(s: &SweepSettings) -> Result<ParamSweep, DiagramError> {
                     if limit == v {
                         continue;
                     }
-                    match march(&problem, x0, v, &toward(limit, far), &mut |_, _| {}) {
-                        Ok(m) => {
+                    match march(
+                        &problem,
+                        x0,
+                        cont.p_of(v),
+                        &toward(limit, far),
+                        &mut |_, _| {},
+                    ) {
+                        Ok(raw) => {
+                            let m = cont.in_theta(&raw);
                             let mut run = vec![(v, x0.clone())];
                             run.extend(m.points.iter().map(|p| (p.value, p.x.clone())));
                             known.push(run);
-                            marches.push(m)
+                            marches.push((raw, m))
                         }
                         Err(e) => warnings.push(format!("branch {branch} family {family}: {e}")),
                     }
                 }
                 let mut fam: Option<SweepFamily> = None;
-                for (k, m) in marches.iter().enumerate() {
+                for (k, (_, m)) in marches.iter().enumerate() {
                     let f = ctx.family(
                         family,
                         (k == 0).then(|| seed.clone()),
@@ -396,12 +407,13 @@ pub fn sweep_param(s: &SweepSettings) -> Result<ParamSweep, DiagramError> {
                         s.param
                     ));
                 }
-                for m in &marches {
-                    for bp in m.branch_points() {
+                for (raw, _) in &marches {
+                    for bp in raw.branch_points() {
+                        let bp_value = cont.theta(bp.value);
                         let settings = toward(s.target, scene_value);
                         let mut last_energies: Option<Vec<f64>> = None;
                         for dir in [Direction::Forward, Direction::Backward] {
-                            let sw = match march_switch(
+                            let sw_raw = match march_switch(
                                 &problem,
                                 bp,
                                 dir,
@@ -412,12 +424,13 @@ pub fn sweep_param(s: &SweepSettings) -> Result<ParamSweep, DiagramError> {
                                 Ok(sw) => sw,
                                 Err(e) => {
                                     warnings.push(format!(
-                                        "branch {branch} family {}: switching at the branch point {} = {:.8}: {e}",
-                                        fam.family, s.param, bp.value
+                                        "branch {branch} family {}: switching at the branch point {} = {bp_value:.8}: {e}",
+                                        fam.family, s.param
                                     ));
                                     continue;
                                 }
                             };
+                            let sw = cont.in_theta(&sw_raw);
                             let energies: Vec<f64> = sw
                                 .points
                                 .iter()
@@ -436,8 +449,8 @@ pub fn sweep_param(s: &SweepSettings) -> Result<ParamSweep, DiagramError> {
                                         .all(|(a, b)| (a - b).abs() < SAME_STATE)
                                 {
                                     fam.notes.push(format!(
-                                        "the branch point at {} = {:.8} has a mirror pair of secondary families (multiplicity 2, one traced)",
-                                        s.param, bp.value
+                                        "the branch point at {} = {bp_value:.8} has a mirror pair of secondary families (multiplicity 2, one traced)",
+                                        s.param
                                     ));
                                     continue;
                                 }
@@ -448,8 +461,8 @@ pub fn sweep_param(s: &SweepSettings) -> Result<ParamSweep, DiagramError> {
                             let mut f =
                                 ctx.family(family, None, None, &sw, &mut special, &mut warnings)?;
                             f.notes.push(format!(
-                                "switched from family {} at its branch point {} = {:.8}",
-                                fam.family, s.param, bp.value
+                                "switched from family {} at its branch point {} = {bp_value:.8}",
+                                fam.family, s.param
                             ));
                             mine.push(f);
                         }
@@ -471,6 +484,101 @@ pub fn sweep_param(s: &SweepSettings) -> Result<ParamSweep, DiagramError> {
         special,
         warnings,
     })
+}
+
+/// The surface model continued in `ln d1` for `d1` (the three decades at even steps), in the
+/// parameter itself otherwise: the continuation variable `p` and `θ = e^p`,
+/// `∂F/∂p = θ ∂F/∂θ`.
+#[derive(Clone, Debug)]
+struct Continued {
+    model: SurfaceModel,
+    log: bool,
+}
+
+impl Continued {
+    fn theta(&self, p: f64) -> f64 {
+        if self.log {
+            p.exp()
+        } else {
+            p
+        }
+    }
+
+    fn p_of(&self, theta: f64) -> f64 {
+        if self.log {
+            theta.ln()
+        } else {
+            theta
+        }
+    }
+
+    /// A march with its parameter values as `θ` (the tangents of its special points are
+    /// left in `p`; branch switching uses the march as marched).
+    fn in_theta(&self, m: &March) -> March {
+        let mut m = m.clone();
+        for p in &mut m.points {
+            p.value = self.theta(p.value);
+        }
+        for sp in &mut m.special {
+            sp.value = self.theta(sp.value);
+        }
+        for ic in &mut m.index_changes {
+            ic.value = self.theta(ic.value);
+        }
+        if let MarchStop::StepTooSmall { value, .. } | MarchStop::NearCircle { value, .. } =
+            &mut m.stop
+        {
+            *value = self.theta(*value);
+        }
+        m
+    }
+}
+
+impl Confinement for Continued {
+    fn dim(&self) -> usize {
+        Confinement::dim(&self.model)
+    }
+    fn n_constraints(&self) -> usize {
+        self.model.n_constraints()
+    }
+    fn residual(&self, z: &[f64]) -> Result<nalgebra::DVector<f64>, SolverError> {
+        self.model.residual(z)
+    }
+    fn jacobian(&self, z: &[f64]) -> Result<nalgebra::DMatrix<f64>, SolverError> {
+        self.model.jacobian(z)
+    }
+    fn factorize(&self, z: &[f64], shift: f64) -> Result<ModelFactor, SolverError> {
+        Confinement::factorize(&self.model, z, shift)
+    }
+    fn apply(&self, z: &[f64], dz: &[f64]) -> Result<nalgebra::DVector<f64>, SolverError> {
+        Confinement::apply(&self.model, z, dz)
+    }
+    fn param(&self, p: Param) -> Result<f64, SolverError> {
+        Ok(self.p_of(Confinement::param(&self.model, p)?))
+    }
+    fn with_param(&self, p: Param, value: f64) -> Result<Self, SolverError> {
+        Ok(Self {
+            model: Confinement::with_param(&self.model, p, self.theta(value))?,
+            log: self.log,
+        })
+    }
+    fn dparam(&self, z: &[f64], p: Param) -> Result<nalgebra::DVector<f64>, SolverError> {
+        let d = self.model.dparam(z, p)?;
+        Ok(if self.log {
+            d * Confinement::param(&self.model, p)?
+        } else {
+            d
+        })
+    }
+    fn index(&self, z: &[f64], tolerance: f64) -> Result<usize, SolverError> {
+        self.model.index(z, tolerance)
+    }
+    fn energy(&self, z: &[f64]) -> Result<f64, SolverError> {
+        Confinement::energy(&self.model, z)
+    }
+    fn residual_norm(&self, f: &nalgebra::DVector<f64>) -> f64 {
+        Confinement::residual_norm(&self.model, f)
+    }
 }
 
 /// Parameter values at which states are seeded: the scene's value first, then (for `d1`)
@@ -521,7 +629,9 @@ fn traced(
     known.iter().any(|run| {
         run.windows(2).any(|w| {
             let (a, b) = (&w[0], &w[1]);
-            if v < a.0.min(b.0) || v > a.0.max(b.0) {
+            // The ends of a march lie on the range's ends up to rounding (e^{ln θ}).
+            let slack = 1e-12 * v.abs().max(1e-300);
+            if v < a.0.min(b.0) - slack || v > a.0.max(b.0) + slack {
                 return false;
             }
             let start = if (a.0 - v).abs() <= (b.0 - v).abs() {
