@@ -788,3 +788,59 @@ fn label(families: &mut [SweepFamily]) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::DVector;
+    use rodloop_continuation::fd_dparam;
+
+    #[test]
+    fn log_continued_parameter_derivative_matches_finite_differences() {
+        let st = Stiffness::Tanh {
+            d0: 1.0,
+            d1: 0.3,
+            s0: 0.3,
+            s1: 0.8,
+            gamma: 12.0,
+        };
+        let model = SurfaceModel::new(1.0, 1.4, 12, &st).unwrap();
+        // A non-equilibrium state: the exact loop of two periods, arbitrary multipliers.
+        let mut z = rodloop_solver::StartShape::Exact { eta: 2 }
+            .gauss_values(&model)
+            .unwrap();
+        z.extend_from_slice(&[0.3, -0.2, 0.1]);
+        for log in [true, false] {
+            let c = Continued {
+                model: model.clone(),
+                log,
+            };
+            let p0 = Confinement::param(&c, Param::D1).unwrap();
+            assert!((c.theta(p0) - 0.3).abs() < 1e-15);
+            let an = c.dparam(&z, Param::D1).unwrap();
+            let fd = fd_dparam(
+                |p| -> Result<DVector<f64>, SolverError> {
+                    c.with_param(Param::D1, p)?.residual(&z)
+                },
+                p0,
+            )
+            .unwrap();
+            let err = (&an - &fd).amax() / fd.amax();
+            assert!(err < 1e-7, "log = {log}: {err}");
+        }
+    }
+
+    #[test]
+    fn seed_values_and_branches() {
+        assert_eq!(seed_values(Param::D1, 0.5, 0.001).len(), 4);
+        let v = seed_values(Param::D1, 0.5, 0.001);
+        assert!((v[1] - 0.1).abs() < 1e-15 && (v[2] - 0.01).abs() < 1e-15 && v[3] == 0.001);
+        assert_eq!(
+            seed_values(Param::Gamma, 200.0, 20.0),
+            vec![200.0, 110.0, 20.0]
+        );
+        // η − 1 < L̄ < η + 1: at 1.4 the figure-eight (η = 1, branch 2) and η = 2 (branch 1).
+        assert_eq!(branches_at(1.4), vec![1, 2]);
+        assert_eq!(branches_at(2.4), vec![1, 3]);
+    }
+}
