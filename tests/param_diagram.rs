@@ -1,21 +1,10 @@
 //! End-to-end tests of `rodloop diagram --param`: the equilibria of a two-segment rod at a
 //! fixed length traced against D1/D0, through the built binary.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn rodloop(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rodloop"))
-        .args(args)
-        .output()
-        .expect("run rodloop")
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
+use common::{assert_refused, rodloop, tmp};
+use std::path::Path;
 
 fn json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
@@ -184,11 +173,7 @@ fn bad_combinations_are_refused() {
             "two-segment",
         ),
     ] {
-        let r = rodloop(&args);
-        assert!(!r.status.success(), "{args:?}");
-        let e = String::from_utf8_lossy(&r.stderr);
-        assert!(e.contains(msg), "{args:?}: {e}");
-        assert!(!e.contains("panicked"), "{e}");
+        assert_refused(&args, msg);
     }
     assert!(!out.join("branches.csv").exists());
 }

@@ -1,21 +1,9 @@
 //! End-to-end tests of `rodloop phase`: the critical lengths of a two-segment rod as curves
 //! in D1/D0, through the built binary.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn rodloop(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rodloop"))
-        .args(args)
-        .output()
-        .expect("run rodloop")
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
+use common::{assert_refused, rodloop, tmp};
 
 /// The exact critical lengths of the uniform rod in [1, 3] (exact layer, Sec. 4.3).
 fn exact_crossings() -> Vec<f64> {
@@ -178,11 +166,7 @@ fn phase_refuses_bad_input() {
             "--at",
         ),
     ] {
-        let r = rodloop(&args);
-        assert!(!r.status.success(), "{args:?}");
-        let e = String::from_utf8_lossy(&r.stderr);
-        assert!(e.contains(msg), "{args:?}: {e}");
-        assert!(!e.contains("panicked"), "{e}");
+        assert_refused(&args, msg);
     }
     assert!(!out.join("phase.csv").exists());
 }
