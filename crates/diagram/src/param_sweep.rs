@@ -275,7 +275,8 @@ pub fn sweep_param(s: &SweepSettings) -> Result<ParamSweep, DiagramError> {
         let model = SurfaceModel::new(s.radius, s.lbar, cells, &s.stiffness)?;
         let cont = Continued {
             model: model.clone(),
-            log: s.param == Param::D1,
+            // d1 and gamma are positive scale parameters: continued in their logarithm.
+            log: matches!(s.param, Param::D1 | Param::Gamma),
         };
         let problem = ParamProblem::new(cont.clone(), s.param)?;
         let shape = model.n_kappa();
@@ -486,7 +487,7 @@ pub fn sweep_param(s: &SweepSettings) -> Result<ParamSweep, DiagramError> {
     })
 }
 
-/// The surface model continued in `ln d1` for `d1` (the three decades at even steps), in the
+/// The surface model continued in `ln θ` for `d1` and `gamma` (the decades at even steps), in the
 /// parameter itself otherwise: the continuation variable `p` and `θ = e^p`,
 /// `∂F/∂p = θ ∂F/∂θ`.
 #[derive(Clone, Debug)]
