@@ -75,6 +75,16 @@ pub struct Args {
     /// Height of the diagram figures in pixels.
     #[arg(long, default_value_t = 620)]
     pub height: u32,
+    /// Trace the equilibria at the fixed length --lbar against this parameter of a
+    /// two-segment scene (d1 = D1/D0 on a log axis, gamma, s0, s1) instead of against L̄.
+    #[arg(long)]
+    pub param: Option<String>,
+    /// The fixed normalised length of --param.
+    #[arg(long)]
+    pub lbar: Option<f64>,
+    /// End value of --param (default 1e-3 for d1; the start is the scene's value).
+    #[arg(long)]
+    pub to: Option<f64>,
 }
 
 /// The figures of `draw_diagram` (diagram, diagram_split, diagram_lambda; SVG and PNG).
@@ -192,6 +202,12 @@ fn selected_branches(args: &Args, lbar_min: f64, lbar_max: f64) -> Result<Option
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
+    if let Some(p) = &args.param {
+        return crate::param_diagram::run(args, p);
+    }
+    if args.lbar.is_some() || args.to.is_some() {
+        bail!("--lbar and --to belong to --param (the equilibria at a fixed length against a parameter); the diagram in L̄ takes --lbar-min and --lbar-max");
+    }
     let scene = crate::solve::load_scene(args.scene.as_deref())?;
     let lbar_min = args.lbar_min.unwrap_or(scene.lbar_min);
     let lbar_max = args.lbar_max.unwrap_or(scene.lbar_max);

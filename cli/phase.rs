@@ -6,12 +6,11 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use rodloop_diagram::phase::{trace_phase, PhaseDiagram, PhaseSettings, RowSource};
-use rodloop_figures::plot::{LegendItem, Plot, Series};
 use rodloop_figures::raster::svg_to_png;
-use rodloop_figures::svg::{Anchor, Svg};
 use rodloop_solver::{Param, SolveOptions};
 
 use crate::output::{check_finite, strip_nulls, Cell, OutputRun, Table};
+use crate::phase_figure::phase_svg;
 use crate::solve::{accuracy_of, load_scene, stiffness_of};
 
 /// Arguments of `rodloop phase`.
@@ -69,7 +68,7 @@ pub fn run(args: &Args) -> Result<()> {
     let seconds = t0.elapsed().as_secs_f64();
 
     let table = phase_table(&diagram)?;
-    let svg = phase_svg(&diagram, &scene.name);
+    let svg = phase_svg(&diagram, &scene.name, (scene.lbar_min, scene.lbar_max));
     let png = svg_to_png(&svg, 1.0).context("rendering phase.png")?;
 
     // People: the limit check, the ends and notes of each curve.
@@ -115,10 +114,23 @@ pub fn run(args: &Args) -> Result<()> {
                 ex.from_branch, ex.to_branch, diagram.param, e.value, e.kind, e.reason
             );
         }
-        for t in &c.turns {
+        for t in c.turns.iter().chain(&c.switches) {
             eprintln!(
                 "phase: exchange {} -> {}: {t}",
                 ex.from_branch, ex.to_branch
+            );
+        }
+        if !c.checks.is_empty() {
+            eprintln!(
+                "phase: exchange {} -> {}: no lower state of either branch at its length at {} = {} (searched by minimisation from shifted exact loops and the followed states)",
+                ex.from_branch,
+                ex.to_branch,
+                diagram.param,
+                c.checks
+                    .iter()
+                    .map(|v| format!("{v:.6}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
             );
         }
         for n in &c.notes {
@@ -146,6 +158,8 @@ pub fn run(args: &Args) -> Result<()> {
             "ends": c.ends,
             "uniform": c.uniform,
             "turns": c.turns,
+            "switches": c.switches,
+            "checks": c.checks,
             "notes": c.notes,
         })).collect::<Vec<_>>(),
         "time_seconds": seconds,
@@ -203,129 +217,4 @@ fn phase_table(d: &PhaseDiagram) -> Result<Table> {
         }
     }
     Ok(t)
-}
-
-/// `phase.svg`: `L̄_cr` against the parameter (log axis for `d1`), the regions between the
-/// curves labelled by their lowest branch.
-fn phase_svg(d: &PhaseDiagram, scene: &str) -> String {
-    let log = d.param == Param::D1;
-    let xv = |v: f64| if log { v.log10() } else { v };
-    let colors = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd"];
-    let mut plot = Plot {
-        title: format!("Critical lengths of scene {scene} against {}", d.param),
-        xlabel: if log {
-            "log₁₀(D1/D0)".into()
-        } else {
-            d.param.name().into()
-        },
-        ylabel: "critical length L̄_cr = L/(2πR)".into(),
-        legend_width: 0.0,
-        ..Default::default()
-    };
-    let mut all: Vec<(f64, f64)> = Vec::new();
-    for (k, c) in d.curves.iter().enumerate() {
-        let arms = c.rows.iter().map(|r| r.arm).max().unwrap_or(0);
-        for arm in 0..=arms {
-            let pts: Vec<(f64, f64)> = c
-                .rows
-                .iter()
-                .filter(|r| r.arm == arm)
-                .map(|r| (xv(r.value), r.lbar_cr))
-                .collect();
-            all.extend(&pts);
-            plot.series.push(Series {
-                color: colors[k % colors.len()].into(),
-                width: 2.0,
-                dash: if arm == 0 {
-                    String::new()
-                } else {
-                    "6 4".into()
-                },
-                points: pts,
-            });
-        }
-        plot.legend.push(LegendItem::Line {
-            label: format!(
-                "exchange {} → {} (uniform: {:.4})",
-                c.exchange.from_branch, c.exchange.to_branch, c.exchange.lbar_uniform
-            ),
-            color: colors[k % colors.len()].into(),
-            width: 2.0,
-            dash: String::new(),
-        });
-    }
-    let (mut x0, mut x1, mut y0, mut y1) = all.iter().fold(
-        (
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-        ),
-        |r, p| (r.0.min(p.0), r.1.max(p.0), r.2.min(p.1), r.3.max(p.1)),
-    );
-    if !x0.is_finite() {
-        (x0, x1, y0, y1) = (0.0, 1.0, 1.0, 3.0);
-    }
-    let ypad = 0.15 * (y1 - y0).max(0.1);
-    let range = (x0, x1.max(x0 + 1e-9), y0 - ypad, y1 + ypad);
-    plot.range = Some(range);
-    let (w, h) = (820.0, 520.0);
-    let mut svg = Svg::new(w, h);
-    svg.rect(0.0, 0.0, w, h, "white", "none", 0.0);
-    plot.render(&mut svg, 0.0, 0.0, w, h, "phase");
-    // Region labels at the middle of the x range: the lowest branch between the curves
-    // (margins of `Plot::render` with a title and no vline labels: 68, 16, 36, 50).
-    let (px, py, pw, ph) = (68.0, 36.0, w - 68.0 - 16.0, h - 36.0 - 50.0);
-    let sy = |v: f64| py + ph - (v - range.2) / (range.3 - range.2) * ph;
-    let sx = |v: f64| px + (v - range.0) / (range.1 - range.0) * pw;
-    // Each curve separates its lower branch (below) from its upper one (above): labels at
-    // the middle of the curve's own range.
-    for c in &d.curves {
-        let xs: Vec<f64> = c
-            .rows
-            .iter()
-            .filter(|r| r.arm == 0)
-            .map(|r| xv(r.value))
-            .collect();
-        let (lo, hi) = xs.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |r, &x| {
-            (r.0.min(x), r.1.max(x))
-        });
-        let xm = 0.5 * (lo + hi);
-        let near = c.rows.iter().filter(|r| r.arm == 0).min_by(|a, b| {
-            (xv(a.value) - xm)
-                .abs()
-                .total_cmp(&(xv(b.value) - xm).abs())
-        });
-        if let Some(r) = near {
-            let (x, y) = (sx(xm), sy(r.lbar_cr));
-            svg.text(
-                x,
-                y + 18.0,
-                12.5,
-                Anchor::Middle,
-                &format!("branch {} lowest ↓", r.from_branch),
-            );
-            svg.text(
-                x,
-                y - 9.0,
-                12.5,
-                Anchor::Middle,
-                &format!("branch {} lowest ↑", r.to_branch),
-            );
-        }
-    }
-    // Integer lengths inside the range: collapses onto m-fold great circles.
-    let mut m = range.2.ceil();
-    while m <= range.3 {
-        svg.line(px, sy(m), px + pw, sy(m), "#999", 0.8, "4 3");
-        svg.text(
-            px + pw - 6.0,
-            sy(m) - 5.0,
-            11.0,
-            Anchor::End,
-            &format!("L̄ = {m}: {m}-fold great circle"),
-        );
-        m += 1.0;
-    }
-    svg.finish()
 }

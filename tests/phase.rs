@@ -1,21 +1,9 @@
 //! End-to-end tests of `rodloop phase`: the critical lengths of a two-segment rod as curves
 //! in D1/D0, through the built binary.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn rodloop(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rodloop"))
-        .args(args)
-        .output()
-        .expect("run rodloop")
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
+use common::{assert_refused, rodloop, tmp};
 
 /// The exact critical lengths of the uniform rod in [1, 3] (exact layer, Sec. 4.3).
 fn exact_crossings() -> Vec<f64> {
@@ -97,8 +85,9 @@ fn phase_follows_both_exchanges_to_the_uniform_rod_and_down() {
             assert!(f(r, "error_estimate") >= 0.0 && f(r, "error_estimate") < 1e-5);
         }
     }
-    // The second curve (near 2.43) reaches the target; the first ends at a fold above it,
-    // said in summary.json and on stderr.
+    // Both curves reach the target; the first switches onto another pair of states past the
+    // pitchfork of the figure-eight near D1/D0 = 0.157 (said in summary.json and on stderr),
+    // and has a row of the new pair.
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let curves = summary["curves"].as_array().unwrap();
@@ -107,13 +96,28 @@ fn phase_follows_both_exchanges_to_the_uniform_rod_and_down() {
         .iter()
         .map(|c| c["ends"][0]["kind"].as_str().unwrap())
         .collect();
-    assert_eq!(kinds, ["fold", "reached"]);
+    assert_eq!(kinds, ["reached", "reached"]);
+    // At the decade 0.1 on the way a search for lower states of both branches found none.
+    for c in curves {
+        let checks = c["checks"].as_array().unwrap();
+        assert!(
+            checks
+                .iter()
+                .any(|v| (v.as_f64().unwrap() - 0.1).abs() < 1e-9),
+            "{checks:?}"
+        );
+    }
+    assert_eq!(curves[0]["switches"].as_array().unwrap().len(), 1);
+    assert!(rows
+        .iter()
+        .any(|r| r[col("curve")] == "1" && r[col("source")] == "switch"));
     let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(stderr.contains("fold"), "{stderr}");
-    assert!(
-        stderr.contains("--at 0.05: outside the traced range"),
-        "{stderr}"
-    );
+    assert!(stderr.contains("switched"), "{stderr}");
+    for k in ["1", "2"] {
+        assert!(rows
+            .iter()
+            .any(|r| r[col("curve")] == k && r[col("source")] == "fixed" && f(r, "value") == 0.05));
+    }
     let svg = std::fs::read_to_string(out.join("phase.svg")).unwrap();
     assert!(svg.contains("log₁₀(D1/D0)") && svg.contains("lowest"));
     assert!(out.join("phase.png").exists());
@@ -162,11 +166,68 @@ fn phase_refuses_bad_input() {
             "--at",
         ),
     ] {
-        let r = rodloop(&args);
-        assert!(!r.status.success(), "{args:?}");
-        let e = String::from_utf8_lossy(&r.stderr);
-        assert!(e.contains(msg), "{args:?}: {e}");
-        assert!(!e.contains("panicked"), "{e}");
+        assert_refused(&args, msg);
     }
     assert!(!out.join("phase.csv").exists());
+}
+
+/// Past the switch of the first curve (the figure-eight's pitchfork near D1/D0 = 0.157) the
+/// `--at 0.1` row is a Maxwell point of the states `solve` finds on its own (robust starts,
+/// no continuation in D1/D0 from the curve): at the row's L̄_cr both branches have index 0 and
+/// the row's energy, to the solve's error estimates.
+#[test]
+fn switched_rows_agree_with_independent_solves() {
+    let out = tmp("phase-switch");
+    let o = rodloop(&[
+        "phase",
+        "--scene",
+        "data/scenes/inhomogeneous-d1-0.5.toml",
+        "--to",
+        "0.1",
+        "--at",
+        "0.1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(out.join("phase.csv")).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let row: Vec<&str> = lines
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .find(|r| r[col("curve")] == "1" && r[col("source")] == "fixed" && r[col("value")] == "0.1")
+        .expect("--at 0.1 row of the first curve");
+    let f = |name: &str| row[col(name)].parse::<f64>().unwrap();
+    let (lbar, energy) = (f("lbar_cr"), f("energy"));
+    let mut estimates = 0.0;
+    for branch in [row[col("from_branch")], row[col("to_branch")]] {
+        let dir = tmp(&format!("phase-switch-solve-{branch}"));
+        let s = rodloop(&[
+            "solve",
+            "--scene",
+            "data/scenes/inhomogeneous-d1-0.1.toml",
+            "--lbar",
+            &format!("{lbar:.12}"),
+            "--branch",
+            branch,
+            "--out",
+            dir.to_str().unwrap(),
+        ]);
+        assert!(s.status.success(), "{}", String::from_utf8_lossy(&s.stderr));
+        let sum: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap())
+                .unwrap();
+        assert_eq!(sum["index"], 0, "branch {branch}");
+        let (e, est) = (
+            sum["energy"].as_f64().unwrap(),
+            sum["error_estimate"].as_f64().unwrap(),
+        );
+        estimates += est;
+        assert!(
+            (e - energy).abs() <= 2.0 * est + 1e-9,
+            "branch {branch}: solve {e} ± {est:.1e}, phase row {energy}"
+        );
+    }
+    assert!(estimates > 0.0);
 }

@@ -1,0 +1,297 @@
+//! `rodloop diagram --param P --lbar X [--to V]`: the equilibria at a fixed length traced
+//! against a stiffness parameter of a two-segment scene (energy against `log₁₀ D1/D0` for
+//! `d1`), with stability labels and special points.
+
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use rodloop_diagram::param_sweep::{sweep_param, ParamSweep, SweepSettings};
+use rodloop_diagram::Label;
+use rodloop_figures::plot::{LegendItem, Mark, Plot, Series, Shape};
+use rodloop_figures::raster::svg_to_png;
+use rodloop_figures::svg::Svg;
+use rodloop_solver::{Param, SolveOptions};
+
+use crate::diagram::{Args, Model};
+use crate::output::{check_finite, strip_nulls, Cell, OutputRun, Table};
+use crate::solve::{accuracy_of, load_scene, stiffness_of};
+
+/// Run `diagram --param`.
+pub fn run(args: &Args, param: &str) -> Result<()> {
+    let t0 = Instant::now();
+    let param: Param = param.parse()?;
+    if args.model == Model::Exact {
+        bail!("--param {param} traces numerical equilibria of a two-segment rod; --model exact covers homogeneous loops only");
+    }
+    let Some(lbar) = args.lbar else {
+        bail!("--param {param} needs --lbar X: the fixed length at which the equilibria are traced against {param}");
+    };
+    if args.lbar_min.is_some() || args.lbar_max.is_some() || args.step.is_some() || args.resume {
+        bail!("--lbar-min, --lbar-max, --step and --resume belong to the diagram in L̄; with --param the length is fixed by --lbar");
+    }
+    let scene = load_scene(args.scene.as_deref())?;
+    let stiffness = stiffness_of(&scene.stiffness);
+    let target = match (args.to, param) {
+        (Some(v), _) => v,
+        (None, Param::D1) => 1e-3,
+        (None, _) => {
+            bail!("--param {param} needs --to V (the default end value 1e-3 is for d1 only)")
+        }
+    };
+    let settings = SweepSettings {
+        radius: scene.radius,
+        lbar,
+        stiffness,
+        param,
+        target,
+        accuracy: accuracy_of(&scene, args.accuracy.as_deref())?,
+        branches: args.branch.iter().map(|&b| b as u32).collect(),
+        solve: SolveOptions::default(),
+    };
+    let run = OutputRun::begin(&args.out)?;
+    let sweep = sweep_param(&settings)
+        .with_context(|| format!("diagram of scene {} against {param}", scene.name))?;
+    let seconds = t0.elapsed().as_secs_f64();
+
+    let svg = figure(&sweep, &scene.name, args.width as f64, args.height as f64);
+    let png = svg_to_png(&svg, 1.0).context("rendering diagram.png")?;
+    for f in &sweep.families {
+        let seed = match f.seed_energy {
+            Some((v, e, est)) => format!("E R/(pi D0) = {e:.10} ± {est:.1e} at {param} = {v}"),
+            None => f.notes.first().cloned().unwrap_or_default(),
+        };
+        let last = f
+            .points
+            .last()
+            .map(|p| p.value)
+            .unwrap_or(sweep.scene_value);
+        println!(
+            "branch {} (eta = {}) family {}: {seed} ({} cells), traced to {param} = {last:.6} over {} states; {}",
+            f.branch, f.eta, f.family, f.cells, f.points.len(), f.end
+        );
+    }
+    for p in &sweep.special {
+        println!(
+            "  {} of branch {} family {} at {param} = {:.8}: E R/(pi D0) = {:.10} ± {:.1e}{}",
+            p.kind,
+            p.branch,
+            p.family,
+            p.value,
+            p.energy,
+            p.energy_error,
+            p.index
+                .map(|(a, b)| format!(" (index {a} -> {b})"))
+                .unwrap_or_default()
+        );
+    }
+    for w in &sweep.warnings {
+        eprintln!("warning: {w}");
+    }
+    println!("time {seconds:.2} s");
+
+    let summary = serde_json::json!({
+        "command": "diagram --param",
+        "scene": scene.name,
+        "param": param,
+        "scene_value": sweep.scene_value,
+        "target": sweep.target,
+        "lbar": lbar,
+        "families": sweep.families.iter().map(|f| serde_json::json!({
+            "branch": f.branch,
+            "eta": f.eta,
+            "family": f.family,
+            "cells": f.cells,
+            "seed_value": f.seed_energy.map(|e| e.0),
+            "seed_energy": f.seed_energy.map(|e| e.1),
+            "seed_energy_error": f.seed_energy.map(|e| e.2),
+            "notes": f.notes,
+            "states": f.points.len(),
+            "end": f.end,
+        })).collect::<Vec<_>>(),
+        "special_points": sweep.special,
+        "warnings": sweep.warnings,
+        "time_seconds": seconds,
+        "units": "energy E R/(pi D0); lbar = L/(2 pi R)",
+        "files": ["branches.csv", "special_points.csv", "diagram.svg", "diagram.png", "summary.json"],
+    });
+    check_finite("summary.json", &summary)?;
+    run.write_table(&branches_table(&sweep)?)?;
+    run.write_table(&special_table(&sweep)?)?;
+    run.write_bytes("diagram.svg", svg.as_bytes())?;
+    run.write_bytes("diagram.png", &png)?;
+    run.write_json("summary.json", &strip_nulls(summary))?;
+    run.commit()?;
+    println!("wrote {}", args.out.display());
+    Ok(())
+}
+
+fn branches_table(s: &ParamSweep) -> Result<Table> {
+    let mut t = Table::new(
+        "branches.csv",
+        &[
+            "branch",
+            "eta",
+            "family",
+            "param",
+            "value",
+            "lbar",
+            "energy",
+            "index",
+            "stability",
+            "arc",
+        ],
+    );
+    for f in &s.families {
+        for p in &f.points {
+            t.push(vec![
+                Cell::I(f.branch.into()),
+                Cell::I(f.eta.into()),
+                Cell::I(f.family as i64),
+                Cell::S(s.param.name().into()),
+                Cell::F(p.value),
+                Cell::F(s.lbar),
+                Cell::F(p.energy),
+                Cell::I(p.index as i64),
+                Cell::S(p.label.as_str().into()),
+                Cell::I(p.arc as i64),
+            ])?;
+        }
+    }
+    Ok(t)
+}
+
+fn special_table(s: &ParamSweep) -> Result<Table> {
+    let mut t = Table::new(
+        "special_points.csv",
+        &[
+            "kind",
+            "param",
+            "value",
+            "lbar",
+            "energy",
+            "energy_error",
+            "branch",
+            "family",
+            "index_before",
+            "index_after",
+        ],
+    );
+    for p in &s.special {
+        let (a, b) = p
+            .index
+            .map(|(a, b)| (a as i64, b as i64))
+            .unwrap_or((-1, -1));
+        t.push(vec![
+            Cell::S(p.kind.clone()),
+            Cell::S(s.param.name().into()),
+            Cell::F(p.value),
+            Cell::F(s.lbar),
+            Cell::F(p.energy),
+            Cell::F(p.energy_error),
+            Cell::I(p.branch.into()),
+            Cell::I(p.family as i64),
+            Cell::I(a),
+            Cell::I(b),
+        ])?;
+    }
+    Ok(t)
+}
+
+const COLORS: [&str; 5] = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e"];
+
+/// Energy against the parameter (`log₁₀` for `d1`): each family one colour per branch, the
+/// line style by its label, special points marked.
+fn figure(s: &ParamSweep, scene: &str, w: f64, h: f64) -> String {
+    let log = s.param == Param::D1;
+    let xv = |v: f64| if log { v.log10() } else { v };
+    let style = |l: Label| match l {
+        Label::Stable => ("", 2.4),
+        Label::Metastable => ("7 4", 1.6),
+        Label::Unstable => ("2 3", 1.2),
+    };
+    let mut plot = Plot {
+        title: format!(
+            "Equilibria of scene {scene} at L̄ = {} against {}",
+            s.lbar, s.param
+        ),
+        xlabel: if log {
+            "log₁₀(D1/D0)".into()
+        } else {
+            s.param.name().into()
+        },
+        ylabel: "energy E R/(π D0)".into(),
+        legend_width: 0.0,
+        ..Default::default()
+    };
+    let mut branches: Vec<u32> = s.families.iter().map(|f| f.branch).collect();
+    branches.dedup();
+    let color_of = |b: u32| {
+        let k = branches.iter().position(|&x| x == b).unwrap_or(0);
+        COLORS[k % COLORS.len()]
+    };
+    for f in &s.families {
+        // One series per run of equal labels (the boundary point shared).
+        let mut start = 0;
+        while start + 1 < f.points.len() {
+            let l = f.points[start + 1].label;
+            let mut end = start + 1;
+            while end + 1 < f.points.len() && f.points[end + 1].label == l {
+                end += 1;
+            }
+            let (dash, width) = style(l);
+            plot.series.push(Series {
+                color: color_of(f.branch).into(),
+                width,
+                dash: dash.into(),
+                points: f.points[start..=end]
+                    .iter()
+                    .map(|p| (xv(p.value), p.energy))
+                    .collect(),
+            });
+            start = end;
+        }
+    }
+    for b in &branches {
+        plot.legend.push(LegendItem::Line {
+            label: format!("branch {b} (η = {})", rodloop_exact::eta_of_branch(*b)),
+            color: color_of(*b).into(),
+            width: 2.4,
+            dash: String::new(),
+        });
+    }
+    for l in [Label::Stable, Label::Metastable, Label::Unstable] {
+        let (dash, width) = style(l);
+        plot.legend.push(LegendItem::Line {
+            label: l.as_str().into(),
+            color: "#555".into(),
+            width,
+            dash: dash.into(),
+        });
+    }
+    for (kind, shape) in [
+        ("fold", Shape::Triangle),
+        ("branch_point", Shape::Diamond),
+        ("index_change", Shape::OpenSquare),
+    ] {
+        let pts: Vec<_> = s.special.iter().filter(|p| p.kind == kind).collect();
+        for p in &pts {
+            plot.marks.push(Mark {
+                at: (xv(p.value), p.energy),
+                shape,
+                color: color_of(p.branch).into(),
+                size: 4.5,
+            });
+        }
+        if !pts.is_empty() {
+            plot.legend.push(LegendItem::Mark {
+                label: kind.replace('_', " "),
+                shape,
+                color: "#777".into(),
+            });
+        }
+    }
+    let mut svg = Svg::new(w, h);
+    svg.rect(0.0, 0.0, w, h, "white", "none", 0.0);
+    plot.render(&mut svg, 0.0, 0.0, w, h, "sweep");
+    svg.finish()
+}

@@ -1,0 +1,217 @@
+//! Rows of a phase curve: Maxwell points with their companion at another resolution (the
+//! error estimate), and the rows at the requested `--at` values.
+
+use nalgebra::DVector;
+use rodloop_continuation::newton;
+use rodloop_exact::eta_of_branch;
+use rodloop_solver::{Accuracy, Param, SolveOptions};
+
+use super::{Exchange, PhaseRow, PhaseSettings, RowSource, Tracked};
+use crate::maxwell::MaxwellProblem;
+use crate::DiagramError;
+
+/// The resolution pair of an accuracy level: `Some(cells factor)` of the companion.
+pub(super) fn companion_cells(accuracy: Accuracy, n: usize) -> usize {
+    match accuracy {
+        Accuracy::High => 2 * n,
+        _ => (n / 2).div_ceil(2) * 2,
+    }
+}
+
+/// Newton on the augmented system at fixed `p` from `x`.
+pub(super) fn fixed(
+    problem: &MaxwellProblem,
+    x: &DVector<f64>,
+    p: f64,
+) -> Result<DVector<f64>, String> {
+    newton(problem, x, p, 1e-11, 30)
+        .map(|(x, _)| x)
+        .map_err(|e| e.to_string())
+}
+
+/// A Maxwell point at `p` with its companion, as a row.
+pub(super) struct RowMaker<'a> {
+    /// The Maxwell problem of the rows.
+    pub(super) main: &'a MaxwellProblem,
+    ex: Exchange,
+    accuracy: Accuracy,
+    opts: &'a SolveOptions,
+    /// The companion problem and its last state (warm start).
+    companion: Option<(MaxwellProblem, DVector<f64>)>,
+}
+
+impl<'a> RowMaker<'a> {
+    /// Rows of the Maxwell points of `main` for exchange `ex`, at the accuracy and with the
+    /// solver settings of `s`.
+    pub(super) fn new(main: &'a MaxwellProblem, ex: Exchange, s: &'a PhaseSettings) -> Self {
+        Self {
+            main,
+            ex,
+            accuracy: s.accuracy,
+            opts: &s.solve,
+            companion: None,
+        }
+    }
+
+    /// Forget the companion's warm start (after a switch onto another pair of states).
+    pub(super) fn reset(&mut self) {
+        self.companion = None;
+    }
+
+    pub(super) fn row(&mut self, t: &Tracked, source: RowSource) -> Result<PhaseRow, String> {
+        let (x, p, index) = (&t.x, t.p, t.index);
+        let pb = self.main;
+        let (slope, _, _) = pb.crossing_slope(x, p).map_err(|e| e.to_string())?;
+        let (from_branch, to_branch) = if slope > 0.0 {
+            (self.ex.from_branch, self.ex.to_branch)
+        } else {
+            (self.ex.to_branch, self.ex.from_branch)
+        };
+        let (ea, _) = pb.energies(x, p).map_err(|e| e.to_string())?;
+        let lbar = x[x.len() - 1];
+        // The companion from its last state, or resampled from x when that fails.
+        let mut comp = None;
+        if let Some((cp, cx)) = &self.companion {
+            if let Ok(y) = fixed(cp, cx, p) {
+                comp = Some((cp.clone(), y));
+            }
+        }
+        let mut finer = false;
+        if comp.is_none() {
+            let (ma, mb) = pb.models();
+            let mut why = Vec::new();
+            // The companion of the accuracy level; if it does not converge (a sharp profile
+            // at few cells), twice the main resolution, as `finish_with_accuracy` does.
+            let mut pairs = vec![(
+                companion_cells(self.accuracy, ma.cells()),
+                companion_cells(self.accuracy, mb.cells()),
+            )];
+            if self.accuracy != Accuracy::High {
+                pairs.push((2 * ma.cells(), 2 * mb.cells()));
+            }
+            for (k, (ca, cb)) in pairs.into_iter().enumerate() {
+                let attempt = pb
+                    .resampled(x, p, ca, cb, self.opts)
+                    .map_err(|e| e.to_string())
+                    .and_then(|(cp, cx)| fixed(&cp, &cx, p).map(|y| (cp, y)));
+                match attempt {
+                    Ok(c) => {
+                        finer = k == 1;
+                        comp = Some(c);
+                        break;
+                    }
+                    Err(e) => why.push(format!("{ca}+{cb} cells: {e}")),
+                }
+            }
+            if comp.is_none() {
+                return Err(format!("companion resolution: {}", why.join("; ")));
+            }
+        } else if let Some((cp, _)) = &comp {
+            finer = cp.models().0.cells() > pb.models().0.cells();
+        }
+        let (cp, y) = comp.expect("set above");
+        let lc = y[y.len() - 1];
+        let (ec, _) = cp.energies(&y, p).map_err(|e| e.to_string())?;
+        self.companion = Some((cp, y));
+        let (lbar_cr, energy, est) = match self.accuracy {
+            _ if finer && self.accuracy != Accuracy::High => (lbar, ea, (lc - lbar).abs() / 15.0),
+            Accuracy::High => (
+                lc + (lc - lbar) / 15.0,
+                ec + (ec - ea) / 15.0,
+                (lc - lbar).abs() / 15.0,
+            ),
+            _ => (lbar, ea, (lbar - lc).abs() / 15.0),
+        };
+        Ok(PhaseRow {
+            value: pb.theta(p),
+            lbar_cr,
+            error_estimate: est,
+            energy,
+            from_branch,
+            to_branch,
+            index,
+            arm: t.arm,
+            slope,
+            source,
+        })
+    }
+}
+
+pub(super) fn branch_word(b: u32) -> String {
+    format!("branch {b} (eta = {})", eta_of_branch(b))
+}
+
+/// Rows at the `--at` values inside the traced range of each arm of a curve (Newton on the
+/// augmented system at exactly that `θ`, from the nearest traced state of the arm); notes
+/// for the others.
+pub(super) fn add_at_rows(
+    s: &PhaseSettings,
+    problem: &MaxwellProblem,
+    ex: Exchange,
+    states: &[Tracked],
+    rows: &mut Vec<PhaseRow>,
+    notes: &mut Vec<String>,
+) -> Result<(), DiagramError> {
+    if s.at.is_empty() || states.is_empty() {
+        return Ok(());
+    }
+    let arms = states.iter().map(|t| t.arm).max().unwrap_or(0);
+    for &v in &s.at {
+        if s.param == Param::D1 && v == 1.0 {
+            notes.push("--at 1: d1 = 1 is the uniform rod; see the limit row".into());
+            continue;
+        }
+        let p = problem.p_of(v);
+        let mut found = false;
+        for arm in 0..=arms {
+            let on: Vec<&Tracked> = states.iter().filter(|t| t.arm == arm).collect();
+            let (lo, hi) = on
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
+                    (a.min(t.p), b.max(t.p))
+                });
+            if p < lo - 1e-12 || p > hi + 1e-12 {
+                continue;
+            }
+            found = true;
+            let near = on
+                .iter()
+                .min_by(|a, b| (a.p - p).abs().total_cmp(&(b.p - p).abs()))
+                .expect("non-empty");
+            let mut maker = RowMaker::new(problem, ex, s);
+            let row = fixed(problem, &near.x, p).and_then(|y| {
+                let idx = problem.indices(&y, p).map_err(|e| e.to_string())?;
+                maker.row(
+                    &Tracked {
+                        x: y,
+                        p,
+                        index: idx,
+                        arm,
+                    },
+                    RowSource::Fixed,
+                )
+            });
+            match row {
+                Ok(r) => rows.push(PhaseRow { value: v, ..r }),
+                Err(e) => notes.push(format!(
+                    "--at {v}: Newton at fixed {} failed ({e})",
+                    s.param
+                )),
+            }
+        }
+        if !found {
+            let (lo, hi) = states
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
+                    (a.min(t.p), b.max(t.p))
+                });
+            notes.push(format!(
+                "--at {v}: outside the traced range {} = {:.6}..{:.6} of this curve",
+                s.param,
+                problem.theta(lo),
+                problem.theta(hi)
+            ));
+        }
+    }
+    Ok(())
+}
