@@ -307,22 +307,11 @@ fn homotopy(
 ) -> Result<Option<(Equilibrium, usize)>, SolverError> {
     let mild = stiffness.with_param(Param::D1, from)?;
     let eq0 = solve_cells(radius, lbar, cells, &mild, start, None, opts)?;
-    let e0 = eq0.energy().total;
-    if seen
-        .iter()
-        .any(|e| (e - e0).abs() <= 1e-9 * e0.abs().max(1.0))
-    {
+    if !first_seen(seen, &eq0) {
         return Ok(None);
     }
-    seen.push(e0);
     if let Some(want) = eta {
-        let p = identify_equilibrium(&eq0)?;
-        if p.eta != want {
-            return Err(SolverError::InvalidInput(format!(
-                "at D1/D0 = {from} the start relaxes to a state with {} periods of κ_g, not {want}",
-                p.eta
-            )));
-        }
+        require_eta(&eq0, want, &format!("D1/D0 = {from}"))?;
     }
     let problem = ParamProblem::new(eq0.model().clone(), Param::D1)?;
     let (eq, steps) = follow_to(&problem, &eq0, from, target, true, opts, deadline).map_err(
@@ -357,21 +346,10 @@ fn lbar_path(
     deadline: std::time::Instant,
 ) -> Result<Option<(Equilibrium, usize)>, SolverError> {
     let eq0 = solve_cells(radius, from, cells, stiffness, start, None, opts)?;
-    let e0 = eq0.energy().total;
-    if seen
-        .iter()
-        .any(|e| (e - e0).abs() <= 1e-9 * e0.abs().max(1.0))
-    {
+    if !first_seen(seen, &eq0) {
         return Ok(None);
     }
-    seen.push(e0);
-    let p = identify_equilibrium(&eq0)?;
-    if p.eta != want {
-        return Err(SolverError::InvalidInput(format!(
-            "at L̄ = {from} the start relaxes to a state with {} periods of κ_g, not {want}",
-            p.eta
-        )));
-    }
+    require_eta(&eq0, want, &format!("L̄ = {from}"))?;
     let problem = ParamProblem::new(eq0.model().clone(), Param::Lbar)?;
     let (eq, steps) = follow_to(&problem, &eq0, from, lbar, false, opts, deadline).map_err(
         |Stuck { folds, reached }| {
@@ -386,6 +364,32 @@ fn lbar_path(
         },
     )?;
     Ok(Some((eq, steps)))
+}
+
+/// Record the energy of `eq` in `seen`; `false` when a state of the same energy was
+/// already followed (starts that relax to the same state are not followed twice).
+fn first_seen(seen: &mut Vec<f64>, eq: &Equilibrium) -> bool {
+    let e0 = eq.energy().total;
+    if seen
+        .iter()
+        .any(|e| (e - e0).abs() <= 1e-9 * e0.abs().max(1.0))
+    {
+        return false;
+    }
+    seen.push(e0);
+    true
+}
+
+/// Refuse a start that relaxed (at `place`) to a state with other than `want` periods.
+fn require_eta(eq: &Equilibrium, want: u32, place: &str) -> Result<(), SolverError> {
+    let p = identify_equilibrium(eq)?;
+    if p.eta != want {
+        return Err(SolverError::InvalidInput(format!(
+            "at {place} the start relaxes to a state with {} periods of κ_g, not {want}",
+            p.eta
+        )));
+    }
+    Ok(())
 }
 
 /// The values to 4 decimals, repeats (a fold passed back and forth) once.
