@@ -91,6 +91,10 @@ pub(crate) fn lowest_interpolated(branches: &[TracedBranch], lbar: f64) -> Optio
     best
 }
 
+/// Distance in `L̄` within which two sheet ends count as the same state in [`touch`]: a branch
+/// point located from its two branches lands `10⁻⁷` apart at the tracing's locate width.
+const TOUCH_LBAR: f64 = 1e-6;
+
 /// Crossings of the lowest energy seen on the traced samples, plus warnings for changes of
 /// the lowest branch that are neither crossings nor at integer lengths.
 pub(crate) fn detect_crossings(
@@ -136,12 +140,19 @@ pub(crate) fn detect_crossings(
                     hi = mid;
                 }
             }
+            let guess = 0.5 * (lo + hi);
+            // Two sheets that meet at a pitchfork are tangent there (their energies differ
+            // like a power of the distance): a root of the interpolated difference within
+            // two sample spacings of the meeting point is that tangency.
+            if shared_end(ba, bb).is_some_and(|m| (m - guess).abs() <= 2.0 * (l1 - l0)) {
+                continue;
+            }
             out.push(Candidate {
                 a,
                 b,
                 lo: l0,
                 hi: l1,
-                guess: 0.5 * (lo + hi),
+                guess,
             });
         } else {
             // An end of a branch between the two samples: fine at an integer (collapse),
@@ -161,17 +172,30 @@ pub(crate) fn detect_crossings(
     (out, warnings)
 }
 
-/// Whether two sheets share an end state (same length and energy) within `[l0, l1]`: a
-/// fold joining two sheets of one family, or a branch point where a family meets another.
+/// The length of an end state the two sheets share (within [`TOUCH_LBAR`] and `10⁻⁶`
+/// relative in energy), if any.
+fn shared_end(a: &TracedBranch, b: &TracedBranch) -> Option<f64> {
+    let ends = |t: &TracedBranch| [t.points.first().cloned(), t.points.last().cloned()];
+    ends(a).into_iter().flatten().find_map(|pa| {
+        ends(b).into_iter().flatten().find_map(|pb| {
+            ((pa.value - pb.value).abs() <= TOUCH_LBAR
+                && (pa.energy - pb.energy).abs() <= 1e-6 * pa.energy.abs().max(1.0))
+            .then_some(pa.value)
+        })
+    })
+}
+
+/// Whether two sheets share an end state (same length and energy, within [`TOUCH_LBAR`] and
+/// `10⁻⁶` relative) within `[l0, l1]`: a fold joining two sheets of one family, or a branch
+/// point where a family meets another (located from either side to the tracing's width).
 pub(crate) fn touch(a: &TracedBranch, b: &TracedBranch, l0: f64, l1: f64) -> bool {
     let ends = |t: &TracedBranch| [t.points.first().cloned(), t.points.last().cloned()];
     let mut found = false;
     for pa in ends(a).into_iter().flatten() {
         for pb in ends(b).into_iter().flatten() {
-            let l = pa.value;
-            if l >= l0 - 1e-9
-                && l <= l1 + 1e-9
-                && (pa.value - pb.value).abs() <= 1e-8
+            if pa.value.max(pb.value) >= l0 - 1e-9
+                && pa.value.min(pb.value) <= l1 + 1e-9
+                && (pa.value - pb.value).abs() <= TOUCH_LBAR
                 && (pa.energy - pb.energy).abs() <= 1e-6 * pa.energy.abs().max(1.0)
             {
                 found = true;
@@ -182,8 +206,12 @@ pub(crate) fn touch(a: &TracedBranch, b: &TracedBranch, l0: f64, l1: f64) -> boo
     // the pitchfork where the asymmetric pair ends).
     for (x, y) in [(a, b), (b, a)] {
         for pe in ends(x).into_iter().flatten() {
-            if pe.value >= l0 - 1e-9 && pe.value <= l1 + 1e-9 {
-                if let Some(e) = y.points.iter().find(|q| (q.value - pe.value).abs() <= 1e-8) {
+            if pe.value >= l0 - TOUCH_LBAR && pe.value <= l1 + TOUCH_LBAR {
+                if let Some(e) = y
+                    .points
+                    .iter()
+                    .find(|q| (q.value - pe.value).abs() <= TOUCH_LBAR)
+                {
                     if (e.energy - pe.energy).abs() <= 1e-6 * pe.energy.abs().max(1.0) {
                         found = true;
                     }

@@ -245,7 +245,7 @@ pub fn compute_families(
             let shift = j as f64 / (8.0 * e);
             seeds_tried += 1;
             let ts = Instant::now();
-            let seeded = seed_state(&model_l, eta, lbar, shift);
+            let seeded = seed_state(opts, &model_l, eta, lbar, shift);
             debug(|| {
                 format!(
                     "eta {eta} seed at {lbar:.3} shift {shift:.3}: {} in {:.3} s",
@@ -515,13 +515,79 @@ struct EndContext<'a> {
     hi: f64,
 }
 
+/// Contrast `D1/D0` below which seeds come from a mild contrast by continuation in `D1/D0`
+/// (direct solves from Euler starts rarely converge there).
+const HOMOTOPY_BELOW: f64 = crate::STRONG_CONTRAST;
+/// The mild contrast of those continuations.
+const MILD_CONTRAST: f64 = 0.5;
+
 /// The state of an Euler start of `eta` periods with its origin moved by `shift`, relaxed
-/// and solved, if it has `eta` periods of `κ_g`.
-fn seed_state(model: &SurfaceModel, eta: u32, lbar: f64, shift: f64) -> Option<Vec<f64>> {
+/// and solved on `model` (the tracing resolution), if it has `eta` periods of `κ_g`. At
+/// strong contrast (`D1/D0 <` [`HOMOTOPY_BELOW`]) the start is solved at
+/// [`MILD_CONTRAST`] and followed in `D1/D0` to the scene's value (a homotopy; the state
+/// is dropped if the family folds back in `D1/D0` before it).
+fn seed_state(
+    opts: &DiagramOptions,
+    model: &SurfaceModel,
+    eta: u32,
+    lbar: f64,
+    shift: f64,
+) -> Option<Vec<f64>> {
     let start = StartShape::Euler { l: eta }.shifted(lbar, shift).ok()?;
-    let kappa = start.gauss_values(model).ok()?;
-    let eq = solve(model, &kappa, &SolveOptions::default()).ok()?;
-    (periods_of(&eq).ok()? == eta as usize).then(|| eq.state())
+    let contrast = match &opts.stiffness {
+        Stiffness::Tanh { d0, d1, .. } => d1 / d0,
+        _ => 1.0,
+    };
+    if contrast >= HOMOTOPY_BELOW {
+        let kappa = start.gauss_values(model).ok()?;
+        let eq = solve(model, &kappa, &SolveOptions::default())
+            .map_err(|e| debug(|| format!("seed solve failed: {e}")))
+            .ok()?;
+        return (periods_of(&eq).ok()? == eta as usize).then(|| eq.state());
+    }
+    let mild = opts.stiffness.with_param(Param::D1, MILD_CONTRAST).ok()?;
+    let mild_model = SurfaceModel::new(opts.radius, lbar, model.cells(), &mild).ok()?;
+    let kappa = start.gauss_values(&mild_model).ok()?;
+    let eq = solve(&mild_model, &kappa, &SolveOptions::default())
+        .map_err(|e| debug(|| format!("mild seed solve failed: {e}")))
+        .ok()?;
+    if periods_of(&eq).ok()? != eta as usize {
+        return None;
+    }
+    let problem = ParamProblem::new(mild_model, Param::D1).ok()?;
+    let shape = model.dim() - model.n_constraints();
+    let mut settings = march_settings(opts, contrast, shape);
+    settings.ds_min = 1e-6;
+    settings.max_steps = MAX_STEPS;
+    let run = march(
+        &problem,
+        &eq.state(),
+        MILD_CONTRAST,
+        &settings,
+        &mut |_, _| {},
+    )
+    .ok()?;
+    debug(|| {
+        format!(
+            "homotopy in D1/D0: {} steps, {:?}",
+            run.steps,
+            run.stop.clone()
+        )
+    });
+    let last = run.points.last()?;
+    if run.stop != MarchStop::Reached || (last.value - contrast).abs() > 1e-12 {
+        return None;
+    }
+    let eq = rodloop_solver::solve_from_state(
+        model.clone(),
+        last.x.clone(),
+        &crate::states::newton_options(),
+    )
+    .map_err(|e| debug(|| format!("after the homotopy: {e}")))
+    .ok()?;
+    let periods = periods_of(&eq);
+    debug(|| format!("after the homotopy: periods {periods:?}"));
+    (periods.ok()? == eta as usize).then(|| eq.state())
 }
 
 /// Follow a seed both ways; branch points go to `pending`.
@@ -753,7 +819,20 @@ fn switch_all(
                     "switch at {:.5} {dir:?}: {:?} in {:.3} s",
                     bp.value,
                     run.as_ref()
-                        .map(|r| (r.points.len(), r.stop.clone()))
+                        .map(|r| (
+                            r.points.len(),
+                            r.stop.clone(),
+                            r.points
+                                .iter()
+                                .map(|p| p.value)
+                                .fold(f64::INFINITY, f64::min),
+                            r.points
+                                .iter()
+                                .map(|p| p.value)
+                                .fold(f64::NEG_INFINITY, f64::max),
+                            r.special.len(),
+                            r.points.iter().filter_map(|p| p.index).max(),
+                        ))
                         .map_err(|e| e.to_string()),
                     ts.elapsed().as_secs_f64()
                 )
