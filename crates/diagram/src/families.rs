@@ -154,6 +154,11 @@ impl Images {
 
 /// Whether `(x, p)` lies on one of `curves` (or on an image of one), within [`SAME_STATE`].
 fn on_known(images: &Images, curves: &[Curve], x: &[f64], p: f64) -> bool {
+    on_known_within(images, curves, x, p, SAME_STATE)
+}
+
+/// [`on_known`] with the distance `tol` instead of [`SAME_STATE`].
+fn on_known_within(images: &Images, curves: &[Curve], x: &[f64], p: f64, tol: f64) -> bool {
     curves.iter().any(|c| {
         c.points.windows(2).any(|w| {
             let (a, b) = (&w[0], &w[1]);
@@ -167,7 +172,7 @@ fn on_known(images: &Images, curves: &[Curve], x: &[f64], p: f64) -> bool {
                 0.0
             };
             let xi: Vec<f64> = a.x.iter().zip(&b.x).map(|(u, v)| u + t * (v - u)).collect();
-            images.dist_images(&xi, x) < SAME_STATE
+            images.dist_images(&xi, x) < tol
         })
     })
 }
@@ -808,7 +813,14 @@ fn switch_all(
                 ));
                 break;
             }
-            let known = |x: &[f64], p: f64| on_known(images, curves, x, p);
+            // The first point off the branch point is one step (or less) away from it: it
+            // lies on a known curve only if much closer to that curve than to the branch
+            // point (near a great circle, or after a shortened first step, distinct
+            // branches are closer than SAME_STATE).
+            let known = |x: &[f64], p: f64| {
+                let tol = SAME_STATE.min(0.3 * images.dist(x, &bp.x));
+                on_known_within(images, curves, x, p, tol)
+            };
             let mut s = settings.clone();
             s.limit = ctx.hi;
             s.far_limit = Some(ctx.lo);
