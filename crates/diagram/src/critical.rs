@@ -128,6 +128,18 @@ pub(crate) fn detect_crossings(
         if touch(ba, bb, l0, l1) {
             continue;
         }
+        // Two sheets of one branch whose energies differ by less than 10⁻⁵ (relative) on
+        // both sides: near-degenerate states of one family cluster (several pitchforks
+        // within 10⁻³ in L̄ at D1/D0 = 0.001), not an exchange of the lowest branch.
+        if ba.eta == bb.eta {
+            let gap = |l: f64| match (ba.energy_at(l), bb.energy_at(l)) {
+                (Some(x), Some(y)) => (x - y).abs() <= DEGENERATE * x.abs().max(1.0),
+                _ => true,
+            };
+            if gap(l0) && gap(l1) {
+                continue;
+            }
+        }
         if ba.covers(l0) && ba.covers(l1) && bb.covers(l0) && bb.covers(l1) {
             let diff =
                 |l: f64| ba.energy_at(l).unwrap_or(f64::NAN) - bb.energy_at(l).unwrap_or(f64::NAN);
@@ -144,7 +156,11 @@ pub(crate) fn detect_crossings(
             // Two sheets that meet at a pitchfork are tangent there (their energies differ
             // like a power of the distance): a root of the interpolated difference within
             // two sample spacings of the meeting point is that tangency.
-            if shared_end(ba, bb).is_some_and(|m| (m - guess).abs() <= 2.0 * (l1 - l0)) {
+            let near = (2.0 * (l1 - l0)).max(NEAR_MEETING);
+            if meeting_points(ba, bb)
+                .iter()
+                .any(|m| (m - guess).abs() <= near)
+            {
                 continue;
             }
             out.push(Candidate {
@@ -172,17 +188,33 @@ pub(crate) fn detect_crossings(
     (out, warnings)
 }
 
-/// The length of an end state the two sheets share (within [`TOUCH_LBAR`] and `10⁻⁶`
-/// relative in energy), if any.
-fn shared_end(a: &TracedBranch, b: &TracedBranch) -> Option<f64> {
+/// Relative energy gap below which two sheets of one branch count as degenerate in
+/// [`detect_crossings`].
+const DEGENERATE: f64 = 1e-5;
+
+/// Distance in `L̄` from a meeting point of two sheets within which a root of their
+/// interpolated energy difference is taken for their tangency there (near a pitchfork the
+/// symmetric and asymmetric sheets differ by less than the interpolation error).
+const NEAR_MEETING: f64 = 1e-3;
+
+/// The lengths where the two sheets meet: an end state of one that is a state of the other
+/// (within [`TOUCH_LBAR`] and `10⁻⁶` relative in energy) — a shared fold or branch point, or
+/// a branch point in the middle of the other sheet.
+fn meeting_points(a: &TracedBranch, b: &TracedBranch) -> Vec<f64> {
     let ends = |t: &TracedBranch| [t.points.first().cloned(), t.points.last().cloned()];
-    ends(a).into_iter().flatten().find_map(|pa| {
-        ends(b).into_iter().flatten().find_map(|pb| {
-            ((pa.value - pb.value).abs() <= TOUCH_LBAR
-                && (pa.energy - pb.energy).abs() <= 1e-6 * pa.energy.abs().max(1.0))
-            .then_some(pa.value)
-        })
-    })
+    let mut out = Vec::new();
+    for (x, y) in [(a, b), (b, a)] {
+        for pe in ends(x).into_iter().flatten() {
+            let hit = y.points.iter().any(|q| {
+                (q.value - pe.value).abs() <= TOUCH_LBAR
+                    && (q.energy - pe.energy).abs() <= 1e-6 * pe.energy.abs().max(1.0)
+            });
+            if hit {
+                out.push(pe.value);
+            }
+        }
+    }
+    out
 }
 
 /// Whether two sheets share an end state (same length and energy, within [`TOUCH_LBAR`] and

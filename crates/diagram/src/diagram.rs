@@ -370,10 +370,14 @@ pub fn assemble(
     }
     for w in critical.windows(2) {
         // The same sheet, or sheets that meet at a fold or branch point in between (the
-        // lowest state passes continuously from one to the other there).
+        // lowest state passes continuously from one to the other there), or sheets of one
+        // branch (changes of the lowest family within a branch are not exchanges; see
+        // `critical::detect_crossings`).
         let connected = match (w[0].to_sheet, w[1].from_sheet) {
             (Some(a), Some(b)) => {
-                a == b || critical::touch(&branches[a], &branches[b], w[0].lbar_cr, w[1].lbar_cr)
+                a == b
+                    || branches[a].eta == branches[b].eta
+                    || critical::touch(&branches[a], &branches[b], w[0].lbar_cr, w[1].lbar_cr)
             }
             _ => w[0].to_eta == w[1].from_eta,
         };

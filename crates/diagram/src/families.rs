@@ -242,18 +242,68 @@ pub fn compute_families(
         lo,
         hi,
     };
+    let strong = matches!(&opts.stiffness, Stiffness::Tanh { d0, d1, .. }
+        if d1 / d0 < HOMOTOPY_BELOW);
     for &lbar in &seed_lengths {
         let Ok(model_l) = problem.model_at(lbar) else {
             continue;
         };
-        for j in 0..4 {
+        // At strong contrast both a direct solve and the homotopy from a mild contrast:
+        // they reach different families.
+        let methods: &[bool] = if strong { &[true] } else { &[false] };
+        if strong {
+            // What `rodloop solve --branch` finds at this length (labels must agree with it).
+            let start = StartShape::Euler { l: eta };
+            let tr = Instant::now();
+            let robust = rodloop_solver::solve_robust(
+                opts.radius,
+                lbar,
+                &opts.stiffness,
+                &start,
+                rodloop_solver::Accuracy::Fast,
+                Some(eta),
+                &SolveOptions::default(),
+            );
+            let x0 = robust.ok().and_then(|(acc, _)| {
+                let kappa = acc.equilibrium.resample(model_l.cells()).ok()?;
+                solve(&model_l, &kappa, &crate::states::newton_options())
+                    .ok()
+                    .map(|eq| eq.state())
+            });
+            debug(|| {
+                format!(
+                    "eta {eta} robust seed at {lbar:.3}: {} in {:.3} s",
+                    x0.is_some(),
+                    tr.elapsed().as_secs_f64()
+                )
+            });
+            if let Some(x0) = x0 {
+                if !on_known(&images, &curves, &x0, lbar) && curves.len() < MAX_FAMILIES {
+                    seed_note.push(format!("L̄ = {lbar:.4}, as `rodloop solve` finds it"));
+                    let curve =
+                        follow_seed(&end_ctx, &settings, &x0, lbar, &mut pending, &mut steps)?;
+                    curves.push(curve);
+                    switch_all(
+                        &end_ctx,
+                        &settings,
+                        &images,
+                        &mut curves,
+                        &mut pending,
+                        &mut switched,
+                        &mut notes,
+                        &mut steps,
+                    );
+                }
+            }
+        }
+        for (j, &homotopy) in (0..4).flat_map(|j| methods.iter().map(move |h| (j, h))) {
             let shift = j as f64 / (8.0 * e);
             seeds_tried += 1;
             let ts = Instant::now();
-            let seeded = seed_state(opts, &model_l, eta, lbar, shift);
+            let seeded = seed_state(opts, &model_l, eta, lbar, shift, homotopy);
             debug(|| {
                 format!(
-                    "eta {eta} seed at {lbar:.3} shift {shift:.3}: {} in {:.3} s",
+                    "eta {eta} seed at {lbar:.3} shift {shift:.3} (homotopy {homotopy}): {} in {:.3} s",
                     seeded.is_some(),
                     ts.elapsed().as_secs_f64()
                 )
@@ -377,6 +427,7 @@ pub fn compute_families(
             } else {
                 (first_end, last_end)
             };
+            fill_corrections(&mut pts);
             let index_changes = index_changes_of(&pts);
             let midk = pts.len() / 2;
             let mid_state = pts[midk].0.state.clone();
@@ -461,6 +512,30 @@ pub fn compute_families(
     Ok(Families { sheets, notes })
 }
 
+/// States of a sheet whose half-resolution partner failed (no `energy_error`; typically
+/// right next to a branch point) get the Richardson correction `energy − energy_trace` of
+/// the nearest state of the sheet that has one, so that the sheet's energies are of one
+/// kind (a jump of the correction, ~10⁻⁴, would read as a kink). `energy_error` stays
+/// `None`: these energies have no estimate of their own.
+fn fill_corrections(pts: &mut [(crate::TracedPoint, PointSource)]) {
+    let with: Vec<(f64, f64)> = pts
+        .iter()
+        .filter(|p| p.0.energy_error.is_some())
+        .map(|p| (p.0.value, p.0.energy - p.0.energy_trace))
+        .collect();
+    if with.is_empty() {
+        return;
+    }
+    for p in pts.iter_mut().filter(|p| p.0.energy_error.is_none()) {
+        let v = p.0.value;
+        let corr = with
+            .iter()
+            .min_by(|a, b| (a.0 - v).abs().total_cmp(&(b.0 - v).abs()))
+            .map_or(0.0, |c| c.1);
+        p.0.energy = p.0.energy_trace + corr;
+    }
+}
+
 /// Index changes between consecutive states of a sheet (increasing `L̄`), placed midway.
 fn index_changes_of(pts: &[(crate::TracedPoint, PointSource)]) -> Vec<IndexChange> {
     pts.windows(2)
@@ -527,23 +602,24 @@ const HOMOTOPY_BELOW: f64 = crate::STRONG_CONTRAST;
 const MILD_CONTRAST: f64 = 0.5;
 
 /// The state of an Euler start of `eta` periods with its origin moved by `shift`, relaxed
-/// and solved on `model` (the tracing resolution), if it has `eta` periods of `κ_g`. At
-/// strong contrast (`D1/D0 <` [`HOMOTOPY_BELOW`]) the start is solved at
-/// [`MILD_CONTRAST`] and followed in `D1/D0` to the scene's value (a homotopy; the state
-/// is dropped if the family folds back in `D1/D0` before it).
+/// and solved on `model` (the tracing resolution), if it has `eta` periods of `κ_g`. With
+/// `homotopy` (used at strong contrast, `D1/D0 <` [`HOMOTOPY_BELOW`]) the start is solved
+/// at [`MILD_CONTRAST`] and followed in `D1/D0` to the scene's value (the state is dropped
+/// if the family folds back in `D1/D0` before it).
 fn seed_state(
     opts: &DiagramOptions,
     model: &SurfaceModel,
     eta: u32,
     lbar: f64,
     shift: f64,
+    homotopy: bool,
 ) -> Option<Vec<f64>> {
     let start = StartShape::Euler { l: eta }.shifted(lbar, shift).ok()?;
     let contrast = match &opts.stiffness {
         Stiffness::Tanh { d0, d1, .. } => d1 / d0,
         _ => 1.0,
     };
-    if contrast >= HOMOTOPY_BELOW {
+    if !homotopy || contrast >= MILD_CONTRAST {
         let kappa = start.gauss_values(model).ok()?;
         let eq = solve(model, &kappa, &SolveOptions::default())
             .map_err(|e| debug(|| format!("seed solve failed: {e}")))
