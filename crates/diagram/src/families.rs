@@ -248,62 +248,29 @@ pub fn compute_families(
         let Ok(model_l) = problem.model_at(lbar) else {
             continue;
         };
-        // At strong contrast both a direct solve and the homotopy from a mild contrast:
-        // they reach different families.
-        let methods: &[bool] = if strong { &[true] } else { &[false] };
-        if strong {
-            // What `rodloop solve --branch` finds at this length (labels must agree with it).
-            let start = StartShape::Euler { l: eta };
-            let tr = Instant::now();
-            let robust = rodloop_solver::solve_robust(
-                opts.radius,
-                lbar,
-                &opts.stiffness,
-                &start,
-                rodloop_solver::Accuracy::Fast,
-                Some(eta),
-                &SolveOptions::default(),
-            );
-            let x0 = robust.ok().and_then(|(acc, _)| {
-                let kappa = acc.equilibrium.resample(model_l.cells()).ok()?;
-                solve(&model_l, &kappa, &crate::states::newton_options())
-                    .ok()
-                    .map(|eq| eq.state())
-            });
-            debug(|| {
-                format!(
-                    "eta {eta} robust seed at {lbar:.3}: {} in {:.3} s",
-                    x0.is_some(),
-                    tr.elapsed().as_secs_f64()
-                )
-            });
-            if let Some(x0) = x0 {
-                if !on_known(&images, &curves, &x0, lbar) && curves.len() < MAX_FAMILIES {
-                    seed_note.push(format!("L̄ = {lbar:.4}, as `rodloop solve` finds it"));
-                    let curve =
-                        follow_seed(&end_ctx, &settings, &x0, lbar, &mut pending, &mut steps)?;
-                    curves.push(curve);
-                    switch_all(
-                        &end_ctx,
-                        &settings,
-                        &images,
-                        &mut curves,
-                        &mut pending,
-                        &mut switched,
-                        &mut notes,
-                        &mut steps,
-                    );
-                }
-            }
-        }
-        for (j, &homotopy) in (0..4).flat_map(|j| methods.iter().map(move |h| (j, h))) {
-            let shift = j as f64 / (8.0 * e);
+        // Seeds: at strong contrast the state `rodloop solve --branch` finds at this length
+        // (labels must agree with it; `None`), then the shifted Euler starts (solved
+        // directly, or at strong contrast followed in D1/D0 from a mild contrast).
+        let shifts = (0..4).map(|j| Some(j as f64 / (8.0 * e)));
+        let seeds: Vec<Option<f64>> = if strong {
+            std::iter::once(None).chain(shifts).collect()
+        } else {
+            shifts.collect()
+        };
+        for seed in seeds {
             seeds_tried += 1;
             let ts = Instant::now();
-            let seeded = seed_state(opts, &model_l, eta, lbar, shift, homotopy);
+            let seeded = match seed {
+                Some(shift) => seed_state(opts, &model_l, eta, lbar, shift, strong),
+                None => robust_seed(opts, &model_l, eta, lbar),
+            };
+            let what = match seed {
+                Some(shift) => format!("origin moved by {shift:.4}"),
+                None => "as `rodloop solve` finds it".to_string(),
+            };
             debug(|| {
                 format!(
-                    "eta {eta} seed at {lbar:.3} shift {shift:.3} (homotopy {homotopy}): {} in {:.3} s",
+                    "eta {eta} seed at {lbar:.3} ({what}): {} in {:.3} s",
                     seeded.is_some(),
                     ts.elapsed().as_secs_f64()
                 )
@@ -321,7 +288,7 @@ pub fn compute_families(
                 ));
                 break;
             }
-            seed_note.push(format!("L̄ = {lbar:.4}, origin moved by {shift:.4}"));
+            seed_note.push(format!("L̄ = {lbar:.4}, {what}"));
             let ts = Instant::now();
             let curve = follow_seed(&end_ctx, &settings, &x0, lbar, &mut pending, &mut steps)?;
             let (cmin, cmax) = curve
@@ -332,8 +299,8 @@ pub fn compute_families(
                 });
             if cmax - cmin < 1e-3 {
                 notes.push(format!(
-                    "branch {branch} (η = {eta}): a seed at L̄ = {lbar:.4} (origin moved by \
-                     {shift:.4}) could not be followed ({}; {}): left out",
+                    "branch {branch} (η = {eta}): a seed at L̄ = {lbar:.4} ({what}) could not be \
+                     followed ({}; {}): left out",
                     curve.start_end.1, curve.finish_end.1
                 ));
                 continue;
@@ -593,6 +560,30 @@ struct EndContext<'a> {
     problem: &'a ParamProblem<SurfaceModel>,
     lo: f64,
     hi: f64,
+}
+
+/// The state `rodloop solve --branch` finds for `eta` at `lbar` (`solve_robust` from the
+/// Euler curve, fast accuracy), re-solved on `model` (the tracing resolution).
+fn robust_seed(
+    opts: &DiagramOptions,
+    model: &SurfaceModel,
+    eta: u32,
+    lbar: f64,
+) -> Option<Vec<f64>> {
+    let (acc, _) = rodloop_solver::solve_robust(
+        opts.radius,
+        lbar,
+        &opts.stiffness,
+        &StartShape::Euler { l: eta },
+        rodloop_solver::Accuracy::Fast,
+        Some(eta),
+        &SolveOptions::default(),
+    )
+    .ok()?;
+    let kappa = acc.equilibrium.resample(model.cells()).ok()?;
+    solve(model, &kappa, &crate::states::newton_options())
+        .ok()
+        .map(|eq| eq.state())
 }
 
 /// Contrast `D1/D0` below which seeds come from a mild contrast by continuation in `D1/D0`

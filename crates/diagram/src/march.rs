@@ -272,6 +272,26 @@ impl<M: Confinement> Stability for Index<'_, M> {
     }
 }
 
+/// `problem` with the scaling of `st` (see the module docs), if the scaling is valid.
+fn scaled_problem<'a, M: Confinement>(
+    problem: &'a ParamProblem<M>,
+    st: &MarchSettings,
+) -> Result<Scaled<'a, M>, SolverError> {
+    if !(st.scale.is_finite() && st.scale > 0.0) || st.scaled > problem.dim() {
+        return Err(SolverError::InvalidInput(format!(
+            "march scaling: {} unknowns by {} (dimension {})",
+            st.scaled,
+            st.scale,
+            problem.dim()
+        )));
+    }
+    Ok(Scaled {
+        inner: problem,
+        k: st.scaled,
+        s: st.scale,
+    })
+}
+
 /// Errors of [`march`]: the settings, or a start the continuation cannot correct.
 fn start_error(e: impl std::fmt::Display) -> SolverError {
     SolverError::InvalidInput(format!("the march cannot start: {e}"))
@@ -296,14 +316,7 @@ pub fn march<M: Confinement>(
     progress: &mut dyn FnMut(f64, usize),
 ) -> Result<March, SolverError> {
     let st = settings;
-    if !(st.scale.is_finite() && st.scale > 0.0) || st.scaled > problem.dim() {
-        return Err(SolverError::InvalidInput(format!(
-            "march scaling: {} unknowns by {} (dimension {})",
-            st.scaled,
-            st.scale,
-            problem.dim()
-        )));
-    }
+    let scaled = scaled_problem(problem, st)?;
     if x0.len() != problem.dim() {
         return Err(SolverError::WrongLength {
             expected: problem.dim(),
@@ -323,11 +336,6 @@ pub fn march<M: Confinement>(
         -1.0
     } else {
         return Ok(out);
-    };
-    let scaled = Scaled {
-        inner: problem,
-        k: st.scaled,
-        s: st.scale,
     };
     let cont_settings = continuation_settings(st, side)?;
     let cont = Continuation::new(&scaled, cont_settings).with_stability(Index {
@@ -384,25 +392,13 @@ pub fn march_switch<M: Confinement>(
     progress: &mut dyn FnMut(f64, usize),
 ) -> Result<March, SolverError> {
     let st = settings;
-    if !(st.scale.is_finite() && st.scale > 0.0) || st.scaled > problem.dim() {
-        return Err(SolverError::InvalidInput(format!(
-            "march scaling: {} unknowns by {} (dimension {})",
-            st.scaled,
-            st.scale,
-            problem.dim()
-        )));
-    }
+    let scaled = scaled_problem(problem, st)?;
     if bp.x.len() != problem.dim() || bp.tangent.len() != problem.dim() + 1 {
         return Err(SolverError::WrongLength {
             expected: problem.dim(),
             found: bp.x.len(),
         });
     }
-    let scaled = Scaled {
-        inner: problem,
-        k: st.scaled,
-        s: st.scale,
-    };
     let side = if direction == Direction::Forward {
         1.0
     } else {

@@ -30,6 +30,42 @@ fn diagram() -> &'static NumericDiagram {
     })
 }
 
+/// The located crossings of a diagram.
+fn crossings_of(d: &NumericDiagram) -> Vec<&rodloop_diagram::CriticalLength> {
+    d.critical
+        .iter()
+        .filter(|c| c.kind == CriticalKind::Crossing)
+        .collect()
+}
+
+/// `e_diagram` (the diagram's lowest energy at `lbar`) is no higher than the energy of any
+/// state `solve_robust` finds there for branches η = 1–3 (the diagram's energies are at the
+/// tracing resolution, error ≲ 1e-5 here: tolerance 1e-4 plus solve's estimate).
+fn assert_no_higher_than_solve(rod: &Stiffness, lbar: f64, e_diagram: f64) {
+    for eta in [1u32, 2, 3] {
+        if !(f64::from(eta) - 1.0 < lbar && lbar < f64::from(eta) + 1.0) {
+            continue;
+        }
+        let Ok((acc, _)) = solve_robust(
+            1.0,
+            lbar,
+            rod,
+            &StartShape::Euler { l: eta },
+            Accuracy::Default,
+            Some(eta),
+            &SolveOptions::default(),
+        ) else {
+            continue;
+        };
+        let tol = 1e-4 + acc.energy_error;
+        assert!(
+            e_diagram <= acc.energy.total + tol,
+            "L̄ = {lbar}: diagram's lowest {e_diagram} above solve's {} for η = {eta}",
+            acc.energy.total
+        );
+    }
+}
+
 /// At several lengths the diagram's lowest state is stable with index 0, and its energy is
 /// no higher than that of every state `solve_robust` (shifted Euler starts, continuation in
 /// D1/D0; an independent route at another resolution) finds for branches 1–3.
@@ -51,31 +87,7 @@ fn lowest_state_is_no_higher_than_solve() {
             .unwrap();
         assert_eq!(b.points[k].index, 0, "L̄ = {lbar}");
         assert_eq!(d.labels[sheets[0]][k], Label::Stable, "L̄ = {lbar}");
-        for eta in [1u32, 2, 3] {
-            if !(f64::from(eta) - 1.0 < lbar && lbar < f64::from(eta) + 1.0) {
-                continue;
-            }
-            let Ok((acc, _)) = solve_robust(
-                1.0,
-                lbar,
-                &paper_rod(),
-                &StartShape::Euler { l: eta },
-                Accuracy::Default,
-                Some(eta),
-                &SolveOptions::default(),
-            ) else {
-                continue;
-            };
-            // The diagram's energies are at the tracing resolution (error ≲ 1e-5 here).
-            let tol = 1e-4 + acc.energy_error;
-            assert!(
-                e_diagram <= acc.energy.total + tol,
-                "L̄ = {lbar}: diagram's lowest {e_diagram} (branch {}) above solve's {} for \
-                 η = {eta}",
-                b.branch,
-                acc.energy.total
-            );
-        }
+        assert_no_higher_than_solve(&paper_rod(), lbar, e_diagram);
     }
 }
 
@@ -87,11 +99,7 @@ fn lowest_state_is_no_higher_than_solve() {
 #[test]
 fn families_and_special_points() {
     let d = diagram();
-    let crossings: Vec<_> = d
-        .critical
-        .iter()
-        .filter(|c| c.kind == CriticalKind::Crossing)
-        .collect();
+    let crossings = crossings_of(d);
     assert_eq!(crossings.len(), 2, "{crossings:#?}");
     assert!((crossings[0].lbar_cr - 1.38).abs() < 0.03);
     assert_eq!((crossings[0].from_eta, crossings[0].to_eta), (2, 1));
@@ -144,5 +152,37 @@ fn families_and_special_points() {
             })
             .collect();
         assert!(!ends.is_empty(), "fold at {}", s.lbar);
+    }
+}
+
+/// The very soft rod (D1/D0 = 0.001): at lengths that are not seed lengths of the diagram
+/// (its seeds lie at 1.25, 1.5, 1.75 for η = 1, 1.5, 2, 2.5 for η = 2 and 2.25, 2.5, 2.75
+/// for η = 3), the lowest traced state is no higher than what `solve_robust` finds for any
+/// branch there (independent route: its own starts, resolution and homotopy), and the
+/// lowest state passes from branch 1 (η = 2) to branch 2 (η = 1) and back to branch 1 only
+/// through located crossings.
+#[test]
+fn very_soft_rod_lowest_state_is_no_higher_than_solve() {
+    let rod = Stiffness::Tanh {
+        d0: 1.0,
+        d1: 0.001,
+        s0: 0.3,
+        s1: 0.8,
+        gamma: 200.0,
+    };
+    let opts = DiagramOptions {
+        stiffness: rod.clone(),
+        lbar_min: 1.0,
+        lbar_max: 3.0,
+        ..DiagramOptions::default()
+    };
+    let d = compute(&opts, &mut (), &mut |_| {}).expect("diagram of the very soft rod");
+    let crossings = crossings_of(&d);
+    assert_eq!(crossings.len(), 2, "{crossings:#?}");
+    for lbar in [1.28, 1.62, 2.2, 2.62] {
+        let sheets = d.lowest_sheets_at(lbar);
+        assert!(!sheets.is_empty(), "L̄ = {lbar}");
+        let e_diagram = d.branches[sheets[0]].energy_at(lbar).expect("covers");
+        assert_no_higher_than_solve(&rod, lbar, e_diagram);
     }
 }
