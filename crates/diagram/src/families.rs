@@ -55,6 +55,7 @@ const MAX_STEPS: usize = 600;
 const SAME_STATE: f64 = 0.03;
 
 /// The traced sheets of branch `eta` and notes (caps reached, failed switches).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Families {
     /// The sheets, by family and position along it.
     pub sheets: Vec<TracedBranch>,
