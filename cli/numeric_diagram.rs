@@ -281,6 +281,7 @@ pub fn write_outputs(
             "family",
             "index_before",
             "index_after",
+            "error_estimate",
         ],
     );
     for p in &d.special {
@@ -292,6 +293,10 @@ pub fn write_outputs(
             Cell::I(p.family.into()),
             Cell::I(p.index_before as i64),
             Cell::I(p.index_after as i64),
+            match p.error_estimate {
+                Some(e) => Cell::F(e),
+                None => Cell::S(String::new()),
+            },
         ])?;
     }
     let critical = critical_table(d.critical.iter().map(|c| CriticalRow {

@@ -51,6 +51,8 @@ pub const MAX_FAMILIES: usize = 16;
 pub const MAX_SWITCHES: usize = 16;
 /// Budget of continuation steps per followed direction.
 const MAX_STEPS: usize = 600;
+/// Width (arclength) to which the tracer locates folds, branch points and index changes.
+const TRACE_LOCATE_TOL: f64 = 1e-6;
 /// Distance (root-mean-square of `κ_g R`) below which two states count as the same.
 const SAME_STATE: f64 = 0.03;
 
@@ -219,6 +221,9 @@ pub fn compute_families(
     settings.ds_min = 1e-5;
     settings.circles = circles.clone();
     settings.circle_distance = SWITCH_DISTANCE;
+    // Folds and branch points are located again at the reporting resolution
+    // (`crate::special`): the tracer needs them only to its own width.
+    settings.locate_tol = TRACE_LOCATE_TOL;
 
     let mut curves: Vec<Curve> = Vec::new();
     let mut notes = Vec::new();

@@ -67,6 +67,7 @@ mod parallel;
 pub mod phase;
 pub mod refine;
 mod seed;
+mod special;
 mod states;
 pub mod trace;
 pub mod types;

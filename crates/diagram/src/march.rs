@@ -74,6 +74,9 @@ pub struct MarchSettings {
     pub detect_branch_points: bool,
     /// Eigenvalues below `−index_tolerance` count as negative in the stability index.
     pub index_tolerance: f64,
+    /// Whether the stability index is monitored (index changes located, points carry their
+    /// index); off, the points have no index.
+    pub track_index: bool,
     /// Steps between two calls of the progress callback (which is also called at the end).
     pub progress_every: usize,
     /// With [`FoldPolicy::Follow`]: the far end of the range (the march then stays within
@@ -292,6 +295,23 @@ fn scaled_problem<'a, M: Confinement>(
     })
 }
 
+/// The continuation with the model's stability index monitored, unless
+/// [`MarchSettings::track_index`] is off.
+fn with_index<'a, M: Confinement>(
+    cont: Continuation<'a, Scaled<'a, M>>,
+    scaled: &'a Scaled<'a, M>,
+    st: &MarchSettings,
+) -> Continuation<'a, Scaled<'a, M>> {
+    if st.track_index {
+        cont.with_stability(Index {
+            scaled,
+            tolerance: st.index_tolerance,
+        })
+    } else {
+        cont
+    }
+}
+
 /// Errors of [`march`]: the settings, or a start the continuation cannot correct.
 fn start_error(e: impl std::fmt::Display) -> SolverError {
     SolverError::InvalidInput(format!("the march cannot start: {e}"))
@@ -338,10 +358,7 @@ pub fn march<M: Confinement>(
         return Ok(out);
     };
     let cont_settings = continuation_settings(st, side)?;
-    let cont = Continuation::new(&scaled, cont_settings).with_stability(Index {
-        scaled: &scaled,
-        tolerance: st.index_tolerance,
-    });
+    let cont = with_index(Continuation::new(&scaled, cont_settings), &scaled, st);
     let stepper = cont.start(&scaled.scale(x0), p0).map_err(start_error)?;
     Ok(run_loop(stepper, &scaled, st, side, p0, out, progress))
 }
@@ -405,10 +422,7 @@ pub fn march_switch<M: Confinement>(
         -1.0
     };
     let cont_settings = continuation_settings(st, side)?;
-    let cont = Continuation::new(&scaled, cont_settings).with_stability(Index {
-        scaled: &scaled,
-        tolerance: st.index_tolerance,
-    });
+    let cont = with_index(Continuation::new(&scaled, cont_settings), &scaled, st);
     let special = rodloop_continuation::SpecialPoint {
         kind: SpecialKind::BranchPoint,
         x: scaled.scale(&bp.x),

@@ -146,13 +146,67 @@ fn families_and_special_points() {
             .branches
             .iter()
             .filter(|b| {
-                [&b.low_end, &b.high_end].iter().any(
-                    |e| matches!(e, BranchEnd::Fold { value } if (value - s.lbar).abs() < 1e-8),
-                )
+                // Located again at the reporting resolution: within the tracing's width.
+                [&b.low_end, &b.high_end].iter().any(|e| {
+                    matches!(e, BranchEnd::Fold { value } | BranchEnd::BranchPoint { value }
+                        if (value - s.lbar).abs() < 1e-4)
+                })
             })
             .collect();
         assert!(!ends.is_empty(), "fold at {}", s.lbar);
     }
+}
+
+/// Folds and branch points located at the reporting resolutions: most are located (an
+/// error estimate), and at `--accuracy high` (twice the cells) each lies within the sum of
+/// the two estimates of the default location (an independent finer computation).
+#[test]
+fn special_points_agree_with_the_high_accuracy_ones() {
+    let d = diagram();
+    let high = compute(
+        &DiagramOptions {
+            stiffness: paper_rod(),
+            lbar_min: 1.0,
+            lbar_max: 3.0,
+            ..DiagramOptions::with_accuracy(Accuracy::High)
+        },
+        &mut (),
+        &mut |_| {},
+    )
+    .expect("high-accuracy diagram");
+    let ends = |d: &NumericDiagram| -> Vec<(f64, f64)> {
+        d.special
+            .iter()
+            .filter(|s| {
+                matches!(
+                    s.kind,
+                    rodloop_diagram::SpecialKind::Fold | rodloop_diagram::SpecialKind::BranchPoint
+                )
+            })
+            .filter_map(|s| s.error_estimate.map(|e| (s.lbar, e)))
+            .collect()
+    };
+    let (a, b) = (ends(d), ends(&high));
+    assert!(a.len() >= 4, "{a:?}");
+    let mut compared = 0;
+    for &(l, e) in &a {
+        assert!(e < 1e-5, "fold or branch point at {l}: estimate {e}");
+        let Some(&(lh, eh)) = b
+            .iter()
+            .min_by(|x, y| (x.0 - l).abs().total_cmp(&(y.0 - l).abs()))
+        else {
+            continue;
+        };
+        if (lh - l).abs() > 1e-4 {
+            continue;
+        }
+        compared += 1;
+        assert!(
+            (lh - l).abs() <= e + eh,
+            "default {l} ± {e:.1e}, high {lh} ± {eh:.1e}"
+        );
+    }
+    assert!(compared >= 4, "{a:?} / {b:?}");
 }
 
 /// The very soft rod (D1/D0 = 0.001): at lengths that are not seed lengths of the diagram
