@@ -20,6 +20,11 @@ use crate::output::{
 use crate::progress::Progress as Bar;
 use crate::svg::{self, branch_color, Curve, Figure, LegendEntry, LineStyle, Marker};
 
+/// File name prefix of the per-branch families files of non-uniform rods
+/// (`families-branch-B.json`, written after every sheet file of the branch: its presence
+/// means the branch is complete).
+const FAMILIES_PREFIX: &str = "families-";
+
 /// Load the branches of an interrupted run (`DIR/branches/*.json`).
 fn load_resume(dir: &Path) -> Result<Vec<TracedBranch>> {
     let bdir = dir.join("branches");
@@ -29,7 +34,10 @@ fn load_resume(dir: &Path) -> Result<Vec<TracedBranch>> {
     };
     for e in entries {
         let path = e?.path();
-        if path.extension().is_some_and(|x| x == "json") {
+        let families_file = path
+            .file_name()
+            .is_some_and(|n| n.to_string_lossy().starts_with(FAMILIES_PREFIX));
+        if path.extension().is_some_and(|x| x == "json") && !families_file {
             let text = std::fs::read_to_string(&path)
                 .with_context(|| format!("cannot read {}", path.display()))?;
             let b: TracedBranch = serde_json::from_str(&text).with_context(|| {
@@ -49,12 +57,41 @@ fn load_resume(dir: &Path) -> Result<Vec<TracedBranch>> {
 struct BranchFiles<'a> {
     dir: std::path::PathBuf,
     previous: Vec<TracedBranch>,
+    /// `--resume` given.
+    resuming: bool,
     bar: &'a Bar,
 }
 
 impl BranchHook for BranchFiles<'_> {
     fn resume(&mut self, eta: u32) -> Option<TracedBranch> {
         self.previous.iter().find(|b| b.eta == eta).cloned()
+    }
+
+    fn resume_families(&mut self, eta: u32) -> Option<rodloop_diagram::families::Families> {
+        if !self.resuming {
+            return None;
+        }
+        let branch = rodloop_exact::branch_of_eta(eta);
+        let path = self
+            .dir
+            .join(format!("{FAMILIES_PREFIX}branch-{branch}.json"));
+        let text = std::fs::read_to_string(path).ok()?;
+        serde_json::from_str(&text).ok()
+    }
+
+    fn finished_families(
+        &mut self,
+        eta: u32,
+        families: &rodloop_diagram::families::Families,
+    ) -> std::result::Result<(), rodloop_diagram::BoxError> {
+        let branch = rodloop_exact::branch_of_eta(eta);
+        let text = serde_json::to_string(families)?;
+        write_atomic(
+            &self.dir,
+            &format!("{FAMILIES_PREFIX}branch-{branch}.json"),
+            text.as_bytes(),
+        )?;
+        Ok(())
     }
 
     fn finished(
@@ -126,6 +163,7 @@ pub fn run_numeric(
     let mut hook = BranchFiles {
         dir,
         previous,
+        resuming: resume,
         bar: &bar,
     };
     // Progress: branches re-traced because their files do not match are named in one note;
@@ -247,6 +285,7 @@ pub fn write_outputs(
             "family",
             "index_before",
             "index_after",
+            "error_estimate",
         ],
     );
     for p in &d.special {
@@ -258,6 +297,10 @@ pub fn write_outputs(
             Cell::I(p.family.into()),
             Cell::I(p.index_before as i64),
             Cell::I(p.index_after as i64),
+            match p.error_estimate {
+                Some(e) => Cell::F(e),
+                None => Cell::S(String::new()),
+            },
         ])?;
     }
     let critical = critical_table(d.critical.iter().map(|c| CriticalRow {

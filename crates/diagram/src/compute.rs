@@ -44,6 +44,22 @@ pub trait BranchHook {
         let _ = (branch, origin);
         Ok(())
     }
+
+    /// Non-uniform rods: every family of `eta` traced earlier (sheets and notes), to use
+    /// instead of tracing them. Accepted only if it has sheets, all of `eta` and with the
+    /// matching fingerprint. Default: none.
+    fn resume_families(&mut self, eta: u32) -> Option<Families> {
+        let _ = eta;
+        None
+    }
+
+    /// Non-uniform rods: called once for every branch `eta` whose families were traced,
+    /// after [`BranchHook::finished`] for each of its sheets (so a hook that saves the
+    /// families last knows the branch is complete). Default: nothing.
+    fn finished_families(&mut self, eta: u32, families: &Families) -> Result<(), BoxError> {
+        let _ = (eta, families);
+        Ok(())
+    }
 }
 
 /// No hook: trace every branch.
@@ -56,6 +72,14 @@ pub struct Resume<'a>(pub &'a [TracedBranch]);
 impl BranchHook for Resume<'_> {
     fn resume(&mut self, eta: u32) -> Option<TracedBranch> {
         self.0.iter().find(|b| b.eta == eta).cloned()
+    }
+
+    fn resume_families(&mut self, eta: u32) -> Option<Families> {
+        let sheets: Vec<TracedBranch> = self.0.iter().filter(|b| b.eta == eta).cloned().collect();
+        (!sheets.is_empty()).then_some(Families {
+            sheets,
+            notes: Vec::new(),
+        })
     }
 }
 
@@ -84,14 +108,37 @@ pub fn compute(
     let mut have: Vec<TracedBranch> = Vec::new();
     let mut todo: Vec<u32> = Vec::new();
     let mut rejected = Vec::new();
+    // Notes and failures by branch, reported in decreasing η (the tracing order).
+    let mut notes: Vec<(u32, Vec<String>)> = Vec::new();
     for &eta in &etas {
-        // Non-uniform rods have several sheets per branch: traced afresh.
-        let resumed = if opts.stiffness.is_uniform() {
-            hook.resume(eta)
-        } else {
-            None
-        };
-        match resumed {
+        if !opts.stiffness.is_uniform() {
+            // Non-uniform rods: all the families of a branch, or none.
+            match hook.resume_families(eta) {
+                Some(f)
+                    if !f.sheets.is_empty()
+                        && f.sheets.iter().all(|b| {
+                            b.fingerprint == fingerprint && b.eta == eta && !b.points.is_empty()
+                        }) =>
+                {
+                    have.extend(f.sheets);
+                    notes.push((eta, f.notes));
+                }
+                Some(f) => {
+                    rejected.push(Progress::BranchResumeRejected {
+                        eta,
+                        reason: format!(
+                            "the saved families ({} sheets) were traced with other options or \
+                             are incomplete",
+                            f.sheets.len()
+                        ),
+                    });
+                    todo.push(eta);
+                }
+                None => todo.push(eta),
+            }
+            continue;
+        }
+        match hook.resume(eta) {
             Some(b) if b.fingerprint == fingerprint && b.eta == eta && !b.points.is_empty() => {
                 have.push(b)
             }
@@ -136,13 +183,18 @@ pub fn compute(
     let uniform = opts.stiffness.is_uniform();
     let traced = run_parallel(
         opts.worker_threads(),
-        todo,
+        todo.clone(),
         progress,
         &mut |r: &Result<Families, DiagramError>| {
             if let Ok(f) = r {
                 for b in &f.sheets {
                     if hook_error.is_none() {
                         hook_error = hook.finished(b, Origin::Traced).err();
+                    }
+                }
+                if !uniform && hook_error.is_none() {
+                    if let Some(eta) = f.sheets.first().map(|b| b.eta) {
+                        hook_error = hook.finished_families(eta, f).err();
                     }
                 }
             }
@@ -170,17 +222,18 @@ pub fn compute(
     }
     // A branch that cannot be traced at all is left out with a warning (the others still make
     // a diagram); invalid options fail everything.
-    let mut failures = Vec::new();
-    for t in traced {
+    for (t, &eta) in traced.into_iter().zip(&todo) {
         match t {
             Ok(f) => {
                 have.extend(f.sheets);
-                failures.extend(f.notes);
+                notes.push((eta, f.notes));
             }
             Err(e @ DiagramError::InvalidOptions(_)) => return Err(e),
-            Err(e) => failures.push(format!("branch left out of the diagram: {e}")),
+            Err(e) => notes.push((eta, vec![format!("branch left out of the diagram: {e}")])),
         }
     }
+    notes.sort_by_key(|(eta, _)| std::cmp::Reverse(*eta));
+    let failures: Vec<String> = notes.into_iter().flat_map(|(_, n)| n).collect();
     if have.is_empty() {
         return Err(DiagramError::InvalidOptions(format!(
             "no branch could be traced: {}",

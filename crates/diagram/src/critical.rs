@@ -91,6 +91,10 @@ pub(crate) fn lowest_interpolated(branches: &[TracedBranch], lbar: f64) -> Optio
     best
 }
 
+/// Distance in `L̄` within which two sheet ends count as the same state in [`touch`]: a branch
+/// point located from its two branches lands `10⁻⁷` apart at the tracing's locate width.
+const TOUCH_LBAR: f64 = 1e-6;
+
 /// Crossings of the lowest energy seen on the traced samples, plus warnings for changes of
 /// the lowest branch that are neither crossings nor at integer lengths.
 pub(crate) fn detect_crossings(
@@ -124,6 +128,18 @@ pub(crate) fn detect_crossings(
         if touch(ba, bb, l0, l1) {
             continue;
         }
+        // Two sheets of one branch whose energies differ by less than 10⁻⁵ (relative) on
+        // both sides: near-degenerate states of one family cluster (several pitchforks
+        // within 10⁻³ in L̄ at D1/D0 = 0.001), not an exchange of the lowest branch.
+        if ba.eta == bb.eta {
+            let gap = |l: f64| match (ba.energy_at(l), bb.energy_at(l)) {
+                (Some(x), Some(y)) => (x - y).abs() <= DEGENERATE * x.abs().max(1.0),
+                _ => true,
+            };
+            if gap(l0) && gap(l1) {
+                continue;
+            }
+        }
         if ba.covers(l0) && ba.covers(l1) && bb.covers(l0) && bb.covers(l1) {
             let diff =
                 |l: f64| ba.energy_at(l).unwrap_or(f64::NAN) - bb.energy_at(l).unwrap_or(f64::NAN);
@@ -136,12 +152,23 @@ pub(crate) fn detect_crossings(
                     hi = mid;
                 }
             }
+            let guess = 0.5 * (lo + hi);
+            // Two sheets that meet at a pitchfork are tangent there (their energies differ
+            // like a power of the distance): a root of the interpolated difference within
+            // two sample spacings of the meeting point is that tangency.
+            let near = (2.0 * (l1 - l0)).max(NEAR_MEETING);
+            if meeting_points(ba, bb)
+                .iter()
+                .any(|m| (m - guess).abs() <= near)
+            {
+                continue;
+            }
             out.push(Candidate {
                 a,
                 b,
                 lo: l0,
                 hi: l1,
-                guess: 0.5 * (lo + hi),
+                guess,
             });
         } else {
             // An end of a branch between the two samples: fine at an integer (collapse),
@@ -161,17 +188,46 @@ pub(crate) fn detect_crossings(
     (out, warnings)
 }
 
-/// Whether two sheets share an end state (same length and energy) within `[l0, l1]`: a
-/// fold joining two sheets of one family, or a branch point where a family meets another.
+/// Relative energy gap below which two sheets of one branch count as degenerate in
+/// [`detect_crossings`].
+const DEGENERATE: f64 = 1e-5;
+
+/// Distance in `L̄` from a meeting point of two sheets within which a root of their
+/// interpolated energy difference is taken for their tangency there (near a pitchfork the
+/// symmetric and asymmetric sheets differ by less than the interpolation error).
+const NEAR_MEETING: f64 = 1e-3;
+
+/// The lengths where the two sheets meet: an end state of one that is a state of the other
+/// (within [`TOUCH_LBAR`] and `10⁻⁶` relative in energy) — a shared fold or branch point, or
+/// a branch point in the middle of the other sheet.
+fn meeting_points(a: &TracedBranch, b: &TracedBranch) -> Vec<f64> {
+    let ends = |t: &TracedBranch| [t.points.first().cloned(), t.points.last().cloned()];
+    let mut out = Vec::new();
+    for (x, y) in [(a, b), (b, a)] {
+        for pe in ends(x).into_iter().flatten() {
+            let hit = y.points.iter().any(|q| {
+                (q.value - pe.value).abs() <= TOUCH_LBAR
+                    && (q.energy - pe.energy).abs() <= 1e-6 * pe.energy.abs().max(1.0)
+            });
+            if hit {
+                out.push(pe.value);
+            }
+        }
+    }
+    out
+}
+
+/// Whether two sheets share an end state (same length and energy, within [`TOUCH_LBAR`] and
+/// `10⁻⁶` relative) within `[l0, l1]`: a fold joining two sheets of one family, or a branch
+/// point where a family meets another (located from either side to the tracing's width).
 pub(crate) fn touch(a: &TracedBranch, b: &TracedBranch, l0: f64, l1: f64) -> bool {
     let ends = |t: &TracedBranch| [t.points.first().cloned(), t.points.last().cloned()];
     let mut found = false;
     for pa in ends(a).into_iter().flatten() {
         for pb in ends(b).into_iter().flatten() {
-            let l = pa.value;
-            if l >= l0 - 1e-9
-                && l <= l1 + 1e-9
-                && (pa.value - pb.value).abs() <= 1e-8
+            if pa.value.max(pb.value) >= l0 - 1e-9
+                && pa.value.min(pb.value) <= l1 + 1e-9
+                && (pa.value - pb.value).abs() <= TOUCH_LBAR
                 && (pa.energy - pb.energy).abs() <= 1e-6 * pa.energy.abs().max(1.0)
             {
                 found = true;
@@ -182,8 +238,12 @@ pub(crate) fn touch(a: &TracedBranch, b: &TracedBranch, l0: f64, l1: f64) -> boo
     // the pitchfork where the asymmetric pair ends).
     for (x, y) in [(a, b), (b, a)] {
         for pe in ends(x).into_iter().flatten() {
-            if pe.value >= l0 - 1e-9 && pe.value <= l1 + 1e-9 {
-                if let Some(e) = y.points.iter().find(|q| (q.value - pe.value).abs() <= 1e-8) {
+            if pe.value >= l0 - TOUCH_LBAR && pe.value <= l1 + TOUCH_LBAR {
+                if let Some(e) = y
+                    .points
+                    .iter()
+                    .find(|q| (q.value - pe.value).abs() <= TOUCH_LBAR)
+                {
                     if (e.energy - pe.energy).abs() <= 1e-6 * pe.energy.abs().max(1.0) {
                         found = true;
                     }

@@ -18,12 +18,15 @@ use rodloop_exact::shape::ShapeTolerances;
 enum Task {
     Circle(u32),
     Crossing(critical::Candidate),
+    /// A fold or branch point (index into the end points) at a sheet's end.
+    End(usize, usize, bool),
 }
 
 /// Result of a [`Task`] with its duration.
 enum Done {
     Circle(u32, buckling::CircleResult, f64),
     Crossing(Box<Result<CriticalLength, DiagramError>>, f64),
+    End(usize, Option<crate::special::Located>, f64),
 }
 
 /// Wall times of the phases, in seconds.
@@ -31,8 +34,8 @@ enum Done {
 pub struct Timings {
     /// Tracing all branches (wall time; 0 when [`assemble`] is called directly).
     pub tracing: f64,
-    /// Locating the crossings (sum over the tasks, which run in parallel with the great
-    /// circles).
+    /// Locating the crossings and the folds and branch points (sum over the tasks, which
+    /// run in parallel with the great circles).
     pub critical: f64,
     /// Great circles: buckling loads and branch switching (sum over the circles).
     pub great_circles: f64,
@@ -300,8 +303,15 @@ pub fn assemble(
         great_circles: circles.len(),
     });
     let total_circles = circles.len();
+    let (mut ends, end_sources) = end_points(&branches);
     let mut tasks: Vec<Task> = circles.into_iter().map(Task::Circle).collect();
     tasks.extend(candidates.into_iter().map(Task::Crossing));
+    tasks.extend(
+        end_sources
+            .iter()
+            .enumerate()
+            .map(|(k, &(sheet, at_low))| Task::End(k, sheet, at_low)),
+    );
     let results = run_parallel(
         opts.worker_threads(),
         tasks,
@@ -330,6 +340,11 @@ pub fn assemble(
                     }
                     Done::Crossing(Box::new(r), t.elapsed().as_secs_f64())
                 }
+                Task::End(k, sheet, at_low) => Done::End(
+                    k,
+                    crate::special::locate_end(opts, &branches[sheet], at_low),
+                    t.elapsed().as_secs_f64(),
+                ),
             }
         },
     );
@@ -340,6 +355,14 @@ pub fn assemble(
             Done::Circle(m, r, secs) => {
                 timings.great_circles += secs;
                 circle_results.push((m, r));
+            }
+            Done::End(k, located, secs) => {
+                timings.critical += secs;
+                if let Some(l) = located {
+                    ends[k].lbar = l.lbar;
+                    ends[k].energy = l.energy;
+                    ends[k].error_estimate = Some(l.error);
+                }
             }
             Done::Crossing(r, secs) => {
                 timings.critical += secs;
@@ -384,10 +407,14 @@ pub fn assemble(
     }
     for w in critical.windows(2) {
         // The same sheet, or sheets that meet at a fold or branch point in between (the
-        // lowest state passes continuously from one to the other there).
+        // lowest state passes continuously from one to the other there), or sheets of one
+        // branch (changes of the lowest family within a branch are not exchanges; see
+        // `critical::detect_crossings`).
         let connected = match (w[0].to_sheet, w[1].from_sheet) {
             (Some(a), Some(b)) => {
-                a == b || critical::touch(&branches[a], &branches[b], w[0].lbar_cr, w[1].lbar_cr)
+                a == b
+                    || branches[a].eta == branches[b].eta
+                    || critical::touch(&branches[a], &branches[b], w[0].lbar_cr, w[1].lbar_cr)
             }
             _ => w[0].to_eta == w[1].from_eta,
         };
@@ -415,7 +442,7 @@ pub fn assemble(
     timings.shapes = t.elapsed().as_secs_f64();
     warnings.extend(shape_warnings);
     warnings.extend(no_minimum_warnings(opts, &branches));
-    let special = special_points(&branches, &critical);
+    let special = special_points(ends, &branches, &critical);
 
     for b in &branches {
         for (end, stop) in [(&b.low_end, &b.stop_low), (&b.high_end, &b.stop_high)] {
@@ -505,11 +532,13 @@ fn no_minimum_warnings(opts: &DiagramOptions, branches: &[TracedBranch]) -> Vec<
         .collect()
 }
 
-/// Special points of the diagram: folds and branch points (the ends of sheets), crossings
-/// and collapses (the critical lengths), in increasing `L̄`.
-fn special_points(branches: &[TracedBranch], critical: &[CriticalLength]) -> Vec<SpecialPoint> {
+/// Folds and branch points (the ends of sheets), one record per point, with the sheet and
+/// end (`true`: low) each was first seen at. Their lengths and energies are the traced ones
+/// until [`crate::special::locate_end`] refines them.
+fn end_points(branches: &[TracedBranch]) -> (Vec<SpecialPoint>, Vec<(usize, bool)>) {
     let mut out: Vec<SpecialPoint> = Vec::new();
-    for b in branches {
+    let mut sources = Vec::new();
+    for (bi, b) in branches.iter().enumerate() {
         for (end, at_low) in [(&b.low_end, true), (&b.high_end, false)] {
             let kind = match end {
                 crate::BranchEnd::Fold { .. } => SpecialKind::Fold,
@@ -527,27 +556,44 @@ fn special_points(branches: &[TracedBranch], critical: &[CriticalLength]) -> Vec
             let (Some(p), Some(q)) = (p, q) else { continue };
             let value = p.value;
             // One record per point: a fold is the end of two sheets, a branch point of
-            // several.
+            // several (located from each within the tracing's width, up to ~1e-5 apart at
+            // D1/D0 = 0.5; a pitchfork is a turning point of the asymmetric sheets that end
+            // there).
             if let Some(s) = out.iter_mut().find(|s| {
-                s.kind == kind
-                    && (s.lbar - value).abs() < 1e-8
-                    && (s.energy - p.energy).abs() < 1e-6 * p.energy.abs().max(1.0)
+                (s.lbar - value).abs() < 1e-4
+                    && (s.energy - p.energy).abs() < 1e-4 * p.energy.abs().max(1.0)
             }) {
                 s.index_after = s.index_after.max(q.index);
                 s.index_before = s.index_before.min(q.index);
+                if kind == SpecialKind::BranchPoint {
+                    s.kind = kind;
+                }
                 continue;
             }
             out.push(SpecialPoint {
                 kind,
                 lbar: value,
                 energy: p.energy,
+                error_estimate: None,
                 branch: b.branch,
                 family: b.family,
                 index_before: q.index,
                 index_after: q.index,
             });
+            sources.push((bi, at_low));
         }
     }
+    (out, sources)
+}
+
+/// Special points of the diagram: folds and branch points (`ends`, see [`end_points`]),
+/// crossings and collapses (the critical lengths), in increasing `L̄`.
+fn special_points(
+    ends: Vec<SpecialPoint>,
+    branches: &[TracedBranch],
+    critical: &[CriticalLength],
+) -> Vec<SpecialPoint> {
+    let mut out = ends;
     // Before/after: the two sides of a fold are its two sheets, the lower index first.
     for c in critical {
         out.push(SpecialPoint {
@@ -557,6 +603,7 @@ fn special_points(branches: &[TracedBranch], critical: &[CriticalLength]) -> Vec
             },
             lbar: c.lbar_cr,
             energy: c.energy,
+            error_estimate: Some(c.error_estimate),
             branch: c.to_branch,
             family: c.to_sheet.map_or(0, |i| branches[i].family),
             index_before: 0,
@@ -603,6 +650,11 @@ pub struct SpecialPoint {
     pub lbar: f64,
     /// Energy `E R/(π D0)` there.
     pub energy: f64,
+    /// Error estimate of `lbar`: folds and branch points located at the reporting
+    /// resolutions (`crate::special`), crossings and collapses as in `critical.csv`; `None`
+    /// where a fold or branch point is known only to the tracing's width (its re-location
+    /// failed).
+    pub error_estimate: Option<f64>,
     /// Paper branch (crossings and collapses: the branch lowest above).
     pub branch: u32,
     /// Family within the branch (0: uniform rod, or none).

@@ -51,10 +51,13 @@ pub const MAX_FAMILIES: usize = 16;
 pub const MAX_SWITCHES: usize = 16;
 /// Budget of continuation steps per followed direction.
 const MAX_STEPS: usize = 600;
+/// Width (arclength) to which the tracer locates folds, branch points and index changes.
+const TRACE_LOCATE_TOL: f64 = 1e-6;
 /// Distance (root-mean-square of `κ_g R`) below which two states count as the same.
 const SAME_STATE: f64 = 0.03;
 
 /// The traced sheets of branch `eta` and notes (caps reached, failed switches).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Families {
     /// The sheets, by family and position along it.
     pub sheets: Vec<TracedBranch>,
@@ -154,6 +157,11 @@ impl Images {
 
 /// Whether `(x, p)` lies on one of `curves` (or on an image of one), within [`SAME_STATE`].
 fn on_known(images: &Images, curves: &[Curve], x: &[f64], p: f64) -> bool {
+    on_known_within(images, curves, x, p, SAME_STATE)
+}
+
+/// [`on_known`] with the distance `tol` instead of [`SAME_STATE`].
+fn on_known_within(images: &Images, curves: &[Curve], x: &[f64], p: f64, tol: f64) -> bool {
     curves.iter().any(|c| {
         c.points.windows(2).any(|w| {
             let (a, b) = (&w[0], &w[1]);
@@ -167,7 +175,7 @@ fn on_known(images: &Images, curves: &[Curve], x: &[f64], p: f64) -> bool {
                 0.0
             };
             let xi: Vec<f64> = a.x.iter().zip(&b.x).map(|(u, v)| u + t * (v - u)).collect();
-            images.dist_images(&xi, x) < SAME_STATE
+            images.dist_images(&xi, x) < tol
         })
     })
 }
@@ -213,6 +221,9 @@ pub fn compute_families(
     settings.ds_min = 1e-5;
     settings.circles = circles.clone();
     settings.circle_distance = SWITCH_DISTANCE;
+    // Folds and branch points are located again at the reporting resolution
+    // (`crate::special`): the tracer needs them only to its own width.
+    settings.locate_tol = TRACE_LOCATE_TOL;
 
     let mut curves: Vec<Curve> = Vec::new();
     let mut notes = Vec::new();
@@ -237,18 +248,35 @@ pub fn compute_families(
         lo,
         hi,
     };
+    let strong = matches!(&opts.stiffness, Stiffness::Tanh { d0, d1, .. }
+        if d1 / d0 < HOMOTOPY_BELOW);
     for &lbar in &seed_lengths {
         let Ok(model_l) = problem.model_at(lbar) else {
             continue;
         };
-        for j in 0..4 {
-            let shift = j as f64 / (8.0 * e);
+        // Seeds: at strong contrast the state `rodloop solve --branch` finds at this length
+        // (labels must agree with it; `None`), then the shifted Euler starts (solved
+        // directly, or at strong contrast followed in D1/D0 from a mild contrast).
+        let shifts = (0..4).map(|j| Some(j as f64 / (8.0 * e)));
+        let seeds: Vec<Option<f64>> = if strong {
+            std::iter::once(None).chain(shifts).collect()
+        } else {
+            shifts.collect()
+        };
+        for seed in seeds {
             seeds_tried += 1;
             let ts = Instant::now();
-            let seeded = seed_state(&model_l, eta, lbar, shift);
+            let seeded = match seed {
+                Some(shift) => seed_state(opts, &model_l, eta, lbar, shift, strong),
+                None => robust_seed(opts, &model_l, eta, lbar),
+            };
+            let what = match seed {
+                Some(shift) => format!("origin moved by {shift:.4}"),
+                None => "as `rodloop solve` finds it".to_string(),
+            };
             debug(|| {
                 format!(
-                    "eta {eta} seed at {lbar:.3} shift {shift:.3}: {} in {:.3} s",
+                    "eta {eta} seed at {lbar:.3} ({what}): {} in {:.3} s",
                     seeded.is_some(),
                     ts.elapsed().as_secs_f64()
                 )
@@ -266,7 +294,7 @@ pub fn compute_families(
                 ));
                 break;
             }
-            seed_note.push(format!("L̄ = {lbar:.4}, origin moved by {shift:.4}"));
+            seed_note.push(format!("L̄ = {lbar:.4}, {what}"));
             let ts = Instant::now();
             let curve = follow_seed(&end_ctx, &settings, &x0, lbar, &mut pending, &mut steps)?;
             let (cmin, cmax) = curve
@@ -277,8 +305,8 @@ pub fn compute_families(
                 });
             if cmax - cmin < 1e-3 {
                 notes.push(format!(
-                    "branch {branch} (η = {eta}): a seed at L̄ = {lbar:.4} (origin moved by \
-                     {shift:.4}) could not be followed ({}; {}): left out",
+                    "branch {branch} (η = {eta}): a seed at L̄ = {lbar:.4} ({what}) could not be \
+                     followed ({}; {}): left out",
                     curve.start_end.1, curve.finish_end.1
                 ));
                 continue;
@@ -372,6 +400,7 @@ pub fn compute_families(
             } else {
                 (first_end, last_end)
             };
+            fill_corrections(&mut pts);
             let index_changes = index_changes_of(&pts);
             let midk = pts.len() / 2;
             let mid_state = pts[midk].0.state.clone();
@@ -456,6 +485,30 @@ pub fn compute_families(
     Ok(Families { sheets, notes })
 }
 
+/// States of a sheet whose half-resolution partner failed (no `energy_error`; typically
+/// right next to a branch point) get the Richardson correction `energy − energy_trace` of
+/// the nearest state of the sheet that has one, so that the sheet's energies are of one
+/// kind (a jump of the correction, ~10⁻⁴, would read as a kink). `energy_error` stays
+/// `None`: these energies have no estimate of their own.
+fn fill_corrections(pts: &mut [(crate::TracedPoint, PointSource)]) {
+    let with: Vec<(f64, f64)> = pts
+        .iter()
+        .filter(|p| p.0.energy_error.is_some())
+        .map(|p| (p.0.value, p.0.energy - p.0.energy_trace))
+        .collect();
+    if with.is_empty() {
+        return;
+    }
+    for p in pts.iter_mut().filter(|p| p.0.energy_error.is_none()) {
+        let v = p.0.value;
+        let corr = with
+            .iter()
+            .min_by(|a, b| (a.0 - v).abs().total_cmp(&(b.0 - v).abs()))
+            .map_or(0.0, |c| c.1);
+        p.0.energy = p.0.energy_trace + corr;
+    }
+}
+
 /// Index changes between consecutive states of a sheet (increasing `L̄`), placed midway.
 fn index_changes_of(pts: &[(crate::TracedPoint, PointSource)]) -> Vec<IndexChange> {
     pts.windows(2)
@@ -515,13 +568,104 @@ struct EndContext<'a> {
     hi: f64,
 }
 
+/// The state `rodloop solve --branch` finds for `eta` at `lbar` (`solve_robust` from the
+/// Euler curve, fast accuracy), re-solved on `model` (the tracing resolution).
+fn robust_seed(
+    opts: &DiagramOptions,
+    model: &SurfaceModel,
+    eta: u32,
+    lbar: f64,
+) -> Option<Vec<f64>> {
+    let (acc, _) = rodloop_solver::solve_robust(
+        opts.radius,
+        lbar,
+        &opts.stiffness,
+        &StartShape::Euler { l: eta },
+        rodloop_solver::Accuracy::Fast,
+        Some(eta),
+        &SolveOptions::default(),
+    )
+    .ok()?;
+    let kappa = acc.equilibrium.resample(model.cells()).ok()?;
+    solve(model, &kappa, &crate::states::newton_options())
+        .ok()
+        .map(|eq| eq.state())
+}
+
+/// Contrast `D1/D0` below which seeds come from a mild contrast by continuation in `D1/D0`
+/// (direct solves from Euler starts rarely converge there).
+const HOMOTOPY_BELOW: f64 = crate::STRONG_CONTRAST;
+/// The mild contrast of those continuations.
+const MILD_CONTRAST: f64 = 0.5;
+
 /// The state of an Euler start of `eta` periods with its origin moved by `shift`, relaxed
-/// and solved, if it has `eta` periods of `κ_g`.
-fn seed_state(model: &SurfaceModel, eta: u32, lbar: f64, shift: f64) -> Option<Vec<f64>> {
+/// and solved on `model` (the tracing resolution), if it has `eta` periods of `κ_g`. With
+/// `homotopy` (used at strong contrast, `D1/D0 <` [`HOMOTOPY_BELOW`]) the start is solved
+/// at [`MILD_CONTRAST`] and followed in `D1/D0` to the scene's value (the state is dropped
+/// if the family folds back in `D1/D0` before it).
+fn seed_state(
+    opts: &DiagramOptions,
+    model: &SurfaceModel,
+    eta: u32,
+    lbar: f64,
+    shift: f64,
+    homotopy: bool,
+) -> Option<Vec<f64>> {
     let start = StartShape::Euler { l: eta }.shifted(lbar, shift).ok()?;
-    let kappa = start.gauss_values(model).ok()?;
-    let eq = solve(model, &kappa, &SolveOptions::default()).ok()?;
-    (periods_of(&eq).ok()? == eta as usize).then(|| eq.state())
+    let contrast = match &opts.stiffness {
+        Stiffness::Tanh { d0, d1, .. } => d1 / d0,
+        _ => 1.0,
+    };
+    if !homotopy || contrast >= MILD_CONTRAST {
+        let kappa = start.gauss_values(model).ok()?;
+        let eq = solve(model, &kappa, &SolveOptions::default())
+            .map_err(|e| debug(|| format!("seed solve failed: {e}")))
+            .ok()?;
+        return (periods_of(&eq).ok()? == eta as usize).then(|| eq.state());
+    }
+    let mild = opts.stiffness.with_param(Param::D1, MILD_CONTRAST).ok()?;
+    let mild_model = SurfaceModel::new(opts.radius, lbar, model.cells(), &mild).ok()?;
+    let kappa = start.gauss_values(&mild_model).ok()?;
+    let eq = solve(&mild_model, &kappa, &SolveOptions::default())
+        .map_err(|e| debug(|| format!("mild seed solve failed: {e}")))
+        .ok()?;
+    if periods_of(&eq).ok()? != eta as usize {
+        return None;
+    }
+    let problem = ParamProblem::new(mild_model, Param::D1).ok()?;
+    let shape = model.dim() - model.n_constraints();
+    let mut settings = march_settings(opts, contrast, shape);
+    settings.ds_min = 1e-6;
+    settings.max_steps = MAX_STEPS;
+    let run = march(
+        &problem,
+        &eq.state(),
+        MILD_CONTRAST,
+        &settings,
+        &mut |_, _| {},
+    )
+    .ok()?;
+    debug(|| {
+        format!(
+            "homotopy in D1/D0: {} steps, {:?}",
+            run.steps,
+            run.stop.clone()
+        )
+    });
+    let last = run.points.last()?;
+    if run.stop != MarchStop::Reached || (last.value - contrast).abs() > 1e-12 {
+        return None;
+    }
+    let eq = rodloop_solver::solve_from_state(
+        model.clone(),
+        last.x.clone(),
+        &crate::states::newton_options(),
+    )
+    .map_err(|e| debug(|| format!("after the homotopy: {e}")))
+    .ok()?;
+    let periods = periods_of(&eq);
+    debug(|| format!("after the homotopy: periods {periods:?}"));
+    (periods.ok()? == eta as usize).then(|| eq.state())
 }
 
 /// Follow a seed both ways; branch points go to `pending`.
@@ -742,7 +886,14 @@ fn switch_all(
                 ));
                 break;
             }
-            let known = |x: &[f64], p: f64| on_known(images, curves, x, p);
+            // The first point off the branch point is one step (or less) away from it: it
+            // lies on a known curve only if much closer to that curve than to the branch
+            // point (near a great circle, or after a shortened first step, distinct
+            // branches are closer than SAME_STATE).
+            let known = |x: &[f64], p: f64| {
+                let tol = SAME_STATE.min(0.3 * images.dist(x, &bp.x));
+                on_known_within(images, curves, x, p, tol)
+            };
             let mut s = settings.clone();
             s.limit = ctx.hi;
             s.far_limit = Some(ctx.lo);
@@ -753,7 +904,20 @@ fn switch_all(
                     "switch at {:.5} {dir:?}: {:?} in {:.3} s",
                     bp.value,
                     run.as_ref()
-                        .map(|r| (r.points.len(), r.stop.clone()))
+                        .map(|r| (
+                            r.points.len(),
+                            r.stop.clone(),
+                            r.points
+                                .iter()
+                                .map(|p| p.value)
+                                .fold(f64::INFINITY, f64::min),
+                            r.points
+                                .iter()
+                                .map(|p| p.value)
+                                .fold(f64::NEG_INFINITY, f64::max),
+                            r.special.len(),
+                            r.points.iter().filter_map(|p| p.index).max(),
+                        ))
                         .map_err(|e| e.to_string()),
                     ts.elapsed().as_secs_f64()
                 )

@@ -70,6 +70,7 @@ mod placements;
 pub mod refine;
 mod seed;
 pub mod shapes;
+mod special;
 mod states;
 pub mod trace;
 pub mod types;
@@ -361,7 +362,14 @@ impl DiagramOptions {
     /// multiple of 4.
     pub fn trace_cells(&self, eta: u32) -> usize {
         let base = self.trace_cells_per_period() * (eta as usize + 1);
-        let profile = profile_cells(&self.stiffness);
+        let mut profile = profile_cells(&self.stiffness);
+        if let Stiffness::Tanh { d0, d1, .. } = &self.stiffness {
+            // A very soft segment bends sharply: at D1/D0 = 0.001 the default 80 cells miss
+            // a family of branch 2 that 120 and 160 cells both find (same refined exchanges).
+            if d1 / d0 < STRONG_CONTRAST {
+                profile = profile * 3 / 2;
+            }
+        }
         let factor = if self.accuracy == Accuracy::Fast || profile > 64 {
             1
         } else {
@@ -402,11 +410,33 @@ impl DiagramOptions {
     }
 }
 
-/// Cells a stiffness profile needs to be resolved at all: `γ` for Eq. (51), one per table
-/// point, none for a uniform rod (the fast-level rule of [`Accuracy::cells`]).
+/// `D1/D0` below which the tracing resolution of an Eq. (51) profile is raised by half (see
+/// [`DiagramOptions::trace_cells`]).
+pub(crate) const STRONG_CONTRAST: f64 = 0.05;
+
+/// Cells a stiffness profile needs to be resolved at all: for Eq. (51) on a uniform mesh
+/// `γ` (one cell per transition width `L/γ`); on the graded mesh of
+/// [`rodloop_solver::MeshMap::for_profile`] the cells at the transitions are
+/// `ρ_max/∫ρ` times finer than the mean, so `γ ∫ρ/ρ_max` cells give them the same width;
+/// one per table point; none for a uniform rod (the fast-level rule of [`Accuracy::cells`]).
 pub(crate) fn profile_cells(stiffness: &Stiffness) -> usize {
     match stiffness {
-        Stiffness::Tanh { gamma, .. } => gamma.ceil().min(4096.0) as usize,
+        Stiffness::Tanh { gamma, .. } => {
+            let refinement = match rodloop_solver::MeshMap::for_profile(stiffness) {
+                rodloop_solver::MeshMap::Graded {
+                    centers,
+                    sharpness,
+                    amplitude,
+                } => {
+                    // ∫ρ = 1 + A π k/β (k bumps of ∫sech = π/β); ρ_max ≥ 1 + A.
+                    let integral =
+                        1.0 + amplitude * std::f64::consts::PI * centers.len() as f64 / sharpness;
+                    (1.0 + amplitude) / integral
+                }
+                rodloop_solver::MeshMap::Uniform => 1.0,
+            };
+            (gamma / refinement).ceil().min(4096.0) as usize
+        }
         Stiffness::Table { s, .. } => s.len(),
         Stiffness::Uniform { .. } => 0,
     }

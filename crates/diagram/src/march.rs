@@ -74,6 +74,9 @@ pub struct MarchSettings {
     pub detect_branch_points: bool,
     /// Eigenvalues below `−index_tolerance` count as negative in the stability index.
     pub index_tolerance: f64,
+    /// Whether the stability index is monitored (index changes located, points carry their
+    /// index); off, the points have no index.
+    pub track_index: bool,
     /// Steps between two calls of the progress callback (which is also called at the end).
     pub progress_every: usize,
     /// With [`FoldPolicy::Follow`]: the far end of the range (the march then stays within
@@ -272,6 +275,43 @@ impl<M: Confinement> Stability for Index<'_, M> {
     }
 }
 
+/// `problem` with the scaling of `st` (see the module docs), if the scaling is valid.
+fn scaled_problem<'a, M: Confinement>(
+    problem: &'a ParamProblem<M>,
+    st: &MarchSettings,
+) -> Result<Scaled<'a, M>, SolverError> {
+    if !(st.scale.is_finite() && st.scale > 0.0) || st.scaled > problem.dim() {
+        return Err(SolverError::InvalidInput(format!(
+            "march scaling: {} unknowns by {} (dimension {})",
+            st.scaled,
+            st.scale,
+            problem.dim()
+        )));
+    }
+    Ok(Scaled {
+        inner: problem,
+        k: st.scaled,
+        s: st.scale,
+    })
+}
+
+/// The continuation with the model's stability index monitored, unless
+/// [`MarchSettings::track_index`] is off.
+fn with_index<'a, M: Confinement>(
+    cont: Continuation<'a, Scaled<'a, M>>,
+    scaled: &'a Scaled<'a, M>,
+    st: &MarchSettings,
+) -> Continuation<'a, Scaled<'a, M>> {
+    if st.track_index {
+        cont.with_stability(Index {
+            scaled,
+            tolerance: st.index_tolerance,
+        })
+    } else {
+        cont
+    }
+}
+
 /// Errors of [`march`]: the settings, or a start the continuation cannot correct.
 fn start_error(e: impl std::fmt::Display) -> SolverError {
     SolverError::InvalidInput(format!("the march cannot start: {e}"))
@@ -296,14 +336,7 @@ pub fn march<M: Confinement>(
     progress: &mut dyn FnMut(f64, usize),
 ) -> Result<March, SolverError> {
     let st = settings;
-    if !(st.scale.is_finite() && st.scale > 0.0) || st.scaled > problem.dim() {
-        return Err(SolverError::InvalidInput(format!(
-            "march scaling: {} unknowns by {} (dimension {})",
-            st.scaled,
-            st.scale,
-            problem.dim()
-        )));
-    }
+    let scaled = scaled_problem(problem, st)?;
     if x0.len() != problem.dim() {
         return Err(SolverError::WrongLength {
             expected: problem.dim(),
@@ -324,16 +357,8 @@ pub fn march<M: Confinement>(
     } else {
         return Ok(out);
     };
-    let scaled = Scaled {
-        inner: problem,
-        k: st.scaled,
-        s: st.scale,
-    };
     let cont_settings = continuation_settings(st, side)?;
-    let cont = Continuation::new(&scaled, cont_settings).with_stability(Index {
-        scaled: &scaled,
-        tolerance: st.index_tolerance,
-    });
+    let cont = with_index(Continuation::new(&scaled, cont_settings), &scaled, st);
     let stepper = cont.start(&scaled.scale(x0), p0).map_err(start_error)?;
     Ok(run_loop(stepper, &scaled, st, side, p0, out, progress))
 }
@@ -384,35 +409,20 @@ pub fn march_switch<M: Confinement>(
     progress: &mut dyn FnMut(f64, usize),
 ) -> Result<March, SolverError> {
     let st = settings;
-    if !(st.scale.is_finite() && st.scale > 0.0) || st.scaled > problem.dim() {
-        return Err(SolverError::InvalidInput(format!(
-            "march scaling: {} unknowns by {} (dimension {})",
-            st.scaled,
-            st.scale,
-            problem.dim()
-        )));
-    }
+    let scaled = scaled_problem(problem, st)?;
     if bp.x.len() != problem.dim() || bp.tangent.len() != problem.dim() + 1 {
         return Err(SolverError::WrongLength {
             expected: problem.dim(),
             found: bp.x.len(),
         });
     }
-    let scaled = Scaled {
-        inner: problem,
-        k: st.scaled,
-        s: st.scale,
-    };
     let side = if direction == Direction::Forward {
         1.0
     } else {
         -1.0
     };
     let cont_settings = continuation_settings(st, side)?;
-    let cont = Continuation::new(&scaled, cont_settings).with_stability(Index {
-        scaled: &scaled,
-        tolerance: st.index_tolerance,
-    });
+    let cont = with_index(Continuation::new(&scaled, cont_settings), &scaled, st);
     let special = rodloop_continuation::SpecialPoint {
         kind: SpecialKind::BranchPoint,
         x: scaled.scale(&bp.x),

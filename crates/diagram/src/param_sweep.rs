@@ -293,6 +293,7 @@ pub fn sweep_param(s: &SweepSettings) -> Result<ParamSweep, DiagramError> {
             folds: FoldPolicy::Follow,
             detect_branch_points: true,
             index_tolerance: INDEX_TOLERANCE,
+            track_index: true,
             progress_every: usize::MAX,
             far_limit: Some(cont.p_of(far)),
             circles: Vec::new(),

@@ -21,15 +21,28 @@ use crate::types::TracedBranch;
 use crate::DiagramOptions;
 
 /// `(N_f, N_c)`: the two reporting resolutions (cells) of branch `eta` (see the table above).
+///
+/// Below `D1/D0 =` [`crate::STRONG_CONTRAST`] every count is half as large again (rounded up
+/// to a multiple of 8): the very soft segment bends sharply, and at the table's counts the
+/// exchanges of the D1/D0 = 0.001 scene carry error estimates of 1–3·10⁻⁷.
 pub fn reporting_cells(opts: &DiagramOptions, eta: u32) -> (usize, usize) {
     let periods = eta.max(1) as usize;
+    let strong = matches!(&opts.stiffness, rodloop_solver::Stiffness::Tanh { d0, d1, .. }
+        if d1 / d0 < crate::STRONG_CONTRAST);
+    let scale = |n: usize| {
+        if strong {
+            (3 * n / 2).div_ceil(8) * 8
+        } else {
+            n
+        }
+    };
     match opts.accuracy {
         Accuracy::Fast | Accuracy::Default => {
-            let n = opts.accuracy.cells(periods, &opts.stiffness);
+            let n = scale(opts.accuracy.cells(periods, &opts.stiffness));
             (n, n / 2)
         }
         Accuracy::High => {
-            let n = Accuracy::Default.cells(periods, &opts.stiffness);
+            let n = scale(Accuracy::Default.cells(periods, &opts.stiffness));
             (2 * n, n)
         }
     }

@@ -52,9 +52,10 @@ pub(crate) fn seed_at(
     Ok((eq, seed))
 }
 
-/// Number of periods of `κ_g` of an equilibrium.
+/// Number of periods of `κ_g` of an equilibrium: the dominant Fourier harmonic in
+/// arclength ([`rodloop_solver::identify::identify_equilibrium`], what `rodloop solve
+/// --branch` checks). Counting sign changes of samples fails on graded meshes and where a
+/// stiff segment lies on a great circle (`κ_g ≈ 0` with rounding-level wiggles).
 pub(crate) fn periods_of(eq: &Equilibrium) -> Result<usize, SolverError> {
-    let r = eq.model().radius();
-    let kg: Vec<f64> = eq.profile().iter().map(|p| p.kappa_g * r).collect();
-    StartShape::from_kappa_g_samples(&kg)?.periods(eq.lbar())
+    Ok(rodloop_solver::identify::identify_equilibrium(eq)?.eta as usize)
 }

@@ -66,6 +66,7 @@ pub(crate) fn march_settings(opts: &DiagramOptions, limit: f64, shape: usize) ->
         folds: FoldPolicy::Stop,
         detect_branch_points: false,
         index_tolerance: INDEX_TOLERANCE,
+        track_index: true,
         progress_every: PROGRESS_EVERY,
         far_limit: None,
         circles: Vec::new(),

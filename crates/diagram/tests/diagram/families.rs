@@ -30,6 +30,42 @@ fn diagram() -> &'static NumericDiagram {
     })
 }
 
+/// The located crossings of a diagram.
+fn crossings_of(d: &NumericDiagram) -> Vec<&rodloop_diagram::CriticalLength> {
+    d.critical
+        .iter()
+        .filter(|c| c.kind == CriticalKind::Crossing)
+        .collect()
+}
+
+/// `e_diagram` (the diagram's lowest energy at `lbar`) is no higher than the energy of any
+/// state `solve_robust` finds there for branches η = 1–3 (the diagram's energies are at the
+/// tracing resolution, error ≲ 1e-5 here: tolerance 1e-4 plus solve's estimate).
+fn assert_no_higher_than_solve(rod: &Stiffness, lbar: f64, e_diagram: f64) {
+    for eta in [1u32, 2, 3] {
+        if !(f64::from(eta) - 1.0 < lbar && lbar < f64::from(eta) + 1.0) {
+            continue;
+        }
+        let Ok((acc, _)) = solve_robust(
+            1.0,
+            lbar,
+            rod,
+            &StartShape::Euler { l: eta },
+            Accuracy::Default,
+            Some(eta),
+            &SolveOptions::default(),
+        ) else {
+            continue;
+        };
+        let tol = 1e-4 + acc.energy_error;
+        assert!(
+            e_diagram <= acc.energy.total + tol,
+            "L̄ = {lbar}: diagram's lowest {e_diagram} above solve's {} for η = {eta}",
+            acc.energy.total
+        );
+    }
+}
+
 /// At several lengths the diagram's lowest state is stable with index 0, and its energy is
 /// no higher than that of every state `solve_robust` (shifted Euler starts, continuation in
 /// D1/D0; an independent route at another resolution) finds for branches 1–3.
@@ -51,31 +87,7 @@ fn lowest_state_is_no_higher_than_solve() {
             .unwrap();
         assert_eq!(b.points[k].index, 0, "L̄ = {lbar}");
         assert_eq!(d.labels[sheets[0]][k], Label::Stable, "L̄ = {lbar}");
-        for eta in [1u32, 2, 3] {
-            if !(f64::from(eta) - 1.0 < lbar && lbar < f64::from(eta) + 1.0) {
-                continue;
-            }
-            let Ok((acc, _)) = solve_robust(
-                1.0,
-                lbar,
-                &paper_rod(),
-                &StartShape::Euler { l: eta },
-                Accuracy::Default,
-                Some(eta),
-                &SolveOptions::default(),
-            ) else {
-                continue;
-            };
-            // The diagram's energies are at the tracing resolution (error ≲ 1e-5 here).
-            let tol = 1e-4 + acc.energy_error;
-            assert!(
-                e_diagram <= acc.energy.total + tol,
-                "L̄ = {lbar}: diagram's lowest {e_diagram} (branch {}) above solve's {} for \
-                 η = {eta}",
-                b.branch,
-                acc.energy.total
-            );
-        }
+        assert_no_higher_than_solve(&paper_rod(), lbar, e_diagram);
     }
 }
 
@@ -87,11 +99,7 @@ fn lowest_state_is_no_higher_than_solve() {
 #[test]
 fn families_and_special_points() {
     let d = diagram();
-    let crossings: Vec<_> = d
-        .critical
-        .iter()
-        .filter(|c| c.kind == CriticalKind::Crossing)
-        .collect();
+    let crossings = crossings_of(d);
     assert_eq!(crossings.len(), 2, "{crossings:#?}");
     assert!((crossings[0].lbar_cr - 1.38).abs() < 0.03);
     assert_eq!((crossings[0].from_eta, crossings[0].to_eta), (2, 1));
@@ -138,11 +146,97 @@ fn families_and_special_points() {
             .branches
             .iter()
             .filter(|b| {
-                [&b.low_end, &b.high_end].iter().any(
-                    |e| matches!(e, BranchEnd::Fold { value } if (value - s.lbar).abs() < 1e-8),
-                )
+                // Located again at the reporting resolution: within the tracing's width.
+                [&b.low_end, &b.high_end].iter().any(|e| {
+                    matches!(e, BranchEnd::Fold { value } | BranchEnd::BranchPoint { value }
+                        if (value - s.lbar).abs() < 1e-4)
+                })
             })
             .collect();
         assert!(!ends.is_empty(), "fold at {}", s.lbar);
+    }
+}
+
+/// Folds and branch points located at the reporting resolutions: most are located (an
+/// error estimate), and at `--accuracy high` (twice the cells) each lies within the sum of
+/// the two estimates of the default location (an independent finer computation).
+#[test]
+fn special_points_agree_with_the_high_accuracy_ones() {
+    let d = diagram();
+    let high = compute(
+        &DiagramOptions {
+            stiffness: paper_rod(),
+            lbar_min: 1.0,
+            lbar_max: 3.0,
+            ..DiagramOptions::with_accuracy(Accuracy::High)
+        },
+        &mut (),
+        &mut |_| {},
+    )
+    .expect("high-accuracy diagram");
+    let ends = |d: &NumericDiagram| -> Vec<(f64, f64)> {
+        d.special
+            .iter()
+            .filter(|s| {
+                matches!(
+                    s.kind,
+                    rodloop_diagram::SpecialKind::Fold | rodloop_diagram::SpecialKind::BranchPoint
+                )
+            })
+            .filter_map(|s| s.error_estimate.map(|e| (s.lbar, e)))
+            .collect()
+    };
+    let (a, b) = (ends(d), ends(&high));
+    assert!(a.len() >= 4, "{a:?}");
+    let mut compared = 0;
+    for &(l, e) in &a {
+        assert!(e < 1e-5, "fold or branch point at {l}: estimate {e}");
+        let Some(&(lh, eh)) = b
+            .iter()
+            .min_by(|x, y| (x.0 - l).abs().total_cmp(&(y.0 - l).abs()))
+        else {
+            continue;
+        };
+        if (lh - l).abs() > 1e-4 {
+            continue;
+        }
+        compared += 1;
+        assert!(
+            (lh - l).abs() <= e + eh,
+            "default {l} ± {e:.1e}, high {lh} ± {eh:.1e}"
+        );
+    }
+    assert!(compared >= 4, "{a:?} / {b:?}");
+}
+
+/// The very soft rod (D1/D0 = 0.001): at lengths that are not seed lengths of the diagram
+/// (its seeds lie at 1.25, 1.5, 1.75 for η = 1, 1.5, 2, 2.5 for η = 2 and 2.25, 2.5, 2.75
+/// for η = 3), the lowest traced state is no higher than what `solve_robust` finds for any
+/// branch there (independent route: its own starts, resolution and homotopy), and the
+/// lowest state passes from branch 1 (η = 2) to branch 2 (η = 1) and back to branch 1 only
+/// through located crossings.
+#[test]
+fn very_soft_rod_lowest_state_is_no_higher_than_solve() {
+    let rod = Stiffness::Tanh {
+        d0: 1.0,
+        d1: 0.001,
+        s0: 0.3,
+        s1: 0.8,
+        gamma: 200.0,
+    };
+    let opts = DiagramOptions {
+        stiffness: rod.clone(),
+        lbar_min: 1.0,
+        lbar_max: 3.0,
+        ..DiagramOptions::default()
+    };
+    let d = compute(&opts, &mut (), &mut |_| {}).expect("diagram of the very soft rod");
+    let crossings = crossings_of(&d);
+    assert_eq!(crossings.len(), 2, "{crossings:#?}");
+    for lbar in [1.28, 1.62, 2.2, 2.62] {
+        let sheets = d.lowest_sheets_at(lbar);
+        assert!(!sheets.is_empty(), "L̄ = {lbar}");
+        let e_diagram = d.branches[sheets[0]].energy_at(lbar).expect("covers");
+        assert_no_higher_than_solve(&rod, lbar, e_diagram);
     }
 }

@@ -81,6 +81,7 @@ fn the_same_march_continues_in_d1_at_fixed_length() {
         folds: FoldPolicy::Stop,
         detect_branch_points: false,
         index_tolerance: 1e-6,
+        track_index: true,
         progress_every: 5,
         far_limit: None,
         circles: Vec::new(),
