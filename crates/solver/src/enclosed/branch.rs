@@ -54,6 +54,8 @@ pub struct BranchSolve {
     pub fine: EnclosedState,
     /// The companion at `N/2` cells.
     pub coarse: EnclosedState,
+    /// The first level, `N/4` cells.
+    pub quarter: EnclosedState,
     /// Energy `E R/(π D0)` at `N` cells.
     pub energy: f64,
     /// `|E_N − E_{N/2}|/(2^p − 1)` with the order `p` observed over `N/4, N/2, N`, clamped
@@ -107,24 +109,30 @@ pub fn solve_branch(
     let coarse = refine(&first)?;
     let fine = refine(&coarse)?;
     let energy = fine.energy();
-    // Error estimate from the observed order over N/4, N/2, N (clamped to [1, 4]): near
-    // point-like contacts the scheme is not yet in its fourth-order regime at moderate N,
-    // and the fourth-order rule |E_N − E_{N/2}|/15 would then understate the error.
-    let (e0, e1) = (first.energy(), coarse.energy());
-    let (d1, d2) = ((e1 - e0).abs(), (energy - e1).abs());
+    let (energy_error, order) = three_level_estimate(first.energy(), coarse.energy(), energy);
+    Ok(BranchSolve {
+        fine,
+        coarse,
+        quarter: first,
+        energy,
+        energy_error,
+        order,
+    })
+}
+
+/// Error estimate of the finest of three energies at `N/4, N/2, N` cells:
+/// `|E_N − E_{N/2}|/(2^p − 1)` with the order `p = log2(|E_{N/2} − E_{N/4}|/|E_N − E_{N/2}|)`
+/// observed over the three levels, clamped to `[1, 4]` (near point-like contacts the scheme
+/// is not yet in its fourth-order regime at moderate `N`, and the fourth-order rule
+/// `|E_N − E_{N/2}|/15` would then understate the error). Returns `(estimate, p)`.
+pub fn three_level_estimate(e_quarter: f64, e_half: f64, e_full: f64) -> (f64, f64) {
+    let (d1, d2) = ((e_half - e_quarter).abs(), (e_full - e_half).abs());
     let order = if d2 > 0.0 && d1 > 0.0 {
         (d1 / d2).log2().clamp(1.0, 4.0)
     } else {
         4.0
     };
-    let energy_error = d2 / (2f64.powf(order) - 1.0);
-    Ok(BranchSolve {
-        fine,
-        coarse,
-        energy,
-        energy_error,
-        order,
-    })
+    (d2 / (2f64.powf(order) - 1.0), order)
 }
 
 /// Cells of an enclosed solve for a branch with `eta` periods: `c (1 + η)` with `c = 16`

@@ -13,14 +13,19 @@
 //! * [`model`]: [`EnclosedModel`] (energy, closure, wall, KKT residual and exact Jacobian).
 //! * [`solve`](mod@solve): semismooth Newton, starts (surface loop, free circle), contact
 //!   summary, stability on the active constraints' tangent space.
+//! * [`continuation`]: natural-parameter steps in `L̄` (the enclosed diagram's tracer).
 //! * [`branch`]: a paper branch in an enclosed scene with the two-resolution error estimate.
 
 pub mod branch;
+pub mod continuation;
 pub mod jet;
 pub mod model;
 pub mod solve;
 
-pub use branch::{detached_intervals, enclosed_cells, solve_branch, BranchSolve, SurfaceSource};
+pub use branch::{
+    detached_intervals, enclosed_cells, solve_branch, three_level_estimate, BranchSolve,
+    SurfaceSource,
+};
 pub use model::{EnclosedModel, Gauge};
 pub use solve::{
     free_circle, solve_enclosed, start_from_surface, Contact, EnclosedOptions, EnclosedState,
