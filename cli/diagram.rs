@@ -191,6 +191,9 @@ fn selected_branches(args: &Args, lbar_min: f64, lbar_max: f64) -> Result<Option
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
+    if let Some(scene) = crate::enclosed_diagram::enclosed_scene(args.scene.as_deref())? {
+        return crate::enclosed_diagram::run(args, &scene);
+    }
     let scene = crate::solve::load_scene(args.scene.as_deref())?;
     let lbar_min = args.lbar_min.unwrap_or(scene.lbar_min);
     let lbar_max = args.lbar_max.unwrap_or(scene.lbar_max);
