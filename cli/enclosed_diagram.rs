@@ -223,8 +223,9 @@ fn write_outputs(
     Ok(())
 }
 
-/// The `L̄` intervals where the lowest state has lifted off: from each critical length or
-/// event to the next, when the lowest branch there is lifted off at the samples between.
+/// The `L̄` intervals where the lowest state is a paper branch that has lifted off (branch
+/// 0, the free circle below `L̄ = 1`, is not counted): from each critical length or event to
+/// the next, when the lowest branch there is lifted off at the samples between.
 fn lowest_lifted_off(d: &EnclosedDiagram) -> Vec<(f64, f64)> {
     let mut cuts: Vec<f64> = d
         .critical
@@ -241,7 +242,9 @@ fn lowest_lifted_off(d: &EnclosedDiagram) -> Vec<(f64, f64)> {
         let inside: Vec<_> = d
             .points
             .iter()
-            .filter(|p| p.lowest && p.lbar > w[0] + 1e-9 && p.lbar < w[1] - 1e-9)
+            .filter(|p| {
+                p.lowest && p.branch > 0 && p.lbar > w[0] + 1e-9 && p.lbar < w[1] - 1e-9
+            })
             .collect();
         if !inside.is_empty() && inside.iter().all(|p| !p.attached) {
             match out.last_mut() {

@@ -481,10 +481,14 @@ fn trace_detached(
                     Err(e) => {
                         halvings += 1;
                         if halvings > 6 {
+                            let c = cur.states[2].contact(TOUCH).ok();
                             warnings.push(format!(
-                                "branch {} (eta = {eta}): the lifted-off trace stops at lbar = {:.6} ({e})",
+                                "branch {} (eta = {eta}): the lifted-off trace stops at lbar = {:.6} ({e}); the last state touches the wall on {:.1}% of its length with contact forces in [{:.3e}, {:.3e}]; Newton failed under 6 step halvings (perhaps a fold or a bifurcation of the lifted-off branch; not traced further)",
                                 branch_of_eta(eta),
-                                cur.lbar
+                                cur.lbar,
+                                100.0 * c.as_ref().map_or(f64::NAN, |c| c.fraction),
+                                c.as_ref().map_or(f64::NAN, |c| c.lambda_range.0),
+                                c.as_ref().map_or(f64::NAN, |c| c.lambda_range.1),
                             ));
                             break 'targets;
                         }
@@ -607,17 +611,18 @@ fn trace_branch(opts: &EnclosedDiagramOptions, eta: u32) -> Result<BranchOut, Di
     let mut out = BranchOut::default();
     let branch = branch_of_eta(eta);
     let e = f64::from(eta);
-    let pad = 1e-6;
+    let pad = 1e-4;
     let (a, b) = ((e - 1.0 + pad).max(lo), (e + 1.0 - pad).min(hi));
     let det = detached_intervals(eta, a, b)?;
     let mut branch_points = Vec::new();
     // Attached samples.
+    // The grid, plus the ends (the window's, or `1e-4` inside the branch's range).
     let mut xs = grid(opts, a - 1e-9, b + 1e-9);
-    if a == lo {
-        xs.insert(0, lo);
+    if xs.first().is_none_or(|&x| x > a + 1e-9) {
+        xs.insert(0, a);
     }
-    if b == hi && xs.last().is_none_or(|&x| x < hi - 1e-12) {
-        xs.push(hi);
+    if xs.last().is_none_or(|&x| x < b - 1e-9) {
+        xs.push(b);
     }
     let inside = |x: f64| det.iter().any(|&(p, q)| x > p - 1e-12 && x < q + 1e-12);
     let ta = Instant::now();
