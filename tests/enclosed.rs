@@ -110,3 +110,74 @@ fn bad_enclosed_input() {
         assert!(!dir.join("summary.json").exists());
     }
 }
+
+/// `rodloop diagram` on the enclosed scene writes the diagram outputs: branches.csv with the
+/// contact columns, critical.csv next to the surface values, the landing of branch 2 in
+/// special_points.csv, and the interval where the lowest state has lifted off.
+#[test]
+fn diagram_on_enclosed_scene() {
+    let dir = out("enclosed-diagram");
+    let sc = scene();
+    let o = rodloop(&["diagram", "--scene", &sc, "--out", dir.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    for f in [
+        "branches.csv",
+        "critical.csv",
+        "special_points.csv",
+        "diagram.svg",
+        "diagram.png",
+        "summary.json",
+    ] {
+        assert!(dir.join(f).exists(), "{f}");
+    }
+    let branches = std::fs::read_to_string(dir.join("branches.csv")).unwrap();
+    let header = branches.lines().next().unwrap();
+    for col in ["max_gap", "contact_fraction", "index", "label", "energy_error"] {
+        assert!(header.split(',').any(|c| c == col), "{header}");
+    }
+    let special = std::fs::read_to_string(dir.join("special_points.csv")).unwrap();
+    assert!(special.lines().any(|l| l.starts_with("landing,1.50612321743")), "{special}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap())
+            .unwrap();
+    let lifted = summary["lowest_lifted_off"].as_array().unwrap();
+    assert_eq!(lifted.len(), 1, "{summary}");
+    let (a, b) = (
+        lifted[0][0].as_f64().unwrap(),
+        lifted[0][1].as_f64().unwrap(),
+    );
+    // From the enclosed 1 -> 2 exchange (below the surface one) to the landing.
+    assert!(a > 1.3798 && a < 1.379941144287, "{a}");
+    assert!((b - 1.506123217436).abs() < 1e-9, "{b}");
+    assert!(text.contains("lifted off the wall"), "{text}");
+}
+
+#[test]
+fn diagram_refuses_what_it_does_not_cover() {
+    let sc = scene();
+    let two = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/data/scenes/inhomogeneous-d1-0.5-enclosed.toml"
+    );
+    for (args, word) in [
+        (vec!["--scene", sc.as_str(), "--model", "exact"], "--model exact"),
+        (vec!["--scene", sc.as_str(), "--max-step", "0.1"], "--max-step"),
+        (vec!["--scene", two], "uniform rods only"),
+        (vec!["--scene", sc.as_str(), "--branch", "7"], "no such branch"),
+    ] {
+        let dir = out("enclosed-diagram-bad");
+        let mut all = vec!["diagram"];
+        all.extend(args.iter());
+        all.extend(["--out", dir.to_str().unwrap()]);
+        let o = rodloop(&all);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success());
+        assert!(err.contains(word) && !err.contains("panicked"), "{err}");
+        assert!(!dir.join("summary.json").exists());
+    }
+}
