@@ -12,7 +12,7 @@ use rodloop_figures::raster::svg_to_png;
 use rodloop_scene::{Confinement, Scene};
 
 use crate::diagram::{Args, Model};
-use crate::output::{checked_json, Cell, OutputRun, Table};
+use crate::output::{checked_json, critical_table, Cell, CriticalRow, OutputRun, Table};
 use crate::svg::{self, branch_color, Curve, Figure, LegendEntry, LineStyle, Marker};
 
 /// The scene of `path` when it is an enclosed scene (the default scene is a surface one).
@@ -143,31 +143,20 @@ fn write_outputs(
             ),
         ])?;
     }
-    let mut critical = Table::new(
-        "critical.csv",
-        &[
-            "index",
-            "lbar_cr",
-            "kind",
-            "from_branch",
-            "to_branch",
-            "energy",
-            "error_estimate",
-            "surface_lbar_cr",
-        ],
-    );
-    for c in &d.critical {
-        critical.push(vec![
-            Cell::I(c.index as i64),
-            Cell::F(c.lbar_cr),
-            Cell::S(c.kind.to_string()),
-            Cell::I(c.from_branch.into()),
-            Cell::I(c.to_branch.into()),
-            Cell::F(c.energy),
-            Cell::F(c.error_estimate),
-            Cell::F(c.surface_lbar_cr),
-        ])?;
-    }
+    // critical.csv has the surface diagram's columns; the surface values and the methods
+    // are in summary.json.
+    let critical = critical_table(d.critical.iter().map(|c| {
+        let c = &c.critical;
+        CriticalRow {
+            index: c.index,
+            lbar_cr: c.lbar_cr,
+            kind: c.kind,
+            from_branch: c.from_branch,
+            to_branch: c.to_branch,
+            energy: c.energy,
+            error_estimate: c.error_estimate,
+        }
+    }))?;
     let mut special = Table::new(
         "special_points.csv",
         &[
@@ -230,11 +219,21 @@ fn lowest_lifted_off(d: &EnclosedDiagram) -> Vec<(f64, f64)> {
     let mut cuts: Vec<f64> = d
         .critical
         .iter()
-        .map(|c| c.lbar_cr)
+        .map(|c| c.critical.lbar_cr)
         .chain(d.events.iter().map(|e| e.lbar))
         .collect();
-    cuts.push(d.points.iter().map(|p| p.lbar).fold(f64::INFINITY, f64::min));
-    cuts.push(d.points.iter().map(|p| p.lbar).fold(f64::NEG_INFINITY, f64::max));
+    cuts.push(
+        d.points
+            .iter()
+            .map(|p| p.lbar)
+            .fold(f64::INFINITY, f64::min),
+    );
+    cuts.push(
+        d.points
+            .iter()
+            .map(|p| p.lbar)
+            .fold(f64::NEG_INFINITY, f64::max),
+    );
     cuts.sort_by(f64::total_cmp);
     cuts.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
     let mut out: Vec<(f64, f64)> = Vec::new();
@@ -242,9 +241,7 @@ fn lowest_lifted_off(d: &EnclosedDiagram) -> Vec<(f64, f64)> {
         let inside: Vec<_> = d
             .points
             .iter()
-            .filter(|p| {
-                p.lowest && p.branch > 0 && p.lbar > w[0] + 1e-9 && p.lbar < w[1] - 1e-9
-            })
+            .filter(|p| p.lowest && p.branch > 0 && p.lbar > w[0] + 1e-9 && p.lbar < w[1] - 1e-9)
             .collect();
         if !inside.is_empty() && inside.iter().all(|p| !p.attached) {
             match out.last_mut() {
@@ -322,8 +319,8 @@ fn figure(d: &EnclosedDiagram, scene: &str) -> Figure {
         .critical
         .iter()
         .map(|c| Marker {
-            x: c.lbar_cr,
-            label: format!("{:.4}", c.lbar_cr),
+            x: c.critical.lbar_cr,
+            label: format!("{:.4}", c.critical.lbar_cr),
         })
         .collect();
     markers.extend(d.events.iter().map(|e| Marker {
@@ -357,7 +354,8 @@ fn print(d: &EnclosedDiagram, scene: &Scene, opts: &EnclosedDiagramOptions, out:
         "error",
         "surface lbar_cr"
     );
-    for c in &d.critical {
+    for e in &d.critical {
+        let c = &e.critical;
         outln!(
             "  {:>2}  {:>18.12}  {:>9}  {:>3}->{:<3}  {:>16.10}  {:>9.1e}  {:>18.12}",
             c.index,
@@ -367,7 +365,7 @@ fn print(d: &EnclosedDiagram, scene: &Scene, opts: &EnclosedDiagramOptions, out:
             c.to_branch,
             c.energy,
             c.error_estimate,
-            c.surface_lbar_cr
+            e.surface_lbar_cr
         );
     }
     for e in &d.events {

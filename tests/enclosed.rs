@@ -24,6 +24,17 @@ fn out(name: &str) -> PathBuf {
     p
 }
 
+/// `rodloop ARGS --out DIR` fails with a message containing `word`, no panic, no output.
+fn assert_refused(mut all: Vec<&str>, word: &str, dir: &str) {
+    let dir = out(dir);
+    all.extend(["--out", dir.to_str().unwrap()]);
+    let o = rodloop(&all);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(err.contains(word) && !err.contains("panicked"), "{err}");
+    assert!(!dir.join("summary.json").exists());
+}
+
 /// The figure-eight at L̄ = 1.4 lifts off: config.csv has a gap column with positive gaps,
 /// summary.json the contact fields; its energy is below the exact surface loop's.
 #[test]
@@ -97,17 +108,10 @@ fn bad_enclosed_input() {
         (vec!["--lbar", "2.5", "--branch", "2"], "exists only for"),
         (vec!["--lbar", "-1", "--branch", "1"], "lbar"),
     ] {
-        let dir = out("enclosed-bad");
-        let mut all = vec!["solve", "--scene"];
         let sc = scene();
-        all.push(&sc);
+        let mut all = vec!["solve", "--scene", sc.as_str()];
         all.extend(args.iter());
-        all.extend(["--out", dir.to_str().unwrap()]);
-        let o = rodloop(&all);
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(!o.status.success());
-        assert!(err.contains(word) && !err.contains("panicked"), "{err}");
-        assert!(!dir.join("summary.json").exists());
+        assert_refused(all, word, "enclosed-bad");
     }
 }
 
@@ -120,11 +124,7 @@ fn diagram_on_enclosed_scene() {
     let sc = scene();
     let o = rodloop(&["diagram", "--scene", &sc, "--out", dir.to_str().unwrap()]);
     let text = String::from_utf8_lossy(&o.stdout);
-    assert!(
-        o.status.success(),
-        "{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     for f in [
         "branches.csv",
         "critical.csv",
@@ -137,14 +137,24 @@ fn diagram_on_enclosed_scene() {
     }
     let branches = std::fs::read_to_string(dir.join("branches.csv")).unwrap();
     let header = branches.lines().next().unwrap();
-    for col in ["max_gap", "contact_fraction", "index", "label", "energy_error"] {
+    for col in [
+        "max_gap",
+        "contact_fraction",
+        "index",
+        "label",
+        "energy_error",
+    ] {
         assert!(header.split(',').any(|c| c == col), "{header}");
     }
     let special = std::fs::read_to_string(dir.join("special_points.csv")).unwrap();
-    assert!(special.lines().any(|l| l.starts_with("landing,1.50612321743")), "{special}");
+    assert!(
+        special
+            .lines()
+            .any(|l| l.starts_with("landing,1.50612321743")),
+        "{special}"
+    );
     let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap())
-            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
     let lifted = summary["lowest_lifted_off"].as_array().unwrap();
     assert_eq!(lifted.len(), 1, "{summary}");
     let (a, b) = (
@@ -165,19 +175,22 @@ fn diagram_refuses_what_it_does_not_cover() {
         "/data/scenes/inhomogeneous-d1-0.5-enclosed.toml"
     );
     for (args, word) in [
-        (vec!["--scene", sc.as_str(), "--model", "exact"], "--model exact"),
-        (vec!["--scene", sc.as_str(), "--max-step", "0.1"], "--max-step"),
+        (
+            vec!["--scene", sc.as_str(), "--model", "exact"],
+            "--model exact",
+        ),
+        (
+            vec!["--scene", sc.as_str(), "--max-step", "0.1"],
+            "--max-step",
+        ),
         (vec!["--scene", two], "uniform rods only"),
-        (vec!["--scene", sc.as_str(), "--branch", "7"], "no such branch"),
+        (
+            vec!["--scene", sc.as_str(), "--branch", "7"],
+            "no such branch",
+        ),
     ] {
-        let dir = out("enclosed-diagram-bad");
         let mut all = vec!["diagram"];
         all.extend(args.iter());
-        all.extend(["--out", dir.to_str().unwrap()]);
-        let o = rodloop(&all);
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(!o.status.success());
-        assert!(err.contains(word) && !err.contains("panicked"), "{err}");
-        assert!(!dir.join("summary.json").exists());
+        assert_refused(all, word, "enclosed-diagram-bad");
     }
 }

@@ -41,7 +41,7 @@
 
 use std::time::Instant;
 
-use rodloop_exact::diagram::{compute, CriticalKind, DiagramSettings};
+use rodloop_exact::diagram::{compute, Critical, CriticalKind, DiagramSettings};
 use rodloop_exact::{branch_of_eta, eta_of_branch, paper_branch_loop, ExactLoop};
 use rodloop_solver::enclosed::{
     detached_intervals, enclosed_cells, solve_branch, solve_enclosed, start_from_surface,
@@ -211,23 +211,14 @@ pub struct EnclosedEvent {
     pub index_after: usize,
 }
 
-/// An exchange (or collapse) of the lowest branch.
+/// An exchange (or collapse) of the lowest branch: the surface diagram's record with the
+/// enclosed value (index `i` of `L̄_icr` as in the surface diagram, counted from
+/// `L̄_1cr = 1`).
 #[derive(Clone, Debug, Serialize)]
 pub struct EnclosedCritical {
-    /// Index `i` of `L̄_icr` (as in the surface diagram, counted from `L̄_1cr = 1`).
-    pub index: usize,
-    /// The critical length.
-    pub lbar_cr: f64,
-    /// Crossing or collapse.
-    pub kind: CriticalKind,
-    /// Lowest branch below.
-    pub from_branch: u32,
-    /// Lowest branch above.
-    pub to_branch: u32,
-    /// Energy at the critical length.
-    pub energy: f64,
-    /// Estimated error of `lbar_cr`.
-    pub error_estimate: f64,
+    /// The critical length, its kind, branches, energy and error estimate.
+    #[serde(flatten)]
+    pub critical: Critical,
     /// The surface diagram's value (exact layer).
     pub surface_lbar_cr: f64,
     /// How it was obtained.
@@ -587,7 +578,11 @@ fn enclosed_crossing(
         }
     }
     let (fc, _, _) = f(xc, &mut fine)?;
-    let x1 = if fc == 0.0 { xc - 1e-9 } else { xc - fc / slope };
+    let x1 = if fc == 0.0 {
+        xc - 1e-9
+    } else {
+        xc - fc / slope
+    };
     let (x, slope, step, err, e) = secant(|x| f(x, &mut fine), xc, x1)?;
     Ok((x, err / slope.abs().max(1e-300) + step, e))
 }
@@ -710,7 +705,9 @@ pub fn enclosed_diagram(opts: &EnclosedDiagramOptions) -> Result<EnclosedDiagram
             .into_iter()
             .map(|h| {
                 h.join().unwrap_or_else(|_| {
-                    Err(DiagramError::InvalidOptions("a branch thread panicked".into()))
+                    Err(DiagramError::InvalidOptions(
+                        "a branch thread panicked".into(),
+                    ))
                 })
             })
             .collect()
@@ -758,13 +755,7 @@ pub fn enclosed_diagram(opts: &EnclosedDiagramOptions) -> Result<EnclosedDiagram
         }
         if !lifted {
             critical.push(EnclosedCritical {
-                index: c.index,
-                lbar_cr: c.lbar_cr,
-                kind: c.kind,
-                from_branch: c.from_branch,
-                to_branch: c.to_branch,
-                energy: c.energy,
-                error_estimate: c.error_estimate,
+                critical: *c,
                 surface_lbar_cr: c.lbar_cr,
                 method: "exact layer: both states attached, so the surface value holds".into(),
             });
@@ -779,18 +770,15 @@ pub fn enclosed_diagram(opts: &EnclosedDiagramOptions) -> Result<EnclosedDiagram
         }
         let etas2 = [eta_of_branch(c.from_branch), eta_of_branch(c.to_branch)];
         let nearest = |eta: u32| -> Option<Levels> {
-            traced
-                .iter()
-                .find(|(e, _)| *e == eta)
-                .and_then(|(_, lv)| {
-                    lv.iter()
-                        .min_by(|u, v| {
-                            (u.lbar - c.lbar_cr)
-                                .abs()
-                                .total_cmp(&(v.lbar - c.lbar_cr).abs())
-                        })
-                        .cloned()
-                })
+            traced.iter().find(|(e, _)| *e == eta).and_then(|(_, lv)| {
+                lv.iter()
+                    .min_by(|u, v| {
+                        (u.lbar - c.lbar_cr)
+                            .abs()
+                            .total_cmp(&(v.lbar - c.lbar_cr).abs())
+                    })
+                    .cloned()
+            })
         };
         let mut tracks = [nearest(etas2[0]), nearest(etas2[1])];
         let (x, err, energy) = enclosed_crossing(etas2[0], etas2[1], c.lbar_cr, &mut tracks)
@@ -808,13 +796,12 @@ pub fn enclosed_diagram(opts: &EnclosedDiagramOptions) -> Result<EnclosedDiagram
             .max()
             .unwrap_or(0);
         critical.push(EnclosedCritical {
-            index: c.index,
-            lbar_cr: x,
-            kind: c.kind,
-            from_branch: c.from_branch,
-            to_branch: c.to_branch,
-            energy,
-            error_estimate: err,
+            critical: Critical {
+                lbar_cr: x,
+                energy,
+                error_estimate: err,
+                ..*c
+            },
             surface_lbar_cr: c.lbar_cr,
             method: format!(
                 "secant on E_a = E_b with the lifted-off state re-solved (3-D model at N = {}, {}, {}; error from the three levels and the last secant step)",
@@ -841,11 +828,11 @@ pub fn enclosed_diagram(opts: &EnclosedDiagramOptions) -> Result<EnclosedDiagram
 /// The lowest branch at `lbar`: the branch the last critical length at or below `lbar`
 /// hands over to (the first one's `from` branch below it).
 fn lowest_branch(critical: &[EnclosedCritical], lbar: f64) -> Option<u32> {
-    let k = critical.partition_point(|c| c.lbar_cr <= lbar + 1e-12);
+    let k = critical.partition_point(|c| c.critical.lbar_cr <= lbar + 1e-12);
     if k > 0 {
-        Some(critical[k - 1].to_branch)
+        Some(critical[k - 1].critical.to_branch)
     } else {
-        critical.first().map(|c| c.from_branch)
+        critical.first().map(|c| c.critical.from_branch)
     }
 }
 
@@ -886,7 +873,11 @@ fn label(points: &mut [EnclosedPoint], critical: &[EnclosedCritical], warnings: 
     for p in points.iter() {
         // Linear interpolation between samples errs by ~E''h²/8; skip the neighbourhood
         // of the located critical lengths and allow 1e-3.
-        if p.lowest || critical.iter().any(|c| (c.lbar_cr - p.lbar).abs() < 0.05) {
+        if p.lowest
+            || critical
+                .iter()
+                .any(|c| (c.critical.lbar_cr - p.lbar).abs() < 0.05)
+        {
             continue;
         }
         if let Some(b) = lowest_branch(critical, p.lbar) {

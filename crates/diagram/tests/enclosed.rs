@@ -76,8 +76,12 @@ fn exchanges_between_attached_states_are_the_surface_ones() {
     })
     .unwrap();
     assert_eq!(d.critical.len(), surface.critical.len());
-    for (c, s) in d.critical.iter().zip(&surface.critical) {
-        assert_eq!((c.from_branch, c.to_branch, c.kind), (s.from_branch, s.to_branch, s.kind));
+    for (e, s) in d.critical.iter().zip(&surface.critical) {
+        let c = &e.critical;
+        assert_eq!(
+            (c.from_branch, c.to_branch, c.kind),
+            (s.from_branch, s.to_branch, s.kind)
+        );
         // Is either branch lifted off at the surface value?
         let lifted = [c.from_branch, c.to_branch].iter().any(|&b| {
             b > 0
@@ -97,7 +101,8 @@ fn exchanges_between_attached_states_are_the_surface_ones() {
     assert!(d
         .critical
         .iter()
-        .any(|c| c.kind == CriticalKind::Crossing && (c.lbar_cr - 2.425697732215).abs() < 1e-11));
+        .any(|c| c.critical.kind == CriticalKind::Crossing
+            && (c.critical.lbar_cr - 2.425697732215).abs() < 1e-11));
 }
 
 #[test]
@@ -109,9 +114,10 @@ fn lifted_off_exchange_brackets_independent_solves() {
     let c = d
         .critical
         .iter()
-        .find(|c| c.from_branch == 1 && c.to_branch == 2)
+        .find(|c| c.critical.from_branch == 1 && c.critical.to_branch == 2)
         .expect("the 1 -> 2 exchange");
-    assert!(c.lbar_cr < c.surface_lbar_cr);
+    assert!(c.critical.lbar_cr < c.surface_lbar_cr);
+    let c = &c.critical;
     let delta = 10.0 * c.error_estimate + 2e-7;
     let f = |x: f64| {
         let e1 = paper_branch_loop(2, x).unwrap().energy().unwrap();
@@ -152,8 +158,9 @@ fn lowest_states_are_stable_and_lifted_off_only_between_exchange_and_landing() {
     let c = d
         .critical
         .iter()
-        .find(|c| c.from_branch == 1 && c.to_branch == 2)
-        .unwrap();
+        .find(|c| c.critical.from_branch == 1 && c.critical.to_branch == 2)
+        .unwrap()
+        .critical;
     let landing = d.events[0].lbar;
     for p in d.points.iter().filter(|p| p.lowest) {
         assert_eq!(p.index, 0, "{p:?}");

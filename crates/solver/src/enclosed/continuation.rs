@@ -18,11 +18,7 @@ impl EnclosedState {
     pub fn continue_to(&self, lbar: f64) -> Result<(EnclosedModel, Vec<f64>), SolverError> {
         let m = &self.model;
         let n = m.cells();
-        if !(lbar.is_finite() && lbar > 0.0) {
-            return Err(SolverError::InvalidInput(format!(
-                "normalised length L̄ must be positive and finite (got {lbar})"
-            )));
-        }
+        crate::model::check_lbar(lbar)?;
         let reference: Vec<f64> = self.z[..4 * n].to_vec();
         let stiffness = m.stiffness().kind().clone();
         let slope = if m.gauge().slope.is_some() {

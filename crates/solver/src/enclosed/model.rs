@@ -126,21 +126,7 @@ impl EnclosedModel {
         stiffness: &Stiffness,
         gauge: Gauge,
     ) -> Result<Self, SolverError> {
-        if !(radius.is_finite() && radius > 0.0) {
-            return Err(SolverError::InvalidInput(format!(
-                "sphere radius must be positive and finite (got {radius})"
-            )));
-        }
-        if !(lbar.is_finite() && lbar > 0.0) {
-            return Err(SolverError::InvalidInput(format!(
-                "normalised length L̄ must be positive and finite (got {lbar})"
-            )));
-        }
-        if cells < 8 {
-            return Err(SolverError::InvalidInput(format!(
-                "the enclosed model needs at least 8 cells (got {cells})"
-            )));
-        }
+        crate::model::check_loop_inputs(radius, lbar, cells, 8)?;
         if gauge.reference.len() != 4 * cells {
             return Err(SolverError::WrongLength {
                 expected: 4 * cells,
