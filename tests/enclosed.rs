@@ -25,9 +25,11 @@ fn out(name: &str) -> PathBuf {
 }
 
 /// `rodloop ARGS --out DIR` fails with a message containing `word`, no panic, no output.
-fn assert_refused(mut all: Vec<&str>, word: &str, dir: &str) {
+fn assert_refused(all: Vec<&str>, word: &str, dir: &str) {
     let dir = out(dir);
-    all.extend(["--out", dir.to_str().unwrap()]);
+    let d = dir.to_str().unwrap().to_string();
+    let mut all: Vec<&str> = all;
+    all.extend(["--out", d.as_str()]);
     let o = rodloop(&all);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
