@@ -196,3 +196,37 @@ fn diagram_refuses_what_it_does_not_cover() {
         assert_refused(all, word, "enclosed-diagram-bad");
     }
 }
+
+/// The two-segment enclosed scene (D1/D0 = 0.5, gamma = 200): branch 1 at L̄ = 1.4 needs a
+/// wall pulling with λ ≈ −98 D0/R³ on the surface; the enclosed solve (pull homotopy) returns
+/// a first-order optimal state below the surface energy.
+#[test]
+fn two_segment_enclosed_state() {
+    let dir = out("enclosed-two-segment");
+    let sc = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/data/scenes/inhomogeneous-d1-0.5-enclosed.toml"
+    );
+    let o = rodloop(&[
+        "solve",
+        "--scene",
+        sc,
+        "--lbar",
+        "1.4",
+        "--branch",
+        "1",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let f = |k: &str| s[k].as_f64().unwrap_or_else(|| panic!("{k}"));
+    assert!(f("surface_lambda_min") < -50.0);
+    assert!(f("energy") < f("surface_energy"));
+    assert!(f("optimality_lambda_min") >= -1e-8);
+    assert!(f("optimality_gap_min") >= -1e-10);
+    assert!(f("optimality_complementarity_max") <= 1e-9);
+    assert!(f("optimality_stationarity") <= 1e-8);
+    assert!(f("max_gap") > 1e-4);
+}

@@ -16,20 +16,26 @@ fn exact_start(eta: u32, lbar: f64, cells: usize, d: &Stiffness) -> (EnclosedMod
 }
 
 /// The semismooth Jacobian against central differences of the residual, at a perturbed
-/// state with mixed contact rows (both branches of the min-function), uniform and Eq. (51).
+/// state with mixed contact rows (both branches of the min-function), uniform and Eq. (51),
+/// with the physical wall and with the pull homotopy's wall (`pull = 0.7`).
 #[test]
 fn jacobian_matches_finite_differences() {
-    for stiff in [
-        Stiffness::uniform(1.0),
-        Stiffness::Tanh {
-            d0: 1.0,
-            d1: 0.5,
-            s0: 0.3,
-            s1: 0.8,
-            gamma: 10.0,
-        },
+    for (stiff, pull) in [
+        (Stiffness::uniform(1.0), 0.0),
+        (Stiffness::uniform(1.0), 0.7),
+        (
+            Stiffness::Tanh {
+                d0: 1.0,
+                d1: 0.5,
+                s0: 0.3,
+                s1: 0.8,
+                gamma: 10.0,
+            },
+            0.0,
+        ),
     ] {
         let (m, mut z) = exact_start(1, 1.5, 10, &stiff);
+        let m = m.with_pull(pull).unwrap();
         // Perturb everything, make some multipliers clearly positive/negative.
         for (i, v) in z.iter_mut().enumerate() {
             *v += 0.01 * ((i as f64 * 1.7).sin());

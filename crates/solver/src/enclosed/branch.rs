@@ -4,7 +4,9 @@
 
 use rodloop_exact::ExactLoop;
 
-use super::solve::{solve_enclosed, start_from_surface, EnclosedOptions, EnclosedState};
+use super::solve::{
+    solve_by_pull_homotopy, solve_enclosed, start_from_surface, EnclosedOptions, EnclosedState,
+};
 use crate::solve::Equilibrium;
 use crate::stiffness::Stiffness;
 use crate::SolverError;
@@ -101,7 +103,14 @@ pub fn solve_branch(
         kg[g]
     };
     let (model, z0) = start_from_surface(radius, lbar, n0, stiffness, lookup)?;
-    let first = solve_enclosed(&model, z0, opts)?;
+    // Plain Newton first; where it fails (sharp profiles), the pull homotopy.
+    let first = match solve_enclosed(&model, z0.clone(), opts) {
+        Ok(s) => s,
+        Err(plain) => {
+            let lmin = source.lambda_min(radius, stiffness.reference());
+            solve_by_pull_homotopy(&model, z0, lmin, opts).map_err(|_| plain)?
+        }
+    };
     let refine = |prev: &EnclosedState| -> Result<EnclosedState, SolverError> {
         let (model, z0) = prev.refine()?;
         solve_enclosed(&model, z0, opts)
