@@ -186,10 +186,7 @@ fn config_table(st: &EnclosedState, scene: &Scene) -> Result<Table> {
 pub fn run_solve(args: &crate::solve::Args, scene: &Scene) -> Result<()> {
     let t0 = Instant::now();
     if args.from.is_some() {
-        bail!("--from is not supported for enclosed scenes yet (the start is the branch's surface loop)");
-    }
-    if args.draw {
-        bail!("--draw is not supported for enclosed scenes yet");
+        bail!("--from is not supported for enclosed scenes yet: the 3-D model starts from the branch's surface loop (a saved enclosed shape would also need its frame at s = 0, which config.csv does not hold)");
     }
     crate::output::check_lbar(args.lbar)?;
     let branch = match (args.branch, args.eta) {
@@ -249,6 +246,11 @@ pub fn run_solve(args: &crate::solve::Args, scene: &Scene) -> Result<()> {
     run.write_table(&table)?;
     run.write_json("summary.json", &summary)?;
     run.commit()?;
+    if args.draw {
+        // config.csv has x, y, z (and kappa, lambda): `rodloop draw` reads it as it is.
+        let set = crate::draw::DrawSettings::beside(&args.out);
+        crate::draw::draw_loop(&args.out.join("config.csv"), &set)?;
+    }
     outln!(
         "enclosed branch {branch} at lbar = {}: E R/(pi D0) = {:.10} ± {:.1e}, index {} ({}), contact fraction {:.4} in {} interval(s), max gap {:.3e} R",
         args.lbar,

@@ -230,3 +230,43 @@ fn two_segment_enclosed_state() {
     assert!(f("optimality_stationarity") <= 1e-8);
     assert!(f("max_gap") > 1e-4);
 }
+
+/// `solve --draw` on an enclosed scene draws the loop next to config.csv; `--from` is refused
+/// with its reason.
+#[test]
+fn solve_draw_and_from() {
+    let dir = out("enclosed-draw");
+    let sc = scene();
+    let o = rodloop(&[
+        "solve",
+        "--scene",
+        &sc,
+        "--lbar",
+        "1.2",
+        "--branch",
+        "1",
+        "--draw",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in ["config.csv", "config.svg", "config.png", "config-draw.json"] {
+        assert!(dir.join(f).exists(), "{f}");
+    }
+    let from = dir.join("config.csv");
+    assert_refused(
+        vec![
+            "solve",
+            "--scene",
+            &sc,
+            "--lbar",
+            "1.2",
+            "--branch",
+            "1",
+            "--from",
+            from.to_str().unwrap(),
+        ],
+        "--from is not supported",
+        "enclosed-from",
+    );
+}
