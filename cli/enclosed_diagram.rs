@@ -191,7 +191,8 @@ fn write_outputs(
     let png = svg_to_png(&text, 1.0).context("rendering diagram.png")?;
     run.write_bytes("diagram.png", &png)?;
     let _ = (args.width, args.height);
-    let lowest_lifted = lowest_lifted_off(d);
+    // With --branch, "lowest" is among the selected branches only: no hypothesis verdict.
+    let lowest_lifted = opts.branches.is_none().then(|| lowest_lifted_off(d));
     let summary = checked_json!({
         "model": "enclosed",
         "scene": scene,
@@ -378,7 +379,12 @@ fn print(d: &EnclosedDiagram, scene: &Scene, opts: &EnclosedDiagramOptions, out:
             e.energy
         );
     }
-    for (a, b) in lowest_lifted_off(d) {
+    let verdict = if opts.branches.is_none() {
+        lowest_lifted_off(d)
+    } else {
+        Vec::new()
+    };
+    for (a, b) in verdict {
         outln!(
             "  the lowest state has lifted off the wall for {a:.9} < lbar < {b:.9} (the Sec. 3.2 hypothesis fails there)"
         );
