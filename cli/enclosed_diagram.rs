@@ -41,7 +41,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     }
     if !scene.stiffness.is_uniform() {
         bail!(
-            "scene {}: the enclosed diagram covers uniform rods only (the surface loops of a non-uniform rod are numerical, and the 3-D Newton does not yet converge from the two-segment scene's sharp gamma = 200 surface loops); `rodloop solve` handles single states of uniform enclosed scenes",
+            "scene {}: the enclosed diagram covers uniform rods only (a non-uniform rod has no exact layer, its branches come as families that this tracer does not follow, and the 3-D Newton reaches its lifted-off states only through a pull homotopy and not at every length); `rodloop solve` handles single states",
             scene.name
         );
     }

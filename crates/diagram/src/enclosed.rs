@@ -34,8 +34,11 @@
 //!   closed curve of its length, so no exchange outside that list appears; the sampled
 //!   energies are checked for one anyway (a warning if found).
 //!
-//! Non-uniform rods are refused: their surface loops are numerical, and the two-segment
-//! enclosed scene's 3-D Newton does not converge from them yet.
+//! Non-uniform rods are refused: there is no exact layer (every part would need the 3-D
+//! model, and the two-segment scene's loops lift off everywhere checked), the 3-D Newton
+//! reaches their lifted-off states only through the pull homotopy and not at every length,
+//! and their branches come as families (shifted seeds, mirror pairs) that this tracer does
+//! not follow.
 
 #![allow(clippy::needless_range_loop)]
 
@@ -113,7 +116,7 @@ impl EnclosedDiagramOptions {
             ));
         }
         if !self.stiffness.is_uniform() {
-            return bad("the enclosed diagram covers uniform rods only: the surface loops of a non-uniform rod are numerical, and the 3-D Newton does not yet converge from the two-segment scene's sharp (gamma = 200) surface loops".into());
+            return bad("the enclosed diagram covers uniform rods only: a non-uniform rod has no exact layer, its branches come as families that this tracer does not follow, and the 3-D Newton reaches its lifted-off states only through the pull homotopy and not at every length (use `rodloop solve` for single states)".into());
         }
         Ok(())
     }
