@@ -136,7 +136,12 @@ pub fn solve_state(
         (
             (b.energy, b.energy_error),
             format!(
-                "3-D enclosed model, N = {cells} cells (semismooth Newton from the surface loop, lambda_min = {lam_min:.6} < 0); error from N/4, N/2, N (observed order {:.2})",
+                "3-D enclosed model, N = {cells} cells (semismooth Newton from the surface loop{}, lambda_min = {lam_min:.6} < 0); error from N/4, N/2, N (observed order {:.2})",
+                if b.homotopy {
+                    " by the pull homotopy"
+                } else {
+                    ""
+                },
                 b.order
             ),
         )

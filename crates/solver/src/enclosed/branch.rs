@@ -65,6 +65,9 @@ pub struct BranchSolve {
     pub energy_error: f64,
     /// The observed order `p`.
     pub order: f64,
+    /// `true` when plain Newton failed at `N/4` and the pull homotopy
+    /// ([`super::solve::solve_by_pull_homotopy`]) found the state.
+    pub homotopy: bool,
 }
 
 /// Solve one enclosed state at `cells` and `cells/2` from the surface loop `source`: the
@@ -104,11 +107,12 @@ pub fn solve_branch(
     };
     let (model, z0) = start_from_surface(radius, lbar, n0, stiffness, lookup)?;
     // Plain Newton first; where it fails (sharp profiles), the pull homotopy.
-    let first = match solve_enclosed(&model, z0.clone(), opts) {
-        Ok(s) => s,
+    let (first, homotopy) = match solve_enclosed(&model, z0.clone(), opts) {
+        Ok(s) => (s, false),
         Err(plain) => {
             let lmin = source.lambda_min(radius, stiffness.reference());
-            solve_by_pull_homotopy(&model, z0, lmin, opts).map_err(|_| plain)?
+            let s = solve_by_pull_homotopy(&model, z0, lmin, opts).map_err(|_| plain)?;
+            (s, true)
         }
     };
     let refine = |prev: &EnclosedState| -> Result<EnclosedState, SolverError> {
@@ -126,6 +130,7 @@ pub fn solve_branch(
         energy,
         energy_error,
         order,
+        homotopy,
     })
 }
 
