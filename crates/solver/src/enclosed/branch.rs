@@ -117,7 +117,16 @@ pub fn solve_branch(
     };
     let refine = |prev: &EnclosedState| -> Result<EnclosedState, SolverError> {
         let (model, z0) = prev.refine()?;
-        solve_enclosed(&model, z0, opts)
+        match solve_enclosed(&model, z0.clone(), opts) {
+            Ok(s) => Ok(s),
+            // The prolonged state is close to the finer solution; where the active set
+            // cycles, the pull homotopy from the surface loop's λ_min settles it.
+            Err(plain) if homotopy => {
+                let lmin = source.lambda_min(radius, stiffness.reference());
+                solve_by_pull_homotopy(&model, z0, lmin, opts).map_err(|_| plain)
+            }
+            Err(plain) => Err(plain),
+        }
     };
     let coarse = refine(&first)?;
     let fine = refine(&coarse)?;
