@@ -179,3 +179,26 @@ fn detached_interval_ends_have_zero_lambda_min() {
             .is_empty());
     }
 }
+
+/// The three-level estimate on model sequences `E_N = E + C N^{−p}`: it recovers `p` and
+/// the error of the finest level exactly for `1 ≤ p ≤ 4`, and clamps outside.
+#[test]
+fn three_level_estimate_is_exact_on_power_laws() {
+    use rodloop_solver::enclosed::three_level_estimate;
+    for &p in &[1.0, 2.5, 4.0] {
+        let e = |n: f64| 3.0 + 0.7 * n.powf(-p);
+        let (err, order) = three_level_estimate(e(16.0), e(32.0), e(64.0));
+        assert!((order - p).abs() < 1e-6, "p {p}: {order}");
+        let truth = (e(64.0) - 3.0).abs();
+        // (round-off: the differences of E_N cancel 3.0 to ~1e-8 relative)
+        assert!(
+            (err - truth).abs() < 1e-6 * truth,
+            "p {p}: {err} vs {truth}"
+        );
+    }
+    // Faster than fourth order: clamped to 4, so the estimate exceeds the true error.
+    let e = |n: f64| 3.0 + 0.7 * n.powf(-6.0);
+    let (err, order) = three_level_estimate(e(16.0), e(32.0), e(64.0));
+    assert_eq!(order, 4.0);
+    assert!(err > (e(64.0) - 3.0).abs());
+}
