@@ -48,7 +48,7 @@ use rodloop_exact::diagram::{compute, Critical, CriticalKind, DiagramSettings};
 use rodloop_exact::{branch_of_eta, eta_of_branch, paper_branch_loop, ExactLoop};
 use rodloop_solver::enclosed::{
     detached_intervals, enclosed_cells, solve_branch, solve_enclosed, start_from_surface,
-    three_level_estimate, EnclosedOptions, EnclosedState, SurfaceSource,
+    three_level_estimate, EnclosedOptions, EnclosedState, SurfaceSource, LIFTED_OFF_MAX_ORDER,
 };
 use rodloop_solver::{Accuracy, SolverError, Stiffness};
 use serde::Serialize;
@@ -275,7 +275,11 @@ impl Levels {
             self.states[1].energy(),
             self.states[2].energy(),
         ];
-        let (err, _) = three_level_estimate(e[0], e[1], e[2]);
+        let max_order = match self.states[2].contact(TOUCH) {
+            Ok(c) if c.fraction >= 1.0 => 4.0,
+            _ => LIFTED_OFF_MAX_ORDER,
+        };
+        let (err, _) = three_level_estimate(e[0], e[1], e[2], max_order);
         (e[2], err)
     }
 

@@ -24,7 +24,7 @@ pub mod solve;
 
 pub use branch::{
     detached_intervals, enclosed_cells, solve_branch, three_level_estimate, BranchSolve,
-    SurfaceSource,
+    SurfaceSource, LIFTED_OFF_MAX_ORDER,
 };
 pub use model::{EnclosedModel, Gauge};
 pub use solve::{
