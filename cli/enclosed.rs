@@ -354,7 +354,7 @@ pub fn run_compare(scene_arg: &str, out: &Path) -> Result<()> {
                 best_drop.2,
                 best_drop.1,
                 match stable {
-                    Some((s, t)) => format!("stable on the surface (lowest branch) for {s:.6} < lbar < {t:.6} inside this interval: the Sec. 3.2 hypothesis fails there"),
+                    Some((s, t)) => format!("stable on the surface (lowest branch) for {s:.6} < lbar < {t:.6} inside this interval: the Sec. 3.2 hypothesis fails there (the enclosed exchange, located by `rodloop diagram`, lies lower still)"),
                     None => "never the lowest surface branch there".into(),
                 }
             );
