@@ -231,8 +231,10 @@ fn two_segment_enclosed_state() {
     assert!(f("max_gap") > 1e-4);
 }
 
-/// `solve --draw` on an enclosed scene draws the loop next to config.csv; `--from` is refused
-/// with its reason.
+/// `solve --draw` on an enclosed scene draws the loop next to config.csv; `--from` a saved
+/// enclosed state at another length reaches the state the surface-loop start reaches there
+/// (the same discrete equilibrium from a different start); a file without the columns is
+/// refused.
 #[test]
 fn solve_draw_and_from() {
     let dir = out("enclosed-draw");
@@ -242,9 +244,9 @@ fn solve_draw_and_from() {
         "--scene",
         &sc,
         "--lbar",
-        "1.2",
+        "1.4",
         "--branch",
-        "1",
+        "2",
         "--draw",
         "--out",
         dir.to_str().unwrap(),
@@ -253,20 +255,55 @@ fn solve_draw_and_from() {
     for f in ["config.csv", "config.svg", "config.png", "config-draw.json"] {
         assert!(dir.join(f).exists(), "{f}");
     }
+    let energy = |d: &Path| -> (f64, f64) {
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(d.join("summary.json")).unwrap())
+                .unwrap();
+        (
+            s["energy"].as_f64().unwrap(),
+            s["error_estimate"].as_f64().unwrap(),
+        )
+    };
     let from = dir.join("config.csv");
+    let d1 = out("enclosed-from");
+    let o = rodloop(&[
+        "solve",
+        "--scene",
+        &sc,
+        "--lbar",
+        "1.3",
+        "--branch",
+        "2",
+        "--from",
+        from.to_str().unwrap(),
+        "--out",
+        d1.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let d2 = out("enclosed-direct");
+    let o = rodloop(&[
+        "solve",
+        "--scene",
+        &sc,
+        "--lbar",
+        "1.3",
+        "--branch",
+        "2",
+        "--out",
+        d2.to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    let ((e1, _), (e2, est)) = (energy(&d1), energy(&d2));
+    assert!(
+        (e1 - e2).abs() <= 1e-3 * est,
+        "{e1} vs {e2} (estimate {est:e})"
+    );
+    let readme = concat!(env!("CARGO_MANIFEST_DIR"), "/README.md");
     assert_refused(
         vec![
-            "solve",
-            "--scene",
-            &sc,
-            "--lbar",
-            "1.2",
-            "--branch",
-            "1",
-            "--from",
-            from.to_str().unwrap(),
+            "solve", "--scene", &sc, "--lbar", "1.3", "--branch", "2", "--from", readme,
         ],
-        "--from is not supported",
-        "enclosed-from",
+        "kappa_1",
+        "enclosed-from-bad",
     );
 }

@@ -106,26 +106,40 @@ pub fn solve_branch(
         kg[g]
     };
     let (model, z0) = start_from_surface(radius, lbar, n0, stiffness, lookup)?;
-    // Plain Newton first; where it fails (sharp profiles), the pull homotopy.
-    let (first, homotopy) = match solve_enclosed(&model, z0.clone(), opts) {
+    let lmin = source.lambda_min(radius, stiffness.reference());
+    solve_levels(&model, z0, Some(lmin), opts)
+}
+
+/// The cascade of [`solve_branch`] from a start at `N/4` cells (`model`, `z0`): Newton
+/// there, then at `N/2` and `N` from the prolonged coarser state, and the three-level error
+/// estimate. With `lambda_min` (the start's smallest contact force, `< 0` where it would
+/// need a pulling wall), a level where plain Newton fails is retried by the pull homotopy.
+pub fn solve_levels(
+    model: &super::model::EnclosedModel,
+    z0: Vec<f64>,
+    lambda_min: Option<f64>,
+    opts: &EnclosedOptions,
+) -> Result<BranchSolve, SolverError> {
+    let (first, homotopy) = match solve_enclosed(model, z0.clone(), opts) {
         Ok(s) => (s, false),
-        Err(plain) => {
-            let lmin = source.lambda_min(radius, stiffness.reference());
-            let s = solve_by_pull_homotopy(&model, z0, lmin, opts).map_err(|_| plain)?;
-            (s, true)
-        }
+        Err(plain) => match lambda_min {
+            Some(lmin) => {
+                let s = solve_by_pull_homotopy(model, z0, lmin, opts).map_err(|_| plain)?;
+                (s, true)
+            }
+            None => return Err(plain),
+        },
     };
     let refine = |prev: &EnclosedState| -> Result<EnclosedState, SolverError> {
         let (model, z0) = prev.refine()?;
-        match solve_enclosed(&model, z0.clone(), opts) {
-            Ok(s) => Ok(s),
+        match (solve_enclosed(&model, z0.clone(), opts), lambda_min) {
+            (Ok(s), _) => Ok(s),
             // The prolonged state is close to the finer solution; where the active set
-            // cycles, the pull homotopy from the surface loop's λ_min settles it.
-            Err(plain) if homotopy => {
-                let lmin = source.lambda_min(radius, stiffness.reference());
+            // cycles, the pull homotopy settles it.
+            (Err(plain), Some(lmin)) if homotopy => {
                 solve_by_pull_homotopy(&model, z0, lmin, opts).map_err(|_| plain)
             }
-            Err(plain) => Err(plain),
+            (Err(plain), _) => Err(plain),
         }
     };
     let coarse = refine(&first)?;
