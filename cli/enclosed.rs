@@ -222,7 +222,7 @@ fn read_shape(path: &Path, radius: f64) -> Result<SavedShape> {
         + (first[3] - last[3]).powi(2))
     .sqrt();
     let period = last[0] - first[0] + chord;
-    if !(period > 0.0) {
+    if period.is_nan() || period <= 0.0 {
         bail!("{}: the s column does not describe a loop", path.display());
     }
     let shape = SavedShape {
