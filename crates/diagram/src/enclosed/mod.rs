@@ -14,13 +14,13 @@
 //! * **Events are roots of the exact layer.** A branch lifts off or lands where `λ_min`
 //!   crosses zero, i.e. where `k²(L̄) = 1/2`
 //!   ([`detached_intervals`](rodloop_solver::enclosed::detached_intervals), bisection to
-//!   `1e-13`). That is the event "λ crosses 0 on the contact set" without a discrete event function,
-//!   and more accurate than locating it on a discrete trace. The tests check it
-//!   independently with the 3-D model on both sides of each event.
+//!   `1e-13`). That is the event "λ crosses 0 on the contact set" without a discrete
+//!   event function, and more accurate than locating it on a discrete trace. The tests
+//!   check it independently with the 3-D model on both sides of each event.
 //! * **Only lifted-off parts use the 3-D model**, traced in `L̄` by natural-parameter steps
 //!   with warm starts ([`step_to`](rodloop_solver::enclosed::EnclosedState::step_to)) at
-//!   three resolutions `N/4, N/2, N` (for the energy and its error estimate). The semismooth Newton picks the contact set anew
-//!   at every step, so contact ends that move between nodes need no bookkeeping; with a
+//!   three resolutions `N/4, N/2, N` (for the energy and its error estimate). The
+//!   semismooth Newton picks the contact set anew at every step, so contact ends that move between nodes need no bookkeeping; with a
 //!   fixed active set behind the `Confinement` seam, every node a contact end passes would be
 //!   an event and a restart. `L̄` is a good parameter on the lifted-off parts of the paper's
 //!   branches (no folds: a fold would show as Newton failing under step halving, which is
