@@ -20,9 +20,9 @@
 //! * **Only lifted-off parts use the 3-D model**, traced in `L̄` by natural-parameter steps
 //!   with warm starts ([`step_to`](rodloop_solver::enclosed::EnclosedState::step_to)) at
 //!   three resolutions `N/4, N/2, N` (for the energy and its error estimate). The
-//!   semismooth Newton picks the contact set anew at every step, so contact ends that move between nodes need no bookkeeping; with a
-//!   fixed active set behind the `Confinement` seam, every node a contact end passes would be
-//!   an event and a restart. `L̄` is a good parameter on the lifted-off parts of the paper's
+//!   semismooth Newton picks the contact set anew at every step, so contact ends that move
+//!   between nodes need no bookkeeping; with a fixed active set behind the `Confinement`
+//!   seam, every node a contact end passes would be an event and a restart. `L̄` is a good parameter on the lifted-off parts of the paper's
 //!   branches (no folds: a fold would show as Newton failing under step halving, which is
 //!   reported as a warning and ends the trace there).
 //! * **Exchanges** come from the exact layer's list (the surface diagram): an exchange
