@@ -22,9 +22,10 @@
 //!   three resolutions `N/4, N/2, N` (for the energy and its error estimate). The
 //!   semismooth Newton picks the contact set anew at every step, so contact ends that move
 //!   between nodes need no bookkeeping; with a fixed active set behind the `Confinement`
-//!   seam, every node a contact end passes would be an event and a restart. `L̄` is a good parameter on the lifted-off parts of the paper's
-//!   branches (no folds: a fold would show as Newton failing under step halving, which is
-//!   reported as a warning and ends the trace there).
+//!   seam, every node a contact end passes would be an event and a restart. `L̄` is a good
+//!   parameter on the lifted-off parts of the paper's branches in `[1, 3]` (no folds: a fold
+//!   would show as Newton failing under step halving, which is reported as a warning and
+//!   ends the trace there, as near `L̄ = 0.813` on branch 2).
 //! * **Exchanges** come from the exact layer's list (the surface diagram): an exchange
 //!   between two attached states is the surface one, exactly. Where a branch of an exchange
 //!   has lifted off, `E_a(L̄) = E_b(L̄)` is solved again by the secant method on re-solved
