@@ -208,6 +208,9 @@ pub fn run(args: &Args) -> Result<()> {
     if args.lbar.is_some() || args.to.is_some() {
         bail!("--lbar and --to belong to --param (the equilibria at a fixed length against a parameter); the diagram in L̄ takes --lbar-min and --lbar-max");
     }
+    if let Some(scene) = crate::enclosed_diagram::enclosed_scene(args.scene.as_deref())? {
+        return crate::enclosed_diagram::run(args, &scene);
+    }
     let scene = crate::solve::load_scene(args.scene.as_deref())?;
     let lbar_min = args.lbar_min.unwrap_or(scene.lbar_min);
     let lbar_max = args.lbar_max.unwrap_or(scene.lbar_max);

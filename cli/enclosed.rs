@@ -15,8 +15,8 @@ use anyhow::{bail, Context, Result};
 use rodloop_exact::{branch_of_eta, eta_of_branch, paper_branch_loop};
 use rodloop_scene::Scene;
 use rodloop_solver::enclosed::{
-    detached_intervals, enclosed_cells, free_circle, solve_branch, solve_enclosed, EnclosedOptions,
-    EnclosedState, SurfaceSource,
+    detached_intervals, enclosed_cells, free_circle, solve_branch, solve_enclosed, solve_levels,
+    start_from_shape, EnclosedOptions, EnclosedState, SavedShape, SurfaceSource,
 };
 use rodloop_solver::{solve_robust, Accuracy, SolveOptions, StartShape, Stiffness};
 
@@ -136,7 +136,12 @@ pub fn solve_state(
         (
             (b.energy, b.energy_error),
             format!(
-                "3-D enclosed model, N = {cells} cells (semismooth Newton from the surface loop, lambda_min = {lam_min:.6} < 0); error from N/4, N/2, N (observed order {:.2})",
+                "3-D enclosed model, N = {cells} cells (semismooth Newton from the surface loop{}, lambda_min = {lam_min:.6} < 0); error from N/4, N/2, N (observed order {:.2})",
+                if b.homotopy {
+                    " by the pull homotopy"
+                } else {
+                    ""
+                },
                 b.order
             ),
         )
@@ -148,6 +153,125 @@ pub fn solve_state(
         surface: Some((e_surf, lam_min)),
         stability,
         method,
+    })
+}
+
+/// A saved enclosed `config.csv` (columns `s, x, y, z, kappa_1, kappa_2`, in units of `R`)
+/// as a [`SavedShape`] in the model's units; the period is the last `s` plus the chord back to
+/// the first point.
+fn read_shape(path: &Path, radius: f64) -> Result<SavedShape> {
+    if path.is_dir() {
+        bail!(
+            "--from {} is a directory; give a config.csv saved by `rodloop solve` on an enclosed scene",
+            path.display()
+        );
+    }
+    let mut rdr = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .from_path(path)
+        .with_context(|| format!("reading {}", path.display()))?;
+    let headers = rdr.headers()?.clone();
+    let col = |name: &str| -> Result<usize> {
+        headers.iter().position(|h| h == name).with_context(|| {
+            format!(
+                "{}: an enclosed start needs the columns s, x, y, z, kappa_1, kappa_2 of a config.csv saved by `rodloop solve` on an enclosed scene; found {:?}",
+                path.display(),
+                headers.iter().collect::<Vec<_>>()
+            )
+        })
+    };
+    let idx = [
+        col("s")?,
+        col("x")?,
+        col("y")?,
+        col("z")?,
+        col("kappa_1")?,
+        col("kappa_2")?,
+    ];
+    let mut rows: Vec<[f64; 6]> = Vec::new();
+    for (k, rec) in rdr.records().enumerate() {
+        let rec = rec.with_context(|| format!("{}: row {}", path.display(), k + 2))?;
+        let mut row = [0.0; 6];
+        for (c, &i) in idx.iter().enumerate() {
+            let cell = rec.get(i).unwrap_or("");
+            row[c] = cell
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .with_context(|| {
+                    format!(
+                        "{}: row {}: {:?} is not a finite number",
+                        path.display(),
+                        k + 2,
+                        cell
+                    )
+                })?;
+        }
+        rows.push(row);
+    }
+    if rows.len() < 8 {
+        bail!(
+            "{}: needs at least 8 rows, found {}",
+            path.display(),
+            rows.len()
+        );
+    }
+    let (first, last) = (rows[0], rows[rows.len() - 1]);
+    let chord = ((first[1] - last[1]).powi(2)
+        + (first[2] - last[2]).powi(2)
+        + (first[3] - last[3]).powi(2))
+    .sqrt();
+    let period = last[0] - first[0] + chord;
+    if period.is_nan() || period <= 0.0 {
+        bail!("{}: the s column does not describe a loop", path.display());
+    }
+    let shape = SavedShape {
+        sigma: rows.iter().map(|r| (r[0] - first[0]) / period).collect(),
+        points: rows
+            .iter()
+            .map(|r| [r[1] * radius, r[2] * radius, r[3] * radius])
+            .collect(),
+        kappa: rows
+            .iter()
+            .map(|r| (r[4] / radius, r[5] / radius))
+            .collect(),
+    };
+    shape
+        .validate()
+        .with_context(|| format!("--from {}", path.display()))?;
+    Ok(shape)
+}
+
+/// Solve from a saved enclosed shape at `lbar`: the shape's curvature vectors, aligned by
+/// [`start_from_shape`], start the cascade at `N/4` (`N = 32(1 + η)` with the branch's `η`
+/// when given, else `η = 2`).
+fn solve_from_shape(
+    scene: &Scene,
+    stiffness: &Stiffness,
+    lbar: f64,
+    shape: &SavedShape,
+    branch: Option<u32>,
+    accuracy: Accuracy,
+) -> Result<EnclosedResult> {
+    let eta = branch.filter(|&b| b > 0).map_or(2, eta_of_branch);
+    let mut cells = enclosed_cells(accuracy, eta);
+    if !stiffness.is_uniform() {
+        cells = cells.max(32 * (2 + eta as usize));
+    }
+    let (model, z0) = start_from_shape(scene.radius, lbar, cells / 4, stiffness, shape)?;
+    let b = solve_levels(&model, z0, None, &EnclosedOptions::default())
+        .context("the enclosed loop from the saved shape")?;
+    let stability = b.coarse.stability(1e-6)?;
+    Ok(EnclosedResult {
+        model_energy: (b.energy, b.energy_error),
+        energy: (b.energy, b.energy_error),
+        surface: None,
+        stability,
+        method: format!(
+            "3-D enclosed model, N = {cells} cells (semismooth Newton from the saved shape); error from N/4, N/2, N (observed order {:.2})",
+            b.order
+        ),
+        state: b.fine,
     })
 }
 
@@ -185,31 +309,30 @@ fn config_table(st: &EnclosedState, scene: &Scene) -> Result<Table> {
 /// `rodloop solve` for an enclosed scene.
 pub fn run_solve(args: &crate::solve::Args, scene: &Scene) -> Result<()> {
     let t0 = Instant::now();
-    if args.from.is_some() {
-        bail!("--from is not supported for enclosed scenes yet (the start is the branch's surface loop)");
-    }
-    if args.draw {
-        bail!("--draw is not supported for enclosed scenes yet");
-    }
     crate::output::check_lbar(args.lbar)?;
     let branch = match (args.branch, args.eta) {
-        (Some(b), _) if b <= 1000 => b as u32,
-        (None, Some(e)) if (1..=1000).contains(&e) => branch_of_eta(e as u32),
+        (Some(b), _) if b <= 1000 => Some(b as u32),
+        (None, Some(e)) if (1..=1000).contains(&e) => Some(branch_of_eta(e as u32)),
+        (None, None) if args.from.is_some() => None,
         _ => bail!("give --branch B (0 to 1000; 0 = the planar circle) or --eta N (1 to 1000)"),
     };
     let accuracy = crate::solve::accuracy_of(scene, args.accuracy.as_deref())?;
     let stiffness = crate::solve::stiffness_of(&scene.stiffness);
+    let shape = match &args.from {
+        Some(p) => Some(read_shape(p, scene.radius)?),
+        None => None,
+    };
     let run = OutputRun::begin(&args.out)?;
-    let res = solve_state(scene, &stiffness, args.lbar, branch, accuracy)?;
+    let res = match (&shape, branch) {
+        (Some(sh), _) => solve_from_shape(scene, &stiffness, args.lbar, sh, branch, accuracy)?,
+        (None, Some(b)) => solve_state(scene, &stiffness, args.lbar, b, accuracy)?,
+        (None, None) => unreachable!("a branch or --from is required above"),
+    };
     let st = &res.state;
     let contact = st.contact(TOUCH)?;
     let (opt_lmin, opt_gmin, opt_comp, opt_stat) = st.optimality()?;
     let table = config_table(st, scene)?;
-    let eta = if branch == 0 {
-        0
-    } else {
-        eta_of_branch(branch)
-    };
+    let eta = branch.map(|b| if b == 0 { 0 } else { eta_of_branch(b) });
     // Point group and self-intersections, from the table as `rodloop draw` reads it.
     let loop_data = rodloop_figures::data::LoopData::parse("config.csv", &table.to_bytes()?)?;
     let shape = rodloop_figures::loops::shape(&loop_data, Default::default());
@@ -255,8 +378,17 @@ pub fn run_solve(args: &crate::solve::Args, scene: &Scene) -> Result<()> {
     run.write_table(&table)?;
     run.write_json("summary.json", &summary)?;
     run.commit()?;
+    if args.draw {
+        // config.csv has x, y, z (and kappa, lambda): `rodloop draw` reads it as it is.
+        let set = crate::draw::DrawSettings::beside(&args.out);
+        crate::draw::draw_loop(&args.out.join("config.csv"), &set)?;
+    }
+    let what = match branch {
+        Some(b) => format!("enclosed branch {b}"),
+        None => "enclosed loop".to_string(),
+    };
     outln!(
-        "enclosed branch {branch} at lbar = {}: E R/(pi D0) = {:.10} ± {:.1e}, index {} ({}), contact fraction {:.4} in {} interval(s), max gap {:.3e} R",
+        "{what} at lbar = {}: E R/(pi D0) = {:.10} ± {:.1e}, index {} ({}), contact fraction {:.4} in {} interval(s), max gap {:.3e} R",
         args.lbar,
         res.energy.0,
         res.energy.1,
@@ -353,7 +485,7 @@ pub fn run_compare(scene_arg: &str, out: &Path) -> Result<()> {
                 best_drop.2,
                 best_drop.1,
                 match stable {
-                    Some((s, t)) => format!("stable on the surface (lowest branch) for {s:.6} < lbar < {t:.6} inside this interval: the Sec. 3.2 hypothesis fails there"),
+                    Some((s, t)) => format!("stable on the surface (lowest branch) for {s:.6} < lbar < {t:.6} inside this interval: the Sec. 3.2 hypothesis fails there (the enclosed exchange, located by `rodloop diagram`, lies lower still)"),
                     None => "never the lowest surface branch there".into(),
                 }
             );

@@ -19,6 +19,7 @@ mod converge;
 mod diagram;
 mod draw;
 mod enclosed;
+mod enclosed_diagram;
 mod euler;
 mod numeric_diagram;
 mod output;

@@ -80,7 +80,7 @@ pub fn load_scene(path: Option<&Path>) -> Result<Scene> {
     };
     if scene.confinement == Confinement::Enclosed {
         bail!(
-            "scene {}: confinement = \"enclosed\" is solved by `rodloop solve` and compared with the surface by `rodloop compare --scene enclosed`; this command covers surface scenes only (the enclosed branch diagram is not built yet, and the paper's Sec. 3.2 hypothesis that stable loops stay attached fails for 1.3799 < lbar < 1.5061: see the README)",
+            "scene {}: confinement = \"enclosed\" is handled by `rodloop solve`, `rodloop diagram` and `rodloop compare --scene enclosed`; this command runs the surface model only (report, converge and phase are built on the surface model's O(N) factorisation and its diagram; the enclosed model is dense and has its own diagram). See the README, Enclosed loops",
             scene.name
         );
     }

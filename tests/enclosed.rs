@@ -24,6 +24,19 @@ fn out(name: &str) -> PathBuf {
     p
 }
 
+/// `rodloop ARGS --out DIR` fails with a message containing `word`, no panic, no output.
+fn assert_refused(all: Vec<&str>, word: &str, dir: &str) {
+    let dir = out(dir);
+    let d = dir.to_str().unwrap().to_string();
+    let mut all: Vec<&str> = all;
+    all.extend(["--out", d.as_str()]);
+    let o = rodloop(&all);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(err.contains(word) && !err.contains("panicked"), "{err}");
+    assert!(!dir.join("summary.json").exists());
+}
+
 /// The figure-eight at L̄ = 1.4 lifts off: config.csv has a gap column with positive gaps,
 /// summary.json the contact fields; its energy is below the exact surface loop's.
 #[test]
@@ -97,16 +110,200 @@ fn bad_enclosed_input() {
         (vec!["--lbar", "2.5", "--branch", "2"], "exists only for"),
         (vec!["--lbar", "-1", "--branch", "1"], "lbar"),
     ] {
-        let dir = out("enclosed-bad");
-        let mut all = vec!["solve", "--scene"];
         let sc = scene();
-        all.push(&sc);
+        let mut all = vec!["solve", "--scene", sc.as_str()];
         all.extend(args.iter());
-        all.extend(["--out", dir.to_str().unwrap()]);
-        let o = rodloop(&all);
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(!o.status.success());
-        assert!(err.contains(word) && !err.contains("panicked"), "{err}");
-        assert!(!dir.join("summary.json").exists());
+        assert_refused(all, word, "enclosed-bad");
     }
+}
+
+/// `rodloop diagram` on the enclosed scene writes the diagram outputs: branches.csv with the
+/// contact columns, critical.csv next to the surface values, the landing of branch 2 in
+/// special_points.csv, and the interval where the lowest state has lifted off.
+#[test]
+fn diagram_on_enclosed_scene() {
+    let dir = out("enclosed-diagram");
+    let sc = scene();
+    let o = rodloop(&["diagram", "--scene", &sc, "--out", dir.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in [
+        "branches.csv",
+        "critical.csv",
+        "special_points.csv",
+        "diagram.svg",
+        "diagram.png",
+        "summary.json",
+    ] {
+        assert!(dir.join(f).exists(), "{f}");
+    }
+    let branches = std::fs::read_to_string(dir.join("branches.csv")).unwrap();
+    let header = branches.lines().next().unwrap();
+    for col in [
+        "max_gap",
+        "contact_fraction",
+        "index",
+        "label",
+        "energy_error",
+    ] {
+        assert!(header.split(',').any(|c| c == col), "{header}");
+    }
+    let special = std::fs::read_to_string(dir.join("special_points.csv")).unwrap();
+    assert!(
+        special
+            .lines()
+            .any(|l| l.starts_with("landing,1.50612321743")),
+        "{special}"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let lifted = summary["lowest_lifted_off"].as_array().unwrap();
+    assert_eq!(lifted.len(), 1, "{summary}");
+    let (a, b) = (
+        lifted[0][0].as_f64().unwrap(),
+        lifted[0][1].as_f64().unwrap(),
+    );
+    // From the enclosed 1 -> 2 exchange (below the surface one) to the landing.
+    assert!(a > 1.3798 && a < 1.379941144287, "{a}");
+    assert!((b - 1.506123217436).abs() < 1e-9, "{b}");
+    assert!(text.contains("lifted off the wall"), "{text}");
+}
+
+#[test]
+fn diagram_refuses_what_it_does_not_cover() {
+    let sc = scene();
+    let two = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/data/scenes/inhomogeneous-d1-0.5-enclosed.toml"
+    );
+    for (args, word) in [
+        (
+            vec!["--scene", sc.as_str(), "--model", "exact"],
+            "--model exact",
+        ),
+        (
+            vec!["--scene", sc.as_str(), "--max-step", "0.1"],
+            "--max-step",
+        ),
+        (vec!["--scene", two], "uniform rods only"),
+        (
+            vec!["--scene", sc.as_str(), "--branch", "7"],
+            "no such branch",
+        ),
+    ] {
+        let mut all = vec!["diagram"];
+        all.extend(args.iter());
+        assert_refused(all, word, "enclosed-diagram-bad");
+    }
+}
+
+/// The two-segment enclosed scene (D1/D0 = 0.5, gamma = 200): branch 1 at L̄ = 1.4 needs a
+/// wall pulling with λ ≈ −98 D0/R³ on the surface; the enclosed solve (pull homotopy) returns
+/// a first-order optimal state below the surface energy.
+#[test]
+fn two_segment_enclosed_state() {
+    let dir = out("enclosed-two-segment");
+    let sc = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/data/scenes/inhomogeneous-d1-0.5-enclosed.toml"
+    );
+    let o = rodloop(&[
+        "solve",
+        "--scene",
+        sc,
+        "--lbar",
+        "1.4",
+        "--branch",
+        "1",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let f = |k: &str| s[k].as_f64().unwrap_or_else(|| panic!("{k}"));
+    assert!(f("surface_lambda_min") < -50.0);
+    assert!(f("energy") < f("surface_energy"));
+    assert!(f("optimality_lambda_min") >= -1e-8);
+    assert!(f("optimality_gap_min") >= -1e-10);
+    assert!(f("optimality_complementarity_max") <= 1e-9);
+    assert!(f("optimality_stationarity") <= 1e-8);
+    assert!(f("max_gap") > 1e-4);
+}
+
+/// `solve --draw` on an enclosed scene draws the loop next to config.csv; `--from` a saved
+/// enclosed state at another length reaches the state the surface-loop start reaches there
+/// (the same discrete equilibrium from a different start); a file without the columns is
+/// refused.
+#[test]
+fn solve_draw_and_from() {
+    let dir = out("enclosed-draw");
+    let sc = scene();
+    let o = rodloop(&[
+        "solve",
+        "--scene",
+        &sc,
+        "--lbar",
+        "1.4",
+        "--branch",
+        "2",
+        "--draw",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in ["config.csv", "config.svg", "config.png", "config-draw.json"] {
+        assert!(dir.join(f).exists(), "{f}");
+    }
+    let energy = |d: &Path| -> (f64, f64) {
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(d.join("summary.json")).unwrap())
+                .unwrap();
+        (
+            s["energy"].as_f64().unwrap(),
+            s["error_estimate"].as_f64().unwrap(),
+        )
+    };
+    let from = dir.join("config.csv");
+    let d1 = out("enclosed-from");
+    let o = rodloop(&[
+        "solve",
+        "--scene",
+        &sc,
+        "--lbar",
+        "1.3",
+        "--branch",
+        "2",
+        "--from",
+        from.to_str().unwrap(),
+        "--out",
+        d1.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let d2 = out("enclosed-direct");
+    let o = rodloop(&[
+        "solve",
+        "--scene",
+        &sc,
+        "--lbar",
+        "1.3",
+        "--branch",
+        "2",
+        "--out",
+        d2.to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    let ((e1, _), (e2, est)) = (energy(&d1), energy(&d2));
+    assert!(
+        (e1 - e2).abs() <= 1e-3 * est,
+        "{e1} vs {e2} (estimate {est:e})"
+    );
+    let readme = concat!(env!("CARGO_MANIFEST_DIR"), "/README.md");
+    assert_refused(
+        vec![
+            "solve", "--scene", &sc, "--lbar", "1.3", "--branch", "2", "--from", readme,
+        ],
+        "kappa_1",
+        "enclosed-from-bad",
+    );
 }

@@ -58,6 +58,7 @@ pub mod buckling;
 mod compute;
 pub mod critical;
 mod diagram;
+pub mod enclosed;
 mod ends;
 pub mod families;
 mod labels;

@@ -198,6 +198,38 @@ pub(crate) fn tr_prod(a: &M3, b: &M3) -> f64 {
     s
 }
 
+/// `L̄` must be positive and finite (every model and continuation step checks it).
+pub(crate) fn check_lbar(lbar: f64) -> Result<(), SolverError> {
+    if !(lbar.is_finite() && lbar > 0.0) {
+        return Err(SolverError::InvalidInput(format!(
+            "normalised length L̄ must be positive and finite (got {lbar})"
+        )));
+    }
+    Ok(())
+}
+
+/// The inputs every discretised loop shares (the surface model and the enclosed one): a
+/// positive finite sphere radius and `L̄`, and at least `min_cells` cells.
+pub(crate) fn check_loop_inputs(
+    radius: f64,
+    lbar: f64,
+    cells: usize,
+    min_cells: usize,
+) -> Result<(), SolverError> {
+    if !(radius.is_finite() && radius > 0.0) {
+        return Err(SolverError::InvalidInput(format!(
+            "sphere radius must be positive and finite (got {radius})"
+        )));
+    }
+    check_lbar(lbar)?;
+    if cells < min_cells {
+        return Err(SolverError::InvalidInput(format!(
+            "at least {min_cells} cells are needed (got {cells})"
+        )));
+    }
+    Ok(())
+}
+
 impl SurfaceModel {
     /// Loop of normalised length `lbar = L/(2πR)` on a sphere of radius `radius`, discretised
     /// with `cells` cells, with bending stiffness `stiffness` (validated here). No phase
@@ -209,21 +241,7 @@ impl SurfaceModel {
         cells: usize,
         stiffness: &Stiffness,
     ) -> Result<Self, SolverError> {
-        if !(radius.is_finite() && radius > 0.0) {
-            return Err(SolverError::InvalidInput(format!(
-                "sphere radius must be positive and finite (got {radius})"
-            )));
-        }
-        if !(lbar.is_finite() && lbar > 0.0) {
-            return Err(SolverError::InvalidInput(format!(
-                "normalised length L̄ must be positive and finite (got {lbar})"
-            )));
-        }
-        if cells < 4 {
-            return Err(SolverError::InvalidInput(format!(
-                "at least 4 cells are needed (got {cells})"
-            )));
-        }
+        check_loop_inputs(radius, lbar, cells, 4)?;
         let profile = stiffness.validate()?;
         let mut m = Self {
             radius,
@@ -289,11 +307,7 @@ impl SurfaceModel {
 
     /// The same model at another normalised length (same cells, profile and phase).
     pub fn with_lbar(&self, lbar: f64) -> Result<Self, SolverError> {
-        if !(lbar.is_finite() && lbar > 0.0) {
-            return Err(SolverError::InvalidInput(format!(
-                "normalised length L̄ must be positive and finite (got {lbar})"
-            )));
-        }
+        check_lbar(lbar)?;
         let mut m = self.clone();
         m.lbar = lbar;
         Ok(m)

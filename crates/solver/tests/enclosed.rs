@@ -16,20 +16,26 @@ fn exact_start(eta: u32, lbar: f64, cells: usize, d: &Stiffness) -> (EnclosedMod
 }
 
 /// The semismooth Jacobian against central differences of the residual, at a perturbed
-/// state with mixed contact rows (both branches of the min-function), uniform and Eq. (51).
+/// state with mixed contact rows (both branches of the min-function), uniform and Eq. (51),
+/// with the physical wall and with the pull homotopy's wall (`pull = 0.7`).
 #[test]
 fn jacobian_matches_finite_differences() {
-    for stiff in [
-        Stiffness::uniform(1.0),
-        Stiffness::Tanh {
-            d0: 1.0,
-            d1: 0.5,
-            s0: 0.3,
-            s1: 0.8,
-            gamma: 10.0,
-        },
+    for (stiff, pull) in [
+        (Stiffness::uniform(1.0), 0.0),
+        (Stiffness::uniform(1.0), 0.7),
+        (
+            Stiffness::Tanh {
+                d0: 1.0,
+                d1: 0.5,
+                s0: 0.3,
+                s1: 0.8,
+                gamma: 10.0,
+            },
+            0.0,
+        ),
     ] {
         let (m, mut z) = exact_start(1, 1.5, 10, &stiff);
+        let m = m.with_pull(pull).unwrap();
         // Perturb everything, make some multipliers clearly positive/negative.
         for (i, v) in z.iter_mut().enumerate() {
             *v += 0.01 * ((i as f64 * 1.7).sin());
@@ -154,6 +160,13 @@ fn figure_eight_lifts_off_with_lower_energy() {
     assert!((b256.coarse.energy() - e128).abs() < 1e-10);
     let order = ((e128 - e64).abs() / (e256 - e128).abs()).log2();
     assert!(order > 3.5 && order < 4.5, "order {order}");
+    // The reported estimates bound the errors against N = 256 (plus its own estimate) at
+    // N = 64 (default accuracy) and N = 128 (high).
+    let b64 = branch(1, 1.4, 64);
+    for (e, est) in [(b64.energy, b64.energy_error), (b.energy, b.energy_error)] {
+        let err = (e - e256).abs() + b256.energy_error;
+        assert!(est >= 0.9 * err, "estimate {est:e} vs error {err:e}");
+    }
 }
 
 /// The lift-off and landing lengths are where Eq. (38)'s λ_min = c²(1 − 2k²) vanishes.
@@ -172,4 +185,32 @@ fn detached_interval_ends_have_zero_lambda_min() {
             .unwrap()
             .is_empty());
     }
+}
+
+/// The three-level estimate on model sequences `E_N = E + C N^{−p}`: it recovers `p` and
+/// the error of the finest level exactly for `1 ≤ p ≤ 4`, and clamps outside.
+#[test]
+fn three_level_estimate_is_exact_on_power_laws() {
+    use rodloop_solver::enclosed::three_level_estimate;
+    for &p in &[1.0, 2.5, 4.0] {
+        let e = |n: f64| 3.0 + 0.7 * n.powf(-p);
+        let (err, order) = three_level_estimate(e(16.0), e(32.0), e(64.0), 4.0);
+        assert!((order - p).abs() < 1e-6, "p {p}: {order}");
+        let truth = (e(64.0) - 3.0).abs();
+        // (round-off: the differences of E_N cancel 3.0 to ~1e-8 relative)
+        assert!(
+            (err - truth).abs() < 1e-6 * truth,
+            "p {p}: {err} vs {truth}"
+        );
+    }
+    // Faster than fourth order: clamped to 4, so the estimate exceeds the true error.
+    let e = |n: f64| 3.0 + 0.7 * n.powf(-6.0);
+    let (err, order) = three_level_estimate(e(16.0), e(32.0), e(64.0), 4.0);
+    assert_eq!(order, 4.0);
+    assert!(err > (e(64.0) - 3.0).abs());
+    // A cap of 3 on a fourth-order sequence overestimates.
+    let e = |n: f64| 3.0 + 0.7 * n.powf(-4.0);
+    let (err, order) = three_level_estimate(e(16.0), e(32.0), e(64.0), 3.0);
+    assert_eq!(order, 3.0);
+    assert!(err > (e(64.0) - 3.0).abs());
 }

@@ -13,14 +13,22 @@
 //! * [`model`]: [`EnclosedModel`] (energy, closure, wall, KKT residual and exact Jacobian).
 //! * [`solve`](mod@solve): semismooth Newton, starts (surface loop, free circle), contact
 //!   summary, stability on the active constraints' tangent space.
+//! * [`from_shape`]: a start from a saved shape (`solve --from`).
+//! * [`continuation`]: natural-parameter steps in `L̄` (the enclosed diagram's tracer).
 //! * [`branch`]: a paper branch in an enclosed scene with the two-resolution error estimate.
 
 pub mod branch;
+pub mod continuation;
+pub mod from_shape;
 pub mod jet;
 pub mod model;
 pub mod solve;
 
-pub use branch::{detached_intervals, enclosed_cells, solve_branch, BranchSolve, SurfaceSource};
+pub use branch::{
+    detached_intervals, enclosed_cells, solve_branch, solve_levels, three_level_estimate,
+    BranchSolve, SurfaceSource, LIFTED_OFF_MAX_ORDER,
+};
+pub use from_shape::{start_from_shape, SavedShape};
 pub use model::{EnclosedModel, Gauge};
 pub use solve::{
     free_circle, solve_enclosed, start_from_surface, Contact, EnclosedOptions, EnclosedState,

@@ -75,6 +75,7 @@ pub struct EnclosedModel {
     bounds: Vec<f64>,
     uniform_mesh: bool,
     gauge: Gauge,
+    pull: f64,
 }
 
 /// The chain of cell propagators with their jets and prefix products.
@@ -126,21 +127,7 @@ impl EnclosedModel {
         stiffness: &Stiffness,
         gauge: Gauge,
     ) -> Result<Self, SolverError> {
-        if !(radius.is_finite() && radius > 0.0) {
-            return Err(SolverError::InvalidInput(format!(
-                "sphere radius must be positive and finite (got {radius})"
-            )));
-        }
-        if !(lbar.is_finite() && lbar > 0.0) {
-            return Err(SolverError::InvalidInput(format!(
-                "normalised length L̄ must be positive and finite (got {lbar})"
-            )));
-        }
-        if cells < 8 {
-            return Err(SolverError::InvalidInput(format!(
-                "the enclosed model needs at least 8 cells (got {cells})"
-            )));
-        }
+        crate::model::check_loop_inputs(radius, lbar, cells, 8)?;
         if gauge.reference.len() != 4 * cells {
             return Err(SolverError::WrongLength {
                 expected: 4 * cells,
@@ -168,6 +155,7 @@ impl EnclosedModel {
             bounds,
             uniform_mesh,
             gauge,
+            pull: 0.0,
         };
         m.d_gauss = (0..2 * cells)
             .map(|g| m.stiffness.eval(m.gauss_sigma(g)).d)
@@ -255,6 +243,35 @@ impl EnclosedModel {
     /// Offset of the wall multipliers `λ` in the KKT vector.
     pub fn lambda_offset(&self) -> usize {
         self.n_primal() + self.n_equalities()
+    }
+
+    /// The same model with a wall that may pull up to `pull` (force per unit length, units
+    /// `D0/R³`): the complementarity becomes `min(λ_j + π_j, σ g_j) = 0` with `π_j` the
+    /// impulse of `pull` at node `j`. A homotopy device only (`pull = 0` is the physical
+    /// wall): at `pull ≥ −λ_min` of a surface loop, that loop satisfies it
+    /// ([`super::solve::solve_by_pull_homotopy`]).
+    pub fn with_pull(mut self, pull: f64) -> Result<Self, SolverError> {
+        if !(pull.is_finite() && pull >= 0.0) {
+            return Err(SolverError::InvalidInput(format!(
+                "the homotopy's pulling force must be finite and >= 0 (got {pull})"
+            )));
+        }
+        self.pull = pull;
+        Ok(self)
+    }
+
+    /// The allowed pulling force (0: the physical wall).
+    pub fn pull(&self) -> f64 {
+        self.pull
+    }
+
+    /// Impulse `π_j` of the allowed pull at node `j`.
+    fn pull_impulse(&self, j: usize) -> f64 {
+        if self.pull == 0.0 {
+            return 0.0;
+        }
+        let r = self.radius;
+        self.pull * self.stiffness.kind().reference() / r.powi(3) * self.node_weight(j) / (2.0 * r)
     }
 
     /// Scale `σ` of the min-function.
@@ -497,7 +514,7 @@ impl EnclosedModel {
             let lam = z[lo + j];
             fr += r * (2.0 * lam);
             let g = self.radius * self.radius - r.norm_squared();
-            f[lo + j] = lam.min(sigma * g);
+            f[lo + j] = (lam + self.pull_impulse(j)).min(sigma * g);
         }
         for k in 0..3 {
             f[4 * n + k] = fr[k];
@@ -677,7 +694,7 @@ impl EnclosedModel {
             for a in 0..np {
                 jac[(a, lo + j)] = -grad[a];
             }
-            if sigma * g <= lam {
+            if sigma * g <= lam + self.pull_impulse(j) {
                 wall_rows.push(j);
                 for a in 0..np {
                     jac[(lo + j, a)] = sigma * grad[a];

@@ -175,6 +175,44 @@ pub fn solve_enclosed(
     })
 }
 
+/// Semismooth Newton by a homotopy in the wall's allowed pull: a surface loop with
+/// `λ_min < 0` satisfies the conditions of a wall that may pull up to `−λ_min`
+/// ([`EnclosedModel::with_pull`]), so Newton starts at `pull = 1.1·(−λ_min)` next to a
+/// solution and follows the pull down to 0 (the physical wall) in steps of an eighth of the
+/// start, halving a failed step up to 12 times. For starts that plain Newton cannot bring
+/// to the lifted-off state (sharp stiffness profiles, where the surface loop needs
+/// `λ_min ≈ −100 D0/R³`).
+pub fn solve_by_pull_homotopy(
+    model: &EnclosedModel,
+    z0: Vec<f64>,
+    lambda_min: f64,
+    opts: &EnclosedOptions,
+) -> Result<EnclosedState, SolverError> {
+    let top = 1.1 * (-lambda_min).max(0.0) + 1e-3;
+    let mut state = solve_enclosed(&model.clone().with_pull(top)?, z0, opts)?;
+    let mut pull = top;
+    let mut step = top / 8.0;
+    let mut halvings = 0;
+    while pull > 0.0 {
+        let next = (pull - step).max(0.0);
+        let m = model.clone().with_pull(next)?;
+        match solve_enclosed(&m, state.z.clone(), opts) {
+            Ok(s) => {
+                state = s;
+                pull = next;
+            }
+            Err(e) => {
+                halvings += 1;
+                if halvings > 12 {
+                    return Err(e);
+                }
+                step *= 0.5;
+            }
+        }
+    }
+    Ok(state)
+}
+
 /// The starting state built from a loop on the sphere: `κ1 = κ_g(σ)`, `κ2 = −1/R`, `r0 = R e3`
 /// (the Darboux frame is rotation-minimising on a sphere; [`super::jet`]), multipliers by
 /// least squares. The gauge takes this shape as reference; uniform rods get the arclength

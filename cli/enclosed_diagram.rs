@@ -1,0 +1,401 @@
+//! `rodloop diagram` for enclosed scenes (`|r| ≤ R`, paper Sec. 3.2; issue 9): the
+//! engine is `rodloop_diagram::enclosed` (attached parts from the exact layer, lifted-off
+//! parts from the 3-D model, events where `λ_min` crosses zero, exchanges re-solved where a
+//! branch has lifted off). Uniform rods only, for the reason the engine states.
+
+use std::path::Path;
+
+use anyhow::{bail, Context, Result};
+use rodloop_diagram::enclosed::{enclosed_diagram, EnclosedDiagram, EnclosedDiagramOptions};
+use rodloop_diagram::Label;
+use rodloop_figures::raster::svg_to_png;
+use rodloop_scene::{Confinement, Scene};
+
+use crate::diagram::{Args, Model};
+use crate::output::{checked_json, critical_table, Cell, CriticalRow, OutputRun, Table};
+use crate::svg::{self, branch_color, Curve, Figure, LegendEntry, LineStyle, Marker};
+
+/// The scene of `path` when it is an enclosed scene (the default scene is a surface one).
+pub fn enclosed_scene(path: Option<&Path>) -> Result<Option<Scene>> {
+    let Some(p) = path else { return Ok(None) };
+    let scene = Scene::from_file(p)?;
+    Ok((scene.confinement == Confinement::Enclosed).then_some(scene))
+}
+
+/// Run `rodloop diagram` on an enclosed scene.
+pub fn run(args: &Args, scene: &Scene) -> Result<()> {
+    if args.model == Model::Exact {
+        bail!(
+            "--model exact does not apply to enclosed scenes: the enclosed diagram uses the exact layer where a branch is attached and the 3-D enclosed model where it has lifted off (omit --model)"
+        );
+    }
+    if args.resume
+        || args.max_step.is_some()
+        || args.min_step.is_some()
+        || args.max_points.is_some()
+        || args.newton_tol.is_some()
+    {
+        bail!(
+            "--resume, --max-step, --min-step, --max-points and --newton-tol control the surface tracer; the enclosed diagram samples every --step in lbar (default 0.05) and traces lifted-off parts by natural-parameter steps"
+        );
+    }
+    if !scene.stiffness.is_uniform() {
+        bail!(
+            "scene {}: the enclosed diagram covers uniform rods only (a non-uniform rod has no exact layer, its branches come as families that this tracer does not follow, and the 3-D Newton reaches its lifted-off states only through a pull homotopy and not at every length); `rodloop solve` handles single states",
+            scene.name
+        );
+    }
+    let lbar_min = args.lbar_min.unwrap_or(scene.lbar_min);
+    let lbar_max = args.lbar_max.unwrap_or(scene.lbar_max);
+    if !(lbar_min > 0.0 && lbar_max > lbar_min && lbar_max <= 20.0) {
+        bail!("need 0 < --lbar-min < --lbar-max <= 20 for an enclosed diagram (got {lbar_min} and {lbar_max})");
+    }
+    let accuracy = crate::solve::accuracy_of(scene, args.accuracy.as_deref())?;
+    let mut opts = EnclosedDiagramOptions::new(
+        scene.radius,
+        crate::solve::stiffness_of(&scene.stiffness),
+        lbar_min,
+        lbar_max,
+    );
+    opts.accuracy = accuracy;
+    if let Some(step) = args.step {
+        opts.step = step;
+    }
+    if !args.branch.is_empty() {
+        let mut sel = Vec::new();
+        for &b in &args.branch {
+            let b = u32::try_from(b).with_context(|| format!("--branch {b}"))?;
+            let ok = if b == 0 {
+                lbar_min <= 1.0
+            } else {
+                let e = f64::from(rodloop_exact::eta_of_branch(b));
+                e - 1.0 < lbar_max && e + 1.0 > lbar_min
+            };
+            if !ok {
+                bail!("--branch {b}: no such branch in the length range [{lbar_min}, {lbar_max}] (branch 0 is the circle, lbar <= 1)");
+            }
+            sel.push(b);
+        }
+        opts.branches = Some(sel);
+    }
+    let run = OutputRun::begin(&args.out)?;
+    let d = enclosed_diagram(&opts).context("the enclosed diagram")?;
+    write_outputs(&d, &opts, &scene.name, &run, args)?;
+    run.commit()?;
+    print(&d, scene, &opts, &args.out);
+    Ok(())
+}
+
+fn write_outputs(
+    d: &EnclosedDiagram,
+    opts: &EnclosedDiagramOptions,
+    scene: &str,
+    run: &OutputRun,
+    args: &Args,
+) -> Result<()> {
+    let mut branches = Table::new(
+        "branches.csv",
+        &[
+            "branch",
+            "eta",
+            "lbar",
+            "energy",
+            "energy_error",
+            "attached",
+            "contact_fraction",
+            "contact_intervals",
+            "max_gap",
+            "lambda_min",
+            "gap_min",
+            "complementarity",
+            "stationarity",
+            "index",
+            "label",
+            "lowest",
+            "cells",
+            "source",
+        ],
+    );
+    for p in &d.points {
+        branches.push(vec![
+            Cell::I(p.branch.into()),
+            Cell::I(p.eta.into()),
+            Cell::F(p.lbar),
+            Cell::F(p.energy),
+            Cell::F(p.energy_error),
+            Cell::I(p.attached.into()),
+            Cell::F(p.contact_fraction),
+            Cell::I(p.contact_intervals as i64),
+            Cell::F(p.max_gap),
+            Cell::F(p.lambda_min),
+            Cell::F(p.gap_min),
+            Cell::F(p.complementarity),
+            Cell::F(p.stationarity),
+            Cell::I(p.index as i64),
+            Cell::S(p.label.as_str().into()),
+            Cell::I(p.lowest.into()),
+            Cell::I(p.cells as i64),
+            Cell::S(
+                serde_json::to_value(p.source)?
+                    .as_str()
+                    .unwrap_or("")
+                    .to_string(),
+            ),
+        ])?;
+    }
+    // critical.csv has the surface diagram's columns; the surface values and the methods
+    // are in summary.json.
+    let critical = critical_table(d.critical.iter().map(|c| {
+        let c = &c.critical;
+        CriticalRow {
+            index: c.index,
+            lbar_cr: c.lbar_cr,
+            kind: c.kind,
+            from_branch: c.from_branch,
+            to_branch: c.to_branch,
+            energy: c.energy,
+            error_estimate: c.error_estimate,
+        }
+    }))?;
+    let mut special = Table::new(
+        "special_points.csv",
+        &[
+            "kind",
+            "lbar",
+            "energy",
+            "branch",
+            "family",
+            "index_before",
+            "index_after",
+            "error_estimate",
+        ],
+    );
+    for e in &d.events {
+        special.push(vec![
+            Cell::S(e.kind.as_str().into()),
+            Cell::F(e.lbar),
+            Cell::F(e.energy),
+            Cell::I(e.branch.into()),
+            Cell::I(e.branch.into()),
+            Cell::I(e.index_before as i64),
+            Cell::I(e.index_after as i64),
+            Cell::F(e.error_estimate),
+        ])?;
+    }
+    run.write_table(&branches)?;
+    run.write_table(&critical)?;
+    run.write_table(&special)?;
+    let fig = figure(d, scene);
+    let text = svg::render(&fig);
+    run.write_bytes("diagram.svg", text.as_bytes())?;
+    let png = svg_to_png(&text, 1.0).context("rendering diagram.png")?;
+    run.write_bytes("diagram.png", &png)?;
+    let _ = (args.width, args.height);
+    // With --branch, "lowest" is among the selected branches only: no hypothesis verdict.
+    let lowest_lifted = opts.branches.is_none().then(|| lowest_lifted_off(d));
+    let summary = checked_json!({
+        "model": "enclosed",
+        "scene": scene,
+        "lbar_min": opts.lbar_min,
+        "lbar_max": opts.lbar_max,
+        "accuracy": format!("{:?}", opts.accuracy).to_lowercase(),
+        "step": opts.step,
+        "states": d.points.len(),
+        "critical": d.critical,
+        "special_points": d.events,
+        "lowest_lifted_off": lowest_lifted,
+        "cells": d.cells,
+        "warnings": d.warnings,
+        "timings": d.seconds,
+        "units": crate::diagram::UNITS,
+    })?;
+    run.write_json("summary.json", &summary)?;
+    Ok(())
+}
+
+/// The `L̄` intervals where the lowest state is a paper branch that has lifted off (branch
+/// 0, the free circle below `L̄ = 1`, is not counted): from each critical length or event to
+/// the next, when the lowest branch there is lifted off at the samples between.
+fn lowest_lifted_off(d: &EnclosedDiagram) -> Vec<(f64, f64)> {
+    let mut cuts: Vec<f64> = d
+        .critical
+        .iter()
+        .map(|c| c.critical.lbar_cr)
+        .chain(d.events.iter().map(|e| e.lbar))
+        .collect();
+    cuts.push(
+        d.points
+            .iter()
+            .map(|p| p.lbar)
+            .fold(f64::INFINITY, f64::min),
+    );
+    cuts.push(
+        d.points
+            .iter()
+            .map(|p| p.lbar)
+            .fold(f64::NEG_INFINITY, f64::max),
+    );
+    cuts.sort_by(f64::total_cmp);
+    cuts.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
+    let mut out: Vec<(f64, f64)> = Vec::new();
+    for w in cuts.windows(2) {
+        let inside: Vec<_> = d
+            .points
+            .iter()
+            .filter(|p| p.lowest && p.branch > 0 && p.lbar > w[0] + 1e-9 && p.lbar < w[1] - 1e-9)
+            .collect();
+        if !inside.is_empty() && inside.iter().all(|p| !p.attached) {
+            match out.last_mut() {
+                Some(last) if (last.1 - w[0]).abs() < 1e-12 => last.1 = w[1],
+                _ => out.push((w[0], w[1])),
+            }
+        }
+    }
+    out
+}
+
+fn style_of(l: Label) -> (LineStyle, f64) {
+    match l {
+        Label::Stable => (LineStyle::Solid, 2.2),
+        Label::Metastable => (LineStyle::Dashed, 1.4),
+        Label::Unstable => (LineStyle::Dotted, 1.4),
+    }
+}
+
+/// Energy versus length, one colour per branch (branch 0, the circle, in grey); solid
+/// stable, dashed metastable, dotted unstable; critical lengths and events marked.
+fn figure(d: &EnclosedDiagram, scene: &str) -> Figure {
+    let mut curves = Vec::new();
+    let mut branches: Vec<u32> = d.points.iter().map(|p| p.branch).collect();
+    branches.sort_unstable();
+    branches.dedup();
+    let color = |b: u32| {
+        if b == 0 {
+            "#555555".to_string()
+        } else {
+            branch_color(b)
+        }
+    };
+    for &b in &branches {
+        let pts: Vec<(f64, f64, Label)> = d
+            .points
+            .iter()
+            .filter(|p| p.branch == b)
+            .map(|p| (p.lbar, p.energy, p.label))
+            .collect();
+        curves.extend(svg::runs(&pts, |l, points| {
+            let (style, width) = style_of(l);
+            Curve {
+                color: color(b),
+                style,
+                width,
+                points,
+            }
+        }));
+    }
+    let mut legend: Vec<LegendEntry> = branches
+        .iter()
+        .map(|&b| LegendEntry {
+            label: if b == 0 {
+                "branch 0 (free circle)".into()
+            } else {
+                format!("branch {b} (eta = {})", rodloop_exact::eta_of_branch(b))
+            },
+            color: color(b),
+            style: LineStyle::Solid,
+        })
+        .collect();
+    for (text, style) in [
+        ("solid: stable", LineStyle::Solid),
+        ("dashed: metastable", LineStyle::Dashed),
+        ("dotted: unstable", LineStyle::Dotted),
+    ] {
+        legend.push(LegendEntry {
+            label: text.into(),
+            color: "black".into(),
+            style,
+        });
+    }
+    let mut markers: Vec<Marker> = d
+        .critical
+        .iter()
+        .map(|c| Marker {
+            x: c.critical.lbar_cr,
+            label: format!("{:.4}", c.critical.lbar_cr),
+        })
+        .collect();
+    markers.extend(d.events.iter().map(|e| Marker {
+        x: e.lbar,
+        label: format!("{} {:.4}", e.kind.as_str(), e.lbar),
+    }));
+    Figure {
+        title: format!("Enclosed loops (|r| <= R), scene {scene}: bending energy E R/(pi D)"),
+        xlabel: "L / (2 pi R)".into(),
+        ylabel: "E R/(pi D)".into(),
+        curves,
+        markers,
+        legend,
+        range: None,
+    }
+}
+
+fn print(d: &EnclosedDiagram, scene: &Scene, opts: &EnclosedDiagramOptions, out: &Path) {
+    outln!(
+        "Critical lengths (enclosed scene {}, accuracy {:?}):",
+        scene.name,
+        opts.accuracy
+    );
+    outln!(
+        "  {:>2}  {:>18}  {:>9}  {:>8}  {:>16}  {:>9}  {:>18}",
+        "i",
+        "lbar_cr",
+        "kind",
+        "from->to",
+        "E R/(pi D)",
+        "error",
+        "surface lbar_cr"
+    );
+    for e in &d.critical {
+        let c = &e.critical;
+        outln!(
+            "  {:>2}  {:>18.12}  {:>9}  {:>3}->{:<3}  {:>16.10}  {:>9.1e}  {:>18.12}",
+            c.index,
+            c.lbar_cr,
+            c.kind,
+            c.from_branch,
+            c.to_branch,
+            c.energy,
+            c.error_estimate,
+            e.surface_lbar_cr
+        );
+    }
+    for e in &d.events {
+        outln!(
+            "  {} of branch {} at lbar = {:.12} ± {:.0e} (lambda_min = 0; E R/(pi D) = {:.10})",
+            e.kind.as_str(),
+            e.branch,
+            e.lbar,
+            e.error_estimate,
+            e.energy
+        );
+    }
+    let verdict = if opts.branches.is_none() {
+        lowest_lifted_off(d)
+    } else {
+        Vec::new()
+    };
+    for (a, b) in verdict {
+        outln!(
+            "  the lowest state has lifted off the wall for {a:.9} < lbar < {b:.9} (the Sec. 3.2 hypothesis fails there)"
+        );
+    }
+    for w in &d.warnings {
+        eprintln!("warning: {w}");
+    }
+    outln!(
+        "{} in {:.2} s; wrote branches.csv, critical.csv, special_points.csv, diagram.svg/.png, summary.json to {}",
+        crate::output::plural(d.points.len() as u64, "state"),
+        d.seconds.total,
+        out.display()
+    );
+}

@@ -1,0 +1,419 @@
+//! The branch diagram of homogeneous loops enclosed in the ball, `|r| ≤ R` (paper Sec. 3.2;
+//! issue 9): every paper branch traced through its attached and lifted-off parts, branch 0
+//! (the free planar circle) below `L̄ = 1`, the lift-off and landing events, the exchanges
+//! of the lowest branch with error estimates, and the Hessian index on the tangent space of
+//! the active constraints.
+//!
+//! # Route: a natural-parameter tracer with re-solves, not the `Confinement` seam
+//!
+//! * **Attached parts need no continuation.** While the surface loop of a uniform rod has
+//!   `λ ≥ 0` everywhere, it meets every enclosed KKT condition (stationarity is the surface
+//!   equations, the wall pushes, the gap is zero), so it *is* the enclosed equilibrium, and
+//!   the exact layer gives it in closed form with its contact force (Eq. (38),
+//!   `λ_min R³/D = c²(1 − 2k²)`). Its energy carries no discretisation error.
+//! * **Events are roots of the exact layer.** A branch lifts off or lands where `λ_min`
+//!   crosses zero, i.e. where `k²(L̄) = 1/2`
+//!   ([`detached_intervals`](rodloop_solver::enclosed::detached_intervals), bisection to
+//!   `1e-13`). That is the event "λ crosses 0 on the contact set" without a discrete
+//!   event function, and more accurate than locating it on a discrete trace. The tests
+//!   check it independently with the 3-D model on both sides of each event.
+//! * **Only lifted-off parts use the 3-D model**, traced in `L̄` by natural-parameter steps
+//!   with warm starts ([`step_to`](rodloop_solver::enclosed::EnclosedState::step_to)) at
+//!   three resolutions `N/4, N/2, N` (for the energy and its error estimate). The
+//!   semismooth Newton picks the contact set anew at every step, so contact ends that move
+//!   between nodes need no bookkeeping; with a fixed active set behind the `Confinement`
+//!   seam, every node a contact end passes would be an event and a restart. `L̄` is a good
+//!   parameter on the lifted-off parts of the paper's branches in `[1, 3]` (no folds: a fold
+//!   would show as Newton failing under step halving, which is reported as a warning and
+//!   ends the trace there, as near `L̄ = 0.813` on branch 2).
+//! * **Exchanges** come from the exact layer's list (the surface diagram): an exchange
+//!   between two attached states is the surface one, exactly. Where a branch of an exchange
+//!   has lifted off, `E_a(L̄) = E_b(L̄)` is solved again by the secant method on re-solved
+//!   states (3-D model at `N/4, N/2, N` to locate it, then at `N/2, N, 2N` from there;
+//!   warm-started from the trace), with the error
+//!   estimate `(δE_a + δE_b)/|d(E_a − E_b)/dL̄| +` the last secant step. The enclosed
+//!   energy never exceeds the surface one, and below `L̄ = 1` the circle is the lowest
+//!   closed curve of its length, so no exchange outside that list appears; the sampled
+//!   energies are checked for one anyway (a warning if found).
+//!
+//! Non-uniform rods are refused: there is no exact layer (every part would need the 3-D
+//! model, and the two-segment scene's loops lift off everywhere checked), the 3-D Newton
+//! reaches their lifted-off states only through the pull homotopy and not at every length,
+//! and their branches come as families (shifted seeds, mirror pairs) that this tracer does
+//! not follow.
+
+#![allow(clippy::needless_range_loop)]
+
+use std::time::Instant;
+
+use rodloop_exact::diagram::{compute, Critical, CriticalKind, DiagramSettings};
+use rodloop_exact::{branch_of_eta, eta_of_branch};
+use rodloop_solver::enclosed::enclosed_cells;
+use rodloop_solver::{Accuracy, SolverError, Stiffness};
+use serde::Serialize;
+
+use crate::labels::Label;
+use crate::parallel::run_parallel;
+use crate::DiagramError;
+
+mod critical;
+mod trace;
+
+use critical::{detached_at, enclosed_crossing, label};
+use trace::{circle_point, grid, trace_branch, BranchOut, Levels};
+
+/// Gap (units of `R`) below which a node touches the wall.
+pub const TOUCH: f64 = 1e-9;
+
+/// What to compute.
+#[derive(Clone, Debug)]
+pub struct EnclosedDiagramOptions {
+    /// Ball radius.
+    pub radius: f64,
+    /// Stiffness (uniform only).
+    pub stiffness: Stiffness,
+    /// Smallest `L̄`.
+    pub lbar_min: f64,
+    /// Largest `L̄`.
+    pub lbar_max: f64,
+    /// Accuracy level: cells of the lifted-off parts `32(1+η)` at default (`16`, `64` per
+    /// period for fast, high) and twice that for the finest level and the exchanges.
+    pub accuracy: Accuracy,
+    /// Spacing of the sampled lengths (default 0.05).
+    pub step: f64,
+    /// Only these branches (`None`: all that meet the range).
+    pub branches: Option<Vec<u32>>,
+}
+
+impl EnclosedDiagramOptions {
+    /// Defaults for the range `[lbar_min, lbar_max]` of a uniform rod of stiffness `d`.
+    pub fn new(radius: f64, stiffness: Stiffness, lbar_min: f64, lbar_max: f64) -> Self {
+        Self {
+            radius,
+            stiffness,
+            lbar_min,
+            lbar_max,
+            accuracy: Accuracy::Default,
+            step: 0.05,
+            branches: None,
+        }
+    }
+
+    fn validate(&self) -> Result<(), DiagramError> {
+        let bad = |m: String| Err(DiagramError::InvalidOptions(m));
+        if !(self.radius.is_finite() && self.radius > 0.0) {
+            return bad(format!("radius must be positive (got {})", self.radius));
+        }
+        if !(self.lbar_min.is_finite()
+            && self.lbar_max.is_finite()
+            && self.lbar_min > 0.0
+            && self.lbar_max > self.lbar_min
+            && self.lbar_max <= 20.0)
+        {
+            return bad(format!(
+                "need 0 < lbar_min < lbar_max <= 20 (got {} and {})",
+                self.lbar_min, self.lbar_max
+            ));
+        }
+        if !(self.step.is_finite() && self.step >= 1e-3 && self.step <= 0.5) {
+            return bad(format!(
+                "the sample spacing must lie in [0.001, 0.5] (got {})",
+                self.step
+            ));
+        }
+        if !self.stiffness.is_uniform() {
+            return bad("the enclosed diagram covers uniform rods only: a non-uniform rod has no exact layer, its branches come as families that this tracer does not follow, and the 3-D Newton reaches its lifted-off states only through the pull homotopy and not at every length (use `rodloop solve` for single states)".into());
+        }
+        Ok(())
+    }
+}
+
+/// How a point of the diagram was obtained.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PointSource {
+    /// The free planar circle, `E R/(πD) = 1/L̄` (branch 0).
+    Circle,
+    /// The exact surface loop, attached (`λ_min ≥ 0`).
+    Exact,
+    /// The 3-D enclosed model (lifted off).
+    Model,
+}
+
+/// One state of the enclosed diagram.
+#[derive(Clone, Debug, Serialize)]
+pub struct EnclosedPoint {
+    /// Paper branch (0: the circle).
+    pub branch: u32,
+    /// Periods `η` of `κ_g` (0 for the circle).
+    pub eta: u32,
+    /// `L̄`.
+    pub lbar: f64,
+    /// Energy `E R/(π D)`.
+    pub energy: f64,
+    /// Its error estimate.
+    pub energy_error: f64,
+    /// Fully on the wall.
+    pub attached: bool,
+    /// Length fraction touching the wall.
+    pub contact_fraction: f64,
+    /// Number of contact intervals.
+    pub contact_intervals: usize,
+    /// Largest gap `(R − |r|)/R`.
+    pub max_gap: f64,
+    /// Smallest contact force `λ R³/D` over all nodes (≥ 0 at an equilibrium).
+    pub lambda_min: f64,
+    /// Smallest gap `/R` (≥ 0).
+    pub gap_min: f64,
+    /// Largest `|λ · gap|` (0).
+    pub complementarity: f64,
+    /// Stationarity residual of the 3-D model (0 for exact states).
+    pub stationarity: f64,
+    /// Hessian index on the tangent space of the active constraints.
+    pub index: usize,
+    /// Stability label.
+    pub label: Label,
+    /// The lowest state at this length.
+    pub lowest: bool,
+    /// Cells of the reported 3-D state (0 for exact states).
+    pub cells: usize,
+    /// Where the state comes from.
+    pub source: PointSource,
+}
+
+/// Kind of an event on a branch.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum EventKind {
+    /// Attached below, lifted off above (increasing `L̄`).
+    LiftOff,
+    /// Lifted off below, attached above.
+    Landing,
+}
+
+impl EventKind {
+    /// `"lift-off"` or `"landing"`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            EventKind::LiftOff => "lift-off",
+            EventKind::Landing => "landing",
+        }
+    }
+}
+
+/// A lift-off or landing event (a special point).
+#[derive(Clone, Debug, Serialize)]
+pub struct EnclosedEvent {
+    /// Kind.
+    pub kind: EventKind,
+    /// Branch.
+    pub branch: u32,
+    /// `L̄` of the event (`k² = 1/2`, `λ_min = 0`).
+    pub lbar: f64,
+    /// Its error estimate.
+    pub error_estimate: f64,
+    /// Energy at the event (exact layer).
+    pub energy: f64,
+    /// Index just below and just above.
+    pub index_before: usize,
+    /// Index just above.
+    pub index_after: usize,
+}
+
+/// An exchange (or collapse) of the lowest branch: the surface diagram's record with the
+/// enclosed value (index `i` of `L̄_icr` as in the surface diagram, counted from
+/// `L̄_1cr = 1`).
+#[derive(Clone, Debug, Serialize)]
+pub struct EnclosedCritical {
+    /// The critical length, its kind, branches, energy and error estimate.
+    #[serde(flatten)]
+    pub critical: Critical,
+    /// The surface diagram's value (exact layer).
+    pub surface_lbar_cr: f64,
+    /// How it was obtained.
+    pub method: String,
+}
+
+/// The enclosed diagram.
+#[derive(Clone, Debug, Serialize)]
+pub struct EnclosedDiagram {
+    /// States, by branch then `L̄`.
+    pub points: Vec<EnclosedPoint>,
+    /// Lift-off and landing events.
+    pub events: Vec<EnclosedEvent>,
+    /// Critical lengths of the lowest branch.
+    pub critical: Vec<EnclosedCritical>,
+    /// Things the caller should print.
+    pub warnings: Vec<String>,
+    /// Cells of the lifted-off trace (`N` of `N/4, N/2, N`) per branch.
+    pub cells: Vec<(u32, usize)>,
+    /// Wall-clock seconds: total, attached samples (index checks), lifted-off traces,
+    /// critical lengths.
+    pub seconds: EnclosedTimings,
+}
+
+/// Wall-clock seconds of the parts of [`enclosed_diagram`].
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct EnclosedTimings {
+    /// Everything.
+    pub total: f64,
+    /// Attached samples (exact layer, index from the 3-D model), summed over the branch
+    /// threads.
+    pub attached: f64,
+    /// Lifted-off traces, summed over the branch threads.
+    pub lifted_off: f64,
+    /// Critical lengths.
+    pub critical: f64,
+}
+
+/// Compute the enclosed diagram (see the module docs).
+pub fn enclosed_diagram(opts: &EnclosedDiagramOptions) -> Result<EnclosedDiagram, DiagramError> {
+    opts.validate()?;
+    let t0 = Instant::now();
+    let (lo, hi) = (opts.lbar_min, opts.lbar_max);
+    let mut warnings = Vec::new();
+    let mut points: Vec<EnclosedPoint> = Vec::new();
+    let mut events: Vec<EnclosedEvent> = Vec::new();
+    let mut cells = Vec::new();
+    let mut timings = EnclosedTimings::default();
+    let top = hi.ceil() as u32 + 1;
+    let mut etas: Vec<u32> = (1..=top)
+        .filter(|&e| f64::from(e) - 1.0 < hi && f64::from(e) + 1.0 > lo)
+        .collect();
+    let wanted = |b: u32| opts.branches.as_ref().is_none_or(|s| s.contains(&b));
+    etas.retain(|&e| wanted(branch_of_eta(e)));
+    if lo <= 1.0 && wanted(0) {
+        let mut xs = grid(opts, lo - opts.step, 1.0 + 1e-12);
+        xs.retain(|&x| x >= lo - 1e-12);
+        if !xs.iter().any(|&x| (x - 1.0).abs() < 1e-12) {
+            xs.push(1.0);
+        }
+        points.extend(xs.into_iter().map(circle_point));
+    }
+    // Branches in parallel on the crate's pool (the lifted-off traces dominate: branch 2
+    // first).
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut order: Vec<u32> = etas.clone();
+    order.sort_by_key(|&e| u32::from(e != 1));
+    let outs = run_parallel(
+        threads,
+        order.clone(),
+        &mut |_| {},
+        &mut |_: &Result<BranchOut, DiagramError>| {},
+        |eta, _| trace_branch(opts, eta),
+    );
+    let mut outs: Vec<(u32, Result<BranchOut, DiagramError>)> =
+        order.into_iter().zip(outs).collect();
+    outs.sort_by_key(|(e, _)| *e);
+    let mut traced: Vec<(u32, Vec<Levels>)> = Vec::new();
+    for (eta, o) in outs {
+        let o = o?;
+        points.extend(o.points);
+        events.extend(o.events);
+        warnings.extend(o.warnings);
+        timings.attached += o.attached_s;
+        timings.lifted_off += o.lifted_s;
+        cells.push((branch_of_eta(eta), enclosed_cells(opts.accuracy, eta)));
+        traced.push((eta, o.levels));
+    }
+    events.sort_by(|u, v| u.lbar.total_cmp(&v.lbar));
+
+    // Critical lengths: the surface list, re-solved where a branch has lifted off.
+    let tc = Instant::now();
+    let eta_max = etas.iter().copied().max().unwrap_or(1).max(1);
+    let surface = compute(&DiagramSettings {
+        lbar_min: lo.min(1.0),
+        lbar_max: hi,
+        eta_max,
+        step: 0.01,
+    })
+    .map_err(SolverError::from)?;
+    let mut critical = Vec::new();
+    for c in surface.critical.iter().filter(|c| {
+        c.lbar_cr >= lo - 1e-12
+            && c.lbar_cr <= hi + 1e-12
+            && wanted(c.from_branch)
+            && wanted(c.to_branch)
+    }) {
+        let involved = [c.from_branch, c.to_branch];
+        let mut lifted = false;
+        for &bch in &involved {
+            if bch == 0 {
+                continue;
+            }
+            let eta = eta_of_branch(bch);
+            let e = f64::from(eta);
+            let x = c.lbar_cr.clamp(e - 1.0 + 1e-6, e + 1.0 - 1e-6);
+            lifted |= detached_at(eta, x)?;
+        }
+        if !lifted {
+            critical.push(EnclosedCritical {
+                critical: *c,
+                surface_lbar_cr: c.lbar_cr,
+                method: "exact layer: both states attached, so the surface value holds".into(),
+            });
+            continue;
+        }
+        if c.kind != CriticalKind::Crossing {
+            warnings.push(format!(
+                "the {} of branches {} -> {} at lbar = {} involves a lifted-off state; not re-solved",
+                c.kind, c.from_branch, c.to_branch, c.lbar_cr
+            ));
+            continue;
+        }
+        let etas2 = [eta_of_branch(c.from_branch), eta_of_branch(c.to_branch)];
+        let nearest = |eta: u32| -> Option<Levels> {
+            traced.iter().find(|(e, _)| *e == eta).and_then(|(_, lv)| {
+                lv.iter()
+                    .min_by(|u, v| {
+                        (u.lbar - c.lbar_cr)
+                            .abs()
+                            .total_cmp(&(v.lbar - c.lbar_cr).abs())
+                    })
+                    .cloned()
+            })
+        };
+        let mut tracks = [nearest(etas2[0]), nearest(etas2[1])];
+        let (x, err, energy) = enclosed_crossing(etas2[0], etas2[1], c.lbar_cr, &mut tracks)
+            .map_err(|e| DiagramError::Critical {
+                from_branch: c.from_branch,
+                to_branch: c.to_branch,
+                lbar: c.lbar_cr,
+                reason: e.to_string(),
+            })?;
+        let n = etas2
+            .iter()
+            .zip(&tracks)
+            .filter(|(_, t)| t.is_some())
+            .map(|(&e, _)| 2 * enclosed_cells(opts.accuracy, e))
+            .max()
+            .unwrap_or(0);
+        critical.push(EnclosedCritical {
+            critical: Critical {
+                lbar_cr: x,
+                energy,
+                error_estimate: err,
+                ..*c
+            },
+            surface_lbar_cr: c.lbar_cr,
+            method: format!(
+                "secant on E_a = E_b with the lifted-off state re-solved (3-D model at N = {}, {}, {}; error from the three levels and the last secant step)",
+                n / 4,
+                n / 2,
+                n
+            ),
+        });
+    }
+
+    timings.critical = tc.elapsed().as_secs_f64();
+    label(&mut points, &critical, &mut warnings);
+    timings.total = t0.elapsed().as_secs_f64();
+    Ok(EnclosedDiagram {
+        points,
+        events,
+        critical,
+        warnings,
+        cells,
+        seconds: timings,
+    })
+}

@@ -1,0 +1,353 @@
+//! Sampling of the enclosed diagram's branches: attached samples from the exact layer (index
+//! from the 3-D model), lift-off/landing events, lifted-off parts traced by natural-parameter
+//! steps at three resolutions (see the parent module's docs).
+
+#![allow(clippy::needless_range_loop)]
+
+use std::time::Instant;
+
+use rodloop_exact::{branch_of_eta, paper_branch_loop, ExactLoop};
+use rodloop_solver::enclosed::{
+    detached_intervals, enclosed_cells, solve_branch, solve_enclosed, start_from_surface,
+    three_level_estimate, EnclosedOptions, EnclosedState, SurfaceSource, LIFTED_OFF_MAX_ORDER,
+};
+use rodloop_solver::{Accuracy, SolverError, Stiffness};
+
+use super::{EnclosedDiagramOptions, EnclosedEvent, EnclosedPoint, EventKind, PointSource, TOUCH};
+use crate::labels::Label;
+use crate::DiagramError;
+
+/// A traced lifted-off state at three resolutions `N/4, N/2, N`.
+#[derive(Clone, Debug)]
+pub(super) struct Levels {
+    pub(super) lbar: f64,
+    pub(super) states: [EnclosedState; 3],
+}
+
+impl Levels {
+    pub(super) fn energy(&self) -> (f64, f64) {
+        let e = [
+            self.states[0].energy(),
+            self.states[1].energy(),
+            self.states[2].energy(),
+        ];
+        let max_order = match self.states[2].contact(TOUCH) {
+            Ok(c) if c.fraction >= 1.0 => 4.0,
+            _ => LIFTED_OFF_MAX_ORDER,
+        };
+        let (err, _) = three_level_estimate(e[0], e[1], e[2], max_order);
+        (e[2], err)
+    }
+
+    pub(super) fn step_to(&self, lbar: f64, opts: &EnclosedOptions) -> Result<Levels, SolverError> {
+        let mut out = Vec::with_capacity(3);
+        for s in &self.states {
+            out.push(s.step_to(lbar, opts)?);
+        }
+        let [a, b, c]: [EnclosedState; 3] = out.try_into().expect("three levels");
+        Ok(Levels {
+            lbar,
+            states: [a, b, c],
+        })
+    }
+
+    /// The same length at twice the cells (each level prolonged and re-solved).
+    pub(super) fn refine(&self, opts: &EnclosedOptions) -> Result<Levels, SolverError> {
+        let mut out = Vec::with_capacity(3);
+        for s in &self.states {
+            let (m, z) = s.refine()?;
+            out.push(solve_enclosed(&m, z, opts)?);
+        }
+        let [a, b, c]: [EnclosedState; 3] = out.try_into().expect("three levels");
+        Ok(Levels {
+            lbar: self.lbar,
+            states: [a, b, c],
+        })
+    }
+
+    pub(super) fn point(&self, branch: u32, eta: u32) -> Result<EnclosedPoint, SolverError> {
+        let fine = &self.states[2];
+        let (energy, energy_error) = self.energy();
+        let c = fine.contact(TOUCH)?;
+        let (lmin, gmin, comp, stat) = fine.optimality()?;
+        let (index, _) = self.states[1].stability(1e-6)?;
+        Ok(EnclosedPoint {
+            branch,
+            eta,
+            lbar: self.lbar,
+            energy,
+            energy_error,
+            attached: c.fraction >= 1.0,
+            contact_fraction: c.fraction,
+            contact_intervals: c.intervals,
+            max_gap: c.max_gap.0,
+            lambda_min: lmin,
+            gap_min: gmin,
+            complementarity: comp,
+            stationarity: stat,
+            index,
+            label: Label::Unstable,
+            lowest: false,
+            cells: fine.model.cells(),
+            source: PointSource::Model,
+        })
+    }
+}
+
+pub(super) fn exact(eta: u32, lbar: f64) -> Result<ExactLoop, SolverError> {
+    Ok(paper_branch_loop(eta, lbar)?)
+}
+
+/// Index of an attached loop: the 3-D model re-solved from the exact loop at half the
+/// fast resolution (`8(1+η)` cells, at least 16), stability on the tangent space of the
+/// closure, gauges and the (strictly active) wall. (On `[1, 3]` the indices at 48 and 24
+/// cells for `η = 2` agree at every sample; the coarser one costs a fifth.)
+pub(super) fn attached_index(
+    radius: f64,
+    stiffness: &Stiffness,
+    l: &ExactLoop,
+) -> Result<usize, SolverError> {
+    let n = (enclosed_cells(Accuracy::Fast, l.eta) / 2).max(16);
+    let len = l.length();
+    let (model, z0) = start_from_surface(radius, l.lbar, n, stiffness, |s| {
+        l.point(s * len)
+            .map(|p| p.kappa_g / radius)
+            .unwrap_or(f64::NAN)
+    })?;
+    let st = solve_enclosed(&model, z0, &EnclosedOptions::default())?;
+    Ok(st.stability(1e-6)?.0)
+}
+
+pub(super) fn exact_point(
+    radius: f64,
+    stiffness: &Stiffness,
+    l: &ExactLoop,
+    branch: u32,
+) -> Result<EnclosedPoint, SolverError> {
+    let lmin = l.lambda_range().0;
+    Ok(EnclosedPoint {
+        branch,
+        eta: l.eta,
+        lbar: l.lbar,
+        energy: l.energy()?,
+        energy_error: 1e-14 * l.energy()?.abs().max(1.0),
+        attached: true,
+        contact_fraction: 1.0,
+        contact_intervals: 1,
+        max_gap: 0.0,
+        lambda_min: lmin,
+        gap_min: 0.0,
+        complementarity: 0.0,
+        stationarity: 0.0,
+        index: attached_index(radius, stiffness, l)?,
+        label: Label::Unstable,
+        lowest: false,
+        cells: 0,
+        source: PointSource::Exact,
+    })
+}
+
+pub(super) fn circle_point(lbar: f64) -> EnclosedPoint {
+    let touch = (lbar - 1.0).abs() < 1e-12;
+    EnclosedPoint {
+        branch: 0,
+        eta: 0,
+        lbar,
+        energy: 1.0 / lbar,
+        energy_error: 0.0,
+        attached: touch,
+        contact_fraction: if touch { 1.0 } else { 0.0 },
+        contact_intervals: usize::from(touch),
+        max_gap: (1.0 - lbar).max(0.0),
+        lambda_min: 0.0,
+        gap_min: (1.0 - lbar).max(0.0),
+        complementarity: 0.0,
+        stationarity: 0.0,
+        // The circle is the global minimum of ∫κ² among closed curves of its length.
+        index: 0,
+        label: Label::Unstable,
+        lowest: false,
+        cells: 0,
+        source: PointSource::Circle,
+    }
+}
+
+/// Sample lengths in `(a, b)` on the grid `lbar_min + k·step`, plus the ends when they lie
+/// in the window (`incl_a`, `incl_b`).
+pub(super) fn grid(opts: &EnclosedDiagramOptions, a: f64, b: f64) -> Vec<f64> {
+    let (lo, h) = (opts.lbar_min, opts.step);
+    let k0 = ((a - lo) / h).floor().max(0.0) as i64;
+    let k1 = ((b - lo) / h).ceil() as i64;
+    (k0..=k1)
+        .map(|k| lo + k as f64 * h)
+        .filter(|&x| x > a + 1e-9 && x < b - 1e-9 && x <= opts.lbar_max + 1e-12)
+        .collect()
+}
+
+/// Trace a lifted-off interval `(a, b)` of branch `eta` at the sample lengths `xs`: seed in
+/// the middle from the surface loop, then natural-parameter steps both ways (halving a
+/// failed step up to 6 times).
+pub(super) fn trace_detached(
+    opts: &EnclosedDiagramOptions,
+    eta: u32,
+    xs: &[f64],
+    warnings: &mut Vec<String>,
+) -> Result<Vec<Levels>, DiagramError> {
+    if xs.is_empty() {
+        return Ok(Vec::new());
+    }
+    let n = enclosed_cells(opts.accuracy, eta);
+    let sopts = EnclosedOptions::default();
+    let mid = xs.len() / 2;
+    let seed_at = xs[mid];
+    let l = exact(eta, seed_at)?;
+    let seed = solve_branch(
+        opts.radius,
+        seed_at,
+        &opts.stiffness,
+        &SurfaceSource::Exact(l),
+        n,
+        &sopts,
+    )
+    .map_err(|source| DiagramError::Seed {
+        eta,
+        lbar: seed_at,
+        source,
+    })?;
+    let first = Levels {
+        lbar: seed_at,
+        states: [seed.quarter, seed.coarse, seed.fine],
+    };
+    let mut up = vec![first.clone()];
+    let mut down = vec![first];
+    for (dir, out) in [(1i64, &mut up), (-1i64, &mut down)] {
+        let targets: Vec<f64> = if dir > 0 {
+            xs[mid + 1..].to_vec()
+        } else {
+            xs[..mid].iter().rev().copied().collect()
+        };
+        'targets: for &x in &targets {
+            let mut cur = out.last().expect("seed").clone();
+            let mut h = x - cur.lbar;
+            let mut halvings = 0;
+            while (x - cur.lbar).abs() > 1e-14 {
+                let to = if (x - cur.lbar).abs() <= h.abs() * (1.0 + 1e-9) {
+                    x
+                } else {
+                    cur.lbar + h
+                };
+                match cur.step_to(to, &sopts) {
+                    Ok(next) => cur = next,
+                    Err(e) => {
+                        halvings += 1;
+                        if halvings > 6 {
+                            let c = cur.states[2].contact(TOUCH).ok();
+                            warnings.push(format!(
+                                "branch {} (eta = {eta}): the lifted-off trace stops at lbar = {:.6} ({e}); the last state touches the wall on {:.1}% of its length with contact forces in [{:.3e}, {:.3e}]; Newton failed under 6 step halvings (perhaps a fold or a bifurcation of the lifted-off branch; not traced further)",
+                                branch_of_eta(eta),
+                                cur.lbar,
+                                100.0 * c.as_ref().map_or(f64::NAN, |c| c.fraction),
+                                c.as_ref().map_or(f64::NAN, |c| c.lambda_range.0),
+                                c.as_ref().map_or(f64::NAN, |c| c.lambda_range.1),
+                            ));
+                            break 'targets;
+                        }
+                        h *= 0.5;
+                    }
+                }
+            }
+            out.push(cur);
+        }
+    }
+    down.remove(0);
+    down.reverse();
+    down.extend(up);
+    Ok(down)
+}
+
+/// One branch's share of the diagram.
+#[derive(Default)]
+pub(super) struct BranchOut {
+    pub(super) points: Vec<EnclosedPoint>,
+    pub(super) events: Vec<EnclosedEvent>,
+    pub(super) levels: Vec<Levels>,
+    pub(super) warnings: Vec<String>,
+    pub(super) attached_s: f64,
+    pub(super) lifted_s: f64,
+}
+
+/// Sample branch `eta` on the window: attached samples from the exact layer, events at the
+/// ends of its lifted-off intervals, the lifted-off parts traced with the 3-D model.
+pub(super) fn trace_branch(
+    opts: &EnclosedDiagramOptions,
+    eta: u32,
+) -> Result<BranchOut, DiagramError> {
+    let (lo, hi) = (opts.lbar_min, opts.lbar_max);
+    let r = opts.radius;
+    let mut out = BranchOut::default();
+    let branch = branch_of_eta(eta);
+    let e = f64::from(eta);
+    let pad = 1e-4;
+    let (a, b) = ((e - 1.0 + pad).max(lo), (e + 1.0 - pad).min(hi));
+    let det = detached_intervals(eta, a, b)?;
+    let mut branch_points = Vec::new();
+    // Attached samples.
+    // The grid, plus the ends (the window's, or `1e-4` inside the branch's range).
+    let mut xs = grid(opts, a - 1e-9, b + 1e-9);
+    if xs.first().is_none_or(|&x| x > a + 1e-9) {
+        xs.insert(0, a);
+    }
+    if xs.last().is_none_or(|&x| x < b - 1e-9) {
+        xs.push(b);
+    }
+    let inside = |x: f64| det.iter().any(|&(p, q)| x > p - 1e-12 && x < q + 1e-12);
+    let ta = Instant::now();
+    for &x in xs.iter().filter(|&&x| !inside(x)) {
+        branch_points.push(exact_point(r, &opts.stiffness, &exact(eta, x)?, branch)?);
+    }
+    out.attached_s += ta.elapsed().as_secs_f64();
+    // Events and lifted-off parts.
+    for &(p, q) in &det {
+        for (x, kind) in [(p, EventKind::LiftOff), (q, EventKind::Landing)] {
+            let interior = x > a + 1e-9 && x < b - 1e-9;
+            if interior {
+                let l = exact(eta, x)?;
+                let mut pt = exact_point(r, &opts.stiffness, &l, branch)?;
+                pt.lambda_min = pt.lambda_min.max(0.0);
+                out.events.push(EnclosedEvent {
+                    kind,
+                    branch,
+                    lbar: x,
+                    // Bisection width of `detached_intervals` plus the exact layer's
+                    // round-off in `k²(L̄)`.
+                    error_estimate: 1e-12,
+                    energy: pt.energy,
+                    index_before: 0,
+                    index_after: 0,
+                });
+                branch_points.push(pt);
+            }
+        }
+        let mut ys: Vec<f64> = xs.iter().copied().filter(|&x| x > p && x < q).collect();
+        if ys.is_empty() {
+            ys.push(0.5 * (p + q));
+        }
+        let td = Instant::now();
+        let tr = trace_detached(opts, eta, &ys, &mut out.warnings)?;
+        out.lifted_s += td.elapsed().as_secs_f64();
+        for lv in &tr {
+            branch_points.push(lv.point(branch, eta)?);
+        }
+        out.levels.extend(tr);
+    }
+    branch_points.sort_by(|u, v| u.lbar.total_cmp(&v.lbar));
+    // Index before/after each event from the neighbouring samples.
+    for ev in out.events.iter_mut() {
+        let before = branch_points.iter().rev().find(|p| p.lbar < ev.lbar - 1e-9);
+        let after = branch_points.iter().find(|p| p.lbar > ev.lbar + 1e-9);
+        ev.index_before = before.map_or(0, |p| p.index);
+        ev.index_after = after.map_or(0, |p| p.index);
+    }
+    out.points = branch_points;
+    Ok(out)
+}
