@@ -74,6 +74,10 @@ pub struct Args {
     /// Height of the diagram figures in pixels.
     #[arg(long, default_value_t = 620)]
     pub height: u32,
+    /// Branch atlas: K shape thumbnails per branch spread along its range (in OUT/atlas/) and
+    /// the composite atlas.svg/.png (rows = branches, columns = lengths); 0: none.
+    #[arg(long, default_value_t = 0)]
+    pub shapes: usize,
 }
 
 /// The figures of `draw_diagram` (diagram, diagram_split, diagram_lambda; SVG and PNG).
@@ -202,6 +206,13 @@ pub fn run(args: &Args) -> Result<()> {
         );
     }
     let selection = selected_branches(args, lbar_min, lbar_max)?;
+    if args.shapes > crate::atlas::MAX_SHAPES {
+        bail!(
+            "--shapes must be from 0 to {} (got {})",
+            crate::atlas::MAX_SHAPES,
+            args.shapes
+        );
+    }
     if args.model == Model::Numeric {
         if let Some(step) = args.step {
             bail!(
@@ -213,6 +224,12 @@ pub fn run(args: &Args) -> Result<()> {
     if let Some(a) = &args.accuracy {
         bail!(
             "--accuracy {a} applies to --model numeric only: the exact model solves the closed-form closure to machine precision"
+        );
+    }
+    if args.shapes > 0 {
+        bail!(
+            "--shapes {} applies to --model numeric only: the atlas draws the traced states saved in states/, and the exact model samples closed-form loops without saving them (draw one with `rodloop analytic --draw`)",
+            args.shapes
         );
     }
     if args.resume {
@@ -382,6 +399,10 @@ fn run_numeric(
     let d =
         crate::numeric_diagram::run_numeric(&opts, &args.out, args.resume, args.quiet, selection)?;
     crate::numeric_diagram::write_outputs(&d, &opts, &scene.name, &run)?;
+    let atlas = match args.shapes {
+        0 => None,
+        k => Some(crate::atlas::write_atlas(&run, k, &scene.name)?),
+    };
     run.commit()?;
     draw_figures(args)?;
     // For homogeneous scenes, show the exact layer's critical lengths next to the numeric ones:
@@ -456,6 +477,16 @@ fn run_numeric(
         d.timings.tracing,
         args.out.display()
     );
+    outln!(
+        "every traced state's shape is in states/ (the state_file column of branches.csv; re-solve with solve --from, draw with draw)"
+    );
+    if let Some(a) = atlas {
+        outln!(
+            "atlas: {} rows, {} thumbnails in atlas/, atlas.svg/.png",
+            a.rows.len(),
+            a.rows.iter().map(|r| r.2.len()).sum::<usize>()
+        );
+    }
     Ok(())
 }
 

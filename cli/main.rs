@@ -14,6 +14,7 @@ macro_rules! outln {
 }
 
 mod analytic;
+mod atlas;
 mod compare;
 mod converge;
 mod diagram;
@@ -26,6 +27,7 @@ mod phase;
 mod progress;
 mod report;
 mod solve;
+mod states;
 mod svg;
 
 use std::process::ExitCode;

@@ -209,11 +209,14 @@ pub fn write_outputs(
             "family",
             "arc",
             "multiplicity",
+            "state_file",
         ],
     );
+    // Every traced state's shape in states/ (cli/states.rs), named in the last column.
+    let (state_files, state_warnings) = crate::states::write_states(d, opts, run)?;
     // The model works in the scene's R and D; report lambda R^3/D0.
     let lam_unit = opts.radius.powi(3) / opts.stiffness.reference();
-    for r in d.rows() {
+    for (r, file) in d.rows().into_iter().zip(state_files) {
         branches.push(vec![
             Cell::I(r.branch.into()),
             Cell::I(r.eta.into()),
@@ -231,6 +234,7 @@ pub fn write_outputs(
             Cell::I(r.family.into()),
             Cell::I(r.arc as i64),
             Cell::I(r.multiplicity.into()),
+            Cell::S(file),
         ])?;
     }
     let mut special = Table::new(
@@ -292,7 +296,7 @@ pub fn write_outputs(
         "special_points": d.special,
         "branches": ends,
         "great_circles": d.great_circles,
-        "warnings": d.warnings,
+        "warnings": d.warnings.iter().chain(&state_warnings).collect::<Vec<_>>(),
         "timings": d.timings,
         "units": crate::diagram::UNITS,
     })?;

@@ -8,6 +8,7 @@
 
 mod error;
 
+pub mod atlas;
 pub mod color;
 pub mod data;
 pub mod diagram;
