@@ -14,6 +14,7 @@ pub mod data;
 pub mod diagram;
 pub mod geometry;
 pub mod loops;
+pub mod overlay;
 pub mod plot;
 pub mod profiles;
 pub mod raster;
