@@ -315,6 +315,25 @@ pub fn run(args: &Args) -> Result<()> {
         let fig = figure(&d, energy_g);
         run.write_bytes(name, svg::render(&fig).as_bytes())?;
     }
+    // Fig. 11: k² against L̄ with Eq. (B.4).
+    let k2: Vec<rodloop_figures::k2::K2Point> = d
+        .points
+        .iter()
+        .map(|p| rodloop_figures::k2::K2Point {
+            branch: p.branch,
+            eta: p.eta,
+            p: p.p,
+            lbar: p.lbar,
+            k2: p.k * p.k,
+        })
+        .collect();
+    let k2_svg =
+        rodloop_figures::k2::k2_figure(&k2, f64::from(args.width), f64::from(args.height))?;
+    run.write_bytes("diagram_k2.svg", k2_svg.as_bytes())?;
+    run.write_bytes(
+        "diagram_k2.png",
+        &rodloop_figures::raster::svg_to_png(&k2_svg, 1.0)?,
+    )?;
     let branch_count = d
         .points
         .iter()
@@ -361,7 +380,7 @@ pub fn run(args: &Args) -> Result<()> {
         );
     }
     outln!(
-        "{} on {}, {} continuation points, computed in {:.3} s; wrote branches.csv, critical.csv, diagram.svg/.png, diagram_g.svg, diagram_split.svg/.png, diagram_lambda.svg/.png, summary.json to {}",
+        "{} on {}, {} continuation points, computed in {:.3} s; wrote branches.csv, critical.csv, diagram.svg/.png, diagram_g.svg, diagram_split.svg/.png, diagram_lambda.svg/.png, diagram_k2.svg/.png (Fig. 11), summary.json to {}",
         crate::output::plural(d.points.len() as u64, "state"),
         crate::output::plural(branch_count as u64, "branch"),
         d.continuation_steps,

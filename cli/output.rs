@@ -400,6 +400,8 @@ const KNOWN_OUTPUTS: &[&str] = &[
     "report.html",
     "atlas.svg",
     "atlas.png",
+    "diagram_k2.svg",
+    "diagram_k2.png",
 ];
 
 /// Subdirectories a rodloop command writes whole ([`OutputRun::subdir`]): a run that does not

@@ -242,3 +242,46 @@ fn shapes_bad_input_is_refused() {
     assert!(!d.join("atlas.svg").exists());
     std::fs::remove_dir_all(&d).ok();
 }
+
+#[test]
+fn exact_diagram_writes_fig11_with_eq_b4() {
+    let d = tmp("k2");
+    let (ok, out, err) = run(bin()
+        .args(["diagram", "--model", "exact", "--lbar-max", "3", "--out"])
+        .arg(&d));
+    assert!(ok, "{err}");
+    assert!(out.contains("diagram_k2.svg"), "{out}");
+    let svg = std::fs::read_to_string(d.join("diagram_k2.svg")).unwrap();
+    let doc = roxmltree::Document::parse(&svg).unwrap();
+    // A solid curve per branch (1, 2, 3) and dashed Eq. (B.4) pieces.
+    let paths: Vec<_> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("path"))
+        .collect();
+    let dashed = paths
+        .iter()
+        .filter(|n| n.attribute("stroke-dasharray") == Some("6 4"))
+        .count();
+    assert!(
+        paths.len() - dashed >= 3 && dashed >= 3,
+        "{} paths, {dashed} dashed",
+        paths.len()
+    );
+    assert!(svg.contains("Eq. (B.4)"));
+    rodloop_figures::raster::png_size(&std::fs::read(d.join("diagram_k2.png")).unwrap()).unwrap();
+    // A numeric run into the same directory removes it.
+    let (ok, _, err) = run(bin()
+        .args([
+            "diagram",
+            "--quiet",
+            "--accuracy",
+            "fast",
+            "--lbar-max",
+            "1.5",
+            "--out",
+        ])
+        .arg(&d));
+    assert!(ok, "{err}");
+    assert!(!d.join("diagram_k2.svg").exists() && !d.join("diagram_k2.png").exists());
+    std::fs::remove_dir_all(&d).ok();
+}

@@ -170,6 +170,16 @@ pub fn draw_cell(svg: &mut Svg, x0: f64, y0: f64, side: f64, cell: &AtlasCell, c
         c.1,
         r * sc
     ));
+    // The principal plane's equator (front half), as an orientation guide.
+    let eq: Vec<(f64, f64)> = (0..=96)
+        .map(|t| {
+            let a = std::f64::consts::TAU * t as f64 / 96.0;
+            view.project(&Vector3::new(r * a.cos(), r * a.sin(), 0.0))
+        })
+        .filter(|q| q.depth >= -1e-9)
+        .map(|q| px(q.u, q.v))
+        .collect();
+    svg.polyline(&eq, "#8da0b8", 0.7, "3 3");
     for &i in &order[split..] {
         seg(svg, i);
     }
@@ -283,7 +293,7 @@ pub fn atlas_figure(rows: &[AtlasRow], side: f64, title: &str) -> Result<String,
     }
     let ly = height - legend + 24.0;
     let mut note = String::from(
-        "Oblique view (azimuth 35°, elevation 25°) of each loop turned to its principal axes; nearer strands darker and thicker; ● s = 0.",
+        "Oblique view (az. 35°, el. 25°) of each loop turned to its principal axes (dashed: plane of the two largest); nearer: darker, thicker; ● s = 0.",
     );
     if any_soft {
         note.push_str(" Orange: the soft segment.");

@@ -13,6 +13,7 @@ pub mod color;
 pub mod data;
 pub mod diagram;
 pub mod geometry;
+pub mod k2;
 pub mod loops;
 pub mod overlay;
 pub mod plot;
