@@ -141,9 +141,9 @@ fn atlas_rows(dir: &Path, k: usize) -> Result<(Vec<AtlasRow>, AtlasNote)> {
         let subtitle = if family == 0 {
             format!("η = {eta}")
         } else if g[0].multiplicity > 1 {
-            format!("η = {eta}, family {family}, ×{}", g[0].multiplicity)
+            format!("η = {eta}\nfamily {family} (×{})", g[0].multiplicity)
         } else {
-            format!("η = {eta}, family {family}")
+            format!("η = {eta}\nfamily {family}")
         };
         out.push(AtlasRow {
             title: format!("branch {branch}"),

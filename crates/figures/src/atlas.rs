@@ -37,7 +37,7 @@ pub struct AtlasCell {
 pub struct AtlasRow {
     /// Heading, e.g. `branch 1`.
     pub title: String,
-    /// Second heading line, e.g. `η = 2` or `family 2, ×2`.
+    /// Further heading lines (separated by `\n`), e.g. `η = 2` or `η = 2\nfamily 2 (×2)`.
     pub subtitle: String,
     /// Line colour of the loops (the branch's colour in the diagram).
     pub color: String,
@@ -220,7 +220,7 @@ pub fn thumbnail(row: &AtlasRow, cell: &AtlasCell, side: f64) -> Result<String, 
         17.0,
         13.0,
         Anchor::Middle,
-        &format!("{} ({})", row.title, row.subtitle),
+        &format!("{} ({})", row.title, row.subtitle.replace('\n', ", ")),
     );
     draw_cell(&mut svg, 0.0, top, side, cell, &row.color);
     Ok(svg.finish())
@@ -246,7 +246,7 @@ pub fn atlas_figure(rows: &[AtlasRow], side: f64, title: &str) -> Result<String,
         ));
     }
     let cols = rows.iter().map(|r| r.cells.len()).max().unwrap_or(0).max(1);
-    let (left, top, legend) = (118.0, 46.0, 44.0);
+    let (left, top, legend) = (118.0, 46.0, 52.0);
     let ch = cell_height(side);
     let width = (left + cols as f64 * side + 10.0).max(640.0);
     let height = top + rows.len() as f64 * ch + legend;
@@ -280,25 +280,33 @@ pub fn atlas_figure(rows: &[AtlasRow], side: f64, title: &str) -> Result<String,
             0.0,
         );
         svg.text_bold(22.0, y + 0.42 * side, 14.0, Anchor::Start, &row.title);
-        svg.text(
-            22.0,
-            y + 0.42 * side + 18.0,
-            12.5,
-            Anchor::Start,
-            &row.subtitle,
-        );
+        for (l, line) in row.subtitle.lines().enumerate() {
+            let dy = 18.0 * (l + 1) as f64;
+            svg.text(22.0, y + 0.42 * side + dy, 12.5, Anchor::Start, line);
+        }
         for (j, cell) in row.cells.iter().enumerate() {
             draw_cell(&mut svg, left + j as f64 * side, y, side, cell, &row.color);
         }
     }
-    let ly = height - legend + 24.0;
-    let mut note = String::from(
-        "Oblique view (az. 35°, el. 25°) of each loop turned to its principal axes (dashed: plane of the two largest); nearer: darker, thicker; ● s = 0.",
+    let ly = height - legend + 20.0;
+    svg.text(
+        12.0,
+        ly,
+        12.0,
+        Anchor::Start,
+        "Oblique view (az. 35°, el. 25°) of each loop turned to its principal axes (dashed: plane of the two largest).",
     );
-    if any_soft {
-        note.push_str(" Orange: the soft segment.");
-    }
-    svg.text(12.0, ly, 12.0, Anchor::Start, &note);
+    svg.text(
+        12.0,
+        ly + 16.0,
+        12.0,
+        Anchor::Start,
+        if any_soft {
+            "Nearer strands darker and thicker; ● s = 0; orange: the soft segment."
+        } else {
+            "Nearer strands darker and thicker; ● s = 0."
+        },
+    );
     Ok(svg.finish())
 }
 
