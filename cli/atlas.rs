@@ -89,10 +89,13 @@ fn read_rows(dir: &Path) -> Result<Vec<Row>> {
     Ok(rows)
 }
 
+/// One drawn row: branch, family and the `(lbar, state_file)` of its cells.
+pub type NoteRow = (u32, u32, Vec<(f64, String)>);
+
 /// What the atlas drew: per row, its heading and the states of its cells.
 pub struct AtlasNote {
-    /// `(branch, family, [(lbar, state_file)])`.
-    pub rows: Vec<(u32, u32, Vec<(f64, String)>)>,
+    /// The rows.
+    pub rows: Vec<NoteRow>,
     /// Files written (relative to the diagram directory).
     pub files: Vec<String>,
 }

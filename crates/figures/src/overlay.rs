@@ -150,7 +150,9 @@ pub fn align(reference: &LoopData, other: &LoopData) -> Result<Aligned, FigureEr
     // search within one grid step; then the candidate whose positions match best (the
     // invariants of a symmetric loop do not tell its symmetric alignments apart).
     let phi = 0.5 * (5f64.sqrt() - 1.0);
-    let mut best: Option<(f64, f64, bool, bool, Vec<Vector3<f64>>)> = None;
+    // (largest distance, shift, reversed, mirrored, placed points)
+    type Candidate = (f64, f64, bool, bool, Vec<Vector3<f64>>);
+    let mut best: Option<Candidate> = None;
     for rev in [false, true] {
         for mir in [false, true] {
             let (mut v0, mut shift) = (f64::INFINITY, 0.0);

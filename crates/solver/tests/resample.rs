@@ -18,7 +18,10 @@ fn max_diff(a: &[ProfilePoint], b: &[ProfilePoint], f: fn(&ProfilePoint) -> f64)
         .fold(0.0, f64::max)
 }
 
-const FIELDS: [(&str, fn(&ProfilePoint) -> f64); 7] = [
+/// A named quantity of a profile point.
+type Field = (&'static str, fn(&ProfilePoint) -> f64);
+
+const FIELDS: [Field; 7] = [
     ("x", |p| p.x),
     ("y", |p| p.y),
     ("z", |p| p.z),
