@@ -165,11 +165,79 @@ fn atlas_rows(dir: &Path, k: usize) -> Result<(Vec<AtlasRow>, AtlasNote)> {
 /// Draw the atlas of the staged diagram of `run` (its `branches.csv` and `states/`): the
 /// thumbnails into the run's `atlas/` directory, the composite `atlas.svg`/`atlas.png`.
 pub fn write_atlas(run: &OutputRun, k: usize, scene: &str) -> Result<AtlasNote> {
+    check_shapes(k)?;
+    let (rows, note) = atlas_rows(run.stage_dir(), k)?;
+    write_rows(run, &rows, note, scene)
+}
+
+fn check_shapes(k: usize) -> Result<()> {
     if !(1..=MAX_SHAPES).contains(&k) {
         bail!("--shapes must be from 0 to {MAX_SHAPES} (got {k})");
     }
-    let stage = run.stage_dir();
-    let (rows, mut note) = atlas_rows(stage, k)?;
+    Ok(())
+}
+
+/// The atlas of an exact diagram: per branch, `k` lengths spread over its sampled range, each
+/// loop computed by the exact layer (Eq. 35, 256 points); labelled `lowest` where the branch
+/// has the lowest energy, else `higher` (the exact model computes no Hessian index).
+pub fn write_exact_atlas(
+    run: &OutputRun,
+    k: usize,
+    points: &[rodloop_exact::diagram::BranchPoint],
+) -> Result<AtlasNote> {
+    check_shapes(k)?;
+    let mut groups: BTreeMap<u32, Vec<&rodloop_exact::diagram::BranchPoint>> = BTreeMap::new();
+    for p in points {
+        groups.entry(p.branch).or_default().push(p);
+    }
+    let mut rows = Vec::new();
+    let mut note = AtlasNote {
+        rows: Vec::new(),
+        files: Vec::new(),
+    };
+    for (branch, mut g) in groups {
+        g.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
+        let pos: Vec<f64> = g.iter().map(|p| p.lbar).collect();
+        let mut cells = Vec::new();
+        let mut picked = Vec::new();
+        for i in spread(&pos, k) {
+            let p = g[i];
+            let lp = rodloop_exact::paper_branch_loop(p.eta, p.lbar)
+                .with_context(|| format!("exact loop of branch {branch} at L̄ = {}", p.lbar))?;
+            let pts = lp.sample(256)?;
+            cells.push(AtlasCell {
+                points: pts
+                    .iter()
+                    .map(|q| nalgebra::Vector3::new(q.x, q.y, q.z))
+                    .collect(),
+                stiffness: None,
+                lbar: p.lbar,
+                energy: p.energy,
+                stability: if p.lowest { "lowest" } else { "higher" }.into(),
+            });
+            picked.push((p.lbar, String::new()));
+        }
+        rows.push(AtlasRow {
+            title: format!("branch {branch}"),
+            subtitle: format!("η = {}", g[0].eta),
+            color: branch_color(branch).to_string(),
+            cells,
+        });
+        note.rows.push((branch, 0, picked));
+    }
+    if rows.is_empty() {
+        bail!("the diagram has no states to draw an atlas from");
+    }
+    write_rows(run, &rows, note, "exact loops")
+}
+
+/// Write the thumbnails of `rows` into the run's `atlas/` and the composite.
+fn write_rows(
+    run: &OutputRun,
+    rows: &[AtlasRow],
+    mut note: AtlasNote,
+    scene: &str,
+) -> Result<AtlasNote> {
     let thumbs = run.subdir("atlas")?;
     for (row, (branch, family, _)) in rows.iter().zip(&note.rows) {
         for (j, cell) in row.cells.iter().enumerate() {
@@ -187,7 +255,7 @@ pub fn write_atlas(run: &OutputRun, k: usize, scene: &str) -> Result<AtlasNote> 
         }
     }
     let svg = atlas_figure(
-        &rows,
+        rows,
         CELL,
         &format!("Branch atlas ({scene}): shapes along each branch"),
     )?;

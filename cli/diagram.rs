@@ -226,12 +226,6 @@ pub fn run(args: &Args) -> Result<()> {
             "--accuracy {a} applies to --model numeric only: the exact model solves the closed-form closure to machine precision"
         );
     }
-    if args.shapes > 0 {
-        bail!(
-            "--shapes {} applies to --model numeric only: the atlas draws the traced states saved in states/, and the exact model samples closed-form loops without saving them (draw one with `rodloop analytic --draw`)",
-            args.shapes
-        );
-    }
     if args.resume {
         bail!(
             "--resume applies to --model numeric only: the exact diagram takes milliseconds and is always computed afresh"
@@ -354,6 +348,10 @@ pub fn run(args: &Args) -> Result<()> {
         "units": UNITS,
     })?;
     run.write_json("summary.json", &summary)?;
+    let atlas = match args.shapes {
+        0 => None,
+        k => Some(crate::atlas::write_exact_atlas(&run, k, &d.points)?),
+    };
     run.commit()?;
     draw_figures(args)?;
 
@@ -387,6 +385,13 @@ pub fn run(args: &Args) -> Result<()> {
         elapsed.as_secs_f64(),
         args.out.display()
     );
+    if let Some(a) = atlas {
+        outln!(
+            "atlas: {} rows, {} thumbnails in atlas/, atlas.svg/.png",
+            a.rows.len(),
+            a.rows.iter().map(|r| r.2.len()).sum::<usize>()
+        );
+    }
     Ok(())
 }
 

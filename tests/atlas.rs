@@ -230,13 +230,6 @@ fn shapes_bad_input_is_refused() {
         !ok && err.contains("--shapes must be from 0 to 20"),
         "{err}"
     );
-    let (ok, _, err) = run(bin()
-        .args(["diagram", "--model", "exact", "--shapes", "3", "--out"])
-        .arg(&d));
-    assert!(
-        !ok && err.contains("--shapes 3 applies to --model numeric"),
-        "{err}"
-    );
     let (ok, _, err) = run(bin().args(["diagram", "--shapes", "-1", "--out"]).arg(&d));
     assert!(!ok && !err.contains("panicked"), "{err}");
     assert!(!d.join("atlas.svg").exists());
@@ -268,6 +261,7 @@ fn exact_diagram_writes_fig11_with_eq_b4() {
         paths.len()
     );
     assert!(svg.contains("Eq. (B.4)"));
+    assert!(!d.join("atlas.svg").exists(), "no --shapes, no atlas");
     rodloop_figures::raster::png_size(&std::fs::read(d.join("diagram_k2.png")).unwrap()).unwrap();
     // A numeric run into the same directory removes it.
     let (ok, _, err) = run(bin()
@@ -283,5 +277,34 @@ fn exact_diagram_writes_fig11_with_eq_b4() {
         .arg(&d));
     assert!(ok, "{err}");
     assert!(!d.join("diagram_k2.svg").exists() && !d.join("diagram_k2.png").exists());
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn exact_diagram_atlas_has_k_cells_per_branch() {
+    let d = tmp("exact-atlas");
+    let (ok, out, err) = run(bin()
+        .args([
+            "diagram",
+            "--model",
+            "exact",
+            "--lbar-max",
+            "3",
+            "--shapes",
+            "3",
+            "--out",
+        ])
+        .arg(&d));
+    assert!(ok, "{err}");
+    assert!(out.contains("atlas: 3 rows, 9 thumbnails"), "{out}");
+    let t = thumbnails(&d);
+    assert_eq!(
+        t.keys().collect::<Vec<_>>(),
+        ["branch-1", "branch-2", "branch-3"]
+    );
+    assert!(t.values().all(|&k| k == 3), "{t:?}");
+    let svg = std::fs::read_to_string(d.join("atlas.svg")).unwrap();
+    roxmltree::Document::parse(&svg).unwrap();
+    assert_eq!(svg.matches("L̄ = ").count(), 9);
     std::fs::remove_dir_all(&d).ok();
 }
