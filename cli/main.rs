@@ -26,6 +26,7 @@ mod output;
 mod phase;
 mod progress;
 mod report;
+mod report_tables;
 mod solve;
 mod states;
 mod svg;
