@@ -85,6 +85,10 @@ pub struct Args {
     /// End value of --param (default 1e-3 for d1; the start is the scene's value).
     #[arg(long)]
     pub to: Option<f64>,
+    /// Branch atlas: K shape thumbnails per branch spread along its range (in OUT/atlas/) and
+    /// the composite atlas.svg/.png (rows = branches, columns = lengths); 0: none.
+    #[arg(long, default_value_t = 0)]
+    pub shapes: usize,
 }
 
 /// The figures of `draw_diagram` (diagram, diagram_split, diagram_lambda; SVG and PNG).
@@ -222,6 +226,13 @@ pub fn run(args: &Args) -> Result<()> {
         );
     }
     let selection = selected_branches(args, lbar_min, lbar_max)?;
+    if args.shapes > crate::atlas::MAX_SHAPES {
+        bail!(
+            "--shapes must be from 0 to {} (got {})",
+            crate::atlas::MAX_SHAPES,
+            args.shapes
+        );
+    }
     if args.model == Model::Numeric {
         if let Some(step) = args.step {
             bail!(
@@ -326,6 +337,25 @@ pub fn run(args: &Args) -> Result<()> {
         let fig = figure(&d, energy_g);
         run.write_bytes(name, svg::render(&fig).as_bytes())?;
     }
+    // Fig. 11: k² against L̄ with Eq. (B.4).
+    let k2: Vec<rodloop_figures::k2::K2Point> = d
+        .points
+        .iter()
+        .map(|p| rodloop_figures::k2::K2Point {
+            branch: p.branch,
+            eta: p.eta,
+            p: p.p,
+            lbar: p.lbar,
+            k2: p.k * p.k,
+        })
+        .collect();
+    let k2_svg =
+        rodloop_figures::k2::k2_figure(&k2, f64::from(args.width), f64::from(args.height))?;
+    run.write_bytes("diagram_k2.svg", k2_svg.as_bytes())?;
+    run.write_bytes(
+        "diagram_k2.png",
+        &rodloop_figures::raster::svg_to_png(&k2_svg, 1.0)?,
+    )?;
     let branch_count = d
         .points
         .iter()
@@ -348,6 +378,10 @@ pub fn run(args: &Args) -> Result<()> {
         "units": UNITS,
     })?;
     run.write_json("summary.json", &summary)?;
+    let atlas = match args.shapes {
+        0 => None,
+        k => Some(crate::atlas::write_exact_atlas(&run, k, &d.points)?),
+    };
     run.commit()?;
     draw_figures(args)?;
 
@@ -374,13 +408,20 @@ pub fn run(args: &Args) -> Result<()> {
         );
     }
     outln!(
-        "{} on {}, {} continuation points, computed in {:.3} s; wrote branches.csv, critical.csv, diagram.svg/.png, diagram_g.svg, diagram_split.svg/.png, diagram_lambda.svg/.png, summary.json to {}",
+        "{} on {}, {} continuation points, computed in {:.3} s; wrote branches.csv, critical.csv, diagram.svg/.png, diagram_g.svg, diagram_split.svg/.png, diagram_lambda.svg/.png, diagram_k2.svg/.png (Fig. 11), summary.json to {}",
         crate::output::plural(d.points.len() as u64, "state"),
         crate::output::plural(branch_count as u64, "branch"),
         d.continuation_steps,
         elapsed.as_secs_f64(),
         args.out.display()
     );
+    if let Some(a) = atlas {
+        outln!(
+            "atlas: {} rows, {} thumbnails in atlas/, atlas.svg/.png",
+            a.rows.len(),
+            a.rows.iter().map(|r| r.2.len()).sum::<usize>()
+        );
+    }
     Ok(())
 }
 
@@ -412,6 +453,10 @@ fn run_numeric(
     let d =
         crate::numeric_diagram::run_numeric(&opts, &args.out, args.resume, args.quiet, selection)?;
     crate::numeric_diagram::write_outputs(&d, &opts, &scene.name, &run)?;
+    let atlas = match args.shapes {
+        0 => None,
+        k => Some(crate::atlas::write_atlas(&run, k, &scene.name)?),
+    };
     run.commit()?;
     draw_figures(args)?;
     // For homogeneous scenes, show the exact layer's critical lengths next to the numeric ones:
@@ -486,6 +531,16 @@ fn run_numeric(
         d.timings.tracing,
         args.out.display()
     );
+    outln!(
+        "every traced state's shape is in states/ (the state_file column of branches.csv; re-solve with solve --from, draw with draw)"
+    );
+    if let Some(a) = atlas {
+        outln!(
+            "atlas: {} rows, {} thumbnails in atlas/, atlas.svg/.png",
+            a.rows.len(),
+            a.rows.iter().map(|r| r.2.len()).sum::<usize>()
+        );
+    }
     Ok(())
 }
 

@@ -8,6 +8,7 @@ use anyhow::{bail, Context, Result};
 use rodloop_figures::data::LoopData;
 use rodloop_figures::diagram::{energy_figure, energy_split_figure, lambda_figure, DiagramData};
 use rodloop_figures::loops::{loop_picture, LoopPictureOptions};
+use rodloop_figures::overlay::align;
 use rodloop_figures::paint::to_png;
 use rodloop_figures::profiles::profiles_document;
 use rodloop_figures::raster::svg_to_png;
@@ -106,6 +107,65 @@ pub struct DrawSettings {
     pub width: Option<u32>,
     /// Height hint in pixels.
     pub height: Option<u32>,
+    /// A curve to overlay (dashed, aligned) on the profiles, with its legend label (Fig. 5).
+    pub overlay: Option<(LoopData, String)>,
+}
+
+/// Samples of an overlay curve.
+const OVERLAY_POINTS: usize = 512;
+
+/// The Euler rotation curve `l = η` at `L̄` (Eqs. 4–8) as an overlay, or `None` where it does
+/// not exist.
+pub fn euler_overlay(eta: u32, lbar: f64) -> Option<(LoopData, String)> {
+    let curve = rodloop_exact::euler::EulerCurve::from_lbar(eta, lbar).ok()?;
+    let pts = curve.sample(OVERLAY_POINTS);
+    let cols: Vec<Vec<f64>> = vec![
+        pts.iter().map(|p| p.s).collect(),
+        pts.iter().map(|p| p.x).collect(),
+        pts.iter().map(|p| p.y).collect(),
+        pts.iter().map(|p| p.z).collect(),
+        pts.iter().map(|p| p.kappa).collect(),
+        pts.iter().map(|p| p.tau).collect(),
+        pts.iter().map(|p| p.kappa_g).collect(),
+    ];
+    overlay_data("Euler curve", cols).map(|d| {
+        (
+            d,
+            format!("Euler rotation curve l = {eta} (Eqs. 4–8), aligned"),
+        )
+    })
+}
+
+/// The exact loop of the paper's branch with `η` periods at `L̄` (Eq. 35) as an overlay.
+pub fn exact_overlay(eta: u32, lbar: f64) -> Option<(LoopData, String)> {
+    let lp = rodloop_exact::paper_branch_loop(eta, lbar).ok()?;
+    let pts = lp.sample(OVERLAY_POINTS).ok()?;
+    let cols: Vec<Vec<f64>> = vec![
+        pts.iter().map(|p| p.s).collect(),
+        pts.iter().map(|p| p.x).collect(),
+        pts.iter().map(|p| p.y).collect(),
+        pts.iter().map(|p| p.z).collect(),
+        pts.iter().map(|p| p.kappa).collect(),
+        pts.iter().map(|p| p.tau).collect(),
+        pts.iter().map(|p| p.kappa_g).collect(),
+    ];
+    overlay_data("exact loop", cols).map(|d| {
+        (
+            d,
+            format!(
+                "exact loop of branch {} (Eq. 35), aligned",
+                rodloop_exact::branch_of_eta(eta)
+            ),
+        )
+    })
+}
+
+fn overlay_data(source: &str, cols: Vec<Vec<f64>>) -> Option<LoopData> {
+    let names = ["s", "x", "y", "z", "kappa", "tau", "kappa_g"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    LoopData::new(source, names, cols).ok()
 }
 
 impl DrawSettings {
@@ -118,6 +178,7 @@ impl DrawSettings {
             tol: 1e-3,
             width: None,
             height: None,
+            overlay: None,
         }
     }
 }
@@ -176,8 +237,18 @@ pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
     };
     let pic = loop_picture(&data, &opts)?;
     let t_picture = t0.elapsed().as_secs_f64();
+    // Fig. 5: the overlay curve aligned onto the loop (shift, direction, mirror, rotation).
+    let aligned = set.overlay.as_ref().map(|(o, label)| {
+        align(&data, o)
+            .map(|a| (a, label.clone()))
+            .map_err(|e| e.to_string())
+    });
     let profiles = profiles_document(
         &data,
+        match &aligned {
+            Some(Ok((a, label))) => Some((&a.data, label.as_str())),
+            _ => None,
+        },
         480.0,
         260.0,
         &format!("{}: quantities along the loop (Figs. 5, 6)", path.display()),
@@ -209,6 +280,14 @@ pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
         "point_group_order": pic.shape.as_ref().and_then(|g| g.group_order),
         "point_group_tolerance": pic.shape.as_ref().map(|g| g.tolerances.symmetry),
         "symmetry_residual": pic.shape.as_ref().map(|g| g.symmetry_residual),
+        "overlay": match &aligned {
+            Some(Ok((a, label))) => json!({
+                "curve": label, "max_distance": a.max_distance, "shift": a.shift,
+                "reversed": a.reversed, "mirrored": a.mirrored,
+            }),
+            Some(Err(e)) => json!({"error": e}),
+            None => serde_json::Value::Null,
+        },
         "seconds_picture": t_picture,
         "seconds": t0.elapsed().as_secs_f64(),
     });
@@ -264,6 +343,7 @@ pub fn run(args: &Args) -> Result<()> {
         tol: args.tol,
         width: args.width,
         height: args.height,
+        overlay: None,
     };
     let is_diagram = args.file.file_name().is_some_and(|n| n == "branches.csv");
     let written = if is_diagram {

@@ -127,7 +127,8 @@ pub fn run(args: &Args) -> Result<()> {
     run.write_json("summary.json", &summary)?;
     run.commit()?;
     if args.draw {
-        let set = crate::draw::DrawSettings::beside(&args.out);
+        let mut set = crate::draw::DrawSettings::beside(&args.out);
+        set.overlay = crate::draw::exact_overlay(l, args.lbar);
         crate::draw::draw_loop(&args.out.join("curve.csv"), &set)?;
     }
     outln!(

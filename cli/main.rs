@@ -14,6 +14,7 @@ macro_rules! outln {
 }
 
 mod analytic;
+mod atlas;
 mod compare;
 mod converge;
 mod diagram;
@@ -28,7 +29,9 @@ mod phase;
 mod phase_figure;
 mod progress;
 mod report;
+mod report_tables;
 mod solve;
+mod states;
 mod svg;
 
 use std::process::ExitCode;

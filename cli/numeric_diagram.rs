@@ -249,11 +249,14 @@ pub fn write_outputs(
             "multiplicity",
             "point_group",
             "self_intersections",
+            "state_file",
         ],
     );
+    // Every traced state's shape in states/ (cli/states.rs), named in the last column.
+    let (state_files, state_warnings) = crate::states::write_states(d, opts, run)?;
     // The model works in the scene's R and D; report lambda R^3/D0.
     let lam_unit = opts.radius.powi(3) / opts.stiffness.reference();
-    for r in d.rows() {
+    for (r, file) in d.rows().into_iter().zip(state_files) {
         branches.push(vec![
             Cell::I(r.branch.into()),
             Cell::I(r.eta.into()),
@@ -273,6 +276,7 @@ pub fn write_outputs(
             Cell::I(r.multiplicity.into()),
             Cell::S(r.shape.point_group.clone().unwrap_or_default()),
             Cell::S(r.shape.self_intersections_label()),
+            Cell::S(file),
         ])?;
     }
     let mut special = Table::new(
@@ -340,7 +344,7 @@ pub fn write_outputs(
         "branches": ends,
         "great_circles": d.great_circles,
         "shape_tolerance": d.shape_tolerance,
-        "warnings": d.warnings,
+        "warnings": d.warnings.iter().chain(&state_warnings).collect::<Vec<_>>(),
         "timings": d.timings,
         "units": crate::diagram::UNITS,
     })?;

@@ -398,7 +398,15 @@ const KNOWN_OUTPUTS: &[&str] = &[
     "curve.csv",
     "compare.csv",
     "report.html",
+    "atlas.svg",
+    "atlas.png",
+    "diagram_k2.svg",
+    "diagram_k2.png",
 ];
+
+/// Subdirectories a rodloop command writes whole ([`OutputRun::subdir`]): a run that does not
+/// write one removes that of a previous run.
+const KNOWN_OUTPUT_DIRS: &[&str] = &["states", "atlas"];
 
 fn is_known_output(name: &str) -> bool {
     KNOWN_OUTPUTS.contains(&name)
@@ -434,6 +442,7 @@ pub struct OutputRun {
     lock: PathBuf,
     run_id: String,
     written: std::cell::RefCell<Vec<String>>,
+    dirs: std::cell::RefCell<Vec<String>>,
     committed: bool,
 }
 
@@ -496,6 +505,7 @@ impl OutputRun {
             lock,
             run_id,
             written: std::cell::RefCell::new(Vec::new()),
+            dirs: std::cell::RefCell::new(Vec::new()),
             committed: false,
         };
         run.clean_leftovers();
@@ -533,6 +543,21 @@ impl OutputRun {
         Ok(())
     }
 
+    /// Stage a whole subdirectory `name` (one of `KNOWN_OUTPUT_DIRS`) and return its staging
+    /// path; [`OutputRun::commit`] replaces the directory of that name with it.
+    pub fn subdir(&self, name: &str) -> Result<PathBuf> {
+        if !KNOWN_OUTPUT_DIRS.contains(&name) {
+            bail!("internal error: {name} is not a known output directory");
+        }
+        let path = self.stage.join(name);
+        ensure_dir(&path)?;
+        let mut dirs = self.dirs.borrow_mut();
+        if !dirs.iter().any(|n| n == name) {
+            dirs.push(name.to_string());
+        }
+        Ok(path)
+    }
+
     /// The run id (`summary.json` carries it).
     pub fn run_id(&self) -> &str {
         &self.run_id
@@ -560,8 +585,9 @@ impl OutputRun {
     }
 
     /// Move the staged files into place: first the old `summary.json` and every output of a
-    /// previous run that this run does not write are removed, then the new files are renamed
-    /// in, `summary.json` last, so that a complete-looking set is always one run's.
+    /// previous run that this run does not write are removed (and its subdirectories such as
+    /// `states/`), then the new subdirectories and files are renamed in, `summary.json` last,
+    /// so that a complete-looking set is always one run's.
     pub fn commit(mut self) -> Result<()> {
         let mut names = self.written.borrow().clone();
         names.sort_by_key(|n| n == "summary.json");
@@ -576,7 +602,15 @@ impl OutputRun {
                 }
             }
         }
-        for name in &names {
+        let dirs = self.dirs.borrow().clone();
+        for name in KNOWN_OUTPUT_DIRS {
+            let old = self.dir.join(name);
+            if old.is_dir() {
+                fs::remove_dir_all(&old)
+                    .with_context(|| format!("cannot remove stale output {}", old.display()))?;
+            }
+        }
+        for name in dirs.iter().chain(&names) {
             let (from, to) = (self.stage.join(name), self.dir.join(name));
             fs::rename(&from, &to)
                 .with_context(|| format!("cannot move {} to {}", from.display(), to.display()))?;

@@ -1,8 +1,11 @@
 //! `rodloop report`: one self-contained HTML page with everything a run of the numeric
 //! diagram produces: the energy diagram and its companions (Figs. 3a, 3b, 7), the critical
 //! lengths with their error estimates (and, for homogeneous scenes, the exact values), the
-//! comparison with the paper's printed values, a picture and the contact force `λ(s)` of the
-//! stable state of every branch at one length, the run's settings and its timings.
+//! comparison with the paper's printed values, `k²` against `L̄` with Eq. (B.4) (Fig. 11,
+//! homogeneous scenes), the branch atlas (Figs. 2, 9, 10; [`crate::atlas`]), a picture and the
+//! contact force `λ(s)` of the stable state of every branch at one length, the shape of the
+//! first against its Euler curve (Fig. 5), the run's settings and its timings. The tables and
+//! the style sheet are in `report_tables.rs`.
 //!
 //! The page needs no network and no file beside it: every figure is an inline `<svg>`, the
 //! style sheet is inline, there is no script and no external font (the figures name
@@ -19,7 +22,6 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use rodloop_diagram::{DiagramOptions, DiagramRow, Label, NumericDiagram};
-use rodloop_exact::diagram::Diagram;
 use rodloop_figures::color::branch_color;
 use rodloop_figures::data::LoopData;
 use rodloop_figures::diagram::{energy_figure, energy_split_figure, lambda_figure, DiagramData};
@@ -33,8 +35,8 @@ use rodloop_solver::{
     solve_with_accuracy, Accuracy, AccurateEquilibrium, SolveOptions, StartShape,
 };
 
-use crate::compare::CompareRow;
 use crate::output::{checked_json, OutputRun};
+use crate::report_tables::{compare_html, critical_html, sci, STYLE};
 
 /// Width of the diagram figures in the page, pixels.
 const FIG_W: f64 = 960.0;
@@ -44,6 +46,8 @@ const FIG_H: f64 = 560.0;
 /// the view titles and the legend of [`loop_picture`] fit, so that its text is drawn at its
 /// own size (the picture is 2·PANEL + 208 pixels wide).
 const PANEL: f64 = 300.0;
+/// Columns of the branch atlas in the page.
+const ATLAS_SHAPES: usize = 5;
 /// Size of the force plot beside each loop picture, pixels.
 const FORCE_W: f64 = 360.0;
 /// Height of the force plot beside each loop picture, pixels.
@@ -94,6 +98,9 @@ struct SolvedState {
     picture: String,
     /// `λ(s)` along the loop (SVG).
     force: String,
+    /// `x, y, z, κ, τ, κ_g` along the loop with the aligned Euler curve (Fig. 5; SVG) and the
+    /// largest distance between the two curves.
+    shape: Option<(String, f64)>,
     seconds: f64,
 }
 
@@ -225,6 +232,18 @@ fn solve_state(
         },
     )?;
     let force = force_figure(&data, branch)?;
+    let shape = crate::draw::euler_overlay(eta, lbar).and_then(|(o, label)| {
+        let a = rodloop_figures::overlay::align(&data, &o).ok()?;
+        let svg = rodloop_figures::profiles::profiles_figure_overlay(
+            &data,
+            Some((&a.data, &label)),
+            480.0,
+            240.0,
+            &format!("Branch {branch} (η = {eta}) at L̄ = {lbar}: shape along the loop (Fig. 5)"),
+        )
+        .ok()?;
+        Some((svg, a.max_distance))
+    });
     let lam_unit = scene.radius.powi(3) / scene.stiffness.reference();
     Ok(SolvedState {
         energy: res.energy.total,
@@ -239,6 +258,7 @@ fn solve_state(
         self_contacts: pic.contacts.len(),
         picture: pic.svg,
         force,
+        shape,
         seconds: t0.elapsed().as_secs_f64(),
     })
 }
@@ -361,112 +381,6 @@ pub fn inline_svg(svg: &str, prefix: &str, label: &str) -> String {
     )
 }
 
-/// A number in scientific notation for error columns (`0` stays `0`).
-fn sci(v: f64) -> String {
-    if v == 0.0 {
-        "0".into()
-    } else {
-        format!("{v:.1e}")
-    }
-}
-
-/// The critical-length table.
-fn critical_html(d: &NumericDiagram, exact: Option<&Diagram>) -> String {
-    let mut h = String::new();
-    h.push_str("<table id=\"critical-table\">\n<thead><tr><th>i</th><th>L̄<sub>cr</sub></th><th>kind</th><th>from → to</th><th>E R/(πD₀)</th><th>error estimate of L̄<sub>cr</sub></th>");
-    if exact.is_some() {
-        h.push_str("<th>exact L̄<sub>cr</sub></th><th>numeric − exact</th>");
-    }
-    h.push_str("</tr></thead>\n<tbody>\n");
-    for c in &d.critical {
-        let _ = write!(
-            h,
-            "<tr><td>{}</td><td class=\"num\">{:.12}</td><td>{}</td><td>{} → {}</td><td class=\"num\">{:.10}</td><td class=\"num\">{}</td>",
-            c.index,
-            c.lbar_cr,
-            c.kind,
-            c.from_branch,
-            c.to_branch,
-            c.energy,
-            sci(c.error_estimate)
-        );
-        if let Some(e) = exact {
-            match crate::diagram::exact_match(c, e) {
-                Some(x) => {
-                    let _ = write!(
-                        h,
-                        "<td class=\"num\">{:.12}</td><td class=\"num\">{}</td>",
-                        x.lbar_cr,
-                        sci(c.lbar_cr - x.lbar_cr)
-                    );
-                }
-                None => h.push_str("<td colspan=\"2\">no exact match</td>"),
-            }
-        }
-        h.push_str("</tr>\n");
-    }
-    h.push_str("</tbody></table>\n");
-    h
-}
-
-/// The comparison with the paper's printed values.
-fn compare_html(rows: &[CompareRow], numeric: bool) -> String {
-    let yes = |a: Option<bool>| match a {
-        Some(true) => "<td class=\"ok\">yes</td>",
-        Some(false) => "<td class=\"bad\">NO</td>",
-        None => "<td>–</td>",
-    };
-    let opt_sci = |v: Option<f64>| v.map(sci).unwrap_or_else(|| "–".into());
-    let mut h = String::new();
-    h.push_str("<table id=\"compare-table\">\n<thead><tr><th>id</th><th>quantity</th><th>branch</th><th>L̄</th><th>paper</th><th>exact layer</th><th>exact − paper</th><th>agrees</th>");
-    if numeric {
-        h.push_str("<th>numeric</th><th>numeric − paper</th><th>agrees</th>");
-    }
-    h.push_str("<th>source in the paper</th></tr></thead>\n<tbody>\n");
-    for r in rows {
-        let _ = write!(
-            h,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td>{}",
-            esc(&r.id),
-            esc(&r.kind.replace('_', " ")),
-            r.branch,
-            r.lbar.map(|l| l.to_string()).unwrap_or_default(),
-            esc(&r.paper),
-            esc(&r.exact_text()),
-            opt_sci(r.exact_deviation),
-            yes(r.agrees_exact),
-        );
-        if numeric {
-            let _ = write!(
-                h,
-                "<td class=\"num\">{}</td><td class=\"num\">{}</td>{}",
-                match r.numeric_text().as_str() {
-                    "-" => "–".to_string(),
-                    t => esc(t),
-                },
-                opt_sci(r.numeric_deviation),
-                yes(r.agrees_numeric)
-            );
-        }
-        let _ = writeln!(h, "<td class=\"src\">{}</td></tr>", esc(&r.source));
-    }
-    h.push_str("</tbody></table>\n");
-    h
-}
-
-const STYLE: &str = "body{font-family:'DejaVu Sans',Verdana,Arial,sans-serif;margin:0 auto;max-width:1240px;padding:16px 20px 40px;color:#1a1a1a;background:#fff;line-height:1.45}
-h1{font-size:26px;margin:8px 0 4px}h2{font-size:20px;border-bottom:2px solid #d8dee8;padding-bottom:4px;margin-top:34px}
-p.lead{color:#444;margin:4px 0 10px}nav a{margin-right:14px;color:#1f4fd1;text-decoration:none}
-figure{margin:14px 0;padding:0}figure svg.fig{max-width:100%;height:auto;border:1px solid #e2e6ee;display:block}
-figcaption{font-size:13px;color:#444;margin-top:4px;max-width:960px}
-table{border-collapse:collapse;font-size:13px;margin:10px 0}th,td{border:1px solid #d5dae3;padding:3px 8px;text-align:left;vertical-align:top}
-th{background:#f0f3f8}td.num{text-align:right;font-family:'DejaVu Sans Mono',Menlo,Consolas,monospace;white-space:nowrap}
-td.ok{color:#1b7a1b}td.bad{color:#c01818;font-weight:bold}td.src{color:#555;font-size:12px}
-.state{display:flex;flex-wrap:wrap;gap:0 18px;align-items:flex-start;margin-top:18px}.state figure{margin:0;display:table}.state figcaption{display:table-caption;caption-side:bottom}
-.note{background:#fff6e0;border-left:4px solid #e0a800;padding:6px 10px;font-size:13px}
-dl{display:grid;grid-template-columns:max-content auto;gap:2px 16px;font-size:14px}dt{font-weight:bold}dd{margin:0}
-pre{background:#f6f8fa;padding:8px;font-size:12px;overflow-x:auto}";
-
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
     let t_start = Instant::now();
@@ -502,6 +416,11 @@ pub fn run(args: &Args) -> Result<()> {
     let fig_split = energy_split_figure(&dd, FIG_W, 480.0)?;
     let fig_lambda = lambda_figure(&dd, FIG_W, FIG_H)?;
     let t_diagram_figures = t.elapsed().as_secs_f64();
+    // The branch atlas from the staged state files (as `diagram --shapes` draws it).
+    let t = Instant::now();
+    let fig_atlas = crate::atlas::atlas_svg(run.stage_dir(), ATLAS_SHAPES, &scene.name)
+        .map_err(|e| format!("{e:#}"));
+    let t_atlas = t.elapsed().as_secs_f64();
 
     // 3. Exact critical lengths (homogeneous scenes) and the paper's values.
     let t = Instant::now();
@@ -516,6 +435,24 @@ pub fn run(args: &Args) -> Result<()> {
         None
     };
     let compare = crate::compare::compare_rows(uniform.then_some(&d))?;
+    // Fig. 11 from the exact layer (homogeneous scenes).
+    let fig_k2 = match &exact {
+        Some(e) => {
+            let pts: Vec<rodloop_figures::k2::K2Point> = e
+                .points
+                .iter()
+                .map(|p| rodloop_figures::k2::K2Point {
+                    branch: p.branch,
+                    eta: p.eta,
+                    p: p.p,
+                    lbar: p.lbar,
+                    k2: p.k * p.k,
+                })
+                .collect();
+            Some(rodloop_figures::k2::k2_figure(&pts, FIG_W, 480.0)?)
+        }
+        None => None,
+    };
     let t_exact = t.elapsed().as_secs_f64();
 
     // 4. One state per branch, its picture and its contact force.
@@ -538,7 +475,7 @@ pub fn run(args: &Args) -> Result<()> {
     let mut h = String::with_capacity(1 << 20);
     let _ = write!(
         h,
-        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>rodloop report: {name}</title>\n<style>\n{STYLE}\n</style>\n</head>\n<body>\n<h1>rodloop report: scene {name}</h1>\n<p class=\"lead\">{desc}. Numeric branch diagram for {lo} ≤ L̄ ≤ {hi} at accuracy <b>{acc}</b>: {nstates} traced states on {nbranches} branches, {ncrit} critical lengths. Elastic rod loops in a sphere after Wang, Li &amp; Yi, J. Mech. Phys. Solids (2024); equation and figure numbers refer to that paper.</p>\n<nav><a href=\"#diagram\">Diagram</a><a href=\"#critical\">Critical lengths</a><a href=\"#states\">States</a><a href=\"#paper\">Paper values</a><a href=\"#settings\">Settings</a><a href=\"#timings\">Timings</a></nav>\n",
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>rodloop report: {name}</title>\n<style>\n{STYLE}\n</style>\n</head>\n<body>\n<h1>rodloop report: scene {name}</h1>\n<p class=\"lead\">{desc}. Numeric branch diagram for {lo} ≤ L̄ ≤ {hi} at accuracy <b>{acc}</b>: {nstates} traced states on {nbranches} branches, {ncrit} critical lengths. Elastic rod loops in a sphere after Wang, Li &amp; Yi, J. Mech. Phys. Solids (2024); equation and figure numbers refer to that paper.</p>\n<nav><a href=\"#diagram\">Diagram</a><a href=\"#critical\">Critical lengths</a><a href=\"#atlas\">Atlas</a><a href=\"#states\">States</a><a href=\"#paper\">Paper values</a><a href=\"#settings\">Settings</a><a href=\"#timings\">Timings</a></nav>\n",
         name = esc(&scene.name),
         desc = esc(&d.scene),
         lo = opts.lbar_min,
@@ -571,6 +508,14 @@ pub fn run(args: &Args) -> Result<()> {
         "Largest and smallest contact force λR³/D₀ of every state (paper Fig. 7), with the great-circle buckling loads of Eqs. (33)–(34) at L̄ = m.",
         "fig-lambda",
     ));
+    if let Some(k2) = &fig_k2 {
+        h.push_str(&fig(
+            k2,
+            "elliptic modulus against length",
+            "k² of the exact loops of every branch against L̄ (paper Fig. 11), with the small-k² formula Eq. (B.4) dashed, evaluated with each branch's (η, p). The numeric model has no k; this figure is the exact layer's.",
+            "fig-k2",
+        ));
+    }
     h.push_str("</section>\n");
 
     h.push_str("<section id=\"critical\">\n<h2>2. Critical lengths</h2>\n<p>Where the globally stable branch changes: crossings solve E<sub>a</sub>(L̄) = E<sub>b</sub>(L̄) on re-solved, Richardson-extrapolated equilibria; collapses are the lengths L̄ = m where the lowest branch ends on the m-fold great circle. Branch 0 is the planar circle below L̄ = 1. The error estimate is that of L̄<sub>cr</sub> itself.");
@@ -604,7 +549,21 @@ pub fn run(args: &Args) -> Result<()> {
     }
     h.push_str("</section>\n");
 
-    h.push_str("<section id=\"states\">\n<h2>3. The stable state of each branch</h2>\n<p>Each branch solved at one length (the middle of the first stretch where the diagram finds it the lowest branch), from the Euler rotation curve with l = η at the report's accuracy, as <code>rodloop solve</code> does; the converged state's branch is checked from the periods of its κ<sub>g</sub>. Each picture shows the loop on the sphere from an oblique view and along the three axes, coloured by the contact force λR³/D₀ (uniform rods) or by the stiffness D/D₀ (other profiles); nearer strands are darker and thicker. Red circles: self-contacts in 3-D.</p>\n");
+    h.push_str("<section id=\"atlas\">\n<h2>3. Branch atlas</h2>\n");
+    match &fig_atlas {
+        Ok(svg) => h.push_str(&fig(
+            svg,
+            "branch atlas: shapes along every branch",
+            &format!("The traced states along every branch (one row per branch, or per family of a non-uniform rod), {ATLAS_SHAPES} per row spread evenly over its traced range (paper Figs. 2, 9, 10), each labelled with L̄, its stability and E R/(πD₀). Every traced state is in <code>states/</code> (column <code>state_file</code> of <code>branches.csv</code>); <code>rodloop diagram --shapes K</code> draws this atlas with K columns."),
+            "fig-atlas",
+        )),
+        Err(e) => {
+            let _ = writeln!(h, "<p class=\"note\">no atlas: {}</p>", esc(e));
+        }
+    }
+    h.push_str("</section>\n");
+
+    h.push_str("<section id=\"states\">\n<h2>4. The stable state of each branch</h2>\n<p>Each branch solved at one length (the middle of the first stretch where the diagram finds it the lowest branch), from the Euler rotation curve with l = η at the report's accuracy, as <code>rodloop solve</code> does; the converged state's branch is checked from the periods of its κ<sub>g</sub>. Each picture shows the loop on the sphere from an oblique view and along the three axes, coloured by the contact force λR³/D₀ (uniform rods) or by the stiffness D/D₀ (other profiles); nearer strands are darker and thicker. Red circles: self-contacts in 3-D.</p>\n");
     h.push_str("<table id=\"states-table\"><thead><tr><th>branch</th><th>η</th><th>L̄</th><th>chosen as</th><th>solved from</th><th>E R/(πD₀)</th><th>error</th><th>index</th><th>state</th><th>λR³/D₀ range</th><th>point group</th><th>self-contacts</th><th>cells</th></tr></thead><tbody>\n");
     for st in &states {
         match &st.outcome {
@@ -643,6 +602,24 @@ pub fn run(args: &Args) -> Result<()> {
         }
     }
     h.push_str("</tbody></table>\n");
+    // Fig. 5 for the first solved state: its shape against the Euler curve.
+    if let Some((st, (svg, dist))) = states.iter().find_map(|st| {
+        st.outcome
+            .as_ref()
+            .ok()
+            .and_then(|s| s.shape.as_ref())
+            .map(|x| (st, x))
+    }) {
+        h.push_str(&fig(
+            svg,
+            &format!("shape of branch {} against its Euler curve", st.branch),
+            &format!(
+                "Position, curvature, torsion and geodesic curvature along the loop of branch {} at L̄ = {} (solid) and the Euler rotation curve l = η of Eqs. (4)–(8) at the same length (dashed; paper Fig. 5), aligned by arclength shift, direction, mirror and rotation. The two curves are at most {:.3} R apart.",
+                st.branch, st.lbar, dist
+            ),
+            "fig-shape",
+        ));
+    }
     for st in &states {
         if let Ok(s) = &st.outcome {
             let _ = writeln!(h, "<div class=\"state\" id=\"state-{}\">", st.branch);
@@ -683,7 +660,7 @@ pub fn run(args: &Args) -> Result<()> {
     }
     h.push_str("</section>\n");
 
-    h.push_str("<section id=\"paper\">\n<h2>4. Comparison with the paper's printed values</h2>\n<p>Values printed in the paper (<code>data/reference/paper_values.csv</code>, with their sources), next to rodloop's. “Agrees” means within half a unit of the last printed digit (exact statements: within 1e−6).");
+    h.push_str("<section id=\"paper\">\n<h2>5. Comparison with the paper's printed values</h2>\n<p>Values printed in the paper (<code>data/reference/paper_values.csv</code>, with their sources), next to rodloop's. “Agrees” means within half a unit of the last printed digit (exact statements: within 1e−6).");
     if !uniform {
         h.push_str(" The paper's values are for homogeneous loops; this scene's stiffness is not uniform, so only the exact (homogeneous) layer is compared.");
     }
@@ -693,7 +670,7 @@ pub fn run(args: &Args) -> Result<()> {
 
     let t_page = t.elapsed().as_secs_f64();
     let total = t_start.elapsed().as_secs_f64();
-    h.push_str("<section id=\"settings\">\n<h2>5. Settings</h2>\n<dl>\n");
+    h.push_str("<section id=\"settings\">\n<h2>6. Settings</h2>\n<dl>\n");
     let mut dl = |k: &str, v: &str| {
         let _ = writeln!(h, "<dt>{k}</dt><dd>{v}</dd>");
     };
@@ -744,7 +721,7 @@ pub fn run(args: &Args) -> Result<()> {
     }
     h.push_str("</section>\n");
 
-    h.push_str("<section id=\"timings\">\n<h2>6. Timings</h2>\n<table id=\"timings-table\"><thead><tr><th>stage</th><th>wall time (s)</th></tr></thead><tbody>\n");
+    h.push_str("<section id=\"timings\">\n<h2>7. Timings</h2>\n<table id=\"timings-table\"><thead><tr><th>stage</th><th>wall time (s)</th></tr></thead><tbody>\n");
     let mut row = |k: &str, v: f64| {
         let _ = writeln!(h, "<tr><td>{k}</td><td class=\"num\">{v:.3}</td></tr>");
     };
@@ -753,6 +730,7 @@ pub fn run(args: &Args) -> Result<()> {
     row("diagram: great circles", d.timings.great_circles);
     row("diagram total (with writing the CSV files)", t_diagram);
     row("diagram figures", t_diagram_figures);
+    row("branch atlas", t_atlas);
     row("exact layer and paper comparison", t_exact);
     row(
         &format!(
@@ -821,6 +799,7 @@ pub fn run(args: &Args) -> Result<()> {
         "seconds": serde_json::json!({
             "diagram": t_diagram,
             "diagram_figures": t_diagram_figures,
+            "atlas": t_atlas,
             "exact_and_paper": t_exact,
             "states": t_states,
             "page": t_page,
@@ -841,7 +820,7 @@ pub fn run(args: &Args) -> Result<()> {
         );
     }
     outln!(
-        "wrote report.html ({} KB, {} figures: diagram, energy split, lambda extremes, {} with their force plots), branches.csv, critical.csv, diagram.svg, summary.json to {} in {:.2} s",
+        "wrote report.html ({} KB, {} figures: diagram, energy split, lambda extremes, k² (homogeneous scenes), branch atlas, shape against the Euler curve, {} with their force plots), branches.csv, critical.csv, diagram.svg, summary.json, states/ to {} in {:.2} s",
         h.len().div_ceil(1024),
         figures,
         crate::output::plural((states.len() - failed) as u64, "loop picture"),

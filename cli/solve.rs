@@ -191,8 +191,11 @@ fn start_from_file(path: &Path) -> Result<StartShape> {
 /// `D0`: lengths in units of `R`, curvatures in `1/R`, `λR³/D0`, `F R²/D0`, `D/D0` (the model
 /// works in the scene's dimensional `R` and `D`).
 pub fn config_table(profile: &[rodloop_solver::ProfilePoint], scene: &Scene) -> Result<Table> {
-    let r = scene.radius;
-    let d0 = scene.stiffness.reference();
+    config_table_in(profile, scene.radius, scene.stiffness.reference())
+}
+
+/// [`config_table`] for a sphere of radius `r` and reference stiffness `d0`.
+pub fn config_table_in(profile: &[rodloop_solver::ProfilePoint], r: f64, d0: f64) -> Result<Table> {
     let (lam_unit, f_unit) = (r * r * r / d0, r * r / d0);
     let mut table = Table::new(
         "config.csv",
@@ -354,7 +357,8 @@ pub fn run(args: &Args) -> Result<()> {
     run.write_json("summary.json", &summary)?;
     run.commit()?;
     if args.draw {
-        let set = crate::draw::DrawSettings::beside(&args.out);
+        let mut set = crate::draw::DrawSettings::beside(&args.out);
+        set.overlay = crate::draw::euler_overlay(eta, args.lbar);
         crate::draw::draw_loop(&args.out.join("config.csv"), &set)?;
     }
     outln!(

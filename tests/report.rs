@@ -123,13 +123,22 @@ fn branches() -> BTreeSet<u32> {
     rows.iter().map(|r| r[b].parse().unwrap()).collect()
 }
 
-/// The figures the page must show: the three diagram figures and, for every branch of the
+/// The figures the page must show: the diagram figures, the atlas, Fig. 5 and, for every branch of the
 /// diagram, its loop picture and its force plot.
 fn expected_figures() -> Vec<String> {
-    let mut ids: Vec<String> = ["fig-energy", "fig-split", "fig-lambda"]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
+    // The default scene is homogeneous: Fig. 11 (k²) from the exact layer; the branch atlas;
+    // Fig. 5 (shape against the Euler curve) of the first state.
+    let mut ids: Vec<String> = [
+        "fig-energy",
+        "fig-split",
+        "fig-lambda",
+        "fig-k2",
+        "fig-atlas",
+        "fig-shape",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
     for b in branches() {
         ids.push(format!("fig-loop-{b}"));
         ids.push(format!("fig-force-{b}"));
@@ -248,6 +257,7 @@ fn every_figure_is_an_inline_svg_and_nothing_is_fetched() {
             "diagram.svg",
             "report.html",
             "special_points.csv",
+            "states",
             "summary.json"
         ]
     );

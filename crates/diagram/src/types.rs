@@ -306,6 +306,44 @@ impl TracedBranch {
             .collect()
     }
 
+    /// The equilibrium of traced state `k` itself, at the tracing resolution: Newton from its
+    /// own KKT state (already converged, so normally no step), giving its profile
+    /// (positions, forces). Only for branches traced in `lbar`.
+    pub fn equilibrium_of(
+        &self,
+        opts: &DiagramOptions,
+        k: usize,
+    ) -> Result<Equilibrium, SolverError> {
+        let p = self.points.get(k).ok_or_else(|| {
+            SolverError::InvalidInput(format!(
+                "branch eta = {} has {} states, no state {k}",
+                self.eta,
+                self.points.len()
+            ))
+        })?;
+        if self.param != Param::Lbar {
+            return Err(SolverError::InvalidInput(format!(
+                "branch eta = {} was traced in {}, not in lbar",
+                self.eta, self.param
+            )));
+        }
+        let dim = 2 * self.cells + 3 + usize::from(self.phase);
+        if p.state.len() != dim {
+            return Err(SolverError::WrongLength {
+                expected: dim,
+                found: p.state.len(),
+            });
+        }
+        let model = self.model_for(opts, p.value, &p.state)?;
+        // The traced state met the corrector's tolerance: accept it as it is unless its
+        // residual has grown above 1e-8 (a state read from an older file).
+        let accept = rodloop_solver::SolveOptions {
+            tolerance: 1e-8,
+            ..newton_options()
+        };
+        solve_from_state(model, p.state.clone(), &accept)
+    }
+
     /// The equilibrium of this branch at `lbar` at the tracing resolution (Newton from the
     /// interpolated traced states). Only for branches traced in `lbar`.
     pub fn solve_at(&self, opts: &DiagramOptions, lbar: f64) -> Result<Equilibrium, SolverError> {

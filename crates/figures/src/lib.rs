@@ -10,11 +10,14 @@
 
 mod error;
 
+pub mod atlas;
 pub mod color;
 pub mod data;
 pub mod diagram;
 pub mod geometry;
+pub mod k2;
 pub mod loops;
+pub mod overlay;
 pub mod paint;
 pub mod plot;
 pub mod profiles;

@@ -19,12 +19,26 @@ pub fn profiles_figure(
     panel_h: f64,
     title: &str,
 ) -> Result<String, FigureError> {
-    Ok(profiles_document(data, panel_w, panel_h, title)?.finish())
+    Ok(profiles_document(data, None, panel_w, panel_h, title)?.finish())
 }
 
-/// [`profiles_figure`] as a document (for [`crate::paint::to_png`]).
+/// [`profiles_figure`] with a second curve drawn dashed in the panels of the columns it has
+/// (e.g. the aligned Euler curve of [`crate::overlay::align`], the paper's Fig. 5), named by
+/// `overlay.1` in a line under the title.
+pub fn profiles_figure_overlay(
+    data: &LoopData,
+    overlay: Option<(&LoopData, &str)>,
+    panel_w: f64,
+    panel_h: f64,
+    title: &str,
+) -> Result<String, FigureError> {
+    Ok(profiles_document(data, overlay, panel_w, panel_h, title)?.finish())
+}
+
+/// [`profiles_figure_overlay`] as a document (for [`crate::paint::to_png`]).
 pub fn profiles_document(
     data: &LoopData,
+    overlay: Option<(&LoopData, &str)>,
     panel_w: f64,
     panel_h: f64,
     title: &str,
@@ -40,9 +54,15 @@ pub fn profiles_document(
         .filter(|c| data.column(c).is_some())
         .collect();
     let rows = cols.len().div_ceil(2).max(1);
-    let top = 40.0;
+    let top = if overlay.is_some() { 60.0 } else { 40.0 };
     let mut svg = Svg::new(2.0 * panel_w, top + rows as f64 * panel_h);
     svg.text_bold(12.0, 26.0, 16.0, Anchor::Start, title);
+    if let Some((_, label)) = overlay {
+        svg.line(14.0, 44.0, 44.0, 44.0, "#1f4fd1", 1.8, "");
+        svg.text(50.0, 48.0, 13.0, Anchor::Start, "this loop");
+        svg.line(140.0, 44.0, 170.0, 44.0, "#d8600c", 1.8, "6 4");
+        svg.text(176.0, 48.0, 13.0, Anchor::Start, label);
+    }
     let s = data.s();
     let length = data.length();
     for (k, c) in cols.iter().enumerate() {
@@ -52,6 +72,26 @@ pub fn profiles_document(
         if let (Some(&first), Some(&s0)) = (v.first(), s.first()) {
             pts.push((s0 / length + 1.0, first));
         }
+        let mut series = vec![Series {
+            color: "#1f4fd1".into(),
+            width: 1.8,
+            dash: String::new(),
+            points: pts,
+        }];
+        if let Some(o) = overlay.and_then(|(o, _)| o.column(c).map(|v| (o.s(), v))) {
+            let (os, ov) = o;
+            let mut q: Vec<(f64, f64)> =
+                os.iter().zip(ov).map(|(&a, &b)| (a / length, b)).collect();
+            if let (Some(&first), Some(&s0)) = (ov.first(), os.first()) {
+                q.push((s0 / length + 1.0, first));
+            }
+            series.push(Series {
+                color: "#d8600c".into(),
+                width: 1.8,
+                dash: "6 4".into(),
+                points: q,
+            });
+        }
         let plot = Plot {
             title: column_label(c),
             xlabel: "s/L".into(),
@@ -60,12 +100,7 @@ pub fn profiles_document(
                 .next()
                 .unwrap_or_default()
                 .to_string(),
-            series: vec![Series {
-                color: "#1f4fd1".into(),
-                width: 1.8,
-                dash: String::new(),
-                points: pts,
-            }],
+            series,
             hlines: if *c == "lambda" || *c == "kappa_g" || *c == "tau" {
                 vec![0.0]
             } else {

@@ -44,7 +44,7 @@ fn direct_painter_matches_resvg() {
     let data = figure_eight();
     let pic = loop_picture(&data, &LoopPictureOptions::default()).unwrap();
     assert!(pic.document.is_direct());
-    let prof = profiles_document(&data, 480.0, 260.0, "profiles").unwrap();
+    let prof = profiles_document(&data, None, 480.0, 260.0, "profiles").unwrap();
     assert!(prof.is_direct());
     for doc in [&pic.document, &prof] {
         let (w1, h1, a) = pixels(&to_png(doc, 1.0).unwrap());

@@ -35,6 +35,7 @@ pub mod mesh;
 pub mod model;
 pub mod param;
 pub mod periodic;
+mod resample;
 pub mod robust;
 pub mod seam;
 pub mod shape;

@@ -1,0 +1,280 @@
+//! `diagram --shapes K`: the branch atlas, drawn from a diagram directory's `branches.csv`
+//! and the state files it names (`state_file`, see [`crate::states`]): K thumbnails per
+//! branch (per family for a non-uniform rod) spread along its traced range, in `atlas/`,
+//! and the composite `atlas.svg`/`atlas.png` (rows = branches, columns = positions along
+//! them, as in the paper's Figs. 2, 9, 10). The layout is `rodloop_figures::atlas`.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use anyhow::{bail, Context, Result};
+use rodloop_figures::atlas::{atlas_figure, spread, thumbnail, AtlasCell, AtlasRow};
+use rodloop_figures::color::branch_color;
+use rodloop_figures::data::LoopData;
+use rodloop_figures::raster::svg_to_png;
+
+use crate::output::{write_atomic, OutputRun};
+
+/// Width of one cell of the composite atlas, pixels.
+pub const CELL: f64 = 170.0;
+/// Width of a standalone thumbnail, pixels.
+pub const THUMB: f64 = 240.0;
+
+/// Largest `--shapes`.
+pub const MAX_SHAPES: usize = 20;
+
+/// One row of branches.csv, as the atlas needs it.
+struct Row {
+    branch: u32,
+    eta: u32,
+    family: u32,
+    multiplicity: u32,
+    arc: u64,
+    lbar: f64,
+    energy: f64,
+    stability: String,
+    file: String,
+}
+
+fn read_rows(dir: &Path) -> Result<Vec<Row>> {
+    let path = dir.join("branches.csv");
+    let mut rdr =
+        csv::Reader::from_path(&path).with_context(|| format!("cannot read {}", path.display()))?;
+    let header = rdr.headers()?.clone();
+    let col = |name: &str| {
+        header
+            .iter()
+            .position(|h| h == name)
+            .with_context(|| format!("{}: no column {name}", path.display()))
+    };
+    let (cb, ce, cl, cen, cs, cf) = (
+        col("branch")?,
+        col("eta")?,
+        col("lbar")?,
+        col("energy")?,
+        col("stability")?,
+        col("state_file")?,
+    );
+    let (cfam, carc, cmul) = (
+        col("family").ok(),
+        col("arc").ok(),
+        col("multiplicity").ok(),
+    );
+    let mut rows = Vec::new();
+    for (i, rec) in rdr.records().enumerate() {
+        let rec = rec.with_context(|| format!("{}: row {}", path.display(), i + 2))?;
+        let get = |c: usize| rec.get(c).unwrap_or("");
+        let num = |c: usize| -> Result<f64> {
+            get(c)
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .with_context(|| format!("{}: row {}: not a number", path.display(), i + 2))
+        };
+        let int = |c: Option<usize>, default: u64| -> u64 {
+            c.and_then(|c| get(c).parse().ok()).unwrap_or(default)
+        };
+        rows.push(Row {
+            branch: num(cb)? as u32,
+            eta: num(ce)? as u32,
+            family: int(cfam, 0) as u32,
+            multiplicity: int(cmul, 1) as u32,
+            arc: int(carc, i as u64),
+            lbar: num(cl)?,
+            energy: num(cen)?,
+            stability: get(cs).to_string(),
+            file: get(cf).to_string(),
+        });
+    }
+    Ok(rows)
+}
+
+/// One drawn row: branch, family and the `(lbar, state_file)` of its cells.
+pub type NoteRow = (u32, u32, Vec<(f64, String)>);
+
+/// What the atlas drew: per row, its heading and the states of its cells.
+pub struct AtlasNote {
+    /// The rows.
+    pub rows: Vec<NoteRow>,
+    /// Files written (relative to the diagram directory).
+    pub files: Vec<String>,
+}
+
+/// The atlas rows of the diagram in `dir` with `k` cells each (fewer where a branch has fewer
+/// states): rows by branch, then family; cells spread evenly in traversed `L̄` along the
+/// family's arclength order.
+fn atlas_rows(dir: &Path, k: usize) -> Result<(Vec<AtlasRow>, AtlasNote)> {
+    let rows = read_rows(dir)?;
+    let mut groups: BTreeMap<(u32, u32), Vec<&Row>> = BTreeMap::new();
+    for r in &rows {
+        groups.entry((r.branch, r.family)).or_default().push(r);
+    }
+    let mut out = Vec::new();
+    let mut note = AtlasNote {
+        rows: Vec::new(),
+        files: Vec::new(),
+    };
+    for ((branch, family), mut g) in groups {
+        g.sort_by_key(|r| r.arc);
+        g.retain(|r| !r.file.is_empty());
+        if g.is_empty() {
+            continue;
+        }
+        let mut pos = vec![0.0];
+        for w in g.windows(2) {
+            pos.push(pos[pos.len() - 1] + (w[1].lbar - w[0].lbar).abs());
+        }
+        let mut cells = Vec::new();
+        let mut picked = Vec::new();
+        for i in spread(&pos, k) {
+            let r = g[i];
+            let data = LoopData::read(&dir.join(&r.file)).with_context(|| {
+                format!("reading the state of branch {branch} at L̄ = {}", r.lbar)
+            })?;
+            cells.push(AtlasCell {
+                points: data.points(),
+                stiffness: data.column("D").map(<[f64]>::to_vec),
+                lbar: r.lbar,
+                energy: r.energy,
+                stability: r.stability.clone(),
+            });
+            picked.push((r.lbar, r.file.clone()));
+        }
+        let eta = g[0].eta;
+        let subtitle = if family == 0 {
+            format!("η = {eta}")
+        } else if g[0].multiplicity > 1 {
+            format!("η = {eta}\nfamily {family} (×{})", g[0].multiplicity)
+        } else {
+            format!("η = {eta}\nfamily {family}")
+        };
+        out.push(AtlasRow {
+            title: format!("branch {branch}"),
+            subtitle,
+            color: branch_color(branch).to_string(),
+            cells,
+        });
+        note.rows.push((branch, family, picked));
+    }
+    if out.is_empty() {
+        bail!("the diagram has no state files to draw an atlas from");
+    }
+    Ok((out, note))
+}
+
+/// Draw the atlas of the staged diagram of `run` (its `branches.csv` and `states/`): the
+/// thumbnails into the run's `atlas/` directory, the composite `atlas.svg`/`atlas.png`.
+pub fn write_atlas(run: &OutputRun, k: usize, scene: &str) -> Result<AtlasNote> {
+    check_shapes(k)?;
+    let (rows, note) = atlas_rows(run.stage_dir(), k)?;
+    write_rows(run, &rows, note, scene)
+}
+
+fn check_shapes(k: usize) -> Result<()> {
+    if !(1..=MAX_SHAPES).contains(&k) {
+        bail!("--shapes must be from 0 to {MAX_SHAPES} (got {k})");
+    }
+    Ok(())
+}
+
+/// The atlas of an exact diagram: per branch, `k` lengths spread over its sampled range, each
+/// loop computed by the exact layer (Eq. 35, 256 points); labelled `lowest` where the branch
+/// has the lowest energy, else `higher` (the exact model computes no Hessian index).
+pub fn write_exact_atlas(
+    run: &OutputRun,
+    k: usize,
+    points: &[rodloop_exact::diagram::BranchPoint],
+) -> Result<AtlasNote> {
+    check_shapes(k)?;
+    let mut groups: BTreeMap<u32, Vec<&rodloop_exact::diagram::BranchPoint>> = BTreeMap::new();
+    for p in points {
+        groups.entry(p.branch).or_default().push(p);
+    }
+    let mut rows = Vec::new();
+    let mut note = AtlasNote {
+        rows: Vec::new(),
+        files: Vec::new(),
+    };
+    for (branch, mut g) in groups {
+        g.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
+        let pos: Vec<f64> = g.iter().map(|p| p.lbar).collect();
+        let mut cells = Vec::new();
+        let mut picked = Vec::new();
+        for i in spread(&pos, k) {
+            let p = g[i];
+            let lp = rodloop_exact::paper_branch_loop(p.eta, p.lbar)
+                .with_context(|| format!("exact loop of branch {branch} at L̄ = {}", p.lbar))?;
+            let pts = lp.sample(256)?;
+            cells.push(AtlasCell {
+                points: pts
+                    .iter()
+                    .map(|q| nalgebra::Vector3::new(q.x, q.y, q.z))
+                    .collect(),
+                stiffness: None,
+                lbar: p.lbar,
+                energy: p.energy,
+                stability: if p.lowest { "lowest" } else { "higher" }.into(),
+            });
+            picked.push((p.lbar, String::new()));
+        }
+        rows.push(AtlasRow {
+            title: format!("branch {branch}"),
+            subtitle: format!("η = {}", g[0].eta),
+            color: branch_color(branch).to_string(),
+            cells,
+        });
+        note.rows.push((branch, 0, picked));
+    }
+    if rows.is_empty() {
+        bail!("the diagram has no states to draw an atlas from");
+    }
+    write_rows(run, &rows, note, "exact loops")
+}
+
+/// Write the thumbnails of `rows` into the run's `atlas/` and the composite.
+fn write_rows(
+    run: &OutputRun,
+    rows: &[AtlasRow],
+    mut note: AtlasNote,
+    scene: &str,
+) -> Result<AtlasNote> {
+    let thumbs = run.subdir("atlas")?;
+    for (row, (branch, family, _)) in rows.iter().zip(&note.rows) {
+        for (j, cell) in row.cells.iter().enumerate() {
+            let stem = if *family == 0 {
+                format!("branch-{branch}-{:02}", j + 1)
+            } else {
+                format!("branch-{branch}-family-{family}-{:02}", j + 1)
+            };
+            let svg = thumbnail(row, cell, THUMB)?;
+            write_atomic(&thumbs, &format!("{stem}.svg"), svg.as_bytes())?;
+            let png = svg_to_png(&svg, 1.0).with_context(|| format!("rendering {stem}.png"))?;
+            write_atomic(&thumbs, &format!("{stem}.png"), &png)?;
+            note.files.push(format!("atlas/{stem}.svg"));
+            note.files.push(format!("atlas/{stem}.png"));
+        }
+    }
+    let svg = atlas_figure(
+        rows,
+        CELL,
+        &format!("Branch atlas ({scene}): shapes along each branch"),
+    )?;
+    run.write_bytes("atlas.svg", svg.as_bytes())?;
+    run.write_bytes(
+        "atlas.png",
+        &svg_to_png(&svg, 1.0).context("rendering atlas.png")?,
+    )?;
+    note.files.push("atlas.svg".into());
+    note.files.push("atlas.png".into());
+    Ok(note)
+}
+
+/// The composite atlas of the diagram in `dir` as SVG (for the report).
+pub fn atlas_svg(dir: &Path, k: usize, scene: &str) -> Result<String> {
+    let (rows, _) = atlas_rows(dir, k)?;
+    Ok(atlas_figure(
+        &rows,
+        CELL,
+        &format!("Branch atlas ({scene}): shapes along each branch"),
+    )?)
+}

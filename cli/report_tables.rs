@@ -1,0 +1,116 @@
+//! The tables and the style sheet of `rodloop report`'s page (cli/report.rs): the critical
+//! lengths with their exact values, the paper's printed values.
+
+use std::fmt::Write as _;
+
+use rodloop_diagram::NumericDiagram;
+use rodloop_exact::diagram::Diagram;
+use rodloop_figures::svg::esc;
+
+use crate::compare::CompareRow;
+
+/// A number in scientific notation for error columns (`0` stays `0`).
+pub fn sci(v: f64) -> String {
+    if v == 0.0 {
+        "0".into()
+    } else {
+        format!("{v:.1e}")
+    }
+}
+
+/// The critical-length table.
+pub fn critical_html(d: &NumericDiagram, exact: Option<&Diagram>) -> String {
+    let mut h = String::new();
+    h.push_str("<table id=\"critical-table\">\n<thead><tr><th>i</th><th>L̄<sub>cr</sub></th><th>kind</th><th>from → to</th><th>E R/(πD₀)</th><th>error estimate of L̄<sub>cr</sub></th>");
+    if exact.is_some() {
+        h.push_str("<th>exact L̄<sub>cr</sub></th><th>numeric − exact</th>");
+    }
+    h.push_str("</tr></thead>\n<tbody>\n");
+    for c in &d.critical {
+        let _ = write!(
+            h,
+            "<tr><td>{}</td><td class=\"num\">{:.12}</td><td>{}</td><td>{} → {}</td><td class=\"num\">{:.10}</td><td class=\"num\">{}</td>",
+            c.index,
+            c.lbar_cr,
+            c.kind,
+            c.from_branch,
+            c.to_branch,
+            c.energy,
+            sci(c.error_estimate)
+        );
+        if let Some(e) = exact {
+            match crate::diagram::exact_match(c, e) {
+                Some(x) => {
+                    let _ = write!(
+                        h,
+                        "<td class=\"num\">{:.12}</td><td class=\"num\">{}</td>",
+                        x.lbar_cr,
+                        sci(c.lbar_cr - x.lbar_cr)
+                    );
+                }
+                None => h.push_str("<td colspan=\"2\">no exact match</td>"),
+            }
+        }
+        h.push_str("</tr>\n");
+    }
+    h.push_str("</tbody></table>\n");
+    h
+}
+
+/// The comparison with the paper's printed values.
+pub fn compare_html(rows: &[CompareRow], numeric: bool) -> String {
+    let yes = |a: Option<bool>| match a {
+        Some(true) => "<td class=\"ok\">yes</td>",
+        Some(false) => "<td class=\"bad\">NO</td>",
+        None => "<td>–</td>",
+    };
+    let opt_sci = |v: Option<f64>| v.map(sci).unwrap_or_else(|| "–".into());
+    let mut h = String::new();
+    h.push_str("<table id=\"compare-table\">\n<thead><tr><th>id</th><th>quantity</th><th>branch</th><th>L̄</th><th>paper</th><th>exact layer</th><th>exact − paper</th><th>agrees</th>");
+    if numeric {
+        h.push_str("<th>numeric</th><th>numeric − paper</th><th>agrees</th>");
+    }
+    h.push_str("<th>source in the paper</th></tr></thead>\n<tbody>\n");
+    for r in rows {
+        let _ = write!(
+            h,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td>{}",
+            esc(&r.id),
+            esc(&r.kind.replace('_', " ")),
+            r.branch,
+            r.lbar.map(|l| l.to_string()).unwrap_or_default(),
+            esc(&r.paper),
+            esc(&r.exact_text()),
+            opt_sci(r.exact_deviation),
+            yes(r.agrees_exact),
+        );
+        if numeric {
+            let _ = write!(
+                h,
+                "<td class=\"num\">{}</td><td class=\"num\">{}</td>{}",
+                match r.numeric_text().as_str() {
+                    "-" => "–".to_string(),
+                    t => esc(t),
+                },
+                opt_sci(r.numeric_deviation),
+                yes(r.agrees_numeric)
+            );
+        }
+        let _ = writeln!(h, "<td class=\"src\">{}</td></tr>", esc(&r.source));
+    }
+    h.push_str("</tbody></table>\n");
+    h
+}
+
+pub const STYLE: &str = "body{font-family:'DejaVu Sans',Verdana,Arial,sans-serif;margin:0 auto;max-width:1240px;padding:16px 20px 40px;color:#1a1a1a;background:#fff;line-height:1.45}
+h1{font-size:26px;margin:8px 0 4px}h2{font-size:20px;border-bottom:2px solid #d8dee8;padding-bottom:4px;margin-top:34px}
+p.lead{color:#444;margin:4px 0 10px}nav a{margin-right:14px;color:#1f4fd1;text-decoration:none}
+figure{margin:14px 0;padding:0}figure svg.fig{max-width:100%;height:auto;border:1px solid #e2e6ee;display:block}
+figcaption{font-size:13px;color:#444;margin-top:4px;max-width:960px}
+table{border-collapse:collapse;font-size:13px;margin:10px 0}th,td{border:1px solid #d5dae3;padding:3px 8px;text-align:left;vertical-align:top}
+th{background:#f0f3f8}td.num{text-align:right;font-family:'DejaVu Sans Mono',Menlo,Consolas,monospace;white-space:nowrap}
+td.ok{color:#1b7a1b}td.bad{color:#c01818;font-weight:bold}td.src{color:#555;font-size:12px}
+.state{display:flex;flex-wrap:wrap;gap:0 18px;align-items:flex-start;margin-top:18px}.state figure{margin:0;display:table}.state figcaption{display:table-caption;caption-side:bottom}
+.note{background:#fff6e0;border-left:4px solid #e0a800;padding:6px 10px;font-size:13px}
+dl{display:grid;grid-template-columns:max-content auto;gap:2px 16px;font-size:14px}dt{font-weight:bold}dd{margin:0}
+pre{background:#f6f8fa;padding:8px;font-size:12px;overflow-x:auto}";

@@ -1,0 +1,310 @@
+//! `diagram --shapes K` and the state files of `diagram`: every traced state is saved in
+//! `states/` and re-solves (`solve --from`) to its `branches.csv` energy within the error
+//! estimates; the atlas has K cells per branch; no `--shapes` means no atlas.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_rodloop"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("rodloop-atlas-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn run(cmd: &mut Command) -> (bool, String, String) {
+    let o = cmd.output().unwrap();
+    (
+        o.status.success(),
+        String::from_utf8_lossy(&o.stdout).into(),
+        String::from_utf8_lossy(&o.stderr).into(),
+    )
+}
+
+/// branches.csv as maps from column name to text.
+fn rows(dir: &Path) -> Vec<BTreeMap<String, String>> {
+    let mut rdr = csv::Reader::from_path(dir.join("branches.csv")).unwrap();
+    let header: Vec<String> = rdr.headers().unwrap().iter().map(String::from).collect();
+    assert_eq!(header.last().map(String::as_str), Some("state_file"));
+    rdr.records()
+        .map(|r| {
+            let r = r.unwrap();
+            header
+                .iter()
+                .cloned()
+                .zip(r.iter().map(String::from))
+                .collect()
+        })
+        .collect()
+}
+
+fn json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// Re-solve the state of `row` with `solve --from` and check the energy against the row's
+/// energy: within the sum of the two error estimates.
+fn resolve_matches(dir: &Path, row: &BTreeMap<String, String>, scene: Option<&Path>, out: &Path) {
+    let file = dir.join(&row["state_file"]);
+    let mut cmd = bin();
+    cmd.args([
+        "solve",
+        "--lbar",
+        &row["lbar"],
+        "--branch",
+        &row["branch"],
+        "--from",
+    ])
+    .arg(&file)
+    .arg("--out")
+    .arg(out);
+    if let Some(s) = scene {
+        cmd.arg("--scene").arg(s);
+    }
+    let (ok, _, err) = run(&mut cmd);
+    assert!(ok, "{}: {err}", file.display());
+    let s = json(&out.join("summary.json"));
+    let e_solve = s["energy"].as_f64().unwrap();
+    let est_solve = s["error_estimate"].as_f64().unwrap();
+    let e_diagram: f64 = row["energy"].parse().unwrap();
+    let est_diagram: f64 = row["energy_error"].parse().unwrap();
+    assert!(
+        (e_solve - e_diagram).abs() <= est_diagram + est_solve,
+        "{}: solve {e_solve} ± {est_solve:e}, diagram {e_diagram} ± {est_diagram:e}",
+        file.display()
+    );
+    // The saved state has the columns solve writes.
+    let head = |p: &Path| {
+        std::fs::read_to_string(p)
+            .unwrap()
+            .lines()
+            .next()
+            .unwrap()
+            .to_string()
+    };
+    assert_eq!(head(&file), head(&out.join("config.csv")));
+}
+
+/// Atlas thumbnails per (branch, family), from the files in atlas/.
+fn thumbnails(dir: &Path) -> BTreeMap<String, usize> {
+    let mut m = BTreeMap::new();
+    for e in std::fs::read_dir(dir.join("atlas")).unwrap() {
+        let name = e.unwrap().file_name().to_string_lossy().to_string();
+        if let Some(stem) = name.strip_suffix(".svg") {
+            let key = stem.rsplit_once('-').unwrap().0.to_string();
+            *m.entry(key).or_insert(0) += 1;
+            assert!(dir.join("atlas").join(format!("{stem}.png")).is_file());
+        }
+    }
+    m
+}
+
+#[test]
+fn homogeneous_states_resolve_and_the_atlas_has_k_cells_per_branch() {
+    let d = tmp("homogeneous");
+    let (ok, out, err) = run(bin()
+        .args(["diagram", "--quiet", "--lbar-min", "1", "--lbar-max", "2.6"])
+        .args(["--shapes", "4", "--out"])
+        .arg(&d));
+    assert!(ok, "{err}");
+    assert!(out.contains("atlas:"), "{out}");
+    let rs = rows(&d);
+    // Every row names its own existing file.
+    let mut files: Vec<&str> = rs.iter().map(|r| r["state_file"].as_str()).collect();
+    assert!(
+        files.iter().all(|f| d.join(f).is_file()),
+        "missing state file"
+    );
+    files.sort_unstable();
+    files.dedup();
+    assert_eq!(files.len(), rs.len());
+    // One state per branch from the middle of its rows re-solves to its energy.
+    let branches: Vec<String> = {
+        let mut b: Vec<String> = rs.iter().map(|r| r["branch"].clone()).collect();
+        b.dedup();
+        b.sort();
+        b.dedup();
+        b
+    };
+    assert!(branches.len() >= 3, "{branches:?}");
+    for b in &branches {
+        let of: Vec<_> = rs.iter().filter(|r| &r["branch"] == b).collect();
+        resolve_matches(&d, of[of.len() / 2], None, &d.join(format!("solve-{b}")));
+    }
+    // K thumbnails for every branch, and the composite with K cells per row.
+    let t = thumbnails(&d);
+    assert_eq!(t.len(), branches.len(), "{t:?}");
+    assert!(t.values().all(|&k| k == 4), "{t:?}");
+    let svg = std::fs::read_to_string(d.join("atlas.svg")).unwrap();
+    roxmltree::Document::parse(&svg).unwrap();
+    assert_eq!(svg.matches("L̄ = ").count(), 4 * branches.len());
+    let png = std::fs::read(d.join("atlas.png")).unwrap();
+    rodloop_figures::raster::png_size(&png).unwrap();
+
+    // Without --shapes: the states stay, the atlas of the previous run goes.
+    let (ok, out, err) = run(bin()
+        .args([
+            "diagram",
+            "--quiet",
+            "--lbar-min",
+            "1",
+            "--lbar-max",
+            "2.6",
+            "--out",
+        ])
+        .arg(&d));
+    assert!(ok, "{err}");
+    assert!(!out.contains("atlas:"), "{out}");
+    assert!(!d.join("atlas.svg").exists() && !d.join("atlas.png").exists());
+    assert!(!d.join("atlas").exists());
+    assert!(rows(&d).iter().all(|r| d.join(&r["state_file"]).is_file()));
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn two_segment_family_states_resolve_and_are_drawn() {
+    // Eq. (51) with D1/D0 = 0.5 and gamma = 30: a graded mesh, and cells enough for the
+    // half-resolution partner, so every traced energy has an error estimate.
+    let d = tmp("two-segment");
+    let scene = d.join("g30.toml");
+    std::fs::write(
+        &scene,
+        "name = \"two-segment-g30\"\n[stiffness]\nkind = \"tanh\"\nd0 = 1.0\nd1 = 0.5\ns0 = 0.3\ns1 = 0.8\ngamma = 30.0\n",
+    )
+    .unwrap();
+    let out = d.join("diagram");
+    let (ok, _, err) = run(bin()
+        .args(["diagram", "--quiet", "--branch", "2", "--lbar-min", "1.2"])
+        .args(["--lbar-max", "1.8", "--shapes", "3", "--scene"])
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out));
+    assert!(ok, "{err}");
+    let rs = rows(&out);
+    let families: std::collections::BTreeSet<&str> =
+        rs.iter().map(|r| r["family"].as_str()).collect();
+    assert!(
+        families.len() >= 2 && !families.contains("0"),
+        "{families:?}"
+    );
+    for f in &families {
+        let of: Vec<_> = rs.iter().filter(|r| r["family"] == *f).collect();
+        let row = of[of.len() / 2];
+        assert!(row["state_file"].contains(&format!("family-{f}-")));
+        resolve_matches(&out, row, Some(&scene), &d.join(format!("solve-{f}")));
+        // The state file is uniform in s and carries the stiffness profile.
+        let data = rodloop_figures::data::LoopData::read(&out.join(&row["state_file"])).unwrap();
+        let s = data.s();
+        let h = s[1] - s[0];
+        assert!(s.windows(2).all(|w| ((w[1] - w[0]) - h).abs() < 1e-9));
+        let dcol = data.column("D").unwrap();
+        let (lo, hi) = dcol
+            .iter()
+            .fold((9.0f64, 0.0f64), |(a, b), &v| (a.min(v), b.max(v)));
+        assert!(lo < 0.51 && hi > 0.99, "D in [{lo}, {hi}]");
+    }
+    let t = thumbnails(&out);
+    assert_eq!(t.len(), families.len(), "{t:?}");
+    assert!(t.values().all(|&k| k == 3), "{t:?}");
+    // The state files draw with `rodloop draw`.
+    let first = out.join(&rs[0]["state_file"]);
+    let (ok, _, err) = run(bin()
+        .arg("draw")
+        .arg(&first)
+        .args(["--format", "svg", "--out"])
+        .arg(&d));
+    assert!(ok, "{err}");
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn shapes_bad_input_is_refused() {
+    let d = tmp("bad");
+    let (ok, _, err) = run(bin().args(["diagram", "--shapes", "21", "--out"]).arg(&d));
+    assert!(
+        !ok && err.contains("--shapes must be from 0 to 20"),
+        "{err}"
+    );
+    let (ok, _, err) = run(bin().args(["diagram", "--shapes", "-1", "--out"]).arg(&d));
+    assert!(!ok && !err.contains("panicked"), "{err}");
+    assert!(!d.join("atlas.svg").exists());
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn exact_diagram_writes_fig11_with_eq_b4() {
+    let d = tmp("k2");
+    let (ok, out, err) = run(bin()
+        .args(["diagram", "--model", "exact", "--lbar-max", "3", "--out"])
+        .arg(&d));
+    assert!(ok, "{err}");
+    assert!(out.contains("diagram_k2.svg"), "{out}");
+    let svg = std::fs::read_to_string(d.join("diagram_k2.svg")).unwrap();
+    let doc = roxmltree::Document::parse(&svg).unwrap();
+    // A solid curve per branch (1, 2, 3) and dashed Eq. (B.4) pieces.
+    let paths: Vec<_> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("path"))
+        .collect();
+    let dashed = paths
+        .iter()
+        .filter(|n| n.attribute("stroke-dasharray") == Some("6 4"))
+        .count();
+    assert!(
+        paths.len() - dashed >= 3 && dashed >= 3,
+        "{} paths, {dashed} dashed",
+        paths.len()
+    );
+    assert!(svg.contains("Eq. (B.4)"));
+    assert!(!d.join("atlas.svg").exists(), "no --shapes, no atlas");
+    rodloop_figures::raster::png_size(&std::fs::read(d.join("diagram_k2.png")).unwrap()).unwrap();
+    // A numeric run into the same directory removes it.
+    let (ok, _, err) = run(bin()
+        .args([
+            "diagram",
+            "--quiet",
+            "--accuracy",
+            "fast",
+            "--lbar-max",
+            "1.5",
+            "--out",
+        ])
+        .arg(&d));
+    assert!(ok, "{err}");
+    assert!(!d.join("diagram_k2.svg").exists() && !d.join("diagram_k2.png").exists());
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn exact_diagram_atlas_has_k_cells_per_branch() {
+    let d = tmp("exact-atlas");
+    let (ok, out, err) = run(bin()
+        .args([
+            "diagram",
+            "--model",
+            "exact",
+            "--lbar-max",
+            "3",
+            "--shapes",
+            "3",
+            "--out",
+        ])
+        .arg(&d));
+    assert!(ok, "{err}");
+    assert!(out.contains("atlas: 3 rows, 9 thumbnails"), "{out}");
+    let t = thumbnails(&d);
+    assert_eq!(
+        t.keys().collect::<Vec<_>>(),
+        ["branch-1", "branch-2", "branch-3"]
+    );
+    assert!(t.values().all(|&k| k == 3), "{t:?}");
+    let svg = std::fs::read_to_string(d.join("atlas.svg")).unwrap();
+    roxmltree::Document::parse(&svg).unwrap();
+    assert_eq!(svg.matches("L̄ = ").count(), 9);
+    std::fs::remove_dir_all(&d).ok();
+}
