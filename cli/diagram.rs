@@ -271,6 +271,11 @@ pub fn run(args: &Args) -> Result<()> {
     if !(step.is_finite() && step > 0.0 && (lbar_max - lbar_min) / step <= 1e6) {
         bail!("--step must be a positive number giving at most 1e6 samples (got {step})");
     }
+    if step > lbar_max - lbar_min {
+        bail!(
+            "--step {step:e} is longer than the range [{lbar_min}, {lbar_max}]: the exact diagram needs at least two sampled lengths"
+        );
+    }
     let run = OutputRun::begin(&args.out)?;
     let t0 = Instant::now();
     let mut d = exact_window(lbar_min, lbar_max, step)?;

@@ -25,7 +25,7 @@
 //! two models' own `O(N)` block factorisations ([`ModelFactor`]) and one scalar Schur
 //! complement (Govaerts 2000, ch. 3).
 //!
-//! [`trace_phase`] seeds every exchange of the uniform rod that lies in the scene's range just
+//! [`trace_phase`](crate::phase::trace_phase) seeds every exchange of the uniform rod that lies in the scene's range just
 //! below `D1/D0 = 1` (at `1 − 10⁻³`, where the arclength-shift symmetry of the uniform rod is
 //! broken: the lowest placement of the soft segment is chosen among shifted exact loops),
 //! solves `E_a = E_b` there by the secant method on re-solved equilibria, and continues the
