@@ -309,18 +309,8 @@ mod tests {
 
     /// The exact critical lengths of the uniform rod (the exact layer, Sec. 4.3).
     fn exact_crossings() -> Vec<f64> {
-        let d = rodloop_exact::diagram::compute(&rodloop_exact::diagram::DiagramSettings {
-            lbar_min: 1.0,
-            lbar_max: 3.0,
-            eta_max: 4,
-            step: 0.01,
-        })
-        .unwrap();
-        d.critical
-            .iter()
-            .filter(|c| c.kind == rodloop_exact::diagram::CriticalKind::Crossing)
-            .map(|c| c.lbar_cr)
-            .collect()
+        let x = uniform_exchanges(1.0, 3.0).unwrap();
+        x.iter().map(|e| e.lbar_uniform).collect()
     }
 
     #[test]
