@@ -407,6 +407,23 @@ pub fn loop_picture(
     })
 }
 
+/// An end label of a colour bar: enough decimals to resolve the span (at least 4), and no
+/// "−0" for a value that rounds to zero.
+fn end_label(v: f64, span: f64) -> String {
+    let dec = if span > 0.0 && span.is_finite() {
+        ((-span.log10()).ceil() as i64 + 2).clamp(4, 9) as usize
+    } else {
+        4
+    };
+    let s = format!("{v:.dec$}");
+    let unsigned = s.trim_start_matches('-');
+    if unsigned.chars().all(|c| c == '0' || c == '.') {
+        unsigned.to_string()
+    } else {
+        s.replace('-', "−")
+    }
+}
+
 /// A vertical colour bar at `(x, y)`, `h` pixels tall, spanning exactly `scale`, with ticks
 /// and a rotated label.
 pub fn colorbar(svg: &mut Svg, x: f64, y: f64, h: f64, scale: Scale, label: &str) {
@@ -447,7 +464,7 @@ pub fn colorbar(svg: &mut Svg, x: f64, y: f64, h: f64, scale: Scale, label: &str
             pos(v) + 4.0,
             11.0,
             Anchor::Start,
-            &format!("{v:.4}").replace('-', "−"),
+            &end_label(v, scale.max - scale.min),
         );
     }
     svg.text_vertical(x + w + 80.0, y + h / 2.0, 13.0, label);
