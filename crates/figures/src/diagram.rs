@@ -425,7 +425,11 @@ impl DiagramData {
             .branches()
             .into_iter()
             .map(|(b, eta)| LegendItem::Line {
-                label: format!("branch {b} (η = {eta})"),
+                label: if b == 0 {
+                    "branch 0 (planar circle)".into()
+                } else {
+                    format!("branch {b} (η = {eta})")
+                },
                 color: branch_color(b).into(),
                 width: 2.6,
                 dash: String::new(),
@@ -455,13 +459,13 @@ fn special_style(kind: &str) -> (Shape, &'static str, f64, &'static str) {
             Shape::Circle,
             "#e08a00",
             4.5,
-            "lift-off (λ_min = 0, leaves the wall)",
+            "lift-off (λ_min = 0)",
         ),
         "landing" => (
             Shape::Circle,
             "#2a8a2a",
             4.5,
-            "landing (λ_min = 0, back on the wall)",
+            "landing (λ_min = 0)",
         ),
         _ => (Shape::Circle, "#b00", 3.5, "branch point (pitchfork)"),
     }
