@@ -793,7 +793,9 @@ pub fn run(args: &Args) -> Result<()> {
             }
         })
         .collect::<Result<Vec<_>>>()?;
-    let files = crate::states::files_in(run.stage_dir())?;
+    // The tracer's branches/*.json stay in the staging directory (removed at commit).
+    let mut files = crate::states::files_in(run.stage_dir())?;
+    files.retain(|f| !f.starts_with("branches/"));
     let report = checked_json!({
         "file": "report.html",
         "states_dir": "states",
