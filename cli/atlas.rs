@@ -318,8 +318,7 @@ pub fn enclosed_rows(
 ) -> Result<(Vec<AtlasRow>, AtlasNote, Vec<String>)> {
     check_shapes(k)?;
     let stiffness = crate::solve::stiffness_of(&scene.stiffness);
-    let mut groups: BTreeMap<u32, Vec<&rodloop_diagram::enclosed::EnclosedPoint>> =
-        BTreeMap::new();
+    let mut groups: BTreeMap<u32, Vec<&rodloop_diagram::enclosed::EnclosedPoint>> = BTreeMap::new();
     for p in &d.points {
         groups.entry(p.branch).or_default().push(p);
     }
@@ -341,7 +340,14 @@ pub fn enclosed_rows(
                 write_atomic(dir, name.trim_start_matches("states/"), &bytes)?;
             }
             let data = LoopData::parse(&name, &bytes)?;
-            Ok((data, if states.is_some() { name } else { String::new() }))
+            Ok((
+                data,
+                if states.is_some() {
+                    name
+                } else {
+                    String::new()
+                },
+            ))
         };
         one().map_err(|e| format!("branch {branch} at L̄ = {}: {e:#}", p.lbar))
     });
@@ -359,7 +365,10 @@ pub fn enclosed_rows(
                 continue;
             }
         };
-        if rows.last().is_none_or(|r| r.title != format!("branch {branch}")) {
+        if rows
+            .last()
+            .is_none_or(|r| r.title != format!("branch {branch}"))
+        {
             rows.push(AtlasRow {
                 title: format!("branch {branch}"),
                 subtitle: if *branch == 0 {

@@ -104,8 +104,7 @@ fn profile_figure(data: &LoopData, branch: u32, lifted: bool) -> Result<String> 
         let v = data
             .column(col)
             .with_context(|| format!("the state has no {col} column"))?;
-        let mut points: Vec<(f64, f64)> =
-            s.iter().zip(v).map(|(&a, &b)| (a / length, b)).collect();
+        let mut points: Vec<(f64, f64)> = s.iter().zip(v).map(|(&a, &b)| (a / length, b)).collect();
         if let (Some(&s0), Some(&v0)) = (s.first(), v.first()) {
             points.push((s0 / length + 1.0, v0));
         }
@@ -125,13 +124,11 @@ fn profile_figure(data: &LoopData, branch: u32, lifted: bool) -> Result<String> 
     };
     let (w, h) = (380.0, 300.0);
     let mut svg = Svg::new(if lifted { 2.0 * w } else { w }, h);
-    panel("lambda", "Contact force along the loop", "λR³/D₀")?.render(
-        &mut svg, 0.0, 0.0, w, h, "force",
-    );
+    panel("lambda", "Contact force along the loop", "λR³/D₀")?
+        .render(&mut svg, 0.0, 0.0, w, h, "force");
     if lifted {
-        panel("gap", "Gap to the wall along the loop", "gap (R − |r|)/R")?.render(
-            &mut svg, w, 0.0, w, h, "gap",
-        );
+        panel("gap", "Gap to the wall along the loop", "gap (R − |r|)/R")?
+            .render(&mut svg, w, 0.0, w, h, "gap");
     }
     Ok(svg.finish())
 }
@@ -148,7 +145,10 @@ fn solve_one(
     let stiffness = crate::solve::stiffness_of(&scene.stiffness);
     let res = crate::enclosed::solve_state(scene, &stiffness, lbar, branch, accuracy)?;
     let table = crate::enclosed::config_table(&res.state, scene)?;
-    let data = LoopData::parse(&format!("branch {branch} at L̄ = {lbar}"), &table.to_bytes()?)?;
+    let data = LoopData::parse(
+        &format!("branch {branch} at L̄ = {lbar}"),
+        &table.to_bytes()?,
+    )?;
     let index = res.stability.0;
     let label = match (index, lowest) {
         (0, true) => "stable",
@@ -235,7 +235,10 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     // 1. The enclosed diagram, written as `rodloop diagram` writes it.
     let t = Instant::now();
     if !args.quiet {
-        eprintln!("tracing the enclosed diagram ({} ≤ L̄ ≤ {})", opts.lbar_min, opts.lbar_max);
+        eprintln!(
+            "tracing the enclosed diagram ({} ≤ L̄ ≤ {})",
+            opts.lbar_min, opts.lbar_max
+        );
     }
     let d = enclosed_diagram(&opts).context("the enclosed diagram")?;
     crate::enclosed_diagram::write_outputs(&d, &opts, &scene.name, &run, &dargs)?;
@@ -495,7 +498,10 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
         ("sphere radius R", scene.radius.to_string()),
         (
             "length range",
-            format!("{} ≤ L̄ ≤ {}, sampled every {}", opts.lbar_min, opts.lbar_max, opts.step),
+            format!(
+                "{} ≤ L̄ ≤ {}, sampled every {}",
+                opts.lbar_min, opts.lbar_max, opts.step
+            ),
         ),
         (
             "accuracy",
@@ -522,7 +528,10 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
             "platform",
             format!("{}-{}", std::env::consts::ARCH, std::env::consts::OS),
         ),
-        ("command", format!("<code>{}</code>", esc(&command.join(" ")))),
+        (
+            "command",
+            format!("<code>{}</code>", esc(&command.join(" "))),
+        ),
         ("run id", format!("<code>{}</code>", esc(run.run_id()))),
         (
             "units",
@@ -545,7 +554,10 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     row("diagram figure", t_figures);
     row("branch atlas (states re-solved)", t_atlas);
     row(
-        &format!("representative states ({} solves, in parallel)", states.len()),
+        &format!(
+            "representative states ({} solves, in parallel)",
+            states.len()
+        ),
         t_states,
     );
     for st in &states {

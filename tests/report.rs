@@ -194,7 +194,9 @@ fn every_figure_is_an_inline_svg_and_nothing_is_fetched() {
         serde_json::from_str(&std::fs::read_to_string(report().join("summary.json")).unwrap())
             .unwrap();
     let files = summary["report"]["files"].as_array().unwrap();
-    assert!(files.iter().any(|f| f.as_str().unwrap().starts_with("states/")));
+    assert!(files
+        .iter()
+        .any(|f| f.as_str().unwrap().starts_with("states/")));
     for f in files {
         assert!(report().join(f.as_str().unwrap()).is_file(), "{f}");
     }
@@ -576,7 +578,10 @@ fn enclosed_report_has_every_figure_and_the_tables_of_its_csv_files() {
     assert_eq!(table.len(), rows.len());
     for (t, r) in table.iter().zip(&rows) {
         assert_eq!(t[0], r[col(&h, "index")]);
-        assert!((num(&t[1]) - num(&r[col(&h, "lbar_cr")])).abs() < 1e-11, "{t:?} vs {r:?}");
+        assert!(
+            (num(&t[1]) - num(&r[col(&h, "lbar_cr")])).abs() < 1e-11,
+            "{t:?} vs {r:?}"
+        );
     }
     // The lift-off interval of the lowest state runs from the exchange 1 → 2 (branch 2 lifted
     // off) to the landing of branch 2: a critical length and an event of the CSV files.
@@ -584,7 +589,10 @@ fn enclosed_report_has_every_figure_and_the_tables_of_its_csv_files() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
     let lifted = summary["report"]["lowest_lifted_off"].as_array().unwrap();
     assert_eq!(lifted.len(), 1, "{lifted:?}");
-    let (a, b) = (lifted[0][0].as_f64().unwrap(), lifted[0][1].as_f64().unwrap());
+    let (a, b) = (
+        lifted[0][0].as_f64().unwrap(),
+        lifted[0][1].as_f64().unwrap(),
+    );
     let crossing = rows
         .iter()
         .find(|r| r[col(&h, "kind")] == "crossing" && r[col(&h, "to_branch")] == "2")
@@ -612,8 +620,14 @@ fn enclosed_states_are_in_the_ball_and_agree_with_the_exact_surface_loops() {
     assert_eq!(states.len(), 3, "{states:?}");
     let mut lifted = 0;
     for s in states {
-        let (eta, lbar) = (s["eta"].as_u64().unwrap() as u32, s["lbar"].as_f64().unwrap());
-        let (e, err) = (s["energy"].as_f64().unwrap(), s["energy_error"].as_f64().unwrap());
+        let (eta, lbar) = (
+            s["eta"].as_u64().unwrap() as u32,
+            s["lbar"].as_f64().unwrap(),
+        );
+        let (e, err) = (
+            s["energy"].as_f64().unwrap(),
+            s["energy_error"].as_f64().unwrap(),
+        );
         let exact = rodloop_exact::paper_branch_loop(eta, lbar)
             .unwrap()
             .energy()
@@ -623,11 +637,17 @@ fn enclosed_states_are_in_the_ball_and_agree_with_the_exact_surface_loops() {
             // Off the wall: below its surface loop (the surface loop is admissible in the
             // ball, so the enclosed minimum cannot be higher), coloured by the gap.
             lifted += 1;
-            assert!(e < exact - err, "eta {eta} at {lbar}: {e} ± {err} vs surface {exact}");
+            assert!(
+                e < exact - err,
+                "eta {eta} at {lbar}: {e} ± {err} vs surface {exact}"
+            );
             assert_eq!(s["colour"], "gap");
         } else {
             // On the wall: the exact surface loop.
-            assert!((e - exact).abs() <= 1e-9, "eta {eta} at {lbar}: {e} vs {exact}");
+            assert!(
+                (e - exact).abs() <= 1e-9,
+                "eta {eta} at {lbar}: {e} vs {exact}"
+            );
             assert_eq!(s["colour"], "lambda");
         }
         assert!(s["lambda_min"].as_f64().unwrap() >= -1e-6, "{s}");

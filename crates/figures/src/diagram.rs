@@ -455,18 +455,8 @@ const LIFTED: &str = "#f5d76e";
 fn special_style(kind: &str) -> (Shape, &'static str, f64, &'static str) {
     match kind {
         "fold" => (Shape::Triangle, "#555", 3.5, "fold (turning point in L̄)"),
-        "lift-off" => (
-            Shape::Circle,
-            "#e08a00",
-            4.5,
-            "lift-off (λ_min = 0)",
-        ),
-        "landing" => (
-            Shape::Circle,
-            "#2a8a2a",
-            4.5,
-            "landing (λ_min = 0)",
-        ),
+        "lift-off" => (Shape::Circle, "#e08a00", 4.5, "lift-off (λ_min = 0)"),
+        "landing" => (Shape::Circle, "#2a8a2a", 4.5, "landing (λ_min = 0)"),
         _ => (Shape::Circle, "#b00", 3.5, "branch point (pitchfork)"),
     }
 }

@@ -458,7 +458,7 @@ pub fn colour_scale(values: &[f64], s: &[f64]) -> (Scale, Option<Scale>) {
         })
         .collect();
     let total: f64 = w.iter().sum();
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return (full, None);
     }
     let mut order: Vec<usize> = (0..n).collect();

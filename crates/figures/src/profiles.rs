@@ -50,9 +50,11 @@ pub fn profiles_document(
     }
     // A constant stiffness (a uniform rod) says nothing along the loop: no panel, a note.
     let constant_d = data.column("D").and_then(|d| {
-        let (lo, hi) = d.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-            (a.min(v), b.max(v))
-        });
+        let (lo, hi) = d
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
         (hi - lo <= 1e-12 * hi.abs().max(1.0)).then_some(lo)
     });
     let cols: Vec<&str> = PROFILE_COLUMNS
@@ -74,7 +76,10 @@ pub fn profiles_document(
             48.0,
             13.0,
             Anchor::End,
-            &format!("D/D₀ = {} along the whole loop (uniform rod)", crate::svg::tick_label(d)),
+            &format!(
+                "D/D₀ = {} along the whole loop (uniform rod)",
+                crate::svg::tick_label(d)
+            ),
         );
     }
     if let Some((_, label)) = overlay {

@@ -292,5 +292,8 @@ fn colour_scale_clips_only_isolated_peaks() {
     let (sc, full) = colour_scale(&peaks, &s);
     let full = full.expect("clipped");
     assert_eq!((full.min, full.max), (-100.0, 100.0));
-    assert!(sc.min >= -1.0 && sc.max <= 1.0 && sc.max - sc.min > 1.5, "{sc:?}");
+    assert!(
+        sc.min >= -1.0 && sc.max <= 1.0 && sc.max - sc.min > 1.5,
+        "{sc:?}"
+    );
 }
