@@ -134,6 +134,7 @@ fn atlas_rows(dir: &Path, k: usize) -> Result<(Vec<AtlasRow>, AtlasNote)> {
             cells.push(AtlasCell {
                 points: data.points(),
                 stiffness: data.column("D").map(<[f64]>::to_vec),
+                off_wall: None,
                 lbar: r.lbar,
                 energy: r.energy,
                 stability: r.stability.clone(),
@@ -211,6 +212,7 @@ pub fn write_exact_atlas(
                     .map(|q| nalgebra::Vector3::new(q.x, q.y, q.z))
                     .collect(),
                 stiffness: None,
+                off_wall: None,
                 lbar: p.lbar,
                 energy: p.energy,
                 stability: if p.lowest { "lowest" } else { "higher" }.into(),
@@ -266,7 +268,168 @@ fn write_rows(
     )?;
     note.files.push("atlas.svg".into());
     note.files.push("atlas.png".into());
+    record_in_summary(run, &note)?;
     Ok(note)
+}
+
+/// Add what the atlas drew to the staged `summary.json` (written before the atlas): an
+/// `atlas` object with the files written (relative to the output directory) and, per row,
+/// the lengths and state files of its cells.
+fn record_in_summary(run: &OutputRun, note: &AtlasNote) -> Result<()> {
+    let path = run.stage_dir().join("summary.json");
+    let Ok(text) = std::fs::read_to_string(&path) else {
+        return Ok(());
+    };
+    let mut summary: serde_json::Value =
+        serde_json::from_str(&text).context("reading the staged summary.json")?;
+    let rows: Vec<serde_json::Value> = note
+        .rows
+        .iter()
+        .map(|(branch, family, cells)| {
+            serde_json::json!({
+                "branch": branch,
+                "family": family,
+                "lbar": cells.iter().map(|c| c.0).collect::<Vec<_>>(),
+                "state_files": cells.iter().map(|c| c.1.as_str()).collect::<Vec<_>>(),
+            })
+        })
+        .collect();
+    if let serde_json::Value::Object(map) = &mut summary {
+        map.insert(
+            "atlas".into(),
+            serde_json::json!({"files": note.files, "rows": rows}),
+        );
+    }
+    run.write_json("summary.json", &summary)
+}
+
+/// The atlas of an enclosed diagram (which keeps no states): per branch, `k` of its sampled
+/// lengths spread over its range, each solved again as `rodloop solve` solves it
+/// ([`crate::enclosed::solve_state`]; attached: the exact surface loop re-solved by the 3-D
+/// model, lifted off: the 3-D model), written to `states/branch-B-NN.csv` in the columns of
+/// the enclosed `config.csv` when `states` is given, and drawn with the parts off the wall
+/// in amber. Returns the rows, what was drawn and the states that could not be solved.
+pub fn enclosed_rows(
+    scene: &rodloop_scene::Scene,
+    accuracy: rodloop_solver::Accuracy,
+    d: &rodloop_diagram::enclosed::EnclosedDiagram,
+    k: usize,
+    states: Option<&Path>,
+) -> Result<(Vec<AtlasRow>, AtlasNote, Vec<String>)> {
+    check_shapes(k)?;
+    let stiffness = crate::solve::stiffness_of(&scene.stiffness);
+    let mut groups: BTreeMap<u32, Vec<&rodloop_diagram::enclosed::EnclosedPoint>> = BTreeMap::new();
+    for p in &d.points {
+        groups.entry(p.branch).or_default().push(p);
+    }
+    let mut jobs = Vec::new();
+    for (&branch, g) in groups.iter_mut() {
+        g.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
+        let pos: Vec<f64> = g.iter().map(|p| p.lbar).collect();
+        for (j, i) in spread(&pos, k).into_iter().enumerate() {
+            jobs.push((branch, j, g[i]));
+        }
+    }
+    let solved = crate::states::parallel_map(&jobs, |&(branch, j, p)| {
+        let one = || -> Result<(LoopData, String)> {
+            let res = crate::enclosed::solve_state(scene, &stiffness, p.lbar, branch, accuracy)?;
+            let table = crate::enclosed::config_table(&res.state, scene)?;
+            let bytes = table.to_bytes()?;
+            let name = format!("states/branch-{branch}-{:02}.csv", j + 1);
+            if let Some(dir) = states {
+                write_atomic(dir, name.trim_start_matches("states/"), &bytes)?;
+            }
+            let data = LoopData::parse(&name, &bytes)?;
+            Ok((
+                data,
+                if states.is_some() {
+                    name
+                } else {
+                    String::new()
+                },
+            ))
+        };
+        one().map_err(|e| format!("branch {branch} at L̄ = {}: {e:#}", p.lbar))
+    });
+    let mut rows: Vec<AtlasRow> = Vec::new();
+    let mut note = AtlasNote {
+        rows: Vec::new(),
+        files: Vec::new(),
+    };
+    let mut failed = Vec::new();
+    for ((branch, _, p), res) in jobs.iter().zip(solved) {
+        let (data, file) = match res {
+            Ok(x) => x,
+            Err(e) => {
+                failed.push(e);
+                continue;
+            }
+        };
+        if rows
+            .last()
+            .is_none_or(|r| r.title != format!("branch {branch}"))
+        {
+            rows.push(AtlasRow {
+                title: format!("branch {branch}"),
+                subtitle: if *branch == 0 {
+                    "free circle".into()
+                } else {
+                    format!("η = {}", p.eta)
+                },
+                color: if *branch == 0 {
+                    "#555555".into()
+                } else {
+                    branch_color(*branch).to_string()
+                },
+                cells: Vec::new(),
+            });
+            note.rows.push((*branch, 0, Vec::new()));
+        }
+        let off_wall = data.column("gap").map(|g| {
+            g.iter()
+                .map(|&v| v > rodloop_figures::data::GAP_TOUCH)
+                .collect()
+        });
+        if let (Some(row), Some(n)) = (rows.last_mut(), note.rows.last_mut()) {
+            row.cells.push(AtlasCell {
+                points: data.points(),
+                stiffness: data.column("D").map(<[f64]>::to_vec),
+                off_wall,
+                lbar: p.lbar,
+                energy: p.energy,
+                stability: p.label.as_str().to_string(),
+            });
+            if !file.is_empty() {
+                note.files.push(file.clone());
+            }
+            n.2.push((p.lbar, file));
+        }
+    }
+    if rows.is_empty() {
+        bail!(
+            "no state of the enclosed diagram could be solved for the atlas: {}",
+            failed.join("; ")
+        );
+    }
+    Ok((rows, note, failed))
+}
+
+/// `diagram --shapes K` on an enclosed scene: [`enclosed_rows`] with the states in the run's
+/// `states/`, the thumbnails in `atlas/`, the composite `atlas.svg/.png`; the files and any
+/// state that could not be solved are added to `summary.json`.
+pub fn write_enclosed_atlas(
+    run: &OutputRun,
+    k: usize,
+    scene: &rodloop_scene::Scene,
+    accuracy: rodloop_solver::Accuracy,
+    d: &rodloop_diagram::enclosed::EnclosedDiagram,
+) -> Result<AtlasNote> {
+    let states = run.subdir("states")?;
+    let (rows, note, failed) = enclosed_rows(scene, accuracy, d, k, Some(&states))?;
+    for f in &failed {
+        eprintln!("warning: atlas: {f}");
+    }
+    write_rows(run, &rows, note, &scene.name)
 }
 
 /// The composite atlas of the diagram in `dir` as SVG (for the report).

@@ -74,7 +74,8 @@ pub struct Args {
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Column to colour the loop by (D, lambda, kappa_g, gap, kappa, tau, s, …; default:
-    /// lambda when present, else gap, else kappa_g).
+    /// gap for a loop that has lifted off the wall (enclosed scenes), else lambda when present,
+    /// else kappa_g).
     #[arg(long)]
     pub color: Option<String>,
     /// Output format.
@@ -302,13 +303,18 @@ pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
 }
 
 /// Draw the figures of a diagram directory (`branches.csv`, `critical.csv`) into
-/// `set.out`: `diagram` (Fig. 3a), `diagram_split` (Fig. 3b), `diagram_lambda` (Fig. 7).
+/// `set.out`: `diagram` (Fig. 3a), `diagram_split` (Fig. 3b), `diagram_lambda` (Fig. 7); for
+/// an enclosed diagram only `diagram` (with its lifted-off parts and lift-off/landing events).
 pub fn draw_diagram(dir: &Path, set: &DrawSettings) -> Result<Vec<String>> {
     let d = DiagramData::read(dir)?;
     let w = f64::from(set.width.unwrap_or(960));
     let h = f64::from(set.height.unwrap_or(620));
     ensure_dir(&set.out)?;
     let mut names = write_figure(&set.out, "diagram", &energy_figure(&d, w, h)?, set.format)?;
+    if !d.missing.is_empty() {
+        // An enclosed diagram has no energy split and no largest contact force.
+        return Ok(names);
+    }
     names.extend(write_figure(
         &set.out,
         "diagram_split",

@@ -276,7 +276,7 @@ fn solve_from_shape(
 }
 
 /// `config.csv` of an enclosed state: one row per node.
-fn config_table(st: &EnclosedState, scene: &Scene) -> Result<Table> {
+pub(crate) fn config_table(st: &EnclosedState, scene: &Scene) -> Result<Table> {
     let m = &st.model;
     let r = scene.radius;
     let d0 = scene.stiffness.reference();

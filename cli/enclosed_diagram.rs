@@ -81,12 +81,16 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     let run = OutputRun::begin(&args.out)?;
     let d = enclosed_diagram(&opts).context("the enclosed diagram")?;
     write_outputs(&d, &opts, &scene.name, &run, args)?;
+    if args.shapes > 0 {
+        // The branch atlas (cli/atlas.rs): states re-solved along each branch, in states/.
+        crate::atlas::write_enclosed_atlas(&run, args.shapes, scene, accuracy, &d)?;
+    }
     run.commit()?;
     print(&d, scene, &opts, &args.out);
     Ok(())
 }
 
-fn write_outputs(
+pub(crate) fn write_outputs(
     d: &EnclosedDiagram,
     opts: &EnclosedDiagramOptions,
     scene: &str,
@@ -216,7 +220,7 @@ fn write_outputs(
 /// The `L̄` intervals where the lowest state is a paper branch that has lifted off (branch
 /// 0, the free circle below `L̄ = 1`, is not counted): from each critical length or event to
 /// the next, when the lowest branch there is lifted off at the samples between.
-fn lowest_lifted_off(d: &EnclosedDiagram) -> Vec<(f64, f64)> {
+pub(crate) fn lowest_lifted_off(d: &EnclosedDiagram) -> Vec<(f64, f64)> {
     let mut cuts: Vec<f64> = d
         .critical
         .iter()

@@ -29,6 +29,7 @@ mod phase;
 mod phase_figure;
 mod progress;
 mod report;
+mod report_enclosed;
 mod report_tables;
 mod solve;
 mod states;

@@ -344,6 +344,7 @@ pub fn write_outputs(
         "branches": ends,
         "great_circles": d.great_circles,
         "shape_tolerance": d.shape_tolerance,
+        "states_dir": "states",
         "warnings": d.warnings.iter().chain(&state_warnings).collect::<Vec<_>>(),
         "timings": d.timings,
         "units": crate::diagram::UNITS,

@@ -39,15 +39,15 @@ use crate::output::{checked_json, OutputRun};
 use crate::report_tables::{compare_html, critical_html, sci, STYLE};
 
 /// Width of the diagram figures in the page, pixels.
-const FIG_W: f64 = 960.0;
+pub(crate) const FIG_W: f64 = 960.0;
 /// Height of the diagram figures in the page, pixels.
-const FIG_H: f64 = 560.0;
+pub(crate) const FIG_H: f64 = 560.0;
 /// Side of one view of a loop picture, pixels (four views per picture): the smallest at which
 /// the view titles and the legend of [`loop_picture`] fit, so that its text is drawn at its
 /// own size (the picture is 2·PANEL + 208 pixels wide).
-const PANEL: f64 = 300.0;
+pub(crate) const PANEL: f64 = 300.0;
 /// Columns of the branch atlas in the page.
-const ATLAS_SHAPES: usize = 5;
+pub(crate) const ATLAS_SHAPES: usize = 5;
 /// Size of the force plot beside each loop picture, pixels.
 const FORCE_W: f64 = 360.0;
 /// Height of the force plot beside each loop picture, pixels.
@@ -118,7 +118,7 @@ fn first_stable_stretch(rows: &[DiagramRow], branch: u32) -> Option<(f64, f64)> 
 }
 
 /// The middle of `(a, b)`, rounded to 0.01 when that stays well inside.
-fn middle(a: f64, b: f64) -> f64 {
+pub(crate) fn middle(a: f64, b: f64) -> f64 {
     let m = 0.5 * (a + b);
     let r = (m * 100.0).round() / 100.0;
     if r > a + 0.25 * (b - a) && r < b - 0.25 * (b - a) {
@@ -384,6 +384,9 @@ pub fn inline_svg(svg: &str, prefix: &str, label: &str) -> String {
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
     let t_start = Instant::now();
+    if let Some(scene) = crate::enclosed_diagram::enclosed_scene(args.scene.as_deref())? {
+        return crate::report_enclosed::run(args, &scene);
+    }
     let scene = crate::solve::load_scene(args.scene.as_deref())?;
     let scene_text = match &args.scene {
         Some(p) => Some(
@@ -515,6 +518,8 @@ pub fn run(args: &Args) -> Result<()> {
             "k² of the exact loops of every branch against L̄ (paper Fig. 11), with the small-k² formula Eq. (B.4) dashed, evaluated with each branch's (η, p). The numeric model has no k; this figure is the exact layer's.",
             "fig-k2",
         ));
+    } else {
+        h.push_str("<p class=\"note\" id=\"no-k2\">No k² figure (paper Fig. 11): the elliptic modulus k belongs to the closed-form loops of a uniform rod (Eq. (35)); this scene's stiffness is not uniform, so its loops have no k and Eq. (B.4) does not apply.</p>\n");
     }
     h.push_str("</section>\n");
 
@@ -788,8 +793,13 @@ pub fn run(args: &Args) -> Result<()> {
             }
         })
         .collect::<Result<Vec<_>>>()?;
+    // The tracer's branches/*.json stay in the staging directory (removed at commit).
+    let mut files = crate::states::files_in(run.stage_dir())?;
+    files.retain(|f| !f.starts_with("branches/"));
     let report = checked_json!({
         "file": "report.html",
+        "states_dir": "states",
+        "files": files,
         "bytes": h.len(),
         "figures": figures,
         "states": state_notes,

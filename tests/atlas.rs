@@ -145,6 +145,12 @@ fn homogeneous_states_resolve_and_the_atlas_has_k_cells_per_branch() {
     assert_eq!(svg.matches("L̄ = ").count(), 4 * branches.len());
     let png = std::fs::read(d.join("atlas.png")).unwrap();
     rodloop_figures::raster::png_size(&png).unwrap();
+    // summary.json names the state directory and every atlas file, which exist.
+    let summary = json(&d.join("summary.json"));
+    assert_eq!(summary["states_dir"], "states");
+    let listed = summary["atlas"]["files"].as_array().unwrap();
+    assert_eq!(listed.len(), 2 * 4 * branches.len() + 2);
+    assert!(listed.iter().all(|f| d.join(f.as_str().unwrap()).is_file()));
 
     // Without --shapes: the states stay, the atlas of the previous run goes.
     let (ok, out, err) = run(bin()
@@ -306,5 +312,72 @@ fn exact_diagram_atlas_has_k_cells_per_branch() {
     let svg = std::fs::read_to_string(d.join("atlas.svg")).unwrap();
     roxmltree::Document::parse(&svg).unwrap();
     assert_eq!(svg.matches("L̄ = ").count(), 9);
+    std::fs::remove_dir_all(&d).ok();
+}
+
+#[test]
+fn enclosed_atlas_states_are_in_the_ball_and_off_the_wall_where_the_diagram_says() {
+    let d = tmp("enclosed");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/scenes/homogeneous-enclosed.toml");
+    let (ok, out, err) = run(bin()
+        .args(["diagram", "--scene"])
+        .arg(&scene)
+        .args(["--lbar-max", "2", "--shapes", "3", "--out"])
+        .arg(&d));
+    assert!(ok, "{err}");
+    assert!(d.join("atlas.png").is_file(), "{out}");
+    // branches.csv of the enclosed diagram: (branch, lbar) -> attached.
+    let mut rdr = csv::Reader::from_path(d.join("branches.csv")).unwrap();
+    let h: Vec<String> = rdr.headers().unwrap().iter().map(String::from).collect();
+    let c = |n: &str| h.iter().position(|x| x == n).unwrap();
+    let attached: Vec<(u32, f64, bool)> = rdr
+        .records()
+        .map(|r| {
+            let r = r.unwrap();
+            (
+                r[c("branch")].parse().unwrap(),
+                r[c("lbar")].parse().unwrap(),
+                &r[c("attached")] == "1",
+            )
+        })
+        .collect();
+    let summary = json(&d.join("summary.json"));
+    let rows = summary["atlas"]["rows"].as_array().unwrap();
+    let mut lifted = 0;
+    for row in rows {
+        let b = row["branch"].as_u64().unwrap() as u32;
+        for (l, f) in row["lbar"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .zip(row["state_files"].as_array().unwrap())
+        {
+            let l = l.as_f64().unwrap();
+            let mut st = csv::Reader::from_path(d.join(f.as_str().unwrap())).unwrap();
+            let sh: Vec<String> = st.headers().unwrap().iter().map(String::from).collect();
+            let k = |n: &str| sh.iter().position(|x| x == n).unwrap();
+            let mut max_gap = 0.0f64;
+            for r in st.records() {
+                let r = r.unwrap();
+                let v = |n: &str| r[k(n)].parse::<f64>().unwrap();
+                let norm = (v("x").powi(2) + v("y").powi(2) + v("z").powi(2)).sqrt();
+                assert!(norm <= 1.0 + 1e-9, "{f}: |r| = {norm}");
+                assert!((norm - (1.0 - v("gap"))).abs() < 1e-9);
+                max_gap = max_gap.max(v("gap"));
+            }
+            // The re-solved state is off the wall exactly where the diagram's sample is.
+            let (_, _, on) = attached
+                .iter()
+                .find(|(bb, ll, _)| *bb == b && (ll - l).abs() < 1e-12)
+                .unwrap_or_else(|| panic!("branch {b} at {l} is not a sample"));
+            assert_eq!(!on, max_gap > 1e-9, "branch {b} at {l}: max gap {max_gap}");
+            lifted += usize::from(max_gap > 1e-9);
+        }
+    }
+    // Branch 2 is lifted off below its landing at 1.506 (and L̄ ≤ 2 here).
+    assert!(lifted >= 1, "{rows:?}");
+    let svg = std::fs::read_to_string(d.join("atlas.svg")).unwrap();
+    roxmltree::Document::parse(&svg).unwrap();
+    assert!(svg.contains("amber: lifted off the wall"));
     std::fs::remove_dir_all(&d).ok();
 }

@@ -1,4 +1,4 @@
-//! `rodloop report` on the default scene: the HTML page is checked structurally (every
+//! `rodloop report` on the default scene (and, at the end, on the enclosed scene): the HTML page is checked structurally (every
 //! figure an inline `<svg>` that parses, the critical-length table equal to `critical.csv`
 //! and to the independent mpmath reference, the states equal to the exact loops, nothing
 //! fetched from the network, no NaN), and, when `chromium` is installed, loaded in headless
@@ -188,6 +188,17 @@ fn every_figure_is_an_inline_svg_and_nothing_is_fetched() {
     for part in html.split("url(#").skip(1) {
         let id = &part[..part.find(')').unwrap()];
         assert!(ids.contains(id), "url(#{id}) has no target");
+    }
+    // summary.json lists every file the run wrote, the state files among them.
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(report().join("summary.json")).unwrap())
+            .unwrap();
+    let files = summary["report"]["files"].as_array().unwrap();
+    assert!(files
+        .iter()
+        .any(|f| f.as_str().unwrap().starts_with("states/")));
+    for f in files {
+        assert!(report().join(f.as_str().unwrap()).is_file(), "{f}");
     }
     // Self-contained: no network, no external resource of any kind.
     for bad in [
@@ -472,8 +483,9 @@ fn page_loads_in_headless_chromium_without_console_errors() {
 fn bad_input_is_one_line_and_writes_nothing() {
     let base = Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-bad");
     let _ = std::fs::remove_dir_all(&base);
-    let enclosed =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("data/scenes/homogeneous-enclosed.toml");
+    // Enclosed two-segment rods: the enclosed diagram covers uniform rods only.
+    let enclosed = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("data/scenes/inhomogeneous-d1-0.5-enclosed.toml");
     let broken = base.join("broken.toml");
     std::fs::create_dir_all(&base).unwrap();
     std::fs::write(&broken, "radius = -1\n").unwrap();
@@ -491,7 +503,7 @@ fn bad_input_is_one_line_and_writes_nothing() {
         ),
         (
             vec!["--scene".into(), enclosed.display().to_string()],
-            "enclosed",
+            "uniform rods only",
         ),
         (vec!["--accuracy".into(), "sloppy".into()], "sloppy"),
     ];
@@ -511,5 +523,192 @@ fn bad_input_is_one_line_and_writes_nothing() {
         assert!(first.len() < 400, "{first}");
         assert!(!out.join("report.html").exists());
         assert!(!out.join("summary.json").exists());
+    }
+}
+
+/// The report of the enclosed scene, made once.
+fn enclosed_report() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-enclosed");
+        let _ = std::fs::remove_dir_all(&dir);
+        let o = rodloop(&[
+            "report",
+            "--quiet",
+            "--scene",
+            "data/scenes/homogeneous-enclosed.toml",
+            "--out",
+            dir.to_str().unwrap(),
+        ]);
+        assert!(
+            o.status.success(),
+            "rodloop report (enclosed) failed: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        dir
+    })
+}
+
+#[test]
+fn enclosed_report_has_every_figure_and_the_tables_of_its_csv_files() {
+    let dir = enclosed_report();
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    // Branches 1–3 live in 1 ≤ L̄ ≤ 3 with a range; branch 0 (the circle) only at L̄ = 1.
+    let mut ids: Vec<String> = vec!["fig-energy".into(), "fig-atlas".into()];
+    for b in 1..=3 {
+        ids.push(format!("fig-loop-{b}"));
+        ids.push(format!("fig-force-{b}"));
+    }
+    for id in &ids {
+        let fig = between(&html, &format!("<figure id=\"{id}\">"), "</figure>");
+        assert_eq!(fig.matches("<svg").count(), 1, "figure {id}");
+    }
+    let all = svgs(&html);
+    assert_eq!(all.len(), ids.len(), "one <svg> per figure, no other");
+    for svg in &all {
+        roxmltree::Document::parse(svg)
+            .unwrap_or_else(|e| panic!("an inline SVG does not parse: {e}"));
+    }
+    for bad in ["http://", "https://", "<script", "<img", "NaN"] {
+        assert!(!html.contains(bad), "the page contains {bad}");
+    }
+    // The critical table is critical.csv.
+    let (h, rows) = read_csv(&dir.join("critical.csv"));
+    let table = table_rows(&html, "critical-table");
+    assert_eq!(table.len(), rows.len());
+    for (t, r) in table.iter().zip(&rows) {
+        assert_eq!(t[0], r[col(&h, "index")]);
+        assert!(
+            (num(&t[1]) - num(&r[col(&h, "lbar_cr")])).abs() < 1e-11,
+            "{t:?} vs {r:?}"
+        );
+    }
+    // The lift-off interval of the lowest state runs from the exchange 1 → 2 (branch 2 lifted
+    // off) to the landing of branch 2: a critical length and an event of the CSV files.
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let lifted = summary["report"]["lowest_lifted_off"].as_array().unwrap();
+    assert_eq!(lifted.len(), 1, "{lifted:?}");
+    let (a, b) = (
+        lifted[0][0].as_f64().unwrap(),
+        lifted[0][1].as_f64().unwrap(),
+    );
+    let crossing = rows
+        .iter()
+        .find(|r| r[col(&h, "kind")] == "crossing" && r[col(&h, "to_branch")] == "2")
+        .expect("the exchange 1 -> 2");
+    assert_eq!(a, num(&crossing[col(&h, "lbar_cr")]));
+    let (sh, sr) = read_csv(&dir.join("special_points.csv"));
+    let landing = sr
+        .iter()
+        .find(|r| r[col(&sh, "kind")] == "landing")
+        .expect("a landing");
+    assert_eq!(b, num(&landing[col(&sh, "lbar")]));
+    assert!(html.contains(&format!("{a:.9} &lt; L̄ &lt; {b:.9}")));
+    // Every file the summary lists is there.
+    for f in summary["report"]["files"].as_array().unwrap() {
+        assert!(dir.join(f.as_str().unwrap()).is_file(), "{f}");
+    }
+}
+
+#[test]
+fn enclosed_states_are_in_the_ball_and_agree_with_the_exact_surface_loops() {
+    let dir = enclosed_report();
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let states = summary["report"]["states"].as_array().unwrap();
+    assert_eq!(states.len(), 3, "{states:?}");
+    let mut lifted = 0;
+    for s in states {
+        let (eta, lbar) = (
+            s["eta"].as_u64().unwrap() as u32,
+            s["lbar"].as_f64().unwrap(),
+        );
+        let (e, err) = (
+            s["energy"].as_f64().unwrap(),
+            s["energy_error"].as_f64().unwrap(),
+        );
+        let exact = rodloop_exact::paper_branch_loop(eta, lbar)
+            .unwrap()
+            .energy()
+            .unwrap();
+        let gap = s["max_gap"].as_f64().unwrap();
+        if gap > 1e-9 {
+            // Off the wall: below its surface loop (the surface loop is admissible in the
+            // ball, so the enclosed minimum cannot be higher), coloured by the gap.
+            lifted += 1;
+            assert!(
+                e < exact - err,
+                "eta {eta} at {lbar}: {e} ± {err} vs surface {exact}"
+            );
+            assert_eq!(s["colour"], "gap");
+        } else {
+            // On the wall: the exact surface loop.
+            assert!(
+                (e - exact).abs() <= 1e-9,
+                "eta {eta} at {lbar}: {e} vs {exact}"
+            );
+            assert_eq!(s["colour"], "lambda");
+        }
+        assert!(s["lambda_min"].as_f64().unwrap() >= -1e-6, "{s}");
+    }
+    // Branch 2 is shown where it is the lowest state and has lifted off.
+    assert_eq!(lifted, 1);
+    // The atlas states lie in the ball, |r| = R − gap.
+    let mut files = 0;
+    for e in std::fs::read_dir(dir.join("states")).unwrap() {
+        let (h, rows) = read_csv(&e.unwrap().path());
+        let (x, y, z, g) = (col(&h, "x"), col(&h, "y"), col(&h, "z"), col(&h, "gap"));
+        for r in &rows {
+            let norm = (num(&r[x]).powi(2) + num(&r[y]).powi(2) + num(&r[z]).powi(2)).sqrt();
+            assert!(norm <= 1.0 + 1e-9 && (norm - (1.0 - num(&r[g]))).abs() < 1e-9);
+        }
+        files += 1;
+    }
+    assert!(files >= 15, "{files} state files");
+}
+
+#[test]
+fn enclosed_page_loads_in_headless_chromium_without_console_errors() {
+    let Some(chromium) = chromium() else {
+        println!("skipped: chromium not installed (run scripts/screenshot_report.sh)");
+        return;
+    };
+    let page = format!(
+        "file://{}",
+        std::fs::canonicalize(enclosed_report().join("report.html"))
+            .unwrap()
+            .display()
+    );
+    let profile = Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-enclosed-chromium");
+    let _ = std::fs::remove_dir_all(&profile);
+    let o = run_with_timeout(
+        Command::new(&chromium).args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            &format!("--user-data-dir={}", profile.display()),
+            "--enable-logging=stderr",
+            "--v=0",
+            "--dump-dom",
+            &page,
+        ]),
+        Duration::from_secs(120),
+    )
+    .expect("chromium did not finish within 120 s");
+    let _ = std::fs::remove_dir_all(&profile);
+    let log = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "chromium failed: {log}");
+    for bad in [":CONSOLE", "Uncaught", "Failed to load resource"] {
+        assert!(!log.contains(bad), "console error:\n{log}");
+    }
+    let dom = String::from_utf8_lossy(&o.stdout);
+    for id in ["fig-energy", "fig-atlas", "fig-loop-2", "fig-force-2"] {
+        let fig = between(&dom, &format!("<figure id=\"{id}\">"), "</figure>");
+        assert_eq!(fig.matches("<svg").count(), 1, "{id} in the rendered DOM");
     }
 }

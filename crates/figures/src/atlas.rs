@@ -14,6 +14,9 @@ use crate::FigureError;
 /// Colour of the soft segment of a non-uniform rod.
 pub const SOFT_COLOR: &str = "#e8590c";
 
+/// Colour of the parts of an enclosed loop that have lifted off the wall.
+pub const OFF_WALL_COLOR: &str = "#d9a400";
+
 /// One loop of the atlas.
 #[derive(Clone, Debug)]
 pub struct AtlasCell {
@@ -23,6 +26,9 @@ pub struct AtlasCell {
     /// Bending stiffness at the points (`None` or constant: a uniform rod). Where it lies
     /// below the middle of its range the loop is drawn in [`SOFT_COLOR`].
     pub stiffness: Option<Vec<f64>>,
+    /// Points off the wall (an enclosed loop's gap above [`crate::data::GAP_TOUCH`]),
+    /// drawn in [`OFF_WALL_COLOR`]; `None` on the surface.
+    pub off_wall: Option<Vec<bool>>,
     /// `L̄` of the state.
     pub lbar: f64,
     /// Energy `E R/(πD₀)`.
@@ -142,8 +148,13 @@ pub fn draw_cell(svg: &mut Svg, x0: f64, y0: f64, side: f64, cell: &AtlasCell, c
         }
         _ => vec![false; n],
     };
+    let off: Vec<bool> = match &cell.off_wall {
+        Some(o) if o.len() == n => o.clone(),
+        _ => vec![false; n],
+    };
     let base = Rgb::hex(u32::from_str_radix(color.trim_start_matches('#'), 16).unwrap_or(0x1f4fd1));
     let soft_rgb = Rgb::hex(0xe8590c);
+    let off_rgb = Rgb::hex(0xd9a400);
     let mid = |i: usize| 0.5 * (proj[i].depth + proj[(i + 1) % n].depth);
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&a, &b| mid(a).total_cmp(&mid(b)));
@@ -152,7 +163,13 @@ pub fn draw_cell(svg: &mut Svg, x0: f64, y0: f64, side: f64, cell: &AtlasCell, c
     let seg = |svg: &mut Svg, i: usize| {
         let j = (i + 1) % n;
         let f = ((mid(i) / r + 1.0) / 2.0).clamp(0.0, 1.0);
-        let col = if soft[i] && soft[j] { soft_rgb } else { base };
+        let col = if off[i] && off[j] {
+            off_rgb
+        } else if soft[i] && soft[j] {
+            soft_rgb
+        } else {
+            base
+        };
         svg.segment(
             px(proj[i].u, proj[i].v),
             px(proj[j].u, proj[j].v),
@@ -265,6 +282,11 @@ pub fn atlas_figure(rows: &[AtlasRow], side: f64, title: &str) -> Result<String,
             })
         })
     });
+    let any_off = rows.iter().any(|r| {
+        r.cells
+            .iter()
+            .any(|c| c.off_wall.as_ref().is_some_and(|o| o.iter().any(|&b| b)))
+    });
     for (i, row) in rows.iter().enumerate() {
         let y = top + i as f64 * ch;
         if i > 0 {
@@ -301,10 +323,11 @@ pub fn atlas_figure(rows: &[AtlasRow], side: f64, title: &str) -> Result<String,
         ly + 16.0,
         12.0,
         Anchor::Start,
-        if any_soft {
-            "Nearer strands darker and thicker; ● s = 0; orange: the soft segment."
-        } else {
-            "Nearer strands darker and thicker; ● s = 0."
+        match (any_soft, any_off) {
+            (true, true) => "Nearer strands darker and thicker; ● s = 0; orange: the soft segment; amber: off the wall.",
+            (true, false) => "Nearer strands darker and thicker; ● s = 0; orange: the soft segment.",
+            (false, true) => "Nearer strands darker and thicker; ● s = 0; amber: lifted off the wall (gap > 1e-9 R).",
+            (false, false) => "Nearer strands darker and thicker; ● s = 0.",
         },
     );
     Ok(svg.finish())

@@ -8,6 +8,10 @@ use nalgebra::Vector3;
 
 use crate::FigureError;
 
+/// Gap (units of `R`) above which a node of an enclosed loop counts as off the wall (the
+/// enclosed solver's touching tolerance is 1e-9 R).
+pub const GAP_TOUCH: f64 = 1e-9;
+
 /// A closed curve and its per-point columns.
 #[derive(Clone, Debug)]
 pub struct LoopData {
@@ -193,6 +197,13 @@ impl LoopData {
         self.length() / (2.0 * std::f64::consts::PI * self.radius())
     }
 
+    /// Whether the table has a `gap` column (enclosed scenes) with some gap above
+    /// [`GAP_TOUCH`]: the loop has lifted off the wall there.
+    pub fn lifted_off(&self) -> bool {
+        self.column("gap")
+            .is_some_and(|g| g.iter().any(|&v| v > GAP_TOUCH))
+    }
+
     /// Number of periods η of the geodesic curvature (half its sign changes round the loop),
     /// when the file has a `kappa_g` column.
     pub fn eta(&self) -> Option<u32> {
@@ -217,9 +228,13 @@ impl LoopData {
         Some((changes / 2) as u32)
     }
 
-    /// The column a picture is coloured by when none is chosen: `lambda`, else `gap`, else
-    /// `kappa_g`, else `s`.
+    /// The column a picture is coloured by when none is chosen: `gap` for a loop that has
+    /// lifted off the wall somewhere (an enclosed state with a gap above [`GAP_TOUCH`]), else
+    /// `lambda`, else `gap`, else `kappa_g`, else `s`.
     pub fn default_color_column(&self) -> &'static str {
+        if self.lifted_off() {
+            return "gap";
+        }
         for c in ["lambda", "gap", "kappa_g"] {
             if self.column(c).is_some() {
                 return c;

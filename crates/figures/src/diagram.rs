@@ -72,12 +72,15 @@ pub struct DiagramPoint {
     /// Position along the family (`arc` column: sheet · 10⁶ + rank in arclength order);
     /// `None` without the column (points are then drawn in increasing `L̄`).
     pub arc: Option<u64>,
+    /// Enclosed diagrams (`attached` column): whether the state lies on the wall
+    /// everywhere; `None` for surface diagrams.
+    pub attached: Option<bool>,
 }
 
 /// A special point of `special_points.csv` (fold, branch point, crossing, collapse).
 #[derive(Clone, Debug)]
 pub struct SpecialMark {
-    /// `fold`, `branch_point`, `crossing` or `collapse`.
+    /// `fold`, `branch_point`, `lift-off` or `landing` (enclosed diagrams).
     pub kind: String,
     /// `L̄`.
     pub lbar: f64,
@@ -101,8 +104,12 @@ pub struct CriticalPoint {
 /// A diagram read back from its CSV files.
 #[derive(Clone, Debug)]
 pub struct DiagramData {
-    /// `exact` (a `lowest` column) or `numeric` (a `stability` column).
+    /// `exact` (a `lowest` column), `numeric` (a `stability` column) or `enclosed` (a
+    /// `label` and an `attached` column).
     pub model: String,
+    /// Columns the file lacks that some figures need (`energy_g`, `lambda_max`: the enclosed
+    /// diagram has neither); their values are NaN and those figures are refused.
+    pub missing: Vec<String>,
     /// States.
     pub points: Vec<DiagramPoint>,
     /// Critical lengths.
@@ -183,17 +190,33 @@ impl DiagramData {
             });
         }
         let col = |c: &str| num_col(&names, &rows, c, &src);
-        let (branch, eta, lbar, energy, energy_g, lmin, lmax) = (
+        let enclosed = names.iter().any(|n| n == "attached") && names.iter().any(|n| n == "label");
+        let mut missing = Vec::new();
+        // The enclosed diagram has no energy split and no largest contact force.
+        let mut col_or_nan = |c: &str| -> Result<Vec<f64>, FigureError> {
+            if enclosed && !names.iter().any(|n| n == c) {
+                missing.push(c.to_string());
+                Ok(vec![f64::NAN; rows.len()])
+            } else {
+                col(c)
+            }
+        };
+        let (energy_g, lmax) = (col_or_nan("energy_g")?, col_or_nan("lambda_max")?);
+        let (branch, eta, lbar, energy, lmin) = (
             col("branch")?,
             col("eta")?,
             col("lbar")?,
             col("energy")?,
-            col("energy_g")?,
             col("lambda_min")?,
-            col("lambda_max")?,
         );
-        let (model, stability): (String, Vec<Stability>) = if let Some(i) =
-            names.iter().position(|n| n == "stability")
+        let attached = if enclosed {
+            Some(col("attached")?)
+        } else {
+            None
+        };
+        let (model, stability): (String, Vec<Stability>) = if let Some(i) = names
+            .iter()
+            .position(|n| n == "stability" || (enclosed && n == "label"))
         {
             let mut v = Vec::new();
             for (r, row) in rows.iter().enumerate() {
@@ -203,14 +226,14 @@ impl DiagramData {
                         Some("unstable") => Stability::Unstable,
                         other => {
                             return Err(FigureError::Invalid(format!(
-                                "{src}: row {}: stability must be stable, metastable or unstable (got {:?})",
+                                "{src}: row {}: stability (label) must be stable, metastable or unstable (got {:?})",
                                 r + 2,
                                 other.unwrap_or("")
                             )))
                         }
                     });
             }
-            ("numeric".into(), v)
+            (if enclosed { "enclosed" } else { "numeric" }.into(), v)
         } else {
             let lowest = col("lowest")?;
             (
@@ -240,6 +263,7 @@ impl DiagramData {
             .map(|k| DiagramPoint {
                 family: family.as_ref().map_or(0, |f| f[k] as u32),
                 arc: arc.as_ref().map(|a| a[k] as u64),
+                attached: attached.as_ref().map(|a| a[k] != 0.0),
                 branch: branch[k] as u32,
                 eta: eta[k] as u32,
                 lbar: lbar[k],
@@ -292,7 +316,7 @@ impl DiagramData {
                     })?;
             for (k, row) in sr.iter().enumerate() {
                 let kind = row.get(ki).cloned().unwrap_or_default();
-                if kind == "fold" || kind == "branch_point" {
+                if ["fold", "branch_point", "lift-off", "landing"].contains(&kind.as_str()) {
                     special.push(SpecialMark {
                         kind,
                         lbar: lb[k],
@@ -303,6 +327,7 @@ impl DiagramData {
         }
         Ok(DiagramData {
             model,
+            missing,
             points,
             critical,
             special,
@@ -373,12 +398,38 @@ impl DiagramData {
         out
     }
 
+    /// Wide light bands under the runs of lifted-off states (enclosed diagrams), drawn
+    /// before the branch lines.
+    fn lifted_off(&self, f: impl Fn(&DiagramPoint) -> f64) -> Vec<Series> {
+        let mut out = Vec::new();
+        for (b, _) in self.branches() {
+            let mut pts: Vec<&DiagramPoint> =
+                self.points.iter().filter(|p| p.branch == b).collect();
+            pts.sort_by(|a, c| a.lbar.total_cmp(&c.lbar));
+            for run in pts.split(|p| p.attached != Some(false)) {
+                if !run.is_empty() {
+                    out.push(Series {
+                        color: LIFTED.into(),
+                        width: 9.0,
+                        dash: String::new(),
+                        points: run.iter().map(|p| (p.lbar, f(p))).collect(),
+                    });
+                }
+            }
+        }
+        out
+    }
+
     fn legend(&self, used: &BTreeSet<Stability>) -> Vec<LegendItem> {
         let mut legend: Vec<LegendItem> = self
             .branches()
             .into_iter()
             .map(|(b, eta)| LegendItem::Line {
-                label: format!("branch {b} (η = {eta})"),
+                label: if b == 0 {
+                    "branch 0 (planar circle)".into()
+                } else {
+                    format!("branch {b} (η = {eta})")
+                },
                 color: branch_color(b).into(),
                 width: 2.6,
                 dash: String::new(),
@@ -397,6 +448,32 @@ impl DiagramData {
     }
 }
 
+/// Colour of the band under the lifted-off parts of an enclosed diagram.
+const LIFTED: &str = "#f5d76e";
+
+/// Marker of a special point: shape, colour, half-size, legend text.
+fn special_style(kind: &str) -> (Shape, &'static str, f64, &'static str) {
+    match kind {
+        "fold" => (Shape::Triangle, "#555", 3.5, "fold (turning point in L̄)"),
+        "lift-off" => (Shape::Circle, "#e08a00", 4.5, "lift-off (λ_min = 0)"),
+        "landing" => (Shape::Circle, "#2a8a2a", 4.5, "landing (λ_min = 0)"),
+        _ => (Shape::Circle, "#b00", 3.5, "branch point (pitchfork)"),
+    }
+}
+
+/// Refuse a figure that needs columns the diagram lacks.
+fn require(d: &DiagramData, what: &str) -> Result<(), FigureError> {
+    if d.missing.is_empty() {
+        Ok(())
+    } else {
+        Err(FigureError::Invalid(format!(
+            "the {} diagram has no {} columns, which {what} needs",
+            d.model,
+            d.missing.join(", ")
+        )))
+    }
+}
+
 /// Figure size check shared by the diagram figures.
 pub fn check_size(w: f64, h: f64) -> Result<(), FigureError> {
     if !(300.0..=6000.0).contains(&w) || !(200.0..=6000.0).contains(&h) {
@@ -412,8 +489,18 @@ pub fn check_size(w: f64, h: f64) -> Result<(), FigureError> {
 pub fn energy_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, FigureError> {
     check_size(w, h)?;
     let mut used = BTreeSet::new();
-    let series = d.lines(|p| p.energy, &mut used);
+    let mut series = d.lifted_off(|p| p.energy);
+    let lifted = !series.is_empty();
+    series.extend(d.lines(|p| p.energy, &mut used));
     let mut legend = d.legend(&used);
+    if lifted {
+        legend.push(LegendItem::Line {
+            label: "lifted off the wall (gap > 0)".into(),
+            color: LIFTED.into(),
+            width: 9.0,
+            dash: String::new(),
+        });
+    }
     let mut marks = Vec::new();
     let mut kinds = BTreeSet::new();
     for c in &d.critical {
@@ -432,28 +519,24 @@ pub fn energy_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, FigureEr
     }
     let mut special_kinds = BTreeSet::new();
     for p in &d.special {
-        let fold = p.kind == "fold";
-        special_kinds.insert(fold);
+        let (shape, color, size, _) = special_style(&p.kind);
+        special_kinds.insert(p.kind.as_str());
         marks.push(Mark {
             at: (p.lbar, p.energy),
-            shape: if fold { Shape::Triangle } else { Shape::Circle },
-            color: if fold { "#555" } else { "#b00" }.into(),
-            size: 3.5,
+            shape,
+            color: color.into(),
+            size,
         });
     }
-    if special_kinds.contains(&true) {
-        legend.push(LegendItem::Mark {
-            label: "fold (turning point in L̄)".into(),
-            shape: Shape::Triangle,
-            color: "#555".into(),
-        });
-    }
-    if special_kinds.contains(&false) {
-        legend.push(LegendItem::Mark {
-            label: "branch point (pitchfork)".into(),
-            shape: Shape::Circle,
-            color: "#b00".into(),
-        });
+    for kind in ["fold", "branch_point", "lift-off", "landing"] {
+        if special_kinds.contains(kind) {
+            let (shape, color, _, label) = special_style(kind);
+            legend.push(LegendItem::Mark {
+                label: label.into(),
+                shape,
+                color: color.into(),
+            });
+        }
     }
     if kinds.contains(&true) {
         legend.push(LegendItem::Mark {
@@ -494,6 +577,7 @@ pub fn energy_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, FigureEr
 /// panels.
 pub fn energy_split_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, FigureError> {
     check_size(w, h)?;
+    require(d, "the energy split")?;
     let mut svg = Svg::new(w, h);
     for (k, (title, ylabel, f)) in [
         (
@@ -542,6 +626,7 @@ pub fn energy_split_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, Fi
 /// `(m − 1)²/m²`, `m ≥ 2` (▲).
 pub fn lambda_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, FigureError> {
     check_size(w, h)?;
+    require(d, "the contact-force figure")?;
     let mut used = BTreeSet::new();
     let mut series = d.lines(|p| p.lambda_max, &mut used);
     series.extend(d.lines(|p| p.lambda_min, &mut used));

@@ -46,8 +46,11 @@ pub struct LoopPicture {
     pub document: Svg,
     /// Column the loop is coloured by.
     pub color_column: String,
-    /// Range of the colour bar (the column's data range).
+    /// Range of the colour bar: the column's data range, or its central 90 % by arclength
+    /// when the rest spans far more (see [`colour_scale`]).
     pub scale: Scale,
+    /// The column's full data range when the colour bar is clipped to the central part.
+    pub full_range: Option<Scale>,
     /// Self-contacts in 3-D (closest approach of strands apart along the loop below the
     /// tolerance), from [`LoopPicture::shape`] when the table has `kappa_g`, else from the
     /// polygon through the table's points.
@@ -130,7 +133,7 @@ pub fn loop_picture(
             found: data.names.join(", "),
         })?
         .to_vec();
-    let scale = Scale::of(&values);
+    let (scale, full_range) = colour_scale(&values, data.s());
     let pts = data.points();
     let n = pts.len();
     let r = data.radius();
@@ -192,9 +195,16 @@ pub fn loop_picture(
         13.0,
         Anchor::Start,
         &format!(
-            "L̄ = L/(2πR) = {lbar:.4},  L/R = {:.4},  {n} points;  colour: {}",
+            "L̄ = L/(2πR) = {lbar:.4},  L/R = {:.4},  {n} points;  colour: {}{}",
             data.length() / r,
-            column_label(&color_column)
+            column_label(&color_column),
+            full_range
+                .map(|f| format!(
+                    " (from {} to {}; the bar spans 90 % of the loop)",
+                    crate::svg::tick_label((f.min * 1e3).round() / 1e3),
+                    crate::svg::tick_label((f.max * 1e3).round() / 1e3)
+                ))
+                .unwrap_or_default()
         ),
     );
     svg.text(
@@ -366,6 +376,7 @@ pub fn loop_picture(
         2.0 * p + gap_y,
         scale,
         &column_label(&color_column),
+        full_range.is_some(),
     );
     // Legend of the marks.
     let ly = top + 2.0 * p + gap_y + 34.0;
@@ -400,6 +411,7 @@ pub fn loop_picture(
         document: svg,
         color_column,
         scale,
+        full_range,
         contacts,
         shape,
         tol,
@@ -407,9 +419,71 @@ pub fn loop_picture(
     })
 }
 
+/// An end label of a colour bar: enough decimals to resolve the span (at least 4), and no
+/// "−0" for a value that rounds to zero.
+fn end_label(v: f64, span: f64) -> String {
+    let dec = if span > 0.0 && span.is_finite() {
+        ((-span.log10()).ceil() as i64 + 2).clamp(4, 9) as usize
+    } else {
+        4
+    };
+    let s = format!("{v:.dec$}");
+    let unsigned = s.trim_start_matches('-');
+    if unsigned.chars().all(|c| c == '0' || c == '.') {
+        unsigned.to_string()
+    } else {
+        s.replace('-', "−")
+    }
+}
+
+/// The colour range of `values` at arclengths `s`: their full range, unless the central
+/// 90 % of the loop's length (5th to 95th percentile weighted by arclength) spans less than
+/// a quarter of it. Then a few sharp peaks (the contact force at the stiffness transitions
+/// of a two-segment rod) would leave the rest of the loop in one colour, so the bar spans the
+/// central part, and the full range is returned beside it for the bar's labels.
+pub fn colour_scale(values: &[f64], s: &[f64]) -> (Scale, Option<Scale>) {
+    let full = Scale::of(values);
+    let n = values.len();
+    if n < 8 || s.len() != n || full.max <= full.min {
+        return (full, None);
+    }
+    // Weight of node i: half the arclength to each neighbour (the last closes the loop
+    // with the mean spacing).
+    let mean = (s[n - 1] - s[0]) / (n - 1) as f64;
+    let w: Vec<f64> = (0..n)
+        .map(|i| {
+            let before = if i == 0 { mean } else { s[i] - s[i - 1] };
+            let after = if i + 1 == n { mean } else { s[i + 1] - s[i] };
+            0.5 * (before + after).max(0.0)
+        })
+        .collect();
+    let total: f64 = w.iter().sum();
+    if total.is_nan() || total <= 0.0 {
+        return (full, None);
+    }
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| values[a].total_cmp(&values[b]));
+    let quantile = |q: f64| {
+        let mut acc = 0.0;
+        for &i in &order {
+            acc += w[i];
+            if acc >= q * total {
+                return values[i];
+            }
+        }
+        values[order[n - 1]]
+    };
+    let (lo, hi) = (quantile(0.05), quantile(0.95));
+    if hi > lo && hi - lo < 0.25 * (full.max - full.min) {
+        (Scale { min: lo, max: hi }, Some(full))
+    } else {
+        (full, None)
+    }
+}
+
 /// A vertical colour bar at `(x, y)`, `h` pixels tall, spanning exactly `scale`, with ticks
 /// and a rotated label.
-pub fn colorbar(svg: &mut Svg, x: f64, y: f64, h: f64, scale: Scale, label: &str) {
+pub fn colorbar(svg: &mut Svg, x: f64, y: f64, h: f64, scale: Scale, label: &str, clipped: bool) {
     let w = 18.0;
     let steps = 64;
     for k in 0..steps {
@@ -440,15 +514,29 @@ pub fn colorbar(svg: &mut Svg, x: f64, y: f64, h: f64, scale: Scale, label: &str
         );
     }
     // The ends carry the exact data range.
-    for v in [scale.min, scale.max] {
+    for (k, v) in [scale.min, scale.max].into_iter().enumerate() {
         svg.line(x + w, pos(v), x + w + 5.0, pos(v), "#333", 1.0, "");
+        let sign = match (clipped, k) {
+            (false, _) => "",
+            (true, 0) => "≤ ",
+            (true, _) => "≥ ",
+        };
         svg.text_bold(
             x + w + 8.0,
             pos(v) + 4.0,
             11.0,
             Anchor::Start,
-            &format!("{v:.4}").replace('-', "−"),
+            &format!("{sign}{}", end_label(v, scale.max - scale.min)),
         );
     }
-    svg.text_vertical(x + w + 80.0, y + h / 2.0, 13.0, label);
+    if clipped {
+        svg.text_vertical(
+            x + w + 80.0,
+            y + h / 2.0,
+            13.0,
+            &format!("{label}, central 90 % of the loop"),
+        );
+    } else {
+        svg.text_vertical(x + w + 80.0, y + h / 2.0, 13.0, label);
+    }
 }

@@ -150,15 +150,28 @@ impl Plot {
             r.0 -= 0.5;
             r.1 += 0.5;
         }
-        let span = (r.3 - r.2).max(1e-9 * r.3.abs().max(1.0));
+        let span = r.3 - r.2;
+        if span <= 1e-9 * r.2.abs().max(r.3.abs()).max(1.0) {
+            // A constant (to rounding): centre it in a range wide enough for readable ticks.
+            let c = 0.5 * (r.2 + r.3);
+            let half = 0.5 * c.abs().max(1.0);
+            return (r.0, r.1, c - half, c + half);
+        }
         let pad = 0.05 * span;
         (r.0, r.1, r.2 - pad, r.3 + pad)
     }
 
     /// Render into the box `(x, y, w, h)` of `svg`; `id` names the clip path.
     pub fn render(&self, svg: &mut Svg, x: f64, y: f64, w: f64, h: f64, id: &str) {
+        let (x0, x1, y0, y1) = self.data_range();
+        // Room for the widest y tick label between the axis and the rotated y label.
+        let widest = ticks(y0, y1, ((h - 100.0) / 50.0).max(3.0) as usize)
+            .iter()
+            .map(|&t| tick_label(t).chars().count())
+            .max()
+            .unwrap_or(1) as f64;
         let (ml, mr, mt, mb) = (
-            68.0,
+            (36.0 + 7.2 * widest).max(68.0),
             16.0 + self.legend_width,
             match (
                 self.title.is_empty(),
@@ -171,7 +184,6 @@ impl Plot {
             if self.note.is_empty() { 50.0 } else { 66.0 },
         );
         let (px, py, pw, ph) = (x + ml, y + mt, w - ml - mr, h - mt - mb);
-        let (x0, x1, y0, y1) = self.data_range();
         let sx = |v: f64| px + (v - x0) / (x1 - x0) * pw;
         let sy = |v: f64| py + ph - (v - y0) / (y1 - y0) * ph;
         if !self.title.is_empty() {

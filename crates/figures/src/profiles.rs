@@ -48,15 +48,40 @@ pub fn profiles_document(
             "profile panels must be 200–3000 × 150–3000 pixels, got {panel_w} × {panel_h}"
         )));
     }
+    // A constant stiffness (a uniform rod) says nothing along the loop: no panel, a note.
+    let constant_d = data.column("D").and_then(|d| {
+        let (lo, hi) = d
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
+        (hi - lo <= 1e-12 * hi.abs().max(1.0)).then_some(lo)
+    });
     let cols: Vec<&str> = PROFILE_COLUMNS
         .iter()
         .copied()
-        .filter(|c| data.column(c).is_some())
+        .filter(|c| data.column(c).is_some() && !(*c == "D" && constant_d.is_some()))
         .collect();
     let rows = cols.len().div_ceil(2).max(1);
-    let top = if overlay.is_some() { 60.0 } else { 40.0 };
+    let top = if overlay.is_some() || constant_d.is_some() {
+        60.0
+    } else {
+        40.0
+    };
     let mut svg = Svg::new(2.0 * panel_w, top + rows as f64 * panel_h);
     svg.text_bold(12.0, 26.0, 16.0, Anchor::Start, title);
+    if let Some(d) = constant_d {
+        svg.text(
+            2.0 * panel_w - 12.0,
+            48.0,
+            13.0,
+            Anchor::End,
+            &format!(
+                "D/D₀ = {} along the whole loop (uniform rod)",
+                crate::svg::tick_label(d)
+            ),
+        );
+    }
     if let Some((_, label)) = overlay {
         svg.line(14.0, 44.0, 44.0, 44.0, "#1f4fd1", 1.8, "");
         svg.text(50.0, 48.0, 13.0, Anchor::Start, "this loop");

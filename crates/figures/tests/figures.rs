@@ -265,3 +265,35 @@ fn diagram_legend_lists_only_what_is_drawn() {
     assert!(energy_figure(&d, 10.0, 600.0).is_err());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn colour_scale_clips_only_isolated_peaks() {
+    use rodloop_figures::loops::colour_scale;
+    let n = 200;
+    let s: Vec<f64> = (0..n).map(|i| i as f64 / n as f64).collect();
+    let smooth: Vec<f64> = s
+        .iter()
+        .map(|x| (std::f64::consts::TAU * x).sin())
+        .collect();
+    // A smooth column: the bar spans the data.
+    let (sc, full) = colour_scale(&smooth, &s);
+    assert!(full.is_none());
+    let (lo, hi) = smooth
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    assert_eq!((sc.min, sc.max), (lo, hi));
+    // Four nodes (2 % of the length) at ±100: the bar spans the sine, the full range is kept.
+    let mut peaks = smooth.clone();
+    for (i, v) in [(50, 100.0), (51, -100.0), (150, 100.0), (151, -100.0)] {
+        peaks[i] = v;
+    }
+    let (sc, full) = colour_scale(&peaks, &s);
+    let full = full.expect("clipped");
+    assert_eq!((full.min, full.max), (-100.0, 100.0));
+    assert!(
+        sc.min >= -1.0 && sc.max <= 1.0 && sc.max - sc.min > 1.5,
+        "{sc:?}"
+    );
+}

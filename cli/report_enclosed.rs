@@ -1,0 +1,648 @@
+//! `rodloop report` for enclosed scenes (`|r| ≤ R`, paper Sec. 3.2): the same one-page HTML
+//! report as [`crate::report`], built on the enclosed diagram
+//! ([`rodloop_diagram::enclosed`], written as `rodloop diagram` writes it by
+//! [`crate::enclosed_diagram::write_outputs`]): the energy diagram with its lifted-off parts
+//! and the lift-off / landing events, the critical lengths with their error estimates next to
+//! the surface values, the lengths where the lowest state has lifted off the wall (where the
+//! Sec. 3.2 hypothesis fails), the branch atlas (states re-solved along each branch,
+//! [`crate::atlas::enclosed_rows`]), one state per branch solved as `rodloop solve` solves it
+//! ([`crate::enclosed::solve_state`]) and drawn coloured by its gap to the wall (by `λ` where it
+//! is attached), the settings and the timings.
+
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use rodloop_diagram::enclosed::{enclosed_diagram, EnclosedDiagram, EnclosedDiagramOptions};
+use rodloop_diagram::Label;
+use rodloop_figures::atlas::atlas_figure;
+use rodloop_figures::color::branch_color;
+use rodloop_figures::data::LoopData;
+use rodloop_figures::diagram::{energy_figure, DiagramData};
+use rodloop_figures::loops::{loop_picture, point_group, LoopPictureOptions};
+use rodloop_figures::plot::{Plot, Series};
+use rodloop_figures::svg::{esc, Svg};
+use rodloop_scene::Scene;
+use rodloop_solver::Accuracy;
+
+use crate::output::{checked_json, OutputRun};
+use crate::report::{inline_svg, middle, Args, ATLAS_SHAPES, FIG_H, FIG_W, PANEL};
+use crate::report_tables::{sci, STYLE};
+
+/// A representative state of one branch.
+struct EnclosedEntry {
+    branch: u32,
+    eta: u32,
+    lbar: f64,
+    why: String,
+    outcome: Result<Solved, String>,
+}
+
+/// A solved state with its pictures.
+struct Solved {
+    energy: (f64, f64),
+    surface: Option<(f64, f64)>,
+    index: usize,
+    label: &'static str,
+    max_gap: f64,
+    contact_fraction: f64,
+    lambda_min: f64,
+    method: String,
+    point_group: Option<String>,
+    picture: String,
+    color: &'static str,
+    profile: String,
+    seconds: f64,
+}
+
+/// Where to show branch `b`: the middle of a stretch where it is the lowest state and has
+/// lifted off (from `lifted`), else of its first stretch as the lowest state, else of its
+/// sampled range. `None` for a branch sampled at one length only.
+fn pick(d: &EnclosedDiagram, b: u32, lifted: &[(f64, f64)]) -> Option<(f64, String, bool)> {
+    let mut pts: Vec<_> = d.points.iter().filter(|p| p.branch == b).collect();
+    pts.sort_by(|a, c| a.lbar.total_cmp(&c.lbar));
+    let (lo, hi) = (pts.first()?.lbar, pts.last()?.lbar);
+    if hi <= lo {
+        return None;
+    }
+    for &(a, c) in lifted {
+        let inside: Vec<_> = pts.iter().filter(|p| p.lbar > a && p.lbar < c).collect();
+        if !inside.is_empty() && inside.iter().all(|p| p.lowest && !p.attached) {
+            return Some((
+                middle(a, c),
+                format!("middle of the stretch {a:.6} < L̄ < {c:.6} where it is the lowest state and has lifted off the wall"),
+                true,
+            ));
+        }
+    }
+    if let Some(start) = pts.iter().position(|p| p.label == Label::Stable) {
+        let len = pts[start..]
+            .iter()
+            .take_while(|p| p.label == Label::Stable)
+            .count();
+        let (a, c) = (pts[start].lbar, pts[start + len - 1].lbar);
+        let at = if c > a { middle(a, c) } else { a };
+        return Some((
+            at,
+            format!("middle of its first stable stretch (samples at {a:.4} ≤ L̄ ≤ {c:.4})"),
+            true,
+        ));
+    }
+    Some((
+        middle(lo, hi),
+        format!("middle of its sampled range {lo:.4} ≤ L̄ ≤ {hi:.4} (never the lowest state there)"),
+        false,
+    ))
+}
+
+/// `λ(s)` and, for a loop off the wall somewhere, the gap `(R − |r|)/R` along the loop.
+fn profile_figure(data: &LoopData, branch: u32, lifted: bool) -> Result<String> {
+    let length = data.length();
+    let s = data.s();
+    let panel = |col: &str, title: &str, ylabel: &str| -> Result<Plot> {
+        let v = data
+            .column(col)
+            .with_context(|| format!("the state has no {col} column"))?;
+        let mut points: Vec<(f64, f64)> = s.iter().zip(v).map(|(&a, &b)| (a / length, b)).collect();
+        if let (Some(&s0), Some(&v0)) = (s.first(), v.first()) {
+            points.push((s0 / length + 1.0, v0));
+        }
+        Ok(Plot {
+            title: title.into(),
+            xlabel: "s/L (s = 0 as marked on the loop)".into(),
+            ylabel: ylabel.into(),
+            series: vec![Series {
+                color: branch_color(branch).to_string(),
+                width: 2.0,
+                dash: String::new(),
+                points,
+            }],
+            hlines: vec![0.0],
+            ..Default::default()
+        })
+    };
+    let (w, h) = (380.0, 300.0);
+    let mut svg = Svg::new(if lifted { 2.0 * w } else { w }, h);
+    panel("lambda", "Contact force along the loop", "λR³/D₀")?
+        .render(&mut svg, 0.0, 0.0, w, h, "force");
+    if lifted {
+        panel("gap", "Gap to the wall along the loop", "gap (R − |r|)/R")?
+            .render(&mut svg, w, 0.0, w, h, "gap");
+    }
+    Ok(svg.finish())
+}
+
+fn solve_one(
+    scene: &Scene,
+    accuracy: Accuracy,
+    branch: u32,
+    eta: u32,
+    lbar: f64,
+    lowest: bool,
+) -> Result<Solved> {
+    let t0 = Instant::now();
+    let stiffness = crate::solve::stiffness_of(&scene.stiffness);
+    let res = crate::enclosed::solve_state(scene, &stiffness, lbar, branch, accuracy)?;
+    let table = crate::enclosed::config_table(&res.state, scene)?;
+    let data = LoopData::parse(
+        &format!("branch {branch} at L̄ = {lbar}"),
+        &table.to_bytes()?,
+    )?;
+    let index = res.stability.0;
+    let label = match (index, lowest) {
+        (0, true) => "stable",
+        (0, false) => "metastable",
+        _ => "unstable",
+    };
+    let lifted = data.lifted_off();
+    let color = if lifted { "gap" } else { "lambda" };
+    let gap = data.column("gap").unwrap_or(&[]);
+    let lam = data.column("lambda").unwrap_or(&[]);
+    let max_gap = gap.iter().fold(0.0f64, |m, &v| m.max(v));
+    let touching = gap
+        .iter()
+        .filter(|&&v| v <= rodloop_figures::data::GAP_TOUCH)
+        .count();
+    let pic = loop_picture(
+        &data,
+        &LoopPictureOptions {
+            color: Some(color.into()),
+            tol: 1e-3,
+            panel: PANEL,
+            title: format!(
+                "Branch {branch} (η = {eta}) at L̄ = {lbar}: {label}, {}",
+                if lifted {
+                    "lifted off the wall"
+                } else {
+                    "on the wall"
+                }
+            ),
+        },
+    )?;
+    let _ = eta;
+    Ok(Solved {
+        energy: res.energy,
+        surface: res.surface,
+        index,
+        label,
+        max_gap,
+        contact_fraction: touching as f64 / gap.len().max(1) as f64,
+        lambda_min: lam.iter().fold(f64::INFINITY, |m, &v| m.min(v)),
+        method: res.method,
+        point_group: point_group(&data, crate::draw::POINT_GROUP_TOL).map(|g| g.0),
+        picture: pic.svg,
+        color,
+        profile: profile_figure(&data, branch, lifted)?,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
+}
+
+/// The options `rodloop diagram` would use with no flags (for [`write_outputs`]).
+fn diagram_args(out: &Path) -> Result<crate::diagram::Args> {
+    use clap::{Args as _, FromArgMatches as _};
+    let cmd = crate::diagram::Args::augment_args(clap::Command::new("diagram"));
+    let m = cmd.try_get_matches_from(["diagram", "--out", &out.display().to_string()])?;
+    Ok(crate::diagram::Args::from_arg_matches(&m)?)
+}
+
+/// Run `rodloop report` on an enclosed scene.
+pub fn run(args: &Args, scene: &Scene) -> Result<()> {
+    let t_start = Instant::now();
+    if !scene.stiffness.is_uniform() {
+        bail!(
+            "scene {}: the report of an enclosed scene is built on the enclosed diagram, which covers uniform rods only (a non-uniform rod has no exact layer for its attached parts); `rodloop solve` handles single enclosed states",
+            scene.name
+        );
+    }
+    let scene_text = match &args.scene {
+        Some(p) => Some(
+            std::fs::read_to_string(p).with_context(|| format!("cannot read {}", p.display()))?,
+        ),
+        None => None,
+    };
+    let accuracy = crate::solve::accuracy_of(scene, args.accuracy.as_deref())?;
+    let mut opts = EnclosedDiagramOptions::new(
+        scene.radius,
+        crate::solve::stiffness_of(&scene.stiffness),
+        scene.lbar_min,
+        scene.lbar_max,
+    );
+    opts.accuracy = accuracy;
+    let dargs = diagram_args(&args.out)?;
+    let run = OutputRun::begin(&args.out)?;
+
+    // 1. The enclosed diagram, written as `rodloop diagram` writes it.
+    let t = Instant::now();
+    if !args.quiet {
+        eprintln!(
+            "tracing the enclosed diagram ({} ≤ L̄ ≤ {})",
+            opts.lbar_min, opts.lbar_max
+        );
+    }
+    let d = enclosed_diagram(&opts).context("the enclosed diagram")?;
+    crate::enclosed_diagram::write_outputs(&d, &opts, &scene.name, &run, &dargs)?;
+    let lifted = crate::enclosed_diagram::lowest_lifted_off(&d);
+    let t_diagram = t.elapsed().as_secs_f64();
+
+    // 2. The diagram figure, from the staged CSV files as `rodloop draw` reads them.
+    let t = Instant::now();
+    let dd = DiagramData::read(run.stage_dir())?;
+    let fig_energy = energy_figure(&dd, FIG_W, FIG_H)?;
+    let t_figures = t.elapsed().as_secs_f64();
+
+    // 3. The atlas: states re-solved along each branch (into states/).
+    let t = Instant::now();
+    let states_dir = run.subdir("states")?;
+    let atlas = crate::atlas::enclosed_rows(scene, accuracy, &d, ATLAS_SHAPES, Some(&states_dir))
+        .and_then(|(rows, note, failed)| {
+            let svg = atlas_figure(
+                &rows,
+                crate::atlas::CELL,
+                &format!("Branch atlas ({}): shapes along each branch", scene.name),
+            )?;
+            Ok((svg, note, failed))
+        })
+        .map_err(|e| format!("{e:#}"));
+    let t_atlas = t.elapsed().as_secs_f64();
+
+    // 4. One state per branch.
+    let t = Instant::now();
+    let mut branches: Vec<(u32, u32)> = d.points.iter().map(|p| (p.branch, p.eta)).collect();
+    branches.sort_unstable();
+    branches.dedup();
+    let plan: Vec<(u32, u32, f64, String, bool)> = branches
+        .iter()
+        .filter_map(|&(b, eta)| pick(&d, b, &lifted).map(|(l, why, low)| (b, eta, l, why, low)))
+        .collect();
+    let solved = crate::states::parallel_map(&plan, |(b, eta, lbar, _, low)| {
+        solve_one(scene, accuracy, *b, *eta, *lbar, *low).map_err(|e| format!("{e:#}"))
+    });
+    let states: Vec<EnclosedEntry> = plan
+        .into_iter()
+        .zip(solved)
+        .map(|((branch, eta, lbar, why, _), outcome)| EnclosedEntry {
+            branch,
+            eta,
+            lbar,
+            why,
+            outcome,
+        })
+        .collect();
+    let t_states = t.elapsed().as_secs_f64();
+
+    // 5. The page.
+    let t = Instant::now();
+    let version = env!("CARGO_PKG_VERSION");
+    let mut figures = 0usize;
+    let mut fig = |svg: &str, label: &str, caption: &str, id: &str| {
+        figures += 1;
+        format!(
+            "<figure id=\"{id}\">\n{}\n<figcaption>{caption}</figcaption></figure>\n",
+            inline_svg(svg, &format!("f{figures}"), label)
+        )
+    };
+    let mut h = String::with_capacity(1 << 20);
+    let _ = write!(
+        h,
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>rodloop report: {name}</title>\n<style>\n{STYLE}\n</style>\n</head>\n<body>\n<h1>rodloop report: scene {name}</h1>\n<p class=\"lead\">Homogeneous loops enclosed in the ball |r| ≤ R (paper Sec. 3.2): a loop may leave the wall where the wall would have to pull. Enclosed branch diagram for {lo} ≤ L̄ ≤ {hi} at accuracy <b>{acc}</b>: {nstates} states on {nbranches} branches, {ncrit} critical lengths, {nev}. Elastic rod loops in a sphere after Wang, Li &amp; Yi, J. Mech. Phys. Solids (2024); equation and figure numbers refer to that paper.</p>\n<nav><a href=\"#diagram\">Diagram</a><a href=\"#critical\">Critical lengths</a><a href=\"#atlas\">Atlas</a><a href=\"#states\">States</a><a href=\"#settings\">Settings</a><a href=\"#timings\">Timings</a></nav>\n",
+        name = esc(&scene.name),
+        lo = opts.lbar_min,
+        hi = opts.lbar_max,
+        acc = format!("{accuracy:?}").to_lowercase(),
+        nstates = d.points.len(),
+        nbranches = branches.len(),
+        ncrit = d.critical.len(),
+        nev = crate::output::plural(d.events.len() as u64, "lift-off or landing event"),
+    );
+    for w in &d.warnings {
+        let _ = writeln!(h, "<p class=\"note\">warning: {}</p>", esc(w));
+    }
+    h.push_str("<section id=\"diagram\">\n<h2>1. Energy against length</h2>\n");
+    h.push_str(&fig(
+        &fig_energy,
+        "bending energy of the enclosed loops against normalised length",
+        "Bending energy E R/(πD₀) of every sampled state against L̄ = L/(2πR) (the enclosed counterpart of Fig. 3a). One colour per branch; solid: stable (lowest energy, Hessian index 0 on the tangent space of the active constraints), dashed: metastable, dotted: unstable. The light band marks states that have lifted off the wall (somewhere R − |r| &gt; 0); elsewhere the loop is the surface loop of the exact layer. Diamonds: exchanges E<sub>a</sub> = E<sub>b</sub>; open squares: collapses onto an m-fold great circle; circles: lift-off and landing (λ<sub>min</sub> = 0, Eq. (38)).",
+        "fig-energy",
+    ));
+    h.push_str("</section>\n");
+
+    h.push_str("<section id=\"critical\">\n<h2>2. Critical lengths and lift-off</h2>\n<p>Where the lowest branch changes. An exchange between two attached states is the surface one (exact layer); where one of the two has lifted off, E<sub>a</sub> = E<sub>b</sub> is solved again on re-solved 3-D states, with the error estimate of L̄<sub>cr</sub> itself. The same numbers are in <code>critical.csv</code>; the surface value is the surface diagram's.</p>\n");
+    h.push_str("<table id=\"critical-table\"><thead><tr><th>i</th><th>L̄<sub>cr</sub></th><th>kind</th><th>from → to</th><th>E R/(πD₀)</th><th>error estimate of L̄<sub>cr</sub></th><th>surface L̄<sub>cr</sub></th><th>enclosed − surface</th><th>method</th></tr></thead><tbody>\n");
+    for e in &d.critical {
+        let c = &e.critical;
+        let _ = writeln!(
+            h,
+            "<tr><td>{}</td><td class=\"num\">{:.12}</td><td>{}</td><td>{} → {}</td><td class=\"num\">{:.10}</td><td class=\"num\">{}</td><td class=\"num\">{:.12}</td><td class=\"num\">{}</td><td>{}</td></tr>",
+            c.index,
+            c.lbar_cr,
+            c.kind,
+            c.from_branch,
+            c.to_branch,
+            c.energy,
+            sci(c.error_estimate),
+            e.surface_lbar_cr,
+            sci(c.lbar_cr - e.surface_lbar_cr),
+            esc(&e.method)
+        );
+    }
+    h.push_str("</tbody></table>\n");
+    if d.events.is_empty() {
+        h.push_str("<p>No branch lifts off or lands inside the range.</p>\n");
+    } else {
+        h.push_str("<p>Lift-off and landing: where λ<sub>min</sub> of a branch's surface loop crosses zero, i.e. k²(L̄) = 1/2 (Eq. (38)), bisected on the exact layer (<code>special_points.csv</code>).</p>\n<table id=\"events-table\"><thead><tr><th>event</th><th>branch</th><th>L̄</th><th>error estimate</th><th>E R/(πD₀)</th><th>index below</th><th>index above</th></tr></thead><tbody>\n");
+        for e in &d.events {
+            let _ = writeln!(
+                h,
+                "<tr><td>{}</td><td>{}</td><td class=\"num\">{:.12}</td><td class=\"num\">{}</td><td class=\"num\">{:.10}</td><td>{}</td><td>{}</td></tr>",
+                e.kind.as_str(),
+                e.branch,
+                e.lbar,
+                sci(e.error_estimate),
+                e.energy,
+                e.index_before,
+                e.index_after
+            );
+        }
+        h.push_str("</tbody></table>\n");
+    }
+    if lifted.is_empty() {
+        h.push_str("<p id=\"lifted-off\">The lowest state of a paper branch lies on the wall at every sampled length: the Sec. 3.2 hypothesis (stable loops with L̄ ≥ 1 stay on the surface) holds in this range.</p>\n");
+    } else {
+        h.push_str("<p id=\"lifted-off\">The lowest state has <b>lifted off the wall</b> for ");
+        let parts: Vec<String> = lifted
+            .iter()
+            .map(|(a, b)| format!("<span class=\"num\">{a:.9} &lt; L̄ &lt; {b:.9}</span>"))
+            .collect();
+        h.push_str(&parts.join(", "));
+        h.push_str(" (ends: the critical lengths and events above, with their error estimates): the Sec. 3.2 hypothesis fails there.</p>\n");
+    }
+    h.push_str("</section>\n");
+
+    h.push_str("<section id=\"atlas\">\n<h2>3. Branch atlas</h2>\n");
+    match &atlas {
+        Ok((svg, _, failed)) => {
+            h.push_str(&fig(
+                svg,
+                "branch atlas: shapes along every branch",
+                &format!("{ATLAS_SHAPES} states per branch spread over its sampled range, each solved again as <code>rodloop solve</code> solves it and saved in <code>states/</code> (enclosed <code>config.csv</code> columns, with <code>gap</code>); parts off the wall in amber. Labels: L̄, the diagram's stability label and E R/(πD₀). <code>rodloop diagram --shapes K</code> draws this atlas with K columns."),
+                "fig-atlas",
+            ));
+            for f in failed {
+                let _ = writeln!(h, "<p class=\"note\">atlas: not solved: {}</p>", esc(f));
+            }
+        }
+        Err(e) => {
+            let _ = writeln!(h, "<p class=\"note\">no atlas: {}</p>", esc(e));
+        }
+    }
+    h.push_str("</section>\n");
+
+    h.push_str("<section id=\"states\">\n<h2>4. One state of each branch</h2>\n<p>Each branch solved at one length as <code>rodloop solve</code> solves it: the exact surface loop where its λ ≥ 0 (then it is the enclosed equilibrium; the 3-D model re-solves it as a check), else the 3-D enclosed model from it (energy error from N/4, N/2, N). A loop that has lifted off is coloured by its gap (R − |r|)/R, one on the wall by its contact force λR³/D₀; nearer strands are darker and thicker; red circles: self-contacts in 3-D.</p>\n");
+    h.push_str("<table id=\"states-table\"><thead><tr><th>branch</th><th>η</th><th>L̄</th><th>chosen as</th><th>E R/(πD₀)</th><th>error</th><th>surface E</th><th>surface λ<sub>min</sub>R³/D₀</th><th>index</th><th>state</th><th>on the wall</th><th>max gap / R</th><th>point group</th><th>method</th></tr></thead><tbody>\n");
+    for st in &states {
+        match &st.outcome {
+            Ok(s) => {
+                let (se, sl) = s
+                    .surface
+                    .map(|(e, l)| (format!("{e:.10}"), format!("{l:.6}")))
+                    .unwrap_or_else(|| ("–".into(), "–".into()));
+                let _ = writeln!(
+                    h,
+                    "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"num\">{:.10}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td>{}</td><td>{}</td><td class=\"num\">{:.1} %</td><td class=\"num\">{}</td><td>{}</td><td>{}</td></tr>",
+                    st.branch,
+                    st.eta,
+                    st.lbar,
+                    esc(&st.why),
+                    s.energy.0,
+                    sci(s.energy.1),
+                    se,
+                    sl,
+                    s.index,
+                    s.label,
+                    100.0 * s.contact_fraction,
+                    sci(s.max_gap),
+                    s.point_group.as_deref().map(esc).unwrap_or_else(|| "–".into()),
+                    esc(&s.method)
+                );
+            }
+            Err(e) => {
+                let _ = writeln!(
+                    h,
+                    "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td colspan=\"10\" class=\"bad\">not solved: {}</td></tr>",
+                    st.branch,
+                    st.eta,
+                    st.lbar,
+                    esc(&st.why),
+                    esc(e)
+                );
+            }
+        }
+    }
+    h.push_str("</tbody></table>\n");
+    for st in &states {
+        if let Ok(s) = &st.outcome {
+            let _ = writeln!(h, "<div class=\"state\" id=\"state-{}\">", st.branch);
+            h.push_str(&fig(
+                &s.picture,
+                &format!("loop of branch {} at length {}", st.branch, st.lbar),
+                &format!(
+                    "Branch {} (η = {}) at L̄ = {}: {}, E R/(πD₀) = {:.8} ± {}, coloured by {}; {:.1} % of the nodes on the wall, largest gap {} R.",
+                    st.branch,
+                    st.eta,
+                    st.lbar,
+                    s.label,
+                    s.energy.0,
+                    sci(s.energy.1),
+                    if s.color == "gap" {
+                        "the gap (R − |r|)/R"
+                    } else {
+                        "the contact force λR³/D₀"
+                    },
+                    100.0 * s.contact_fraction,
+                    sci(s.max_gap)
+                ),
+                &format!("fig-loop-{}", st.branch),
+            ));
+            h.push_str(&fig(
+                &s.profile,
+                &format!("contact force and gap along the loop of branch {}", st.branch),
+                &format!(
+                    "Contact force λR³/D₀{} along the loop of branch {} at L̄ = {} (smallest λ {:.6}; the wall only pushes, λ ≥ 0, and λ = 0 wherever the loop is off the wall).",
+                    if s.color == "gap" { " and gap (R − |r|)/R" } else { "" },
+                    st.branch,
+                    st.lbar,
+                    s.lambda_min
+                ),
+                &format!("fig-force-{}", st.branch),
+            ));
+            h.push_str("</div>\n");
+        }
+    }
+    h.push_str("</section>\n");
+
+    let t_page = t.elapsed().as_secs_f64();
+    let total = t_start.elapsed().as_secs_f64();
+    h.push_str("<section id=\"settings\">\n<h2>5. Settings</h2>\n<dl>\n");
+    let command: Vec<String> = std::env::args().collect();
+    let items = [
+        ("scene", esc(&scene.name)),
+        (
+            "scene file",
+            args.scene
+                .as_ref()
+                .map(|p| format!("<code>{}</code>", esc(&p.display().to_string())))
+                .unwrap_or_else(|| "built-in default".into()),
+        ),
+        ("confinement", "enclosed, |r| ≤ R".into()),
+        ("sphere radius R", scene.radius.to_string()),
+        (
+            "length range",
+            format!(
+                "{} ≤ L̄ ≤ {}, sampled every {}",
+                opts.lbar_min, opts.lbar_max, opts.step
+            ),
+        ),
+        (
+            "accuracy",
+            format!(
+                "{}{}",
+                format!("{accuracy:?}").to_lowercase(),
+                if args.accuracy.is_some() {
+                    " (--accuracy)"
+                } else {
+                    " (scene)"
+                }
+            ),
+        ),
+        (
+            "cells of the lifted-off traces",
+            d.cells
+                .iter()
+                .map(|(b, n)| format!("branch {b}: N = {n}"))
+                .collect::<Vec<_>>()
+                .join(", "),
+        ),
+        ("rodloop version", version.into()),
+        (
+            "platform",
+            format!("{}-{}", std::env::consts::ARCH, std::env::consts::OS),
+        ),
+        (
+            "command",
+            format!("<code>{}</code>", esc(&command.join(" "))),
+        ),
+        ("run id", format!("<code>{}</code>", esc(run.run_id()))),
+        (
+            "units",
+            "lengths and gaps in R, L̄ = L/(2πR), energies E R/(πD₀), contact force λR³/D₀".into(),
+        ),
+    ];
+    for (k, v) in items {
+        let _ = writeln!(h, "<dt>{k}</dt><dd>{v}</dd>");
+    }
+    h.push_str("</dl>\n");
+    if let Some(text) = &scene_text {
+        let _ = writeln!(h, "<pre>{}</pre>", esc(text));
+    }
+    h.push_str("</section>\n");
+    h.push_str("<section id=\"timings\">\n<h2>6. Timings</h2>\n<table id=\"timings-table\"><thead><tr><th>stage</th><th>wall time (s)</th></tr></thead><tbody>\n");
+    let mut row = |k: &str, v: f64| {
+        let _ = writeln!(h, "<tr><td>{k}</td><td class=\"num\">{v:.3}</td></tr>");
+    };
+    row("enclosed diagram (with writing the CSV files)", t_diagram);
+    row("diagram figure", t_figures);
+    row("branch atlas (states re-solved)", t_atlas);
+    row(
+        &format!(
+            "representative states ({} solves, in parallel)",
+            states.len()
+        ),
+        t_states,
+    );
+    for st in &states {
+        if let Ok(s) = &st.outcome {
+            row(
+                &format!(
+                    "&nbsp;&nbsp;branch {} at L̄ = {} (solve and picture)",
+                    st.branch, st.lbar
+                ),
+                s.seconds,
+            );
+        }
+    }
+    row("page assembly", t_page);
+    row("total", total);
+    h.push_str("</tbody></table>\n</section>\n");
+    let _ = writeln!(
+        h,
+        "<footer><p class=\"lead\">Written by rodloop {version}. This page is self-contained: no scripts, no external style sheets, fonts or images.</p></footer>\n</body>\n</html>"
+    );
+    if let Some(bad) = h
+        .split(|c: char| !c.is_alphanumeric())
+        .find(|t| *t == "NaN" || *t == "inf")
+    {
+        bail!(
+            "internal error: the report contains a non-finite number ({bad}); nothing was written"
+        );
+    }
+    run.write_bytes("report.html", h.as_bytes())?;
+
+    let staged = std::fs::read_to_string(run.stage_dir().join("summary.json"))
+        .context("reading the staged summary.json")?;
+    let mut summary: serde_json::Value = serde_json::from_str(&staged)?;
+    let state_notes = states
+        .iter()
+        .map(|st| match &st.outcome {
+            Ok(s) => checked_json!({
+                "branch": st.branch, "eta": st.eta, "lbar": st.lbar, "energy": s.energy.0,
+                "energy_error": s.energy.1, "surface_energy": s.surface.map(|x| x.0),
+                "surface_lambda_min": s.surface.map(|x| x.1), "index": s.index,
+                "state": s.label, "contact_fraction": s.contact_fraction, "max_gap": s.max_gap,
+                "lambda_min": s.lambda_min, "point_group": s.point_group, "colour": s.color,
+                "method": s.method, "seconds": s.seconds,
+            }),
+            Err(e) => {
+                checked_json!({"branch": st.branch, "eta": st.eta, "lbar": st.lbar, "error": e})
+            }
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let files = crate::states::files_in(run.stage_dir())?;
+    let report = checked_json!({
+        "file": "report.html",
+        "bytes": h.len(),
+        "figures": figures,
+        "states": state_notes,
+        "lowest_lifted_off": lifted,
+        "atlas_rows": atlas.as_ref().ok().map(|(_, note, _)| note.rows.iter().map(|(b, _, c)| serde_json::json!({"branch": b, "lbar": c.iter().map(|x| x.0).collect::<Vec<_>>(), "state_files": c.iter().map(|x| x.1.clone()).collect::<Vec<_>>()})).collect::<Vec<_>>()),
+        "states_dir": "states",
+        "files": files,
+        "version": version,
+        "seconds": serde_json::json!({
+            "diagram": t_diagram, "diagram_figures": t_figures, "atlas": t_atlas,
+            "states": t_states, "page": t_page, "total": total,
+        }),
+    })?;
+    if let serde_json::Value::Object(map) = &mut summary {
+        map.insert("report".into(), crate::output::strip_nulls(report));
+    }
+    run.write_json("summary.json", &summary)?;
+    run.commit()?;
+    let failed = states.iter().filter(|s| s.outcome.is_err()).count();
+    if failed > 0 {
+        eprintln!(
+            "warning: {} of {} representative states could not be solved (see the report)",
+            failed,
+            states.len()
+        );
+    }
+    outln!(
+        "wrote report.html ({} KB, {} figures: enclosed diagram, branch atlas, {} with their force and gap plots), branches.csv, critical.csv, special_points.csv, diagram.svg/.png, summary.json, states/ to {} in {:.2} s",
+        h.len().div_ceil(1024),
+        figures,
+        crate::output::plural((states.len() - failed) as u64, "loop picture"),
+        args.out.display(),
+        t_start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
