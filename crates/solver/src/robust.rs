@@ -88,9 +88,30 @@ impl Strategy {
     }
 }
 
-/// Wall-clock budget of the fallback strategies (the direct solve is not limited): past it,
-/// no new attempt is started and a running continuation stops, with a message.
-const BUDGET: std::time::Duration = std::time::Duration::from_secs(8);
+/// Work budget of each of the two continuation fallbacks (in `D1/D0`, in `L̄`), counted in
+/// continuation steps plus Newton solves (the direct solve is not limited): past it, no new
+/// attempt is started and a running continuation stops, with a message. A count, not a
+/// wall-clock time, so that a result does not depend on the machine's load.
+const BUDGET: usize = 1500;
+
+/// Work spent by a fallback, against [`BUDGET`].
+struct Budget {
+    spent: std::cell::Cell<usize>,
+}
+
+impl Budget {
+    fn new() -> Self {
+        Self {
+            spent: std::cell::Cell::new(0),
+        }
+    }
+
+    /// Spend one unit; `false` once the budget is used up.
+    fn spend(&self) -> bool {
+        self.spent.set(self.spent.get() + 1);
+        self.spent.get() <= BUDGET
+    }
+}
 
 /// Mild contrasts tried as homotopy starts, in order.
 const MILD: [f64; 2] = [0.9, 0.6];
@@ -147,10 +168,9 @@ pub fn solve_robust(
         .iter()
         .map(|f| f * per)
         .collect();
-    let t0 = std::time::Instant::now();
-    let deadline = t0 + BUDGET;
+    let budget = Budget::new();
     for &shift in &shifts {
-        if std::time::Instant::now() > deadline {
+        if !budget.spend() {
             break;
         }
         let shifted = start.shifted(lbar, shift)?;
@@ -167,17 +187,16 @@ pub fn solve_robust(
         let mut seen: Vec<f64> = Vec::new();
         for &from in MILD.iter().filter(|&&m| m > target) {
             for shift in std::iter::once(0.0).chain(shifts.iter().copied()) {
-                if std::time::Instant::now() > deadline {
+                if !budget.spend() {
                     tried.push(format!(
-                        "stopped after {:.0} s, the time budget of the fallbacks",
-                        BUDGET.as_secs_f64()
+                        "stopped after {BUDGET} continuation steps and solves, the work budget of the fallback"
                     ));
                     break;
                 }
                 let shifted = start.shifted(lbar, shift)?;
                 let outcome = homotopy(
                     radius, lbar, n, stiffness, &shifted, from, target, eta, opts, &mut seen,
-                    deadline,
+                    &budget,
                 );
                 match outcome {
                     Ok(Some((main, steps))) => {
@@ -211,8 +230,8 @@ pub fn solve_robust(
         }
     }
     // The same family at other lengths of the branch's range at the scene's stiffness,
-    // followed in L̄ (its own time budget).
-    let deadline = std::time::Instant::now() + BUDGET;
+    // followed in L̄ (its own work budget).
+    let budget = Budget::new();
 
     if let (Some(want), StartShape::Euler { .. } | StartShape::Exact { .. }) = (eta, start) {
         let e = f64::from(want);
@@ -226,12 +245,12 @@ pub fn solve_robust(
         let mut seen: Vec<f64> = Vec::new();
         'seeds: for &from in &seeds {
             for shift in std::iter::once(0.0).chain(shifts.iter().copied()) {
-                if std::time::Instant::now() > deadline {
+                if !budget.spend() {
                     break 'seeds;
                 }
                 let shifted = start.shifted(from, shift)?;
                 match lbar_path(
-                    radius, lbar, n, stiffness, &shifted, from, want, opts, &mut seen, deadline,
+                    radius, lbar, n, stiffness, &shifted, from, want, opts, &mut seen, &budget,
                 ) {
                     Ok(Some((main, steps))) => {
                         if let Ok(acc) = check(Ok(main)).and_then(|main| {
@@ -303,7 +322,7 @@ fn homotopy(
     eta: Option<u32>,
     opts: &SolveOptions,
     seen: &mut Vec<f64>,
-    deadline: std::time::Instant,
+    budget: &Budget,
 ) -> Result<Option<(Equilibrium, usize)>, SolverError> {
     let mild = stiffness.with_param(Param::D1, from)?;
     let eq0 = solve_cells(radius, lbar, cells, &mild, start, None, opts)?;
@@ -314,7 +333,7 @@ fn homotopy(
         require_eta(&eq0, want, &format!("D1/D0 = {from}"))?;
     }
     let problem = ParamProblem::new(eq0.model().clone(), Param::D1)?;
-    let (eq, steps) = follow_to(&problem, &eq0, from, target, true, opts, deadline).map_err(
+    let (eq, steps) = follow_to(&problem, &eq0, from, target, true, opts, budget).map_err(
         |Stuck { folds, reached }| match folds.is_empty() {
             false => SolverError::InvalidInput(format!(
                 "the branch turns back in D1/D0 at {} (folds) and reaches no lower than \
@@ -343,7 +362,7 @@ fn lbar_path(
     want: u32,
     opts: &SolveOptions,
     seen: &mut Vec<f64>,
-    deadline: std::time::Instant,
+    budget: &Budget,
 ) -> Result<Option<(Equilibrium, usize)>, SolverError> {
     let eq0 = solve_cells(radius, from, cells, stiffness, start, None, opts)?;
     if !first_seen(seen, &eq0) {
@@ -351,7 +370,7 @@ fn lbar_path(
     }
     require_eta(&eq0, want, &format!("L̄ = {from}"))?;
     let problem = ParamProblem::new(eq0.model().clone(), Param::Lbar)?;
-    let (eq, steps) = follow_to(&problem, &eq0, from, lbar, false, opts, deadline).map_err(
+    let (eq, steps) = follow_to(&problem, &eq0, from, lbar, false, opts, budget).map_err(
         |Stuck { folds, reached }| {
             SolverError::InvalidInput(match folds.is_empty() {
                 false => format!(
@@ -414,7 +433,7 @@ struct Stuck {
 /// Continue the equilibrium `eq0` of `problem` (a one-parameter family at `from`) until the
 /// parameter reaches `target`, then correct there with Newton. `log`: continue in `ln θ`
 /// (decades of `D1/D0` at even steps). Gives up after 4 folds, when the family turns away
-/// from the target for good, at the deadline or when the continuation stops.
+/// from the target for good, when the work budget is spent or when the continuation stops.
 fn follow_to(
     problem: &ParamProblem<SurfaceModel>,
     eq0: &Equilibrium,
@@ -422,7 +441,7 @@ fn follow_to(
     target: f64,
     log: bool,
     opts: &SolveOptions,
-    deadline: std::time::Instant,
+    budget: &Budget,
 ) -> Result<(Equilibrium, usize), Stuck> {
     let (q0, qt) = if log {
         (from.ln(), target.ln())
@@ -447,9 +466,9 @@ fn follow_to(
     let x0 = DVector::from_vec(eq0.state());
     let outcome = if log {
         let lp = LogParam(problem.clone());
-        run_to(&lp, &settings, &x0, q0, qt, deadline)
+        run_to(&lp, &settings, &x0, q0, qt, budget)
     } else {
-        run_to(problem, &settings, &x0, q0, qt, deadline)
+        run_to(problem, &settings, &x0, q0, qt, budget)
     };
     let (z, steps) = outcome.map_err(|(folds, reached)| {
         stuck(folds.into_iter().map(value).collect(), value(reached))
@@ -475,7 +494,7 @@ fn run_to<P: rodloop_continuation::Problem>(
     x0: &DVector<f64>,
     q0: f64,
     qt: f64,
-    deadline: std::time::Instant,
+    budget: &Budget,
 ) -> Result<(DVector<f64>, usize), (Vec<f64>, f64)> {
     let cont = Continuation::new(problem, settings.clone());
     let mut stepper = cont.start(x0, q0).map_err(|_| (vec![], q0))?;
@@ -484,7 +503,7 @@ fn run_to<P: rodloop_continuation::Problem>(
     let mut folds = Vec::new();
     let mut closest = q0;
     loop {
-        if std::time::Instant::now() > deadline {
+        if !budget.spend() {
             return Err((folds, closest));
         }
         let step = stepper.step().map_err(|_| (folds.clone(), closest))?;
