@@ -279,8 +279,11 @@ fn figure(d: &EnclosedDiagram, scene: &str) -> Figure {
         }
     };
     // One curve per sheet (a uniform rod's branch is one sheet).
-    let mut sheets: Vec<(u32, u32, u32)> =
-        d.points.iter().map(|p| (p.branch, p.family, p.sheet)).collect();
+    let mut sheets: Vec<(u32, u32, u32)> = d
+        .points
+        .iter()
+        .map(|p| (p.branch, p.family, p.sheet))
+        .collect();
     sheets.sort_unstable();
     sheets.dedup();
     for &(b, f, sh) in &sheets {

@@ -12,8 +12,9 @@
 //!   sphere's, so the index is the surface index).
 //! * **Events** are where `λ_min` of a sheet changes sign between traced states: the root of
 //!   `λ_min(L̄)` is found by the Illinois method on surface states re-solved at the tracing
-//!   resolution `N` and again at `2N`; the `2N` root is reported, with `|x_2N − x_N|` plus
-//!   the bracket width as its error estimate.
+//!   resolution `N`, then at `4N` and `8N` (`λ` involves `κ_g''`, so the tracing resolution
+//!   places it only to ~5e-4 on a mild rod); the `8N` root is reported, with `|x_8N − x_4N|`
+//!   plus the bracket widths as its error estimate.
 //! * **Lifted-off parts** (`λ_min < 0` on the sheet) are traced with the 3-D enclosed model:
 //!   the run's middle sample is solved from its surface state ([`solve_branch`]: Newton,
 //!   the pull homotopy where plain Newton fails), then natural-parameter steps in `L̄` with
@@ -24,9 +25,11 @@
 //!   enclosed lowest branch need not change where the surface one does): where the lowest
 //!   sampled state changes from a sheet of one branch to a sheet of another and both
 //!   sheets cover the bracket, `E_a = E_b` is solved by the secant method on re-solved
-//!   states (3-D model at `N/4, N/2, N`, then at `N/2, N, 2N` from that root; surface
-//!   states where attached), error `(δE_a + δE_b)/|d(E_a − E_b)/dL̄|` plus the last secant
-//!   step. The surface value of the same exchange is solved on the same two sheets for
+//!   states (3-D model at `N/4, N/2, N`; surface states where attached), then from the line
+//!   fitted to `E_a − E_b` at the secant root and `2e-3` on either side (the lifted-off
+//!   energies carry discretisation noise where contact ends cross nodes, and the curves
+//!   meet at a small angle). Error: `(δE_a + δE_b)/|d(E_a − E_b)/dL̄|` plus the line's
+//!   misfit over the same slope. The surface value of the same exchange is solved on the same two sheets for
 //!   comparison. Where the lowest branch ends at the `m`-fold great circle and another
 //!   begins there (the traces do not overlap), the exchange is a collapse at `L̄ = m`, with
 //!   the distance of the last traced states from `m` as its estimate. A change between
@@ -134,7 +137,10 @@ fn surface_energy(
     let n = sheet.cells;
     let e1 = surface_at(dopts, sheet, x, n)?;
     let e2 = half_resolution(dopts, &e1, 2 * n).ok_or_else(|| {
-        SolverError::InvalidInput(format!("the surface state at lbar = {x} at {} cells", 2 * n))
+        SolverError::InvalidInput(format!(
+            "the surface state at lbar = {x} at {} cells",
+            2 * n
+        ))
     })?;
     let (a, b) = (e1.energy().total, e2.energy().total);
     Ok((b, (b - a).abs() / 15.0))
@@ -178,19 +184,25 @@ fn locate_event(
     b: f64,
 ) -> Result<(f64, f64), SolverError> {
     let n = sheet.cells;
-    let (x1, w1) = illinois(|x| lambda_min_at(dopts, sheet, x, n), a, b, 1e-10)?;
-    // At 2N, a bracket around the N root (widened until the sign changes).
-    let mut h = (w1 + 1e-6).max(1e-6);
-    let f2 = |x: f64| lambda_min_at(dopts, sheet, x, 2 * n);
-    for _ in 0..12 {
-        let (lo, hi) = ((x1 - h).max(a), (x1 + h).min(b));
-        if f2(lo)? * f2(hi)? <= 0.0 {
-            let (x2, w2) = illinois(f2, lo, hi, 1e-10)?;
-            return Ok((x2, (x2 - x1).abs() + w1 + w2));
+    let (x0, w0) = illinois(|x| lambda_min_at(dopts, sheet, x, n), a, b, 1e-10)?;
+    // At 4N and 8N, brackets around the previous root (widened until the sign changes).
+    let refine = |c: usize, x_prev: f64, w_prev: f64| -> Result<(f64, f64), SolverError> {
+        let f = |x: f64| lambda_min_at(dopts, sheet, x, c);
+        let mut h = (2.0 * w_prev).max(1e-6);
+        for _ in 0..12 {
+            let (lo, hi) = ((x_prev - h).max(a), (x_prev + h).min(b));
+            if f(lo)? * f(hi)? <= 0.0 {
+                return illinois(f, lo, hi, 1e-10);
+            }
+            h *= 4.0;
         }
-        h *= 4.0;
-    }
-    Ok((x1, (b - a).abs()))
+        Err(SolverError::InvalidInput(format!(
+            "lambda_min has no sign change near lbar = {x_prev} at {c} cells"
+        )))
+    };
+    let (x1, w1) = refine(4 * n, x0, w0 + 1e-4)?;
+    let (x2, w2) = refine(8 * n, x1, w1 + 1e-5)?;
+    Ok((x2, (x2 - x1).abs() + w1 + w2))
 }
 
 /// Sample states of `sheet` within `[lo, hi]`: its traced states at least `step` apart in
@@ -251,12 +263,12 @@ fn surface_point(sheet: &TracedBranch, k: usize) -> EnclosedPoint {
     }
 }
 
-/// Newton options of the continuation steps: a step that needs more than 12 iterations is
-/// halved instead (a converging step takes 2–6; a failing one at the default 80 iterations
-/// costs 7× as much).
+/// Newton options of the continuation steps: a step that needs more than 30 iterations is
+/// halved instead (most steps take 2–6; with 12, steps that were converging slowly, at
+/// residuals 1e-8, stopped the traces; the default 80 makes a failing step 2.7× dearer).
 fn step_options() -> EnclosedOptions {
     EnclosedOptions {
-        max_iterations: 12,
+        max_iterations: 30,
         ..EnclosedOptions::default()
     }
 }
@@ -268,7 +280,11 @@ fn walk(t: &Levels, x: f64) -> Result<Levels, SolverError> {
     let mut h = (x - cur.lbar).clamp(-0.01, 0.01);
     let mut fails = 0;
     while (x - cur.lbar).abs() > 1e-15 {
-        let to = if (x - cur.lbar).abs() <= h.abs() { x } else { cur.lbar + h };
+        let to = if (x - cur.lbar).abs() <= h.abs() {
+            x
+        } else {
+            cur.lbar + h
+        };
         match cur.step_to(to, &opts) {
             Ok(n) => cur = n,
             Err(e) => {
@@ -408,7 +424,15 @@ fn trace_sheet(
             ));
             continue;
         };
-        let traced = follow(first, &xs, mid, &what, &step_options(), true, &mut out.warnings);
+        let traced = follow(
+            first,
+            &xs,
+            mid,
+            &what,
+            &step_options(),
+            true,
+            &mut out.warnings,
+        );
         for lv in traced {
             let mut pt = lv.point(sheet.branch, sheet.eta)?;
             // The surface loop at the same length: the traced state, or (where the trace
@@ -540,12 +564,24 @@ fn locate_crossing(
             "surface states (both attached: lambda_min > 0); secant on E_a = E_b, error from the N and 2N surface energies and the last secant step".into(),
         ));
     }
-    let (x, mut slope, step, err, e) = secant_loose(|x| f(x, &mut tracks), xg, xg - h)?;
-    if !(slope.is_finite() && slope != 0.0) {
-        let (fp, _, _) = f(x + 1e-5, &mut tracks)?;
-        let (fm, _, _) = f(x - 1e-5, &mut tracks)?;
-        slope = (fp - fm) / 2e-5;
+    let (xsec, _, _, _, _) = secant_loose(|x| f(x, &mut tracks), xg, xg - h)?;
+    // The energies carry discretisation noise (contact ends crossing nodes) and the two
+    // curves meet at a small angle, so the root is taken from the straight line fitted to
+    // `E_a − E_b` at `x_s − d, x_s, x_s + d` (`d = 2e-3`) around the secant's root `x_s`.
+    let d = 2e-3;
+    let mut fs = [(0.0, 0.0, 0.0); 3];
+    for (k, x) in [xsec - d, xsec, xsec + d].into_iter().enumerate() {
+        fs[k] = f(x, &mut tracks)?;
     }
+    let slope = (fs[2].0 - fs[0].0) / (2.0 * d);
+    let mean = (fs[0].0 + fs[1].0 + fs[2].0) / 3.0;
+    let x = xsec - mean / slope;
+    let err = fs.iter().map(|v| v.1).fold(0.0, f64::max);
+    // The line's misfit at the middle point (curvature and noise of E_a − E_b).
+    let misfit = (fs[1].0 - 0.5 * (fs[0].0 + fs[2].0)).abs();
+    // Plus the distance beyond the fitted points where the root is extrapolated.
+    let step = misfit / slope.abs().max(1e-300) + ((x - xsec).abs() - d).max(0.0);
+    let e = fs[1].2;
     let cells = tracks
         .iter()
         .flatten()
@@ -558,7 +594,7 @@ fn locate_crossing(
         e,
         xs,
         format!(
-            "secant on E_a = E_b with the lifted-off state(s) re-solved (3-D model at N = {}, {}, {}; error from the three levels' energy estimates over the slope, plus the last secant step); surface value on the same sheets",
+            "secant on E_a = E_b with the lifted-off state(s) re-solved (3-D model at N = {}, {}, {}), then the root of the line fitted at the secant root and 2e-3 on either side; error: the three levels' energy estimates over the slope plus the line's misfit over the slope; surface value on the same sheets",
             cells / 4,
             cells / 2,
             cells
@@ -566,18 +602,22 @@ fn locate_crossing(
     ))
 }
 
-/// Secant iteration on `f(x) = 0` from `xa`, `xb` until the step is below `1e-10` or 30
+/// Secant iteration on `f(x) = 0` from `xa`, `xb` until the step is below `1e-10` or 12
 /// steps are taken (the energies of lifted-off states carry discretisation noise where
 /// contact ends cross nodes, so the last step, which enters the error, may stay above the
 /// tolerance); returns `(x, f', last step, f's error, mean energy)`.
-fn secant_loose<F>(mut f: F, mut xa: f64, mut xb: f64) -> Result<(f64, f64, f64, f64, f64), SolverError>
+fn secant_loose<F>(
+    mut f: F,
+    mut xa: f64,
+    mut xb: f64,
+) -> Result<(f64, f64, f64, f64, f64), SolverError>
 where
     F: FnMut(f64) -> Result<(f64, f64, f64), SolverError>,
 {
     let (mut fa, _, _) = f(xa)?;
     let (mut fb, mut err, mut e) = f(xb)?;
     let mut step = (xb - xa).abs();
-    for _ in 0..30 {
+    for _ in 0..12 {
         let slope = (fb - fa) / (xb - xa);
         if fb == 0.0 || !slope.is_finite() || slope == 0.0 || step < 1e-10 {
             return Ok((xb, slope, step, err, e));
@@ -643,7 +683,11 @@ pub(super) fn nonuniform_diagram(
     let surface_s = ts.elapsed().as_secs_f64();
     // 2. Each sheet: attached samples, events, lifted-off traces (longest first).
     let mut order: Vec<usize> = (0..sheets.len()).collect();
-    order.sort_by_key(|&i| std::cmp::Reverse(samples(&sheets[i], opts.lbar_min, opts.lbar_max, opts.step).len() * sheets[i].cells));
+    order.sort_by_key(|&i| {
+        std::cmp::Reverse(
+            samples(&sheets[i], opts.lbar_min, opts.lbar_max, opts.step).len() * sheets[i].cells,
+        )
+    });
     let outs = run_parallel(
         threads,
         order.clone(),
@@ -730,7 +774,10 @@ pub(super) fn nonuniform_diagram(
             }
             continue;
         }
-        if ends.iter().any(|m| (w[0] - m).abs() < CIRCLE || (w[1] - m).abs() < CIRCLE) {
+        if ends
+            .iter()
+            .any(|m| (w[0] - m).abs() < CIRCLE || (w[1] - m).abs() < CIRCLE)
+        {
             // Sheets begin and end at the great circles: handled below.
             continue;
         }

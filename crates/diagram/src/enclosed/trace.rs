@@ -235,7 +235,7 @@ pub(super) fn trace_detached(
 }
 
 /// Follow a lifted-off state `first` (at `xs[mid]`) through the sample lengths `xs` both
-/// ways by natural-parameter steps, halving a failed step up to 6 times (3 with `extend`); a
+/// ways by natural-parameter steps, halving a failed step up to 6 times (5 with `extend`); a
 /// trace that still fails stops there with a warning naming `what`. With `extend`, a failed
 /// step is
 /// retried once as a jump past the target and back (over a singular point such as a
@@ -252,7 +252,7 @@ pub(super) fn follow(
 ) -> Vec<Levels> {
     let mut up = vec![first.clone()];
     let mut down = vec![first];
-    let max_halvings = if extend { 3 } else { 6 };
+    let max_halvings = if extend { 5 } else { 6 };
     for (dir, out) in [(1i64, &mut up), (-1i64, &mut down)] {
         let targets: Vec<f64> = if dir > 0 {
             xs[mid + 1..].to_vec()
@@ -275,9 +275,7 @@ pub(super) fn follow(
                         halvings += 1;
                         if halvings > max_halvings && extend {
                             let over = x + (x - cur.lbar);
-                            let jumped = cur
-                                .step_to(over, sopts)
-                                .and_then(|j| j.step_to(x, sopts));
+                            let jumped = cur.step_to(over, sopts).and_then(|j| j.step_to(x, sopts));
                             if let Ok(at) = jumped {
                                 cur = at;
                                 continue;
