@@ -379,37 +379,40 @@ fn trace_sheet(
     runs.retain(|r| !r.is_empty());
     let n = nonuniform_cells(opts.accuracy, sheet.eta);
     let sopts = EnclosedOptions::default();
-    for run in runs {
+    let seed_at = |k: usize| -> Result<Levels, SolverError> {
+        let p = &pts[k];
+        let m = SurfaceModel::new(opts.radius, p.value, sheet.cells, &opts.stiffness)?;
+        let eq = solve_from_state(m, p.state.clone(), &newton_options())?;
+        let b = solve_branch(
+            opts.radius,
+            p.value,
+            &opts.stiffness,
+            &SurfaceSource::Numeric(Box::new(eq)),
+            n,
+            &sopts,
+        )?;
+        Ok(Levels {
+            lbar: p.value,
+            states: [b.quarter, b.coarse, b.fine],
+        })
+    };
+    // Pieces of runs to trace: (samples, seed position or the middle, re-seeded). Where a
+    // trace stops short of a run's end, the rest is seeded once more from its far end (past
+    // a singular point of the lifted-off sheet, e.g. where an asymmetric family meets it).
+    let mut pieces: Vec<(Vec<usize>, Option<usize>, bool)> =
+        runs.into_iter().map(|r| (r, None, false)).collect();
+    while let Some((run, at, reseeded)) = pieces.pop() {
         let xs: Vec<f64> = run.iter().map(|&k| pts[k].value).collect();
-        // Seed in the middle; if it fails, the next samples outwards.
-        let mid0 = xs.len() / 2;
+        // Seed at `at` (or in the middle); if it fails, the next samples from there.
+        let mid0 = at.unwrap_or(xs.len() / 2);
         let mut order: Vec<usize> = (0..xs.len()).collect();
         order.sort_by_key(|&i| (i as i64 - mid0 as i64).abs());
         let mut seeded = None;
         let mut last_err = None;
         for &i in order.iter().take(4) {
-            let p = &pts[run[i]];
-            let seed = SurfaceModel::new(opts.radius, p.value, sheet.cells, &opts.stiffness)
-                .and_then(|m| solve_from_state(m, p.state.clone(), &newton_options()))
-                .and_then(|eq| {
-                    solve_branch(
-                        opts.radius,
-                        p.value,
-                        &opts.stiffness,
-                        &SurfaceSource::Numeric(Box::new(eq)),
-                        n,
-                        &sopts,
-                    )
-                });
-            match seed {
-                Ok(b) => {
-                    seeded = Some((
-                        i,
-                        Levels {
-                            lbar: p.value,
-                            states: [b.quarter, b.coarse, b.fine],
-                        },
-                    ));
+            match seed_at(run[i]) {
+                Ok(l) => {
+                    seeded = Some((i, l));
                     break;
                 }
                 Err(e) => last_err = Some(e),
@@ -433,6 +436,23 @@ fn trace_sheet(
             true,
             &mut out.warnings,
         );
+        if !reseeded {
+            let (t_lo, t_hi) = (
+                traced.first().map_or(f64::INFINITY, |l| l.lbar),
+                traced.last().map_or(f64::NEG_INFINITY, |l| l.lbar),
+            );
+            let above: Vec<usize> = (0..xs.len()).filter(|&j| xs[j] > t_hi + 1e-9).collect();
+            let below: Vec<usize> = (0..xs.len()).filter(|&j| xs[j] < t_lo - 1e-9).collect();
+            if above.len() > 1 {
+                let r: Vec<usize> = above.iter().map(|&j| run[j]).collect();
+                let at = r.len() - 1;
+                pieces.push((r, Some(at), true));
+            }
+            if below.len() > 1 {
+                let r: Vec<usize> = below.iter().map(|&j| run[j]).collect();
+                pieces.push((r, Some(0), true));
+            }
+        }
         for lv in traced {
             let mut pt = lv.point(sheet.branch, sheet.eta)?;
             // The surface loop at the same length: the traced state, or (where the trace
@@ -581,7 +601,8 @@ fn locate_crossing(
     let misfit = (fs[1].0 - 0.5 * (fs[0].0 + fs[2].0)).abs();
     // Plus the distance beyond the fitted points where the root is extrapolated.
     let step = misfit / slope.abs().max(1e-300) + ((x - xsec).abs() - d).max(0.0);
-    let e = fs[1].2;
+    // The mean energy at the root, from its values at the three points.
+    let e = fs[1].2 + (x - xsec) * (fs[2].2 - fs[0].2) / (2.0 * d);
     let cells = tracks
         .iter()
         .flatten()
