@@ -468,12 +468,15 @@ fn trace_sheet(
             pt.sheet = sheet.sheet;
             pt.multiplicity = sheet.multiplicity;
             pt.surface_energy = Some(surf);
-            let tol = pt.energy_error + surf_err + 1e-9;
-            if pt.energy > surf + tol {
+            if pt.energy > surf + surf_err {
+                // Not this sheet's lifted-off state: the wall that may pull no longer only
+                // relaxes the surface loop here (the levels disagree, or the trace crossed
+                // to another solution near a fold of the sheet).
                 out.warnings.push(format!(
-                    "{what} at lbar = {:.6}: the enclosed energy {:.10} lies above the surface one {:.10} (the trace left the branch?)",
-                    lv.lbar, pt.energy, surf
+                    "{what} at lbar = {:.6}: the enclosed state found ({:.10} ± {:.1e}) lies above the sheet's surface loop ({:.10}); left out",
+                    lv.lbar, pt.energy, pt.energy_error, surf
                 ));
+                continue;
             }
             out.points.push(pt);
             out.levels.push(lv);
