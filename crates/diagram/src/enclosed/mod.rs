@@ -56,6 +56,7 @@ use crate::DiagramError;
 
 mod critical;
 mod nonuniform;
+mod nonuniform_exchange;
 mod trace;
 
 pub use nonuniform::nonuniform_cells;
