@@ -1,7 +1,7 @@
 //! `rodloop diagram` for enclosed scenes (`|r| ≤ R`, paper Sec. 3.2; issue 9): the
 //! engine is `rodloop_diagram::enclosed` (attached parts from the exact layer, lifted-off
 //! parts from the 3-D model, events where `λ_min` crosses zero, exchanges re-solved where a
-//! branch has lifted off). Uniform rods only, for the reason the engine states.
+//! branch has lifted off); non-uniform rods from their surface families.
 
 use std::path::Path;
 
@@ -37,12 +37,6 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     {
         bail!(
             "--resume, --max-step, --min-step, --max-points and --newton-tol control the surface tracer; the enclosed diagram samples every --step in lbar (default 0.05) and traces lifted-off parts by natural-parameter steps"
-        );
-    }
-    if !scene.stiffness.is_uniform() {
-        bail!(
-            "scene {}: the enclosed diagram covers uniform rods only (a non-uniform rod has no exact layer, its branches come as families that this tracer does not follow, and the 3-D Newton reaches its lifted-off states only through a pull homotopy and not at every length); `rodloop solve` handles single states",
-            scene.name
         );
     }
     let lbar_min = args.lbar_min.unwrap_or(scene.lbar_min);
@@ -118,6 +112,10 @@ pub(crate) fn write_outputs(
             "lowest",
             "cells",
             "source",
+            "family",
+            "sheet",
+            "multiplicity",
+            "surface_energy",
         ],
     );
     for p in &d.points {
@@ -145,6 +143,10 @@ pub(crate) fn write_outputs(
                     .unwrap_or("")
                     .to_string(),
             ),
+            Cell::I(p.family.into()),
+            Cell::I(p.sheet.into()),
+            Cell::I(p.multiplicity.into()),
+            p.surface_energy.map_or(Cell::S(String::new()), Cell::F),
         ])?;
     }
     // critical.csv has the surface diagram's columns; the surface values and the methods
@@ -180,7 +182,7 @@ pub(crate) fn write_outputs(
             Cell::F(e.lbar),
             Cell::F(e.energy),
             Cell::I(e.branch.into()),
-            Cell::I(e.branch.into()),
+            Cell::I(e.family.into()),
             Cell::I(e.index_before as i64),
             Cell::I(e.index_after as i64),
             Cell::F(e.error_estimate),
@@ -280,11 +282,19 @@ fn figure(d: &EnclosedDiagram, scene: &str) -> Figure {
             branch_color(b)
         }
     };
-    for &b in &branches {
+    // One curve per sheet (a uniform rod's branch is one sheet).
+    let mut sheets: Vec<(u32, u32, u32)> = d
+        .points
+        .iter()
+        .map(|p| (p.branch, p.family, p.sheet))
+        .collect();
+    sheets.sort_unstable();
+    sheets.dedup();
+    for &(b, f, sh) in &sheets {
         let pts: Vec<(f64, f64, Label)> = d
             .points
             .iter()
-            .filter(|p| p.branch == b)
+            .filter(|p| (p.branch, p.family, p.sheet) == (b, f, sh))
             .map(|p| (p.lbar, p.energy, p.label))
             .collect();
         curves.extend(svg::runs(&pts, |l, points| {

@@ -185,7 +185,10 @@ fn diagram_refuses_what_it_does_not_cover() {
             vec!["--scene", sc.as_str(), "--max-step", "0.1"],
             "--max-step",
         ),
-        (vec!["--scene", two], "uniform rods only"),
+        (
+            vec!["--scene", two, "--lbar-min", "0.5"],
+            "starts at lbar = 1",
+        ),
         (
             vec!["--scene", sc.as_str(), "--branch", "7"],
             "no such branch",

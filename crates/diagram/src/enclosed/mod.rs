@@ -1,4 +1,4 @@
-//! The branch diagram of homogeneous loops enclosed in the ball, `|r| ≤ R` (paper Sec. 3.2;
+//! The branch diagram of loops enclosed in the ball, `|r| ≤ R` (paper Sec. 3.2;
 //! issue 9): every paper branch traced through its attached and lifted-off parts, branch 0
 //! (the free planar circle) below `L̄ = 1`, the lift-off and landing events, the exchanges
 //! of the lowest branch with error estimates, and the Hessian index on the tangent space of
@@ -36,11 +36,9 @@
 //!   closed curve of its length, so no exchange outside that list appears; the sampled
 //!   energies are checked for one anyway (a warning if found).
 //!
-//! Non-uniform rods are refused: there is no exact layer (every part would need the 3-D
-//! model, and the two-segment scene's loops lift off everywhere checked), the 3-D Newton
-//! reaches their lifted-off states only through the pull homotopy and not at every length,
-//! and their branches come as families (shifted seeds, mirror pairs) that this tracer does
-//! not follow.
+//! Non-uniform rods (two-segment stiffness, Eq. (51)) have no exact layer and their
+//! branches come as families: `nonuniform.rs` takes the attached parts, events and
+//! lifted-off starts from the surface families instead (see its docs).
 
 #![allow(clippy::needless_range_loop)]
 
@@ -57,7 +55,11 @@ use crate::parallel::run_parallel;
 use crate::DiagramError;
 
 mod critical;
+mod nonuniform;
+mod nonuniform_exchange;
 mod trace;
+
+pub use nonuniform::nonuniform_cells;
 
 use critical::{detached_at, enclosed_crossing, label};
 use trace::{circle_point, grid, trace_branch, BranchOut, Levels};
@@ -70,7 +72,7 @@ pub const TOUCH: f64 = 1e-9;
 pub struct EnclosedDiagramOptions {
     /// Ball radius.
     pub radius: f64,
-    /// Stiffness (uniform only).
+    /// Stiffness (uniform or non-uniform).
     pub stiffness: Stiffness,
     /// Smallest `L̄`.
     pub lbar_min: f64,
@@ -121,9 +123,6 @@ impl EnclosedDiagramOptions {
                 self.step
             ));
         }
-        if !self.stiffness.is_uniform() {
-            return bad("the enclosed diagram covers uniform rods only: a non-uniform rod has no exact layer, its branches come as families that this tracer does not follow, and the 3-D Newton reaches its lifted-off states only through the pull homotopy and not at every length (use `rodloop solve` for single states)".into());
-        }
         Ok(())
     }
 }
@@ -138,6 +137,8 @@ pub enum PointSource {
     Exact,
     /// The 3-D enclosed model (lifted off).
     Model,
+    /// The surface model's equilibrium, attached (`λ_min > 0`; non-uniform rods).
+    Surface,
 }
 
 /// One state of the enclosed diagram.
@@ -179,6 +180,16 @@ pub struct EnclosedPoint {
     pub cells: usize,
     /// Where the state comes from.
     pub source: PointSource,
+    /// Family within the branch (non-uniform rods; 0 for a uniform rod, whose branch is one
+    /// family).
+    pub family: u32,
+    /// Sheet of the family (monotone in `L̄`; 0 for a uniform rod).
+    pub sheet: u32,
+    /// Distinct loops the state stands for (2 for a mirror-asymmetric state of a
+    /// non-uniform rod, reported once).
+    pub multiplicity: u32,
+    /// Energy of the branch's surface loop at this length (`None` for the free circle).
+    pub surface_energy: Option<f64>,
 }
 
 /// Kind of an event on a branch.
@@ -208,7 +219,9 @@ pub struct EnclosedEvent {
     pub kind: EventKind,
     /// Branch.
     pub branch: u32,
-    /// `L̄` of the event (`k² = 1/2`, `λ_min = 0`).
+    /// Family within the branch (0 for a uniform rod).
+    pub family: u32,
+    /// `L̄` of the event (`λ_min = 0`; `k² = 1/2` for a uniform rod).
     pub lbar: f64,
     /// Its error estimate.
     pub error_estimate: f64,
@@ -264,11 +277,16 @@ pub struct EnclosedTimings {
     pub lifted_off: f64,
     /// Critical lengths.
     pub critical: f64,
+    /// Surface families traced first (non-uniform rods; 0 for uniform ones).
+    pub surface: f64,
 }
 
 /// Compute the enclosed diagram (see the module docs).
 pub fn enclosed_diagram(opts: &EnclosedDiagramOptions) -> Result<EnclosedDiagram, DiagramError> {
     opts.validate()?;
+    if !opts.stiffness.is_uniform() {
+        return nonuniform::nonuniform_diagram(opts);
+    }
     let t0 = Instant::now();
     let (lo, hi) = (opts.lbar_min, opts.lbar_max);
     let mut warnings = Vec::new();

@@ -90,6 +90,10 @@ impl Levels {
             lowest: false,
             cells: fine.model.cells(),
             source: PointSource::Model,
+            family: 0,
+            sheet: 0,
+            multiplicity: 1,
+            surface_energy: None,
         })
     }
 }
@@ -144,6 +148,10 @@ pub(super) fn exact_point(
         lowest: false,
         cells: 0,
         source: PointSource::Exact,
+        family: 0,
+        sheet: 0,
+        multiplicity: 1,
+        surface_energy: Some(l.energy()?),
     })
 }
 
@@ -169,6 +177,10 @@ pub(super) fn circle_point(lbar: f64) -> EnclosedPoint {
         lowest: false,
         cells: 0,
         source: PointSource::Circle,
+        family: 0,
+        sheet: 0,
+        multiplicity: 1,
+        surface_energy: None,
     }
 }
 
@@ -218,8 +230,29 @@ pub(super) fn trace_detached(
         lbar: seed_at,
         states: [seed.quarter, seed.coarse, seed.fine],
     };
+    let what = format!("branch {} (eta = {eta})", branch_of_eta(eta));
+    Ok(follow(first, xs, mid, &what, &sopts, false, warnings))
+}
+
+/// Follow a lifted-off state `first` (at `xs[mid]`) through the sample lengths `xs` both
+/// ways by natural-parameter steps, halving a failed step up to 6 times (5 with `extend`); a
+/// trace that still fails stops there with a warning naming `what`. With `extend`, a failed
+/// step is
+/// retried once as a jump past the target and back (over a singular point such as a
+/// pitchfork of the lifted-off branch), and a trace that stops keeps the last state it
+/// reached. Returns the states in increasing `L̄`.
+pub(super) fn follow(
+    first: Levels,
+    xs: &[f64],
+    mid: usize,
+    what: &str,
+    sopts: &EnclosedOptions,
+    extend: bool,
+    warnings: &mut Vec<String>,
+) -> Vec<Levels> {
     let mut up = vec![first.clone()];
     let mut down = vec![first];
+    let max_halvings = if extend { 5 } else { 6 };
     for (dir, out) in [(1i64, &mut up), (-1i64, &mut down)] {
         let targets: Vec<f64> = if dir > 0 {
             xs[mid + 1..].to_vec()
@@ -236,15 +269,25 @@ pub(super) fn trace_detached(
                 } else {
                     cur.lbar + h
                 };
-                match cur.step_to(to, &sopts) {
+                match cur.step_to(to, sopts) {
                     Ok(next) => cur = next,
                     Err(e) => {
                         halvings += 1;
-                        if halvings > 6 {
+                        if halvings > max_halvings && extend {
+                            let over = x + (x - cur.lbar);
+                            let jumped = cur.step_to(over, sopts).and_then(|j| j.step_to(x, sopts));
+                            if let Ok(at) = jumped {
+                                cur = at;
+                                continue;
+                            }
+                            if (cur.lbar - out.last().expect("seed").lbar).abs() > 1e-12 {
+                                out.push(cur.clone());
+                            }
+                        }
+                        if halvings > max_halvings {
                             let c = cur.states[2].contact(TOUCH).ok();
                             warnings.push(format!(
-                                "branch {} (eta = {eta}): the lifted-off trace stops at lbar = {:.6} ({e}); the last state touches the wall on {:.1}% of its length with contact forces in [{:.3e}, {:.3e}]; Newton failed under 6 step halvings (perhaps a fold or a bifurcation of the lifted-off branch; not traced further)",
-                                branch_of_eta(eta),
+                                "{what}: the lifted-off trace stops at lbar = {:.6} ({e}); the last state touches the wall on {:.1}% of its length with contact forces in [{:.3e}, {:.3e}]; Newton failed under {max_halvings} step halvings (perhaps a fold or a bifurcation of the lifted-off branch; not traced further)",
                                 cur.lbar,
                                 100.0 * c.as_ref().map_or(f64::NAN, |c| c.fraction),
                                 c.as_ref().map_or(f64::NAN, |c| c.lambda_range.0),
@@ -262,7 +305,7 @@ pub(super) fn trace_detached(
     down.remove(0);
     down.reverse();
     down.extend(up);
-    Ok(down)
+    down
 }
 
 /// One branch's share of the diagram.
@@ -317,6 +360,7 @@ pub(super) fn trace_branch(
                 out.events.push(EnclosedEvent {
                     kind,
                     branch,
+                    family: 0,
                     lbar: x,
                     // Bisection width of `detached_intervals` plus the exact layer's
                     // round-off in `k²(L̄)`.
@@ -336,7 +380,9 @@ pub(super) fn trace_branch(
         let tr = trace_detached(opts, eta, &ys, &mut out.warnings)?;
         out.lifted_s += td.elapsed().as_secs_f64();
         for lv in &tr {
-            branch_points.push(lv.point(branch, eta)?);
+            let mut pt = lv.point(branch, eta)?;
+            pt.surface_energy = Some(exact(eta, lv.lbar)?.energy().map_err(SolverError::from)?);
+            branch_points.push(pt);
         }
         out.levels.extend(tr);
     }

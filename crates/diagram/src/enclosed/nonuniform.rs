@@ -1,0 +1,719 @@
+//! The enclosed diagram of a non-uniform rod (two-segment stiffness, Eq. (51); paper Sec. 3.2
+//! with the rods of Sec. 5; issue 9).
+//!
+//! # Route
+//!
+//! * **Surface families first.** [`compute_families`] traces every family of each branch on
+//!   the sphere (sheets monotone in `L̄`, mirror pairs once) with `λ(s)` at every state.
+//!   Where a surface state has `λ_min > 0` it meets every enclosed KKT condition (the same
+//!   argument as for uniform rods, Eq. (27) with the wall pushing), so it *is* the enclosed
+//!   state: energy, error estimate and index are the surface ones (with every wall
+//!   constraint strongly active, the tangent space of the active constraints is the
+//!   sphere's, so the index is the surface index).
+//! * **Events** are where `λ_min` of a sheet changes sign between traced states: the root of
+//!   `λ_min(L̄)` is found by the Illinois method on surface states re-solved at the tracing
+//!   resolution `N`, then at `4N` and `8N` (`λ` involves `κ_g''`, so the tracing resolution
+//!   places it only to ~5e-4 on a mild rod); the `8N` root is reported, with `|x_8N − x_4N|`
+//!   plus the bracket widths as its error estimate.
+//! * **Lifted-off parts** (`λ_min < 0` on the sheet) are traced with the 3-D enclosed model:
+//!   the run's middle sample is solved from its surface state ([`solve_branch`]: Newton,
+//!   the pull homotopy where plain Newton fails), then natural-parameter steps in `L̄` with
+//!   warm starts at three resolutions `N/4, N/2, N` ([`super::trace::follow`]), exactly as
+//!   for uniform rods. `N = max(32(1+η), 32(2+η))` at default accuracy: the coarsest level
+//!   must resolve the `tanh` transitions (as in `rodloop solve`).
+//! * **Exchanges** of the lowest branch come from the enclosed energies themselves (the
+//!   enclosed lowest branch need not change where the surface one does): where the lowest
+//!   sampled state changes from a sheet of one branch to a sheet of another and both
+//!   sheets cover the bracket, `E_a = E_b` is solved by the secant method on re-solved
+//!   states (3-D model at `N/4, N/2, N`; surface states where attached), then from the line
+//!   fitted to `E_a − E_b` at the secant root and `2e-3` on either side (the lifted-off
+//!   energies carry discretisation noise where contact ends cross nodes, and the curves
+//!   meet at a small angle). Error: `(δE_a + δE_b)/|d(E_a − E_b)/dL̄|` plus the line's
+//!   misfit over the same slope. The surface value of the same exchange is solved on the same two sheets for
+//!   comparison. Where the lowest branch ends at the `m`-fold great circle and another
+//!   begins there (the traces do not overlap), the exchange is a collapse at `L̄ = m`, with
+//!   the distance of the last traced states from `m` as its estimate. A change between
+//!   families of one branch is not an exchange (as in the surface diagram).
+
+#![allow(clippy::needless_range_loop)]
+
+use std::time::Instant;
+
+use rodloop_exact::branch_of_eta;
+use rodloop_exact::diagram::{Critical, CriticalKind};
+use rodloop_solver::enclosed::{enclosed_cells, solve_branch, EnclosedOptions, SurfaceSource};
+use rodloop_solver::{solve_from_state, Accuracy, Equilibrium, SolverError, SurfaceModel};
+
+use super::nonuniform_exchange::{interp, locate_crossing, lowest_at, mean_stiffness, CIRCLE};
+use super::trace::{follow, Levels};
+use super::{
+    EnclosedCritical, EnclosedDiagram, EnclosedDiagramOptions, EnclosedEvent, EnclosedPoint,
+    EnclosedTimings, EventKind, PointSource,
+};
+use crate::families::compute_families;
+use crate::labels::Label;
+use crate::parallel::run_parallel;
+use crate::states::{half_resolution, newton_options};
+use crate::types::TracedBranch;
+use crate::{DiagramError, DiagramOptions};
+
+/// Cells `N` of the lifted-off traces of a non-uniform rod's branch `eta` (levels `N/4,
+/// N/2, N`): `enclosed_cells` but at least `32(2+η)`, so that `N/4` resolves the profile.
+pub fn nonuniform_cells(accuracy: Accuracy, eta: u32) -> usize {
+    enclosed_cells(accuracy, eta).max(32 * (2 + eta as usize))
+}
+
+/// The surface diagram options matching `opts`.
+fn surface_options(opts: &EnclosedDiagramOptions) -> DiagramOptions {
+    DiagramOptions {
+        radius: opts.radius,
+        stiffness: opts.stiffness.clone(),
+        lbar_min: opts.lbar_min,
+        lbar_max: opts.lbar_max,
+        accuracy: opts.accuracy,
+        great_circles: false,
+        ..DiagramOptions::default()
+    }
+}
+
+/// One sheet's share of the diagram.
+pub(super) struct SheetOut {
+    pub(super) branch: u32,
+    pub(super) eta: u32,
+    pub(super) family: u32,
+    pub(super) points: Vec<EnclosedPoint>,
+    pub(super) levels: Vec<Levels>,
+    events: Vec<EnclosedEvent>,
+    warnings: Vec<String>,
+    attached_s: f64,
+    lifted_s: f64,
+}
+
+/// The surface equilibrium of `sheet` at `x` with `cells` cells: Newton at the tracing
+/// resolution from the traced state nearest in `L̄`, then (for other `cells`) re-solved
+/// there.
+fn surface_at(
+    dopts: &DiagramOptions,
+    sheet: &TracedBranch,
+    x: f64,
+    cells: usize,
+) -> Result<Equilibrium, SolverError> {
+    let p = sheet
+        .points
+        .iter()
+        .min_by(|a, b| (a.value - x).abs().total_cmp(&(b.value - x).abs()))
+        .ok_or_else(|| SolverError::InvalidInput("an empty sheet".into()))?;
+    let model = SurfaceModel::new(dopts.radius, x, sheet.cells, &dopts.stiffness)?;
+    let eq = solve_from_state(model, p.state.clone(), &newton_options())?;
+    if cells == sheet.cells {
+        return Ok(eq);
+    }
+    half_resolution(dopts, &eq, cells).ok_or_else(|| {
+        SolverError::InvalidInput(format!(
+            "the surface state at lbar = {x} did not re-solve at {cells} cells"
+        ))
+    })
+}
+
+/// `λ_min R³/D0` of the surface state of `sheet` at `x` (`cells` cells).
+fn lambda_min_at(
+    dopts: &DiagramOptions,
+    sheet: &TracedBranch,
+    x: f64,
+    cells: usize,
+) -> Result<f64, SolverError> {
+    let eq = surface_at(dopts, sheet, x, cells)?;
+    let r = dopts.radius;
+    Ok(eq.lambda_range().0 * r.powi(3) / dopts.stiffness.reference())
+}
+
+/// Surface energy of `sheet` at `x` with its error: `N` and `2N` cells,
+/// `E_2N` and `|E_2N − E_N|/15` (fourth order on the graded mesh).
+pub(super) fn surface_energy(
+    dopts: &DiagramOptions,
+    sheet: &TracedBranch,
+    x: f64,
+) -> Result<(f64, f64), SolverError> {
+    let n = sheet.cells;
+    let e1 = surface_at(dopts, sheet, x, n)?;
+    let e2 = half_resolution(dopts, &e1, 2 * n).ok_or_else(|| {
+        SolverError::InvalidInput(format!(
+            "the surface state at lbar = {x} at {} cells",
+            2 * n
+        ))
+    })?;
+    let (a, b) = (e1.energy().total, e2.energy().total);
+    Ok((b, (b - a).abs() / 15.0))
+}
+
+/// Root of `f` in `[a, b]` (`f(a) f(b) < 0`) by the Illinois method, to a bracket of `tol`.
+/// Returns `(root, bracket width)`.
+fn illinois<F>(mut f: F, mut a: f64, mut b: f64, tol: f64) -> Result<(f64, f64), SolverError>
+where
+    F: FnMut(f64) -> Result<f64, SolverError>,
+{
+    let (mut fa, mut fb) = (f(a)?, f(b)?);
+    if fa * fb > 0.0 {
+        return Err(SolverError::InvalidInput(format!(
+            "no sign change of lambda_min in [{a}, {b}] at this resolution"
+        )));
+    }
+    // `b` is the newest iterate, `a` the retained end of the bracket.
+    for _ in 0..60 {
+        if (b - a).abs() < tol || fb == 0.0 {
+            break;
+        }
+        let c = (a * fb - b * fa) / (fb - fa);
+        let fc = f(c)?;
+        if fc * fb < 0.0 {
+            (a, fa) = (b, fb);
+        } else {
+            fa *= 0.5;
+        }
+        (b, fb) = (c, fc);
+    }
+    Ok((b, (b - a).abs()))
+}
+
+/// Locate the event between traced states at `a` and `b` of `sheet` (see the module docs).
+/// Returns `(L̄, error estimate)`.
+fn locate_event(
+    dopts: &DiagramOptions,
+    sheet: &TracedBranch,
+    a: f64,
+    b: f64,
+) -> Result<(f64, f64), SolverError> {
+    let n = sheet.cells;
+    let (x0, w0) = illinois(|x| lambda_min_at(dopts, sheet, x, n), a, b, 1e-10)?;
+    // At 4N and 8N, brackets around the previous root (widened until the sign changes).
+    let refine = |c: usize, x_prev: f64, w_prev: f64| -> Result<(f64, f64), SolverError> {
+        let f = |x: f64| lambda_min_at(dopts, sheet, x, c);
+        let mut h = (2.0 * w_prev).max(1e-6);
+        for _ in 0..12 {
+            let (lo, hi) = ((x_prev - h).max(a), (x_prev + h).min(b));
+            if f(lo)? * f(hi)? <= 0.0 {
+                return illinois(f, lo, hi, 1e-10);
+            }
+            h *= 4.0;
+        }
+        Err(SolverError::InvalidInput(format!(
+            "lambda_min has no sign change near lbar = {x_prev} at {c} cells"
+        )))
+    };
+    let (x1, w1) = refine(4 * n, x0, w0 + 1e-4)?;
+    let (x2, w2) = refine(8 * n, x1, w1 + 1e-5)?;
+    Ok((x2, (x2 - x1).abs() + w1 + w2))
+}
+
+/// Sample states of `sheet` within `[lo, hi]`: its traced states at least `step` apart in
+/// `L̄`, with both ends.
+fn samples(sheet: &TracedBranch, lo: f64, hi: f64, step: f64) -> Vec<usize> {
+    let idx: Vec<usize> = (0..sheet.points.len())
+        .filter(|&k| {
+            let x = sheet.points[k].value;
+            x >= lo - 1e-12 && x <= hi + 1e-12
+        })
+        .collect();
+    let mut out: Vec<usize> = Vec::new();
+    for (j, &k) in idx.iter().enumerate() {
+        let x = sheet.points[k].value;
+        let last = j + 1 == idx.len();
+        match out.last() {
+            None => out.push(k),
+            Some(&p) if x - sheet.points[p].value >= step - 1e-9 => out.push(k),
+            Some(&p) if last && x - sheet.points[p].value > 1e-9 => {
+                // The end: replace a sample closer than half a step.
+                if x - sheet.points[p].value < 0.5 * step && out.len() > 1 {
+                    out.pop();
+                }
+                out.push(k);
+            }
+            _ => {}
+        }
+    }
+    out
+}
+
+/// An attached sample: the surface state itself.
+fn surface_point(sheet: &TracedBranch, k: usize) -> EnclosedPoint {
+    let p = &sheet.points[k];
+    EnclosedPoint {
+        branch: sheet.branch,
+        eta: sheet.eta,
+        lbar: p.value,
+        energy: p.energy,
+        energy_error: p.energy_error.unwrap_or((p.energy - p.energy_trace).abs()),
+        attached: true,
+        contact_fraction: 1.0,
+        contact_intervals: 1,
+        max_gap: 0.0,
+        lambda_min: p.lambda_min,
+        gap_min: 0.0,
+        complementarity: 0.0,
+        stationarity: 0.0,
+        index: p.index,
+        label: Label::Unstable,
+        lowest: false,
+        cells: sheet.cells,
+        source: PointSource::Surface,
+        family: sheet.family,
+        sheet: sheet.sheet,
+        multiplicity: sheet.multiplicity,
+        surface_energy: Some(p.energy),
+    }
+}
+
+/// Newton options of the continuation steps: a step that needs more than 30 iterations is
+/// halved instead (most steps take 2–6; with 12, steps that were converging slowly, at
+/// residuals 1e-8, stopped the traces; the default 80 makes a failing step 2.7× dearer).
+pub(super) fn step_options() -> EnclosedOptions {
+    EnclosedOptions {
+        max_iterations: 30,
+        ..EnclosedOptions::default()
+    }
+}
+
+/// Step `t` to `x` in steps of at most `0.01`, halving a failed step up to 6 times.
+pub(super) fn walk(t: &Levels, x: f64) -> Result<Levels, SolverError> {
+    let opts = step_options();
+    let mut cur = t.clone();
+    let mut h = (x - cur.lbar).clamp(-0.01, 0.01);
+    let mut fails = 0;
+    while (x - cur.lbar).abs() > 1e-15 {
+        let to = if (x - cur.lbar).abs() <= h.abs() {
+            x
+        } else {
+            cur.lbar + h
+        };
+        match cur.step_to(to, &opts) {
+            Ok(n) => cur = n,
+            Err(e) => {
+                fails += 1;
+                if fails > 6 {
+                    return Err(e);
+                }
+                h *= 0.5;
+            }
+        }
+    }
+    Ok(cur)
+}
+
+/// Trace one sheet (see the module docs).
+fn trace_sheet(
+    opts: &EnclosedDiagramOptions,
+    dopts: &DiagramOptions,
+    sheet: &TracedBranch,
+) -> Result<SheetOut, DiagramError> {
+    let (lo, hi) = (opts.lbar_min, opts.lbar_max);
+    let what = format!(
+        "branch {} (eta = {}) family {} sheet {}",
+        sheet.branch, sheet.eta, sheet.family, sheet.sheet
+    );
+    let mut out = SheetOut {
+        branch: sheet.branch,
+        eta: sheet.eta,
+        family: sheet.family,
+        points: Vec::new(),
+        levels: Vec::new(),
+        events: Vec::new(),
+        warnings: Vec::new(),
+        attached_s: 0.0,
+        lifted_s: 0.0,
+    };
+    let pts = &sheet.points;
+    // Events between consecutive traced states.
+    let ta = Instant::now();
+    for k in 1..pts.len() {
+        let (a, b) = (&pts[k - 1], &pts[k]);
+        if (a.lambda_min > 0.0) == (b.lambda_min > 0.0) || b.value < lo || a.value > hi {
+            continue;
+        }
+        match locate_event(dopts, sheet, a.value, b.value) {
+            Ok((x, err)) if x >= lo && x <= hi => {
+                let (energy, _) = surface_energy(dopts, sheet, x).unwrap_or((f64::NAN, 0.0));
+                out.events.push(EnclosedEvent {
+                    kind: if a.lambda_min > 0.0 {
+                        EventKind::LiftOff
+                    } else {
+                        EventKind::Landing
+                    },
+                    branch: sheet.branch,
+                    family: sheet.family,
+                    lbar: x,
+                    error_estimate: err,
+                    energy: if energy.is_finite() {
+                        energy
+                    } else {
+                        a.energy + (x - a.value) / (b.value - a.value) * (b.energy - a.energy)
+                    },
+                    index_before: a.index,
+                    index_after: b.index,
+                });
+            }
+            Ok(_) => {}
+            Err(e) => out.warnings.push(format!(
+                "{what}: lambda_min changes sign between lbar = {:.6} and {:.6}, but the event was not located ({e})",
+                a.value, b.value
+            )),
+        }
+    }
+    let chosen = samples(sheet, lo, hi, opts.step);
+    for &k in chosen.iter().filter(|&&k| pts[k].lambda_min > 0.0) {
+        out.points.push(surface_point(sheet, k));
+    }
+    out.attached_s = ta.elapsed().as_secs_f64();
+    // Lifted-off runs of consecutive samples.
+    let td = Instant::now();
+    let mut runs: Vec<Vec<usize>> = Vec::new();
+    for &k in &chosen {
+        if pts[k].lambda_min > 0.0 {
+            runs.push(Vec::new());
+        } else {
+            match runs.last_mut() {
+                Some(r) => r.push(k),
+                None => runs.push(vec![k]),
+            }
+        }
+    }
+    runs.retain(|r| !r.is_empty());
+    let n = nonuniform_cells(opts.accuracy, sheet.eta);
+    let sopts = EnclosedOptions::default();
+    let seed_at = |k: usize| -> Result<Levels, SolverError> {
+        let p = &pts[k];
+        let m = SurfaceModel::new(opts.radius, p.value, sheet.cells, &opts.stiffness)?;
+        let eq = solve_from_state(m, p.state.clone(), &newton_options())?;
+        let b = solve_branch(
+            opts.radius,
+            p.value,
+            &opts.stiffness,
+            &SurfaceSource::Numeric(Box::new(eq)),
+            n,
+            &sopts,
+        )?;
+        Ok(Levels {
+            lbar: p.value,
+            states: [b.quarter, b.coarse, b.fine],
+        })
+    };
+    // Pieces of runs to trace: (samples, seed position or the middle, re-seeded). Where a
+    // trace stops short of a run's end, the rest is seeded once more from its far end (past
+    // a singular point of the lifted-off sheet, e.g. where an asymmetric family meets it).
+    let mut pieces: Vec<(Vec<usize>, Option<usize>, bool)> =
+        runs.into_iter().map(|r| (r, None, false)).collect();
+    while let Some((run, at, reseeded)) = pieces.pop() {
+        let xs: Vec<f64> = run.iter().map(|&k| pts[k].value).collect();
+        // Seed at `at` (or in the middle); if it fails, the next samples from there.
+        let mid0 = at.unwrap_or(xs.len() / 2);
+        let mut order: Vec<usize> = (0..xs.len()).collect();
+        order.sort_by_key(|&i| (i as i64 - mid0 as i64).abs());
+        let mut seeded = None;
+        let mut last_err = None;
+        for &i in order.iter().take(4) {
+            match seed_at(run[i]) {
+                Ok(l) => {
+                    seeded = Some((i, l));
+                    break;
+                }
+                Err(e) => last_err = Some(e),
+            }
+        }
+        let Some((mid, first)) = seeded else {
+            out.warnings.push(format!(
+                "{what}: no lifted-off state found between lbar = {:.4} and {:.4} (the enclosed solve from the surface state failed: {}); left out",
+                xs[0],
+                xs[xs.len() - 1],
+                last_err.map_or_else(String::new, |e| e.to_string())
+            ));
+            continue;
+        };
+        let traced = follow(
+            first,
+            &xs,
+            mid,
+            &what,
+            &step_options(),
+            true,
+            &mut out.warnings,
+        );
+        if !reseeded {
+            let (t_lo, t_hi) = (
+                traced.first().map_or(f64::INFINITY, |l| l.lbar),
+                traced.last().map_or(f64::NEG_INFINITY, |l| l.lbar),
+            );
+            let above: Vec<usize> = (0..xs.len()).filter(|&j| xs[j] > t_hi + 1e-9).collect();
+            let below: Vec<usize> = (0..xs.len()).filter(|&j| xs[j] < t_lo - 1e-9).collect();
+            if above.len() > 1 {
+                let r: Vec<usize> = above.iter().map(|&j| run[j]).collect();
+                let at = r.len() - 1;
+                pieces.push((r, Some(at), true));
+            }
+            if below.len() > 1 {
+                let r: Vec<usize> = below.iter().map(|&j| run[j]).collect();
+                pieces.push((r, Some(0), true));
+            }
+        }
+        for lv in traced {
+            let mut pt = lv.point(sheet.branch, sheet.eta)?;
+            // The surface loop at the same length: the traced state, or (where the trace
+            // stopped between samples) re-solved there.
+            let (surf, surf_err) = match xs.iter().position(|&x| (x - lv.lbar).abs() < 1e-12) {
+                Some(i) => {
+                    let p = &pts[run[i]];
+                    (p.energy, p.energy_error.unwrap_or(0.0))
+                }
+                None => surface_energy(dopts, sheet, lv.lbar)?,
+            };
+            pt.family = sheet.family;
+            pt.sheet = sheet.sheet;
+            pt.multiplicity = sheet.multiplicity;
+            pt.surface_energy = Some(surf);
+            if pt.energy > surf + surf_err {
+                // Not this sheet's lifted-off state: the wall that may pull no longer only
+                // relaxes the surface loop here (the levels disagree, or the trace crossed
+                // to another solution near a fold of the sheet).
+                out.warnings.push(format!(
+                    "{what} at lbar = {:.6}: the enclosed state found ({:.10} ± {:.1e}) lies above the sheet's surface loop ({:.10}); left out",
+                    lv.lbar, pt.energy, pt.energy_error, surf
+                ));
+                continue;
+            }
+            out.points.push(pt);
+            out.levels.push(lv);
+        }
+    }
+    out.lifted_s = td.elapsed().as_secs_f64();
+    out.points.sort_by(|u, v| u.lbar.total_cmp(&v.lbar));
+    Ok(out)
+}
+
+/// The enclosed diagram of a non-uniform rod (see the module docs).
+pub(super) fn nonuniform_diagram(
+    opts: &EnclosedDiagramOptions,
+) -> Result<EnclosedDiagram, DiagramError> {
+    let t0 = Instant::now();
+    if opts.lbar_min < 1.0 {
+        return Err(DiagramError::InvalidOptions(format!(
+            "the enclosed diagram of a non-uniform rod starts at lbar = 1 (got lbar_min = {}): below it the loop is free and, with non-uniform stiffness, not a circle; that free loop is not modelled",
+            opts.lbar_min
+        )));
+    }
+    let dopts = surface_options(opts);
+    let wanted = |b: u32| opts.branches.as_ref().is_none_or(|s| s.contains(&b));
+    let etas: Vec<u32> = dopts
+        .etas()
+        .into_iter()
+        .filter(|&e| wanted(branch_of_eta(e)))
+        .collect();
+    let threads = dopts.worker_threads();
+    let mut warnings = Vec::new();
+    let mut timings = EnclosedTimings::default();
+    // 1. Surface families.
+    let ts = Instant::now();
+    let fams = run_parallel(
+        threads,
+        etas.clone(),
+        &mut |_| {},
+        &mut |_: &Result<_, DiagramError>| {},
+        |eta, _| compute_families(&dopts, eta, &mut |_| {}),
+    );
+    let mut sheets: Vec<TracedBranch> = Vec::new();
+    for f in fams {
+        let f = f?;
+        warnings.extend(f.notes);
+        sheets.extend(f.sheets);
+    }
+    let surface_s = ts.elapsed().as_secs_f64();
+    // 2. Each sheet: attached samples, events, lifted-off traces (longest first).
+    let mut order: Vec<usize> = (0..sheets.len()).collect();
+    order.sort_by_key(|&i| {
+        std::cmp::Reverse(
+            samples(&sheets[i], opts.lbar_min, opts.lbar_max, opts.step).len() * sheets[i].cells,
+        )
+    });
+    let outs = run_parallel(
+        threads,
+        order.clone(),
+        &mut |_| {},
+        &mut |_: &Result<SheetOut, DiagramError>| {},
+        |i, _| trace_sheet(opts, &dopts, &sheets[i]),
+    );
+    let mut traced: Vec<(usize, SheetOut)> = Vec::new();
+    for (i, o) in order.into_iter().zip(outs) {
+        let o = o?;
+        timings.attached += o.attached_s;
+        timings.lifted_off += o.lifted_s;
+        traced.push((i, o));
+    }
+    traced.sort_by_key(|(i, _)| *i);
+    let (idx, outs): (Vec<usize>, Vec<SheetOut>) = traced.into_iter().unzip();
+    let surf: Vec<&TracedBranch> = idx.iter().map(|&i| &sheets[i]).collect();
+    // 3. Exchanges of the lowest branch.
+    let tc = Instant::now();
+    let mut grid: Vec<f64> = outs
+        .iter()
+        .flat_map(|s| s.points.iter().map(|p| p.lbar))
+        .collect();
+    grid.sort_by(f64::total_cmp);
+    grid.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+    let mut critical: Vec<EnclosedCritical> = Vec::new();
+    // (x0, x1, a, b) brackets of located crossings, for the lowest flags.
+    let mut brackets: Vec<(f64, f64, usize, usize)> = Vec::new();
+    let dbar = mean_stiffness(opts)?;
+    // Great circles inside the range where some sheet begins or ends.
+    let ends: Vec<f64> = (1..=(opts.lbar_max.floor() as u32))
+        .map(f64::from)
+        .filter(|&m| m >= opts.lbar_min - CIRCLE)
+        .filter(|&m| {
+            outs.iter()
+                .any(|s| [s.eta as f64 - 1.0, s.eta as f64 + 1.0].contains(&m))
+        })
+        .collect();
+    let circles: Vec<f64> = ends
+        .iter()
+        .copied()
+        .filter(|&m| m > opts.lbar_min + CIRCLE && m < opts.lbar_max - CIRCLE)
+        .collect();
+    for w in grid.windows(2) {
+        let (Some(a), Some(b)) = (lowest_at(&outs, w[0]), lowest_at(&outs, w[1])) else {
+            continue;
+        };
+        if a == b || outs[a].eta == outs[b].eta {
+            continue;
+        }
+        let (sa, sb) = (&outs[a], &outs[b]);
+        let overlap = interp(sa, w[1]).is_some() && interp(sb, w[0]).is_some();
+        let base = Critical {
+            index: 0,
+            lbar_cr: f64::NAN,
+            kind: CriticalKind::Crossing,
+            from_branch: sa.branch,
+            to_branch: sb.branch,
+            energy: f64::NAN,
+            error_estimate: f64::NAN,
+        };
+        if overlap {
+            match locate_crossing(&dopts, [sa, sb], [surf[a], surf[b]], w[0], w[1]) {
+                Ok((x, err, e, xs, method)) => {
+                    brackets.push((w[0], w[1], a, b));
+                    critical.push(EnclosedCritical {
+                        critical: Critical {
+                            lbar_cr: x,
+                            energy: e,
+                            error_estimate: err,
+                            ..base
+                        },
+                        surface_lbar_cr: xs,
+                        method: format!(
+                            "{method}; families {} -> {}",
+                            sa.family, sb.family
+                        ),
+                    });
+                }
+                Err(e) => warnings.push(format!(
+                    "the exchange of branches {} -> {} between lbar = {:.6} and {:.6} was not located: {e}",
+                    sa.branch, sb.branch, w[0], w[1]
+                )),
+            }
+            continue;
+        }
+        if ends
+            .iter()
+            .any(|m| (w[0] - m).abs() < CIRCLE || (w[1] - m).abs() < CIRCLE)
+        {
+            // Sheets begin and end at the great circles: handled below.
+            continue;
+        }
+        warnings.push(format!(
+            "the lowest state changes from branch {} to {} between lbar = {:.6} and {:.6} where a trace stopped; not located",
+            sa.branch, sb.branch, w[0], w[1]
+        ));
+    }
+    // Collapses: the lowest sheet just below a great circle `L̄ = m` ends there and the
+    // lowest just above begins there.
+    for &m in &circles {
+        let (Some(a), Some(b)) = (lowest_at(&outs, m - CIRCLE), lowest_at(&outs, m + CIRCLE))
+        else {
+            continue;
+        };
+        let (sa, sb) = (&outs[a], &outs[b]);
+        if sa.eta == sb.eta {
+            continue;
+        }
+        let a_end = sa.points.last().map_or(f64::NAN, |p| p.lbar);
+        let b_start = sb.points.first().map_or(f64::NAN, |p| p.lbar);
+        if sa.eta as f64 + 1.0 != m || sb.eta as f64 - 1.0 != m {
+            warnings.push(format!(
+                "the lowest state changes from branch {} to {} near the great circle lbar = {m} without both ending there; not located",
+                sa.branch, sb.branch
+            ));
+            continue;
+        }
+        critical.push(EnclosedCritical {
+            critical: Critical {
+                index: 0,
+                kind: CriticalKind::Collapse,
+                lbar_cr: m,
+                from_branch: sa.branch,
+                to_branch: sb.branch,
+                energy: m * dbar,
+                error_estimate: (a_end - m).abs().max((b_start - m).abs()),
+            },
+            surface_lbar_cr: m,
+            method: format!(
+                "the lowest branch {} ends at the {m}-fold great circle and branch {} begins there (E R/(pi D0) = m mean(D)/D0); the enclosed traces reach lbar = {a_end:.6} and {b_start:.6}, so the error estimate is their distance from {m}",
+                sa.branch, sb.branch
+            ),
+        });
+    }
+    critical.sort_by(|u, v| u.critical.lbar_cr.total_cmp(&v.critical.lbar_cr));
+    for (i, c) in critical.iter_mut().enumerate() {
+        c.critical.index = i + 1;
+    }
+    timings.critical = tc.elapsed().as_secs_f64();
+    // 4. Lowest flags and labels.
+    let mut points = Vec::new();
+    let mut events = Vec::new();
+    let mut cells = Vec::new();
+    for (k, s) in outs.iter().enumerate() {
+        for p in &s.points {
+            let mut p = p.clone();
+            let mut lowest = lowest_at(&outs, p.lbar) == Some(k);
+            for &(x0, x1, a, b) in &brackets {
+                if p.lbar > x0 && p.lbar < x1 && (k == a || k == b) {
+                    let c = critical
+                        .iter()
+                        .find(|c| {
+                            c.critical.lbar_cr >= x0 - 0.05 && c.critical.lbar_cr <= x1 + 0.05
+                        })
+                        .map_or(0.5 * (x0 + x1), |c| c.critical.lbar_cr);
+                    lowest = (k == a) == (p.lbar < c);
+                }
+            }
+            p.lowest = lowest;
+            p.label = match (p.index, lowest) {
+                (0, true) => Label::Stable,
+                (0, false) => Label::Metastable,
+                _ => Label::Unstable,
+            };
+            points.push(p);
+        }
+        events.extend(s.events.iter().cloned());
+        warnings.extend(s.warnings.iter().cloned());
+        let n = nonuniform_cells(opts.accuracy, s.eta);
+        if !cells.contains(&(s.branch, n)) {
+            cells.push((s.branch, n));
+        }
+    }
+    events.sort_by(|u, v| u.lbar.total_cmp(&v.lbar));
+    timings.surface = surface_s;
+    timings.total = t0.elapsed().as_secs_f64();
+    Ok(EnclosedDiagram {
+        points,
+        events,
+        critical,
+        warnings,
+        cells,
+        seconds: timings,
+    })
+}
