@@ -147,9 +147,6 @@ pub(crate) fn correct_bordered<P: Problem + ?Sized>(
         if res <= tol.tol && step_ok {
             return Ok(Corrected::Converged { y, iterations: it });
         }
-        // The residual is converged; only the update test is not met yet. Kept in case the
-        // next update does not contract (see below).
-        let at_tolerance = (res <= tol.tol).then(|| y.clone());
         if it == tol.max_iter {
             return Ok(Corrected::Failed);
         }
@@ -164,17 +161,6 @@ pub(crate) fn correct_bordered<P: Problem + ?Sized>(
         // Newton-Kantorovich style monotonicity test: updates must contract once the
         // iteration is under way (ignored at round-off level).
         if it >= 1 && step > prev_step && step > tol.step_tol * (1.0 + y.amax()) {
-            // An update that grows from a point whose residual already met the tolerance is
-            // rounding noise along a nearly singular direction of an ill-conditioned
-            // Jacobian (seen on very soft segments, D1/D0 = 0.001: residual 1e-13, updates
-            // 3e-7 then 5e-7), not divergence: that point is the solution. Rejecting it
-            // made the step control halve the step hundreds of times.
-            if let Some(y_ok) = at_tolerance {
-                return Ok(Corrected::Converged {
-                    y: y_ok,
-                    iterations: it,
-                });
-            }
             return Ok(Corrected::Failed);
         }
         prev_step = step;
