@@ -153,7 +153,7 @@ fn hermite_guess(
 ) -> Option<DVector<f64>> {
     let w = hi.sigma - lo.sigma;
     let (ca, cb) = (t_a.dot(&lo.t), t_a.dot(&hi.t));
-    if !(w > 0.0) || ca.abs() < 0.1 || cb.abs() < 0.1 {
+    if w.is_nan() || w <= 0.0 || ca.abs() < 0.1 || cb.abs() < 0.1 {
         return None;
     }
     let th = (sigma - lo.sigma) / w;
