@@ -142,6 +142,29 @@ impl SegEval {
     }
 }
 
+/// The cubic Hermite interpolant at `sigma` of the curve points `lo` and `hi`, in the
+/// step's parameter `σ = t_aᵀ (y − y_a)` (so `dy/dσ = t / (t_aᵀ t)`); `None` when the
+/// bracket is empty or a tangent is nearly orthogonal to `t_a`.
+fn hermite_guess(
+    t_a: &DVector<f64>,
+    lo: &SegEval,
+    hi: &SegEval,
+    sigma: f64,
+) -> Option<DVector<f64>> {
+    let w = hi.sigma - lo.sigma;
+    let (ca, cb) = (t_a.dot(&lo.t), t_a.dot(&hi.t));
+    if w.is_nan() || w <= 0.0 || ca.abs() < 0.1 || cb.abs() < 0.1 {
+        return None;
+    }
+    let th = (sigma - lo.sigma) / w;
+    let (th2, th3) = (th * th, th * th * th);
+    let h00 = 2.0 * th3 - 3.0 * th2 + 1.0;
+    let h10 = th3 - 2.0 * th2 + th;
+    let h01 = -2.0 * th3 + 3.0 * th2;
+    let h11 = th3 - th2;
+    Some(&lo.y * h00 + &lo.t * (h10 * w / ca) + &hi.y * h01 + &hi.t * (h11 * w / cb))
+}
+
 /// A step between two accepted points.
 pub(crate) struct Segment<'n> {
     pub a: &'n Node,
@@ -328,14 +351,24 @@ impl<'a, P: Problem + ?Sized> Continuation<'a, P> {
     }
 
     /// The curve point at arclength `sigma` within the segment, or `None` if the
-    /// corrector fails there.
+    /// corrector fails there. The corrector starts from the chord of the step or, with
+    /// [`PseudoArclength::with_hermite_location`], from the cubic Hermite interpolant of
+    /// `lo` and `hi`, points of the segment already evaluated with
+    /// `lo.sigma < sigma < hi.sigma` (the current bracket of a location loop).
     fn eval_at(
         &self,
         ev: &Evaluator<'_, P>,
         seg: &Segment<'_>,
+        lo: &SegEval,
+        hi: &SegEval,
         sigma: f64,
     ) -> Result<Option<SegEval>, ContinuationError> {
-        let guess = &seg.a.y + (&seg.b.y - &seg.a.y) * (sigma / seg.h);
+        let hermite = if self.settings.hermite_location {
+            hermite_guess(&seg.a.t, lo, hi, sigma)
+        } else {
+            None
+        };
+        let guess = hermite.unwrap_or_else(|| &seg.a.y + (&seg.b.y - &seg.a.y) * (sigma / seg.h));
         let c = seg.a.t.dot(&seg.a.y) + sigma;
         match correct_bordered(ev, guess, &seg.a.t, c, self.corrector_tol())? {
             Corrected::Converged { y, .. } => {
@@ -500,9 +533,9 @@ impl<'a, P: Problem + ?Sized> Continuation<'a, P> {
                 sigma = mid;
             }
             sigma = sigma.clamp(a.sigma + margin, b.sigma - margin);
-            let e = match self.eval_at(ev, seg, sigma)? {
+            let e = match self.eval_at(ev, seg, &a, &b, sigma)? {
                 Some(e) => e,
-                None if sigma != mid => match self.eval_at(ev, seg, mid)? {
+                None if sigma != mid => match self.eval_at(ev, seg, &a, &b, mid)? {
                     Some(e) => e,
                     None => break,
                 },
@@ -549,7 +582,7 @@ impl<'a, P: Problem + ?Sized> Continuation<'a, P> {
         };
         let sigma = (a.sigma * fb_true - b.sigma * fa_true) / (fb_true - fa_true);
         if sigma.is_finite() && sigma > a.sigma && sigma < b.sigma {
-            if let Some(e) = self.eval_at(ev, seg, sigma)? {
+            if let Some(e) = self.eval_at(ev, seg, &a, &b, sigma)? {
                 let fe = f(&e)?;
                 if fe.abs() < best.1.abs() {
                     best = (e, fe);
@@ -584,7 +617,7 @@ impl<'a, P: Problem + ?Sized> Continuation<'a, P> {
                     break;
                 }
                 let mid = 0.5 * (l.sigma + h.sigma);
-                let Some(e) = self.eval_at(ev, seg, mid)? else {
+                let Some(e) = self.eval_at(ev, seg, &l, &h, mid)? else {
                     break;
                 };
                 let im = self

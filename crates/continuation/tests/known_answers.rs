@@ -889,3 +889,50 @@ fn start_on_the_boundary_heading_out_adds_no_point() {
     assert_eq!(branch.stop, StopReason::LeftRange { boundary: 1.0 });
     assert_eq!(branch.points.len(), 1);
 }
+
+/// The Hermite start of the location correctors finds the same folds as the chord start
+/// (the circle's, at `p = ±1`), and on the parabola `x² = p` of the pitchfork, followed
+/// through `x = 0`, the fold and the branch point there, both at `(0, 0)`.
+#[test]
+fn hermite_location_finds_the_known_folds_and_branch_point() {
+    let problem = circle();
+    for hermite in [false, true] {
+        let settings = PseudoArclength::new()
+            .with_ds(0.05)
+            .unwrap()
+            .with_ds_bounds(1e-8, 0.1)
+            .unwrap()
+            .with_hermite_location(hermite)
+            .unwrap();
+        let branch = Continuation::new(&problem, settings)
+            .run(&v1(1.0), 0.0)
+            .unwrap();
+        let folds: Vec<_> = branch.folds().collect();
+        assert_eq!(folds.len(), 2, "hermite {hermite}: {:?}", branch.special);
+        assert!((folds[0].p - 1.0).abs() < 1e-8 && folds[0].x[0].abs() < 1e-8);
+        assert!((folds[1].p + 1.0).abs() < 1e-8 && folds[1].x[0].abs() < 1e-8);
+    }
+    let problem = pitchfork();
+    let settings = PseudoArclength::new()
+        .with_ds(0.07)
+        .unwrap()
+        .with_ds_bounds(1e-8, 0.1)
+        .unwrap()
+        .with_range(-1.0, 0.3)
+        .unwrap()
+        .with_direction(Direction::Backward)
+        .unwrap()
+        .with_locate_tol(1e-9)
+        .unwrap()
+        .with_hermite_location(true)
+        .unwrap();
+    let branch = Continuation::new(&problem, settings)
+        .run(&v1(0.5), 0.25)
+        .unwrap();
+    let fold = branch.folds().next().expect("the parabola's fold");
+    let bp = branch.branch_points().next().expect("the branch point");
+    for (what, x, p) in [("fold", fold.x[0], fold.p), ("branch point", bp.x[0], bp.p)] {
+        eprintln!("pitchfork parabola: {what} at x = {x:e}, p = {p:e}");
+        assert!(x.abs() < 1e-8 && p.abs() < 1e-8, "{what}: x = {x}, p = {p}");
+    }
+}

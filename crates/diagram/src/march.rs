@@ -77,6 +77,11 @@ pub struct MarchSettings {
     /// Whether the stability index is monitored (index changes located, points carry their
     /// index); off, the points have no index.
     pub track_index: bool,
+    /// Whether the location of special points starts its correctors from the Hermite
+    /// interpolant of the current bracket
+    /// ([`PseudoArclength::with_hermite_location`]): cheaper and more accurate location,
+    /// used where the curve is already known (relocating special points).
+    pub hermite_location: bool,
     /// Steps between two calls of the progress callback (which is also called at the end).
     pub progress_every: usize,
     /// With [`FoldPolicy::Follow`]: the far end of the range (the march then stays within
@@ -386,6 +391,7 @@ fn continuation_settings(st: &MarchSettings, side: f64) -> Result<PseudoArclengt
         .and_then(|s| s.with_detect_folds(true))
         .and_then(|s| s.with_detect_branch_points(st.detect_branch_points))
         .and_then(|s| s.with_detect_loops(st.folds == FoldPolicy::Follow))
+        .and_then(|s| s.with_hermite_location(st.hermite_location))
         .map_err(start_error)
 }
 

@@ -294,6 +294,7 @@ pub fn sweep_param(s: &SweepSettings) -> Result<ParamSweep, DiagramError> {
             detect_branch_points: true,
             index_tolerance: INDEX_TOLERANCE,
             track_index: true,
+            hermite_location: false,
             progress_every: usize::MAX,
             far_limit: Some(cont.p_of(far)),
             circles: Vec::new(),

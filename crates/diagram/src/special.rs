@@ -74,6 +74,7 @@ pub(crate) fn locate_end(opts: &DiagramOptions, b: &TracedBranch, at_low: bool) 
         settings.max_steps = MAX_STEPS;
         settings.track_index = false;
         settings.locate_tol = LOCATE_TOL;
+        settings.hermite_location = true;
         // About three steps to the end (distance in the march's scaled norm).
         let dist = scaled_distance(&start.state, &end.state, shape, settings.scale)
             .hypot(end.value - start.value);

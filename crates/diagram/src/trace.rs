@@ -67,6 +67,7 @@ pub(crate) fn march_settings(opts: &DiagramOptions, limit: f64, shape: usize) ->
         detect_branch_points: false,
         index_tolerance: INDEX_TOLERANCE,
         track_index: true,
+        hermite_location: false,
         progress_every: PROGRESS_EVERY,
         far_limit: None,
         circles: Vec::new(),

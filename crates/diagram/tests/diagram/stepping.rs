@@ -82,6 +82,7 @@ fn the_same_march_continues_in_d1_at_fixed_length() {
         detect_branch_points: false,
         index_tolerance: 1e-6,
         track_index: true,
+        hermite_location: false,
         progress_every: 5,
         far_limit: None,
         circles: Vec::new(),
