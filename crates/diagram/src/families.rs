@@ -39,6 +39,7 @@ use rodloop_solver::{
 
 use crate::ends::{approach_end, SWITCH_DISTANCE};
 use crate::march::{march, march_switch, FoldPolicy, MarchPoint, MarchSpecial, MarchStop};
+use crate::parallel::run_parallel;
 use crate::seed::periods_of;
 use crate::states::finish_point;
 use crate::trace::march_settings;
@@ -250,35 +251,49 @@ pub fn compute_families(
     };
     let strong = matches!(&opts.stiffness, Stiffness::Tanh { d0, d1, .. }
         if d1 / d0 < HOMOTOPY_BELOW);
-    for &lbar in &seed_lengths {
-        let Ok(model_l) = problem.model_at(lbar) else {
-            continue;
-        };
-        // Seeds: at strong contrast the state `rodloop solve --branch` finds at this length
-        // (labels must agree with it; `None`), then the shifted Euler starts (solved
-        // directly, or at strong contrast followed in D1/D0 from a mild contrast).
-        let shifts = (0..4).map(|j| Some(j as f64 / (8.0 * e)));
-        let seeds: Vec<Option<f64>> = if strong {
-            std::iter::once(None).chain(shifts).collect()
-        } else {
-            shifts.collect()
-        };
-        for seed in seeds {
-            seeds_tried += 1;
+    // Seeds: at strong contrast the state `rodloop solve --branch` finds at each length
+    // (labels must agree with it; `None`), then the shifted Euler starts (solved directly, or
+    // at strong contrast followed in D1/D0 from a mild contrast).
+    let shifts = (0..4).map(|j| Some(j as f64 / (8.0 * e)));
+    let seeds: Vec<Option<f64>> = if strong {
+        std::iter::once(None).chain(shifts).collect()
+    } else {
+        shifts.collect()
+    };
+    // Every seed is solved before any is followed, on the crate's thread pool: the seeds are
+    // independent of each other and of the curves (which only decide whether a seed is
+    // new), and at strong contrast they are most of a branch's time.
+    let jobs: Vec<(f64, Option<f64>)> = seed_lengths
+        .iter()
+        .flat_map(|&l| seeds.iter().map(move |&sd| (l, sd)))
+        .collect();
+    let solved = run_parallel(
+        opts.worker_threads(),
+        jobs,
+        &mut |_| {},
+        &mut |_| {},
+        |(lbar, seed), _| {
             let ts = Instant::now();
-            let seeded = match seed {
-                Some(shift) => seed_state(opts, &model_l, eta, lbar, shift, strong),
-                None => robust_seed(opts, &model_l, eta, lbar),
-            };
+            let x = problem.model_at(lbar).ok().and_then(|m| match seed {
+                Some(shift) => seed_state(opts, &m, eta, lbar, shift, strong),
+                None => robust_seed(opts, &m, eta, lbar),
+            });
+            (x, ts.elapsed().as_secs_f64())
+        },
+    );
+    for (li, &lbar) in seed_lengths.iter().enumerate() {
+        for (si, &seed) in seeds.iter().enumerate() {
+            // (A break below leaves the rest of this length's seeds: index, don't iterate.)
+            let (seeded, secs) = solved[li * seeds.len() + si].clone();
+            seeds_tried += 1;
             let what = match seed {
                 Some(shift) => format!("origin moved by {shift:.4}"),
                 None => "as `rodloop solve` finds it".to_string(),
             };
             debug(|| {
                 format!(
-                    "eta {eta} seed at {lbar:.3} ({what}): {} in {:.3} s",
+                    "eta {eta} seed at {lbar:.3} ({what}): {} in {secs:.3} s",
                     seeded.is_some(),
-                    ts.elapsed().as_secs_f64()
                 )
             });
             let Some(x0) = seeded else {
