@@ -211,7 +211,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     let t_start = Instant::now();
     if !scene.stiffness.is_uniform() {
         bail!(
-            "scene {}: the report of an enclosed scene is built on the enclosed diagram, which covers uniform rods only (a non-uniform rod has no exact layer for its attached parts); `rodloop solve` handles single enclosed states",
+            "scene {}: the report of an enclosed scene covers uniform rods only (its pages are built on the exact layer's attached loops); for a two-segment enclosed rod run `rodloop diagram --scene FILE` (the enclosed two-segment diagram, several minutes) and `rodloop solve` for single states",
             scene.name
         );
     }

@@ -483,7 +483,7 @@ fn page_loads_in_headless_chromium_without_console_errors() {
 fn bad_input_is_one_line_and_writes_nothing() {
     let base = Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-bad");
     let _ = std::fs::remove_dir_all(&base);
-    // Enclosed two-segment rods: the enclosed diagram covers uniform rods only.
+    // Enclosed two-segment rods: the report covers uniform rods only (the diagram does both).
     let enclosed = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("data/scenes/inhomogeneous-d1-0.5-enclosed.toml");
     let broken = base.join("broken.toml");
