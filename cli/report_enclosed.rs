@@ -560,33 +560,16 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
         ),
         t_states,
     );
-    for st in &states {
-        if let Ok(s) = &st.outcome {
-            row(
-                &format!(
-                    "&nbsp;&nbsp;branch {} at L̄ = {} (solve and picture)",
-                    st.branch, st.lbar
-                ),
-                s.seconds,
-            );
-        }
-    }
-    row("page assembly", t_page);
-    row("total", total);
-    h.push_str("</tbody></table>\n</section>\n");
-    let _ = writeln!(
-        h,
-        "<footer><p class=\"lead\">Written by rodloop {version}. This page is self-contained: no scripts, no external style sheets, fonts or images.</p></footer>\n</body>\n</html>"
-    );
-    if let Some(bad) = h
-        .split(|c: char| !c.is_alphanumeric())
-        .find(|t| *t == "NaN" || *t == "inf")
-    {
-        bail!(
-            "internal error: the report contains a non-finite number ({bad}); nothing was written"
-        );
-    }
-    run.write_bytes("report.html", h.as_bytes())?;
+    let state_rows: Vec<(u32, f64, f64)> = states
+        .iter()
+        .filter_map(|st| {
+            st.outcome
+                .as_ref()
+                .ok()
+                .map(|s| (st.branch, st.lbar, s.seconds))
+        })
+        .collect();
+    crate::report_tables::finish_page(&run, &mut h, &state_rows, t_page, total)?;
 
     let staged = std::fs::read_to_string(run.stage_dir().join("summary.json"))
         .context("reading the staged summary.json")?;

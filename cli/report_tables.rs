@@ -114,3 +114,43 @@ td.ok{color:#1b7a1b}td.bad{color:#c01818;font-weight:bold}td.src{color:#555;font
 .note{background:#fff6e0;border-left:4px solid #e0a800;padding:6px 10px;font-size:13px}
 dl{display:grid;grid-template-columns:max-content auto;gap:2px 16px;font-size:14px}dt{font-weight:bold}dd{margin:0}
 pre{background:#f6f8fa;padding:8px;font-size:12px;overflow-x:auto}";
+
+/// The end of a report page (cli/report.rs, cli/report_enclosed.rs): one timing row per
+/// representative state (`(branch, lbar, seconds)`), the page assembly and the total, the
+/// footer; then the page is written to `run` after a last check that it holds no
+/// non-finite number (every number comes from checked outputs: this is the last line of
+/// defence).
+pub fn finish_page(
+    run: &crate::output::OutputRun,
+    h: &mut String,
+    state_rows: &[(u32, f64, f64)],
+    t_page: f64,
+    total: f64,
+) -> anyhow::Result<()> {
+    let mut row = |k: &str, v: f64| {
+        let _ = writeln!(h, "<tr><td>{k}</td><td class=\"num\">{v:.3}</td></tr>");
+    };
+    for &(branch, lbar, secs) in state_rows {
+        row(
+            &format!("&nbsp;&nbsp;branch {branch} at L̄ = {lbar} (solve and picture)"),
+            secs,
+        );
+    }
+    row("page assembly", t_page);
+    row("total", total);
+    h.push_str("</tbody></table>\n</section>\n");
+    let _ = writeln!(
+        h,
+        "<footer><p class=\"lead\">Written by rodloop {}. This page is self-contained: no scripts, no external style sheets, fonts or images.</p></footer>\n</body>\n</html>",
+        env!("CARGO_PKG_VERSION")
+    );
+    if let Some(bad) = h
+        .split(|c: char| !c.is_alphanumeric())
+        .find(|t| *t == "NaN" || *t == "inf")
+    {
+        anyhow::bail!(
+            "internal error: the report contains a non-finite number ({bad}); nothing was written"
+        );
+    }
+    run.write_bytes("report.html", h.as_bytes())
+}
