@@ -163,31 +163,17 @@ pub(crate) fn write_outputs(
             error_estimate: c.error_estimate,
         }
     }))?;
-    let mut special = Table::new(
-        "special_points.csv",
-        &[
-            "kind",
-            "lbar",
-            "energy",
-            "branch",
-            "family",
-            "index_before",
-            "index_after",
-            "error_estimate",
-        ],
-    );
-    for e in &d.events {
-        special.push(vec![
-            Cell::S(e.kind.as_str().into()),
-            Cell::F(e.lbar),
-            Cell::F(e.energy),
-            Cell::I(e.branch.into()),
-            Cell::I(e.family.into()),
-            Cell::I(e.index_before as i64),
-            Cell::I(e.index_after as i64),
-            Cell::F(e.error_estimate),
-        ])?;
-    }
+    let special =
+        crate::output::special_table(d.events.iter().map(|e| crate::output::SpecialRow {
+            kind: e.kind.as_str().into(),
+            lbar: e.lbar,
+            energy: e.energy,
+            branch: e.branch,
+            family: e.family,
+            index_before: e.index_before,
+            index_after: e.index_after,
+            error_estimate: Some(e.error_estimate),
+        }))?;
     run.write_table(&branches)?;
     run.write_table(&critical)?;
     run.write_table(&special)?;

@@ -279,34 +279,17 @@ pub fn write_outputs(
             Cell::S(file),
         ])?;
     }
-    let mut special = Table::new(
-        "special_points.csv",
-        &[
-            "kind",
-            "lbar",
-            "energy",
-            "branch",
-            "family",
-            "index_before",
-            "index_after",
-            "error_estimate",
-        ],
-    );
-    for p in &d.special {
-        special.push(vec![
-            Cell::S(p.kind.as_str().into()),
-            Cell::F(p.lbar),
-            Cell::F(p.energy),
-            Cell::I(p.branch.into()),
-            Cell::I(p.family.into()),
-            Cell::I(p.index_before as i64),
-            Cell::I(p.index_after as i64),
-            match p.error_estimate {
-                Some(e) => Cell::F(e),
-                None => Cell::S(String::new()),
-            },
-        ])?;
-    }
+    let special =
+        crate::output::special_table(d.special.iter().map(|p| crate::output::SpecialRow {
+            kind: p.kind.as_str().into(),
+            lbar: p.lbar,
+            energy: p.energy,
+            branch: p.branch,
+            family: p.family,
+            index_before: p.index_before,
+            index_after: p.index_after,
+            error_estimate: p.error_estimate,
+        }))?;
     let critical = critical_table(d.critical.iter().map(|c| CriticalRow {
         index: c.index,
         lbar_cr: c.lbar_cr,

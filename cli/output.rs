@@ -141,6 +141,56 @@ pub struct CriticalRow {
     pub error_estimate: f64,
 }
 
+/// One row of `special_points.csv` (numeric and enclosed diagrams).
+pub struct SpecialRow {
+    /// Kind of the point (fold, branch point, crossing, collapse, lift-off, landing …).
+    pub kind: String,
+    /// Where it is.
+    pub lbar: f64,
+    /// Energy there.
+    pub energy: f64,
+    /// Branch it is on.
+    pub branch: u32,
+    /// Family of the branch (0 for uniform rods).
+    pub family: u32,
+    /// Hessian index on either side.
+    pub index_before: usize,
+    /// See [`SpecialRow::index_before`].
+    pub index_after: usize,
+    /// Estimated error of `lbar` (empty when the point was not located again).
+    pub error_estimate: Option<f64>,
+}
+
+/// The `special_points.csv` table.
+pub fn special_table(rows: impl IntoIterator<Item = SpecialRow>) -> Result<Table> {
+    let mut t = Table::new(
+        "special_points.csv",
+        &[
+            "kind",
+            "lbar",
+            "energy",
+            "branch",
+            "family",
+            "index_before",
+            "index_after",
+            "error_estimate",
+        ],
+    );
+    for p in rows {
+        t.push(vec![
+            Cell::S(p.kind),
+            Cell::F(p.lbar),
+            Cell::F(p.energy),
+            Cell::I(p.branch.into()),
+            Cell::I(p.family.into()),
+            Cell::I(p.index_before as i64),
+            Cell::I(p.index_after as i64),
+            p.error_estimate.map_or(Cell::S(String::new()), Cell::F),
+        ])?;
+    }
+    Ok(t)
+}
+
 /// The `critical.csv` table.
 pub fn critical_table(rows: impl IntoIterator<Item = CriticalRow>) -> Result<Table> {
     let mut t = Table::new(
