@@ -13,7 +13,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use rodloop_diagram::enclosed::{enclosed_diagram, EnclosedDiagram, EnclosedDiagramOptions};
 use rodloop_diagram::Label;
 use rodloop_figures::atlas::atlas_figure;
@@ -209,12 +209,6 @@ fn diagram_args(out: &Path) -> Result<crate::diagram::Args> {
 /// Run `rodloop report` on an enclosed scene.
 pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     let t_start = Instant::now();
-    if !scene.stiffness.is_uniform() {
-        bail!(
-            "scene {}: the report of an enclosed scene covers uniform rods only (its pages are built on the exact layer's attached loops); for a two-segment enclosed rod run `rodloop diagram --scene FILE` (the enclosed two-segment diagram, several minutes) and `rodloop solve` for single states",
-            scene.name
-        );
-    }
     let scene_text = match &args.scene {
         Some(p) => Some(
             std::fs::read_to_string(p).with_context(|| format!("cannot read {}", p.display()))?,

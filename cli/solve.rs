@@ -80,7 +80,7 @@ pub fn load_scene(path: Option<&Path>) -> Result<Scene> {
     };
     if scene.confinement == Confinement::Enclosed {
         bail!(
-            "scene {}: confinement = \"enclosed\" is handled by `rodloop solve`, `rodloop diagram`, `rodloop report` (uniform rods) and `rodloop compare --scene enclosed`; this command runs the surface model only (converge and phase are built on the surface model's O(N) factorisation and its diagram; the enclosed model is dense and has its own diagram). See the README, Enclosed loops",
+            "scene {}: confinement = \"enclosed\" is handled by `rodloop solve`, `rodloop diagram`, `rodloop report` and `rodloop compare --scene enclosed`; this command runs the surface model only (converge and phase are built on the surface model's O(N) factorisation and its diagram; the enclosed model is dense and has its own diagram). See the README, Enclosed loops",
             scene.name
         );
     }
