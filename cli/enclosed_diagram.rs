@@ -7,13 +7,11 @@ use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 use rodloop_diagram::enclosed::{enclosed_diagram, EnclosedDiagram, EnclosedDiagramOptions};
-use rodloop_diagram::Label;
 use rodloop_figures::raster::svg_to_png;
 use rodloop_scene::{Confinement, Scene};
 
 use crate::diagram::{Args, Model};
 use crate::output::{checked_json, critical_table, Cell, CriticalRow, OutputRun, Table};
-use crate::svg::{self, branch_color, Curve, Figure, LegendEntry, LineStyle, Marker};
 
 /// The scene of `path` when it is an enclosed scene (the default scene is a surface one).
 pub fn enclosed_scene(path: Option<&Path>) -> Result<Option<Scene>> {
@@ -177,12 +175,17 @@ pub(crate) fn write_outputs(
     run.write_table(&branches)?;
     run.write_table(&critical)?;
     run.write_table(&special)?;
-    let fig = figure(d, scene);
-    let text = svg::render(&fig);
+    // The figure from the staged CSV files, as `rodloop draw` and `report` draw it (real
+    // symbols, the lifted-off band, lift-off/landing and critical markers).
+    let data = rodloop_figures::diagram::DiagramData::read(run.stage_dir())?;
+    let text = rodloop_figures::diagram::energy_figure(
+        &data,
+        f64::from(args.width),
+        f64::from(args.height),
+    )?;
     run.write_bytes("diagram.svg", text.as_bytes())?;
     let png = svg_to_png(&text, 1.0).context("rendering diagram.png")?;
     run.write_bytes("diagram.png", &png)?;
-    let _ = (args.width, args.height);
     // With --branch, "lowest" is among the selected branches only: no hypothesis verdict.
     let lowest_lifted = opts.branches.is_none().then(|| lowest_lifted_off(d));
     let summary = checked_json!({
@@ -244,99 +247,6 @@ pub(crate) fn lowest_lifted_off(d: &EnclosedDiagram) -> Vec<(f64, f64)> {
         }
     }
     out
-}
-
-fn style_of(l: Label) -> (LineStyle, f64) {
-    match l {
-        Label::Stable => (LineStyle::Solid, 2.2),
-        Label::Metastable => (LineStyle::Dashed, 1.4),
-        Label::Unstable => (LineStyle::Dotted, 1.4),
-    }
-}
-
-/// Energy versus length, one colour per branch (branch 0, the circle, in grey); solid
-/// stable, dashed metastable, dotted unstable; critical lengths and events marked.
-fn figure(d: &EnclosedDiagram, scene: &str) -> Figure {
-    let mut curves = Vec::new();
-    let mut branches: Vec<u32> = d.points.iter().map(|p| p.branch).collect();
-    branches.sort_unstable();
-    branches.dedup();
-    let color = |b: u32| {
-        if b == 0 {
-            "#555555".to_string()
-        } else {
-            branch_color(b)
-        }
-    };
-    // One curve per sheet (a uniform rod's branch is one sheet).
-    let mut sheets: Vec<(u32, u32, u32)> = d
-        .points
-        .iter()
-        .map(|p| (p.branch, p.family, p.sheet))
-        .collect();
-    sheets.sort_unstable();
-    sheets.dedup();
-    for &(b, f, sh) in &sheets {
-        let pts: Vec<(f64, f64, Label)> = d
-            .points
-            .iter()
-            .filter(|p| (p.branch, p.family, p.sheet) == (b, f, sh))
-            .map(|p| (p.lbar, p.energy, p.label))
-            .collect();
-        curves.extend(svg::runs(&pts, |l, points| {
-            let (style, width) = style_of(l);
-            Curve {
-                color: color(b),
-                style,
-                width,
-                points,
-            }
-        }));
-    }
-    let mut legend: Vec<LegendEntry> = branches
-        .iter()
-        .map(|&b| LegendEntry {
-            label: if b == 0 {
-                "branch 0 (free circle)".into()
-            } else {
-                format!("branch {b} (eta = {})", rodloop_exact::eta_of_branch(b))
-            },
-            color: color(b),
-            style: LineStyle::Solid,
-        })
-        .collect();
-    for (text, style) in [
-        ("solid: stable", LineStyle::Solid),
-        ("dashed: metastable", LineStyle::Dashed),
-        ("dotted: unstable", LineStyle::Dotted),
-    ] {
-        legend.push(LegendEntry {
-            label: text.into(),
-            color: "black".into(),
-            style,
-        });
-    }
-    let mut markers: Vec<Marker> = d
-        .critical
-        .iter()
-        .map(|c| Marker {
-            x: c.critical.lbar_cr,
-            label: format!("{:.4}", c.critical.lbar_cr),
-        })
-        .collect();
-    markers.extend(d.events.iter().map(|e| Marker {
-        x: e.lbar,
-        label: format!("{} {:.4}", e.kind.as_str(), e.lbar),
-    }));
-    Figure {
-        title: format!("Enclosed loops (|r| <= R), scene {scene}: bending energy E R/(pi D)"),
-        xlabel: "L / (2 pi R)".into(),
-        ylabel: "E R/(pi D)".into(),
-        curves,
-        markers,
-        legend,
-        range: None,
-    }
 }
 
 fn print(d: &EnclosedDiagram, scene: &Scene, opts: &EnclosedDiagramOptions, out: &Path) {

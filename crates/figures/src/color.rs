@@ -54,12 +54,17 @@ pub fn colormap(t: f64) -> Rgb {
     Rgb::hex(MAP[i]).mix(Rgb::hex(MAP[i + 1]), x - i as f64)
 }
 
-/// Colours for branches 1, 2, 3, …: blue, red, green, pink (as in the paper's Fig. 3), then more.
+/// Colours for branches 1, 2, 3, …: blue, red, green, pink (as in the paper's Fig. 3), then
+/// more; branch 0 (the circle) grey.
 pub fn branch_color(branch: u32) -> &'static str {
     const C: [&str; 8] = [
         "#1f4fd1", "#d62728", "#2ca02c", "#e377c2", "#ff7f0e", "#8c564b", "#17becf", "#7f7f7f",
     ];
-    C[(branch.max(1) as usize - 1) % C.len()]
+    if branch == 0 {
+        // The circle (branch 0) is not one of the paper's branches: grey, apart from them.
+        return "#666666";
+    }
+    C[(branch as usize - 1) % C.len()]
 }
 
 /// Maps data values to `[0, 1]` over a range; a constant column maps to the middle.
