@@ -15,7 +15,8 @@
 //! solution is the KKT matrix of the active set, which is what stability and continuation
 //! need. Globalisation: backtracking on the scaled residual norm.
 //!
-//! Linear algebra is dense (LU of the `(5N + 10)`-square Jacobian): `O(N³)` per iteration.
+//! Linear algebra: the step comes from the `O(N)` block factorisation of [`super::lifted`];
+//! where that reports a near-singular block, from the dense LU of [`EnclosedModel::evaluate`].
 
 #![allow(clippy::needless_range_loop)] // index arithmetic over cells, nodes and unknowns
 
@@ -118,8 +119,20 @@ pub fn solve_enclosed(
     let mut z = z0;
     let mut norm = f64::INFINITY;
     for it in 0..=opts.max_iterations {
-        let ev = model.evaluate(&z)?;
-        norm = model.residual_norm(&ev.residual);
+        let (residual, step) = match model.newton_step(&z) {
+            Ok((f, dz)) => (f, Ok(dz)),
+            Err(SolverError::SingularJacobian { .. }) => {
+                // The block factorisation cannot be trusted here: the dense Jacobian.
+                let ev = model.evaluate(&z)?;
+                let dz = ev.jacobian.lu().solve(&(-&ev.residual));
+                (
+                    ev.residual,
+                    dz.ok_or(SolverError::SingularJacobian { iteration: it }),
+                )
+            }
+            Err(e) => return Err(e),
+        };
+        norm = model.residual_norm(&residual);
         if !norm.is_finite() {
             break;
         }
@@ -134,10 +147,7 @@ pub fn solve_enclosed(
         if it == opts.max_iterations {
             break;
         }
-        let lu = ev.jacobian.lu();
-        let dz = lu
-            .solve(&(-&ev.residual))
-            .ok_or(SolverError::SingularJacobian { iteration: it })?;
+        let dz = step?;
         let mut t = 1.0;
         let mut accepted = false;
         for _ in 0..opts.max_backtracks {
