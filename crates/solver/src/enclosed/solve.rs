@@ -255,6 +255,20 @@ pub fn start_from_curvature<F: Fn(f64) -> (f64, f64)>(
     kappa: F,
     r0: [f64; 3],
 ) -> Result<(EnclosedModel, Vec<f64>), SolverError> {
+    let (model, mut z) = model_from_curvature(radius, lbar, cells, stiffness, &kappa, r0)?;
+    start_multipliers(&model, &mut z, &kappa)?;
+    Ok((model, z))
+}
+
+/// The model and shape of [`start_from_curvature`] with all multipliers 0.
+fn model_from_curvature<F: Fn(f64) -> (f64, f64)>(
+    radius: f64,
+    lbar: f64,
+    cells: usize,
+    stiffness: &Stiffness,
+    kappa: F,
+    r0: [f64; 3],
+) -> Result<(EnclosedModel, Vec<f64>), SolverError> {
     let probe = EnclosedModel::new(
         radius,
         lbar,
@@ -286,8 +300,63 @@ pub fn start_from_curvature<F: Fn(f64) -> (f64, f64)>(
     let mut z = vec![0.0; model.dim()];
     z[..4 * cells].copy_from_slice(&reference);
     z[4 * cells..4 * cells + 3].copy_from_slice(&r0);
-    least_squares_multipliers(&model, &mut z)?;
     Ok((model, z))
+}
+
+/// Largest mesh on which starting multipliers come from the dense least-squares fit
+/// ([`least_squares_multipliers`] forms the dense Jacobian, `O(N³)`); finer starts take them
+/// from a fit at this many cells ([`transfer_multipliers`]).
+pub const LEAST_SQUARES_MAX_CELLS: usize = 64;
+
+/// Starting multipliers for the shape in `z` (curvature and start point set): the dense
+/// least-squares fit up to [`LEAST_SQUARES_MAX_CELLS`] cells; above, the fit on that many
+/// cells of the same curvature functions, carried over by [`transfer_multipliers`].
+fn start_multipliers<F: Fn(f64) -> (f64, f64)>(
+    model: &EnclosedModel,
+    z: &mut [f64],
+    kappa: F,
+) -> Result<(), SolverError> {
+    let n = model.cells();
+    if n <= LEAST_SQUARES_MAX_CELLS {
+        return least_squares_multipliers(model, z);
+    }
+    let r0 = model.start_point(z);
+    let stiff = model.stiffness().kind().clone();
+    let (cm, mut cz) = model_from_curvature(
+        model.radius(),
+        model.lbar(),
+        LEAST_SQUARES_MAX_CELLS,
+        &stiff,
+        kappa,
+        [r0[0], r0[1], r0[2]],
+    )?;
+    least_squares_multipliers(&cm, &mut cz)?;
+    transfer_multipliers(&cm, &cz, model, z);
+    Ok(())
+}
+
+/// Carry the multipliers of `(from, zf)` over to `(to, zt)`: closure multipliers as they
+/// are (resolution-independent), gauge multipliers 0, and the wall impulses through the
+/// contact force density, interpolated linearly (periodically) in `σ` to the new nodes.
+pub fn transfer_multipliers(from: &EnclosedModel, zf: &[f64], to: &EnclosedModel, zt: &mut [f64]) {
+    let (npf, npt) = (from.n_primal(), to.n_primal());
+    zt[npt..npt + 6].copy_from_slice(&zf[npf..npf + 6]);
+    for k in 6..to.n_equalities() {
+        zt[npt + k] = 0.0;
+    }
+    let dens = from.contact_force(zf);
+    let nf = from.cells();
+    let bf = from.bounds();
+    let lo = to.lambda_offset();
+    for j in 0..to.cells() {
+        let s = to.bounds()[j];
+        // Coarse interval [bf[k], bf[k+1]) holding s.
+        let k = bf[..nf].partition_point(|&b| b <= s).saturating_sub(1);
+        let (a, b) = (bf[k], bf[k + 1]);
+        let t = if b > a { (s - a) / (b - a) } else { 0.0 };
+        let d = (1.0 - t) * dens[k] + t * dens[(k + 1) % nf];
+        zt[lo + j] = d * to.node_weight(j) / (2.0 * to.radius());
+    }
 }
 
 /// Branch 0: the planar circle of length `L = 2πR L̄` centred at the origin, free for
@@ -320,7 +389,12 @@ pub fn free_circle(
     let mut z = vec![0.0; model.dim()];
     z[..4 * cells].copy_from_slice(&reference);
     z[4 * cells + 2] = rho;
-    least_squares_multipliers(&model, &mut z)?;
+    if cells <= LEAST_SQUARES_MAX_CELLS {
+        least_squares_multipliers(&model, &mut z)?;
+    } else {
+        let (cm, cz) = free_circle(radius, lbar, LEAST_SQUARES_MAX_CELLS, stiffness)?;
+        transfer_multipliers(&cm, &cz, &model, &mut z);
+    }
     Ok((model, z))
 }
 
@@ -525,7 +599,7 @@ impl EnclosedState {
         let n = m.cells();
         let r0 = m.start_point(&self.z);
         let stiff = m.stiffness().kind().clone();
-        let (fine, mut z) = start_from_curvature(
+        let (fine, mut z) = model_from_curvature(
             m.radius(),
             m.lbar(),
             2 * n,
@@ -533,22 +607,7 @@ impl EnclosedState {
             |s| self.curvature_at(s),
             [r0[0], r0[1], r0[2]],
         )?;
-        let np = m.n_primal();
-        let npf = fine.n_primal();
-        z[npf..npf + 6].copy_from_slice(&self.z[np..np + 6]);
-        for k in 6..fine.n_equalities() {
-            z[npf + k] = 0.0;
-        }
-        let dens = m.contact_force(&self.z);
-        let lo = fine.lambda_offset();
-        for j in 0..2 * n {
-            let d = if j % 2 == 0 {
-                dens[j / 2]
-            } else {
-                0.5 * (dens[j / 2] + dens[(j / 2 + 1) % n])
-            };
-            z[lo + j] = d * fine.node_weight(j) / (2.0 * m.radius());
-        }
+        transfer_multipliers(m, &self.z, &fine, &mut z);
         Ok((fine, z))
     }
 
