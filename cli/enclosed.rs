@@ -35,7 +35,7 @@ pub struct EnclosedResult {
     pub energy: (f64, f64),
     /// Surface loop energy and `λ_min` (None for branch 0).
     pub surface: Option<(f64, f64)>,
-    /// Stability index and lowest eigenvalues (on the `N/2` companion).
+    /// Stability index and lowest eigenvalues (on the `N/4` companion; dense, `O(N³)`).
     pub stability: (usize, Vec<f64>),
     /// How the energy was obtained.
     pub method: String,
@@ -57,7 +57,15 @@ pub fn solve_state(
         if lbar > 1.0 {
             bail!("branch 0 (the planar circle) fits in the ball only for lbar <= 1; got lbar = {lbar}");
         }
-        let cells = enclosed_cells(accuracy, 1);
+        // The uniform circle is exact at any resolution: the 3-D check runs at the fast one.
+        let cells = enclosed_cells(
+            if stiffness.is_uniform() {
+                Accuracy::Fast
+            } else {
+                accuracy
+            },
+            1,
+        );
         let (model, z0) = free_circle(r, lbar, cells, stiffness)?;
         let state = solve_enclosed(&model, z0, &opts).context("the free circle")?;
         let (cm, cz) = free_circle(r, lbar, cells / 2, stiffness)?;
@@ -124,7 +132,7 @@ pub fn solve_state(
     }
     let b = solve_branch(r, lbar, stiffness, &source, cells, &opts)
         .with_context(|| format!("the enclosed loop of branch {branch} at lbar = {lbar}"))?;
-    let stability = b.coarse.stability(1e-6)?;
+    let stability = b.quarter.stability(1e-6)?;
     let (energy, method) = if attached {
         (
             (e_surf, surface_error),
@@ -261,7 +269,7 @@ fn solve_from_shape(
     let (model, z0) = start_from_shape(scene.radius, lbar, cells / 4, stiffness, shape)?;
     let b = solve_levels(&model, z0, None, &EnclosedOptions::default())
         .context("the enclosed loop from the saved shape")?;
-    let stability = b.coarse.stability(1e-6)?;
+    let stability = b.quarter.stability(1e-6)?;
     Ok(EnclosedResult {
         model_energy: (b.energy, b.energy_error),
         energy: (b.energy, b.energy_error),

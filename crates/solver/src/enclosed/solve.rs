@@ -157,6 +157,16 @@ pub fn solve_enclosed(
                 if nt <= (1.0 - 1e-4 * t) * norm {
                     z = zt;
                     accepted = true;
+                    // Round-off floor: a step that no longer halves a residual already
+                    // within 100× the tolerance (fine meshes, N ≥ 512).
+                    if nt < 1e2 * opts.tolerance && nt > 0.5 * norm {
+                        return Ok(EnclosedState {
+                            model: model.clone(),
+                            z,
+                            iterations: it + 1,
+                            residual: nt,
+                        });
+                    }
                     break;
                 }
             }
