@@ -15,8 +15,9 @@ use anyhow::{bail, Context, Result};
 use rodloop_exact::{branch_of_eta, eta_of_branch, paper_branch_loop};
 use rodloop_scene::Scene;
 use rodloop_solver::enclosed::{
-    detached_intervals, enclosed_cells, free_circle, solve_branch, solve_enclosed, solve_levels,
-    start_from_shape, EnclosedOptions, EnclosedState, SavedShape, SurfaceSource,
+    detached_intervals, enclosed_cells, enclosed_solve_cells, free_circle, solve_branch,
+    solve_enclosed, solve_levels, start_from_shape, EnclosedOptions, EnclosedState, SavedShape,
+    SurfaceSource,
 };
 use rodloop_solver::{solve_robust, Accuracy, SolveOptions, StartShape, Stiffness};
 
@@ -124,7 +125,7 @@ pub fn solve_state(
     let attached = lam_min >= 0.0;
     // An attached loop's energy is the surface one; the 3-D re-solve is a check, at the
     // fast resolution.
-    let mut cells = enclosed_cells(if attached { Accuracy::Fast } else { accuracy }, eta);
+    let mut cells = enclosed_solve_cells(if attached { Accuracy::Fast } else { accuracy }, eta);
     if !stiffness.is_uniform() {
         // Sharp profiles (Eq. (51), gamma = 200) need the coarsest level of the cascade
         // (N/4) to resolve the transitions on the graded mesh.
@@ -262,7 +263,7 @@ fn solve_from_shape(
     accuracy: Accuracy,
 ) -> Result<EnclosedResult> {
     let eta = branch.filter(|&b| b > 0).map_or(2, eta_of_branch);
-    let mut cells = enclosed_cells(accuracy, eta);
+    let mut cells = enclosed_solve_cells(accuracy, eta);
     if !stiffness.is_uniform() {
         cells = cells.max(32 * (2 + eta as usize));
     }

@@ -195,9 +195,23 @@ pub fn three_level_estimate(
 pub const LIFTED_OFF_MAX_ORDER: f64 = 2.5;
 
 /// Cells of an enclosed solve for a branch with `eta` periods: `c (1 + η)` with `c = 16`
-/// (fast), `128` (default) or `256` (high), at least 32. (The Newton step is `O(N)`,
-/// [`super::lifted`]; the figure-eight at `L̄ = 1.4` reaches ≈ 4e-9 relative at `N = 256`.)
+/// (fast), `32` (default) or `64` (high), at least 32: the enclosed diagram's levels.
 pub fn enclosed_cells(accuracy: crate::Accuracy, eta: u32) -> usize {
+    let c = match accuracy {
+        crate::Accuracy::Fast => 16,
+        crate::Accuracy::Default => 32,
+        crate::Accuracy::High => 64,
+    };
+    (c * (1 + eta as usize)).max(32)
+}
+
+/// Cells of a single enclosed `solve` for a branch with `eta` periods: `c (1 + η)` with
+/// `c = 16` (fast), `128` (default) or `256` (high). The Newton step is `O(N)`
+/// ([`super::lifted`]), so one state affords the mesh the `≤ 1e-8` target needs: the
+/// figure-eight at `L̄ = 1.4` is within ≈ 4e-9 relative at `N = 256`. (The enclosed diagram
+/// keeps [`enclosed_cells`]: its natural-parameter tracer stalls on the point contacts of
+/// the figure-eight below `L̄ ≈ 1.3` at `N = 256`.)
+pub fn enclosed_solve_cells(accuracy: crate::Accuracy, eta: u32) -> usize {
     let c = match accuracy {
         crate::Accuracy::Fast => 16,
         crate::Accuracy::Default => 128,

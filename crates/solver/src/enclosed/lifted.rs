@@ -37,9 +37,8 @@
 //! Block LU from the first cell to the last (partial pivoting inside each 17×17 block, no
 //! pivoting across blocks), the border by its Schur complement, then one step of iterative
 //! refinement against the lifted system. `O(N)` work: about `6·10⁴` flops per cell. A
-//! near-singular pivot block, or a refined residual above `1e-6` of the right-hand side (an
-//! inexact step that large would still be a descent step; near convergence the lifted
-//! system's round-off floor is ~`1e-9` of a tiny right-hand side), is
+//! near-singular pivot block, or a refined residual above `1e-9 |rhs| + 1e-13 max|M| |x|` (the
+//! second term is the round-off floor near convergence, where the right-hand side is tiny), is
 //! reported as [`SolverError::SingularJacobian`] so that the caller can fall back to the dense
 //! factorisation.
 
@@ -288,8 +287,15 @@ impl EnclosedModel {
         for (a, b) in ax.blocks.iter().zip(&rhs.blocks) {
             err += (a - b).norm_squared();
         }
-        let scale = rhs.norm();
-        if !(err.sqrt() <= 1e-6 * scale.max(1e-300)) {
+        let big = sys
+            .diag
+            .iter()
+            .chain(&sys.lower)
+            .chain(&sys.upper)
+            .map(|b| b.amax())
+            .fold(sys.corner.amax(), f64::max);
+        let scale = 1e-9 * rhs.norm() + 1e-13 * big * x.norm();
+        if !(err.sqrt() <= scale.max(1e-300)) {
             return Err(singular());
         }
         Ok((f, self.unlift(&x)))

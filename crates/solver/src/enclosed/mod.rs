@@ -27,8 +27,8 @@ pub mod model;
 pub mod solve;
 
 pub use branch::{
-    detached_intervals, enclosed_cells, solve_branch, solve_levels, three_level_estimate,
-    BranchSolve, SurfaceSource, LIFTED_OFF_MAX_ORDER,
+    detached_intervals, enclosed_cells, enclosed_solve_cells, solve_branch, solve_levels,
+    three_level_estimate, BranchSolve, SurfaceSource, LIFTED_OFF_MAX_ORDER,
 };
 pub use from_shape::{start_from_shape, SavedShape};
 pub use model::{EnclosedModel, Gauge};
