@@ -3,7 +3,8 @@
 //! N/4, N/2, N; prints E_N, the difference to the finest, the observed order, the
 //! three-level estimate and the time of each cascade.
 //!
-//! `cargo run --release -p rodloop-solver --example enclosed_order -- 1.4 2048`
+//! `cargo run --release -p rodloop-solver --example enclosed_order -- 1.4 1024 [32]`
+//! (arguments: L̄, largest N, smallest N)
 
 use std::time::Instant;
 
@@ -18,14 +19,14 @@ fn main() {
     let eta = 1;
     let l = paper_branch_loop(eta, lbar).expect("exact loop");
     let mut rows = Vec::new();
-    let mut n = 32;
+    let mut n: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(32);
     while n <= top {
         let t = Instant::now();
         let b = solve_branch(
             1.0,
             lbar,
             &Stiffness::uniform(1.0),
-            &SurfaceSource::Exact(l.clone()),
+            &SurfaceSource::Exact(l),
             n,
             &EnclosedOptions::default(),
         )

@@ -95,7 +95,7 @@ fn vee6(m: &M4) -> [f64; 6] {
 /// Inverse of a rigid transform `[[R, p], [0, 1]]`.
 fn se3_inverse(m: &M4) -> M4 {
     let r = m.fixed_view::<3, 3>(0, 0).transpose();
-    let p = -(&r * translation(m));
+    let p = -(r * translation(m));
     let mut out = M4::identity();
     out.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
     for k in 0..3 {
@@ -295,7 +295,8 @@ impl EnclosedModel {
             .map(|b| b.amax())
             .fold(sys.corner.amax(), f64::max);
         let scale = 1e-9 * rhs.norm() + 1e-13 * big * x.norm();
-        if !(err.sqrt() <= scale.max(1e-300)) {
+        let ok = err.sqrt() <= scale.max(1e-300);
+        if !ok {
             return Err(singular());
         }
         Ok((f, self.unlift(&x)))
