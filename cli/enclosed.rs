@@ -15,8 +15,9 @@ use anyhow::{bail, Context, Result};
 use rodloop_exact::{branch_of_eta, eta_of_branch, paper_branch_loop};
 use rodloop_scene::Scene;
 use rodloop_solver::enclosed::{
-    detached_intervals, enclosed_cells, free_circle, solve_branch, solve_enclosed, solve_levels,
-    start_from_shape, EnclosedOptions, EnclosedState, SavedShape, SurfaceSource,
+    detached_intervals, enclosed_cells, enclosed_solve_cells, free_circle, solve_branch,
+    solve_enclosed, solve_levels, start_from_shape, EnclosedOptions, EnclosedState, SavedShape,
+    SurfaceSource,
 };
 use rodloop_solver::{solve_robust, Accuracy, SolveOptions, StartShape, Stiffness};
 
@@ -35,7 +36,7 @@ pub struct EnclosedResult {
     pub energy: (f64, f64),
     /// Surface loop energy and `λ_min` (None for branch 0).
     pub surface: Option<(f64, f64)>,
-    /// Stability index and lowest eigenvalues (on the `N/2` companion).
+    /// Stability index and lowest eigenvalues (on the `N/4` companion; dense, `O(N³)`).
     pub stability: (usize, Vec<f64>),
     /// How the energy was obtained.
     pub method: String,
@@ -57,7 +58,15 @@ pub fn solve_state(
         if lbar > 1.0 {
             bail!("branch 0 (the planar circle) fits in the ball only for lbar <= 1; got lbar = {lbar}");
         }
-        let cells = enclosed_cells(accuracy, 1);
+        // The uniform circle is exact at any resolution: the 3-D check runs at the fast one.
+        let cells = enclosed_cells(
+            if stiffness.is_uniform() {
+                Accuracy::Fast
+            } else {
+                accuracy
+            },
+            1,
+        );
         let (model, z0) = free_circle(r, lbar, cells, stiffness)?;
         let state = solve_enclosed(&model, z0, &opts).context("the free circle")?;
         let (cm, cz) = free_circle(r, lbar, cells / 2, stiffness)?;
@@ -116,7 +125,15 @@ pub fn solve_state(
     let attached = lam_min >= 0.0;
     // An attached loop's energy is the surface one; the 3-D re-solve is a check, at the
     // fast resolution.
-    let mut cells = enclosed_cells(if attached { Accuracy::Fast } else { accuracy }, eta);
+    let acc = if attached { Accuracy::Fast } else { accuracy };
+    // Uniform rods: the fine mesh of the O(N) step. Two-segment rods keep the diagram's mesh
+    // (observed order 1.0–1.4 there; the cascade started at N/4 = 96 cells from the surface
+    // loop of branch 3 at lbar = 2.2 does not converge).
+    let mut cells = if stiffness.is_uniform() {
+        enclosed_solve_cells(acc, eta)
+    } else {
+        enclosed_cells(acc, eta)
+    };
     if !stiffness.is_uniform() {
         // Sharp profiles (Eq. (51), gamma = 200) need the coarsest level of the cascade
         // (N/4) to resolve the transitions on the graded mesh.
@@ -124,7 +141,7 @@ pub fn solve_state(
     }
     let b = solve_branch(r, lbar, stiffness, &source, cells, &opts)
         .with_context(|| format!("the enclosed loop of branch {branch} at lbar = {lbar}"))?;
-    let stability = b.coarse.stability(1e-6)?;
+    let stability = b.quarter.stability(1e-6)?;
     let (energy, method) = if attached {
         (
             (e_surf, surface_error),
@@ -254,14 +271,18 @@ fn solve_from_shape(
     accuracy: Accuracy,
 ) -> Result<EnclosedResult> {
     let eta = branch.filter(|&b| b > 0).map_or(2, eta_of_branch);
-    let mut cells = enclosed_cells(accuracy, eta);
+    let mut cells = if stiffness.is_uniform() {
+        enclosed_solve_cells(accuracy, eta)
+    } else {
+        enclosed_cells(accuracy, eta)
+    };
     if !stiffness.is_uniform() {
         cells = cells.max(32 * (2 + eta as usize));
     }
     let (model, z0) = start_from_shape(scene.radius, lbar, cells / 4, stiffness, shape)?;
     let b = solve_levels(&model, z0, None, &EnclosedOptions::default())
         .context("the enclosed loop from the saved shape")?;
-    let stability = b.coarse.stability(1e-6)?;
+    let stability = b.quarter.stability(1e-6)?;
     Ok(EnclosedResult {
         model_energy: (b.energy, b.energy_error),
         energy: (b.energy, b.energy_error),

@@ -70,7 +70,8 @@ impl Levels {
         let (energy, energy_error) = self.energy();
         let c = fine.contact(TOUCH)?;
         let (lmin, gmin, comp, stat) = fine.optimality()?;
-        let (index, _) = self.states[1].stability(1e-6)?;
+        // The index on the coarsest level: the eigen-decomposition is dense, O(N³).
+        let (index, _) = self.states[0].stability(1e-6)?;
         Ok(EnclosedPoint {
             branch,
             eta,

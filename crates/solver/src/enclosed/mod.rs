@@ -11,6 +11,7 @@
 //!
 //! * [`jet`]: second-order jets and the SE(3) cell propagator.
 //! * [`model`]: [`EnclosedModel`] (energy, closure, wall, KKT residual and exact Jacobian).
+//! * [`lifted`]: the Newton step in `O(N)` from a block-tridiagonal form of that Jacobian.
 //! * [`solve`](mod@solve): semismooth Newton, starts (surface loop, free circle), contact
 //!   summary, stability on the active constraints' tangent space.
 //! * [`from_shape`]: a start from a saved shape (`solve --from`).
@@ -21,12 +22,13 @@ pub mod branch;
 pub mod continuation;
 pub mod from_shape;
 pub mod jet;
+pub mod lifted;
 pub mod model;
 pub mod solve;
 
 pub use branch::{
-    detached_intervals, enclosed_cells, solve_branch, solve_levels, three_level_estimate,
-    BranchSolve, SurfaceSource, LIFTED_OFF_MAX_ORDER,
+    detached_intervals, enclosed_cells, enclosed_solve_cells, solve_branch, solve_levels,
+    three_level_estimate, BranchSolve, SurfaceSource, LIFTED_OFF_MAX_ORDER,
 };
 pub use from_shape::{start_from_shape, SavedShape};
 pub use model::{EnclosedModel, Gauge};

@@ -79,10 +79,10 @@ pub struct EnclosedModel {
 }
 
 /// The chain of cell propagators with their jets and prefix products.
-struct Chain {
-    jets: Vec<CellJet>,
+pub(super) struct Chain {
+    pub(super) jets: Vec<CellJet>,
     /// `P_c`, `c = 0..=N`.
-    prefix: Vec<M4>,
+    pub(super) prefix: Vec<M4>,
 }
 
 /// Everything the Jacobian needs, from one evaluation.
@@ -95,7 +95,7 @@ pub struct Evaluation {
     pub wall_rows: Vec<usize>,
 }
 
-fn vee_skew3(m: &M4) -> V3 {
+pub(super) fn vee_skew3(m: &M4) -> V3 {
     V3::new(
         0.5 * (m[(2, 1)] - m[(1, 2)]),
         0.5 * (m[(0, 2)] - m[(2, 0)]),
@@ -103,7 +103,7 @@ fn vee_skew3(m: &M4) -> V3 {
     )
 }
 
-fn tr4(a: &M4, b: &M4) -> f64 {
+pub(super) fn tr4(a: &M4, b: &M4) -> f64 {
     let mut s = 0.0;
     for i in 0..4 {
         for j in 0..4 {
@@ -113,7 +113,7 @@ fn tr4(a: &M4, b: &M4) -> f64 {
     s
 }
 
-fn translation(m: &M4) -> V3 {
+pub(super) fn translation(m: &M4) -> V3 {
     V3::new(m[(0, 3)], m[(1, 3)], m[(2, 3)])
 }
 
@@ -199,6 +199,11 @@ impl EnclosedModel {
         2.0 * PI * self.radius * self.lbar
     }
 
+    /// `D` at Gauss point `g` (`0..2N`).
+    pub(super) fn d_gauss_at(&self, g: usize) -> f64 {
+        self.d_gauss[g]
+    }
+
     /// The stiffness profile.
     pub fn stiffness(&self) -> &StiffnessProfile {
         &self.stiffness
@@ -266,7 +271,7 @@ impl EnclosedModel {
     }
 
     /// Impulse `π_j` of the allowed pull at node `j`.
-    fn pull_impulse(&self, j: usize) -> f64 {
+    pub(super) fn pull_impulse(&self, j: usize) -> f64 {
         if self.pull == 0.0 {
             return 0.0;
         }
@@ -380,7 +385,7 @@ impl EnclosedModel {
             .collect()
     }
 
-    fn gauge_rows(&self) -> Vec<(Vec<f64>, Option<usize>)> {
+    pub(super) fn gauge_rows(&self) -> Vec<(Vec<f64>, Option<usize>)> {
         // Dense gradients over the primal unknowns for the κ gauges, or a pinned index.
         let n = self.cells;
         let reference = &self.gauge.reference;
@@ -436,7 +441,7 @@ impl EnclosedModel {
         out
     }
 
-    fn chain(&self, z: &[f64]) -> Chain {
+    pub(super) fn chain(&self, z: &[f64]) -> Chain {
         let n = self.cells;
         let mut jets = Vec::with_capacity(n);
         let mut prefix = Vec::with_capacity(n + 1);
@@ -452,7 +457,7 @@ impl EnclosedModel {
     }
 
     /// `K` with `μ·C = tr(P_N K)`.
-    fn closure_functional(mu: &[f64]) -> M4 {
+    pub(super) fn closure_functional(mu: &[f64]) -> M4 {
         let mut k = M4::zeros();
         // Rotation: μ_r·vee(skew X) = −½ tr(hat(μ_r) X).
         let h = crate::frame::hat(&V3::new(mu[0], mu[1], mu[2]));
@@ -472,7 +477,7 @@ impl EnclosedModel {
         Ok(self.residual_from(&ch, z))
     }
 
-    fn adjoints(&self, ch: &Chain, z: &[f64]) -> Vec<M4> {
+    pub(super) fn adjoints(&self, ch: &Chain, z: &[f64]) -> Vec<M4> {
         let n = self.cells;
         let r0 = self.start_point(z);
         let lo = self.lambda_offset();
@@ -492,7 +497,7 @@ impl EnclosedModel {
         a
     }
 
-    fn residual_from(&self, ch: &Chain, z: &[f64]) -> DVector<f64> {
+    pub(super) fn residual_from(&self, ch: &Chain, z: &[f64]) -> DVector<f64> {
         let n = self.cells;
         let np = self.n_primal();
         let lo = self.lambda_offset();

@@ -1,0 +1,532 @@
+//! The semismooth Newton step of the enclosed model in `O(N)`: a block-tridiagonal
+//! ("lifted") form of the Jacobian of [`EnclosedModel`], with a small dense border.
+//!
+//! # Why the dense matrix is not needed
+//!
+//! The Bishop-frame chain `P_{c+1} = P_c E_c(κ_c)` makes every node depend on every earlier
+//! cell, so the Jacobian in the unknowns `(κ, r0, μ, ν, λ)` is dense (`O(N³)` to factor).
+//! The residual itself is local once two chains are named (see [`super::model`]):
+//!
+//! * the node transforms `P_j`; perturbed in the spatial frame, `δP_j = hat(ξ_j) P_j`
+//!   (`ξ = (ω, v) ∈ se(3)`), they obey `ξ_{c+1} = ξ_c + Σ_i b_ci δκ_ci`, `ξ_0 = 0`, with
+//!   `b_ci = vee(P_c ∂_iE_c E_c⁻¹ P_c⁻¹)`;
+//! * the adjoint carried to the spatial frame, `M_c = P_{c+1} A_c`, whose recursion
+//!   `A_c = E_{c+1}A_{c+1} + 2λ_{c+1} e4 ρ_{c+1}ᵀ` becomes a plain sum,
+//!   `M_c = M_{c+1} + 2λ_{c+1} (p_{c+1}; 1)(r_{c+1}; 0)ᵀ`, `M_{N−1} = −P_N K(μ)`. Only its
+//!   pairing with `se(3)`, `m_c = (tr(hat(e_k) M_c))_k = Σ_{j>c} 2λ_j u_j − …`, with
+//!   `u_j = (p_j × r_j, r_j)`, enters the residual.
+//!
+//! Stationarity in cell `c` is then `w D κ_ci + b_ci · m_c − ν · ∂φ/∂κ_ci = 0`, which
+//! involves only cell `c`, `ξ_c` and `m_c`. Linearising every one of these relations
+//! (`δb_ci` has the bracket term `[hat ξ_c, B_ci]` and the cell's own second derivatives;
+//! `δu_j` is linear in `ξ_j` and `δr0`; `δm_{N−1}` in `ξ_N` and `δμ`) gives a linear system
+//! in the unknowns, per cell `c`,
+//!
+//! ```text
+//! [δκ_c (4), ξ_{c+1} (6), δm_c (6), δλ_{c+1} (1)]     (17; δλ_N a dummy, fixed to 0)
+//! ```
+//!
+//! with equations `[stationarity (4), forward ξ (6), backward m (6), wall row of node c+1]`,
+//! which is block tridiagonal, plus the global unknowns `(δr0, δμ, δν, δλ_0)` and global
+//! rows (`r0` stationarity, closure, gauges, wall row of node 0) as a dense border. Eliminating
+//! `ξ` and `δm` reproduces the dense semismooth Jacobian of [`EnclosedModel::evaluate`]
+//! exactly, so the step is the same Newton step (`tests/enclosed.rs` compares the two).
+//!
+//! # Factorisation
+//!
+//! Block LU from the first cell to the last (partial pivoting inside each 17×17 block, no
+//! pivoting across blocks), the border by its Schur complement, then one step of iterative
+//! refinement against the lifted system. `O(N)` work: about `6·10⁴` flops per cell. A
+//! near-singular pivot block, or a refined residual above `1e-9 |rhs| + 1e-13 max|M| |x|` (the
+//! second term is the round-off floor near convergence, where the right-hand side is tiny), is
+//! reported as [`SolverError::SingularJacobian`] so that the caller can fall back to the dense
+//! factorisation.
+
+#![allow(clippy::needless_range_loop)] // index arithmetic over cells, nodes and unknowns
+
+use nalgebra::{
+    Const, DMatrix, DVector, Dyn, Matrix3, Matrix4, OMatrix, SMatrix, SVector, Vector3,
+};
+
+use super::model::{tr4, translation, vee_skew3, EnclosedModel};
+use crate::SolverError;
+
+const B: usize = 17;
+type Blk = SMatrix<f64, B, B>;
+type BVec = SVector<f64, B>;
+type BCol = OMatrix<f64, Const<B>, Dyn>;
+type BRow = OMatrix<f64, Dyn, Const<B>>;
+type M4 = Matrix4<f64>;
+type M3 = Matrix3<f64>;
+type V3 = Vector3<f64>;
+
+// Local layout of a cell block (unknowns and equations).
+const K0: usize = 0; // δκ_c / stationarity
+const X0: usize = 4; // ξ_{c+1} / forward recursion
+const M0: usize = 10; // δm_c / backward recursion
+const L0: usize = 16; // δλ_{c+1} / wall row of node c+1
+
+/// Pivot ratio below which a block counts as singular.
+const PIVOT_RATIO: f64 = 1e-14;
+
+fn hat3(v: &V3) -> M3 {
+    M3::new(0.0, -v[2], v[1], v[2], 0.0, -v[0], -v[1], v[0], 0.0)
+}
+
+/// `hat(e_k)` of `se(3)`, `k = 0..6` (rotations first).
+fn se3_basis() -> [M4; 6] {
+    let mut out = [M4::zeros(); 6];
+    for k in 0..3 {
+        let mut e = V3::zeros();
+        e[k] = 1.0;
+        out[k].fixed_view_mut::<3, 3>(0, 0).copy_from(&hat3(&e));
+        out[3 + k][(k, 3)] = 1.0;
+    }
+    out
+}
+
+/// `vee` of an `se(3)` matrix: `(ω, v)`.
+fn vee6(m: &M4) -> [f64; 6] {
+    let w = vee_skew3(m);
+    let t = translation(m);
+    [w[0], w[1], w[2], t[0], t[1], t[2]]
+}
+
+/// Inverse of a rigid transform `[[R, p], [0, 1]]`.
+fn se3_inverse(m: &M4) -> M4 {
+    let r = m.fixed_view::<3, 3>(0, 0).transpose();
+    let p = -(r * translation(m));
+    let mut out = M4::identity();
+    out.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
+    for k in 0..3 {
+        out[(k, 3)] = p[k];
+    }
+    out
+}
+
+/// The lifted system before factorisation.
+struct Lifted {
+    n: usize,
+    diag: Vec<Blk>,
+    /// Rows of block `c`, columns of block `c − 1` (`c ≥ 1`; index `c`).
+    lower: Vec<Blk>,
+    /// Rows of block `c`, columns of block `c + 1` (`c ≤ N − 2`; index `c`).
+    upper: Vec<Blk>,
+    /// Block rows, border columns.
+    bcol: Vec<BCol>,
+    /// Border rows, block columns.
+    brow: Vec<BRow>,
+    corner: DMatrix<f64>,
+}
+
+/// Right-hand side or solution of the lifted system.
+#[derive(Clone)]
+struct LVec {
+    blocks: Vec<BVec>,
+    border: DVector<f64>,
+}
+
+impl LVec {
+    fn norm(&self) -> f64 {
+        (self.blocks.iter().map(|b| b.norm_squared()).sum::<f64>() + self.border.norm_squared())
+            .sqrt()
+    }
+}
+
+impl Lifted {
+    fn apply(&self, x: &LVec) -> LVec {
+        let n = self.n;
+        let mut blocks = Vec::with_capacity(n);
+        let mut border = &self.corner * &x.border;
+        for c in 0..n {
+            let mut y = self.diag[c] * x.blocks[c] + &self.bcol[c] * &x.border;
+            if c >= 1 {
+                y += self.lower[c] * x.blocks[c - 1];
+            }
+            if c + 1 < n {
+                y += self.upper[c] * x.blocks[c + 1];
+            }
+            blocks.push(y);
+            border += &self.brow[c] * x.blocks[c];
+        }
+        LVec { blocks, border }
+    }
+}
+
+/// Block LU factors of [`Lifted`].
+struct Factor {
+    lu: Vec<nalgebra::LU<f64, Const<B>, Const<B>>>,
+    /// `S_c⁻¹ U_c`.
+    yu: Vec<Blk>,
+    /// `S_c⁻¹ C'_c` (border columns after elimination).
+    yc: Vec<BCol>,
+    /// Border rows after elimination of the earlier blocks.
+    rb: Vec<BRow>,
+    corner: nalgebra::LU<f64, Dyn, Dyn>,
+}
+
+fn pivot_ok(lu: &nalgebra::LU<f64, Const<B>, Const<B>>) -> bool {
+    let u = lu.u();
+    let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
+    for i in 0..B {
+        let v = u[(i, i)].abs();
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    hi > 0.0 && lo.is_finite() && lo > PIVOT_RATIO * hi
+}
+
+impl Factor {
+    fn new(sys: &Lifted) -> Result<Self, SolverError> {
+        let n = sys.n;
+        let singular = || SolverError::SingularJacobian { iteration: 0 };
+        let mut lu = Vec::with_capacity(n);
+        let mut yu = Vec::with_capacity(n);
+        let mut yc = Vec::with_capacity(n);
+        let mut rb = Vec::with_capacity(n);
+        let mut corner = sys.corner.clone();
+        let mut s = sys.diag[0];
+        let mut cb = sys.bcol[0].clone();
+        let mut r = sys.brow[0].clone();
+        for c in 0..n {
+            let f = s.lu();
+            if !pivot_ok(&f) {
+                return Err(singular());
+            }
+            let u: Blk = if c + 1 < n {
+                f.solve(&sys.upper[c]).ok_or(singular())?
+            } else {
+                Blk::zeros()
+            };
+            let y: BCol = f.solve(&cb).ok_or(singular())?;
+            corner -= &r * &y;
+            if c + 1 < n {
+                let l = &sys.lower[c + 1];
+                s = sys.diag[c + 1] - l * u;
+                cb = &sys.bcol[c + 1] - l * &y;
+                let rn = &sys.brow[c + 1] - &r * u;
+                rb.push(std::mem::replace(&mut r, rn));
+            } else {
+                rb.push(r.clone());
+            }
+            lu.push(f);
+            yu.push(u);
+            yc.push(y);
+        }
+        let corner = corner.lu();
+        if !corner.is_invertible() {
+            return Err(singular());
+        }
+        Ok(Self {
+            lu,
+            yu,
+            yc,
+            rb,
+            corner,
+        })
+    }
+
+    fn solve(&self, sys: &Lifted, rhs: &LVec) -> Option<LVec> {
+        let n = sys.n;
+        let mut y = Vec::with_capacity(n);
+        let mut g = rhs.border.clone();
+        let mut r = rhs.blocks[0];
+        for c in 0..n {
+            let yc = self.lu[c].solve(&r)?;
+            g -= &self.rb[c] * yc;
+            if c + 1 < n {
+                r = rhs.blocks[c + 1] - sys.lower[c + 1] * yc;
+            }
+            y.push(yc);
+        }
+        let xg = self.corner.solve(&g)?;
+        let mut x = vec![BVec::zeros(); n];
+        for c in (0..n).rev() {
+            let mut v = y[c] - &self.yc[c] * &xg;
+            if c + 1 < n {
+                v -= self.yu[c] * x[c + 1];
+            }
+            x[c] = v;
+        }
+        Some(LVec {
+            blocks: x,
+            border: xg,
+        })
+    }
+}
+
+impl EnclosedModel {
+    /// The KKT residual `F(z)` and the semismooth Newton step `dz` solving `J dz = −F` with
+    /// the Jacobian of [`Self::evaluate`], in `O(N)` (see [`super::lifted`]). Returns
+    /// [`SolverError::SingularJacobian`] when the block factorisation cannot be trusted
+    /// (then the dense Jacobian is the fallback).
+    pub fn newton_step(&self, z: &[f64]) -> Result<(DVector<f64>, DVector<f64>), SolverError> {
+        let f = self.residual(z)?;
+        let (sys, rhs) = self.lifted_system(z, &f);
+        let fac = Factor::new(&sys)?;
+        let singular = || SolverError::SingularJacobian { iteration: 0 };
+        let mut x = fac.solve(&sys, &rhs).ok_or(singular())?;
+        // One step of iterative refinement against the lifted system.
+        let ax = sys.apply(&x);
+        let res = LVec {
+            blocks: rhs
+                .blocks
+                .iter()
+                .zip(&ax.blocks)
+                .map(|(a, b)| a - b)
+                .collect(),
+            border: &rhs.border - &ax.border,
+        };
+        let dx = fac.solve(&sys, &res).ok_or(singular())?;
+        for (a, b) in x.blocks.iter_mut().zip(&dx.blocks) {
+            *a += b;
+        }
+        x.border += &dx.border;
+        let ax = sys.apply(&x);
+        let mut err = (&ax.border - &rhs.border).norm_squared();
+        for (a, b) in ax.blocks.iter().zip(&rhs.blocks) {
+            err += (a - b).norm_squared();
+        }
+        let big = sys
+            .diag
+            .iter()
+            .chain(&sys.lower)
+            .chain(&sys.upper)
+            .map(|b| b.amax())
+            .fold(sys.corner.amax(), f64::max);
+        let scale = 1e-9 * rhs.norm() + 1e-13 * big * x.norm();
+        let ok = err.sqrt() <= scale.max(1e-300);
+        if !ok {
+            return Err(singular());
+        }
+        Ok((f, self.unlift(&x)))
+    }
+
+    /// The step in the model's unknowns from the lifted solution.
+    fn unlift(&self, x: &LVec) -> DVector<f64> {
+        let n = self.cells();
+        let np = self.n_primal();
+        let ng = self.n_gauge();
+        let lo = self.lambda_offset();
+        let mut dz = DVector::zeros(self.dim());
+        for c in 0..n {
+            for i in 0..4 {
+                dz[4 * c + i] = x.blocks[c][K0 + i];
+            }
+            if c + 1 < n {
+                dz[lo + c + 1] = x.blocks[c][L0];
+            }
+        }
+        for k in 0..3 {
+            dz[4 * n + k] = x.border[k];
+        }
+        for k in 0..6 + ng {
+            dz[np + k] = x.border[3 + k];
+        }
+        dz[lo] = x.border[9 + ng];
+        dz
+    }
+
+    /// Assemble the lifted system and its right-hand side `−F` (see the module docs).
+    fn lifted_system(&self, z: &[f64], f: &DVector<f64>) -> (Lifted, LVec) {
+        let n = self.cells();
+        let np = self.n_primal();
+        let ng = self.n_gauge();
+        let g = 10 + ng;
+        let lo = self.lambda_offset();
+        let (gr0, gmu, gnu, gl0) = (0usize, 3usize, 9usize, 9 + ng);
+        let basis = se3_basis();
+        let ch = self.chain(z);
+        let adj = self.adjoints(&ch, z);
+        let r0 = self.start_point(z);
+        let p: Vec<V3> = (0..=n).map(|j| translation(&ch.prefix[j])).collect();
+        let r: Vec<V3> = p.iter().map(|pj| r0 + pj).collect();
+        let lam = &z[lo..lo + n];
+        let sigma = self.wall_scale();
+        let radius = self.radius();
+        let active: Vec<bool> = (0..n)
+            .map(|j| {
+                sigma * (radius * radius - r[j].norm_squared()) <= lam[j] + self.pull_impulse(j)
+            })
+            .collect();
+        let mu = &z[np..np + 6];
+        let kmu = Self::closure_functional(mu);
+        let gauges = self.gauge_rows();
+
+        let mut sys = Lifted {
+            n,
+            diag: vec![Blk::zeros(); n],
+            lower: vec![Blk::zeros(); n],
+            upper: vec![Blk::zeros(); n],
+            bcol: vec![BCol::zeros(g); n],
+            brow: vec![BRow::zeros(g); n],
+            corner: DMatrix::zeros(g, g),
+        };
+        let mut rhs = LVec {
+            blocks: vec![BVec::zeros(); n],
+            border: DVector::zeros(g),
+        };
+
+        for c in 0..n {
+            let jet = &ch.jets[c];
+            let pc = &ch.prefix[c];
+            let pinv = se3_inverse(pc);
+            let einv = se3_inverse(&jet.e);
+            let mc = ch.prefix[c + 1] * adj[c];
+            let h = 0.5 * self.cell_length(c);
+            // b_ci and the spatial B_ci.
+            let bm: Vec<M4> = (0..4).map(|i| pc * jet.d[i] * einv * pinv).collect();
+            let b: Vec<[f64; 6]> = bm.iter().map(vee6).collect();
+            let pd: Vec<M4> = (0..4).map(|i| pc * jet.d[i] * einv).collect();
+            let d = &mut sys.diag[c];
+            // Stationarity rows.
+            for i in 0..4 {
+                let a = 4 * c + i;
+                rhs.blocks[c][K0 + i] = -f[a];
+                d[(K0 + i, K0 + i)] += h * self.d_gauss_at(2 * c + i / 2);
+                for i2 in 0..4 {
+                    d[(K0 + i, K0 + i2)] +=
+                        tr4(&(pc * jet.dd[i][i2]), &adj[c]) - tr4(&(pd[i] * jet.d[i2]), &adj[c]);
+                }
+                for k in 0..6 {
+                    d[(K0 + i, M0 + k)] = b[i][k];
+                }
+                if c >= 1 {
+                    for k in 0..6 {
+                        let br = basis[k] * bm[i] - bm[i] * basis[k];
+                        sys.lower[c][(K0 + i, X0 + k)] = tr4(&br, &mc);
+                    }
+                }
+                for (kg, (row, idx)) in gauges.iter().enumerate() {
+                    if idx.is_none() {
+                        sys.bcol[c][(K0 + i, gnu + kg)] = -row[a];
+                    }
+                }
+            }
+            // Forward recursion: ξ_{c+1} − ξ_c − Σ b_ci δκ_ci = 0.
+            for k in 0..6 {
+                d[(X0 + k, X0 + k)] = 1.0;
+                for i in 0..4 {
+                    d[(X0 + k, K0 + i)] = -b[i][k];
+                }
+                if c >= 1 {
+                    sys.lower[c][(X0 + k, X0 + k)] = -1.0;
+                }
+            }
+            // Backward recursion.
+            for k in 0..6 {
+                d[(M0 + k, M0 + k)] = 1.0;
+            }
+            if c + 1 < n {
+                let j = c + 1;
+                let (pj, rj, lj) = (p[j], r[j], lam[j]);
+                let u = {
+                    let w = pj.cross(&rj);
+                    [w[0], w[1], w[2], rj[0], rj[1], rj[2]]
+                };
+                // ∂u/∂ξ (6×6) and ∂u/∂r0 (6×3).
+                let hr0 = hat3(&r0);
+                let hp = hat3(&pj);
+                let mut du_xi = SMatrix::<f64, 6, 6>::zeros();
+                let mut du_r0 = SMatrix::<f64, 6, 3>::zeros();
+                du_xi.fixed_view_mut::<3, 3>(0, 0).copy_from(&(hr0 * hp));
+                du_xi.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-hr0));
+                du_xi.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-hp));
+                du_xi
+                    .fixed_view_mut::<3, 3>(3, 3)
+                    .copy_from(&M3::identity());
+                du_r0.fixed_view_mut::<3, 3>(0, 0).copy_from(&hp);
+                du_r0
+                    .fixed_view_mut::<3, 3>(3, 0)
+                    .copy_from(&M3::identity());
+                for k in 0..6 {
+                    sys.upper[c][(M0 + k, M0 + k)] = -1.0;
+                    d[(M0 + k, L0)] = -2.0 * u[k];
+                    for l in 0..6 {
+                        d[(M0 + k, X0 + l)] = -2.0 * lj * du_xi[(k, l)];
+                    }
+                    for l in 0..3 {
+                        sys.bcol[c][(M0 + k, gr0 + l)] = -2.0 * lj * du_r0[(k, l)];
+                    }
+                }
+                // Wall row of node j.
+                rhs.blocks[c][L0] = -f[lo + j];
+                if active[j] {
+                    for k in 0..6 {
+                        d[(L0, X0 + k)] = -2.0 * sigma * u[k];
+                    }
+                    for l in 0..3 {
+                        sys.bcol[c][(L0, gr0 + l)] = -2.0 * sigma * rj[l];
+                    }
+                } else {
+                    d[(L0, L0)] = 1.0;
+                }
+                // r0 stationarity: Σ_j 2δλ_j r_j + 2λ_j (δr0 + δp_j), δp_j = −hat(p_j)ω + v.
+                for k in 0..3 {
+                    sys.brow[c][(gr0 + k, L0)] = 2.0 * rj[k];
+                    for l in 0..3 {
+                        sys.brow[c][(gr0 + k, X0 + l)] = -2.0 * lj * hp[(k, l)];
+                    }
+                    sys.brow[c][(gr0 + k, X0 + 3 + k)] = 2.0 * lj;
+                }
+            } else {
+                // δm_{N−1} = −hat(ξ_N)P_N K(μ) − P_N K(δμ), paired with se(3).
+                let pn = &ch.prefix[n];
+                for k in 0..6 {
+                    for l in 0..6 {
+                        d[(M0 + k, X0 + l)] = tr4(&(basis[k] * basis[l] * pn), &kmu);
+                    }
+                    for l in 0..6 {
+                        let mut e = [0.0; 6];
+                        e[l] = 1.0;
+                        let kl = Self::closure_functional(&e);
+                        sys.bcol[c][(M0 + k, gmu + l)] = tr4(&(basis[k] * pn), &kl);
+                    }
+                }
+                d[(L0, L0)] = 1.0;
+                // Closure rows: δF = −(vee skew(hat ω R_N), hat ω p_N + v).
+                for l in 0..6 {
+                    let v = vee6(&(basis[l] * pn));
+                    for k in 0..6 {
+                        sys.brow[c][(gmu + k, X0 + l)] = -v[k];
+                    }
+                }
+            }
+            // Gauge rows.
+            for (kg, (row, idx)) in gauges.iter().enumerate() {
+                if idx.is_none() {
+                    for i in 0..4 {
+                        sys.brow[c][(gnu + kg, K0 + i)] = -row[4 * c + i];
+                    }
+                }
+            }
+        }
+        // Corner: r0 stationarity, closure (none), gauges, wall row of node 0.
+        let lam_sum: f64 = lam.iter().sum();
+        for k in 0..3 {
+            sys.corner[(gr0 + k, gr0 + k)] = 2.0 * lam_sum;
+            sys.corner[(gr0 + k, gl0)] = 2.0 * r0[k];
+            rhs.border[gr0 + k] = -f[4 * n + k];
+        }
+        for k in 0..6 {
+            rhs.border[gmu + k] = -f[np + k];
+        }
+        for (kg, (_, idx)) in gauges.iter().enumerate() {
+            rhs.border[gnu + kg] = -f[np + 6 + kg];
+            if let Some(i) = idx {
+                let k = i - 4 * n;
+                sys.corner[(gnu + kg, gr0 + k)] = -1.0;
+                sys.corner[(gr0 + k, gnu + kg)] = -1.0;
+            }
+        }
+        rhs.border[gl0] = -f[lo];
+        if active[0] {
+            for l in 0..3 {
+                sys.corner[(gl0, gr0 + l)] = -2.0 * sigma * r0[l];
+            }
+        } else {
+            sys.corner[(gl0, gl0)] = 1.0;
+        }
+        (sys, rhs)
+    }
+}
