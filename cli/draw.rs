@@ -120,16 +120,10 @@ const OVERLAY_POINTS: usize = 512;
 pub fn euler_overlay(eta: u32, lbar: f64) -> Option<(LoopData, String)> {
     let curve = rodloop_exact::euler::EulerCurve::from_lbar(eta, lbar).ok()?;
     let pts = curve.sample(OVERLAY_POINTS);
-    let cols: Vec<Vec<f64>> = vec![
-        pts.iter().map(|p| p.s).collect(),
-        pts.iter().map(|p| p.x).collect(),
-        pts.iter().map(|p| p.y).collect(),
-        pts.iter().map(|p| p.z).collect(),
-        pts.iter().map(|p| p.kappa).collect(),
-        pts.iter().map(|p| p.tau).collect(),
-        pts.iter().map(|p| p.kappa_g).collect(),
-    ];
-    overlay_data("Euler curve", cols).map(|d| {
+    overlay_data("Euler curve", &pts, |p| {
+        [p.s, p.x, p.y, p.z, p.kappa, p.tau, p.kappa_g]
+    })
+    .map(|d| {
         (
             d,
             format!("Euler rotation curve l = {eta} (Eqs. 4–8), aligned"),
@@ -141,16 +135,10 @@ pub fn euler_overlay(eta: u32, lbar: f64) -> Option<(LoopData, String)> {
 pub fn exact_overlay(eta: u32, lbar: f64) -> Option<(LoopData, String)> {
     let lp = rodloop_exact::paper_branch_loop(eta, lbar).ok()?;
     let pts = lp.sample(OVERLAY_POINTS).ok()?;
-    let cols: Vec<Vec<f64>> = vec![
-        pts.iter().map(|p| p.s).collect(),
-        pts.iter().map(|p| p.x).collect(),
-        pts.iter().map(|p| p.y).collect(),
-        pts.iter().map(|p| p.z).collect(),
-        pts.iter().map(|p| p.kappa).collect(),
-        pts.iter().map(|p| p.tau).collect(),
-        pts.iter().map(|p| p.kappa_g).collect(),
-    ];
-    overlay_data("exact loop", cols).map(|d| {
+    overlay_data("exact loop", &pts, |p| {
+        [p.s, p.x, p.y, p.z, p.kappa, p.tau, p.kappa_g]
+    })
+    .map(|d| {
         (
             d,
             format!(
@@ -161,7 +149,12 @@ pub fn exact_overlay(eta: u32, lbar: f64) -> Option<(LoopData, String)> {
     })
 }
 
-fn overlay_data(source: &str, cols: Vec<Vec<f64>>) -> Option<LoopData> {
+/// The columns `s, x, y, z, kappa, tau, kappa_g` of sampled points as an overlay curve.
+fn overlay_data<P>(source: &str, pts: &[P], row: impl Fn(&P) -> [f64; 7]) -> Option<LoopData> {
+    let rows: Vec<[f64; 7]> = pts.iter().map(row).collect();
+    let cols: Vec<Vec<f64>> = (0..7)
+        .map(|j| rows.iter().map(|r| r[j]).collect())
+        .collect();
     let names = ["s", "x", "y", "z", "kappa", "tau", "kappa_g"]
         .iter()
         .map(|s| s.to_string())
