@@ -327,15 +327,7 @@ pub fn run(args: &Args) -> Result<()> {
             Cell::S(sh.self_intersections_label()),
         ])?;
     }
-    let critical = critical_table(d.critical.iter().map(|c| CriticalRow {
-        index: c.index,
-        lbar_cr: c.lbar_cr,
-        kind: c.kind,
-        from_branch: c.from_branch,
-        to_branch: c.to_branch,
-        energy: c.energy,
-        error_estimate: c.error_estimate,
-    }))?;
+    let critical = critical_table(d.critical.iter().map(CriticalRow::from))?;
     run.write_table(&branches)?;
     run.write_table(&critical)?;
     for (name, energy_g) in [("diagram.svg", false), ("diagram_g.svg", true)] {

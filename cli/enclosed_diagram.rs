@@ -149,18 +149,7 @@ pub(crate) fn write_outputs(
     }
     // critical.csv has the surface diagram's columns; the surface values and the methods
     // are in summary.json.
-    let critical = critical_table(d.critical.iter().map(|c| {
-        let c = &c.critical;
-        CriticalRow {
-            index: c.index,
-            lbar_cr: c.lbar_cr,
-            kind: c.kind,
-            from_branch: c.from_branch,
-            to_branch: c.to_branch,
-            energy: c.energy,
-            error_estimate: c.error_estimate,
-        }
-    }))?;
+    let critical = critical_table(d.critical.iter().map(|c| CriticalRow::from(&c.critical)))?;
     let special =
         crate::output::special_table(d.events.iter().map(|e| crate::output::SpecialRow {
             kind: e.kind.as_str().into(),

@@ -290,15 +290,7 @@ pub fn write_outputs(
             index_after: p.index_after,
             error_estimate: p.error_estimate,
         }))?;
-    let critical = critical_table(d.critical.iter().map(|c| CriticalRow {
-        index: c.index,
-        lbar_cr: c.lbar_cr,
-        kind: c.kind,
-        from_branch: c.from_branch,
-        to_branch: c.to_branch,
-        energy: c.energy,
-        error_estimate: c.error_estimate,
-    }))?;
+    let critical = critical_table(d.critical.iter().map(CriticalRow::from))?;
     run.write_table(&branches)?;
     run.write_table(&critical)?;
     run.write_table(&special)?;

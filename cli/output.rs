@@ -141,6 +141,36 @@ pub struct CriticalRow {
     pub error_estimate: f64,
 }
 
+impl From<&rodloop_exact::diagram::Critical> for CriticalRow {
+    /// A critical length of the exact diagram (also the surface part of an enclosed one).
+    fn from(c: &rodloop_exact::diagram::Critical) -> Self {
+        Self {
+            index: c.index,
+            lbar_cr: c.lbar_cr,
+            kind: c.kind,
+            from_branch: c.from_branch,
+            to_branch: c.to_branch,
+            energy: c.energy,
+            error_estimate: c.error_estimate,
+        }
+    }
+}
+
+impl From<&rodloop_diagram::CriticalLength> for CriticalRow {
+    /// A critical length of the numeric diagram.
+    fn from(c: &rodloop_diagram::CriticalLength) -> Self {
+        Self {
+            index: c.index,
+            lbar_cr: c.lbar_cr,
+            kind: c.kind,
+            from_branch: c.from_branch,
+            to_branch: c.to_branch,
+            energy: c.energy,
+            error_estimate: c.error_estimate,
+        }
+    }
+}
+
 /// One row of `special_points.csv` (numeric and enclosed diagrams).
 pub struct SpecialRow {
     /// Kind of the point (fold, branch point, crossing, collapse, lift-off, landing …).
