@@ -421,22 +421,16 @@ fn run_with_timeout(cmd: &mut Command, limit: Duration) -> Option<Output> {
     }
 }
 
-#[test]
-fn page_loads_in_headless_chromium_without_console_errors() {
-    let Some(chromium) = chromium() else {
-        println!("skipped: chromium not installed (run scripts/screenshot_report.sh)");
-        return;
-    };
-    let page = format!(
-        "file://{}",
-        std::fs::canonicalize(report().join("report.html"))
-            .unwrap()
-            .display()
-    );
-    let profile = Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-chromium-profile");
+/// Load `html` in headless Chromium (a fresh profile `profile` under the target's tmp dir),
+/// assert that it loads without any console line (the pages have no script, so any console
+/// message is a fault; Chromium logs them, errors included, as `INFO:CONSOLE`, an uncaught
+/// exception as "Uncaught …") and return the DOM as Chromium parsed it.
+fn load_in_chromium(chromium: &Path, html: &Path, profile: &str) -> String {
+    let page = format!("file://{}", std::fs::canonicalize(html).unwrap().display());
+    let profile = Path::new(env!("CARGO_TARGET_TMPDIR")).join(profile);
     let _ = std::fs::remove_dir_all(&profile);
     let o = run_with_timeout(
-        Command::new(&chromium).args([
+        Command::new(chromium).args([
             "--headless",
             "--no-sandbox",
             "--disable-gpu",
@@ -456,16 +450,27 @@ fn page_loads_in_headless_chromium_without_console_errors() {
     .expect("chromium did not finish within 120 s");
     let _ = std::fs::remove_dir_all(&profile);
     let log = String::from_utf8_lossy(&o.stderr);
-    let dom = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "chromium failed: {log}");
-    // Chromium logs every console message, errors included, as `INFO:CONSOLE` (an uncaught
-    // exception as "Uncaught …"); the page has no script, so any console line is a fault.
     for bad in [":CONSOLE", "Uncaught", "Failed to load resource"] {
         assert!(
             !log.contains(bad),
             "console error while loading the page:\n{log}"
         );
     }
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+#[test]
+fn page_loads_in_headless_chromium_without_console_errors() {
+    let Some(chromium) = chromium() else {
+        println!("skipped: chromium not installed (run scripts/screenshot_report.sh)");
+        return;
+    };
+    let dom = load_in_chromium(
+        &chromium,
+        &report().join("report.html"),
+        "report-chromium-profile",
+    );
     // The page as Chromium parsed it: every figure present, with its drawing.
     for id in expected_figures() {
         let fig = between(&dom, &format!("<figure id=\"{id}\">"), "</figure>");
@@ -667,39 +672,11 @@ fn enclosed_page_loads_in_headless_chromium_without_console_errors() {
         println!("skipped: chromium not installed (run scripts/screenshot_report.sh)");
         return;
     };
-    let page = format!(
-        "file://{}",
-        std::fs::canonicalize(enclosed_report().join("report.html"))
-            .unwrap()
-            .display()
+    let dom = load_in_chromium(
+        &chromium,
+        &enclosed_report().join("report.html"),
+        "report-enclosed-chromium",
     );
-    let profile = Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-enclosed-chromium");
-    let _ = std::fs::remove_dir_all(&profile);
-    let o = run_with_timeout(
-        Command::new(&chromium).args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--no-first-run",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            &format!("--user-data-dir={}", profile.display()),
-            "--enable-logging=stderr",
-            "--v=0",
-            "--dump-dom",
-            &page,
-        ]),
-        Duration::from_secs(120),
-    )
-    .expect("chromium did not finish within 120 s");
-    let _ = std::fs::remove_dir_all(&profile);
-    let log = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "chromium failed: {log}");
-    for bad in [":CONSOLE", "Uncaught", "Failed to load resource"] {
-        assert!(!log.contains(bad), "console error:\n{log}");
-    }
-    let dom = String::from_utf8_lossy(&o.stdout);
     for id in ["fig-energy", "fig-atlas", "fig-loop-2", "fig-force-2"] {
         let fig = between(&dom, &format!("<figure id=\"{id}\">"), "</figure>");
         assert_eq!(fig.matches("<svg").count(), 1, "{id} in the rendered DOM");
