@@ -267,7 +267,7 @@ pub fn compute_families(
         .iter()
         .flat_map(|&l| seeds.iter().map(move |&sd| (l, sd)))
         .collect();
-    let solved = run_parallel(
+    let mut solved = run_parallel(
         opts.worker_threads(),
         jobs,
         &mut |_| {},
@@ -284,7 +284,7 @@ pub fn compute_families(
     for (li, &lbar) in seed_lengths.iter().enumerate() {
         for (si, &seed) in seeds.iter().enumerate() {
             // (A break below leaves the rest of this length's seeds: index, don't iterate.)
-            let (seeded, secs) = solved[li * seeds.len() + si].clone();
+            let (seeded, secs) = std::mem::take(&mut solved[li * seeds.len() + si]);
             seeds_tried += 1;
             let what = match seed {
                 Some(shift) => format!("origin moved by {shift:.4}"),
