@@ -466,7 +466,6 @@ pub fn run(args: &Args) -> Result<()> {
     // 5. The page.
     let t = Instant::now();
     let version = env!("CARGO_PKG_VERSION");
-    let command: Vec<String> = std::env::args().collect();
     let mut figures = 0usize;
     let mut fig = |svg: &str, label: &str, caption: &str, id: &str| {
         figures += 1;
@@ -675,75 +674,45 @@ pub fn run(args: &Args) -> Result<()> {
 
     let t_page = t.elapsed().as_secs_f64();
     let total = t_start.elapsed().as_secs_f64();
-    h.push_str("<section id=\"settings\">\n<h2>6. Settings</h2>\n<dl>\n");
-    let mut dl = |k: &str, v: &str| {
-        let _ = writeln!(h, "<dt>{k}</dt><dd>{v}</dd>");
-    };
-    dl("scene", &esc(&scene.name));
-    dl(
-        "scene file",
-        &args
-            .scene
-            .as_ref()
-            .map(|p| format!("<code>{}</code>", esc(&p.display().to_string())))
-            .unwrap_or_else(|| "built-in default".into()),
+    crate::report_tables::settings_section(
+        &mut h,
+        &run,
+        &crate::report_tables::Settings {
+            number: 6,
+            scene_name: &scene.name,
+            scene_file: args.scene.as_deref(),
+            extra: vec![
+                ("description", esc(&d.scene)),
+                ("sphere radius R", scene.radius.to_string()),
+                (
+                    "length range",
+                    format!("{} ≤ L̄ ≤ {}", opts.lbar_min, opts.lbar_max),
+                ),
+            ],
+            accuracy: (accuracy, args.accuracy.is_some()),
+            units: "lengths in R, L̄ = L/(2πR), energies E R/(πD₀), contact force λR³/D₀ (D₀ = D for a uniform rod)",
+            scene_text: scene_text.as_deref(),
+        },
     );
-    dl("description", &esc(&d.scene));
-    dl("sphere radius R", &scene.radius.to_string());
-    dl(
-        "length range",
-        &format!("{} ≤ L̄ ≤ {}", opts.lbar_min, opts.lbar_max),
-    );
-    dl(
-        "accuracy",
-        &format!(
-            "{}{}",
-            format!("{accuracy:?}").to_lowercase(),
-            if args.accuracy.is_some() {
-                " (--accuracy)"
-            } else {
-                " (scene)"
-            }
+    let stages: Vec<(String, f64)> = [
+        ("diagram: tracing the branches", d.timings.tracing),
+        ("diagram: critical lengths", d.timings.critical),
+        ("diagram: great circles", d.timings.great_circles),
+        ("diagram total (with writing the CSV files)", t_diagram),
+        ("diagram figures", t_diagram_figures),
+        ("branch atlas", t_atlas),
+        ("exact layer and paper comparison", t_exact),
+        (
+            &format!(
+                "representative states ({} solves, in parallel)",
+                states.len()
+            ),
+            t_states,
         ),
-    );
-    dl("rodloop version", version);
-    dl(
-        "platform",
-        &format!("{}-{}", std::env::consts::ARCH, std::env::consts::OS),
-    );
-    dl(
-        "command",
-        &format!("<code>{}</code>", esc(&command.join(" "))),
-    );
-    dl("run id", &format!("<code>{}</code>", esc(run.run_id())));
-    dl(
-        "units",
-        "lengths in R, L̄ = L/(2πR), energies E R/(πD₀), contact force λR³/D₀ (D₀ = D for a uniform rod)",
-    );
-    h.push_str("</dl>\n");
-    if let Some(text) = &scene_text {
-        let _ = writeln!(h, "<pre>{}</pre>", esc(text));
-    }
-    h.push_str("</section>\n");
-
-    h.push_str("<section id=\"timings\">\n<h2>7. Timings</h2>\n<table id=\"timings-table\"><thead><tr><th>stage</th><th>wall time (s)</th></tr></thead><tbody>\n");
-    let mut row = |k: &str, v: f64| {
-        let _ = writeln!(h, "<tr><td>{k}</td><td class=\"num\">{v:.3}</td></tr>");
-    };
-    row("diagram: tracing the branches", d.timings.tracing);
-    row("diagram: critical lengths", d.timings.critical);
-    row("diagram: great circles", d.timings.great_circles);
-    row("diagram total (with writing the CSV files)", t_diagram);
-    row("diagram figures", t_diagram_figures);
-    row("branch atlas", t_atlas);
-    row("exact layer and paper comparison", t_exact);
-    row(
-        &format!(
-            "representative states ({} solves, in parallel)",
-            states.len()
-        ),
-        t_states,
-    );
+    ]
+    .iter()
+    .map(|(k, v)| (k.to_string(), *v))
+    .collect();
     let state_rows: Vec<(u32, f64, f64)> = states
         .iter()
         .filter_map(|st| {
@@ -753,12 +722,8 @@ pub fn run(args: &Args) -> Result<()> {
                 .map(|s| (st.branch, st.lbar, s.seconds))
         })
         .collect();
-    crate::report_tables::finish_page(&run, &mut h, &state_rows, t_page, total)?;
+    crate::report_tables::finish_page(&run, &mut h, 7, &stages, &state_rows, t_page, total)?;
 
-    // The summary: the diagram's, with what the report adds.
-    let staged = std::fs::read_to_string(run.stage_dir().join("summary.json"))
-        .context("reading the staged summary.json")?;
-    let mut summary: serde_json::Value = serde_json::from_str(&staged)?;
     let state_notes = states
         .iter()
         .map(|st| match &st.outcome {
@@ -797,19 +762,8 @@ pub fn run(args: &Args) -> Result<()> {
             "total": total,
         }),
     })?;
-    if let serde_json::Value::Object(map) = &mut summary {
-        map.insert("report".into(), crate::output::strip_nulls(report));
-    }
-    run.write_json("summary.json", &summary)?;
-    run.commit()?;
     let failed = states.iter().filter(|s| s.outcome.is_err()).count();
-    if failed > 0 {
-        eprintln!(
-            "warning: {} of {} representative states could not be solved (see the report)",
-            failed,
-            states.len()
-        );
-    }
+    crate::report_tables::commit_report(run, report, failed, states.len())?;
     outln!(
         "wrote report.html ({} KB, {} figures: diagram, energy split, lambda extremes, k² (homogeneous scenes), branch atlas, shape against the Euler curve, {} with their force plots), branches.csv, critical.csv, diagram.svg, summary.json, states/ to {} in {:.2} s",
         h.len().div_ceil(1024),

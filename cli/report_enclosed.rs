@@ -477,83 +477,52 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
 
     let t_page = t.elapsed().as_secs_f64();
     let total = t_start.elapsed().as_secs_f64();
-    h.push_str("<section id=\"settings\">\n<h2>5. Settings</h2>\n<dl>\n");
-    let command: Vec<String> = std::env::args().collect();
-    let items = [
-        ("scene", esc(&scene.name)),
-        (
-            "scene file",
-            args.scene
-                .as_ref()
-                .map(|p| format!("<code>{}</code>", esc(&p.display().to_string())))
-                .unwrap_or_else(|| "built-in default".into()),
-        ),
-        ("confinement", "enclosed, |r| ≤ R".into()),
-        ("sphere radius R", scene.radius.to_string()),
-        (
-            "length range",
-            format!(
-                "{} ≤ L̄ ≤ {}, sampled every {}",
-                opts.lbar_min, opts.lbar_max, opts.step
-            ),
-        ),
-        (
-            "accuracy",
-            format!(
-                "{}{}",
-                format!("{accuracy:?}").to_lowercase(),
-                if args.accuracy.is_some() {
-                    " (--accuracy)"
-                } else {
-                    " (scene)"
-                }
-            ),
-        ),
-        (
-            "cells of the lifted-off traces",
-            d.cells
-                .iter()
-                .map(|(b, n)| format!("branch {b}: N = {n}"))
-                .collect::<Vec<_>>()
-                .join(", "),
-        ),
-        ("rodloop version", version.into()),
-        (
-            "platform",
-            format!("{}-{}", std::env::consts::ARCH, std::env::consts::OS),
-        ),
-        (
-            "command",
-            format!("<code>{}</code>", esc(&command.join(" "))),
-        ),
-        ("run id", format!("<code>{}</code>", esc(run.run_id()))),
-        (
-            "units",
-            "lengths and gaps in R, L̄ = L/(2πR), energies E R/(πD₀), contact force λR³/D₀".into(),
-        ),
-    ];
-    for (k, v) in items {
-        let _ = writeln!(h, "<dt>{k}</dt><dd>{v}</dd>");
-    }
-    h.push_str("</dl>\n");
-    if let Some(text) = &scene_text {
-        let _ = writeln!(h, "<pre>{}</pre>", esc(text));
-    }
-    h.push_str("</section>\n");
-    h.push_str("<section id=\"timings\">\n<h2>6. Timings</h2>\n<table id=\"timings-table\"><thead><tr><th>stage</th><th>wall time (s)</th></tr></thead><tbody>\n");
-    let mut row = |k: &str, v: f64| {
-        let _ = writeln!(h, "<tr><td>{k}</td><td class=\"num\">{v:.3}</td></tr>");
-    };
-    row("enclosed diagram (with writing the CSV files)", t_diagram);
-    row("diagram figure", t_figures);
-    row("branch atlas (states re-solved)", t_atlas);
-    row(
-        &format!(
-            "representative states ({} solves, in parallel)",
-            states.len()
-        ),
-        t_states,
+    crate::report_tables::settings_section(
+        &mut h,
+        &run,
+        &crate::report_tables::Settings {
+            number: 5,
+            scene_name: &scene.name,
+            scene_file: args.scene.as_deref(),
+            extra: vec![
+                ("confinement", "enclosed, |r| ≤ R".into()),
+                ("sphere radius R", scene.radius.to_string()),
+                (
+                    "length range",
+                    format!(
+                        "{} ≤ L̄ ≤ {}, sampled every {}",
+                        opts.lbar_min, opts.lbar_max, opts.step
+                    ),
+                ),
+                (
+                    "cells of the lifted-off traces",
+                    d.cells
+                        .iter()
+                        .map(|(b, n)| format!("branch {b}: N = {n}"))
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                ),
+            ],
+            accuracy: (accuracy, args.accuracy.is_some()),
+            units: "lengths and gaps in R, L̄ = L/(2πR), energies E R/(πD₀), contact force λR³/D₀",
+            scene_text: scene_text.as_deref(),
+        },
     );
+    let stages: Vec<(String, f64)> = [
+        ("enclosed diagram (with writing the CSV files)", t_diagram),
+        ("diagram figure", t_figures),
+        ("branch atlas (states re-solved)", t_atlas),
+        (
+            &format!(
+                "representative states ({} solves, in parallel)",
+                states.len()
+            ),
+            t_states,
+        ),
+    ]
+    .iter()
+    .map(|(k, v)| (k.to_string(), *v))
+    .collect();
     let state_rows: Vec<(u32, f64, f64)> = states
         .iter()
         .filter_map(|st| {
@@ -563,11 +532,8 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
                 .map(|s| (st.branch, st.lbar, s.seconds))
         })
         .collect();
-    crate::report_tables::finish_page(&run, &mut h, &state_rows, t_page, total)?;
+    crate::report_tables::finish_page(&run, &mut h, 6, &stages, &state_rows, t_page, total)?;
 
-    let staged = std::fs::read_to_string(run.stage_dir().join("summary.json"))
-        .context("reading the staged summary.json")?;
-    let mut summary: serde_json::Value = serde_json::from_str(&staged)?;
     let state_notes = states
         .iter()
         .map(|st| match &st.outcome {
@@ -600,19 +566,8 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
             "states": t_states, "page": t_page, "total": total,
         }),
     })?;
-    if let serde_json::Value::Object(map) = &mut summary {
-        map.insert("report".into(), crate::output::strip_nulls(report));
-    }
-    run.write_json("summary.json", &summary)?;
-    run.commit()?;
     let failed = states.iter().filter(|s| s.outcome.is_err()).count();
-    if failed > 0 {
-        eprintln!(
-            "warning: {} of {} representative states could not be solved (see the report)",
-            failed,
-            states.len()
-        );
-    }
+    crate::report_tables::commit_report(run, report, failed, states.len())?;
     outln!(
         "wrote report.html ({} KB, {} figures: enclosed diagram, branch atlas, {} with their force and gap plots), branches.csv, critical.csv, special_points.csv, diagram.svg/.png, summary.json, states/ to {} in {:.2} s",
         h.len().div_ceil(1024),

@@ -115,21 +115,103 @@ td.ok{color:#1b7a1b}td.bad{color:#c01818;font-weight:bold}td.src{color:#555;font
 dl{display:grid;grid-template-columns:max-content auto;gap:2px 16px;font-size:14px}dt{font-weight:bold}dd{margin:0}
 pre{background:#f6f8fa;padding:8px;font-size:12px;overflow-x:auto}";
 
-/// The end of a report page (cli/report.rs, cli/report_enclosed.rs): one timing row per
-/// representative state (`(branch, lbar, seconds)`), the page assembly and the total, the
-/// footer; then the page is written to `run` after a last check that it holds no
-/// non-finite number (every number comes from checked outputs: this is the last line of
-/// defence).
+/// The "Settings" section of a report page: the scene rows first, then `extra` (what only
+/// this kind of report has), then the rows every report shows (accuracy and where it came
+/// from, version, platform, command line, run id, units), then the scene file's text.
+pub struct Settings<'a> {
+    /// The section's number on the page.
+    pub number: u32,
+    /// The scene's name.
+    pub scene_name: &'a str,
+    /// The scene file given with `--scene`, if any.
+    pub scene_file: Option<&'a std::path::Path>,
+    /// Rows between the scene file and the accuracy (description, radius, range, …).
+    pub extra: Vec<(&'a str, String)>,
+    /// The accuracy used, and whether `--accuracy` chose it (else the scene did).
+    pub accuracy: (rodloop_solver::Accuracy, bool),
+    /// The units line.
+    pub units: &'a str,
+    /// The scene file's text, shown verbatim.
+    pub scene_text: Option<&'a str>,
+}
+
+/// Write the settings section (see [`Settings`]).
+pub fn settings_section(h: &mut String, run: &crate::output::OutputRun, s: &Settings) {
+    let _ = writeln!(
+        h,
+        "<section id=\"settings\">\n<h2>{}. Settings</h2>\n<dl>",
+        s.number
+    );
+    let command: Vec<String> = std::env::args().collect();
+    let (accuracy, from_flag) = s.accuracy;
+    let mut items: Vec<(&str, String)> = vec![
+        ("scene", esc(s.scene_name)),
+        (
+            "scene file",
+            s.scene_file
+                .map(|p| format!("<code>{}</code>", esc(&p.display().to_string())))
+                .unwrap_or_else(|| "built-in default".into()),
+        ),
+    ];
+    items.extend(s.extra.iter().cloned());
+    items.extend([
+        (
+            "accuracy",
+            format!(
+                "{}{}",
+                format!("{accuracy:?}").to_lowercase(),
+                if from_flag {
+                    " (--accuracy)"
+                } else {
+                    " (scene)"
+                }
+            ),
+        ),
+        ("rodloop version", env!("CARGO_PKG_VERSION").into()),
+        (
+            "platform",
+            format!("{}-{}", std::env::consts::ARCH, std::env::consts::OS),
+        ),
+        (
+            "command",
+            format!("<code>{}</code>", esc(&command.join(" "))),
+        ),
+        ("run id", format!("<code>{}</code>", esc(run.run_id()))),
+        ("units", s.units.into()),
+    ]);
+    for (k, v) in items {
+        let _ = writeln!(h, "<dt>{k}</dt><dd>{v}</dd>");
+    }
+    h.push_str("</dl>\n");
+    if let Some(text) = s.scene_text {
+        let _ = writeln!(h, "<pre>{}</pre>", esc(text));
+    }
+    h.push_str("</section>\n");
+}
+
+/// The end of a report page: the "Timings" section (numbered `number`) with the `stages`,
+/// one row per representative state `(branch, L̄, seconds)`, the page assembly and the total;
+/// then the footer. Refuses (and writes nothing) if the page holds a non-finite number;
+/// otherwise writes `report.html` into the run's staging directory.
 pub fn finish_page(
     run: &crate::output::OutputRun,
     h: &mut String,
+    number: u32,
+    stages: &[(String, f64)],
     state_rows: &[(u32, f64, f64)],
     t_page: f64,
     total: f64,
 ) -> anyhow::Result<()> {
+    let _ = writeln!(
+        h,
+        "<section id=\"timings\">\n<h2>{number}. Timings</h2>\n<table id=\"timings-table\"><thead><tr><th>stage</th><th>wall time (s)</th></tr></thead><tbody>"
+    );
     let mut row = |k: &str, v: f64| {
         let _ = writeln!(h, "<tr><td>{k}</td><td class=\"num\">{v:.3}</td></tr>");
     };
+    for (k, v) in stages {
+        row(k, *v);
+    }
     for &(branch, lbar, secs) in state_rows {
         row(
             &format!("&nbsp;&nbsp;branch {branch} at L̄ = {lbar} (solve and picture)"),
@@ -153,4 +235,30 @@ pub fn finish_page(
         );
     }
     run.write_bytes("report.html", h.as_bytes())
+}
+
+/// Finish a report run: the staged `summary.json` (the diagram's) gains `report`, the run is
+/// committed (moved into place), and a warning names how many of the `states` representative
+/// states failed.
+pub fn commit_report(
+    run: crate::output::OutputRun,
+    report: serde_json::Value,
+    failed: usize,
+    states: usize,
+) -> anyhow::Result<()> {
+    use anyhow::Context as _;
+    let staged = std::fs::read_to_string(run.stage_dir().join("summary.json"))
+        .context("reading the staged summary.json")?;
+    let mut summary: serde_json::Value = serde_json::from_str(&staged)?;
+    if let serde_json::Value::Object(map) = &mut summary {
+        map.insert("report".into(), crate::output::strip_nulls(report));
+    }
+    run.write_json("summary.json", &summary)?;
+    run.commit()?;
+    if failed > 0 {
+        eprintln!(
+            "warning: {failed} of {states} representative states could not be solved (see the report)"
+        );
+    }
+    Ok(())
 }
