@@ -1,28 +1,14 @@
 //! End-to-end tests of `rodloop draw` and the `--draw` flags, through the built binary.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use rodloop_figures::raster::png_size;
 
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_rodloop"))
-}
+mod common;
+use common::{bin, run};
 
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("rodloop-figtest-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn run(cmd: &mut Command) -> (bool, String, String) {
-    let o = cmd.output().unwrap();
-    (
-        o.status.success(),
-        String::from_utf8_lossy(&o.stdout).into(),
-        String::from_utf8_lossy(&o.stderr).into(),
-    )
+    common::fresh_dir("rodloop-figtest", name)
 }
 
 fn svg_size(path: &Path) -> (u32, u32) {

@@ -1,4 +1,6 @@
-//! Helpers shared by the end-to-end tests of `phase` and `diagram --param`.
+//! Helpers shared by the end-to-end tests (`phase`, `diagram --param`, `draw`, the atlas).
+//! Each test file uses some of them.
+#![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -25,4 +27,27 @@ pub fn assert_refused(args: &[&str], msg: &str) {
     let e = String::from_utf8_lossy(&r.stderr);
     assert!(e.contains(msg), "{args:?}: {e}");
     assert!(!e.contains("panicked"), "{e}");
+}
+
+/// The built binary as a command, for tests that add arguments, directories or inputs.
+pub fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_rodloop"))
+}
+
+/// Run `cmd`: whether it succeeded, its stdout and its stderr.
+pub fn run(cmd: &mut Command) -> (bool, String, String) {
+    let o = cmd.output().expect("run rodloop");
+    (
+        o.status.success(),
+        String::from_utf8_lossy(&o.stdout).into(),
+        String::from_utf8_lossy(&o.stderr).into(),
+    )
+}
+
+/// A fresh, existing directory `prefix-PID-name` under the system's temporary directory.
+pub fn fresh_dir(prefix: &str, name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("{prefix}-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
 }
