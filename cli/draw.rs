@@ -213,6 +213,17 @@ fn write_pair(
     Ok(names)
 }
 
+/// The picture's title: the file with its folder (`solve-x/config.csv`), not the whole path,
+/// which for a temporary directory fills the title line.
+fn short_title(path: &Path) -> String {
+    let comps: Vec<String> = path
+        .components()
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .filter(|c| c != "/" && c != ".")
+        .collect();
+    comps[comps.len().saturating_sub(2)..].join("/")
+}
+
 /// Draw one loop file: the four-view picture, and a JSON note of what was found.
 pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
     let t0 = Instant::now();
@@ -227,7 +238,7 @@ pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
         color: set.color.clone(),
         tol: set.tol,
         panel,
-        title: format!("{}", path.display()),
+        title: short_title(path),
     };
     let pic = loop_picture(&data, &opts)?;
     let t_picture = t0.elapsed().as_secs_f64();
@@ -245,7 +256,10 @@ pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
         },
         480.0,
         260.0,
-        &format!("{}: quantities along the loop (Figs. 5, 6)", path.display()),
+        &format!(
+            "{}: quantities along the loop (Figs. 5, 6)",
+            short_title(path)
+        ),
     )?;
     ensure_dir(&set.out)?;
     // The two figures are rasterised at once (each takes tens of milliseconds with PNG).
