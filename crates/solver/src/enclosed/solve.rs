@@ -39,8 +39,9 @@ pub struct EnclosedOptions {
     pub max_backtracks: usize,
     /// Full steps that may raise the residual (watchdog): a full Newton step that changes
     /// the contact set is taken even when the residual grows, at most this many times per
-    /// solve; if the residual has not dropped below the value before such a step within
-    /// [`WATCHDOG_ITERATIONS`] iterations, the solver returns there and backtracks. `0`
+    /// solve and one at a time; if the residual has not dropped below the value before such
+    /// a step within [`WATCHDOG_ITERATIONS`] iterations, the solver returns there, backtracks
+    /// and takes no more such steps. `0`
     /// (default): plain backtracking. For starts whose contact ends are off by a node or
     /// two (a coarse solution prolonged to a finer mesh), where the monotone line search
     /// crawls through the active-set changes in short steps.
@@ -211,13 +212,12 @@ pub fn solve_enclosed(
                 if k == 0
                     && t == 1.0
                     && watch_left > 0
+                    && watch.is_none()
                     && nt.is_finite()
                     && model.wall_active(&zt)? != model.wall_active(&z)?
                 {
                     let prev = std::mem::replace(&mut z, zt);
-                    if watch.is_none() {
-                        watch = Some((prev, norm, dz.clone(), it + WATCHDOG_ITERATIONS));
-                    }
+                    watch = Some((prev, norm, dz.clone(), it + WATCHDOG_ITERATIONS));
                     watch_left -= 1;
                     accepted = true;
                     break;
