@@ -153,13 +153,13 @@ pub fn solve_state(
         (
             (b.energy, b.energy_error),
             format!(
-                "3-D enclosed model, N = {cells} cells (semismooth Newton from the surface loop{}, lambda_min = {lam_min:.6} < 0); error from N/4, N/2, N (observed order {:.2})",
+                "3-D enclosed model, N = {cells} cells (semismooth Newton from the surface loop{}, lambda_min = {lam_min:.6} < 0); {}",
                 if b.homotopy {
                     " by the pull homotopy"
                 } else {
                     ""
                 },
-                b.order
+                b.estimate_method()
             ),
         )
     };
@@ -289,8 +289,8 @@ fn solve_from_shape(
         surface: None,
         stability,
         method: format!(
-            "3-D enclosed model, N = {cells} cells (semismooth Newton from the saved shape); error from N/4, N/2, N (observed order {:.2})",
-            b.order
+            "3-D enclosed model, N = {cells} cells (semismooth Newton from the saved shape); {}",
+            b.estimate_method()
         ),
         state: b.fine,
     })
