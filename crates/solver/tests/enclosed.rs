@@ -228,7 +228,7 @@ fn figure_eight_lifts_off_with_lower_energy() {
     let b1024 = branch(1, 1.4, 1024);
     let order = ((e256 - e128).abs() / (b512.energy - e256).abs()).log2();
     assert!(order > 2.0 && order < 3.5, "order {order}");
-    assert!(b256.eighth_energy.is_some() && !b256.point_contact);
+    assert!(b256.eighth.is_some() && !b256.point_contact);
     for b in [&b256, &b512] {
         let err = (b.energy - b1024.energy).abs();
         assert!(

@@ -58,8 +58,8 @@ pub struct BranchSolve {
     pub coarse: EnclosedState,
     /// The level at `N/4` cells.
     pub quarter: EnclosedState,
-    /// Energy at `N/8` cells, where the cascade has that level (uniform rods, `N ≥ 256`).
-    pub eighth_energy: Option<f64>,
+    /// The level at `N/8` cells, where the cascade has it (uniform rods, `N ≥ 256`).
+    pub eighth: Option<EnclosedState>,
     /// Energy `E R/(π D0)` at `N` cells.
     pub energy: f64,
     /// The error estimate: [`three_level_estimate`] over `N/4, N/2, N` for an attached
@@ -197,7 +197,7 @@ fn solve_ladder(
     let fine = ladder.pop().expect("N");
     let coarse = ladder.pop().expect("N/2");
     let quarter = ladder.pop().expect("N/4");
-    let eighth_energy = ladder.pop().map(|s| s.energy());
+    let eighth = ladder.pop();
     let energy = fine.energy();
     let contact = fine.contact(1e-9)?;
     let attached = contact.fraction >= 1.0;
@@ -210,10 +210,11 @@ fn solve_ladder(
         } else {
             LIFTED_OFF_MAX_ORDER
         };
-        match eighth_energy {
-            Some(e8) => {
-                four_level_estimate([e8, quarter.energy(), coarse.energy(), energy], max_order)
-            }
+        match &eighth {
+            Some(e8) => four_level_estimate(
+                [e8.energy(), quarter.energy(), coarse.energy(), energy],
+                max_order,
+            ),
             None => three_level_estimate(quarter.energy(), coarse.energy(), energy, max_order),
         }
     };
@@ -221,7 +222,7 @@ fn solve_ladder(
         fine,
         coarse,
         quarter,
-        eighth_energy,
+        eighth,
         energy,
         energy_error,
         order,
@@ -231,10 +232,16 @@ fn solve_ladder(
 }
 
 impl BranchSolve {
+    /// The coarsest level kept (`N/8` where the cascade has it, else `N/4`): where callers
+    /// compute the stability index (a dense eigen-decomposition, `O(N³)`).
+    pub fn coarsest(&self) -> &EnclosedState {
+        self.eighth.as_ref().unwrap_or(&self.quarter)
+    }
+
     /// How the error estimate was formed, for reports: the levels, the order and whether
     /// the contact is point-like.
     pub fn estimate_method(&self) -> String {
-        let levels = if self.eighth_energy.is_some()
+        let levels = if self.eighth.is_some()
             && self.fine.contact(1e-9).is_ok_and(|c| c.fraction < 1.0)
         {
             "N/8, N/4, N/2, N (the smaller of the two observed orders; the larger of the last two differences' estimates)"
@@ -346,15 +353,16 @@ pub fn enclosed_cells(accuracy: crate::Accuracy, eta: u32) -> usize {
 }
 
 /// Cells of a single enclosed `solve` for a branch with `eta` periods: `c (1 + η)` with
-/// `c = 16` (fast), `128` (default) or `256` (high). The Newton step is `O(N)`
-/// ([`super::lifted`]), so one state affords the mesh the `≤ 1e-8` target needs: the
-/// figure-eight at `L̄ = 1.4` is within ≈ 4e-9 relative at `N = 256`. (The enclosed diagram
+/// `c = 16` (fast), `192` (default) or `256` (high). The Newton step is `O(N)`
+/// ([`super::lifted`]), so one state affords the mesh the `≤ 1e-8` target needs with an
+/// estimate that bounds the error: the figure-eight at `L̄ = 1.4` is estimated at 3.5e-9
+/// relative at `N = 384` (1.25e-8 at 256, where the error against `N = 1024` is 3.9e-9). (The enclosed diagram
 /// keeps [`enclosed_cells`]: its natural-parameter tracer stalls on the point contacts of
 /// the figure-eight below `L̄ ≈ 1.3` at `N = 256`.)
 pub fn enclosed_solve_cells(accuracy: crate::Accuracy, eta: u32) -> usize {
     let c = match accuracy {
         crate::Accuracy::Fast => 16,
-        crate::Accuracy::Default => 128,
+        crate::Accuracy::Default => 192,
         crate::Accuracy::High => 256,
     };
     (c * (1 + eta as usize)).max(32)
