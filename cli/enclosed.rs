@@ -36,7 +36,8 @@ pub struct EnclosedResult {
     pub energy: (f64, f64),
     /// Surface loop energy and `λ_min` (None for branch 0).
     pub surface: Option<(f64, f64)>,
-    /// Stability index and lowest eigenvalues (on the `N/4` companion; dense, `O(N³)`).
+    /// Stability index and lowest eigenvalues (on the coarsest level of the cascade, `N/8`
+    /// or `N/4`; dense, `O(N³)`).
     pub stability: (usize, Vec<f64>),
     /// How the energy was obtained.
     pub method: String,
@@ -141,7 +142,7 @@ pub fn solve_state(
     }
     let b = solve_branch(r, lbar, stiffness, &source, cells, &opts)
         .with_context(|| format!("the enclosed loop of branch {branch} at lbar = {lbar}"))?;
-    let stability = b.quarter.stability(1e-6)?;
+    let stability = b.coarsest().stability(1e-6)?;
     let (energy, method) = if attached {
         (
             (e_surf, surface_error),
@@ -153,13 +154,13 @@ pub fn solve_state(
         (
             (b.energy, b.energy_error),
             format!(
-                "3-D enclosed model, N = {cells} cells (semismooth Newton from the surface loop{}, lambda_min = {lam_min:.6} < 0); error from N/4, N/2, N (observed order {:.2})",
+                "3-D enclosed model, N = {cells} cells (semismooth Newton from the surface loop{}, lambda_min = {lam_min:.6} < 0); {}",
                 if b.homotopy {
                     " by the pull homotopy"
                 } else {
                     ""
                 },
-                b.order
+                b.estimate_method()
             ),
         )
     };
@@ -282,15 +283,15 @@ fn solve_from_shape(
     let (model, z0) = start_from_shape(scene.radius, lbar, cells / 4, stiffness, shape)?;
     let b = solve_levels(&model, z0, None, &EnclosedOptions::default())
         .context("the enclosed loop from the saved shape")?;
-    let stability = b.quarter.stability(1e-6)?;
+    let stability = b.coarsest().stability(1e-6)?;
     Ok(EnclosedResult {
         model_energy: (b.energy, b.energy_error),
         energy: (b.energy, b.energy_error),
         surface: None,
         stability,
         method: format!(
-            "3-D enclosed model, N = {cells} cells (semismooth Newton from the saved shape); error from N/4, N/2, N (observed order {:.2})",
-            b.order
+            "3-D enclosed model, N = {cells} cells (semismooth Newton from the saved shape); {}",
+            b.estimate_method()
         ),
         state: b.fine,
     })

@@ -392,7 +392,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     }
     h.push_str("</section>\n");
 
-    h.push_str("<section id=\"states\">\n<h2>4. One state of each branch</h2>\n<p>Each branch solved at one length as <code>rodloop solve</code> solves it: the exact surface loop where its λ ≥ 0 (then it is the enclosed equilibrium; the 3-D model re-solves it as a check), else the 3-D enclosed model from it (energy error from N/4, N/2, N). A loop that has lifted off is coloured by its gap (R − |r|)/R, one on the wall by its contact force λR³/D₀; nearer strands are darker and thicker; red circles: self-contacts in 3-D.</p>\n");
+    h.push_str("<section id=\"states\">\n<h2>4. One state of each branch</h2>\n<p>Each branch solved at one length as <code>rodloop solve</code> solves it: the exact surface loop where its λ ≥ 0 (then it is the enclosed equilibrium; the 3-D model re-solves it as a check), else the 3-D enclosed model from it (energy error from the cascade's last three or four levels, as its method says). A loop that has lifted off is coloured by its gap (R − |r|)/R, one on the wall by its contact force λR³/D₀; nearer strands are darker and thicker; red circles: self-contacts in 3-D.</p>\n");
     h.push_str("<table id=\"states-table\"><thead><tr><th>branch</th><th>η</th><th>L̄</th><th>chosen as</th><th>E R/(πD₀)</th><th>error</th><th>surface E</th><th>surface λ<sub>min</sub>R³/D₀</th><th>index</th><th>state</th><th>on the wall</th><th>max gap / R</th><th>point group</th><th>method</th></tr></thead><tbody>\n");
     for st in &states {
         match &st.outcome {

@@ -2,8 +2,11 @@
 //! `E_a = E_b` with re-solved states), and the lowest-branch labels (see the parent
 //! module's docs).
 
-use rodloop_solver::enclosed::EnclosedOptions;
-use rodloop_solver::SolverError;
+use rodloop_solver::enclosed::{
+    four_level_estimate, point_like_contact, solve_enclosed, three_level_estimate, EnclosedOptions,
+    EnclosedState, LIFTED_OFF_MAX_ORDER,
+};
+use rodloop_solver::{Accuracy, SolverError};
 
 use super::trace::{exact, Levels};
 use super::{EnclosedCritical, EnclosedPoint};
@@ -70,38 +73,153 @@ where
     ))
 }
 
+/// A lifted-off state of one branch at one length on a ladder of meshes `N, 2N, …` (the
+/// exchanges' final secant): the trace's three levels stepped to the coarse root, the
+/// finest of them prolonged and re-solved up to the ladder's top.
+#[derive(Clone, Debug)]
+pub(super) struct Ladder {
+    states: Vec<EnclosedState>,
+}
+
+impl Ladder {
+    /// From a trace's levels at `lbar`, with `extra` doublings on top.
+    fn from_levels(t: &Levels, lbar: f64, extra: usize) -> Result<Self, SolverError> {
+        let opts = EnclosedOptions::default();
+        let at = t.step_to(lbar, &opts)?;
+        let mut states: Vec<EnclosedState> = at.states.to_vec();
+        // The prolonged start has its contact ends a node or two off: the watchdog, with
+        // plain backtracking where it fails (as `solve_branch` does).
+        let wd = EnclosedOptions {
+            watchdog: 2,
+            ..opts.clone()
+        };
+        for _ in 0..extra {
+            let (m, z) = states.last().expect("a level").refine()?;
+            let next =
+                solve_enclosed(&m, z.clone(), &wd).or_else(|_| solve_enclosed(&m, z, &opts))?;
+            states.push(next);
+        }
+        // Four levels are all the estimate uses.
+        let drop = states.len().saturating_sub(4);
+        states.drain(..drop);
+        Ok(Self { states })
+    }
+
+    /// Newton at `lbar` from this ladder, level by level.
+    fn step_to(&self, lbar: f64) -> Result<Self, SolverError> {
+        let opts = EnclosedOptions::default();
+        let states = self
+            .states
+            .iter()
+            .map(|s| s.step_to(lbar, &opts))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Self { states })
+    }
+
+    /// Energy of the finest level and its error: [`four_level_estimate`] over the last four
+    /// levels (order capped at [`LIFTED_OFF_MAX_ORDER`], or 1 for point-like contact), or
+    /// the three-level rule where the ladder has three.
+    fn energy(&self) -> Result<(f64, f64), SolverError> {
+        let e: Vec<f64> = self.states.iter().map(EnclosedState::energy).collect();
+        let fine = self.states.last().expect("a level");
+        let c = fine.contact(super::TOUCH)?;
+        let max_order = if c.fraction >= 1.0 {
+            4.0
+        } else if point_like_contact(fine, &c) {
+            1.0
+        } else {
+            LIFTED_OFF_MAX_ORDER
+        };
+        let k = e.len();
+        let (err, _) = if k >= 4 && c.fraction < 1.0 {
+            four_level_estimate([e[k - 4], e[k - 3], e[k - 2], e[k - 1]], max_order)
+        } else {
+            three_level_estimate(e[k - 3], e[k - 2], e[k - 1], max_order)
+        };
+        Ok((e[k - 1], err))
+    }
+
+    /// Cells of the levels, coarsest first.
+    pub(super) fn cells(&self) -> Vec<usize> {
+        self.states.iter().map(|s| s.model.cells()).collect()
+    }
+}
+
+/// Doublings of the trace's finest mesh `N` for the final secant of an exchange: one at
+/// fast accuracy (the ladder `N/4 … 2N`), two at default (`N/2 … 4N`: the figure-eight at
+/// 32, 64, 128, 256 cells) and three at high (`N … 8N`: 128, 256, 512, 1024 cells).
+pub(super) fn exchange_doublings(accuracy: Accuracy) -> usize {
+    match accuracy {
+        Accuracy::Fast => 1,
+        Accuracy::Default => 2,
+        Accuracy::High => 3,
+    }
+}
+
+/// Energy of branch `eta` at `lbar` with its error: the exact loop where attached,
+/// otherwise the ladder `lad` stepped to `lbar` (updated).
+fn ladder_energy(eta: u32, lbar: f64, lad: &mut Option<Ladder>) -> Result<(f64, f64), SolverError> {
+    if eta == 0 {
+        return Ok((1.0 / lbar, 0.0));
+    }
+    let l = exact(eta, lbar)?;
+    if l.lambda_range().0 >= 0.0 {
+        let e = l.energy()?;
+        return Ok((e, 1e-14 * e.abs().max(1.0)));
+    }
+    let t = lad.as_ref().ok_or_else(|| {
+        SolverError::InvalidInput(format!(
+            "no lifted-off state of branch eta = {eta} near lbar = {lbar} to start from"
+        ))
+    })?;
+    let next = t.step_to(lbar)?;
+    let out = next.energy()?;
+    *lad = Some(next);
+    Ok(out)
+}
+
 /// Solve `E_a = E_b` near `x0` (see the module docs): a secant iteration with the
-/// lifted-off states at the trace's levels `N/4, N/2, N`, then, from its root, the same at
-/// `N/2, N, 2N` (first step with the coarse slope). Returns `(L̄_cr, error, energy)`.
+/// lifted-off states at the trace's levels `N/4, N/2, N`, then, from its root, the same on
+/// the ladder of [`Ladder::from_levels`] with `doublings` more levels (first step with the
+/// coarse slope; error from the ladder's last four levels). Returns `(L̄_cr, error, energy,
+/// cells of the final levels)`.
 pub(super) fn enclosed_crossing(
     eta_a: u32,
     eta_b: u32,
     x0: f64,
     tracks: &mut [Option<Levels>; 2],
-) -> Result<(f64, f64, f64), SolverError> {
+    doublings: usize,
+) -> Result<(f64, f64, f64, Vec<usize>), SolverError> {
     let f = |x: f64, tr: &mut [Option<Levels>; 2]| -> Result<(f64, f64, f64), SolverError> {
         let (ea, da) = branch_energy(eta_a, x, &mut tr[0])?;
         let (eb, db) = branch_energy(eta_b, x, &mut tr[1])?;
         Ok((ea - eb, da + db, 0.5 * (ea + eb)))
     };
     let (xc, slope, _, _, _) = secant(|x| f(x, tracks), x0, x0 - 1e-3)?;
-    let sopts = EnclosedOptions::default();
-    let mut fine: [Option<Levels>; 2] = [None, None];
+    let mut fine: [Option<Ladder>; 2] = [None, None];
+    let mut cells = Vec::new();
     for k in 0..2 {
         if let Some(t) = &tracks[k] {
-            // Bring the track to the coarse root first, then double its cells.
-            let at = t.step_to(xc, &sopts)?;
-            fine[k] = Some(at.refine(&sopts)?);
+            let lad = Ladder::from_levels(t, xc, doublings)?;
+            if lad.cells().last() > cells.last() {
+                cells = lad.cells();
+            }
+            fine[k] = Some(lad);
         }
     }
-    let (fc, _, _) = f(xc, &mut fine)?;
+    let g = |x: f64, lad: &mut [Option<Ladder>; 2]| -> Result<(f64, f64, f64), SolverError> {
+        let (ea, da) = ladder_energy(eta_a, x, &mut lad[0])?;
+        let (eb, db) = ladder_energy(eta_b, x, &mut lad[1])?;
+        Ok((ea - eb, da + db, 0.5 * (ea + eb)))
+    };
+    let (fc, _, _) = g(xc, &mut fine)?;
     let x1 = if fc == 0.0 {
         xc - 1e-9
     } else {
         xc - fc / slope
     };
-    let (x, slope, step, err, e) = secant(|x| f(x, &mut fine), xc, x1)?;
-    Ok((x, err / slope.abs().max(1e-300) + step, e))
+    let (x, slope, step, err, e) = secant(|x| g(x, &mut fine), xc, x1)?;
+    Ok((x, err / slope.abs().max(1e-300) + step, e, cells))
 }
 
 /// The lowest branch at `lbar`: the branch the last critical length at or below `lbar`

@@ -61,7 +61,7 @@ mod trace;
 
 pub use nonuniform::nonuniform_cells;
 
-use critical::{detached_at, enclosed_crossing, label};
+use critical::{detached_at, enclosed_crossing, exchange_doublings, label};
 use trace::{circle_point, grid, trace_branch, BranchOut, Levels};
 
 /// Gap (units of `R`) below which a node touches the wall.
@@ -392,20 +392,20 @@ pub fn enclosed_diagram(opts: &EnclosedDiagramOptions) -> Result<EnclosedDiagram
             })
         };
         let mut tracks = [nearest(etas2[0]), nearest(etas2[1])];
-        let (x, err, energy) = enclosed_crossing(etas2[0], etas2[1], c.lbar_cr, &mut tracks)
-            .map_err(|e| DiagramError::Critical {
-                from_branch: c.from_branch,
-                to_branch: c.to_branch,
-                lbar: c.lbar_cr,
-                reason: e.to_string(),
-            })?;
-        let n = etas2
-            .iter()
-            .zip(&tracks)
-            .filter(|(_, t)| t.is_some())
-            .map(|(&e, _)| 2 * enclosed_cells(opts.accuracy, e))
-            .max()
-            .unwrap_or(0);
+        let (x, err, energy, cells) = enclosed_crossing(
+            etas2[0],
+            etas2[1],
+            c.lbar_cr,
+            &mut tracks,
+            exchange_doublings(opts.accuracy),
+        )
+        .map_err(|e| DiagramError::Critical {
+            from_branch: c.from_branch,
+            to_branch: c.to_branch,
+            lbar: c.lbar_cr,
+            reason: e.to_string(),
+        })?;
+        let cells: Vec<String> = cells.iter().map(usize::to_string).collect();
         critical.push(EnclosedCritical {
             critical: Critical {
                 lbar_cr: x,
@@ -415,10 +415,8 @@ pub fn enclosed_diagram(opts: &EnclosedDiagramOptions) -> Result<EnclosedDiagram
             },
             surface_lbar_cr: c.lbar_cr,
             method: format!(
-                "secant on E_a = E_b with the lifted-off state re-solved (3-D model at N = {}, {}, {}; error from the three levels and the last secant step)",
-                n / 4,
-                n / 2,
-                n
+                "secant on E_a = E_b with the lifted-off state re-solved (3-D model at N = {}; error from these levels (the smaller observed order, the larger of the last two differences' estimates) and the last secant step)",
+                cells.join(", ")
             ),
         });
     }

@@ -51,20 +51,6 @@ impl Levels {
         })
     }
 
-    /// The same length at twice the cells (each level prolonged and re-solved).
-    pub(super) fn refine(&self, opts: &EnclosedOptions) -> Result<Levels, SolverError> {
-        let mut out = Vec::with_capacity(3);
-        for s in &self.states {
-            let (m, z) = s.refine()?;
-            out.push(solve_enclosed(&m, z, opts)?);
-        }
-        let [a, b, c]: [EnclosedState; 3] = out.try_into().expect("three levels");
-        Ok(Levels {
-            lbar: self.lbar,
-            states: [a, b, c],
-        })
-    }
-
     pub(super) fn point(&self, branch: u32, eta: u32) -> Result<EnclosedPoint, SolverError> {
         let fine = &self.states[2];
         let (energy, energy_error) = self.energy();

@@ -56,24 +56,34 @@ pub struct BranchSolve {
     pub fine: EnclosedState,
     /// The companion at `N/2` cells.
     pub coarse: EnclosedState,
-    /// The first level, `N/4` cells.
+    /// The level at `N/4` cells.
     pub quarter: EnclosedState,
+    /// The level at `N/8` cells, where the cascade has it (uniform rods, `N ≥ 256`).
+    pub eighth: Option<EnclosedState>,
     /// Energy `E R/(π D0)` at `N` cells.
     pub energy: f64,
-    /// `|E_N − E_{N/2}|/(2^p − 1)` with the order `p` observed over `N/4, N/2, N`, clamped
-    /// to `[1, 4]` (fourth order where the contact is extended; see `tests/enclosed.rs`).
+    /// The error estimate: [`three_level_estimate`] over `N/4, N/2, N` for an attached
+    /// state (fourth order) or where no `N/8` level exists; [`four_level_estimate`] over
+    /// `N/8 … N` for a lifted-off one; order 1 for point-like contact
+    /// ([`POINT_CONTACT_CELLS`]).
     pub energy_error: f64,
     /// The observed order `p`.
     pub order: f64,
+    /// `true` where the finest level touches the wall only at points
+    /// ([`point_like_contact`]; the estimate then takes order 1).
+    pub point_contact: bool,
     /// `true` when plain Newton failed at `N/4` and the pull homotopy
     /// ([`super::solve::solve_by_pull_homotopy`]) found the state.
     pub homotopy: bool,
 }
 
 /// Solve one enclosed state at `cells` and `cells/2` from the surface loop `source`: the
-/// semismooth Newton runs first at `cells/4` from the surface loop, and each finer solve
+/// semismooth Newton runs first on a coarse mesh from the surface loop, and each finer solve
 /// starts from the coarser solution (the contact set is then nearly right, and the
-/// active-set iteration needs few steps).
+/// active-set iteration needs few steps). The first mesh is `cells/4`; for a uniform rod
+/// with `cells ≥ 256` it is `min(cells/8, 64)` (the plain Newton from the surface loop
+/// stalled at 128 cells on the figure-eight at `L̄ = 1.4` and needed the pull homotopy),
+/// and the `cells/8` level enters the error estimate ([`four_level_estimate`]).
 pub fn solve_branch(
     radius: f64,
     lbar: f64,
@@ -87,7 +97,17 @@ pub fn solve_branch(
             "enclosed solves need a multiple of 4 cells, at least 32 (got {cells})"
         )));
     }
-    let n0 = cells / 4;
+    let (n0, refinements) = if stiffness.is_uniform() && cells >= 256 && cells % 8 == 0 {
+        let mut n0 = cells / 8;
+        let mut k = 3;
+        while n0 > 64 && n0 % 2 == 0 {
+            n0 /= 2;
+            k += 1;
+        }
+        (n0, k)
+    } else {
+        (cells / 4, 2)
+    };
     let probe = super::model::EnclosedModel::new(
         radius,
         lbar,
@@ -107,7 +127,7 @@ pub fn solve_branch(
     };
     let (model, z0) = start_from_surface(radius, lbar, n0, stiffness, lookup)?;
     let lmin = source.lambda_min(radius, stiffness.reference());
-    solve_levels(&model, z0, Some(lmin), opts)
+    solve_ladder(&model, z0, Some(lmin), opts, refinements)
 }
 
 /// The cascade of [`solve_branch`] from a start at `N/4` cells (`model`, `z0`): Newton
@@ -120,6 +140,18 @@ pub fn solve_levels(
     lambda_min: Option<f64>,
     opts: &EnclosedOptions,
 ) -> Result<BranchSolve, SolverError> {
+    solve_ladder(model, z0, lambda_min, opts, 2)
+}
+
+/// [`solve_levels`] with `refinements ≥ 2` doublings of the start's cells: the last three
+/// levels are `N/4, N/2, N`, and with three or more doublings the one before is `N/8`.
+fn solve_ladder(
+    model: &super::model::EnclosedModel,
+    z0: Vec<f64>,
+    lambda_min: Option<f64>,
+    opts: &EnclosedOptions,
+    refinements: usize,
+) -> Result<BranchSolve, SolverError> {
     let (first, homotopy) = match solve_enclosed(model, z0.clone(), opts) {
         Ok(s) => (s, false),
         Err(plain) => match lambda_min {
@@ -130,9 +162,24 @@ pub fn solve_levels(
             None => return Err(plain),
         },
     };
+    // The prolonged start has its contact ends a node or two off: let up to two full steps
+    // move them (watchdog) instead of crawling there in short steps. On the figure-eight at
+    // L̄ = 1.36–1.45, N = 128–512, the finest level takes 3–7 iterations instead of 4–18;
+    // where the watchdog solve fails, plain backtracking from the same start.
+    let fine_opts = EnclosedOptions {
+        watchdog: opts.watchdog.max(2),
+        ..opts.clone()
+    };
     let refine = |prev: &EnclosedState| -> Result<EnclosedState, SolverError> {
         let (model, z0) = prev.refine()?;
-        match (solve_enclosed(&model, z0.clone(), opts), lambda_min) {
+        let first_try = solve_enclosed(&model, z0.clone(), &fine_opts).or_else(|e| {
+            if fine_opts.watchdog == opts.watchdog {
+                Err(e)
+            } else {
+                solve_enclosed(&model, z0.clone(), opts)
+            }
+        });
+        match (first_try, lambda_min) {
             (Ok(s), _) => Ok(s),
             // The prolonged state is close to the finer solution; where the active set
             // cycles, the pull homotopy settles it.
@@ -142,25 +189,125 @@ pub fn solve_levels(
             (Err(plain), _) => Err(plain),
         }
     };
-    let coarse = refine(&first)?;
-    let fine = refine(&coarse)?;
+    let mut ladder = vec![first];
+    for _ in 0..refinements.max(2) {
+        let next = refine(ladder.last().expect("a level"))?;
+        ladder.push(next);
+    }
+    let fine = ladder.pop().expect("N");
+    let coarse = ladder.pop().expect("N/2");
+    let quarter = ladder.pop().expect("N/4");
+    let eighth = ladder.pop();
     let energy = fine.energy();
-    let max_order = if fine.contact(1e-9)?.fraction >= 1.0 {
-        4.0
+    let contact = fine.contact(1e-9)?;
+    let attached = contact.fraction >= 1.0;
+    let point_like = !attached && point_like_contact(&fine, &contact);
+    let (energy_error, order) = if attached {
+        three_level_estimate(quarter.energy(), coarse.energy(), energy, 4.0)
     } else {
-        LIFTED_OFF_MAX_ORDER
+        let max_order = if point_like {
+            1.0
+        } else {
+            LIFTED_OFF_MAX_ORDER
+        };
+        match &eighth {
+            Some(e8) => four_level_estimate(
+                [e8.energy(), quarter.energy(), coarse.energy(), energy],
+                max_order,
+            ),
+            None => three_level_estimate(quarter.energy(), coarse.energy(), energy, max_order),
+        }
     };
-    let (energy_error, order) =
-        three_level_estimate(first.energy(), coarse.energy(), energy, max_order);
     Ok(BranchSolve {
         fine,
         coarse,
-        quarter: first,
+        quarter,
+        eighth,
         energy,
         energy_error,
         order,
+        point_contact: point_like,
         homotopy,
     })
+}
+
+impl BranchSolve {
+    /// The coarsest level kept (`N/8` where the cascade has it, else `N/4`): where callers
+    /// compute the stability index (a dense eigen-decomposition, `O(N³)`).
+    pub fn coarsest(&self) -> &EnclosedState {
+        self.eighth.as_ref().unwrap_or(&self.quarter)
+    }
+
+    /// How the error estimate was formed, for reports: the levels, the order and whether
+    /// the contact is point-like.
+    pub fn estimate_method(&self) -> String {
+        let levels = if self.eighth.is_some()
+            && self.fine.contact(1e-9).is_ok_and(|c| c.fraction < 1.0)
+        {
+            "N/8, N/4, N/2, N (the smaller of the two observed orders; the larger of the last two differences' estimates)"
+        } else {
+            "N/4, N/2, N"
+        };
+        format!(
+            "error from {levels}, order {:.2}{}",
+            self.order,
+            if self.point_contact {
+                " (point-like contact: order 1)"
+            } else {
+                ""
+            }
+        )
+    }
+}
+
+/// Contact runs at most this many cells long count as point-like ([`point_like_contact`]).
+pub const POINT_CONTACT_CELLS: usize = 4;
+
+/// Does a lifted-off state touch the wall only at points: every contact run spans at most
+/// [`POINT_CONTACT_CELLS`] cells of its mesh? There the energy converges irregularly and
+/// slowly (the figure-eight at `L̄ = 1.2` touches at two points: errors against `N = 1024`
+/// of 7.2e-7, 3.9e-7, 3.2e-9 relative at `N = 64, 128, 256`), so the estimate takes order 1.
+pub fn point_like_contact(state: &EnclosedState, contact: &super::solve::Contact) -> bool {
+    if contact.runs.is_empty() || contact.fraction >= 1.0 {
+        return false;
+    }
+    let n = state.model.cells() as f64;
+    contact.runs.iter().all(|&(a, b)| {
+        let span = (b - a).rem_euclid(1.0);
+        span * n <= POINT_CONTACT_CELLS as f64 + 1e-9
+    })
+}
+
+/// Error estimate of the finest of four energies at `N/8, N/4, N/2, N` cells, for sequences
+/// that converge irregularly (contact ends between nodes): the order is the smaller of the
+/// two observed, `p = min(log2(d0/d1), log2(d1/d2))` with `d_k` the successive differences,
+/// clamped to `[1, max_order]`, and the estimate is the larger of `d2/(2^p − 1)` and
+/// `d1/((2^p − 1) 2^p)`, so that one small difference (two levels whose errors happen to
+/// match) does not make it small. Exact on `E + C N^{−p}` for `p ≤ max_order`. Returns
+/// `(estimate, p)`.
+///
+/// On the figure-eight (`1.2 ≤ L̄ ≤ 1.5`, against `N = 1024`) it bounds the error at
+/// `N = 256` at every length but `L̄ = 1.3` (where it is 3.7× short: the error halves
+/// only from `N = 128` to 256 after falling 4.5× and 80× before), while the three-level
+/// rule was short at `L̄ = 1.3, 1.33, 1.36, 1.38`.
+pub fn four_level_estimate(e: [f64; 4], max_order: f64) -> (f64, f64) {
+    let d = [
+        (e[1] - e[0]).abs(),
+        (e[2] - e[1]).abs(),
+        (e[3] - e[2]).abs(),
+    ];
+    let observed = |a: f64, b: f64| {
+        if a > 0.0 && b > 0.0 {
+            (a / b).log2()
+        } else {
+            max_order
+        }
+    };
+    let order = observed(d[0], d[1])
+        .min(observed(d[1], d[2]))
+        .clamp(1.0, max_order);
+    let q = 2f64.powf(order);
+    ((d[2] / (q - 1.0)).max(d[1] / ((q - 1.0) * q)), order)
 }
 
 /// Error estimate of the finest of three energies at `N/4, N/2, N` cells:
@@ -206,15 +353,16 @@ pub fn enclosed_cells(accuracy: crate::Accuracy, eta: u32) -> usize {
 }
 
 /// Cells of a single enclosed `solve` for a branch with `eta` periods: `c (1 + η)` with
-/// `c = 16` (fast), `128` (default) or `256` (high). The Newton step is `O(N)`
-/// ([`super::lifted`]), so one state affords the mesh the `≤ 1e-8` target needs: the
-/// figure-eight at `L̄ = 1.4` is within ≈ 4e-9 relative at `N = 256`. (The enclosed diagram
+/// `c = 16` (fast), `192` (default) or `256` (high). The Newton step is `O(N)`
+/// ([`super::lifted`]), so one state affords the mesh the `≤ 1e-8` target needs with an
+/// estimate that bounds the error: the figure-eight at `L̄ = 1.4` is estimated at 3.5e-9
+/// relative at `N = 384` (1.25e-8 at 256, where the error against `N = 1024` is 3.9e-9). (The enclosed diagram
 /// keeps [`enclosed_cells`]: its natural-parameter tracer stalls on the point contacts of
 /// the figure-eight below `L̄ ≈ 1.3` at `N = 256`.)
 pub fn enclosed_solve_cells(accuracy: crate::Accuracy, eta: u32) -> usize {
     let c = match accuracy {
         crate::Accuracy::Fast => 16,
-        crate::Accuracy::Default => 128,
+        crate::Accuracy::Default => 192,
         crate::Accuracy::High => 256,
     };
     (c * (1 + eta as usize)).max(32)

@@ -44,9 +44,7 @@
 
 #![allow(clippy::needless_range_loop)] // index arithmetic over cells, nodes and unknowns
 
-use nalgebra::{
-    Const, DMatrix, DVector, Dyn, Matrix3, Matrix4, OMatrix, SMatrix, SVector, Vector3,
-};
+use nalgebra::{Const, DVector, Matrix3, Matrix4, SMatrix, SVector, Vector3};
 
 use super::model::{tr4, translation, vee_skew3, EnclosedModel};
 use crate::SolverError;
@@ -54,8 +52,13 @@ use crate::SolverError;
 const B: usize = 17;
 type Blk = SMatrix<f64, B, B>;
 type BVec = SVector<f64, B>;
-type BCol = OMatrix<f64, Const<B>, Dyn>;
-type BRow = OMatrix<f64, Dyn, Const<B>>;
+/// Border size, padded: `10 + gauges` unknowns (at most 15) with identity rows after them,
+/// so that every block of the factorisation has a fixed size.
+const G: usize = 15;
+type BCol = SMatrix<f64, B, G>;
+type BRow = SMatrix<f64, G, B>;
+type GMat = SMatrix<f64, G, G>;
+type GVec = SVector<f64, G>;
 type M4 = Matrix4<f64>;
 type M3 = Matrix3<f64>;
 type V3 = Vector3<f64>;
@@ -104,26 +107,34 @@ fn se3_inverse(m: &M4) -> M4 {
     out
 }
 
+/// Rows `K` (stationarity), columns `X` (`ξ_c`) of the sub-diagonal block.
+type Low = SMatrix<f64, 4, 6>;
+/// Six columns of a block (the `δm` columns).
+type B6 = SMatrix<f64, B, 6>;
+
 /// The lifted system before factorisation.
+///
+/// The off-diagonal blocks are mostly constant: block row `c` couples to block `c − 1`
+/// through `−ξ_c` in its forward rows and through the bracket terms `low[c]` in its
+/// stationarity rows (columns `ξ_c` only), and to block `c + 1` through `−δm_{c+1}` in its
+/// backward rows (`U_c = −E_M`, `c ≤ N − 2`). Only `low` is stored.
 struct Lifted {
     n: usize,
     diag: Vec<Blk>,
-    /// Rows of block `c`, columns of block `c − 1` (`c ≥ 1`; index `c`).
-    lower: Vec<Blk>,
-    /// Rows of block `c`, columns of block `c + 1` (`c ≤ N − 2`; index `c`).
-    upper: Vec<Blk>,
+    /// Rows `K` of block `c`, columns `X` of block `c − 1` (`c ≥ 1`; index `c`).
+    low: Vec<Low>,
     /// Block rows, border columns.
     bcol: Vec<BCol>,
     /// Border rows, block columns.
     brow: Vec<BRow>,
-    corner: DMatrix<f64>,
+    corner: GMat,
 }
 
 /// Right-hand side or solution of the lifted system.
 #[derive(Clone)]
 struct LVec {
     blocks: Vec<BVec>,
-    border: DVector<f64>,
+    border: GVec,
 }
 
 impl LVec {
@@ -134,35 +145,62 @@ impl LVec {
 }
 
 impl Lifted {
+    /// `v −= L_c x` for the sub-diagonal block of row `c` (`x` the block `c − 1`).
+    fn sub_lower(&self, c: usize, x: &BVec, v: &mut BVec) {
+        let xi = x.fixed_rows::<6>(X0);
+        let k = self.low[c] * xi;
+        for i in 0..4 {
+            v[K0 + i] -= k[i];
+        }
+        for i in 0..6 {
+            v[X0 + i] += xi[i];
+        }
+    }
+
     fn apply(&self, x: &LVec) -> LVec {
         let n = self.n;
         let mut blocks = Vec::with_capacity(n);
-        let mut border = &self.corner * &x.border;
+        let mut border = self.corner * x.border;
         for c in 0..n {
-            let mut y = self.diag[c] * x.blocks[c] + &self.bcol[c] * &x.border;
+            let mut y = self.diag[c] * x.blocks[c] + self.bcol[c] * x.border;
             if c >= 1 {
-                y += self.lower[c] * x.blocks[c - 1];
+                let mut t = BVec::zeros();
+                self.sub_lower(c, &x.blocks[c - 1], &mut t);
+                y -= t;
             }
             if c + 1 < n {
-                y += self.upper[c] * x.blocks[c + 1];
+                // U_c = −E_M.
+                for k in 0..6 {
+                    y[M0 + k] -= x.blocks[c + 1][M0 + k];
+                }
             }
             blocks.push(y);
-            border += &self.brow[c] * x.blocks[c];
+            border += self.brow[c] * x.blocks[c];
         }
         LVec { blocks, border }
+    }
+
+    /// Largest entry of the tridiagonal blocks and the corner (the constant off-diagonal
+    /// entries are ±1).
+    fn amax(&self) -> f64 {
+        self.diag
+            .iter()
+            .map(|b| b.amax())
+            .chain(self.low.iter().map(|b| b.amax()))
+            .fold(self.corner.amax().max(1.0), f64::max)
     }
 }
 
 /// Block LU factors of [`Lifted`].
 struct Factor {
     lu: Vec<nalgebra::LU<f64, Const<B>, Const<B>>>,
-    /// `S_c⁻¹ U_c`.
-    yu: Vec<Blk>,
+    /// `S_c⁻¹ U_c` (its six nonzero columns, the `δm` columns).
+    yu: Vec<B6>,
     /// `S_c⁻¹ C'_c` (border columns after elimination).
     yc: Vec<BCol>,
     /// Border rows after elimination of the earlier blocks.
     rb: Vec<BRow>,
-    corner: nalgebra::LU<f64, Dyn, Dyn>,
+    corner: nalgebra::LU<f64, Const<G>, Const<G>>,
 }
 
 fn pivot_ok(lu: &nalgebra::LU<f64, Const<B>, Const<B>>) -> bool {
@@ -184,30 +222,64 @@ impl Factor {
         let mut yu = Vec::with_capacity(n);
         let mut yc = Vec::with_capacity(n);
         let mut rb = Vec::with_capacity(n);
-        let mut corner = sys.corner.clone();
+        let mut corner = sys.corner;
         let mut s = sys.diag[0];
-        let mut cb = sys.bcol[0].clone();
-        let mut r = sys.brow[0].clone();
+        let mut cb = sys.bcol[0];
+        let mut r = sys.brow[0];
+        let mut em = B6::zeros();
+        for k in 0..6 {
+            em[(M0 + k, k)] = -1.0;
+        }
         for c in 0..n {
             let f = s.lu();
             if !pivot_ok(&f) {
                 return Err(singular());
             }
-            let u: Blk = if c + 1 < n {
-                f.solve(&sys.upper[c]).ok_or(singular())?
+            // S⁻¹U with U = −E_M: six columns.
+            let u: B6 = if c + 1 < n {
+                f.solve(&em).ok_or(singular())?
             } else {
-                Blk::zeros()
+                B6::zeros()
             };
             let y: BCol = f.solve(&cb).ok_or(singular())?;
-            corner -= &r * &y;
+            corner -= r * y;
             if c + 1 < n {
-                let l = &sys.lower[c + 1];
-                s = sys.diag[c + 1] - l * u;
-                cb = &sys.bcol[c + 1] - l * &y;
-                let rn = &sys.brow[c + 1] - &r * u;
+                let low = &sys.low[c + 1];
+                // S_{c+1} = D_{c+1} − L_{c+1} S⁻¹U: only the δm columns change.
+                s = sys.diag[c + 1];
+                let ux = u.fixed_rows::<6>(X0);
+                let lk = low * ux;
+                for j in 0..6 {
+                    for i in 0..4 {
+                        s[(K0 + i, M0 + j)] -= lk[(i, j)];
+                    }
+                    for i in 0..6 {
+                        s[(X0 + i, M0 + j)] += ux[(i, j)];
+                    }
+                }
+                // C'_{c+1} = C_{c+1} − L_{c+1} y.
+                cb = sys.bcol[c + 1];
+                let yx = y.fixed_rows::<6>(X0);
+                let ly = low * yx;
+                for j in 0..cb.ncols() {
+                    for i in 0..4 {
+                        cb[(K0 + i, j)] -= ly[(i, j)];
+                    }
+                    for i in 0..6 {
+                        cb[(X0 + i, j)] += yx[(i, j)];
+                    }
+                }
+                // R_{c+1} = B_{c+1} − R_c S⁻¹U: only the δm columns change.
+                let mut rn = sys.brow[c + 1];
+                let ru = r * u;
+                for j in 0..6 {
+                    for i in 0..rn.nrows() {
+                        rn[(i, M0 + j)] -= ru[(i, j)];
+                    }
+                }
                 rb.push(std::mem::replace(&mut r, rn));
             } else {
-                rb.push(r.clone());
+                rb.push(r);
             }
             lu.push(f);
             yu.push(u);
@@ -229,22 +301,23 @@ impl Factor {
     fn solve(&self, sys: &Lifted, rhs: &LVec) -> Option<LVec> {
         let n = sys.n;
         let mut y = Vec::with_capacity(n);
-        let mut g = rhs.border.clone();
+        let mut g = rhs.border;
         let mut r = rhs.blocks[0];
         for c in 0..n {
             let yc = self.lu[c].solve(&r)?;
-            g -= &self.rb[c] * yc;
+            g -= self.rb[c] * yc;
             if c + 1 < n {
-                r = rhs.blocks[c + 1] - sys.lower[c + 1] * yc;
+                r = rhs.blocks[c + 1];
+                sys.sub_lower(c + 1, &yc, &mut r);
             }
             y.push(yc);
         }
         let xg = self.corner.solve(&g)?;
         let mut x = vec![BVec::zeros(); n];
         for c in (0..n).rev() {
-            let mut v = y[c] - &self.yc[c] * &xg;
+            let mut v = y[c] - self.yc[c] * xg;
             if c + 1 < n {
-                v -= self.yu[c] * x[c + 1];
+                v -= self.yu[c] * x[c + 1].fixed_rows::<6>(M0);
             }
             x[c] = v;
         }
@@ -261,8 +334,11 @@ impl EnclosedModel {
     /// [`SolverError::SingularJacobian`] when the block factorisation cannot be trusted
     /// (then the dense Jacobian is the fallback).
     pub fn newton_step(&self, z: &[f64]) -> Result<(DVector<f64>, DVector<f64>), SolverError> {
-        let f = self.residual(z)?;
-        let (sys, rhs) = self.lifted_system(z, &f);
+        // One second-order chain and one adjoint sweep for the residual and the system.
+        let ch = self.checked_chain(z)?;
+        let adj = self.adjoints(&ch, z);
+        let f = self.residual_with(&ch, &adj, z);
+        let (sys, rhs) = self.lifted_system(z, &ch, &adj, &f);
         let fac = Factor::new(&sys)?;
         let singular = || SolverError::SingularJacobian { iteration: 0 };
         let mut x = fac.solve(&sys, &rhs).ok_or(singular())?;
@@ -275,25 +351,19 @@ impl EnclosedModel {
                 .zip(&ax.blocks)
                 .map(|(a, b)| a - b)
                 .collect(),
-            border: &rhs.border - &ax.border,
+            border: rhs.border - ax.border,
         };
         let dx = fac.solve(&sys, &res).ok_or(singular())?;
         for (a, b) in x.blocks.iter_mut().zip(&dx.blocks) {
             *a += b;
         }
-        x.border += &dx.border;
+        x.border += dx.border;
         let ax = sys.apply(&x);
-        let mut err = (&ax.border - &rhs.border).norm_squared();
+        let mut err = (ax.border - rhs.border).norm_squared();
         for (a, b) in ax.blocks.iter().zip(&rhs.blocks) {
             err += (a - b).norm_squared();
         }
-        let big = sys
-            .diag
-            .iter()
-            .chain(&sys.lower)
-            .chain(&sys.upper)
-            .map(|b| b.amax())
-            .fold(sys.corner.amax(), f64::max);
+        let big = sys.amax();
         let scale = 1e-9 * rhs.norm() + 1e-13 * big * x.norm();
         let ok = err.sqrt() <= scale.max(1e-300);
         if !ok {
@@ -328,16 +398,21 @@ impl EnclosedModel {
     }
 
     /// Assemble the lifted system and its right-hand side `−F` (see the module docs).
-    fn lifted_system(&self, z: &[f64], f: &DVector<f64>) -> (Lifted, LVec) {
+    fn lifted_system(
+        &self,
+        z: &[f64],
+        ch: &super::model::Chain,
+        adj: &[M4],
+        f: &DVector<f64>,
+    ) -> (Lifted, LVec) {
         let n = self.cells();
         let np = self.n_primal();
         let ng = self.n_gauge();
         let g = 10 + ng;
+        debug_assert!(g <= G, "border of {g} > {G}");
         let lo = self.lambda_offset();
         let (gr0, gmu, gnu, gl0) = (0usize, 3usize, 9usize, 9 + ng);
         let basis = se3_basis();
-        let ch = self.chain(z);
-        let adj = self.adjoints(&ch, z);
         let r0 = self.start_point(z);
         let p: Vec<V3> = (0..=n).map(|j| translation(&ch.prefix[j])).collect();
         let r: Vec<V3> = p.iter().map(|pj| r0 + pj).collect();
@@ -356,28 +431,27 @@ impl EnclosedModel {
         let mut sys = Lifted {
             n,
             diag: vec![Blk::zeros(); n],
-            lower: vec![Blk::zeros(); n],
-            upper: vec![Blk::zeros(); n],
-            bcol: vec![BCol::zeros(g); n],
-            brow: vec![BRow::zeros(g); n],
-            corner: DMatrix::zeros(g, g),
+            low: vec![Low::zeros(); n],
+            bcol: vec![BCol::zeros(); n],
+            brow: vec![BRow::zeros(); n],
+            corner: GMat::zeros(),
         };
         let mut rhs = LVec {
             blocks: vec![BVec::zeros(); n],
-            border: DVector::zeros(g),
+            border: GVec::zeros(),
         };
 
         for c in 0..n {
-            let jet = &ch.jets[c];
+            let (jet_e, jet_d, jet_dd) = (&ch.e[c], &ch.d[c], &ch.dd[c]);
             let pc = &ch.prefix[c];
             let pinv = se3_inverse(pc);
-            let einv = se3_inverse(&jet.e);
+            let einv = se3_inverse(jet_e);
             let mc = ch.prefix[c + 1] * adj[c];
             let h = 0.5 * self.cell_length(c);
             // b_ci and the spatial B_ci.
-            let bm: Vec<M4> = (0..4).map(|i| pc * jet.d[i] * einv * pinv).collect();
+            let bm: Vec<M4> = (0..4).map(|i| pc * jet_d[i] * einv * pinv).collect();
             let b: Vec<[f64; 6]> = bm.iter().map(vee6).collect();
-            let pd: Vec<M4> = (0..4).map(|i| pc * jet.d[i] * einv).collect();
+            let pd: Vec<M4> = (0..4).map(|i| pc * jet_d[i] * einv).collect();
             let d = &mut sys.diag[c];
             // Stationarity rows.
             for i in 0..4 {
@@ -386,7 +460,7 @@ impl EnclosedModel {
                 d[(K0 + i, K0 + i)] += h * self.d_gauss_at(2 * c + i / 2);
                 for i2 in 0..4 {
                     d[(K0 + i, K0 + i2)] +=
-                        tr4(&(pc * jet.dd[i][i2]), &adj[c]) - tr4(&(pd[i] * jet.d[i2]), &adj[c]);
+                        tr4(&(pc * jet_dd[i][i2]), &adj[c]) - tr4(&(pd[i] * jet_d[i2]), &adj[c]);
                 }
                 for k in 0..6 {
                     d[(K0 + i, M0 + k)] = b[i][k];
@@ -394,7 +468,7 @@ impl EnclosedModel {
                 if c >= 1 {
                     for k in 0..6 {
                         let br = basis[k] * bm[i] - bm[i] * basis[k];
-                        sys.lower[c][(K0 + i, X0 + k)] = tr4(&br, &mc);
+                        sys.low[c][(K0 + i, k)] = tr4(&br, &mc);
                     }
                 }
                 for (kg, (row, idx)) in gauges.iter().enumerate() {
@@ -408,9 +482,6 @@ impl EnclosedModel {
                 d[(X0 + k, X0 + k)] = 1.0;
                 for i in 0..4 {
                     d[(X0 + k, K0 + i)] = -b[i][k];
-                }
-                if c >= 1 {
-                    sys.lower[c][(X0 + k, X0 + k)] = -1.0;
                 }
             }
             // Backward recursion.
@@ -440,7 +511,6 @@ impl EnclosedModel {
                     .fixed_view_mut::<3, 3>(3, 0)
                     .copy_from(&M3::identity());
                 for k in 0..6 {
-                    sys.upper[c][(M0 + k, M0 + k)] = -1.0;
                     d[(M0 + k, L0)] = -2.0 * u[k];
                     for l in 0..6 {
                         d[(M0 + k, X0 + l)] = -2.0 * lj * du_xi[(k, l)];
@@ -520,6 +590,10 @@ impl EnclosedModel {
             }
         }
         rhs.border[gl0] = -f[lo];
+        // Padding of the border: identity rows, zero right-hand side.
+        for k in g..G {
+            sys.corner[(k, k)] = 1.0;
+        }
         if active[0] {
             for l in 0..3 {
                 sys.corner[(gl0, gr0 + l)] = -2.0 * sigma * r0[l];

@@ -43,7 +43,7 @@ use std::f64::consts::PI;
 
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix4, Vector3};
 
-use super::jet::{cell_exp, cell_jet, CellJet};
+use super::jet::{cell_exp, cell_grad, cell_jet};
 use crate::mesh::MeshMap;
 use crate::model::GAUSS_OFFSETS;
 use crate::periodic::TrigInterpolant;
@@ -78,9 +78,14 @@ pub struct EnclosedModel {
     pull: f64,
 }
 
-/// The chain of cell propagators with their jets and prefix products.
+/// The chain of cell propagators with their derivatives and prefix products.
 pub(super) struct Chain {
-    pub(super) jets: Vec<CellJet>,
+    /// Cell propagators `E_c`.
+    pub(super) e: Vec<M4>,
+    /// Their first derivatives in the four cell unknowns.
+    pub(super) d: Vec<[M4; 4]>,
+    /// Their second derivatives (empty for a first-order chain, [`EnclosedModel::chain_first`]).
+    pub(super) dd: Vec<[[M4; 4]; 4]>,
     /// `P_c`, `c = 0..=N`.
     pub(super) prefix: Vec<M4>,
 }
@@ -348,6 +353,23 @@ impl EnclosedModel {
             .collect())
     }
 
+    /// The contact set of the semismooth Newton step at `z`: node `j` takes the wall row
+    /// where `σ g_j ≤ λ_j + π_j` (the branch of the min-function that is active).
+    pub fn wall_active(&self, z: &[f64]) -> Result<Vec<bool>, SolverError> {
+        self.check(z)?;
+        let lo = self.lambda_offset();
+        let sigma = self.wall_scale();
+        Ok(self
+            .positions(z)?
+            .iter()
+            .enumerate()
+            .map(|(j, r)| {
+                sigma * (self.radius * self.radius - r.norm_squared())
+                    <= z[lo + j] + self.pull_impulse(j)
+            })
+            .collect())
+    }
+
     /// Closure residual `(vee(skew X_N), p_N)`.
     pub fn closure(&self, z: &[f64]) -> Result<[f64; 6], SolverError> {
         let p = self.transforms(z)?;
@@ -443,17 +465,44 @@ impl EnclosedModel {
 
     pub(super) fn chain(&self, z: &[f64]) -> Chain {
         let n = self.cells;
-        let mut jets = Vec::with_capacity(n);
-        let mut prefix = Vec::with_capacity(n + 1);
+        let mut ch = Chain {
+            e: Vec::with_capacity(n),
+            d: Vec::with_capacity(n),
+            dd: Vec::with_capacity(n),
+            prefix: Vec::with_capacity(n + 1),
+        };
         let mut acc = M4::identity();
-        prefix.push(acc);
+        ch.prefix.push(acc);
         for c in 0..n {
             let j = cell_jet(self.cell_length(c), Self::cell_x(z, c));
             acc *= j.e;
-            prefix.push(acc);
-            jets.push(j);
+            ch.prefix.push(acc);
+            ch.e.push(j.e);
+            ch.d.push(j.d);
+            ch.dd.push(j.dd);
         }
-        Chain { jets, prefix }
+        ch
+    }
+
+    /// The chain with first derivatives only (all the residual needs).
+    pub(super) fn chain_first(&self, z: &[f64]) -> Chain {
+        let n = self.cells;
+        let mut ch = Chain {
+            e: Vec::with_capacity(n),
+            d: Vec::with_capacity(n),
+            dd: Vec::new(),
+            prefix: Vec::with_capacity(n + 1),
+        };
+        let mut acc = M4::identity();
+        ch.prefix.push(acc);
+        for c in 0..n {
+            let (e, d) = cell_grad(self.cell_length(c), Self::cell_x(z, c));
+            acc *= e;
+            ch.prefix.push(acc);
+            ch.e.push(e);
+            ch.d.push(d);
+        }
+        ch
     }
 
     /// `K` with `μ·C = tr(P_N K)`.
@@ -473,7 +522,7 @@ impl EnclosedModel {
     /// KKT residual (see the module docs).
     pub fn residual(&self, z: &[f64]) -> Result<DVector<f64>, SolverError> {
         self.check(z)?;
-        let ch = self.chain(z);
+        let ch = self.chain_first(z);
         Ok(self.residual_from(&ch, z))
     }
 
@@ -488,7 +537,7 @@ impl EnclosedModel {
             let j = c + 1;
             let r = r0 + translation(&ch.prefix[j]);
             let lam = z[lo + j];
-            let mut t = ch.jets[j].e * a[j];
+            let mut t = ch.e[j] * a[j];
             for k in 0..3 {
                 t[(3, k)] += 2.0 * lam * r[k];
             }
@@ -498,17 +547,28 @@ impl EnclosedModel {
     }
 
     pub(super) fn residual_from(&self, ch: &Chain, z: &[f64]) -> DVector<f64> {
+        let adj = self.adjoints(ch, z);
+        self.residual_with(ch, &adj, z)
+    }
+
+    /// The second-order chain of `z` after checking `z`.
+    pub(super) fn checked_chain(&self, z: &[f64]) -> Result<Chain, SolverError> {
+        self.check(z)?;
+        Ok(self.chain(z))
+    }
+
+    /// The residual from a chain and its adjoints ([`Self::adjoints`]).
+    pub(super) fn residual_with(&self, ch: &Chain, adj: &[M4], z: &[f64]) -> DVector<f64> {
         let n = self.cells;
         let np = self.n_primal();
         let lo = self.lambda_offset();
         let mut f = DVector::zeros(self.dim());
-        let adj = self.adjoints(ch, z);
         for c in 0..n {
             let w = 0.5 * self.cell_length(c);
             for i in 0..4 {
                 let a = 4 * c + i;
                 let g = 2 * c + i / 2;
-                f[a] = w * self.d_gauss[g] * z[a] + tr4(&(ch.prefix[c] * ch.jets[c].d[i]), &adj[c]);
+                f[a] = w * self.d_gauss[g] * z[a] + tr4(&(ch.prefix[c] * ch.d[c][i]), &adj[c]);
             }
         }
         let r0 = self.start_point(z);
@@ -569,7 +629,7 @@ impl EnclosedModel {
         for c in 0..n {
             for i in 0..4 {
                 let a = 4 * c + i;
-                let mut m = ch.prefix[c] * ch.jets[c].d[i];
+                let mut m = ch.prefix[c] * ch.d[c][i];
                 for j in c + 1..=n {
                     let t = translation(&m);
                     for k in 0..3 {
@@ -581,7 +641,7 @@ impl EnclosedModel {
                             jrot[(k, a)] = v[k];
                         }
                     } else {
-                        m *= ch.jets[j].e;
+                        m *= ch.e[j];
                     }
                 }
             }
@@ -593,9 +653,9 @@ impl EnclosedModel {
             for i in 0..4 {
                 let a = 4 * c + i;
                 jac[(a, a)] += w * self.d_gauss[2 * c + i / 2];
-                let pd = ch.prefix[c] * ch.jets[c].d[i];
+                let pd = ch.prefix[c] * ch.d[c][i];
                 for i2 in i..4 {
-                    let v = tr4(&(ch.prefix[c] * ch.jets[c].dd[i][i2]), &adj[c]);
+                    let v = tr4(&(ch.prefix[c] * ch.dd[c][i][i2]), &adj[c]);
                     jac[(a, 4 * c + i2)] += v;
                     if i2 != i {
                         jac[(4 * c + i2, a)] += v;
@@ -604,13 +664,13 @@ impl EnclosedModel {
                 let mut rm = pd;
                 for cp in c + 1..n {
                     for i2 in 0..4 {
-                        let g = ch.jets[cp].d[i2] * adj[cp];
+                        let g = ch.d[cp][i2] * adj[cp];
                         let v = tr4(&rm, &g);
                         let b = 4 * cp + i2;
                         jac[(a, b)] += v;
                         jac[(b, a)] += v;
                     }
-                    rm *= ch.jets[cp].e;
+                    rm *= ch.e[cp];
                 }
             }
         }

@@ -22,7 +22,7 @@
 
 use std::f64::consts::PI;
 
-use nalgebra::{DMatrix, DVector, SymmetricEigen, Vector3};
+use nalgebra::{DMatrix, DVector, Vector3};
 
 use super::model::{phase_slope, EnclosedModel, Gauge};
 use crate::stiffness::Stiffness;
@@ -37,7 +37,20 @@ pub struct EnclosedOptions {
     pub tolerance: f64,
     /// Step halvings allowed per iteration.
     pub max_backtracks: usize,
+    /// Full steps that may raise the residual (watchdog): a full Newton step that changes
+    /// the contact set is taken even when the residual grows, at most this many times per
+    /// solve and one at a time; if the residual has not dropped below the value before such
+    /// a step within [`WATCHDOG_ITERATIONS`] iterations, the solver returns there, backtracks
+    /// and takes no more such steps. `0`
+    /// (default): plain backtracking. For starts whose contact ends are off by a node or
+    /// two (a coarse solution prolonged to a finer mesh), where the monotone line search
+    /// crawls through the active-set changes in short steps.
+    pub watchdog: usize,
 }
+
+/// Iterations a watchdog step ([`EnclosedOptions::watchdog`]) has to bring the residual
+/// below its value before the step.
+pub const WATCHDOG_ITERATIONS: usize = 5;
 
 impl Default for EnclosedOptions {
     fn default() -> Self {
@@ -45,6 +58,7 @@ impl Default for EnclosedOptions {
             max_iterations: 80,
             tolerance: 1e-10,
             max_backtracks: 40,
+            watchdog: 0,
         }
     }
 }
@@ -119,21 +133,49 @@ pub fn solve_enclosed(
 ) -> Result<EnclosedState, SolverError> {
     let mut z = z0;
     let mut norm = f64::INFINITY;
+    // Watchdog: (iterate, residual norm and Newton step before the nonmonotone step, the
+    // iteration by which the residual must have dropped below that norm).
+    let mut watch: Option<(Vec<f64>, f64, DVector<f64>, usize)> = None;
+    let mut watch_left = opts.watchdog;
+    let done = |z: Vec<f64>, iterations: usize, residual: f64| EnclosedState {
+        model: model.clone(),
+        z,
+        iterations,
+        residual,
+    };
+    // After a failed watchdog step: the Newton step at the restored iterate.
+    let mut resume: Option<DVector<f64>> = None;
     for it in 0..=opts.max_iterations {
-        let (residual, step) = match model.newton_step(&z) {
-            Ok((f, dz)) => (f, Ok(dz)),
-            Err(SolverError::SingularJacobian { .. }) => {
-                // The block factorisation cannot be trusted here: the dense Jacobian.
-                let ev = model.evaluate(&z)?;
-                let dz = ev.jacobian.lu().solve(&(-&ev.residual));
-                (
-                    ev.residual,
-                    dz.ok_or(SolverError::SingularJacobian { iteration: it }),
-                )
-            }
-            Err(e) => return Err(e),
+        let (residual, step) = match resume.take() {
+            Some(dz) => (model.residual(&z)?, Err(dz)),
+            None => match model.newton_step(&z) {
+                Ok((f, dz)) => (f, Ok(Ok(dz))),
+                Err(SolverError::SingularJacobian { .. }) => {
+                    // The block factorisation cannot be trusted here: the dense Jacobian.
+                    let ev = model.evaluate(&z)?;
+                    let dz = ev.jacobian.lu().solve(&(-&ev.residual));
+                    (
+                        ev.residual,
+                        Ok(dz.ok_or(SolverError::SingularJacobian { iteration: it })),
+                    )
+                }
+                Err(e) => return Err(e),
+            },
         };
         norm = model.residual_norm(&residual);
+        // The watchdog step paid off, or it is time to go back to where it was taken.
+        let mut step = step;
+        if let Some((_, wnorm, _, deadline)) = &watch {
+            if norm.is_finite() && norm <= (1.0 - 1e-4) * wnorm {
+                watch = None;
+            } else if it >= *deadline || !norm.is_finite() {
+                let (wz, wnorm, wdz, _) = watch.take().expect("watchdog state");
+                z = wz;
+                norm = wnorm;
+                step = Err(wdz);
+                watch_left = 0;
+            }
+        }
         if !norm.is_finite() {
             break;
         }
@@ -141,20 +183,18 @@ pub fn solve_enclosed(
         // hair away in L̄) is polished to round-off, so that energies of nearby solves
         // differ smoothly (the secant of the enclosed exchanges needs that).
         if norm < opts.tolerance && it > 0 {
-            return Ok(EnclosedState {
-                model: model.clone(),
-                z,
-                iterations: it,
-                residual: norm,
-            });
+            return Ok(done(z, it, norm));
         }
         if it == opts.max_iterations {
             break;
         }
-        let dz = step?;
-        let mut t = 1.0;
+        let (dz, mut t) = match step {
+            Ok(dz) => (dz?, 1.0),
+            // The full step from this (restored) iterate failed before: from half of it.
+            Err(dz) => (dz, 0.5),
+        };
         let mut accepted = false;
-        for _ in 0..opts.max_backtracks {
+        for k in 0..opts.max_backtracks {
             let zt: Vec<f64> = z.iter().zip(dz.iter()).map(|(a, b)| a + t * b).collect();
             if let Ok(f) = model.residual(&zt) {
                 let nt = model.residual_norm(&f);
@@ -164,27 +204,39 @@ pub fn solve_enclosed(
                     // Round-off floor: a step that gains less than 10% on a residual
                     // already within 100× the tolerance (fine meshes, N ≥ 256).
                     if nt < 1e2 * opts.tolerance && nt > 0.9 * norm && model.cells() >= 256 {
-                        return Ok(EnclosedState {
-                            model: model.clone(),
-                            z,
-                            iterations: it + 1,
-                            residual: nt,
-                        });
+                        return Ok(done(z, it + 1, nt));
                     }
+                    break;
+                }
+                // A full step that changes the contact set is taken anyway (watchdog).
+                if k == 0
+                    && t == 1.0
+                    && watch_left > 0
+                    && watch.is_none()
+                    && nt.is_finite()
+                    && model.wall_active(&zt)? != model.wall_active(&z)?
+                {
+                    let prev = std::mem::replace(&mut z, zt);
+                    watch = Some((prev, norm, dz.clone(), it + WATCHDOG_ITERATIONS));
+                    watch_left -= 1;
+                    accepted = true;
                     break;
                 }
             }
             t *= 0.5;
         }
         if !accepted {
+            if let Some((wz, wnorm, wdz, _)) = watch.take() {
+                // The watchdog step led nowhere: back to it, and backtrack there.
+                z = wz;
+                norm = wnorm;
+                resume = Some(wdz);
+                watch_left = 0;
+                continue;
+            }
             // Round-off floor: accept a state that is already converged to near precision.
             if norm < 1e3 * opts.tolerance {
-                return Ok(EnclosedState {
-                    model: model.clone(),
-                    z,
-                    iterations: it,
-                    residual: norm,
-                });
+                return Ok(done(z, it, norm));
             }
             break;
         }
@@ -552,28 +604,29 @@ impl EnclosedState {
         }
         // Constraint gradients are the (negated) columns ∂F_x/∂y.
         let a = DMatrix::from_fn(rows.len(), np, |r, i| ev.jacobian[(i, rows[r])] * s[i]);
-        let svd = a.clone().svd(false, true);
+        let svd = a.svd(false, true);
         let vt = svd.v_t.ok_or(SolverError::InvalidInput("svd".into()))?;
         let smax = svd.singular_values.iter().fold(0.0f64, |x, &y| x.max(y));
-        let rank = svd
-            .singular_values
-            .iter()
-            .filter(|&&v| v > 1e-10 * smax)
-            .count();
-        let mut p = DMatrix::<f64>::identity(np, np);
-        for k in 0..svd.singular_values.len() {
-            if svd.singular_values[k] > 1e-10 * smax {
-                let v = vt.row(k).transpose();
-                p -= &v * v.transpose();
-            }
-        }
+        // Orthonormal basis V of the constraint gradients' span (rank-revealing SVD); the
+        // projector onto the tangent space is P = I − V Vᵀ.
+        let keep: Vec<usize> = (0..svd.singular_values.len())
+            .filter(|&k| svd.singular_values[k] > 1e-10 * smax)
+            .collect();
+        let v = DMatrix::from_fn(np, keep.len(), |i, k| vt[(keep[k], i)]);
         let wmax = w.amax();
         let beta = 10.0 * wmax + 1.0;
-        let pw = &p * &w * &p + (DMatrix::<f64>::identity(np, np) - &p) * beta;
-        let eig = SymmetricEigen::new(pw);
-        let mut vals: Vec<f64> = eig.eigenvalues.iter().copied().collect();
+        // P W P + β (I − P) = W − V(WV)ᵀ − (WV)Vᵀ + V(VᵀWV + β)Vᵀ (W symmetric), in
+        // O(N² rank) instead of two dense N³ products; β moves the complement of the
+        // tangent space above every tangent eigenvalue.
+        let wv = &w * &v;
+        let mut t = v.transpose() * &wv;
+        for k in 0..keep.len() {
+            t[(k, k)] += beta;
+        }
+        let pw = &w - &v * wv.transpose() - &wv * v.transpose() + &v * (t * v.transpose());
+        // Eigenvalues only (the index and the lowest values are all that is reported).
+        let mut vals: Vec<f64> = pw.symmetric_eigenvalues().iter().copied().collect();
         vals.sort_by(f64::total_cmp);
-        let _ = rank;
         let scale = vals.iter().fold(0.0f64, |x, y| x.max(y.abs())).max(1e-300);
         let index = vals.iter().filter(|&&v| v < -1e-9 * scale).count();
         vals.truncate(8);
