@@ -310,3 +310,37 @@ fn solve_draw_and_from() {
         "enclosed-from-bad",
     );
 }
+
+/// The lifted-off figure-eight touches the wall along two arcs, images of each other under
+/// its two-fold symmetry: `summary.json` counts two contact intervals of equal length at
+/// lengths where the contact ends carry concentrated forces (at L̄ = 1.3 the touching pairs
+/// just past each arc were once counted as six intervals).
+#[test]
+fn figure_eight_touches_along_two_equal_arcs() {
+    for lbar in ["1.3", "1.45"] {
+        let dir = out(&format!("enclosed-arcs-{lbar}"));
+        let o = rodloop(&[
+            "solve",
+            "--scene",
+            &scene(),
+            "--lbar",
+            lbar,
+            "--branch",
+            "2",
+            "--out",
+            dir.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap())
+                .unwrap();
+        assert_eq!(s["contact_intervals"].as_u64(), Some(2), "{lbar}: {s}");
+        let runs = s["contact_runs"].as_array().unwrap();
+        let len = |r: &serde_json::Value| {
+            let (a, b) = (r[0].as_f64().unwrap(), r[1].as_f64().unwrap());
+            (b - a).rem_euclid(1.0)
+        };
+        let (l0, l1) = (len(&runs[0]), len(&runs[1]));
+        assert!(l0 > 0.0 && (l0 - l1).abs() < 1e-9, "{lbar}: {runs:?}");
+    }
+}
