@@ -1,8 +1,8 @@
 //! `rodloop`: equilibria, energies, forces and branch diagrams of elastic rod loops packed in
 //! a sphere (Wang, Li & Yi, J. Mech. Phys. Solids, 2024).
 //!
-//! `main` parses arguments, runs one subcommand, prints the whole error chain on failure and
-//! returns a non-zero exit code; it never panics on bad input.
+//! `main` parses arguments, runs one subcommand, prints the whole error chain on one line on
+//! failure and returns a non-zero exit code; it never panics on bad input.
 
 /// Print a line to stdout, ignoring write errors (a closed pipe, as in `rodloop … | head`,
 /// must not turn into a panic).
@@ -104,11 +104,22 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("error: {err}");
-            for cause in err.chain().skip(1) {
-                eprintln!("  caused by: {cause}");
-            }
+            eprintln!("error: {}", one_line(&err));
             ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes on one line, `context: cause: cause`; a cause whose text the line
+/// already holds (a library error that quotes its source) is not repeated.
+fn one_line(err: &anyhow::Error) -> String {
+    let mut line = err.to_string();
+    for cause in err.chain().skip(1) {
+        let cause = cause.to_string();
+        if !line.contains(&cause) {
+            line.push_str(": ");
+            line.push_str(&cause);
+        }
+    }
+    line
 }

@@ -514,8 +514,8 @@ fn pid_alive(pid: u32) -> bool {
 /// One run's output set: the directory is locked (a lock file holding the pid), files are
 /// written into a staging directory inside it and moved into place by [`OutputRun::commit`],
 /// `summary.json` last and with the run id. Dropping a run that was not committed removes the
-/// staging directory and the lock, so that an error leaves no temporary file and no partial set
-/// that looks complete.
+/// staging directory and the lock (and the directory itself if the run created it and it is
+/// empty), so that an error leaves no temporary file and no partial set that looks complete.
 pub struct OutputRun {
     dir: PathBuf,
     stage: PathBuf,
@@ -524,12 +524,15 @@ pub struct OutputRun {
     written: std::cell::RefCell<Vec<String>>,
     dirs: std::cell::RefCell<Vec<String>>,
     committed: bool,
+    /// Whether this run created `dir` (an uncommitted run then removes it if it is empty).
+    created: bool,
 }
 
 impl OutputRun {
     /// Create and lock `dir`, clean what dead runs left behind (temporary files, staging
     /// directories, stale locks), and open a staging directory.
     pub fn begin(dir: &Path) -> Result<Self> {
+        let created = !dir.exists();
         ensure_dir(dir)?;
         let lock = dir.join(LOCK_NAME);
         let me = std::process::id();
@@ -587,6 +590,7 @@ impl OutputRun {
             written: std::cell::RefCell::new(Vec::new()),
             dirs: std::cell::RefCell::new(Vec::new()),
             committed: false,
+            created,
         };
         run.clean_leftovers();
         fs::create_dir(&run.stage)
@@ -710,7 +714,11 @@ impl Drop for OutputRun {
         if ours {
             let _ = fs::remove_file(&self.lock);
         }
-        let _ = self.committed;
+        // A failed run into a directory it created leaves no empty directory behind
+        // (`remove_dir` keeps a directory that holds anything, e.g. `branches/` for --resume).
+        if !self.committed && self.created {
+            let _ = fs::remove_dir(&self.dir);
+        }
     }
 }
 

@@ -1265,3 +1265,54 @@ fn output_directory_lock_and_cleanup() {
     assert!(dir.join("summary.json").exists());
     assert!(leftovers(&dir).is_empty(), "{:?}", leftovers(&dir));
 }
+
+/// A failed run prints one line that names the problem (the context and its cause joined, a
+/// cause the message already quotes not repeated), exits non-zero and leaves no empty output
+/// directory behind (it used to leave `OUT/` and print the OS error twice, on two lines).
+#[test]
+fn failed_runs_print_one_line_and_leave_no_directory() {
+    let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/scenes");
+    let uniform = scenes.join("homogeneous-surface.toml");
+    let missing = scenes.join("no-such-scene.toml");
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["phase", "--scene", uniform.to_str().unwrap(), "--to", "0.1"],
+            "two-segment stiffness profile",
+        ),
+        (
+            vec![
+                "solve",
+                "--lbar",
+                "1.2",
+                "--branch",
+                "1",
+                "--scene",
+                missing.to_str().unwrap(),
+            ],
+            "no-such-scene.toml",
+        ),
+        (
+            vec!["draw", missing.to_str().unwrap()],
+            "no-such-scene.toml",
+        ),
+    ];
+    for (args, word) in cases {
+        let out = tmp("failed-run");
+        let mut a = args.clone();
+        a.extend(["--out", out.to_str().unwrap()]);
+        let o = rodloop(&a);
+        assert!(!o.status.success(), "{args:?} should fail");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        assert!(
+            err.starts_with("error: ") && err.contains(word),
+            "{args:?}: {err}"
+        );
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+        assert!(
+            err.matches("No such file").count() <= 1,
+            "{args:?} repeats its cause: {err}"
+        );
+        assert!(!out.exists(), "{args:?} left {}", out.display());
+    }
+}
