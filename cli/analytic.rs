@@ -183,15 +183,22 @@ pub fn run(args: &Args) -> Result<()> {
     let summary = crate::output::strip_nulls(summary);
     run.write_json("summary.json", &summary)?;
     run.commit()?;
+    let mut pictures = 0;
     if args.draw {
         let set = crate::draw::DrawSettings::beside(&args.out);
         for i in 0..loops.len() {
-            crate::draw::draw_loop(&args.out.join(format!("loop-{:02}.csv", i + 1)), &set)?;
+            let path = args.out.join(format!("loop-{:02}.csv", i + 1));
+            pictures += crate::draw::draw_loop(&path, &set)?.len();
         }
     }
     outln!(
-        "wrote {} loop file(s) and summary.json to {}",
+        "wrote {} loop file(s){}, summary.json to {}",
         loops.len(),
+        if pictures > 0 {
+            format!(", {pictures} picture files (SVG, PNG, -draw.json)")
+        } else {
+            String::new()
+        },
         args.out.display()
     );
     Ok(())

@@ -309,6 +309,11 @@ pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
     Ok(written)
 }
 
+/// `, NAME.svg, …` for a "wrote …" line: the files `draw_loop` wrote (empty without `--draw`).
+pub fn and_pictures(names: &[String]) -> String {
+    names.iter().map(|n| format!(", {n}")).collect()
+}
+
 /// Draw the figures of a diagram directory (`branches.csv`, `critical.csv`) into
 /// `set.out`: `diagram` (Fig. 3a), `diagram_split` (Fig. 3b), `diagram_lambda` (Fig. 7); for
 /// an enclosed diagram only `diagram` (with its lifted-off parts and lift-off/landing events).

@@ -400,11 +400,13 @@ pub fn run_solve(args: &crate::solve::Args, scene: &Scene) -> Result<()> {
     run.write_table(&table)?;
     run.write_json("summary.json", &summary)?;
     run.commit()?;
-    if args.draw {
+    let pictures = if args.draw {
         // config.csv has x, y, z (and kappa, lambda): `rodloop draw` reads it as it is.
         let set = crate::draw::DrawSettings::beside(&args.out);
-        crate::draw::draw_loop(&args.out.join("config.csv"), &set)?;
-    }
+        crate::draw::draw_loop(&args.out.join("config.csv"), &set)?
+    } else {
+        Vec::new()
+    };
     let what = match branch {
         Some(b) => format!("enclosed branch {b}"),
         None => "enclosed loop".to_string(),
@@ -427,9 +429,10 @@ pub fn run_solve(args: &crate::solve::Args, scene: &Scene) -> Result<()> {
         );
     }
     outln!(
-        "{}; {:.0} ms; wrote config.csv and summary.json to {}",
+        "{}; {:.0} ms; wrote config.csv, summary.json{} to {}",
         res.method,
         t0.elapsed().as_secs_f64() * 1e3,
+        crate::draw::and_pictures(&pictures),
         args.out.display()
     );
     Ok(())

@@ -126,11 +126,13 @@ pub fn run(args: &Args) -> Result<()> {
     crate::draw::add_shape(&mut summary, &shape);
     run.write_json("summary.json", &summary)?;
     run.commit()?;
-    if args.draw {
+    let pictures = if args.draw {
         let mut set = crate::draw::DrawSettings::beside(&args.out);
         set.overlay = crate::draw::exact_overlay(l, args.lbar);
-        crate::draw::draw_loop(&args.out.join("curve.csv"), &set)?;
-    }
+        crate::draw::draw_loop(&args.out.join("curve.csv"), &set)?
+    } else {
+        Vec::new()
+    };
     outln!(
         "Euler rotation curve l = {l}, lbar = {}: alpha = {:.15}, energy E R/(pi D) = {:.12} (quadrature error <= {:.1e}{})",
         args.lbar,
@@ -139,6 +141,10 @@ pub fn run(args: &Args) -> Result<()> {
         bound,
         if energy.error_estimate < bound { ", the rounding of the sum" } else { "" }
     );
-    outln!("wrote {}/curve.csv and summary.json", args.out.display());
+    outln!(
+        "wrote curve.csv, summary.json{} to {}",
+        crate::draw::and_pictures(&pictures),
+        args.out.display()
+    );
     Ok(())
 }

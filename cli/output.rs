@@ -464,7 +464,8 @@ mod finite {
     }
 }
 
-/// Names of every file a rodloop command writes into its output directory (and `loop-NN.csv`):
+/// Names of every file a rodloop command writes into its output directory (and `loop-NN.csv`,
+/// and the pictures `--draw` writes beside `config.csv`, `curve.csv`, `loop-NN.csv`):
 /// a run removes those of a previous run that it does not write itself, so that a directory
 /// never mixes the outputs of two runs (e.g. a stale `diagram_g.svg` after switching model).
 const KNOWN_OUTPUTS: &[&str] = &[
@@ -482,6 +483,15 @@ const KNOWN_OUTPUTS: &[&str] = &[
     "atlas.png",
     "diagram_k2.svg",
     "diagram_k2.png",
+    "diagram.png",
+    "diagram_split.svg",
+    "diagram_split.png",
+    "diagram_lambda.svg",
+    "diagram_lambda.png",
+    "converge.csv",
+    "phase.csv",
+    "phase.svg",
+    "phase.png",
 ];
 
 /// Subdirectories a rodloop command writes whole ([`OutputRun::subdir`]): a run that does not
@@ -489,10 +499,20 @@ const KNOWN_OUTPUTS: &[&str] = &[
 const KNOWN_OUTPUT_DIRS: &[&str] = &["states", "atlas"];
 
 fn is_known_output(name: &str) -> bool {
+    let is_loop_stem = |stem: &str| {
+        stem.strip_prefix("loop-")
+            .is_some_and(|n| !n.is_empty() && n.chars().all(|c| c.is_ascii_digit()))
+    };
+    // The pictures `--draw` writes beside a loop table (`rodloop draw`: NAME.svg/.png,
+    // NAME-profiles.svg/.png, NAME-draw.json), for the tables rodloop writes.
+    let picture_of_table = [".svg", ".png", "-draw.json"]
+        .iter()
+        .find_map(|ext| name.strip_suffix(ext))
+        .map(|stem| stem.strip_suffix("-profiles").unwrap_or(stem))
+        .is_some_and(|stem| stem == "config" || stem == "curve" || is_loop_stem(stem));
     KNOWN_OUTPUTS.contains(&name)
-        || (name.starts_with("loop-")
-            && name.ends_with(".csv")
-            && name[5..name.len() - 4].chars().all(|c| c.is_ascii_digit()))
+        || name.strip_suffix(".csv").is_some_and(is_loop_stem)
+        || picture_of_table
 }
 
 /// Name of the lock file that marks an output directory as in use.

@@ -356,11 +356,13 @@ pub fn run(args: &Args) -> Result<()> {
     run.write_table(&table)?;
     run.write_json("summary.json", &summary)?;
     run.commit()?;
-    if args.draw {
+    let pictures = if args.draw {
         let mut set = crate::draw::DrawSettings::beside(&args.out);
         set.overlay = crate::draw::euler_overlay(eta, args.lbar);
-        crate::draw::draw_loop(&args.out.join("config.csv"), &set)?;
-    }
+        crate::draw::draw_loop(&args.out.join("config.csv"), &set)?
+    } else {
+        Vec::new()
+    };
     outln!(
         "branch {branch} (eta = {eta}) at lbar = {}: E R/(pi D0) = {:.10} ± {:.1e}, index {} ({}), lambda R^3/D0 in [{:.6}, {:.6}] ± {:.1e}",
         args.lbar,
@@ -376,10 +378,11 @@ pub fn run(args: &Args) -> Result<()> {
         outln!("reached by {}", strategy.describe());
     }
     outln!(
-        "{} nodes, {} Newton iterations, KKT residual {:.1e}; wrote config.csv and summary.json to {}",
+        "{} nodes, {} Newton iterations, KKT residual {:.1e}; wrote config.csv, summary.json{} to {}",
         profile.len(),
         report.iterations,
         report.residual,
+        crate::draw::and_pictures(&pictures),
         args.out.display()
     );
     Ok(())

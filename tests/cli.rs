@@ -1316,3 +1316,48 @@ fn failed_runs_print_one_line_and_leave_no_directory() {
         assert!(!out.exists(), "{args:?} left {}", out.display());
     }
 }
+
+/// The pictures `--draw` wrote belong to that run: a later run into the same directory that
+/// does not draw (or writes fewer loops) removes them, as it removes its other stale outputs.
+#[test]
+fn pictures_of_a_previous_run_are_removed() {
+    let out = tmp("stale-pictures");
+    let dir = out.to_str().unwrap();
+    ok(&rodloop(&[
+        "analytic", "--eta", "1", "--lbar", "1.6", "--draw", "--out", dir,
+    ]));
+    assert!(out.join("loop-03.svg").exists() && out.join("loop-01-draw.json").exists());
+    ok(&rodloop(&[
+        "analytic", "--eta", "2", "--lbar", "1.2", "--out", dir,
+    ]));
+    let mut names: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["loop-01.csv", "loop-02.csv", "summary.json"]);
+
+    let out = tmp("stale-pictures-solve");
+    let dir = out.to_str().unwrap();
+    let o = rodloop(&[
+        "solve", "--lbar", "1.2", "--branch", "1", "--draw", "--out", dir,
+    ]);
+    ok(&o);
+    // The "wrote" line names the pictures.
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains("config-profiles.png"),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    ok(&rodloop(&[
+        "solve", "--lbar", "1.2", "--branch", "1", "--out", dir,
+    ]));
+    for name in [
+        "config.svg",
+        "config.png",
+        "config-profiles.svg",
+        "config-draw.json",
+    ] {
+        assert!(!out.join(name).exists(), "stale {name}");
+    }
+}
