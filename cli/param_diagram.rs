@@ -65,13 +65,13 @@ pub fn run(args: &Args, param: &str) -> Result<()> {
             .last()
             .map(|p| p.value)
             .unwrap_or(sweep.scene_value);
-        println!(
+        outln!(
             "branch {} (eta = {}) family {}: {seed} ({} cells), traced to {param} = {last:.6} over {} states; {}",
             f.branch, f.eta, f.family, f.cells, f.points.len(), f.end
         );
     }
     for p in &sweep.special {
-        println!(
+        outln!(
             "  {} of branch {} family {} at {param} = {:.8}: E R/(pi D0) = {:.10} ± {:.1e}{}",
             p.kind,
             p.branch,
@@ -87,7 +87,7 @@ pub fn run(args: &Args, param: &str) -> Result<()> {
     for w in &sweep.warnings {
         eprintln!("warning: {w}");
     }
-    println!("time {seconds:.2} s");
+    outln!("time {seconds:.2} s");
 
     let summary = serde_json::json!({
         "command": "diagram --param",
@@ -121,7 +121,7 @@ pub fn run(args: &Args, param: &str) -> Result<()> {
     run.write_bytes("diagram.png", &png)?;
     run.write_json("summary.json", &strip_nulls(summary))?;
     run.commit()?;
-    println!("wrote {}", args.out.display());
+    outln!("wrote {}", args.out.display());
     Ok(())
 }
 

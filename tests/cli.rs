@@ -1361,3 +1361,37 @@ fn pictures_of_a_previous_run_are_removed() {
         assert!(!out.join(name).exists(), "stale {name}");
     }
 }
+
+/// `rodloop diagram --param … | head -1` ends quietly (it printed with `println!`, which
+/// panics on a closed pipe).
+#[test]
+fn param_diagram_with_closed_stdout_is_not_a_panic() {
+    use std::process::Stdio;
+    let out = tmp("param-pipe");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/scenes/inhomogeneous-d1-0.5.toml");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rodloop"))
+        .args([
+            "diagram",
+            "--scene",
+            scene.to_str().unwrap(),
+            "--param",
+            "d1",
+            "--lbar",
+            "1.3",
+            "--to",
+            "0.4",
+            "--accuracy",
+            "fast",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    assert_ne!(o.status.code(), Some(101), "{err}");
+}
