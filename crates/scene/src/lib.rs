@@ -56,8 +56,9 @@ pub enum SceneError {
         /// Why it is needed.
         reason: String,
     },
-    /// A value outside its domain.
-    #[error("scene file {path}: {key} = {value}: {reason}")]
+    /// A value outside its domain (or a key the stiffness kind does not use, with an empty
+    /// `value`).
+    #[error("scene file {path}: {key}{}: {reason}", if value.is_empty() { String::new() } else { format!(" = {value}") })]
     Invalid {
         /// The path (or `<string>`).
         path: String,
@@ -77,7 +78,7 @@ pub enum Confinement {
     /// On the sphere, `|r| = R`.
     #[default]
     Surface,
-    /// Inside the sphere, `|r| ≤ R` (`solve` and `compare --scene enclosed`; no diagram yet).
+    /// Inside the sphere, `|r| ≤ R` (`solve`, `diagram`, `report` and `compare --scene enclosed`).
     Enclosed,
 }
 

@@ -139,6 +139,27 @@ fn missing_keys_are_named() {
     assert!(msg.contains("missing key stiffness.d"), "{msg}");
 }
 
+/// A key the stiffness kind does not use is named without an empty `= :` (it was
+/// "stiffness.gamma = : is not used by kind = \"uniform\""); so is an array where a number
+/// belongs.
+#[test]
+fn unused_and_mistyped_keys_have_no_empty_value() {
+    for (text, want) in [
+        (
+            "[stiffness]\nkind = \"uniform\"\nd = 1\ngamma = 3\n",
+            "stiffness.gamma: is not used by kind = \"uniform\"",
+        ),
+        (
+            "[stiffness]\nkind = \"uniform\"\nd = [1, 2, 3]\n",
+            "stiffness.d: must be a number",
+        ),
+    ] {
+        let msg = Scene::from_toml(text, "t.toml").unwrap_err().to_string();
+        assert!(msg.contains(want), "{text:?}: {msg}");
+        assert!(!msg.contains(" = :"), "{msg}");
+    }
+}
+
 /// Issue 11: errors do not echo long arrays whole.
 #[test]
 fn long_arrays_are_not_echoed_whole() {
