@@ -110,7 +110,7 @@ pub fn run(args: &Args) -> Result<()> {
         }
         for e in &c.ends {
             eprintln!(
-                "phase: exchange {} -> {}: the curve ends at {} = {} ({}): {}",
+                "phase: exchange {} -> {}: the curve ends at {} = {:.6} ({}): {}",
                 ex.from_branch, ex.to_branch, diagram.param, e.value, e.kind, e.reason
             );
         }

@@ -765,9 +765,10 @@ pub fn run(args: &Args) -> Result<()> {
     let failed = states.iter().filter(|s| s.outcome.is_err()).count();
     crate::report_tables::commit_report(run, report, failed, states.len())?;
     outln!(
-        "wrote report.html ({} KB, {} figures: diagram, energy split, lambda extremes, k² (homogeneous scenes), branch atlas, shape against the Euler curve, {} with their force plots), branches.csv, critical.csv, diagram.svg, summary.json, states/ to {} in {:.2} s",
+        "wrote report.html ({} KB, {} figures: diagram, energy split, lambda extremes, {}branch atlas, shape against the Euler curve, {} with their force plots), branches.csv, critical.csv, special_points.csv, diagram.svg, summary.json, states/ to {} in {:.2} s",
         h.len().div_ceil(1024),
         figures,
+        if fig_k2.is_some() { "k² (Fig. 11), " } else { "" },
         crate::output::plural((states.len() - failed) as u64, "loop picture"),
         args.out.display(),
         t_start.elapsed().as_secs_f64()

@@ -526,7 +526,7 @@ fn no_minimum_warnings(opts: &DiagramOptions, branches: &[TracedBranch]) -> Vec<
     out.into_iter()
         .map(|(a, b)| {
             format!(
-                "NO STABLE STATE FOUND: on {a:.4} ≤ L̄ ≤ {b:.4} no traced state has stability                  index 0 (the lowest state there was not found; labels there are incomplete)"
+                "NO STABLE STATE FOUND: on {a:.4} ≤ L̄ ≤ {b:.4} no traced state has stability index 0 (the lowest state there was not found; labels there are incomplete)"
             )
         })
         .collect()
