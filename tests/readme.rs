@@ -141,3 +141,87 @@ fn every_readme_scene_loads() {
         );
     }
 }
+
+/// The long options (`--name`) in a text.
+fn flags(text: &str) -> std::collections::BTreeSet<String> {
+    let mut out = std::collections::BTreeSet::new();
+    let b = text.as_bytes();
+    let mut i = 0;
+    while i + 2 < b.len() {
+        let starts = b[i] == b'-'
+            && b[i + 1] == b'-'
+            && (i == 0 || !b[i - 1].is_ascii_alphanumeric() && b[i - 1] != b'-');
+        if starts && b[i + 2].is_ascii_lowercase() {
+            let mut j = i + 2;
+            while j < b.len()
+                && (b[j].is_ascii_lowercase() || b[j].is_ascii_digit() || b[j] == b'-')
+            {
+                j += 1;
+            }
+            out.insert(text[i..j].trim_end_matches('-').to_string());
+            i = j;
+        } else {
+            i += 1;
+        }
+    }
+    out
+}
+
+/// The command table of the README lists every subcommand of `rodloop --help`, and its rows for
+/// a subcommand name every option of that subcommand's `--help` (the table lacked `draw`,
+/// `compare --scene`, `--draw` and `--width`/`--height`) and no option it does not have.
+#[test]
+fn readme_command_table_matches_help() {
+    let text = readme();
+    let help = |args: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_rodloop"))
+            .args(args)
+            .arg("--help")
+            .output()
+            .unwrap();
+        assert!(o.status.success());
+        String::from_utf8_lossy(&o.stdout).to_string()
+    };
+    let top = help(&[]);
+    let subcommands: Vec<String> = top
+        .lines()
+        .skip_while(|l| !l.starts_with("Commands:"))
+        .skip(1)
+        .take_while(|l| l.starts_with("  "))
+        .filter_map(|l| l.split_whitespace().next().map(String::from))
+        .filter(|c| c != "help")
+        .collect();
+    assert!(subcommands.len() >= 9, "{top}");
+    for sub in &subcommands {
+        let rows: String = text
+            .lines()
+            .filter(|l| {
+                l.starts_with(&format!("| `rodloop {sub} ")) || *l == format!("| `rodloop {sub}` |")
+            })
+            .collect::<Vec<_>>()
+            .join("\n");
+        assert!(
+            !rows.is_empty(),
+            "README command table has no row for `rodloop {sub}`"
+        );
+        let documented = flags(&rows);
+        let mut options = flags(&help(&[sub]));
+        options.remove("--help");
+        for f in &options {
+            assert!(
+                documented.contains(f),
+                "README rows of `rodloop {sub}` do not mention {f}"
+            );
+        }
+        // Options named in the usage column (the first cell) exist.
+        for row in rows.lines() {
+            let usage = row.split(" | ").next().unwrap_or("");
+            for f in flags(usage) {
+                assert!(
+                    options.contains(&f),
+                    "README usage of `rodloop {sub}` names {f}, which `--help` lacks"
+                );
+            }
+        }
+    }
+}
