@@ -25,7 +25,7 @@ pub struct Args {
     /// Scene file (TOML; see data/scenes/). Default: homogeneous loop on the unit sphere.
     #[arg(long)]
     pub scene: Option<PathBuf>,
-    /// Coarsest number of cells of the ladder (default: a quarter of the `default`
+    /// Coarsest number of cells of the ladder, at least 8 (default: a quarter of the `default`
     /// accuracy's cells).
     #[arg(long)]
     pub min_cells: Option<usize>,
@@ -68,8 +68,11 @@ pub fn run(args: &Args) -> Result<()> {
     let stiffness = stiffness_of(&scene.stiffness);
     let start = StartShape::Euler { l: eta };
     let default_cells = Accuracy::Default.cells(eta as usize, &stiffness);
+    if let Some(m) = args.min_cells.filter(|&m| m < 8) {
+        bail!("--min-cells must be at least 8 (got {m})");
+    }
     let base = args.min_cells.unwrap_or(default_cells / 4).max(8);
-    let finest = base << (args.levels - 1);
+    let finest = base.saturating_mul(1 << (args.levels - 1));
     if finest > 65_536 {
         bail!(
             "the finest rung would have {finest} cells (cap 65536): lower --min-cells or --levels"

@@ -171,6 +171,34 @@ fn bad_input_gives_clear_errors_without_panics() {
         (&["diagram", "--lbar-min", "3", "--lbar-max", "2"], "lbar"),
         (&["euler", "--l", "1", "--lbar", "1e-9"], "degenerate"),
         (&["analytic", "--lbar", "2", "--eta", "4000000000"], "eta"),
+        // --min-cells 0 was silently raised to 8; 2^62 overflowed the shift to the finest
+        // rung, passed the cap and panicked with "capacity overflow".
+        (
+            &[
+                "converge",
+                "--lbar",
+                "1.2",
+                "--branch",
+                "1",
+                "--min-cells",
+                "0",
+            ],
+            "--min-cells must be at least 8",
+        ),
+        (
+            &[
+                "converge",
+                "--lbar",
+                "1.2",
+                "--branch",
+                "1",
+                "--min-cells",
+                "4611686018427387904",
+                "--levels",
+                "3",
+            ],
+            "cap 65536",
+        ),
     ];
     for (args, word) in cases {
         let out = tmp("bad");
