@@ -233,6 +233,15 @@ pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
         .and_then(|s| s.to_str())
         .unwrap_or("loop")
         .to_string();
+    if let Some(w) = set.width.filter(|w| !(375..=10_000).contains(w)) {
+        bail!("--width {w}: a loop picture is 375 to 10000 pixels wide (each view is width/2.5, 150 to 4000 pixels)");
+    }
+    if !(set.tol > 0.0 && set.tol < 1.0) {
+        bail!(
+            "--tol {}: the self-contact tolerance must be in (0, 1), a fraction of R",
+            set.tol
+        );
+    }
     let panel = set.width.map_or(380.0, |w| f64::from(w) / 2.5);
     let opts = LoopPictureOptions {
         color: set.color.clone(),

@@ -76,6 +76,7 @@ enum Command {
     Converge(converge::Args),
     /// Pictures of a loop (four views on the sphere, coloured by a column, self-contacts
     /// marked) or of a diagram's branches.csv, as SVG and PNG.
+    #[command(allow_negative_numbers = true)]
     Draw(draw::Args),
     /// One self-contained HTML page: the numeric diagram and its figures, the critical
     /// lengths with errors (and exact values for homogeneous scenes), the paper's values, a

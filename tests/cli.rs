@@ -1423,3 +1423,31 @@ fn param_diagram_with_closed_stdout_is_not_a_panic() {
     assert!(!err.contains("panicked"), "{err}");
     assert_ne!(o.status.code(), Some(101), "{err}");
 }
+
+/// `draw` names the option at fault: `--width` of a loop picture (the message spoke of a
+/// "panel size" of width/2.5) and a negative `--tol` (clap took `-1` for an option).
+#[test]
+fn draw_rejects_bad_width_and_tol_by_name() {
+    let out = tmp("draw-bad");
+    let dir = out.to_str().unwrap();
+    ok(&rodloop(&[
+        "analytic", "--eta", "2", "--lbar", "1.2", "--out", dir,
+    ]));
+    let file = out.join("loop-01.csv");
+    for (flag, value) in [("--width", "50000"), ("--tol", "-1"), ("--tol", "2")] {
+        let pics = tmp("draw-bad-pics");
+        let o = rodloop(&[
+            "draw",
+            file.to_str().unwrap(),
+            flag,
+            value,
+            "--out",
+            pics.to_str().unwrap(),
+        ]);
+        assert!(!o.status.success(), "{flag} {value}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(err.starts_with(&format!("error: {flag} {value}:")), "{err}");
+        assert!(!pics.exists(), "{flag} {value} wrote {}", pics.display());
+    }
+}
