@@ -536,8 +536,12 @@ pub fn run_compare(scene_arg: &str, out: &Path) -> Result<()> {
             }));
         }
     }
-    let summary =
-        checked_json!({"scene": scene.name, "lbar_range": [lo, hi], "detached": json_rows})?;
+    let summary = checked_json!({
+        "scene": scene.name,
+        "lbar_range": [lo, hi],
+        "detached": json_rows,
+        "units": "lbar = L/(2 pi R); gap R - |r| in units of R; energy E R/(pi D0)",
+    })?;
     run.write_table(&table)?;
     run.write_json("summary.json", &summary)?;
     run.commit()?;

@@ -164,6 +164,7 @@ pub fn run(args: &Args) -> Result<()> {
         })).collect::<Vec<_>>(),
         "time_seconds": seconds,
         "files": ["phase.csv", "phase.svg", "phase.png"],
+        "units": "lbar = L/(2 pi R); energy E R/(pi D0); value: d1 = D1/D0, gamma, or s0, s1 as fractions of L",
     });
     check_finite("summary.json", &summary)?;
     run.write_table(&table)?;

@@ -1451,3 +1451,22 @@ fn draw_rejects_bad_width_and_tol_by_name() {
         assert!(!pics.exists(), "{flag} {value} wrote {}", pics.display());
     }
 }
+
+/// Every `summary.json` has a `units` field (README, Commands): `compare --scene enclosed`'s
+/// had none.
+#[test]
+fn enclosed_compare_summary_has_units() {
+    let out = tmp("compare-enclosed-units");
+    ok(&rodloop(&[
+        "compare",
+        "--scene",
+        "enclosed",
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+    let s = read_json(&out.join("summary.json"));
+    assert!(
+        s["units"].as_str().is_some_and(|u| u.contains("lbar")),
+        "{s}"
+    );
+}
