@@ -29,6 +29,16 @@ pub fn run(args: &Args, param: &str) -> Result<()> {
     if args.lbar_min.is_some() || args.lbar_max.is_some() || args.step.is_some() || args.resume {
         bail!("--lbar-min, --lbar-max, --step and --resume belong to the diagram in L̄; with --param the length is fixed by --lbar");
     }
+    if args.max_step.is_some()
+        || args.min_step.is_some()
+        || args.max_points.is_some()
+        || args.newton_tol.is_some()
+    {
+        bail!("--max-step, --min-step, --max-points and --newton-tol control the tracer of the diagram in L̄; --param uses its own continuation settings");
+    }
+    if args.shapes > 0 {
+        bail!("--shapes draws the atlas of the diagram in L̄; --param keeps no states to draw (solve one with `rodloop solve`)");
+    }
     let scene = load_scene(args.scene.as_deref())?;
     let stiffness = stiffness_of(&scene.stiffness);
     let target = match (args.to, param) {

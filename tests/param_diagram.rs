@@ -172,6 +172,30 @@ fn bad_combinations_are_refused() {
             ],
             "two-segment",
         ),
+        // Options of the diagram in L̄ that --param used to ignore silently.
+        (
+            vec![
+                "diagram", "--scene", scene, "--param", "d1", "--lbar", "1.4", "--shapes", "3",
+                "--out", o,
+            ],
+            "--shapes",
+        ),
+        (
+            vec![
+                "diagram",
+                "--scene",
+                scene,
+                "--param",
+                "d1",
+                "--lbar",
+                "1.4",
+                "--max-step",
+                "0.1",
+                "--out",
+                o,
+            ],
+            "--max-step",
+        ),
     ] {
         assert_refused(&args, msg);
     }
