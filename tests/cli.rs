@@ -1470,3 +1470,29 @@ fn enclosed_compare_summary_has_units() {
         "{s}"
     );
 }
+
+/// With `--branch`, a stretch without an index-0 state says that only those branches were
+/// traced (it said "the lowest state there was not found", an alarm about the solver).
+#[test]
+fn no_stable_state_warning_names_the_branch_filter() {
+    let out = tmp("branch-filter-warning");
+    let o = rodloop(&[
+        "diagram",
+        "--branch",
+        "1",
+        "--accuracy",
+        "fast",
+        "--lbar-max",
+        "3.5",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    ok(&o);
+    let err = String::from_utf8_lossy(&o.stderr);
+    // Branch 1 lives on 1 < L̄ < 3: nothing was traced on (3, 3.5).
+    assert!(
+        err.contains("NO STABLE STATE FOUND") && err.contains("only branch(es) 1 were traced"),
+        "{err}"
+    );
+}

@@ -523,10 +523,21 @@ fn no_minimum_warnings(opts: &DiagramOptions, branches: &[TracedBranch]) -> Vec<
     if let Some(r) = run {
         out.push(r);
     }
+    // With --branch the lowest state may lie on a branch that was not traced.
+    let why = match &opts.only_branches {
+        Some(only) => format!(
+            "only branch(es) {} were traced, so the lowest state there may lie on another branch",
+            only.iter()
+                .map(|b| b.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+        None => "the lowest state there was not found".to_string(),
+    };
     out.into_iter()
         .map(|(a, b)| {
             format!(
-                "NO STABLE STATE FOUND: on {a:.4} ≤ L̄ ≤ {b:.4} no traced state has stability index 0 (the lowest state there was not found; labels there are incomplete)"
+                "NO STABLE STATE FOUND: on {a:.4} ≤ L̄ ≤ {b:.4} no traced state has stability index 0 ({why}; labels there are incomplete)"
             )
         })
         .collect()
