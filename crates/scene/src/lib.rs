@@ -350,18 +350,31 @@ impl Default for Scene {
     }
 }
 
+/// A TOML error on one line: ``line L, column C (`source line`): message`` (the parser's own
+/// rendering spans several lines, with the source line and a caret under it).
+fn one_line_toml_error(text: &str, e: &toml::de::Error) -> String {
+    let message = truncate(e.message().trim().replace('\n', " ").as_str(), 300);
+    match e.span() {
+        Some(span) => {
+            let before = text.get(..span.start).unwrap_or(text);
+            let line = before.matches('\n').count() + 1;
+            let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+            let source = text.lines().nth(line - 1).unwrap_or("").trim();
+            format!(
+                "line {line}, column {column} (`{}`): {message}",
+                truncate(source, 80)
+            )
+        }
+        None => message,
+    }
+}
+
 impl Scene {
     /// Parse and validate a scene from TOML text; `origin` names it in messages.
     pub fn from_toml(text: &str, origin: &str) -> Result<Self, SceneError> {
         let raw: RawScene = toml::from_str(text).map_err(|e| SceneError::Parse {
             path: origin.to_string(),
-            message: e
-                .to_string()
-                .trim_end()
-                .lines()
-                .map(|l| truncate(l, 160))
-                .collect::<Vec<_>>()
-                .join("\n  "),
+            message: one_line_toml_error(text, &e),
         })?;
         let stiffness = raw.stiffness.unwrap_or_default().resolve(origin)?;
         let scene = Scene {

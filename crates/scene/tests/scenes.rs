@@ -160,6 +160,28 @@ fn unused_and_mistyped_keys_have_no_empty_value() {
     }
 }
 
+/// TOML errors are one line that names the line, column and source text (the parser's own
+/// message spans five lines with a caret drawing).
+#[test]
+fn toml_errors_are_one_line_with_the_source() {
+    for (text, want) in [
+        (
+            "name = \"x\"\nconfinment = \"surface\"\n",
+            "line 2, column 1 (`confinment = \"surface\"`): unknown field `confinment`",
+        ),
+        (
+            "radius = \"one\"\n",
+            "line 1, column 10 (`radius = \"one\"`): invalid type",
+        ),
+        ("name = \"x\n", "line 1, column"),
+    ] {
+        let msg = Scene::from_toml(text, "t.toml").unwrap_err().to_string();
+        assert!(!msg.contains('\n'), "{text:?}: {msg}");
+        assert!(msg.starts_with("scene file t.toml: "), "{msg}");
+        assert!(msg.contains(want), "{text:?}: {msg}");
+    }
+}
+
 /// Issue 11: errors do not echo long arrays whole.
 #[test]
 fn long_arrays_are_not_echoed_whole() {
