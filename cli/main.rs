@@ -90,7 +90,22 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(
+                e.kind(),
+                ErrorKind::DisplayHelp
+                    | ErrorKind::DisplayVersion
+                    | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+            ) {
+                e.exit();
+            }
+            eprintln!("{}", one_line_usage_error(&e.render().to_string()));
+            return ExitCode::from(2);
+        }
+    };
     let result = match cli.command {
         Command::Analytic(a) => analytic::run(&a),
         Command::Solve(a) => solve::run(&a),
@@ -121,6 +136,36 @@ fn one_line(err: &anyhow::Error) -> String {
             line.push_str(": ");
             line.push_str(&cause);
         }
+    }
+    line
+}
+
+/// clap's message for a mistake on the command line (an unknown option, an invalid choice, a
+/// missing argument) on one line: the error, its details and tip, and the usage.
+fn one_line_usage_error(text: &str) -> String {
+    let mut lines = text.lines().map(str::trim).filter(|l| !l.is_empty());
+    let mut line = lines
+        .next()
+        .unwrap_or("error: invalid command line")
+        .to_string();
+    let mut details = Vec::new();
+    let mut usage = None;
+    for l in lines {
+        if let Some(u) = l.strip_prefix("Usage:") {
+            usage = Some(u.trim().to_string());
+        } else if !l.starts_with("For more information") {
+            details.push(l.to_string());
+        }
+    }
+    if !details.is_empty() {
+        if line.ends_with(':') {
+            line = format!("{line} {}", details.join(", "));
+        } else {
+            line = format!("{line} ({})", details.join("; "));
+        }
+    }
+    if let Some(u) = usage {
+        line = format!("{line}; usage: {u}");
     }
     line
 }

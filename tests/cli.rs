@@ -1496,3 +1496,50 @@ fn no_stable_state_warning_names_the_branch_filter() {
         "{err}"
     );
 }
+
+/// Mistakes on the command line that clap catches (an invalid choice, a misspelt option, a
+/// missing argument) are one line too, with clap's tip and the usage, and exit code 2 (clap
+/// printed five to seven lines).
+#[test]
+fn usage_mistakes_are_one_line() {
+    for (args, words) in [
+        (
+            &["diagram", "--model", "exakt"][..],
+            &[
+                "'exakt'",
+                "--model",
+                "numeric, exact",
+                "similar value exists: 'exact'",
+            ][..],
+        ),
+        (
+            &[
+                "solve",
+                "--lbar",
+                "1.2",
+                "--branch",
+                "1",
+                "--acuracy",
+                "high",
+            ][..],
+            &["'--acuracy'", "'--accuracy'", "usage: rodloop solve"][..],
+        ),
+        (
+            &["solve", "--branch", "1"][..],
+            &["--lbar <LBAR>", "usage: rodloop solve"][..],
+        ),
+    ] {
+        let o = rodloop(args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        assert!(err.starts_with("error: "), "{err}");
+        for w in words {
+            assert!(err.contains(w), "{args:?}: {w} not in {err}");
+        }
+    }
+    // --help still prints the help, on stdout, with success.
+    let o = rodloop(&["solve", "--help"]);
+    assert!(o.status.success());
+    assert!(String::from_utf8_lossy(&o.stdout).contains("--lbar"));
+}
