@@ -41,7 +41,8 @@ pub struct Args {
     /// the length range.
     #[arg(long, value_delimiter = ',')]
     pub branch: Vec<u64>,
-    /// Spacing of the sampled lengths in branches.csv (exact model only; default 0.01).
+    /// Spacing of the sampled lengths in branches.csv (exact model, default 0.01; enclosed
+    /// scenes, default 0.05; the numeric surface model reports the states it lands on).
     #[arg(long)]
     pub step: Option<f64>,
     /// Continue an interrupted numeric run from the branch files in OUT/branches (numeric

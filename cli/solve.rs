@@ -24,7 +24,8 @@ pub struct Args {
     /// Normalised length L/(2 pi R).
     #[arg(long)]
     pub lbar: f64,
-    /// Paper branch number (1: saddle, eta = 2; 2: figure-eight, eta = 1; B >= 3: eta = B).
+    /// Paper branch number (1: saddle, eta = 2; 2: figure-eight, eta = 1; B >= 3: eta = B;
+    /// enclosed scenes also 0: the planar circle, lbar <= 1).
     #[arg(long, required_unless_present = "eta", conflicts_with = "eta")]
     pub branch: Option<u64>,
     /// Alternative to --branch: the number of periods eta of the geodesic curvature.
@@ -233,7 +234,10 @@ pub fn run(args: &Args) -> Result<()> {
     }
     let (branch, eta) = match (args.branch, args.eta) {
         (Some(b), _) => {
-            if b == 0 || b > MAX_BRANCH {
+            if b == 0 {
+                bail!("--branch must be from 1 to {MAX_BRANCH} on the sphere (got 0; branch 0, the planar circle, is a state of enclosed scenes only)");
+            }
+            if b > MAX_BRANCH {
                 bail!("--branch must be from 1 to {MAX_BRANCH} (got {b})");
             }
             (b as u32, eta_of_branch(b as u32))

@@ -171,6 +171,11 @@ fn bad_input_gives_clear_errors_without_panics() {
         (&["diagram", "--lbar-min", "3", "--lbar-max", "2"], "lbar"),
         (&["euler", "--l", "1", "--lbar", "1e-9"], "degenerate"),
         (&["analytic", "--lbar", "2", "--eta", "4000000000"], "eta"),
+        // Branch 0 exists only inside the sphere.
+        (
+            &["solve", "--lbar", "0.7", "--branch", "0"],
+            "enclosed scenes only",
+        ),
         // --min-cells 0 was silently raised to 8; 2^62 overflowed the shift to the finest
         // rung, passed the cap and panicked with "capacity overflow".
         (
