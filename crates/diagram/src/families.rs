@@ -226,13 +226,6 @@ pub fn compute_families(
     // (`crate::special`): the tracer needs them only to its own width.
     settings.locate_tol = TRACE_LOCATE_TOL;
 
-    let mut curves: Vec<Curve> = Vec::new();
-    let mut notes = Vec::new();
-    let mut pending: Vec<MarchSpecial> = Vec::new();
-    let mut switched: Vec<MarchSpecial> = Vec::new();
-    let mut steps = 0usize;
-    let mut seeds_tried = 0usize;
-    let mut seed_note = Vec::new();
     let span = hi - lo;
     let seed_lengths: Vec<f64> = [0.5, 0.25, 0.75]
         .iter()
@@ -249,113 +242,85 @@ pub fn compute_families(
         lo,
         hi,
     };
+    let mut tr = Tracing {
+        ctx: &end_ctx,
+        settings: &settings,
+        images: &images,
+        branch,
+        eta,
+        curves: Vec::new(),
+        notes: Vec::new(),
+        pending: Vec::new(),
+        switched: Vec::new(),
+        steps: 0,
+        seed_note: Vec::new(),
+    };
     let strong = matches!(&opts.stiffness, Stiffness::Tanh { d0, d1, .. }
         if d1 / d0 < HOMOTOPY_BELOW);
-    // Seeds: at strong contrast the state `rodloop solve --branch` finds at each length
-    // (labels must agree with it; `None`), then the shifted Euler starts (solved directly, or
-    // at strong contrast followed in D1/D0 from a mild contrast).
-    let shifts = (0..4).map(|j| Some(j as f64 / (8.0 * e)));
-    let seeds: Vec<Option<f64>> = if strong {
-        std::iter::once(None).chain(shifts).collect()
-    } else {
-        shifts.collect()
-    };
+    let jobs = seed_jobs(
+        &seed_lengths,
+        eta,
+        (exist_lo, exist_hi),
+        (lo, hi),
+        &circles,
+        strong,
+    );
+    let seeds_tried = jobs.len();
     // Every seed is solved before any is followed, on the crate's thread pool: the seeds are
     // independent of each other and of the curves (which only decide whether a seed is
-    // new), and at strong contrast they are most of a branch's time.
-    let jobs: Vec<(f64, Option<f64>)> = seed_lengths
-        .iter()
-        .flat_map(|&l| seeds.iter().map(move |&sd| (l, sd)))
-        .collect();
-    let mut solved = run_parallel(
+    // new).
+    let solve_seed = |lbar: f64, seed: Seed| {
+        let ts = Instant::now();
+        let x = problem.model_at(lbar).ok().and_then(|m| match seed {
+            Seed::Solve { starts } => robust_seed(opts, &m, eta, lbar, starts),
+            Seed::Shifted(shift) => seed_state(opts, &m, eta, lbar, shift, strong),
+            Seed::Direct(shift) => seed_state(opts, &m, eta, lbar, shift, false),
+        });
+        (x, ts.elapsed().as_secs_f64())
+    };
+    let solved = run_parallel(
         opts.worker_threads(),
-        jobs,
+        jobs.clone(),
         &mut |_| {},
         &mut |_| {},
-        |(lbar, seed), _| {
-            let ts = Instant::now();
-            let x = problem.model_at(lbar).ok().and_then(|m| match seed {
-                Some(shift) => seed_state(opts, &m, eta, lbar, shift, strong),
-                None => robust_seed(opts, &m, eta, lbar),
-            });
-            (x, ts.elapsed().as_secs_f64())
-        },
+        |(lbar, seed), _| solve_seed(lbar, seed),
     );
-    for (li, &lbar) in seed_lengths.iter().enumerate() {
-        for (si, &seed) in seeds.iter().enumerate() {
-            // (A break below leaves the rest of this length's seeds: index, don't iterate.)
-            let (seeded, secs) = std::mem::take(&mut solved[li * seeds.len() + si]);
-            seeds_tried += 1;
-            let what = match seed {
-                Some(shift) => format!("origin moved by {shift:.4}"),
-                None => "as `rodloop solve` finds it".to_string(),
-            };
-            debug(|| {
-                format!(
-                    "eta {eta} seed at {lbar:.3} ({what}): {} in {secs:.3} s",
-                    seeded.is_some(),
-                )
-            });
-            let Some(x0) = seeded else {
-                continue;
-            };
-            if on_known(&images, &curves, &x0, lbar) {
-                continue;
-            }
-            if curves.len() >= MAX_FAMILIES {
-                notes.push(format!(
-                    "branch {branch} (η = {eta}): the cap of {MAX_FAMILIES} followed curves was \
-                     reached; further seeds were not followed"
-                ));
-                break;
-            }
-            seed_note.push(format!("L̄ = {lbar:.4}, {what}"));
-            let ts = Instant::now();
-            let curve = follow_seed(&end_ctx, &settings, &x0, lbar, &mut pending, &mut steps)?;
-            let (cmin, cmax) = curve
-                .points
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
-                    (a.min(p.value), b.max(p.value))
-                });
-            if cmax - cmin < 1e-3 {
-                notes.push(format!(
-                    "branch {branch} (η = {eta}): a seed at L̄ = {lbar:.4} ({what}) could not be \
-                     followed ({}; {}): left out",
-                    curve.start_end.1, curve.finish_end.1
-                ));
-                continue;
-            }
-            debug(|| {
-                format!(
-                    "eta {eta} followed seed: {} points in {:.3} s",
-                    curve.points.len(),
-                    ts.elapsed().as_secs_f64()
-                )
-            });
-            curves.push(curve);
-            progress(Progress::BranchStep { eta, lbar, steps });
-            // Switch at every new branch point before the next seed (the seed may then
-            // lie on a family found by switching).
-            switch_all(
-                &end_ctx,
-                &settings,
-                &images,
-                &mut curves,
-                &mut pending,
-                &mut switched,
-                &mut notes,
-                &mut steps,
-            );
+    let mut unsolved = Vec::new();
+    for (&(lbar, seed), (seeded, secs)) in jobs.iter().zip(solved) {
+        if seeded.is_none() && matches!(seed, Seed::Solve { .. }) {
+            unsolved.push(lbar);
+        }
+        if !tr.take(lbar, seed, seeded, secs, progress)? {
+            break;
         }
     }
+    // At strong contrast, `solve`'s homotopies in D1/D0 where its starts failed, one length
+    // at a time, and only where no traced family of the branch is stable yet: they cost
+    // 0.3–1 s each and serve to find a state of the branch where none is known.
+    for lbar in unsolved {
+        if tr.stable_at(lbar) {
+            debug(|| format!("eta {eta} at {lbar:.3}: a stable state is traced, no homotopy"));
+            continue;
+        }
+        let seed = Seed::Solve { starts: false };
+        let (seeded, secs) = solve_seed(lbar, seed);
+        if !tr.take(lbar, seed, seeded, secs, progress)? {
+            break;
+        }
+    }
+    let Tracing {
+        curves,
+        notes,
+        steps,
+        seed_note,
+        ..
+    } = tr;
     if curves.is_empty() {
         return Err(DiagramError::Seed {
             eta,
             lbar: mid,
             source: rodloop_solver::SolverError::InvalidInput(format!(
-                "none of the {seeds_tried} shifted Euler starts converged to a loop with {eta} \
-                 period(s) of κ_g"
+                "none of the {seeds_tried} seeds (Euler starts, shifted, solved directly or by                  homotopy) converged to a loop with {eta} period(s) of κ_g"
             )),
         });
     }
@@ -456,6 +421,7 @@ pub fn compute_families(
                     seed_note
                         .get(ci)
                         .cloned()
+                        .flatten()
                         .unwrap_or_else(|| "found by branch switching".into())
                 ),
                 index_changes,
@@ -575,6 +541,183 @@ fn split_monotone(
     out
 }
 
+/// How a seed state is found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Seed {
+    /// The state `rodloop solve --branch` finds ([`robust_seed`]); without `starts`, only
+    /// by its homotopies in `D1/D0` (its direct and shifted starts failed before).
+    Solve { starts: bool },
+    /// The Euler start with its origin moved by the fraction given, solved directly or at
+    /// strong contrast through a homotopy in `D1/D0` ([`seed_state`]).
+    Shifted(f64),
+    /// The same start solved directly at any contrast.
+    Direct(f64),
+}
+
+/// The seeds of branch `eta` (existence interval `exist`, traced on `range`), in the order
+/// they are followed.
+///
+/// At mild contrast, the Euler start `l = η` with its origin moved by `j/(8η)` (`j = 0…3`)
+/// at each of `lengths`. At strong contrast (`strong`) the state `rodloop solve --branch`
+/// finds at each of `lengths` (its direct and shifted starts and its homotopies in `D1/D0`)
+/// and, where `solve` would follow a family in `L̄` from another length of the branch's
+/// existence interval (its last fallback; [`rodloop_solver::Fallbacks::lbar_path`]), the
+/// direct solves from the eight shifted starts it uses there, if that length lies in the
+/// range: the tracer follows those families in `L̄` itself. (The range end `L̄ = 1` of
+/// branch 2 is such a length: the family of `η = 1` that exists only on `1 ≤ L̄ < 1.045` at
+/// `D1/D0 = 0.001` is found there.)
+fn seed_jobs(
+    lengths: &[f64],
+    eta: u32,
+    exist: (f64, f64),
+    range: (f64, f64),
+    circles: &[f64],
+    strong: bool,
+) -> Vec<(f64, Seed)> {
+    let e = f64::from(eta);
+    if !strong {
+        return lengths
+            .iter()
+            .flat_map(|&l| (0..4).map(move |j| (l, Seed::Shifted(j as f64 / (8.0 * e)))))
+            .collect();
+    }
+    let mut jobs: Vec<(f64, Seed)> = lengths
+        .iter()
+        .map(|&l| (l, Seed::Solve { starts: true }))
+        .collect();
+    let per = 1.0 / e;
+    for f in [0.5, 0.25, 0.75] {
+        let l = exist.0 + f * (exist.1 - exist.0);
+        let inside = l >= range.0 - 1e-12 && l <= range.1 + 1e-12;
+        let seeded = lengths.iter().any(|&s| (s - l).abs() < 1e-9);
+        let near_circle = circles
+            .iter()
+            .any(|m| (l - m).abs() <= 2.0 * SWITCH_DISTANCE);
+        if inside && !seeded && !near_circle {
+            jobs.extend((0..8).map(|j| (l, Seed::Direct(j as f64 / 8.0 * per))));
+        }
+    }
+    jobs
+}
+
+/// The followed curves of a branch and what following them needs.
+struct Tracing<'a> {
+    ctx: &'a EndContext<'a>,
+    settings: &'a crate::MarchSettings,
+    images: &'a Images,
+    branch: u32,
+    eta: u32,
+    curves: Vec<Curve>,
+    notes: Vec<String>,
+    /// Branch points met and not yet switched at.
+    pending: Vec<MarchSpecial>,
+    /// Branch points switched at.
+    switched: Vec<MarchSpecial>,
+    steps: usize,
+    /// The seed of each followed curve (`None`: found by branch switching).
+    seed_note: Vec<Option<String>>,
+}
+
+impl Tracing<'_> {
+    /// Follow the state `seeded` (solved at `lbar` as `seed` in `secs` seconds) unless it
+    /// is missing or on a known curve, then switch at every new branch point (a later seed
+    /// may lie on a family found by switching). `false` once the cap of followed curves is
+    /// reached.
+    fn take(
+        &mut self,
+        lbar: f64,
+        seed: Seed,
+        seeded: Option<Vec<f64>>,
+        secs: f64,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<bool, DiagramError> {
+        let (branch, eta) = (self.branch, self.eta);
+        let what = match seed {
+            Seed::Shifted(shift) | Seed::Direct(shift) => format!("origin moved by {shift:.4}"),
+            Seed::Solve { .. } => "as `rodloop solve` finds it".to_string(),
+        };
+        debug(|| {
+            format!(
+                "eta {eta} seed at {lbar:.3} ({what}): {} in {secs:.3} s",
+                seeded.is_some(),
+            )
+        });
+        let Some(x0) = seeded else {
+            return Ok(true);
+        };
+        if on_known(self.images, &self.curves, &x0, lbar) {
+            return Ok(true);
+        }
+        if self.curves.len() >= MAX_FAMILIES {
+            self.notes.push(format!(
+                "branch {branch} (η = {eta}): the cap of {MAX_FAMILIES} followed curves was \
+                 reached; further seeds were not followed"
+            ));
+            return Ok(false);
+        }
+        let ts = Instant::now();
+        let curve = follow_seed(
+            self.ctx,
+            self.settings,
+            &x0,
+            lbar,
+            &mut self.pending,
+            &mut self.steps,
+        )?;
+        let (cmin, cmax) = curve
+            .points
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                (a.min(p.value), b.max(p.value))
+            });
+        if cmax - cmin < 1e-3 {
+            self.notes.push(format!(
+                "branch {branch} (η = {eta}): a seed at L̄ = {lbar:.4} ({what}) could not be \
+                 followed ({}; {}): left out",
+                curve.start_end.1, curve.finish_end.1
+            ));
+            return Ok(true);
+        }
+        debug(|| {
+            format!(
+                "eta {eta} followed seed: {} points on {cmin:.4}–{cmax:.4} in {:.3} s",
+                curve.points.len(),
+                ts.elapsed().as_secs_f64()
+            )
+        });
+        self.seed_note.resize(self.curves.len(), None);
+        self.seed_note.push(Some(format!("L̄ = {lbar:.4}, {what}")));
+        self.curves.push(curve);
+        progress(Progress::BranchStep {
+            eta,
+            lbar,
+            steps: self.steps,
+        });
+        switch_all(
+            self.ctx,
+            self.settings,
+            self.images,
+            &mut self.curves,
+            &mut self.pending,
+            &mut self.switched,
+            &mut self.notes,
+            &mut self.steps,
+        );
+        Ok(true)
+    }
+
+    /// Whether a followed curve has a stable (index 0) state at `lbar`: the states on
+    /// either side of it on some curve both have index 0.
+    fn stable_at(&self, lbar: f64) -> bool {
+        self.curves.iter().any(|c| {
+            c.points.windows(2).any(|w| {
+                let (lo, hi) = (w[0].value.min(w[1].value), w[0].value.max(w[1].value));
+                lo <= lbar && lbar <= hi && w[0].index == Some(0) && w[1].index == Some(0)
+            })
+        })
+    }
+}
+
 /// What the ends of followed curves need.
 struct EndContext<'a> {
     opts: &'a DiagramOptions,
@@ -584,14 +727,18 @@ struct EndContext<'a> {
 }
 
 /// The state `rodloop solve --branch` finds for `eta` at `lbar` (`solve_robust` from the
-/// Euler curve, fast accuracy), re-solved on `model` (the tracing resolution).
+/// Euler curve, fast accuracy), re-solved on `model` (the tracing resolution). Without
+/// `rodloop solve`'s continuation in `L̄` (the tracer follows those families itself,
+/// [`seed_jobs`]); with `starts`, its direct and shifted starts only, without, its
+/// homotopies in `D1/D0` only.
 fn robust_seed(
     opts: &DiagramOptions,
     model: &SurfaceModel,
     eta: u32,
     lbar: f64,
+    starts: bool,
 ) -> Option<Vec<f64>> {
-    let (acc, _) = rodloop_solver::solve_robust(
+    let (acc, strategy) = rodloop_solver::solve_robust_with(
         opts.radius,
         lbar,
         &opts.stiffness,
@@ -599,8 +746,16 @@ fn robust_seed(
         rodloop_solver::Accuracy::Fast,
         Some(eta),
         &SolveOptions::default(),
+        rodloop_solver::Fallbacks {
+            starts,
+            homotopy: !starts,
+            lbar_path: false,
+            ..rodloop_solver::Fallbacks::default()
+        },
     )
+    .map_err(|e| debug(|| format!("robust seed {eta} at {lbar}: {e}")))
     .ok()?;
+    debug(|| format!("robust seed {eta} at {lbar}: {}", strategy.describe()));
     let kappa = acc.equilibrium.resample(model.cells()).ok()?;
     solve(model, &kappa, &crate::states::newton_options())
         .ok()
