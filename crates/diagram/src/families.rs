@@ -331,9 +331,8 @@ pub fn compute_families(
     let mut sheets: Vec<TracedBranch> = Vec::new();
     let mut kept_states: Vec<(usize, Vec<f64>, f64)> = Vec::new();
     for (ci, curve) in curves.iter().enumerate() {
-        let finished: Vec<_> = curve
-            .points
-            .iter()
+        let finished: Vec<_> = thinned(&images, &curve.points)
+            .into_iter()
             .filter_map(|r| finish_point(opts, &problem, r).map(|p| (p, r.source)))
             .collect();
         let mut pieces = split_monotone(&finished);
@@ -446,6 +445,14 @@ pub fn compute_families(
         s.family = pos as u32 + 1;
     }
     let seconds = t0.elapsed().as_secs_f64();
+    debug(|| {
+        format!(
+            "eta {eta}: {} sheets of {} states in {:.3} s",
+            sheets.len(),
+            sheets.iter().map(|s| s.points.len()).sum::<usize>(),
+            seconds - t_trace
+        )
+    });
     let count = sheets.len().max(1);
     for s in &mut sheets {
         s.steps = steps / count;
@@ -504,6 +511,39 @@ fn index_changes_of(pts: &[(crate::TracedPoint, PointSource)]) -> Vec<IndexChang
             above: w[1].0.index,
         })
         .collect()
+}
+
+/// Least spacing in `L̄` of the continuation states a sheet keeps ([`thinned`]).
+const MIN_SPACING: f64 = 5e-4;
+
+/// The states of a curve that become sheet states: all but the continuation states closer
+/// than [`MIN_SPACING`] in `L̄` and than `SAME_STATE` in shape to the previous one kept
+/// (where a family creeps through a nearly singular stretch, e.g. branch 2 at
+/// `D1/D0 = 0.001` near `L̄ = 1.1` with 400 steps in 0.025, those would be most of the
+/// diagram's states); located points, the ends and the turning states in `L̄` are always
+/// kept.
+fn thinned<'p>(images: &Images, points: &'p [MarchPoint]) -> Vec<&'p MarchPoint> {
+    let n = points.len();
+    let mut out: Vec<&MarchPoint> = Vec::with_capacity(n);
+    for (i, p) in points.iter().enumerate() {
+        let keep = match out.last() {
+            None => true,
+            Some(last) => {
+                let turning = i + 1 < n
+                    && i > 0
+                    && (points[i + 1].value - p.value) * (p.value - points[i - 1].value) <= 0.0;
+                p.source != PointSource::Continuation
+                    || i + 1 == n
+                    || turning
+                    || (p.value - last.value).abs() >= MIN_SPACING
+                    || images.dist(&p.x, &last.x) >= SAME_STATE
+            }
+        };
+        if keep {
+            out.push(p);
+        }
+    }
+    out
 }
 
 /// Cut a curve (arclength order) into pieces monotone in `L̄`; the turning state belongs
