@@ -170,8 +170,10 @@ pub fn solve_robust(
     )
 }
 
-/// [`solve_robust`] with a choice of the continuation fallbacks and their budget (the
-/// direct and shifted starts are always tried).
+/// [`solve_robust`] with a choice of the attempts ([`Fallbacks`]): the direct and shifted
+/// starts, the continuation fallbacks, and their budget. Used by the branch diagram of
+/// two-segment rods, which runs the starts and the homotopies in separate passes and follows
+/// families in `L̄` itself.
 #[allow(clippy::too_many_arguments)]
 pub fn solve_robust_with(
     radius: f64,
