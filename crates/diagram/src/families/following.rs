@@ -47,7 +47,7 @@ impl Tracing<'_> {
     ) -> Result<bool, DiagramError> {
         let (branch, eta) = (self.branch, self.eta);
         let what = match seed {
-            Seed::Shifted(shift) | Seed::Direct(shift) => format!("origin moved by {shift:.4}"),
+            Seed::Shifted(shift) => format!("origin moved by {shift:.4}"),
             Seed::Solve { .. } => "as `rodloop solve` finds it".to_string(),
         };
         debug(|| {

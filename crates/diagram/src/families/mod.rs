@@ -50,7 +50,7 @@ use crate::types::{BranchEnd, BranchTimings, TracedBranch};
 use crate::{DiagramError, DiagramOptions, Progress};
 use following::{EndContext, Tracing};
 use images::Images;
-use seeding::{robust_seed, seed_jobs, seed_state, Seed, HOMOTOPY_BELOW};
+use seeding::{robust_seed, seed_jobs, seed_state, Seed, STRONG_BELOW};
 
 /// Most families (followed curves) per branch `η`.
 pub const MAX_FAMILIES: usize = 16;
@@ -154,7 +154,7 @@ pub fn compute_families(
         seed_note: Vec::new(),
     };
     let strong = matches!(&opts.stiffness, Stiffness::Tanh { d0, d1, .. }
-        if d1 / d0 < HOMOTOPY_BELOW);
+        if d1 / d0 < STRONG_BELOW);
     let jobs = seed_jobs(
         &seed_lengths,
         eta,
@@ -171,8 +171,7 @@ pub fn compute_families(
         let ts = Instant::now();
         let x = problem.model_at(lbar).ok().and_then(|m| match seed {
             Seed::Solve { starts } => robust_seed(opts, &m, eta, lbar, starts),
-            Seed::Shifted(shift) => seed_state(opts, &m, eta, lbar, shift, strong),
-            Seed::Direct(shift) => seed_state(opts, &m, eta, lbar, shift, false),
+            Seed::Shifted(shift) => seed_state(&m, eta, lbar, shift),
         });
         (x, ts.elapsed().as_secs_f64())
     };
