@@ -269,8 +269,14 @@ fn print(d: &EnclosedDiagram, scene: &Scene, opts: &EnclosedDiagramOptions, out:
         );
     }
     for e in &d.events {
+        let what = match e.kind {
+            rodloop_diagram::enclosed::EventKind::Detachment => {
+                "the last contact force is 0; below it the loop is free"
+            }
+            _ => "lambda_min = 0",
+        };
         outln!(
-            "  {} of branch {} at lbar = {:.12} ± {:.0e} (lambda_min = 0; E R/(pi D) = {:.10})",
+            "  {} of branch {} at lbar = {:.12} ± {:.0e} ({what}; E R/(pi D) = {:.10})",
             e.kind.as_str(),
             e.branch,
             e.lbar,

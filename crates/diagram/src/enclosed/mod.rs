@@ -200,6 +200,11 @@ pub enum EventKind {
     LiftOff,
     /// Lifted off below, attached above.
     Landing,
+    /// The loop leaves the wall altogether (decreasing `L̄`): the forces at its last,
+    /// point-like contacts vanish, and below it the branch is a free elastica inside the
+    /// ball (branch 2: Euler's figure-eight, whose tips touch the wall at
+    /// `L̄ = K(k)/(πk)`, `2E(k) = K(k)`).
+    Detachment,
 }
 
 impl EventKind {
@@ -208,6 +213,7 @@ impl EventKind {
         match self {
             EventKind::LiftOff => "lift-off",
             EventKind::Landing => "landing",
+            EventKind::Detachment => "detachment",
         }
     }
 }
@@ -221,11 +227,12 @@ pub struct EnclosedEvent {
     pub branch: u32,
     /// Family within the branch (0 for a uniform rod).
     pub family: u32,
-    /// `L̄` of the event (`λ_min = 0`; `k² = 1/2` for a uniform rod).
+    /// `L̄` of the event (`λ_min = 0`, `k² = 1/2` for a uniform rod; for a detachment, the
+    /// last contact force 0).
     pub lbar: f64,
     /// Its error estimate.
     pub error_estimate: f64,
-    /// Energy at the event (exact layer).
+    /// Energy at the event (exact layer; for a detachment, the free loop's).
     pub energy: f64,
     /// Index just below and just above.
     pub index_before: usize,

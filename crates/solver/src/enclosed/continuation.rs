@@ -9,8 +9,8 @@
 //! figure-eight near `L̄ = 1.38`, while the unscaled start converges in 3 iterations.) The
 //! gauge takes the start as its reference, as in [`super::start_from_surface`].
 
-use super::model::{phase_slope, EnclosedModel, Gauge};
-use super::solve::{solve_enclosed, EnclosedOptions, EnclosedState};
+use super::model::{phase_slope, rotation, translation, EnclosedModel, Gauge};
+use super::solve::{least_squares_multipliers, solve_enclosed, EnclosedOptions, EnclosedState};
 use crate::SolverError;
 
 impl EnclosedState {
@@ -50,5 +50,118 @@ impl EnclosedState {
     pub fn step_to(&self, lbar: f64, opts: &EnclosedOptions) -> Result<EnclosedState, SolverError> {
         let (model, z) = self.continue_to(lbar)?;
         solve_enclosed(&model, z, opts)
+    }
+}
+
+impl EnclosedState {
+    /// Length-weighted centroid of the nodes (the trapezoid rule of `∫r ds/L`, spectrally
+    /// accurate on a uniform periodic mesh).
+    pub fn centroid(&self) -> Result<[f64; 3], SolverError> {
+        let m = &self.model;
+        let pos = m.positions(&self.z)?;
+        let mut c = [0.0; 3];
+        let mut w_sum = 0.0;
+        for (j, r) in pos.iter().enumerate() {
+            let w = m.node_weight(j);
+            w_sum += w;
+            for k in 0..3 {
+                c[k] += w * r[k];
+            }
+        }
+        Ok(c.map(|v| v / w_sum))
+    }
+
+    /// The model and start vector at `lbar` for a loop that does not touch the wall: as
+    /// [`Self::continue_to`], but with the three translations pinned (they are symmetry
+    /// modes of a free loop, and the KKT matrix is singular without a pin) and the loop moved
+    /// so that its centroid is the ball's centre (the pin is the start point of the moved
+    /// loop). A pinned state is physical only where its wall forces balance
+    /// (`Σ λ_j r_j = 0`, which the pin's multiplier measures): always for a loop off the
+    /// wall.
+    ///
+    /// The pin fixes node 0. Where node 0 touches the wall (its wall constraint would
+    /// depend only on the pinned start point, a rank-deficient KKT matrix), the loop is
+    /// first re-based on a uniform mesh: arclength origin moved by `N/4` cells, the loop
+    /// turned about the centre so that the frame there is the identity (the curvature
+    /// vectors in the rotation-minimising frame are unchanged), and the multipliers taken
+    /// afresh by least squares.
+    pub fn continue_free(&self, lbar: f64) -> Result<(EnclosedModel, Vec<f64>), SolverError> {
+        let m = &self.model;
+        let n = m.cells();
+        crate::model::check_lbar(lbar)?;
+        let gap0 = m.gaps(&self.z)?[0];
+        let touches0 = gap0 <= 1e-6 * m.radius() || self.multipliers()[0] != 0.0;
+        let rebase = touches0 && m.uniform_mesh() && m.stiffness().kind().is_uniform();
+        let shift = if rebase { n / 4 } else { 0 };
+        let p = m.transforms(&self.z)?;
+        let q = if rebase {
+            rotation(&p[shift]).transpose()
+        } else {
+            nalgebra::Matrix3::identity()
+        };
+        let r0 = m.start_point(&self.z);
+        let start = q * (r0 + translation(&p[shift]));
+        let c = q * nalgebra::Vector3::from(self.centroid()?);
+        let pin = start - c;
+        let mut kappa = vec![0.0; 4 * n];
+        for cell in 0..n {
+            let from = (cell + shift) % n;
+            kappa[4 * cell..4 * cell + 4].copy_from_slice(&self.z[4 * from..4 * from + 4]);
+        }
+        let slope = if m.gauge().slope.is_some() {
+            phase_slope(&kappa, n)?
+        } else {
+            None
+        };
+        let model = EnclosedModel::new(
+            m.radius(),
+            lbar,
+            n,
+            &m.stiffness().kind().clone(),
+            Gauge {
+                reference: kappa.clone(),
+                slope,
+                pin: Some([pin[0], pin[1], pin[2]]),
+            },
+        )?;
+        let mut z = vec![0.0; model.dim()];
+        z[..4 * n].copy_from_slice(&kappa);
+        z[4 * n..4 * n + 3].copy_from_slice(&[pin[0], pin[1], pin[2]]);
+        if rebase {
+            least_squares_multipliers(&model, &mut z)?;
+        } else {
+            // The same multipliers (closure, gauges, wall); the pin's start at 0.
+            let (np_old, lo_old) = (m.n_primal(), m.lambda_offset());
+            let np = model.n_primal();
+            let k = (lo_old - np_old).min(model.lambda_offset() - np);
+            z[np..np + k].copy_from_slice(&self.z[np_old..np_old + k]);
+            let lo = model.lambda_offset();
+            z[lo..lo + n].copy_from_slice(&self.z[lo_old..lo_old + n]);
+        }
+        Ok((model, z))
+    }
+
+    /// Newton at `lbar` from this state with the translations pinned
+    /// ([`Self::continue_free`], then [`solve_enclosed`]).
+    pub fn step_free(&self, lbar: f64, opts: &EnclosedOptions) -> Result<EnclosedState, SolverError> {
+        let (model, z) = self.continue_free(lbar)?;
+        solve_enclosed(&model, z, opts)
+    }
+
+    /// Net wall force `Σ_j 2λ_j r_j` (the stationarity row of the start point without a pin;
+    /// the pin's reaction with one), in units of `D0/R²`: zero at a physical equilibrium.
+    pub fn net_wall_force(&self) -> Result<f64, SolverError> {
+        let m = &self.model;
+        let pos = m.positions(&self.z)?;
+        let lam = self.multipliers();
+        let mut f = [0.0; 3];
+        for (j, r) in pos.iter().enumerate() {
+            for k in 0..3 {
+                f[k] += 2.0 * lam[j] * r[k];
+            }
+        }
+        let r = m.radius();
+        let unit = r * r / m.stiffness().kind().reference();
+        Ok((f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt() * unit)
     }
 }
