@@ -97,10 +97,13 @@ fn check_optimal(d: &EnclosedDiagram) {
         assert!(p.stationarity <= 1e-8, "{p:?}");
         let s = p.surface_energy.expect("surface energy");
         match p.source {
-            // Below the surface loop of the same sheet (which needs a pulling wall).
+            // Below the surface loop of the same sheet (which needs a pulling wall), to the
+            // state's discretisation error (next to a landing the drop is below it: the
+            // mild rod at L̄ = 1.6305, gap 4.7e-6 R, lies 8e-8 above at an estimate of
+            // 2.6e-7).
             PointSource::Model => {
                 if !p.attached {
-                    assert!(p.energy < s, "{p:?}");
+                    assert!(p.energy < s + p.energy_error, "{p:?}");
                 }
             }
             PointSource::Surface => assert!(p.attached && p.lambda_min > 0.0, "{p:?}"),

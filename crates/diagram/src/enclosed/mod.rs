@@ -56,6 +56,7 @@ use crate::DiagramError;
 
 mod critical;
 mod nonuniform;
+mod nonuniform_descent;
 mod nonuniform_exchange;
 mod trace;
 

@@ -44,6 +44,7 @@ use rodloop_exact::diagram::{Critical, CriticalKind};
 use rodloop_solver::enclosed::{enclosed_cells, solve_branch, EnclosedOptions, SurfaceSource};
 use rodloop_solver::{solve_from_state, Accuracy, Equilibrium, SolverError, SurfaceModel};
 
+use super::nonuniform_descent::descend_unstable;
 use super::nonuniform_exchange::{interp, locate_crossing, lowest_at, mean_stiffness, CIRCLE};
 use super::trace::{follow, Levels};
 use super::{
@@ -87,6 +88,23 @@ pub(super) struct SheetOut {
     warnings: Vec<String>,
     attached_s: f64,
     lifted_s: f64,
+}
+
+impl SheetOut {
+    /// A sheet of branch `branch` (`eta`), family `family`, with no states yet.
+    pub(super) fn empty(branch: u32, eta: u32, family: u32) -> Self {
+        Self {
+            branch,
+            eta,
+            family,
+            points: Vec::new(),
+            levels: Vec::new(),
+            events: Vec::new(),
+            warnings: Vec::new(),
+            attached_s: 0.0,
+            lifted_s: 0.0,
+        }
+    }
 }
 
 /// The surface equilibrium of `sheet` at `x` with `cells` cells: Newton at the tracing
@@ -265,10 +283,13 @@ fn surface_point(sheet: &TracedBranch, k: usize) -> EnclosedPoint {
 
 /// Newton options of the continuation steps: a step that needs more than 30 iterations is
 /// halved instead (most steps take 2–6; with 12, steps that were converging slowly, at
-/// residuals 1e-8, stopped the traces; the default 80 makes a failing step 2.7× dearer).
+/// residuals 1e-8, stopped the traces; the default 80 makes a failing step 2.7× dearer), and
+/// one that has not halved its residual in 6 iterations is given up (it is shedding the old
+/// contact set node by node; a shorter step does better).
 pub(super) fn step_options() -> EnclosedOptions {
     EnclosedOptions {
         max_iterations: 30,
+        stall_window: 6,
         ..EnclosedOptions::default()
     }
 }
@@ -456,13 +477,29 @@ fn trace_sheet(
         for lv in traced {
             let mut pt = lv.point(sheet.branch, sheet.eta)?;
             // The surface loop at the same length: the traced state, or (where the trace
-            // stopped between samples) re-solved there.
+            // stopped between samples) re-solved there, or, where that re-solve fails,
+            // interpolated between the sheet's traced states with the change between them
+            // as its error.
             let (surf, surf_err) = match xs.iter().position(|&x| (x - lv.lbar).abs() < 1e-12) {
                 Some(i) => {
                     let p = &pts[run[i]];
                     (p.energy, p.energy_error.unwrap_or(0.0))
                 }
-                None => surface_energy(dopts, sheet, lv.lbar)?,
+                None => match surface_energy(dopts, sheet, lv.lbar) {
+                    Ok(v) => v,
+                    Err(e) => {
+                        let k = pts.partition_point(|p| p.value < lv.lbar);
+                        if k == 0 || k == pts.len() {
+                            return Err(e.into());
+                        }
+                        let (a, b) = (&pts[k - 1], &pts[k]);
+                        let t = (lv.lbar - a.value) / (b.value - a.value);
+                        (
+                            a.energy + t * (b.energy - a.energy),
+                            (b.energy - a.energy).abs(),
+                        )
+                    }
+                },
             };
             pt.family = sheet.family;
             pt.sheet = sheet.sheet;
@@ -546,7 +583,13 @@ pub(super) fn nonuniform_diagram(
         traced.push((i, o));
     }
     traced.sort_by_key(|(i, _)| *i);
-    let (idx, outs): (Vec<usize>, Vec<SheetOut>) = traced.into_iter().unzip();
+    let (mut idx, mut outs): (Vec<usize>, Vec<SheetOut>) = traced.into_iter().unzip();
+    // 2b. Lower states below unstable lowest ones (new families).
+    let tdesc = Instant::now();
+    let (w, parents) = descend_unstable(&mut outs, &idx);
+    warnings.extend(w);
+    idx.extend(parents);
+    timings.lifted_off += tdesc.elapsed().as_secs_f64();
     let surf: Vec<&TracedBranch> = idx.iter().map(|&i| &sheets[i]).collect();
     // 3. Exchanges of the lowest branch.
     let tc = Instant::now();

@@ -63,6 +63,28 @@ impl Levels {
         })
     }
 
+    /// Natural-parameter step of each level to `lbar` from the secant predictor through
+    /// `prev` ([`EnclosedState::predict_to`]); an error where it does not apply.
+    pub(super) fn step_predicted(
+        &self,
+        prev: &Levels,
+        lbar: f64,
+        opts: &EnclosedOptions,
+    ) -> Result<Levels, SolverError> {
+        let mut out = Vec::with_capacity(3);
+        for (s, p) in self.states.iter().zip(&prev.states) {
+            let (model, z) = s.predict_to(p, lbar)?.ok_or_else(|| {
+                SolverError::InvalidInput("no secant predictor for this pair of states".into())
+            })?;
+            out.push(solve_enclosed(&model, z, opts)?);
+        }
+        let [a, b, c]: [EnclosedState; 3] = out.try_into().expect("three levels");
+        Ok(Levels {
+            lbar,
+            states: [a, b, c],
+        })
+    }
+
     /// A step to `lbar` that leaves the wall: every level stepped with the translations
     /// pinned ([`EnclosedState::step_free`]), accepted only where no level touches the wall
     /// any more (no wall force, every gap above [`TOUCH`]), so that the pin carries no
@@ -343,6 +365,7 @@ pub(super) fn follow(
         };
         'targets: for &x in &targets {
             let mut cur = out.last().expect("seed").clone();
+            let mut prev: Option<Levels> = out.len().checked_sub(2).map(|k| out[k].clone());
             let mut h = x - cur.lbar;
             let mut halvings = 0;
             while (x - cur.lbar).abs() > 1e-14 {
@@ -351,7 +374,11 @@ pub(super) fn follow(
                 } else {
                     cur.lbar + h
                 };
-                let stepped = cur.step_to(to, sopts).or_else(|e| {
+                let predicted = match &prev {
+                    Some(p) if !cur.free() => cur.step_predicted(p, to, sopts),
+                    _ => Err(SolverError::InvalidInput("no predictor".into())),
+                };
+                let stepped = predicted.or_else(|_| cur.step_to(to, sopts)).or_else(|e| {
                     // Point contacts whose force is vanishing: try leaving the wall.
                     let point_like = !cur.free()
                         && cur.states[2]
@@ -364,13 +391,14 @@ pub(super) fn follow(
                     }
                 });
                 match stepped {
-                    Ok(next) => cur = next,
+                    Ok(next) => prev = Some(std::mem::replace(&mut cur, next)),
                     Err(e) => {
                         halvings += 1;
                         if halvings > max_halvings && extend {
                             let over = x + (x - cur.lbar);
                             let jumped = cur.step_to(over, sopts).and_then(|j| j.step_to(x, sopts));
                             if let Ok(at) = jumped {
+                                prev = None;
                                 cur = at;
                                 continue;
                             }

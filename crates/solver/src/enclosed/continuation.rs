@@ -165,3 +165,38 @@ impl EnclosedState {
         Ok((f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt() * unit)
     }
 }
+
+impl EnclosedState {
+    /// Newton at `lbar` from the secant predictor through `prev` and this state
+    /// (`z + t(z − z_prev)`, `t = (L̄' − L̄)/(L̄ − L̄_prev)`; the model of
+    /// [`Self::continue_to`]). Where the contact set changes smoothly along the trace, the predicted start
+    /// misses the new state by `O(ΔL̄²)` instead of `O(ΔL̄)` (the plain warm start leaves
+    /// closure open by `O(ΔL̄)` and the contact set of the old length, which the semismooth
+    /// Newton then sheds node by node under backtracking). `None` when `prev` does not fit
+    /// (other mesh, a pinned loop, or no length step between the two).
+    pub fn predict_to(
+        &self,
+        prev: &EnclosedState,
+        lbar: f64,
+    ) -> Result<Option<(EnclosedModel, Vec<f64>)>, SolverError> {
+        let (m, mp) = (&self.model, &prev.model);
+        let dl = m.lbar() - mp.lbar();
+        if mp.cells() != m.cells()
+            || prev.z.len() != self.z.len()
+            || mp.gauge().pin.is_some()
+            || m.gauge().pin.is_some()
+            || dl.abs() < 1e-12
+        {
+            return Ok(None);
+        }
+        let (model, _) = self.continue_to(lbar)?;
+        let t = (lbar - m.lbar()) / dl;
+        let z: Vec<f64> = self
+            .z
+            .iter()
+            .zip(&prev.z)
+            .map(|(a, b)| a + t * (a - b))
+            .collect();
+        Ok(Some((model, z)))
+    }
+}

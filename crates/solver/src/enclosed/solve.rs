@@ -37,6 +37,10 @@ pub struct EnclosedOptions {
     pub tolerance: f64,
     /// Step halvings allowed per iteration.
     pub max_backtracks: usize,
+    /// Give up when `stall_window` iterations in a row have not halved the residual (0:
+    /// never). For continuation steps, where a failed step is retried shorter: a start
+    /// whose contact set is far off is then shed node by node at nearly constant residual.
+    pub stall_window: usize,
 }
 
 impl Default for EnclosedOptions {
@@ -45,6 +49,7 @@ impl Default for EnclosedOptions {
             max_iterations: 80,
             tolerance: 1e-10,
             max_backtracks: 40,
+            stall_window: 0,
         }
     }
 }
@@ -119,6 +124,7 @@ pub fn solve_enclosed(
 ) -> Result<EnclosedState, SolverError> {
     let mut z = z0;
     let mut norm = f64::INFINITY;
+    let mut history: Vec<f64> = Vec::new();
     for it in 0..=opts.max_iterations {
         let (residual, step) = match model.newton_step(&z) {
             Ok((f, dz)) => (f, Ok(dz)),
@@ -149,6 +155,11 @@ pub fn solve_enclosed(
             });
         }
         if it == opts.max_iterations {
+            break;
+        }
+        history.push(norm);
+        let w = opts.stall_window;
+        if w > 0 && history.len() > w && norm > 0.5 * history[history.len() - 1 - w] {
             break;
         }
         let dz = step?;
