@@ -120,7 +120,10 @@ fn branch_two_is_traced_down_through_its_detachment() {
     );
     assert!((ev.energy - el / lstar).abs() < 1e-5, "{ev:?}");
     let b2: Vec<_> = d.points.iter().filter(|p| p.branch == 2).collect();
-    assert!(b2.first().unwrap().lbar < 0.55 + 1e-9, "traced down to 0.55");
+    assert!(
+        b2.first().unwrap().lbar < 0.55 + 1e-9,
+        "traced down to 0.55"
+    );
     let mut free = 0;
     for p in &b2 {
         // First-order optimality everywhere.

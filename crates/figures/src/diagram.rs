@@ -316,7 +316,9 @@ impl DiagramData {
                     })?;
             for (k, row) in sr.iter().enumerate() {
                 let kind = row.get(ki).cloned().unwrap_or_default();
-                if ["fold", "branch_point", "lift-off", "landing", "detachment"].contains(&kind.as_str()) {
+                if ["fold", "branch_point", "lift-off", "landing", "detachment"]
+                    .contains(&kind.as_str())
+                {
                     special.push(SpecialMark {
                         kind,
                         lbar: lb[k],
@@ -457,7 +459,12 @@ fn special_style(kind: &str) -> (Shape, &'static str, f64, &'static str) {
         "fold" => (Shape::Triangle, "#555", 3.5, "fold (turning point in L̄)"),
         "lift-off" => (Shape::Circle, "#e08a00", 4.5, "lift-off (λ_min = 0)"),
         "landing" => (Shape::Circle, "#2a8a2a", 4.5, "landing (λ_min = 0)"),
-        "detachment" => (Shape::Circle, "#6a3d9a", 4.5, "detachment (last contact force 0)"),
+        "detachment" => (
+            Shape::Circle,
+            "#6a3d9a",
+            4.5,
+            "detachment (last contact force 0)",
+        ),
         _ => (Shape::Circle, "#b00", 3.5, "branch point (pitchfork)"),
     }
 }

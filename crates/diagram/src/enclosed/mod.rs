@@ -58,6 +58,7 @@ mod critical;
 mod nonuniform;
 mod nonuniform_descent;
 mod nonuniform_exchange;
+mod nonuniform_special;
 mod trace;
 
 pub use nonuniform::nonuniform_cells;
@@ -206,6 +207,9 @@ pub enum EventKind {
     /// ball (branch 2: Euler's figure-eight, whose tips touch the wall at
     /// `L̄ = K(k)/(πk)`, `2E(k) = K(k)`).
     Detachment,
+    /// An eigenvalue on the tangent space of the active constraints crosses zero on a
+    /// lifted-off sheet (the Hessian index changes): another family meets the sheet there.
+    BranchPoint,
 }
 
 impl EventKind {
@@ -215,6 +219,7 @@ impl EventKind {
             EventKind::LiftOff => "lift-off",
             EventKind::Landing => "landing",
             EventKind::Detachment => "detachment",
+            EventKind::BranchPoint => "branch_point",
         }
     }
 }
@@ -266,6 +271,8 @@ pub struct EnclosedDiagram {
     pub critical: Vec<EnclosedCritical>,
     /// Things the caller should print.
     pub warnings: Vec<String>,
+    /// Explained ends of traces (printed as notes).
+    pub notes: Vec<String>,
     /// Cells of the lifted-off trace (`N` of `N/4, N/2, N`) per branch.
     pub cells: Vec<(u32, usize)>,
     /// Wall-clock seconds: total, attached samples (index checks), lifted-off traces,
@@ -439,6 +446,7 @@ pub fn enclosed_diagram(opts: &EnclosedDiagramOptions) -> Result<EnclosedDiagram
         events,
         critical,
         warnings,
+        notes: Vec::new(),
         cells,
         seconds: timings,
     })

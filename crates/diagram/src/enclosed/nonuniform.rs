@@ -46,7 +46,8 @@ use rodloop_solver::{solve_from_state, Accuracy, Equilibrium, SolverError, Surfa
 
 use super::nonuniform_descent::descend_unstable;
 use super::nonuniform_exchange::{interp, locate_crossing, lowest_at, mean_stiffness, CIRCLE};
-use super::trace::{follow, Levels};
+use super::nonuniform_special::{branch_points, classify_stops};
+use super::trace::{follow, Levels, TraceStop};
 use super::{
     EnclosedCritical, EnclosedDiagram, EnclosedDiagramOptions, EnclosedEvent, EnclosedPoint,
     EnclosedTimings, EventKind, PointSource,
@@ -86,6 +87,8 @@ pub(super) struct SheetOut {
     pub(super) levels: Vec<Levels>,
     events: Vec<EnclosedEvent>,
     warnings: Vec<String>,
+    /// Where its lifted-off traces stopped (classified in `nonuniform_special.rs`).
+    pub(super) stops: Vec<TraceStop>,
     attached_s: f64,
     lifted_s: f64,
 }
@@ -101,6 +104,7 @@ impl SheetOut {
             levels: Vec::new(),
             events: Vec::new(),
             warnings: Vec::new(),
+            stops: Vec::new(),
             attached_s: 0.0,
             lifted_s: 0.0,
         }
@@ -294,10 +298,17 @@ pub(super) fn step_options() -> EnclosedOptions {
     }
 }
 
-/// Step `t` to `x` in steps of at most `0.01`, halving a failed step up to 6 times.
+/// Step `t` to `x` in steps of at most `0.01`, halving a failed step up to 6 times; after
+/// the first step, each step starts from the secant predictor through the last two states
+/// (the plain warm start where that fails).
 pub(super) fn walk(t: &Levels, x: f64) -> Result<Levels, SolverError> {
-    let opts = step_options();
+    walk_with(t, x, &step_options())
+}
+
+/// [`walk`] with the Newton options `opts`.
+pub(super) fn walk_with(t: &Levels, x: f64, opts: &EnclosedOptions) -> Result<Levels, SolverError> {
     let mut cur = t.clone();
+    let mut prev: Option<Levels> = None;
     let mut h = (x - cur.lbar).clamp(-0.01, 0.01);
     let mut fails = 0;
     while (x - cur.lbar).abs() > 1e-15 {
@@ -306,8 +317,12 @@ pub(super) fn walk(t: &Levels, x: f64) -> Result<Levels, SolverError> {
         } else {
             cur.lbar + h
         };
-        match cur.step_to(to, &opts) {
-            Ok(n) => cur = n,
+        let predicted = match &prev {
+            Some(p) => cur.step_predicted(p, to, opts),
+            None => Err(SolverError::InvalidInput("no predictor".into())),
+        };
+        match predicted.or_else(|_| cur.step_to(to, opts)) {
+            Ok(n) => prev = Some(std::mem::replace(&mut cur, n)),
             Err(e) => {
                 fails += 1;
                 if fails > 6 {
@@ -339,6 +354,7 @@ fn trace_sheet(
         levels: Vec::new(),
         events: Vec::new(),
         warnings: Vec::new(),
+        stops: Vec::new(),
         attached_s: 0.0,
         lifted_s: 0.0,
     };
@@ -455,7 +471,7 @@ fn trace_sheet(
             &what,
             &step_options(),
             true,
-            &mut out.warnings,
+            &mut out.stops,
         );
         if !reseeded {
             let (t_lo, t_hi) = (
@@ -590,6 +606,23 @@ pub(super) fn nonuniform_diagram(
     warnings.extend(w);
     idx.extend(parents);
     timings.lifted_off += tdesc.elapsed().as_secs_f64();
+    // 2c. Branch points where a lifted-off sheet's index changes; the traces' stops.
+    let tbp = Instant::now();
+    let found = run_parallel(
+        threads,
+        (0..outs.len()).collect(),
+        &mut |_| {},
+        &mut |_: &(Vec<EnclosedEvent>, Vec<String>)| {},
+        |i, _| branch_points(&outs[i]),
+    );
+    let mut special: Vec<EnclosedEvent> = Vec::new();
+    for (ev, w) in found {
+        special.extend(ev);
+        warnings.extend(w);
+    }
+    let (notes, stop_warnings) = classify_stops(&outs, &special);
+    warnings.extend(stop_warnings);
+    timings.lifted_off += tbp.elapsed().as_secs_f64();
     let surf: Vec<&TracedBranch> = idx.iter().map(|&i| &sheets[i]).collect();
     // 3. Exchanges of the lowest branch.
     let tc = Instant::now();
@@ -748,6 +781,7 @@ pub(super) fn nonuniform_diagram(
             cells.push((s.branch, n));
         }
     }
+    events.extend(special);
     events.sort_by(|u, v| u.lbar.total_cmp(&v.lbar));
     timings.surface = surface_s;
     timings.total = t0.elapsed().as_secs_f64();
@@ -756,6 +790,7 @@ pub(super) fn nonuniform_diagram(
         events,
         critical,
         warnings,
+        notes,
         cells,
         seconds: timings,
     })

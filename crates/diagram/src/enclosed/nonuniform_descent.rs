@@ -10,7 +10,7 @@
 //! the parent's (elsewhere they have merged into it).
 
 use rodloop_solver::enclosed::descent::descend;
-use rodloop_solver::enclosed::solve_levels;
+use rodloop_solver::enclosed::{solve_levels, EnclosedOptions};
 
 use super::nonuniform::{step_options, SheetOut};
 use super::nonuniform_exchange::{interp, lowest_at};
@@ -18,7 +18,7 @@ use super::trace::{follow, Levels};
 use super::PointSource;
 
 /// Relative step amplitudes along the unstable direction, tried in turn.
-const AMPLITUDES: [f64; 3] = [0.05, 0.15, 0.3];
+const AMPLITUDES: [f64; 4] = [0.05, 0.15, 0.3, 0.5];
 
 /// Most rounds of descent (a new family may itself be unstable where it is lowest).
 const ROUNDS: usize = 2;
@@ -42,6 +42,35 @@ fn unstable_lowest(outs: &[SheetOut]) -> Vec<(usize, Vec<f64>)> {
     found
 }
 
+/// The lowest new state reached from `lv` (coarsest level) along its unstable direction,
+/// cascaded to `N/2` and `N`: below `lv` and not a state another sheet already has there.
+fn lower_state(lv: &Levels, outs: &[SheetOut], opts: &EnclosedOptions) -> Option<Levels> {
+    let x = lv.lbar;
+    let e0 = lv.energy().0;
+    for amp in AMPLITUDES {
+        let Ok(cands) = descend(&lv.states[0], amp, opts) else {
+            continue;
+        };
+        for c in cands {
+            let Ok(b) = solve_levels(&c.model, c.z.clone(), None, opts) else {
+                continue;
+            };
+            let l = Levels {
+                lbar: x,
+                states: [b.quarter, b.coarse, b.fine],
+            };
+            let e = l.energy().0;
+            let known = outs
+                .iter()
+                .any(|s| interp(s, x).is_some_and(|es| (es - e).abs() < 1e-6));
+            if e < e0 - 1e-7 && !known {
+                return Some(l);
+            }
+        }
+    }
+    None
+}
+
 /// Add the families found below unstable lowest states to `outs` (see the module docs).
 /// Returns the warnings and, for each sheet appended to `outs`, the index of the sheet of
 /// the surface diagram it descends from (`roots[k]` for the first `roots.len()` sheets).
@@ -59,57 +88,48 @@ pub(super) fn descend_unstable(
         }
     };
     let sopts = step_options();
+    // The descent and its cascade get the full Newton budget (the shape moves far).
+    let dopts = EnclosedOptions::default();
     let mut tried: Vec<(usize, f64)> = Vec::new();
     for _ in 0..ROUNDS {
         let mut added: Vec<SheetOut> = Vec::new();
         let mut added_parents = Vec::new();
         for (k, xs) in unstable_lowest(outs) {
             let parent = &outs[k];
-            let x = xs[xs.len() / 2];
-            if tried.iter().any(|&(kk, xx)| kk == k && (xx - x).abs() < 1e-9) {
-                continue;
-            }
-            tried.push((k, x));
-            let Some(lv) = parent
-                .levels
-                .iter()
-                .find(|l| (l.lbar - x).abs() < 1e-12)
-                .cloned()
-            else {
-                continue;
-            };
             let what = format!(
                 "branch {} (eta = {}) below family {}",
                 parent.branch, parent.eta, parent.family
             );
-            // The lowest state reached from the coarsest level, cascaded to N/2 and N.
-            let mut first: Option<Levels> = None;
-            'amp: for amp in AMPLITUDES {
-                let Ok(cands) = descend(&lv.states[0], amp, &sopts) else {
+            // Up to three of the unstable lowest states, the middle one first.
+            let mut order: Vec<f64> = xs.clone();
+            let mid_x = xs[xs.len() / 2];
+            order.sort_by(|u, v| (u - mid_x).abs().total_cmp(&(v - mid_x).abs()));
+            let mut found: Option<(f64, Levels)> = None;
+            let mut attempted = false;
+            for &x in order.iter().take(3) {
+                if tried
+                    .iter()
+                    .any(|&(kk, xx)| kk == k && (xx - x).abs() < 1e-9)
+                {
+                    continue;
+                }
+                tried.push((k, x));
+                attempted = true;
+                let Some(lv) = parent.levels.iter().find(|l| (l.lbar - x).abs() < 1e-12) else {
                     continue;
                 };
-                for c in cands {
-                    let Ok(b) = solve_levels(&c.model, c.z.clone(), None, &sopts) else {
-                        continue;
-                    };
-                    let l = Levels {
-                        lbar: x,
-                        states: [b.quarter, b.coarse, b.fine],
-                    };
-                    let e = l.energy().0;
-                    // Not a state some other sheet already has here.
-                    let known = outs
-                        .iter()
-                        .any(|s| interp(s, x).is_some_and(|es| (es - e).abs() < 1e-6));
-                    if e < lv.energy().0 - 1e-7 && !known {
-                        first = Some(l);
-                        break 'amp;
-                    }
+                if let Some(l) = lower_state(lv, outs, &dopts) {
+                    found = Some((x, l));
+                    break;
                 }
             }
-            let Some(first) = first else {
+            let Some((x, first)) = found else {
+                if !attempted {
+                    continue;
+                }
                 warnings.push(format!(
-                    "{what}: the lowest state at lbar = {x:.6} has index >= 1, but no lower equilibrium was reached along its unstable direction"
+                    "{what}: the lowest states at lbar = {} have index >= 1, but no lower equilibrium was reached along their unstable directions",
+                    order.iter().take(3).map(|x| format!("{x:.6}")).collect::<Vec<_>>().join(", ")
                 ));
                 continue;
             };
@@ -120,7 +140,8 @@ pub(super) fn descend_unstable(
                 .iter()
                 .position(|&g| (g - x).abs() < 1e-12)
                 .unwrap_or(0);
-            let traced = follow(first, &grid, mid, &what, &sopts, true, &mut warnings);
+            let mut stops = Vec::new();
+            let traced = follow(first, &grid, mid, &what, &sopts, true, &mut stops);
             let family = outs
                 .iter()
                 .chain(added.iter())
@@ -130,6 +151,7 @@ pub(super) fn descend_unstable(
                 .unwrap_or(0)
                 + 1;
             let mut new = SheetOut::empty(parent.branch, parent.eta, family);
+            new.stops = stops;
             for l in traced {
                 let Some(pe) = interp(parent, l.lbar) else {
                     continue;

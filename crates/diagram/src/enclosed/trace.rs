@@ -100,8 +100,8 @@ impl Levels {
         let mut out = Vec::with_capacity(3);
         for s in &self.states {
             let t = s.step_free(lbar, opts)?;
-            let touching = t.multipliers().iter().any(|&l| l != 0.0)
-                || t.contact(TOUCH)?.fraction > 0.0;
+            let touching =
+                t.multipliers().iter().any(|&l| l != 0.0) || t.contact(TOUCH)?.fraction > 0.0;
             if touching {
                 return Err(SolverError::InvalidInput(format!(
                     "the pinned state at lbar = {lbar} still touches the wall"
@@ -335,7 +335,19 @@ pub(super) fn trace_detached(
         states: [seed.quarter, seed.coarse, seed.fine],
     };
     let what = format!("branch {} (eta = {eta})", branch_of_eta(eta));
-    Ok(follow(first, xs, mid, &what, &sopts, false, warnings))
+    let mut stops = Vec::new();
+    let traced = follow(first, xs, mid, &what, &sopts, false, &mut stops);
+    warnings.extend(stops.into_iter().map(|s| s.text));
+    Ok(traced)
+}
+
+/// Where a trace stopped because Newton failed under step halving.
+#[derive(Clone, Debug)]
+pub(super) struct TraceStop {
+    /// `L̄` of the last state reached.
+    pub(super) lbar: f64,
+    /// The warning text (what stopped, why, the last state's contact).
+    pub(super) text: String,
 }
 
 /// Follow a lifted-off state `first` (at `xs[mid]`) through the sample lengths `xs` both
@@ -344,7 +356,7 @@ pub(super) fn trace_detached(
 /// step is
 /// retried once as a jump past the target and back (over a singular point such as a
 /// pitchfork of the lifted-off branch), and a trace that stops keeps the last state it
-/// reached. Returns the states in increasing `L̄`.
+/// reached. A stop is recorded in `stops`. Returns the states in increasing `L̄`.
 pub(super) fn follow(
     first: Levels,
     xs: &[f64],
@@ -352,7 +364,7 @@ pub(super) fn follow(
     what: &str,
     sopts: &EnclosedOptions,
     extend: bool,
-    warnings: &mut Vec<String>,
+    stops: &mut Vec<TraceStop>,
 ) -> Vec<Levels> {
     let mut up = vec![first.clone()];
     let mut down = vec![first];
@@ -408,13 +420,16 @@ pub(super) fn follow(
                         }
                         if halvings > max_halvings {
                             let c = cur.states[2].contact(TOUCH).ok();
-                            warnings.push(format!(
+                            stops.push(TraceStop {
+                                lbar: cur.lbar,
+                                text: format!(
                                 "{what}: the lifted-off trace stops at lbar = {:.6} ({e}); the last state touches the wall on {:.1}% of its length with contact forces in [{:.3e}, {:.3e}]; Newton failed under {max_halvings} step halvings (perhaps a fold or a bifurcation of the lifted-off branch; not traced further)",
                                 cur.lbar,
                                 100.0 * c.as_ref().map_or(f64::NAN, |c| c.fraction),
                                 c.as_ref().map_or(f64::NAN, |c| c.lambda_range.0),
                                 c.as_ref().map_or(f64::NAN, |c| c.lambda_range.1),
-                            ));
+                                ),
+                            });
                             break 'targets;
                         }
                         h *= 0.5;

@@ -143,7 +143,11 @@ impl EnclosedState {
 
     /// Newton at `lbar` from this state with the translations pinned
     /// ([`Self::continue_free`], then [`solve_enclosed`]).
-    pub fn step_free(&self, lbar: f64, opts: &EnclosedOptions) -> Result<EnclosedState, SolverError> {
+    pub fn step_free(
+        &self,
+        lbar: f64,
+        opts: &EnclosedOptions,
+    ) -> Result<EnclosedState, SolverError> {
         let (model, z) = self.continue_free(lbar)?;
         solve_enclosed(&model, z, opts)
     }
