@@ -390,18 +390,29 @@ pub(super) fn follow(
                     Some(p) if !cur.free() => cur.step_predicted(p, to, sopts),
                     _ => Err(SolverError::InvalidInput("no predictor".into())),
                 };
-                let stepped = predicted.or_else(|_| cur.step_to(to, sopts)).or_else(|e| {
-                    // Point contacts whose force is vanishing: try leaving the wall.
-                    let point_like = !cur.free()
-                        && cur.states[2]
-                            .contact(TOUCH)
-                            .is_ok_and(|c| c.fraction > 0.0 && c.fraction < 0.1);
-                    if point_like {
-                        cur.leave_wall(to, sopts).map_err(|_| e)
-                    } else {
-                        Err(e)
-                    }
-                });
+                // The plain warm start as a fallback once the step has been halved twice
+                // (trying it on every failed predicted step doubled the cost of failures).
+                let try_plain = prev.is_none() || cur.free() || halvings >= 2;
+                let stepped = predicted
+                    .or_else(|e| {
+                        if try_plain {
+                            cur.step_to(to, sopts)
+                        } else {
+                            Err(e)
+                        }
+                    })
+                    .or_else(|e| {
+                        // Point contacts whose force is vanishing: try leaving the wall.
+                        let point_like = !cur.free()
+                            && cur.states[2]
+                                .contact(TOUCH)
+                                .is_ok_and(|c| c.fraction > 0.0 && c.fraction < 0.1);
+                        if point_like {
+                            cur.leave_wall(to, sopts).map_err(|_| e)
+                        } else {
+                            Err(e)
+                        }
+                    });
                 match stepped {
                     Ok(next) => prev = Some(std::mem::replace(&mut cur, next)),
                     Err(e) => {
