@@ -25,7 +25,12 @@
 //!   seam, every node a contact end passes would be an event and a restart. `L̄` is a good
 //!   parameter on the lifted-off parts of the paper's branches in `[1, 3]` (no folds: a fold
 //!   would show as Newton failing under step halving, which is reported as a warning and
-//!   ends the trace there, as near `L̄ = 0.813` on branch 2).
+//!   ends the trace there). Below `L̄ = 1` branch 2 (the figure-eight, held at two points)
+//!   leaves the wall at `L̄* = K(k)/(πk) = 0.81286` (`2E(k) = K(k)`) where Euler's free
+//!   figure-eight just fits; its translations lose their stiffness there, so the step is
+//!   retried with them pinned ([`EnclosedState::continue_free`](rodloop_solver::enclosed::EnclosedState::continue_free))
+//!   and the free loop traced on; the point is a special point (`detachment`), located
+//!   by the scale invariance of the free discrete loop.
 //! * **Exchanges** come from the exact layer's list (the surface diagram): an exchange
 //!   between two attached states is the surface one, exactly. Where a branch of an exchange
 //!   has lifted off, `E_a(L̄) = E_b(L̄)` is solved again by the secant method on re-solved
@@ -38,7 +43,9 @@
 //!
 //! Non-uniform rods (two-segment stiffness, Eq. (51)) have no exact layer and their
 //! branches come as families: `nonuniform.rs` takes the attached parts, events and
-//! lifted-off starts from the surface families instead (see its docs).
+//! lifted-off starts from the surface families instead (see its docs);
+//! `nonuniform_descent.rs` adds the families below unstable lowest states and
+//! `nonuniform_special.rs` the branch points and the sorting of the traces' stops.
 
 #![allow(clippy::needless_range_loop)]
 
