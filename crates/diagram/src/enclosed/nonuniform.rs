@@ -335,11 +335,85 @@ pub(super) fn walk_with(t: &Levels, x: f64, opts: &EnclosedOptions) -> Result<Le
     Ok(cur)
 }
 
+/// `E_N` of `sheet` at `x` by cubic Hermite interpolation of its traced states (energy at the
+/// tracing resolution and `dE/dL̄`); `None` outside them.
+fn hermite_energy(sheet: &TracedBranch, x: f64) -> Option<f64> {
+    let pts = &sheet.points;
+    let k = pts.iter().position(|p| p.value >= x)?;
+    if k == 0 {
+        return ((pts[0].value - x).abs() < 1e-12).then_some(pts[0].energy_trace);
+    }
+    let (a, b) = (&pts[k - 1], &pts[k]);
+    let h = b.value - a.value;
+    if h <= 0.0 {
+        return None;
+    }
+    let t = (x - a.value) / h;
+    let (h00, h10) = (
+        2.0 * t.powi(3) - 3.0 * t * t + 1.0,
+        t.powi(3) - 2.0 * t * t + t,
+    );
+    let (h01, h11) = (-2.0 * t.powi(3) + 3.0 * t * t, t.powi(3) - t * t);
+    Some(h00 * a.energy_trace + h10 * h * a.slope + h01 * b.energy_trace + h11 * h * b.slope)
+}
+
+/// Largest relative energy difference by which a sheet's traced states duplicate
+/// another's ([`duplicate_ranges`]).
+const DUPLICATE_TOL: f64 = 1e-7;
+
+/// For each sheet, the `L̄` ranges on which an earlier sheet of the same branch (in `order`)
+/// carries the same surface states: every traced state of the sheet strictly inside the
+/// other's range (at least 4) has the other's energy, Hermite-interpolated
+/// ([`hermite_energy`]), to `DUPLICATE_TOL` relative, and the same index. Such states are
+/// the same loop, or its mirror image or a shift of its arclength origin (the surface
+/// families are seeded at several offsets of the soft segment), so their lifted-off states
+/// have the same energies: tracing them again only repeats states.
+fn duplicate_ranges(sheets: &[TracedBranch], order: &[usize]) -> Vec<Vec<(f64, f64)>> {
+    let mut out = vec![Vec::new(); sheets.len()];
+    for (pos, &j) in order.iter().enumerate() {
+        let sj = &sheets[j];
+        for &i in &order[..pos] {
+            let si = &sheets[i];
+            if si.branch != sj.branch || si.points.len() < 2 || sj.points.is_empty() {
+                continue;
+            }
+            let (lo, hi) = (si.points[0].value, si.points[si.points.len() - 1].value);
+            let inside: Vec<_> = sj
+                .points
+                .iter()
+                .filter(|q| q.value > lo && q.value < hi)
+                .collect();
+            if inside.len() < 4 {
+                continue;
+            }
+            let same = inside.iter().all(|q| {
+                let near = si.points.iter().min_by(|u, v| {
+                    (u.value - q.value)
+                        .abs()
+                        .total_cmp(&(v.value - q.value).abs())
+                });
+                hermite_energy(si, q.value).is_some_and(|e| {
+                    (e - q.energy_trace).abs() <= DUPLICATE_TOL * q.energy_trace.abs().max(1.0)
+                }) && near.is_some_and(|n| n.index == q.index)
+            });
+            if same {
+                let a = inside[0].value.min(lo.max(sj.points[0].value));
+                let b = inside[inside.len() - 1]
+                    .value
+                    .max(hi.min(sj.points[sj.points.len() - 1].value));
+                out[j].push((a.max(lo), b.min(hi)));
+            }
+        }
+    }
+    out
+}
+
 /// Trace one sheet (see the module docs).
 fn trace_sheet(
     opts: &EnclosedDiagramOptions,
     dopts: &DiagramOptions,
     sheet: &TracedBranch,
+    repeats: &[(f64, f64)],
 ) -> Result<SheetOut, DiagramError> {
     let (lo, hi) = (opts.lbar_min, opts.lbar_max);
     let what = format!(
@@ -395,7 +469,12 @@ fn trace_sheet(
             )),
         }
     }
-    let chosen = samples(sheet, lo, hi, opts.step);
+    let mut chosen = samples(sheet, lo, hi, opts.step);
+    // Not where another sheet carries the same states (`duplicate_ranges`).
+    chosen.retain(|&k| {
+        let x = pts[k].value;
+        !repeats.iter().any(|&(a, b)| x > a - 1e-9 && x < b + 1e-9)
+    });
     for &k in chosen.iter().filter(|&&k| pts[k].lambda_min > 0.0) {
         out.points.push(surface_point(sheet, k));
     }
@@ -584,12 +663,22 @@ pub(super) fn nonuniform_diagram(
             samples(&sheets[i], opts.lbar_min, opts.lbar_max, opts.step).len() * sheets[i].cells,
         )
     });
+    let repeats = duplicate_ranges(&sheets, &order);
+    let mut notes: Vec<String> = Vec::new();
+    for (j, r) in repeats.iter().enumerate() {
+        for &(a, b) in r {
+            notes.push(format!(
+                "branch {} (eta = {}) family {} sheet {}: its surface states on {a:.6} < lbar < {b:.6} repeat another sheet's of the branch (energies within {DUPLICATE_TOL:.0e} relative, same index): the same loops, not traced again",
+                sheets[j].branch, sheets[j].eta, sheets[j].family, sheets[j].sheet
+            ));
+        }
+    }
     let outs = run_parallel(
         threads,
         order.clone(),
         &mut |_| {},
         &mut |_: &Result<SheetOut, DiagramError>| {},
-        |i, _| trace_sheet(opts, &dopts, &sheets[i]),
+        |i, _| trace_sheet(opts, &dopts, &sheets[i], &repeats[i]),
     );
     let mut traced: Vec<(usize, SheetOut)> = Vec::new();
     for (i, o) in order.into_iter().zip(outs) {
@@ -620,7 +709,8 @@ pub(super) fn nonuniform_diagram(
         special.extend(ev);
         warnings.extend(w);
     }
-    let (notes, stop_warnings) = classify_stops(&outs, &special);
+    let (stop_notes, stop_warnings) = classify_stops(&outs, &special);
+    notes.extend(stop_notes);
     warnings.extend(stop_warnings);
     timings.lifted_off += tbp.elapsed().as_secs_f64();
     let surf: Vec<&TracedBranch> = idx.iter().map(|&i| &sheets[i]).collect();
