@@ -397,13 +397,22 @@ fn duplicate_ranges(sheets: &[TracedBranch], order: &[usize]) -> Vec<Vec<(f64, f
                 }) && near.is_some_and(|n| n.index == q.index)
             });
             if same {
-                let a = inside[0].value.min(lo.max(sj.points[0].value));
-                let b = inside[inside.len() - 1]
-                    .value
-                    .max(hi.min(sj.points[sj.points.len() - 1].value));
-                out[j].push((a.max(lo), b.min(hi)));
+                let a = lo.max(sj.points[0].value);
+                let b = hi.min(sj.points[sj.points.len() - 1].value);
+                out[j].push((a, b));
             }
         }
+        // One range per overlapping run.
+        let r = &mut out[j];
+        r.sort_by(|u, v| u.0.total_cmp(&v.0));
+        let mut merged: Vec<(f64, f64)> = Vec::new();
+        for &(a, b) in r.iter() {
+            match merged.last_mut() {
+                Some(m) if a <= m.1 + 1e-9 => m.1 = m.1.max(b),
+                _ => merged.push((a, b)),
+            }
+        }
+        *r = merged;
     }
     out
 }
@@ -691,7 +700,7 @@ pub(super) fn nonuniform_diagram(
     let (mut idx, mut outs): (Vec<usize>, Vec<SheetOut>) = traced.into_iter().unzip();
     // 2b. Lower states below unstable lowest ones (new families).
     let tdesc = Instant::now();
-    let (w, parents) = descend_unstable(&mut outs, &idx);
+    let (w, parents) = descend_unstable(&mut outs, &idx, threads);
     warnings.extend(w);
     idx.extend(parents);
     timings.lifted_off += tdesc.elapsed().as_secs_f64();

@@ -14,11 +14,15 @@ use rodloop_solver::enclosed::{solve_levels, EnclosedOptions};
 
 use super::nonuniform::{step_options, SheetOut};
 use super::nonuniform_exchange::{interp, lowest_at};
-use super::trace::{follow, Levels};
+use super::trace::{follow, Levels, TraceStop};
 use super::PointSource;
+use crate::parallel::run_parallel;
 
 /// Relative step amplitudes along the unstable direction, tried in turn.
 const AMPLITUDES: [f64; 4] = [0.05, 0.15, 0.3, 0.5];
+
+/// A lower state's trace and where it stopped.
+type Found = (Vec<Levels>, Vec<TraceStop>);
 
 /// Most rounds of descent (a new family may itself be unstable where it is lowest).
 const ROUNDS: usize = 2;
@@ -77,6 +81,7 @@ fn lower_state(lv: &Levels, outs: &[SheetOut], opts: &EnclosedOptions) -> Option
 pub(super) fn descend_unstable(
     outs: &mut Vec<SheetOut>,
     roots: &[usize],
+    threads: usize,
 ) -> (Vec<String>, Vec<usize>) {
     let mut warnings = Vec::new();
     let mut parents: Vec<usize> = Vec::new();
@@ -94,54 +99,73 @@ pub(super) fn descend_unstable(
     for _ in 0..ROUNDS {
         let mut added: Vec<SheetOut> = Vec::new();
         let mut added_parents = Vec::new();
+        // The sheets to try this round, with up to three untried unstable lowest states
+        // each (the middle one first); the searches and traces run in parallel.
+        let mut jobs: Vec<(usize, Vec<f64>)> = Vec::new();
         for (k, xs) in unstable_lowest(outs) {
-            let parent = &outs[k];
-            let what = format!(
-                "branch {} (eta = {}) below family {}",
-                parent.branch, parent.eta, parent.family
-            );
-            // Up to three of the unstable lowest states, the middle one first.
-            let mut order: Vec<f64> = xs.clone();
             let mid_x = xs[xs.len() / 2];
+            let mut order = xs.clone();
             order.sort_by(|u, v| (u - mid_x).abs().total_cmp(&(v - mid_x).abs()));
-            let mut found: Option<(f64, Levels)> = None;
-            let mut attempted = false;
-            for &x in order.iter().take(3) {
-                if tried
-                    .iter()
-                    .any(|&(kk, xx)| kk == k && (xx - x).abs() < 1e-9)
-                {
-                    continue;
-                }
-                tried.push((k, x));
-                attempted = true;
-                let Some(lv) = parent.levels.iter().find(|l| (l.lbar - x).abs() < 1e-12) else {
-                    continue;
-                };
-                if let Some(l) = lower_state(lv, outs, &dopts) {
-                    found = Some((x, l));
-                    break;
-                }
+            let cands: Vec<f64> = order
+                .into_iter()
+                .take(3)
+                .filter(|&x| {
+                    !tried
+                        .iter()
+                        .any(|&(kk, xx)| kk == k && (xx - x).abs() < 1e-9)
+                })
+                .collect();
+            tried.extend(cands.iter().map(|&x| (k, x)));
+            if !cands.is_empty() {
+                jobs.push((k, cands));
             }
-            let Some((x, first)) = found else {
-                if !attempted {
-                    continue;
+        }
+        let shared: &[SheetOut] = outs;
+        let results = run_parallel(
+            threads,
+            jobs,
+            &mut |_| {},
+            &mut |_: &(usize, Vec<f64>, Option<Found>)| {},
+            |(k, cands), _| {
+                let parent = &shared[k];
+                let what = format!(
+                    "branch {} (eta = {}) below family {}",
+                    parent.branch, parent.eta, parent.family
+                );
+                let mut found = None;
+                for &x in &cands {
+                    let Some(lv) = parent.levels.iter().find(|l| (l.lbar - x).abs() < 1e-12) else {
+                        continue;
+                    };
+                    if let Some(first) = lower_state(lv, shared, &dopts) {
+                        let mut grid: Vec<f64> = parent.levels.iter().map(|l| l.lbar).collect();
+                        grid.sort_by(f64::total_cmp);
+                        grid.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
+                        let mid = grid
+                            .iter()
+                            .position(|&g| (g - x).abs() < 1e-12)
+                            .unwrap_or(0);
+                        let mut stops = Vec::new();
+                        let traced = follow(first, &grid, mid, &what, &sopts, true, &mut stops);
+                        found = Some((traced, stops));
+                        break;
+                    }
                 }
+                (k, cands, found)
+            },
+        );
+        for (k, cands, found) in results {
+            let parent = &outs[k];
+            let Some((traced, stops)) = found else {
                 warnings.push(format!(
-                    "{what}: the lowest states at lbar = {} have index >= 1, but no lower equilibrium was reached along their unstable directions",
-                    order.iter().take(3).map(|x| format!("{x:.6}")).collect::<Vec<_>>().join(", ")
+                    "branch {} (eta = {}) below family {}: the lowest states at lbar = {} have index >= 1, but no lower equilibrium was reached along their unstable directions",
+                    parent.branch,
+                    parent.eta,
+                    parent.family,
+                    cands.iter().map(|x| format!("{x:.6}")).collect::<Vec<_>>().join(", ")
                 ));
                 continue;
             };
-            let mut grid: Vec<f64> = parent.levels.iter().map(|l| l.lbar).collect();
-            grid.sort_by(f64::total_cmp);
-            grid.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
-            let mid = grid
-                .iter()
-                .position(|&g| (g - x).abs() < 1e-12)
-                .unwrap_or(0);
-            let mut stops = Vec::new();
-            let traced = follow(first, &grid, mid, &what, &sopts, true, &mut stops);
             let family = outs
                 .iter()
                 .chain(added.iter())
