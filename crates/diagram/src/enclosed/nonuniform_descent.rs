@@ -213,8 +213,22 @@ pub(super) fn descend_unstable(
     }
     for (k, xs) in unstable_lowest(outs) {
         let s = &outs[k];
+        // The two lowest eigenvalues (mass-normalised), to tell a clear saddle from a nearly
+        // degenerate state.
+        let mu = s
+            .levels
+            .iter()
+            .find(|l| (l.lbar - xs[0]).abs() < 1e-12)
+            .and_then(|l| l.states[0].stability(1e-6).ok())
+            .map_or(String::new(), |(_, v)| {
+                format!(
+                    " (lowest eigenvalues {:.2e}, {:.2e})",
+                    v[0],
+                    v.get(1).copied().unwrap_or(f64::NAN)
+                )
+            });
         warnings.push(format!(
-            "branch {} (eta = {}) family {}: the lowest traced state has index >= 1 at {} sampled lengths in [{:.4}, {:.4}]; a lower equilibrium exists there that the traces did not find",
+            "branch {} (eta = {}) family {}: the lowest traced state has index >= 1 at {} sampled lengths in [{:.4}, {:.4}]{mu}; a lower equilibrium exists there that the traces did not find",
             s.branch,
             s.eta,
             s.family,

@@ -73,9 +73,10 @@ impl EnclosedState {
 
     /// The model and start vector at `lbar` for a loop that does not touch the wall: as
     /// [`Self::continue_to`], but with the three translations pinned (they are symmetry
-    /// modes of a free loop, and the KKT matrix is singular without a pin) and the loop moved
-    /// so that its centroid is the ball's centre (the pin is the start point of the moved
-    /// loop). A pinned state is physical only where its wall forces balance
+    /// modes of a free loop, and the KKT matrix is singular without a pin) and, when it is
+    /// off the wall, the loop moved so that its centroid is the ball's centre (the pin is the
+    /// start point of the moved loop). A pinned state is physical only where its wall forces
+    /// balance
     /// (`Σ λ_j r_j = 0`, which the pin's multiplier measures): always for a loop off the
     /// wall.
     ///
@@ -101,7 +102,15 @@ impl EnclosedState {
         };
         let r0 = m.start_point(&self.z);
         let start = q * (r0 + translation(&p[shift]));
-        let c = q * nalgebra::Vector3::from(self.centroid()?);
+        // A loop off the wall is moved to the centre; a touching one stays where the wall
+        // holds it (its centroid need not be the centre: the lifted-off figure-eight at
+        // L̄ = 1.2 has it 0.48 R away).
+        let touching = self.multipliers().iter().any(|&l| l != 0.0);
+        let c = if touching {
+            nalgebra::Vector3::zeros()
+        } else {
+            q * nalgebra::Vector3::from(self.centroid()?)
+        };
         let pin = start - c;
         let mut kappa = vec![0.0; 4 * n];
         for cell in 0..n {
