@@ -10,7 +10,9 @@
 //! gauge takes the start as its reference, as in [`super::start_from_surface`].
 
 use super::model::{phase_slope, rotation, translation, EnclosedModel, Gauge};
-use super::solve::{least_squares_multipliers, solve_enclosed, EnclosedOptions, EnclosedState};
+use nalgebra::{DMatrix, DVector};
+
+use super::solve::{solve_enclosed, EnclosedOptions, EnclosedState};
 use crate::SolverError;
 
 impl EnclosedState {
@@ -84,8 +86,8 @@ impl EnclosedState {
     /// depend only on the pinned start point, a rank-deficient KKT matrix), the loop is
     /// first re-based on a uniform mesh: arclength origin moved by `N/4` cells, the loop
     /// turned about the centre so that the frame there is the identity (the curvature
-    /// vectors in the rotation-minimising frame are unchanged), and the multipliers taken
-    /// afresh by least squares.
+    /// vectors in the rotation-minimising frame are unchanged), the wall impulses moved with
+    /// their nodes, and the closure and gauge multipliers taken afresh by least squares.
     pub fn continue_free(&self, lbar: f64) -> Result<(EnclosedModel, Vec<f64>), SolverError> {
         let m = &self.model;
         let n = m.cells();
@@ -137,7 +139,10 @@ impl EnclosedState {
         z[..4 * n].copy_from_slice(&kappa);
         z[4 * n..4 * n + 3].copy_from_slice(&[pin[0], pin[1], pin[2]]);
         if rebase {
-            least_squares_multipliers(&model, &mut z)?;
+            // The wall impulses move with their nodes; the closure and gauge multipliers
+            // (whose frame changed) by least squares with those impulses held.
+            let lam_old = self.multipliers();
+            equality_multipliers(&model, &mut z, |j| lam_old[(j + shift) % n])?;
         } else {
             // The same multipliers (closure, gauges, wall); the pin's start at 0.
             let (np_old, lo_old) = (m.n_primal(), m.lambda_offset());
@@ -212,4 +217,44 @@ impl EnclosedState {
             .collect();
         Ok(Some((model, z)))
     }
+}
+
+/// Closure and gauge multipliers of `z` by least squares on the stationarity rows, with the
+/// wall impulses set to `lambda(j)` and held (stationarity is linear in all multipliers).
+fn equality_multipliers<F: Fn(usize) -> f64>(
+    model: &EnclosedModel,
+    z: &mut [f64],
+    lambda: F,
+) -> Result<(), SolverError> {
+    let np = model.n_primal();
+    let lo = model.lambda_offset();
+    for v in z[np..lo].iter_mut() {
+        *v = 0.0;
+    }
+    for j in 0..model.cells() {
+        z[lo + j] = lambda(j);
+    }
+    let ev = model.evaluate(z)?;
+    let f0 = ev.residual.rows(0, np).into_owned();
+    let a = ev.jacobian.view((0, np), (np, lo - np)).into_owned();
+    let scales = model.residual_scales();
+    let w: Vec<f64> = scales[..np].iter().map(|s| s.sqrt()).collect();
+    let aw = DMatrix::from_fn(np, lo - np, |i, j| a[(i, j)] * w[i]);
+    let fw = DVector::from_fn(np, |i, _| f0[i] * w[i]);
+    let mut nrm = aw.transpose() * &aw;
+    let tr = nrm.trace() / nrm.nrows() as f64;
+    for i in 0..nrm.nrows() {
+        nrm[(i, i)] += 1e-14 * tr;
+    }
+    let rhs = -(aw.transpose() * fw);
+    let y = nrm
+        .clone()
+        .cholesky()
+        .map(|c| c.solve(&rhs))
+        .or_else(|| nrm.lu().solve(&rhs))
+        .ok_or(SolverError::SingularJacobian { iteration: 0 })?;
+    for (k, v) in y.iter().enumerate() {
+        z[np + k] = *v;
+    }
+    Ok(())
 }
