@@ -190,6 +190,7 @@ pub(crate) fn write_outputs(
         "lowest_lifted_off": lowest_lifted,
         "cells": d.cells,
         "warnings": d.warnings,
+        "notes": d.notes,
         "timings": d.seconds,
         "units": crate::diagram::UNITS,
     })?;
@@ -205,7 +206,18 @@ pub(crate) fn lowest_lifted_off(d: &EnclosedDiagram) -> Vec<(f64, f64)> {
         .critical
         .iter()
         .map(|c| c.critical.lbar_cr)
-        .chain(d.events.iter().map(|e| e.lbar))
+        .chain(
+            d.events
+                .iter()
+                .filter(|e| {
+                    matches!(
+                        e.kind,
+                        rodloop_diagram::enclosed::EventKind::LiftOff
+                            | rodloop_diagram::enclosed::EventKind::Landing
+                    )
+                })
+                .map(|e| e.lbar),
+        )
         .collect();
     cuts.push(
         d.points
@@ -269,8 +281,19 @@ fn print(d: &EnclosedDiagram, scene: &Scene, opts: &EnclosedDiagramOptions, out:
         );
     }
     for e in &d.events {
+        use rodloop_diagram::enclosed::EventKind;
+        let what = match e.kind {
+            EventKind::Detachment => {
+                "the last contact force is 0; below it the loop is free".to_string()
+            }
+            EventKind::BranchPoint => format!(
+                "family {}: the index changes {} -> {}",
+                e.family, e.index_before, e.index_after
+            ),
+            _ => "lambda_min = 0".to_string(),
+        };
         outln!(
-            "  {} of branch {} at lbar = {:.12} ± {:.0e} (lambda_min = 0; E R/(pi D) = {:.10})",
+            "  {} of branch {} at lbar = {:.12} ± {:.0e} ({what}; E R/(pi D) = {:.10})",
             e.kind.as_str(),
             e.branch,
             e.lbar,
@@ -287,6 +310,9 @@ fn print(d: &EnclosedDiagram, scene: &Scene, opts: &EnclosedDiagramOptions, out:
         outln!(
             "  the lowest state has lifted off the wall for {a:.9} < lbar < {b:.9} (the Sec. 3.2 hypothesis fails there)"
         );
+    }
+    for n in &d.notes {
+        eprintln!("note: {n}");
     }
     for w in &d.warnings {
         eprintln!("warning: {w}");

@@ -307,16 +307,19 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
         nstates = d.points.len(),
         nbranches = branches.len(),
         ncrit = d.critical.len(),
-        nev = crate::output::plural(d.events.len() as u64, "lift-off or landing event"),
+        nev = crate::output::plural(d.events.len() as u64, "special point"),
     );
     for w in &d.warnings {
         let _ = writeln!(h, "<p class=\"note\">warning: {}</p>", esc(w));
+    }
+    for n in &d.notes {
+        let _ = writeln!(h, "<p class=\"note\">note: {}</p>", esc(n));
     }
     h.push_str("<section id=\"diagram\">\n<h2>1. Energy against length</h2>\n");
     h.push_str(&fig(
         &fig_energy,
         "bending energy of the enclosed loops against normalised length",
-        "Bending energy E R/(πD₀) of every sampled state against L̄ = L/(2πR) (the enclosed counterpart of Fig. 3a). One colour per branch; solid: stable (lowest energy, Hessian index 0 on the tangent space of the active constraints), dashed: metastable, dotted: unstable. The light band marks states that have lifted off the wall (somewhere R − |r| &gt; 0); elsewhere the loop is the surface loop of the exact layer. Diamonds: exchanges E<sub>a</sub> = E<sub>b</sub>; open squares: collapses onto an m-fold great circle; circles: lift-off and landing (λ<sub>min</sub> = 0, Eq. (38)).",
+        "Bending energy E R/(πD₀) of every sampled state against L̄ = L/(2πR) (the enclosed counterpart of Fig. 3a). One colour per branch; solid: stable (lowest energy, Hessian index 0 on the tangent space of the active constraints), dashed: metastable, dotted: unstable. The light band marks states that have lifted off the wall (somewhere R − |r| &gt; 0); elsewhere the loop is the surface loop of the exact layer. Diamonds: exchanges E<sub>a</sub> = E<sub>b</sub>; open squares: collapses onto an m-fold great circle; circles: lift-off and landing (λ<sub>min</sub> = 0, Eq. (38)), detachment (the last contact force vanishes) and branch points (the index of a lifted-off sheet changes).",
         "fig-energy",
     ));
     h.push_str("</section>\n");
@@ -344,7 +347,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     if d.events.is_empty() {
         h.push_str("<p>No branch lifts off or lands inside the range.</p>\n");
     } else {
-        h.push_str("<p>Lift-off and landing: where λ<sub>min</sub> of a branch's surface loop crosses zero, i.e. k²(L̄) = 1/2 (Eq. (38)), bisected on the exact layer (<code>special_points.csv</code>).</p>\n<table id=\"events-table\"><thead><tr><th>event</th><th>branch</th><th>L̄</th><th>error estimate</th><th>E R/(πD₀)</th><th>index below</th><th>index above</th></tr></thead><tbody>\n");
+        h.push_str("<p>Special points (<code>special_points.csv</code>). Lift-off and landing: where λ<sub>min</sub> of a branch's surface loop crosses zero, i.e. k²(L̄) = 1/2 (Eq. (38)) for a uniform rod, bisected on the exact layer (located on re-solved surface states for a two-segment rod). Detachment: where the last contact force of a lifted-off branch vanishes and the loop leaves the wall (below it the loop is free). Branch point: where the Hessian index of a lifted-off sheet changes, at the interpolated root of the crossing eigenvalue.</p>\n<table id=\"events-table\"><thead><tr><th>event</th><th>branch</th><th>L̄</th><th>error estimate</th><th>E R/(πD₀)</th><th>index below</th><th>index above</th></tr></thead><tbody>\n");
         for e in &d.events {
             let _ = writeln!(
                 h,

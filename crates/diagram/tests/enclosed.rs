@@ -144,6 +144,10 @@ fn events_separate_attached_and_lifted_off_solves() {
         let (lifted, attached) = match e.kind {
             EventKind::Landing => (below, above),
             EventKind::LiftOff => (above, below),
+            // Below L̄ = 1 only (tests/enclosed_detachment.rs); two-segment rods only.
+            EventKind::Detachment | EventKind::BranchPoint => {
+                panic!("no detachment or branch point in [1, 3]: {e:?}")
+            }
         };
         let (_, _, gap_l) = enclosed_energy(eta, lifted, 64);
         let (_, _, gap_a) = enclosed_energy(eta, attached, 64);

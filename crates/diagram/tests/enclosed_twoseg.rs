@@ -11,6 +11,7 @@ use rodloop_diagram::enclosed::{
 };
 use rodloop_exact::diagram::CriticalKind;
 use rodloop_exact::eta_of_branch;
+use rodloop_solver::enclosed::descent::{descend, unstable_direction};
 use rodloop_solver::enclosed::{solve_branch, EnclosedOptions, SurfaceSource};
 use rodloop_solver::{solve_robust, Accuracy, SolveOptions, StartShape, Stiffness};
 
@@ -44,6 +45,18 @@ fn mild_diagram() -> &'static EnclosedDiagram {
         o.branches = Some(vec![2]);
         o.step = 0.02;
         enclosed_diagram(&o).expect("mild enclosed diagram")
+    })
+}
+
+/// Branches 1 and 2 of the sharp rod around the exchange 1 → 2 and up to where branch 2's
+/// surface loop is stable on the sphere (1.50): where the traced figure-eight of the whole
+/// diagram has index 1 in the ball.
+fn sharp_window() -> &'static EnclosedDiagram {
+    static D: OnceLock<EnclosedDiagram> = OnceLock::new();
+    D.get_or_init(|| {
+        let mut o = EnclosedDiagramOptions::new(1.0, sharp(), 1.36, 1.52);
+        o.branches = Some(vec![1, 2]);
+        enclosed_diagram(&o).expect("two-segment enclosed diagram, 1.36 to 1.52")
     })
 }
 
@@ -97,10 +110,13 @@ fn check_optimal(d: &EnclosedDiagram) {
         assert!(p.stationarity <= 1e-8, "{p:?}");
         let s = p.surface_energy.expect("surface energy");
         match p.source {
-            // Below the surface loop of the same sheet (which needs a pulling wall).
+            // Below the surface loop of the same sheet (which needs a pulling wall), to the
+            // state's discretisation error (next to a landing the drop is below it: the
+            // mild rod at L̄ = 1.6305, gap 4.7e-6 R, lies 8e-8 above at an estimate of
+            // 2.6e-7).
             PointSource::Model => {
                 if !p.attached {
-                    assert!(p.energy < s, "{p:?}");
+                    assert!(p.energy < s + p.energy_error, "{p:?}");
                 }
             }
             PointSource::Surface => assert!(p.attached && p.lambda_min > 0.0, "{p:?}"),
@@ -195,4 +211,87 @@ fn the_exchange_of_the_lowest_branch_agrees_with_independent_solves() {
             "at lbar = {x}: E_1 = {e1} ± {d1:.1e}, E_2 = {e2} ± {d2:.1e}"
         );
     }
+}
+
+#[test]
+fn the_unstable_figure_eight_descends_to_a_stable_lower_state() {
+    // The sharp rod's branch 2 at L̄ = 1.4, solved from `rodloop solve`'s surface loop, is a
+    // saddle in the ball (index 1 on the tangent space of its active constraints).
+    let eta = 1;
+    let lbar = 1.4;
+    let (res, _) = solve_robust(
+        1.0,
+        lbar,
+        &sharp(),
+        &StartShape::Euler { l: eta },
+        Accuracy::Default,
+        Some(eta),
+        &SolveOptions::default(),
+    )
+    .unwrap();
+    let src = SurfaceSource::Numeric(Box::new(res.equilibrium));
+    let opts = EnclosedOptions::default();
+    let b = solve_branch(
+        1.0,
+        lbar,
+        &sharp(),
+        &src,
+        nonuniform_cells(Accuracy::Default, eta),
+        &opts,
+    )
+    .unwrap();
+    let saddle = &b.quarter;
+    assert_eq!(saddle.stability(1e-6).unwrap().0, 1);
+    let (mu, v) = unstable_direction(saddle, 1e-6)
+        .unwrap()
+        .expect("an unstable direction");
+    assert!(mu < 0.0);
+    assert!(v.iter().all(|x| x.is_finite()));
+    // Newton after a step along it reaches a lower state that is first-order optimal and
+    // stable (index 0).
+    let lower = [0.05, 0.15, 0.3, 0.5]
+        .iter()
+        .find_map(|&a| {
+            descend(saddle, a, &opts)
+                .ok()
+                .and_then(|v| v.into_iter().next())
+        })
+        .expect("a lower state");
+    assert!(
+        lower.energy() < saddle.energy() - 1e-5,
+        "{} {}",
+        lower.energy(),
+        saddle.energy()
+    );
+    let (lmin, gmin, comp, stat) = lower.optimality().unwrap();
+    assert!(lmin >= -1e-8 && gmin >= -1e-10 && comp <= 1e-9 && stat <= 1e-8);
+    assert_eq!(lower.stability(1e-6).unwrap().0, 0);
+}
+
+#[test]
+fn the_lowest_states_next_to_the_exchange_are_stable() {
+    // Between the exchange 1 → 2 and L̄ = 1.52 the lowest state has index 0 (at L̄ = 1.4 the
+    // surface figure-eight's own enclosed relaxation is a saddle, see the test above; the
+    // whole diagram traced that saddle and descends from it), and nothing is reported as
+    // unstable-lowest.
+    let d = sharp_window();
+    for w in &d.warnings {
+        assert!(!w.contains("index >= 1"), "{w}");
+    }
+    let lowest: Vec<_> = d.points.iter().filter(|p| p.lowest).collect();
+    assert!(lowest.len() >= 3, "{:?}", d.points);
+    for p in &lowest {
+        assert_eq!(p.index, 0, "{p:?}");
+    }
+    // A lowest figure-eight agrees with an independent enclosed solve from `rodloop solve`'s
+    // surface loop at its length, which reaches the same stable state there.
+    let p = lowest
+        .iter()
+        .find(|p| p.branch == 2 && p.lbar > 1.4 && p.lbar < 1.47)
+        .expect("a lowest figure-eight between 1.4 and 1.47");
+    let (_, _, e, err, _) = independent(&sharp(), 2, p.lbar);
+    assert!(
+        (p.energy - e).abs() <= 3.0 * (err + p.energy_error) + 1e-9,
+        "{p:?} against {e} ± {err:.1e}"
+    );
 }

@@ -80,7 +80,7 @@ pub struct DiagramPoint {
 /// A special point of `special_points.csv` (fold, branch point, crossing, collapse).
 #[derive(Clone, Debug)]
 pub struct SpecialMark {
-    /// `fold`, `branch_point`, `lift-off` or `landing` (enclosed diagrams).
+    /// `fold`, `branch_point`, `lift-off`, `landing` or `detachment` (enclosed diagrams).
     pub kind: String,
     /// `L̄`.
     pub lbar: f64,
@@ -316,7 +316,9 @@ impl DiagramData {
                     })?;
             for (k, row) in sr.iter().enumerate() {
                 let kind = row.get(ki).cloned().unwrap_or_default();
-                if ["fold", "branch_point", "lift-off", "landing"].contains(&kind.as_str()) {
+                if ["fold", "branch_point", "lift-off", "landing", "detachment"]
+                    .contains(&kind.as_str())
+                {
                     special.push(SpecialMark {
                         kind,
                         lbar: lb[k],
@@ -457,6 +459,12 @@ fn special_style(kind: &str) -> (Shape, &'static str, f64, &'static str) {
         "fold" => (Shape::Triangle, "#555", 3.5, "fold (turning point in L̄)"),
         "lift-off" => (Shape::Circle, "#e08a00", 4.5, "lift-off (λ_min = 0)"),
         "landing" => (Shape::Circle, "#2a8a2a", 4.5, "landing (λ_min = 0)"),
+        "detachment" => (
+            Shape::Circle,
+            "#6a3d9a",
+            4.5,
+            "detachment (last contact force 0)",
+        ),
         _ => (Shape::Circle, "#b00", 3.5, "branch point (pitchfork)"),
     }
 }
@@ -528,7 +536,7 @@ pub fn energy_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, FigureEr
             size,
         });
     }
-    for kind in ["fold", "branch_point", "lift-off", "landing"] {
+    for kind in ["fold", "branch_point", "lift-off", "landing", "detachment"] {
         if special_kinds.contains(kind) {
             let (shape, color, _, label) = special_style(kind);
             legend.push(LegendItem::Mark {

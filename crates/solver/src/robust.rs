@@ -92,24 +92,53 @@ impl Strategy {
 /// continuation steps plus Newton solves (the direct solve is not limited): past it, no new
 /// attempt is started and a running continuation stops, with a message. A count, not a
 /// wall-clock time, so that a result does not depend on the machine's load.
-const BUDGET: usize = 1500;
+pub const BUDGET: usize = 1500;
 
-/// Work spent by a fallback, against [`BUDGET`].
+/// Which attempts [`solve_robust_with`] makes: the direct and shifted starts, then the
+/// continuation fallbacks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Fallbacks {
+    /// Newton from the start and from the start with its origin moved (`false`: the caller
+    /// has tried those already).
+    pub starts: bool,
+    /// Continuation in `D1/D0` from the mild contrasts 0.9 and 0.6.
+    pub homotopy: bool,
+    /// Continuation in `L̄` from other lengths of the branch's range.
+    pub lbar_path: bool,
+    /// Work budget of each of the two (see [`BUDGET`]).
+    pub budget: usize,
+}
+
+impl Default for Fallbacks {
+    /// Both fallbacks with the budget [`BUDGET`] (what [`solve_robust`] uses).
+    fn default() -> Self {
+        Self {
+            starts: true,
+            homotopy: true,
+            lbar_path: true,
+            budget: BUDGET,
+        }
+    }
+}
+
+/// Work spent by a fallback, against its budget.
 struct Budget {
     spent: std::cell::Cell<usize>,
+    limit: usize,
 }
 
 impl Budget {
-    fn new() -> Self {
+    fn new(limit: usize) -> Self {
         Self {
             spent: std::cell::Cell::new(0),
+            limit,
         }
     }
 
     /// Spend one unit; `false` once the budget is used up.
     fn spend(&self) -> bool {
         self.spent.set(self.spent.get() + 1);
-        self.spent.get() <= BUDGET
+        self.spent.get() <= self.limit
     }
 }
 
@@ -128,6 +157,33 @@ pub fn solve_robust(
     accuracy: Accuracy,
     eta: Option<u32>,
     opts: &SolveOptions,
+) -> Result<(AccurateEquilibrium, Strategy), SolverError> {
+    solve_robust_with(
+        radius,
+        lbar,
+        stiffness,
+        start,
+        accuracy,
+        eta,
+        opts,
+        Fallbacks::default(),
+    )
+}
+
+/// [`solve_robust`] with a choice of the attempts ([`Fallbacks`]): the direct and shifted
+/// starts, the continuation fallbacks, and their budget. Used by the branch diagram of
+/// two-segment rods, which runs the starts and the homotopies in separate passes and follows
+/// families in `L̄` itself.
+#[allow(clippy::too_many_arguments)]
+pub fn solve_robust_with(
+    radius: f64,
+    lbar: f64,
+    stiffness: &Stiffness,
+    start: &StartShape,
+    accuracy: Accuracy,
+    eta: Option<u32>,
+    opts: &SolveOptions,
+    fallbacks: Fallbacks,
 ) -> Result<(AccurateEquilibrium, Strategy), SolverError> {
     let periods = start.periods(lbar)?;
     let n = accuracy.cells(periods, stiffness);
@@ -157,9 +213,13 @@ pub fn solve_robust(
         let acc = finish_with_accuracy(main, radius, stiffness, start, accuracy, opts)?;
         return Ok((acc, Strategy::Direct));
     }
-    let reason = match attempt(start) {
-        Ok(acc) => return Ok((acc, Strategy::Direct)),
-        Err(r) => r,
+    let reason = if fallbacks.starts {
+        match attempt(start) {
+            Ok(acc) => return Ok((acc, Strategy::Direct)),
+            Err(r) => r,
+        }
+    } else {
+        "was not tried (nor the shifted starts)".to_string()
     };
     // The start with its origin moved along the loop: a non-uniform rod meets the shape
     // elsewhere, and another arrangement may be within Newton's reach.
@@ -168,8 +228,8 @@ pub fn solve_robust(
         .iter()
         .map(|f| f * per)
         .collect();
-    let budget = Budget::new();
-    for &shift in &shifts {
+    let budget = Budget::new(fallbacks.budget);
+    for &shift in shifts.iter().filter(|_| fallbacks.starts) {
         if !budget.spend() {
             break;
         }
@@ -180,7 +240,7 @@ pub fn solve_robust(
     }
     let mut tried = Vec::new();
     // Continuation in ln(D1/D0) from a mild contrast, where the start is within reach.
-    if let Stiffness::Tanh { d0, d1, .. } = stiffness {
+    if let (true, Stiffness::Tanh { d0, d1, .. }) = (fallbacks.homotopy, stiffness) {
         let target = d1 / d0;
         // Energies of the mild-contrast states already followed: starts that relax to the same
         // state are not followed twice.
@@ -189,7 +249,8 @@ pub fn solve_robust(
             for shift in std::iter::once(0.0).chain(shifts.iter().copied()) {
                 if !budget.spend() {
                     tried.push(format!(
-                        "stopped after {BUDGET} continuation steps and solves, the work budget of the fallback"
+                        "stopped after {} continuation steps and solves, the work budget of the fallback",
+                        fallbacks.budget
                     ));
                     break;
                 }
@@ -231,9 +292,10 @@ pub fn solve_robust(
     }
     // The same family at other lengths of the branch's range at the scene's stiffness,
     // followed in L̄ (its own work budget).
-    let budget = Budget::new();
-
-    if let (Some(want), StartShape::Euler { .. } | StartShape::Exact { .. }) = (eta, start) {
+    let budget = Budget::new(fallbacks.budget);
+    if let (true, Some(want), StartShape::Euler { .. } | StartShape::Exact { .. }) =
+        (fallbacks.lbar_path, eta, start)
+    {
         let e = f64::from(want);
         let (lo, hi) = (if want == 1 { 0.0 } else { e - 1.0 }, e + 1.0);
         let mut seeds: Vec<f64> = [0.5, 0.25, 0.75]

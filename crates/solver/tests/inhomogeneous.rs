@@ -194,3 +194,51 @@ fn robust_solve_reaches_a_state_by_continuation_in_lbar() {
     );
     assert!(diff <= 3.0 * acc.energy_error + 1e-12);
 }
+
+#[test]
+fn robust_solve_in_separate_passes_gives_the_same_state() {
+    // D1/D0 = 0.001, branch 1 (η = 2) at L̄ = 1.5: no direct or shifted start converges onto
+    // the branch, a homotopy from D1/D0 = 0.9 does. Run as the branch diagram does (the
+    // starts alone, then the homotopies alone), the passes give what the whole solve gives.
+    use rodloop_solver::{solve_robust, solve_robust_with, Accuracy, Fallbacks, Strategy};
+    let st = Stiffness::Tanh {
+        d0: 1.0,
+        d1: 0.001,
+        s0: 0.3,
+        s1: 0.8,
+        gamma: 200.0,
+    };
+    let start = StartShape::Euler { l: 2 };
+    let opts = SolveOptions::default();
+    let (whole, strategy) =
+        solve_robust(1.0, 1.5, &st, &start, Accuracy::Fast, Some(2), &opts).unwrap();
+    assert!(
+        matches!(strategy, Strategy::ContinuationInD1 { .. }),
+        "{strategy:?}"
+    );
+    let only =
+        |f: Fallbacks| solve_robust_with(1.0, 1.5, &st, &start, Accuracy::Fast, Some(2), &opts, f);
+    let none = Fallbacks {
+        homotopy: false,
+        lbar_path: false,
+        ..Fallbacks::default()
+    };
+    let err = only(none).unwrap_err().to_string();
+    assert!(err.contains("the direct solve"), "{err}");
+    let (passes, strategy) = only(Fallbacks {
+        starts: false,
+        lbar_path: false,
+        ..Fallbacks::default()
+    })
+    .unwrap();
+    assert!(
+        matches!(strategy, Strategy::ContinuationInD1 { .. }),
+        "{strategy:?}"
+    );
+    assert!(
+        (passes.energy.total - whole.energy.total).abs() <= 1e-12 * whole.energy.total,
+        "{} vs {}",
+        passes.energy.total,
+        whole.energy.total
+    );
+}

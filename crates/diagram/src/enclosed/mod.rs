@@ -25,7 +25,12 @@
 //!   seam, every node a contact end passes would be an event and a restart. `L̄` is a good
 //!   parameter on the lifted-off parts of the paper's branches in `[1, 3]` (no folds: a fold
 //!   would show as Newton failing under step halving, which is reported as a warning and
-//!   ends the trace there, as near `L̄ = 0.813` on branch 2).
+//!   ends the trace there). Below `L̄ = 1` branch 2 (the figure-eight, held at two points)
+//!   leaves the wall at `L̄* = K(k)/(πk) = 0.81286` (`2E(k) = K(k)`) where Euler's free
+//!   figure-eight just fits; its translations lose their stiffness there, so the step is
+//!   retried with them pinned ([`EnclosedState::continue_free`](rodloop_solver::enclosed::EnclosedState::continue_free))
+//!   and the free loop traced on; the point is a special point (`detachment`), located
+//!   by the scale invariance of the free discrete loop.
 //! * **Exchanges** come from the exact layer's list (the surface diagram): an exchange
 //!   between two attached states is the surface one, exactly. Where a branch of an exchange
 //!   has lifted off, `E_a(L̄) = E_b(L̄)` is solved again by the secant method on re-solved
@@ -38,7 +43,9 @@
 //!
 //! Non-uniform rods (two-segment stiffness, Eq. (51)) have no exact layer and their
 //! branches come as families: `nonuniform.rs` takes the attached parts, events and
-//! lifted-off starts from the surface families instead (see its docs).
+//! lifted-off starts from the surface families instead (see its docs);
+//! `nonuniform_descent.rs` adds the families below unstable lowest states and
+//! `nonuniform_special.rs` the branch points and the sorting of the traces' stops.
 
 #![allow(clippy::needless_range_loop)]
 
@@ -56,7 +63,9 @@ use crate::DiagramError;
 
 mod critical;
 mod nonuniform;
+mod nonuniform_descent;
 mod nonuniform_exchange;
+mod nonuniform_special;
 mod trace;
 
 pub use nonuniform::nonuniform_cells;
@@ -200,6 +209,14 @@ pub enum EventKind {
     LiftOff,
     /// Lifted off below, attached above.
     Landing,
+    /// The loop leaves the wall altogether (decreasing `L̄`): the forces at its last,
+    /// point-like contacts vanish, and below it the branch is a free elastica inside the
+    /// ball (branch 2: Euler's figure-eight, whose tips touch the wall at
+    /// `L̄ = K(k)/(πk)`, `2E(k) = K(k)`).
+    Detachment,
+    /// An eigenvalue on the tangent space of the active constraints crosses zero on a
+    /// lifted-off sheet (the Hessian index changes): another family meets the sheet there.
+    BranchPoint,
 }
 
 impl EventKind {
@@ -208,6 +225,8 @@ impl EventKind {
         match self {
             EventKind::LiftOff => "lift-off",
             EventKind::Landing => "landing",
+            EventKind::Detachment => "detachment",
+            EventKind::BranchPoint => "branch_point",
         }
     }
 }
@@ -221,11 +240,12 @@ pub struct EnclosedEvent {
     pub branch: u32,
     /// Family within the branch (0 for a uniform rod).
     pub family: u32,
-    /// `L̄` of the event (`λ_min = 0`; `k² = 1/2` for a uniform rod).
+    /// `L̄` of the event (`λ_min = 0`, `k² = 1/2` for a uniform rod; for a detachment, the
+    /// last contact force 0).
     pub lbar: f64,
     /// Its error estimate.
     pub error_estimate: f64,
-    /// Energy at the event (exact layer).
+    /// Energy at the event (exact layer; for a detachment, the free loop's).
     pub energy: f64,
     /// Index just below and just above.
     pub index_before: usize,
@@ -258,6 +278,8 @@ pub struct EnclosedDiagram {
     pub critical: Vec<EnclosedCritical>,
     /// Things the caller should print.
     pub warnings: Vec<String>,
+    /// Explained ends of traces (printed as notes).
+    pub notes: Vec<String>,
     /// Cells of the lifted-off trace (`N` of `N/4, N/2, N`) per branch.
     pub cells: Vec<(u32, usize)>,
     /// Wall-clock seconds: total, attached samples (index checks), lifted-off traces,
@@ -429,6 +451,7 @@ pub fn enclosed_diagram(opts: &EnclosedDiagramOptions) -> Result<EnclosedDiagram
         events,
         critical,
         warnings,
+        notes: Vec::new(),
         cells,
         seconds: timings,
     })

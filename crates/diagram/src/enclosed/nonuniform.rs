@@ -44,8 +44,10 @@ use rodloop_exact::diagram::{Critical, CriticalKind};
 use rodloop_solver::enclosed::{enclosed_cells, solve_branch, EnclosedOptions, SurfaceSource};
 use rodloop_solver::{solve_from_state, Accuracy, Equilibrium, SolverError, SurfaceModel};
 
+use super::nonuniform_descent::descend_unstable;
 use super::nonuniform_exchange::{interp, locate_crossing, lowest_at, mean_stiffness, CIRCLE};
-use super::trace::{follow, Levels};
+use super::nonuniform_special::{branch_points, classify_stops};
+use super::trace::{follow, Levels, TraceStop};
 use super::{
     EnclosedCritical, EnclosedDiagram, EnclosedDiagramOptions, EnclosedEvent, EnclosedPoint,
     EnclosedTimings, EventKind, PointSource,
@@ -85,8 +87,28 @@ pub(super) struct SheetOut {
     pub(super) levels: Vec<Levels>,
     events: Vec<EnclosedEvent>,
     warnings: Vec<String>,
+    /// Where its lifted-off traces stopped (classified in `nonuniform_special.rs`).
+    pub(super) stops: Vec<TraceStop>,
     attached_s: f64,
     lifted_s: f64,
+}
+
+impl SheetOut {
+    /// A sheet of branch `branch` (`eta`), family `family`, with no states yet.
+    pub(super) fn empty(branch: u32, eta: u32, family: u32) -> Self {
+        Self {
+            branch,
+            eta,
+            family,
+            points: Vec::new(),
+            levels: Vec::new(),
+            events: Vec::new(),
+            warnings: Vec::new(),
+            stops: Vec::new(),
+            attached_s: 0.0,
+            lifted_s: 0.0,
+        }
+    }
 }
 
 /// The surface equilibrium of `sheet` at `x` with `cells` cells: Newton at the tracing
@@ -265,18 +287,28 @@ fn surface_point(sheet: &TracedBranch, k: usize) -> EnclosedPoint {
 
 /// Newton options of the continuation steps: a step that needs more than 30 iterations is
 /// halved instead (most steps take 2–6; with 12, steps that were converging slowly, at
-/// residuals 1e-8, stopped the traces; the default 80 makes a failing step 2.7× dearer).
+/// residuals 1e-8, stopped the traces; the default 80 makes a failing step 2.7× dearer), and
+/// one that has not halved its residual in 6 iterations is given up (it is shedding the old
+/// contact set node by node; a shorter step does better).
 pub(super) fn step_options() -> EnclosedOptions {
     EnclosedOptions {
         max_iterations: 30,
+        stall_window: 6,
         ..EnclosedOptions::default()
     }
 }
 
-/// Step `t` to `x` in steps of at most `0.01`, halving a failed step up to 6 times.
+/// Step `t` to `x` in steps of at most `0.01`, halving a failed step up to 6 times; after
+/// the first step, each step starts from the secant predictor through the last two states
+/// (the plain warm start where that fails).
 pub(super) fn walk(t: &Levels, x: f64) -> Result<Levels, SolverError> {
-    let opts = step_options();
+    walk_with(t, x, &step_options())
+}
+
+/// [`walk`] with the Newton options `opts`.
+pub(super) fn walk_with(t: &Levels, x: f64, opts: &EnclosedOptions) -> Result<Levels, SolverError> {
     let mut cur = t.clone();
+    let mut prev: Option<Levels> = None;
     let mut h = (x - cur.lbar).clamp(-0.01, 0.01);
     let mut fails = 0;
     while (x - cur.lbar).abs() > 1e-15 {
@@ -285,8 +317,12 @@ pub(super) fn walk(t: &Levels, x: f64) -> Result<Levels, SolverError> {
         } else {
             cur.lbar + h
         };
-        match cur.step_to(to, &opts) {
-            Ok(n) => cur = n,
+        let predicted = match &prev {
+            Some(p) => cur.step_predicted(p, to, opts),
+            None => Err(SolverError::InvalidInput("no predictor".into())),
+        };
+        match predicted.or_else(|_| cur.step_to(to, opts)) {
+            Ok(n) => prev = Some(std::mem::replace(&mut cur, n)),
             Err(e) => {
                 fails += 1;
                 if fails > 6 {
@@ -299,11 +335,94 @@ pub(super) fn walk(t: &Levels, x: f64) -> Result<Levels, SolverError> {
     Ok(cur)
 }
 
+/// `E_N` of `sheet` at `x` by cubic Hermite interpolation of its traced states (energy at the
+/// tracing resolution and `dE/dL̄`); `None` outside them.
+fn hermite_energy(sheet: &TracedBranch, x: f64) -> Option<f64> {
+    let pts = &sheet.points;
+    let k = pts.iter().position(|p| p.value >= x)?;
+    if k == 0 {
+        return ((pts[0].value - x).abs() < 1e-12).then_some(pts[0].energy_trace);
+    }
+    let (a, b) = (&pts[k - 1], &pts[k]);
+    let h = b.value - a.value;
+    if h <= 0.0 {
+        return None;
+    }
+    let t = (x - a.value) / h;
+    let (h00, h10) = (
+        2.0 * t.powi(3) - 3.0 * t * t + 1.0,
+        t.powi(3) - 2.0 * t * t + t,
+    );
+    let (h01, h11) = (-2.0 * t.powi(3) + 3.0 * t * t, t.powi(3) - t * t);
+    Some(h00 * a.energy_trace + h10 * h * a.slope + h01 * b.energy_trace + h11 * h * b.slope)
+}
+
+/// Largest relative energy difference by which a sheet's traced states duplicate
+/// another's ([`duplicate_ranges`]).
+const DUPLICATE_TOL: f64 = 1e-7;
+
+/// For each sheet, the `L̄` ranges on which an earlier sheet of the same branch (in `order`)
+/// carries the same surface states: every traced state of the sheet strictly inside the
+/// other's range (at least 4) has the other's energy, Hermite-interpolated
+/// ([`hermite_energy`]), to `DUPLICATE_TOL` relative, and the same index. Such states are
+/// the same loop, or its mirror image or a shift of its arclength origin (the surface
+/// families are seeded at several offsets of the soft segment), so their lifted-off states
+/// have the same energies: tracing them again only repeats states.
+fn duplicate_ranges(sheets: &[TracedBranch], order: &[usize]) -> Vec<Vec<(f64, f64)>> {
+    let mut out = vec![Vec::new(); sheets.len()];
+    for (pos, &j) in order.iter().enumerate() {
+        let sj = &sheets[j];
+        for &i in &order[..pos] {
+            let si = &sheets[i];
+            if si.branch != sj.branch || si.points.len() < 2 || sj.points.is_empty() {
+                continue;
+            }
+            let (lo, hi) = (si.points[0].value, si.points[si.points.len() - 1].value);
+            let inside: Vec<_> = sj
+                .points
+                .iter()
+                .filter(|q| q.value > lo && q.value < hi)
+                .collect();
+            if inside.len() < 4 {
+                continue;
+            }
+            let same = inside.iter().all(|q| {
+                let near = si.points.iter().min_by(|u, v| {
+                    (u.value - q.value)
+                        .abs()
+                        .total_cmp(&(v.value - q.value).abs())
+                });
+                hermite_energy(si, q.value).is_some_and(|e| {
+                    (e - q.energy_trace).abs() <= DUPLICATE_TOL * q.energy_trace.abs().max(1.0)
+                }) && near.is_some_and(|n| n.index == q.index)
+            });
+            if same {
+                let a = lo.max(sj.points[0].value);
+                let b = hi.min(sj.points[sj.points.len() - 1].value);
+                out[j].push((a, b));
+            }
+        }
+        // One range per overlapping run.
+        let r = &mut out[j];
+        r.sort_by(|u, v| u.0.total_cmp(&v.0));
+        let mut merged: Vec<(f64, f64)> = Vec::new();
+        for &(a, b) in r.iter() {
+            match merged.last_mut() {
+                Some(m) if a <= m.1 + 1e-9 => m.1 = m.1.max(b),
+                _ => merged.push((a, b)),
+            }
+        }
+        *r = merged;
+    }
+    out
+}
+
 /// Trace one sheet (see the module docs).
 fn trace_sheet(
     opts: &EnclosedDiagramOptions,
     dopts: &DiagramOptions,
     sheet: &TracedBranch,
+    repeats: &[(f64, f64)],
 ) -> Result<SheetOut, DiagramError> {
     let (lo, hi) = (opts.lbar_min, opts.lbar_max);
     let what = format!(
@@ -318,6 +437,7 @@ fn trace_sheet(
         levels: Vec::new(),
         events: Vec::new(),
         warnings: Vec::new(),
+        stops: Vec::new(),
         attached_s: 0.0,
         lifted_s: 0.0,
     };
@@ -358,7 +478,12 @@ fn trace_sheet(
             )),
         }
     }
-    let chosen = samples(sheet, lo, hi, opts.step);
+    let mut chosen = samples(sheet, lo, hi, opts.step);
+    // Not where another sheet carries the same states (`duplicate_ranges`).
+    chosen.retain(|&k| {
+        let x = pts[k].value;
+        !repeats.iter().any(|&(a, b)| x > a - 1e-9 && x < b + 1e-9)
+    });
     for &k in chosen.iter().filter(|&&k| pts[k].lambda_min > 0.0) {
         out.points.push(surface_point(sheet, k));
     }
@@ -434,7 +559,7 @@ fn trace_sheet(
             &what,
             &step_options(),
             true,
-            &mut out.warnings,
+            &mut out.stops,
         );
         if !reseeded {
             let (t_lo, t_hi) = (
@@ -456,13 +581,29 @@ fn trace_sheet(
         for lv in traced {
             let mut pt = lv.point(sheet.branch, sheet.eta)?;
             // The surface loop at the same length: the traced state, or (where the trace
-            // stopped between samples) re-solved there.
+            // stopped between samples) re-solved there, or, where that re-solve fails,
+            // interpolated between the sheet's traced states with the change between them
+            // as its error.
             let (surf, surf_err) = match xs.iter().position(|&x| (x - lv.lbar).abs() < 1e-12) {
                 Some(i) => {
                     let p = &pts[run[i]];
                     (p.energy, p.energy_error.unwrap_or(0.0))
                 }
-                None => surface_energy(dopts, sheet, lv.lbar)?,
+                None => match surface_energy(dopts, sheet, lv.lbar) {
+                    Ok(v) => v,
+                    Err(e) => {
+                        let k = pts.partition_point(|p| p.value < lv.lbar);
+                        if k == 0 || k == pts.len() {
+                            return Err(e.into());
+                        }
+                        let (a, b) = (&pts[k - 1], &pts[k]);
+                        let t = (lv.lbar - a.value) / (b.value - a.value);
+                        (
+                            a.energy + t * (b.energy - a.energy),
+                            (b.energy - a.energy).abs(),
+                        )
+                    }
+                },
             };
             pt.family = sheet.family;
             pt.sheet = sheet.sheet;
@@ -531,12 +672,22 @@ pub(super) fn nonuniform_diagram(
             samples(&sheets[i], opts.lbar_min, opts.lbar_max, opts.step).len() * sheets[i].cells,
         )
     });
+    let repeats = duplicate_ranges(&sheets, &order);
+    let mut notes: Vec<String> = Vec::new();
+    for (j, r) in repeats.iter().enumerate() {
+        for &(a, b) in r {
+            notes.push(format!(
+                "branch {} (eta = {}) family {} sheet {}: its surface states on {a:.6} < lbar < {b:.6} repeat another sheet's of the branch (energies within {DUPLICATE_TOL:.0e} relative, same index): the same loops, not traced again",
+                sheets[j].branch, sheets[j].eta, sheets[j].family, sheets[j].sheet
+            ));
+        }
+    }
     let outs = run_parallel(
         threads,
         order.clone(),
         &mut |_| {},
         &mut |_: &Result<SheetOut, DiagramError>| {},
-        |i, _| trace_sheet(opts, &dopts, &sheets[i]),
+        |i, _| trace_sheet(opts, &dopts, &sheets[i], &repeats[i]),
     );
     let mut traced: Vec<(usize, SheetOut)> = Vec::new();
     for (i, o) in order.into_iter().zip(outs) {
@@ -546,7 +697,31 @@ pub(super) fn nonuniform_diagram(
         traced.push((i, o));
     }
     traced.sort_by_key(|(i, _)| *i);
-    let (idx, outs): (Vec<usize>, Vec<SheetOut>) = traced.into_iter().unzip();
+    let (mut idx, mut outs): (Vec<usize>, Vec<SheetOut>) = traced.into_iter().unzip();
+    // 2b. Lower states below unstable lowest ones (new families).
+    let tdesc = Instant::now();
+    let (w, parents) = descend_unstable(&mut outs, &idx, threads);
+    warnings.extend(w);
+    idx.extend(parents);
+    timings.lifted_off += tdesc.elapsed().as_secs_f64();
+    // 2c. Branch points where a lifted-off sheet's index changes; the traces' stops.
+    let tbp = Instant::now();
+    let found = run_parallel(
+        threads,
+        (0..outs.len()).collect(),
+        &mut |_| {},
+        &mut |_: &(Vec<EnclosedEvent>, Vec<String>)| {},
+        |i, _| branch_points(&outs[i]),
+    );
+    let mut special: Vec<EnclosedEvent> = Vec::new();
+    for (ev, w) in found {
+        special.extend(ev);
+        warnings.extend(w);
+    }
+    let (stop_notes, stop_warnings) = classify_stops(&outs, &special);
+    notes.extend(stop_notes);
+    warnings.extend(stop_warnings);
+    timings.lifted_off += tbp.elapsed().as_secs_f64();
     let surf: Vec<&TracedBranch> = idx.iter().map(|&i| &sheets[i]).collect();
     // 3. Exchanges of the lowest branch.
     let tc = Instant::now();
@@ -705,6 +880,7 @@ pub(super) fn nonuniform_diagram(
             cells.push((s.branch, n));
         }
     }
+    events.extend(special);
     events.sort_by(|u, v| u.lbar.total_cmp(&v.lbar));
     timings.surface = surface_s;
     timings.total = t0.elapsed().as_secs_f64();
@@ -713,6 +889,7 @@ pub(super) fn nonuniform_diagram(
         events,
         critical,
         warnings,
+        notes,
         cells,
         seconds: timings,
     })

@@ -31,18 +31,83 @@ impl Levels {
             self.states[1].energy(),
             self.states[2].energy(),
         ];
+        // Fourth order where no contact end lies between nodes: fully attached, or free.
         let max_order = match self.states[2].contact(TOUCH) {
-            Ok(c) if c.fraction >= 1.0 => 4.0,
+            Ok(c) if c.fraction >= 1.0 || c.fraction == 0.0 => 4.0,
             _ => LIFTED_OFF_MAX_ORDER,
         };
         let (err, _) = three_level_estimate(e[0], e[1], e[2], max_order);
         (e[2], err)
     }
 
+    /// `true` when the levels are traced with the translations pinned (a loop off the wall).
+    pub(super) fn free(&self) -> bool {
+        self.states[2].model.gauge().pin.is_some()
+    }
+
+    /// Natural-parameter step of each level to `lbar` (a free loop re-centred and pinned,
+    /// [`EnclosedState::step_free`]).
     pub(super) fn step_to(&self, lbar: f64, opts: &EnclosedOptions) -> Result<Levels, SolverError> {
         let mut out = Vec::with_capacity(3);
         for s in &self.states {
-            out.push(s.step_to(lbar, opts)?);
+            out.push(if self.free() {
+                s.step_free(lbar, opts)?
+            } else {
+                s.step_to(lbar, opts)?
+            });
+        }
+        let [a, b, c]: [EnclosedState; 3] = out.try_into().expect("three levels");
+        Ok(Levels {
+            lbar,
+            states: [a, b, c],
+        })
+    }
+
+    /// Natural-parameter step of each level to `lbar` from the secant predictor through
+    /// `prev` ([`EnclosedState::predict_to`]); an error where it does not apply.
+    pub(super) fn step_predicted(
+        &self,
+        prev: &Levels,
+        lbar: f64,
+        opts: &EnclosedOptions,
+    ) -> Result<Levels, SolverError> {
+        let mut out = Vec::with_capacity(3);
+        for (s, p) in self.states.iter().zip(&prev.states) {
+            let (model, z) = s.predict_to(p, lbar)?.ok_or_else(|| {
+                SolverError::InvalidInput("no secant predictor for this pair of states".into())
+            })?;
+            out.push(solve_enclosed(&model, z, opts)?);
+        }
+        let [a, b, c]: [EnclosedState; 3] = out.try_into().expect("three levels");
+        Ok(Levels {
+            lbar,
+            states: [a, b, c],
+        })
+    }
+
+    /// A step to `lbar` that leaves the wall: every level stepped with the translations
+    /// pinned ([`EnclosedState::step_free`]), accepted only where no level touches the wall
+    /// any more (no wall force, every gap above [`TOUCH`]), so that the pin carries no
+    /// force and the state is a free equilibrium. Tried where a trace with the wall's point
+    /// contacts fails: as the contact forces of a loop held by the wall at isolated points
+    /// go to zero, the translations across the contact normals lose their stiffness and the
+    /// unpinned KKT matrix becomes singular.
+    pub(super) fn leave_wall(
+        &self,
+        lbar: f64,
+        opts: &EnclosedOptions,
+    ) -> Result<Levels, SolverError> {
+        let mut out = Vec::with_capacity(3);
+        for s in &self.states {
+            let t = s.step_free(lbar, opts)?;
+            let touching =
+                t.multipliers().iter().any(|&l| l != 0.0) || t.contact(TOUCH)?.fraction > 0.0;
+            if touching {
+                return Err(SolverError::InvalidInput(format!(
+                    "the pinned state at lbar = {lbar} still touches the wall"
+                )));
+            }
+            out.push(t);
         }
         let [a, b, c]: [EnclosedState; 3] = out.try_into().expect("three levels");
         Ok(Levels {
@@ -83,6 +148,44 @@ impl Levels {
             surface_energy: None,
         })
     }
+}
+
+/// Where a free loop traced at `lv` (every level off the wall, uniform rod) would touch the
+/// wall: the discrete equations of a uniform rod on a uniform mesh are invariant under
+/// `L → cL`, `κ → κ/c`, `r → c r`, so the free state at `L̄` stands for the free states at
+/// every length, and the smallest ball holding the nodes has radius `ρ` and centre `c`; it is
+/// the wall at `L̄ R/ρ`. Per level, `ρ` is half the largest node distance (the state is
+/// refused when some node lies outside the ball on that diameter, i.e. when the smallest
+/// ball is not set by two antipodal contacts). Returns `(L̄_d, estimate, E R/(πD) at
+/// L̄_d)`: the finest level's value with the three-level estimate (fourth order, as for
+/// attached states: the contacts are nodes, no contact end moves between them).
+pub(super) fn detachment(lv: &Levels) -> Result<(f64, f64, f64), SolverError> {
+    let mut x = [0.0; 3];
+    for (k, st) in lv.states.iter().enumerate() {
+        let pos = st.model.positions(&st.z)?;
+        let (mut best, mut pair) = (0.0, (0, 0));
+        for i in 0..pos.len() {
+            for j in i + 1..pos.len() {
+                let d = (pos[i] - pos[j]).norm();
+                if d > best {
+                    best = d;
+                    pair = (i, j);
+                }
+            }
+        }
+        let mid = 0.5 * (pos[pair.0] + pos[pair.1]);
+        let rho = 0.5 * best;
+        if pos.iter().any(|r| (r - mid).norm() > rho * (1.0 + 1e-9)) {
+            return Err(SolverError::InvalidInput(format!(
+                "the free loop at lbar = {} is not held by two antipodal points of its smallest ball",
+                lv.lbar
+            )));
+        }
+        x[k] = lv.lbar * st.model.radius() / rho;
+    }
+    let (err, _) = three_level_estimate(x[0], x[1], x[2], 4.0);
+    let energy = lv.states[2].energy() * lv.lbar / x[2];
+    Ok((x[2], err, energy))
 }
 
 pub(super) fn exact(eta: u32, lbar: f64) -> Result<ExactLoop, SolverError> {
@@ -218,7 +321,19 @@ pub(super) fn trace_detached(
         states: [seed.quarter, seed.coarse, seed.fine],
     };
     let what = format!("branch {} (eta = {eta})", branch_of_eta(eta));
-    Ok(follow(first, xs, mid, &what, &sopts, false, warnings))
+    let mut stops = Vec::new();
+    let traced = follow(first, xs, mid, &what, &sopts, false, &mut stops);
+    warnings.extend(stops.into_iter().map(|s| s.text));
+    Ok(traced)
+}
+
+/// Where a trace stopped because Newton failed under step halving.
+#[derive(Clone, Debug)]
+pub(super) struct TraceStop {
+    /// `L̄` of the last state reached.
+    pub(super) lbar: f64,
+    /// The warning text (what stopped, why, the last state's contact).
+    pub(super) text: String,
 }
 
 /// Follow a lifted-off state `first` (at `xs[mid]`) through the sample lengths `xs` both
@@ -227,7 +342,7 @@ pub(super) fn trace_detached(
 /// step is
 /// retried once as a jump past the target and back (over a singular point such as a
 /// pitchfork of the lifted-off branch), and a trace that stops keeps the last state it
-/// reached. Returns the states in increasing `L̄`.
+/// reached. A stop is recorded in `stops`. Returns the states in increasing `L̄`.
 pub(super) fn follow(
     first: Levels,
     xs: &[f64],
@@ -235,7 +350,7 @@ pub(super) fn follow(
     what: &str,
     sopts: &EnclosedOptions,
     extend: bool,
-    warnings: &mut Vec<String>,
+    stops: &mut Vec<TraceStop>,
 ) -> Vec<Levels> {
     let mut up = vec![first.clone()];
     let mut down = vec![first];
@@ -248,6 +363,7 @@ pub(super) fn follow(
         };
         'targets: for &x in &targets {
             let mut cur = out.last().expect("seed").clone();
+            let mut prev: Option<Levels> = out.len().checked_sub(2).map(|k| out[k].clone());
             let mut h = x - cur.lbar;
             let mut halvings = 0;
             while (x - cur.lbar).abs() > 1e-14 {
@@ -256,14 +372,42 @@ pub(super) fn follow(
                 } else {
                     cur.lbar + h
                 };
-                match cur.step_to(to, sopts) {
-                    Ok(next) => cur = next,
+                let predicted = match &prev {
+                    Some(p) if !cur.free() => cur.step_predicted(p, to, sopts),
+                    _ => Err(SolverError::InvalidInput("no predictor".into())),
+                };
+                // The plain warm start as a fallback once the step has been halved twice
+                // (trying it on every failed predicted step doubled the cost of failures).
+                let try_plain = prev.is_none() || cur.free() || halvings >= 2;
+                let stepped = predicted
+                    .or_else(|e| {
+                        if try_plain {
+                            cur.step_to(to, sopts)
+                        } else {
+                            Err(e)
+                        }
+                    })
+                    .or_else(|e| {
+                        // Point contacts whose force is vanishing: try leaving the wall.
+                        let point_like = !cur.free()
+                            && cur.states[2]
+                                .contact(TOUCH)
+                                .is_ok_and(|c| c.fraction > 0.0 && c.fraction < 0.1);
+                        if point_like {
+                            cur.leave_wall(to, sopts).map_err(|_| e)
+                        } else {
+                            Err(e)
+                        }
+                    });
+                match stepped {
+                    Ok(next) => prev = Some(std::mem::replace(&mut cur, next)),
                     Err(e) => {
                         halvings += 1;
                         if halvings > max_halvings && extend {
                             let over = x + (x - cur.lbar);
                             let jumped = cur.step_to(over, sopts).and_then(|j| j.step_to(x, sopts));
                             if let Ok(at) = jumped {
+                                prev = None;
                                 cur = at;
                                 continue;
                             }
@@ -273,13 +417,16 @@ pub(super) fn follow(
                         }
                         if halvings > max_halvings {
                             let c = cur.states[2].contact(TOUCH).ok();
-                            warnings.push(format!(
+                            stops.push(TraceStop {
+                                lbar: cur.lbar,
+                                text: format!(
                                 "{what}: the lifted-off trace stops at lbar = {:.6} ({e}); the last state touches the wall on {:.1}% of its length with contact forces in [{:.3e}, {:.3e}]; Newton failed under {max_halvings} step halvings (perhaps a fold or a bifurcation of the lifted-off branch; not traced further)",
                                 cur.lbar,
                                 100.0 * c.as_ref().map_or(f64::NAN, |c| c.fraction),
                                 c.as_ref().map_or(f64::NAN, |c| c.lambda_range.0),
                                 c.as_ref().map_or(f64::NAN, |c| c.lambda_range.1),
-                            ));
+                                ),
+                            });
                             break 'targets;
                         }
                         h *= 0.5;
@@ -366,6 +513,34 @@ pub(super) fn trace_branch(
         let td = Instant::now();
         let tr = trace_detached(opts, eta, &ys, &mut out.warnings)?;
         out.lifted_s += td.elapsed().as_secs_f64();
+        // Detachments: a free state next to a touching one.
+        for w in tr.windows(2) {
+            if !w[0].free() || w[1].free() {
+                continue;
+            }
+            match detachment(&w[0]) {
+                Ok((x, err, energy)) if x > w[0].lbar && x < w[1].lbar => {
+                    out.events.push(EnclosedEvent {
+                        kind: EventKind::Detachment,
+                        branch,
+                        family: 0,
+                        lbar: x,
+                        error_estimate: err,
+                        energy,
+                        index_before: 0,
+                        index_after: 0,
+                    });
+                }
+                Ok((x, _, _)) => out.warnings.push(format!(
+                    "branch {branch}: the loop leaves the wall between lbar = {:.6} and {:.6}, but its free state would touch at {x:.6}, outside that interval",
+                    w[0].lbar, w[1].lbar
+                )),
+                Err(e) => out.warnings.push(format!(
+                    "branch {branch}: the loop leaves the wall between lbar = {:.6} and {:.6}; not located ({e})",
+                    w[0].lbar, w[1].lbar
+                )),
+            }
+        }
         for lv in &tr {
             let mut pt = lv.point(branch, eta)?;
             pt.surface_energy = Some(exact(eta, lv.lbar)?.energy().map_err(SolverError::from)?);

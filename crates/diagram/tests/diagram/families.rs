@@ -240,3 +240,182 @@ fn very_soft_rod_lowest_state_is_no_higher_than_solve() {
         assert_no_higher_than_solve(&rod, lbar, e_diagram);
     }
 }
+
+/// The very soft rod of the paper (D1/D0 = 0.001).
+fn very_soft_rod() -> Stiffness {
+    Stiffness::Tanh {
+        d0: 1.0,
+        d1: 0.001,
+        s0: 0.3,
+        s1: 0.8,
+        gamma: 200.0,
+    }
+}
+
+/// The state of a sheet at `lbar`: linear interpolation of its traced states.
+fn sheet_state(b: &rodloop_diagram::TracedBranch, lbar: f64) -> Vec<f64> {
+    let k = b
+        .points
+        .partition_point(|p| p.value <= lbar)
+        .clamp(1, b.points.len() - 1);
+    let (p, q) = (&b.points[k - 1], &b.points[k]);
+    let t = if q.value > p.value {
+        (lbar - p.value) / (q.value - p.value)
+    } else {
+        0.0
+    };
+    p.state
+        .iter()
+        .zip(&q.state)
+        .map(|(a, c)| a + t * (c - a))
+        .collect()
+}
+
+/// No family of branch 2 (η = 1) of the very soft rod is lost: at lengths that are not seed
+/// lengths of the tracer (its seeds for η = 1 lie at 1.25, 1.5, 1.75 and 1.0), every
+/// equilibrium with one period of κ_g that Newton (with relaxation) reaches from the Euler
+/// curve with its origin moved by k/8 of the length (k = 0…7: the soft segment at eight
+/// offsets along the loop) lies on a traced sheet: re-solved at that length from the sheet's
+/// interpolated state (same resolution), one sheet gives the same equilibrium: energy within
+/// 1e-5 relative, the threshold below which the diagram treats families as near-degenerate.
+/// (Along the nearly neutral directions of this rod, Newton from two guesses stops at
+/// points of one valley whose energies differ by up to ~1e-6; distinct families of η = 1
+/// differ by 1e-3 or more at these lengths.) Among these lengths are
+/// 1.02–1.06, where the family of η = 1 that exists only on 1 ≤ L̄ < 1.052 lies and where
+/// the symmetric family, stepped through a nearly singular stretch near 1.1, could be cut
+/// short.
+#[test]
+fn very_soft_rod_states_lie_on_traced_sheets() {
+    use rodloop_solver::identify::identify_equilibrium;
+    use rodloop_solver::{solve, solve_from_state, Globalization, SurfaceModel};
+    let rod = very_soft_rod();
+    let opts = DiagramOptions {
+        stiffness: rod.clone(),
+        lbar_min: 1.0,
+        lbar_max: 3.0,
+        ..DiagramOptions::default()
+    };
+    let fam = rodloop_diagram::families::compute_families(&opts, 1, &mut |_| {}).expect("branch 2");
+    let cells = opts.trace_cells(1);
+    let newton = SolveOptions {
+        globalization: Globalization::Newton,
+        ..SolveOptions::default()
+    };
+    let (mut checked, mut below) = (0, 0);
+    for lbar in [1.02, 1.035, 1.06, 1.2, 1.4, 1.65, 1.9] {
+        let model = SurfaceModel::new(1.0, lbar, cells, &rod).expect("model");
+        let mut seen: Vec<f64> = Vec::new();
+        for k in 0..8 {
+            let start = StartShape::Euler { l: 1 }
+                .shifted(lbar, f64::from(k) / 8.0)
+                .expect("start");
+            let kappa = start.gauss_values(&model).expect("start values");
+            let Ok(eq) = solve(&model, &kappa, &SolveOptions::default()) else {
+                continue;
+            };
+            if identify_equilibrium(&eq).map(|p| p.eta).ok() != Some(1) {
+                continue;
+            }
+            let e = eq.energy().total;
+            if seen.iter().any(|s| (s - e).abs() <= 1e-9 * e) {
+                continue;
+            }
+            seen.push(e);
+            let on: Vec<f64> = fam
+                .sheets
+                .iter()
+                .filter(|b| b.covers(lbar))
+                .filter_map(|b| {
+                    solve_from_state(model.clone(), sheet_state(b, lbar), &newton)
+                        .ok()
+                        .map(|q| q.energy().total)
+                })
+                .collect();
+            assert!(
+                on.iter().any(|s| (s - e).abs() <= 1e-5 * e),
+                "L̄ = {lbar}, start moved by {k}/8: E = {e} is on no traced sheet ({on:?})"
+            );
+            checked += 1;
+            if lbar < 1.1 {
+                below += 1;
+            }
+        }
+    }
+    // The symmetric family, which no start above reaches below L̄ = 1.6: followed down from
+    // its independent state at 1.65 to 1.06 by Newton at fixed length from the secant of
+    // the last two states (natural continuation in steps of 0.01: no pseudo-arclength, no
+    // tangents). Below 1.125, where the Jacobian is nearly singular (its smallest singular
+    // value falls to ~1e-12 of its largest near 1.107 and is still ~1e-9 at 1.08), Newton
+    // stalls at residuals of 1e-9 to 1e-8 and is accepted at 1e-7 (the energy is stationary:
+    // far below the 1e-5 of the comparison).
+    let model_at = |lbar: f64| SurfaceModel::new(1.0, lbar, cells, &rod).expect("model");
+    let loose = SolveOptions {
+        tolerance: 1e-7,
+        ..newton.clone()
+    };
+    let mut prev: Option<(Vec<f64>, f64)> = None;
+    let mut cur = {
+        let model = model_at(1.65);
+        let start = StartShape::Euler { l: 1 }
+            .gauss_values(&model)
+            .expect("start");
+        let eq = solve(&model, &start, &SolveOptions::default()).expect("the state at 1.65");
+        (eq.state(), 1.65)
+    };
+    let mut swept: Vec<(f64, f64)> = Vec::new();
+    for i in 1..=59 {
+        let lbar = 1.65 - 0.01 * f64::from(i);
+        let guess: Vec<f64> = match &prev {
+            Some((zp, lp)) => {
+                let r = (lbar - cur.1) / (cur.1 - lp);
+                cur.0.iter().zip(zp).map(|(a, b)| a + (a - b) * r).collect()
+            }
+            None => cur.0.clone(),
+        };
+        let check = [1.4, 1.2, 1.08, 1.06]
+            .iter()
+            .any(|l| (l - lbar).abs() < 1e-9);
+        let eq = solve_from_state(model_at(lbar), guess.clone(), &newton)
+            .or_else(|e| {
+                if lbar > 1.125 {
+                    Err(e)
+                } else {
+                    solve_from_state(model_at(lbar), guess, &loose)
+                }
+            })
+            .unwrap_or_else(|e| panic!("natural continuation at L̄ = {lbar}: {e}"));
+        if check {
+            swept.push((lbar, eq.energy().total));
+        }
+        prev = Some(std::mem::replace(&mut cur, (eq.state(), lbar)));
+    }
+    for (lbar, e) in swept {
+        let model = model_at(lbar);
+        let on: Vec<f64> = fam
+            .sheets
+            .iter()
+            .filter(|b| b.covers(lbar))
+            .filter_map(|b| {
+                solve_from_state(model.clone(), sheet_state(b, lbar), &newton)
+                    .ok()
+                    .map(|q| q.energy().total)
+            })
+            .collect();
+        assert!(
+            on.iter().any(|s| (s - e).abs() <= 1e-5 * e),
+            "L̄ = {lbar}, followed down from 1.65: E = {e} is on no traced sheet ({on:?})"
+        );
+        checked += 1;
+        if lbar < 1.1 {
+            below += 1;
+        }
+    }
+    // (Below the branch point of this family at 1.0412 the same route reaches, at 1.03, a
+    // state of the other branch through it, E = 0.54269, which is not traced: there the
+    // Jacobian has a second nearly singular direction and the computed secondary tangent
+    // leads back onto the traced family. Not checked; see the README.)
+    assert!(
+        checked >= 8 && below >= 5,
+        "{checked} states, {below} below 1.1"
+    );
+}

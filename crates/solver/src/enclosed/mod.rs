@@ -15,11 +15,13 @@
 //! * [`solve`](mod@solve): semismooth Newton, starts (surface loop, free circle), contact
 //!   summary, stability on the active constraints' tangent space.
 //! * [`from_shape`]: a start from a saved shape (`solve --from`).
+//! * [`descent`]: leaving a saddle along its unstable direction.
 //! * [`continuation`]: natural-parameter steps in `L̄` (the enclosed diagram's tracer).
 //! * [`branch`]: a paper branch in an enclosed scene with the two-resolution error estimate.
 
 pub mod branch;
 pub mod continuation;
+pub mod descent;
 pub mod from_shape;
 pub mod jet;
 pub mod lifted;

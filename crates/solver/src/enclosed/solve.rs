@@ -46,6 +46,10 @@ pub struct EnclosedOptions {
     /// two (a coarse solution prolonged to a finer mesh), where the monotone line search
     /// crawls through the active-set changes in short steps.
     pub watchdog: usize,
+    /// Give up when `stall_window` iterations in a row have not halved the residual (0:
+    /// never). For continuation steps, where a failed step is retried shorter: a start
+    /// whose contact set is far off is then shed node by node at nearly constant residual.
+    pub stall_window: usize,
 }
 
 /// Iterations a watchdog step ([`EnclosedOptions::watchdog`]) has to bring the residual
@@ -59,6 +63,7 @@ impl Default for EnclosedOptions {
             tolerance: 1e-10,
             max_backtracks: 40,
             watchdog: 0,
+            stall_window: 0,
         }
     }
 }
@@ -145,6 +150,7 @@ pub fn solve_enclosed(
     };
     // After a failed watchdog step: the Newton step at the restored iterate.
     let mut resume: Option<DVector<f64>> = None;
+    let mut history: Vec<f64> = Vec::new();
     for it in 0..=opts.max_iterations {
         let (residual, step) = match resume.take() {
             Some(dz) => (model.residual(&z)?, Err(dz)),
@@ -186,6 +192,15 @@ pub fn solve_enclosed(
             return Ok(done(z, it, norm));
         }
         if it == opts.max_iterations {
+            break;
+        }
+        history.push(norm);
+        let w = opts.stall_window;
+        if w > 0
+            && watch.is_none()
+            && history.len() > w
+            && norm > 0.5 * history[history.len() - 1 - w]
+        {
             break;
         }
         let (dz, mut t) = match step {

@@ -1,0 +1,241 @@
+//! Lower states below unstable lowest ones (enclosed diagram of a non-uniform rod, see
+//! `nonuniform.rs`). The surface families seed the lifted-off traces, but the enclosed
+//! problem has equilibria that no surface family leads to: where the lowest traced state
+//! has Hessian index ≥ 1 on the tangent space of its active constraints, a lower
+//! equilibrium must exist. It is found by stepping from that state (coarsest level) along
+//! its unstable direction, both signs, and Newton
+//! ([`descend`](rodloop_solver::enclosed::descent::descend)); the state reached is
+//! re-solved at `N/4, N/2, N` and traced through the parent sheet's sampled lengths as a
+//! new family of the same branch. The new family's states are kept where they lie below
+//! the parent's (elsewhere they have merged into it).
+
+use rodloop_solver::enclosed::descent::descend;
+use rodloop_solver::enclosed::{solve_levels, EnclosedOptions};
+
+use super::nonuniform::{step_options, SheetOut};
+use super::nonuniform_exchange::{interp, lowest_at};
+use super::trace::{follow, Levels, TraceStop};
+use super::PointSource;
+use crate::parallel::run_parallel;
+
+/// Relative step amplitudes along the unstable direction, tried in turn.
+const AMPLITUDES: [f64; 4] = [0.05, 0.15, 0.3, 0.5];
+
+/// A lower state's trace and where it stopped.
+type Found = (Vec<Levels>, Vec<TraceStop>);
+
+/// Most rounds of descent (a new family may itself be unstable where it is lowest).
+const ROUNDS: usize = 2;
+
+/// Sheets whose lowest states are unstable: `(sheet, L̄ of those states)`.
+fn unstable_lowest(outs: &[SheetOut]) -> Vec<(usize, Vec<f64>)> {
+    let mut found = Vec::new();
+    for (k, s) in outs.iter().enumerate() {
+        let xs: Vec<f64> = s
+            .points
+            .iter()
+            .filter(|p| {
+                p.index > 0 && p.source == PointSource::Model && lowest_at(outs, p.lbar) == Some(k)
+            })
+            .map(|p| p.lbar)
+            .collect();
+        if !xs.is_empty() {
+            found.push((k, xs));
+        }
+    }
+    found
+}
+
+/// The lowest new state reached from `lv` (coarsest level) along its unstable direction,
+/// cascaded to `N/2` and `N`: below `lv` and not a state another sheet already has there.
+fn lower_state(lv: &Levels, outs: &[SheetOut], opts: &EnclosedOptions) -> Option<Levels> {
+    let x = lv.lbar;
+    let e0 = lv.energy().0;
+    for amp in AMPLITUDES {
+        let Ok(cands) = descend(&lv.states[0], amp, opts) else {
+            continue;
+        };
+        for c in cands {
+            let Ok(b) = solve_levels(&c.model, c.z.clone(), None, opts) else {
+                continue;
+            };
+            let l = Levels {
+                lbar: x,
+                states: [b.quarter, b.coarse, b.fine],
+            };
+            let e = l.energy().0;
+            let known = outs
+                .iter()
+                .any(|s| interp(s, x).is_some_and(|es| (es - e).abs() < 1e-6));
+            if e < e0 - 1e-7 && !known {
+                return Some(l);
+            }
+        }
+    }
+    None
+}
+
+/// Add the families found below unstable lowest states to `outs` (see the module docs).
+/// Returns the warnings and, for each sheet appended to `outs`, the index of the sheet of
+/// the surface diagram it descends from (`roots[k]` for the first `roots.len()` sheets).
+pub(super) fn descend_unstable(
+    outs: &mut Vec<SheetOut>,
+    roots: &[usize],
+    threads: usize,
+) -> (Vec<String>, Vec<usize>) {
+    let mut warnings = Vec::new();
+    let mut parents: Vec<usize> = Vec::new();
+    let root_of = |k: usize, parents: &[usize]| -> usize {
+        if k < roots.len() {
+            roots[k]
+        } else {
+            parents[k - roots.len()]
+        }
+    };
+    let sopts = step_options();
+    // The descent and its cascade get the full Newton budget (the shape moves far).
+    let dopts = EnclosedOptions::default();
+    let mut tried: Vec<(usize, f64)> = Vec::new();
+    for _ in 0..ROUNDS {
+        let mut added: Vec<SheetOut> = Vec::new();
+        let mut added_parents = Vec::new();
+        // The sheets to try this round, with up to three untried unstable lowest states
+        // each (the middle one first); the searches and traces run in parallel.
+        let mut jobs: Vec<(usize, Vec<f64>)> = Vec::new();
+        for (k, xs) in unstable_lowest(outs) {
+            let mid_x = xs[xs.len() / 2];
+            let mut order = xs.clone();
+            order.sort_by(|u, v| (u - mid_x).abs().total_cmp(&(v - mid_x).abs()));
+            let cands: Vec<f64> = order
+                .into_iter()
+                .take(3)
+                .filter(|&x| {
+                    !tried
+                        .iter()
+                        .any(|&(kk, xx)| kk == k && (xx - x).abs() < 1e-9)
+                })
+                .collect();
+            tried.extend(cands.iter().map(|&x| (k, x)));
+            if !cands.is_empty() {
+                jobs.push((k, cands));
+            }
+        }
+        let shared: &[SheetOut] = outs;
+        let results = run_parallel(
+            threads,
+            jobs,
+            &mut |_| {},
+            &mut |_: &(usize, Vec<f64>, Option<Found>)| {},
+            |(k, cands), _| {
+                let parent = &shared[k];
+                let what = format!(
+                    "branch {} (eta = {}) below family {}",
+                    parent.branch, parent.eta, parent.family
+                );
+                let mut found = None;
+                for &x in &cands {
+                    let Some(lv) = parent.levels.iter().find(|l| (l.lbar - x).abs() < 1e-12) else {
+                        continue;
+                    };
+                    if let Some(first) = lower_state(lv, shared, &dopts) {
+                        let mut grid: Vec<f64> = parent.levels.iter().map(|l| l.lbar).collect();
+                        grid.sort_by(f64::total_cmp);
+                        grid.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
+                        let mid = grid
+                            .iter()
+                            .position(|&g| (g - x).abs() < 1e-12)
+                            .unwrap_or(0);
+                        let mut stops = Vec::new();
+                        let traced = follow(first, &grid, mid, &what, &sopts, true, &mut stops);
+                        found = Some((traced, stops));
+                        break;
+                    }
+                }
+                (k, cands, found)
+            },
+        );
+        for (k, cands, found) in results {
+            let parent = &outs[k];
+            let Some((traced, stops)) = found else {
+                warnings.push(format!(
+                    "branch {} (eta = {}) below family {}: the lowest states at lbar = {} have index >= 1, but no lower equilibrium was reached along their unstable directions",
+                    parent.branch,
+                    parent.eta,
+                    parent.family,
+                    cands.iter().map(|x| format!("{x:.6}")).collect::<Vec<_>>().join(", ")
+                ));
+                continue;
+            };
+            let family = outs
+                .iter()
+                .chain(added.iter())
+                .filter(|s| s.branch == parent.branch)
+                .map(|s| s.family)
+                .max()
+                .unwrap_or(0)
+                + 1;
+            let mut new = SheetOut::empty(parent.branch, parent.eta, family);
+            new.stops = stops;
+            for l in traced {
+                let Some(pe) = interp(parent, l.lbar) else {
+                    continue;
+                };
+                let Ok(mut pt) = l.point(parent.branch, parent.eta) else {
+                    continue;
+                };
+                if pt.energy >= pe - pt.energy_error {
+                    // Merged back into the parent (or not distinguishable from it).
+                    continue;
+                }
+                let surf = parent
+                    .points
+                    .iter()
+                    .find(|p| (p.lbar - l.lbar).abs() < 1e-12)
+                    .and_then(|p| p.surface_energy);
+                pt.family = family;
+                pt.sheet = 0;
+                pt.multiplicity = parent.points.first().map_or(1, |p| p.multiplicity);
+                pt.surface_energy = surf;
+                new.points.push(pt);
+                new.levels.push(l);
+            }
+            if !new.points.is_empty() {
+                new.points.sort_by(|u, v| u.lbar.total_cmp(&v.lbar));
+                added.push(new);
+                added_parents.push(root_of(k, &parents));
+            }
+        }
+        if added.is_empty() {
+            break;
+        }
+        outs.extend(added);
+        parents.extend(added_parents);
+    }
+    for (k, xs) in unstable_lowest(outs) {
+        let s = &outs[k];
+        // The two lowest eigenvalues (mass-normalised), to tell a clear saddle from a nearly
+        // degenerate state.
+        let mu = s
+            .levels
+            .iter()
+            .find(|l| (l.lbar - xs[0]).abs() < 1e-12)
+            .and_then(|l| l.states[0].stability(1e-6).ok())
+            .map_or(String::new(), |(_, v)| {
+                format!(
+                    " (lowest eigenvalues {:.2e}, {:.2e})",
+                    v[0],
+                    v.get(1).copied().unwrap_or(f64::NAN)
+                )
+            });
+        warnings.push(format!(
+            "branch {} (eta = {}) family {}: the lowest traced state has index >= 1 at {} sampled lengths in [{:.4}, {:.4}]{mu}; a lower equilibrium exists there that the traces did not find",
+            s.branch,
+            s.eta,
+            s.family,
+            xs.len(),
+            xs[0],
+            xs[xs.len() - 1]
+        ));
+    }
+    (warnings, parents)
+}

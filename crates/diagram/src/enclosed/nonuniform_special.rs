@@ -1,0 +1,137 @@
+//! Special points of the lifted-off sheets of a non-uniform rod (see `nonuniform.rs`), and
+//! what the traces that stop there stop at.
+//!
+//! * **Branch points.** Where the Hessian index of a lifted-off sheet changes between two
+//!   sampled states, an eigenvalue on the tangent space of the active constraints crosses
+//!   zero: a pitchfork (or a transcritical point) of the enclosed sheet, where another
+//!   family meets it. It is placed at the root of that eigenvalue interpolated linearly
+//!   between the two states, with half the bracket as its estimate (only to the sample
+//!   spacing: re-solving towards the point, where Newton converges linearly next to the
+//!   singular Jacobian and the semismooth active set stalls, failed at four of five such
+//!   points and doubled the diagram's time).
+//! * **Stops.** A trace that stops where Newton fails under step halving is explained when
+//!   it stops next to the end of its branch's range (the `m`-fold great circle, where the
+//!   sheet collapses onto the wall: the collapse at `L̄ = m` is exact) or next to a located
+//!   branch point of its branch (a family that ends where it meets another: natural
+//!   parameter steps cannot pass the vertical tangent of a pitchfork's asymmetric side;
+//!   within the point's estimate plus `2e-2`).
+//!   Other stops stay warnings.
+
+use rodloop_solver::SolverError;
+
+use super::nonuniform::SheetOut;
+use super::trace::Levels;
+use super::{EnclosedEvent, EventKind, PointSource};
+
+/// Eigenvalue `k` (ascending) on the tangent space of the active constraints, level `lvl`.
+fn eigenvalue(l: &Levels, lvl: usize, k: usize) -> Result<f64, SolverError> {
+    let (_, vals) = l.states[lvl].stability(1e-6)?;
+    vals.get(k)
+        .copied()
+        .ok_or_else(|| SolverError::InvalidInput("too few eigenvalues".into()))
+}
+
+/// Branch points of a lifted-off sheet (see the module docs), and warnings for index
+/// changes that were not located.
+pub(super) fn branch_points(s: &SheetOut) -> (Vec<EnclosedEvent>, Vec<String>) {
+    let mut events = Vec::new();
+    let mut warnings = Vec::new();
+    {
+        let pts: Vec<_> = s
+            .points
+            .iter()
+            .filter(|p| p.source == PointSource::Model)
+            .collect();
+        for w in pts.windows(2) {
+            let (p, q) = (w[0], w[1]);
+            if p.index == q.index {
+                continue;
+            }
+            let find = |x: f64| s.levels.iter().find(|l| (l.lbar - x).abs() < 1e-12);
+            let (Some(a), Some(b)) = (find(p.lbar), find(q.lbar)) else {
+                continue;
+            };
+            let k = p.index.min(q.index);
+            // The crossing eigenvalue at the two states (the index's own level, N/4),
+            // interpolated linearly; the estimate is half the bracket.
+            let located = eigenvalue(a, 0, k).and_then(|fa| {
+                let fb = eigenvalue(b, 0, k)?;
+                let t = if fa * fb < 0.0 { fa / (fa - fb) } else { 0.5 };
+                let x = a.lbar + t * (b.lbar - a.lbar);
+                let energy = p.energy + t * (q.energy - p.energy);
+                Ok((x, 0.5 * (b.lbar - a.lbar).abs(), energy))
+            });
+            match located {
+                Ok((x, err, energy)) => events.push(EnclosedEvent {
+                    kind: EventKind::BranchPoint,
+                    branch: s.branch,
+                    family: s.family,
+                    lbar: x,
+                    error_estimate: err,
+                    energy,
+                    index_before: p.index,
+                    index_after: q.index,
+                }),
+                Err(e) => warnings.push(format!(
+                    "branch {} (eta = {}) family {}: the index changes from {} to {} between lbar = {:.6} and {:.6}, but the branch point was not located ({e})",
+                    s.branch, s.eta, s.family, p.index, q.index, p.lbar, q.lbar
+                )),
+            }
+        }
+    }
+    (events, warnings)
+}
+
+/// Distance within which a trace's stop is put down to a great circle `L̄ = m` ending its
+/// branch's range.
+const NEAR_CIRCLE: f64 = 5e-3;
+
+/// Distance, beyond a branch point's own estimate (half its bracket), within which a
+/// trace's stop is put down to it.
+const NEAR_BRANCH_POINT: f64 = 2e-2;
+
+/// Sort the traces' stops into notes (explained: the end of the branch's range, or a branch
+/// point of the branch) and warnings (see the module docs). Returns `(notes, warnings)`.
+pub(super) fn classify_stops(
+    outs: &[SheetOut],
+    events: &[EnclosedEvent],
+) -> (Vec<String>, Vec<String>) {
+    let (mut notes, mut warnings) = (Vec::new(), Vec::new());
+    for s in outs {
+        let e = f64::from(s.eta);
+        for st in &s.stops {
+            if let Some(m) = [e - 1.0, e + 1.0]
+                .into_iter()
+                .find(|m| (st.lbar - m).abs() < NEAR_CIRCLE)
+            {
+                notes.push(format!(
+                    "{} — explained: {:.1e} from L̄ = {m}, where this branch's sheets end on the {m}-fold great circle (a collapse, exact)",
+                    st.text,
+                    (st.lbar - m).abs()
+                ));
+                continue;
+            }
+            let bp = events
+                .iter()
+                .filter(|v| v.kind == EventKind::BranchPoint && v.branch == s.branch)
+                .min_by(|u, v| {
+                    (u.lbar - st.lbar)
+                        .abs()
+                        .total_cmp(&(v.lbar - st.lbar).abs())
+                });
+            match bp {
+                Some(v) if (v.lbar - st.lbar).abs() < v.error_estimate + NEAR_BRANCH_POINT => notes.push(format!(
+                    "{} — consistent with an end where this family meets another: {:.1e} from the branch point of branch {} family {} at L̄ = {:.6} ± {:.1e}",
+                    st.text,
+                    (st.lbar - v.lbar).abs(),
+                    v.branch,
+                    v.family,
+                    v.lbar,
+                    v.error_estimate
+                )),
+                _ => warnings.push(st.text.clone()),
+            }
+        }
+    }
+    (notes, warnings)
+}

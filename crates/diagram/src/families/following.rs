@@ -1,0 +1,436 @@
+//! Following the seeds of a branch through folds and branch points: the curves, their
+//! ends, and branch switching.
+
+use std::time::Instant;
+
+use rodloop_continuation::{Direction, SpecialKind};
+use rodloop_solver::{Confinement, ParamProblem, SurfaceModel};
+
+use super::images::{on_known, on_known_within, Images};
+use super::seeding::Seed;
+use super::{debug, Curve, MAX_FAMILIES, MAX_STEPS, MAX_SWITCHES, SAME_STATE};
+use crate::ends::approach_end;
+use crate::march::{march, march_switch, MarchPoint, MarchSpecial, MarchStop};
+use crate::types::{BranchEnd, PointSource};
+use crate::{DiagramError, DiagramOptions, Progress};
+
+/// The followed curves of a branch and what following them needs.
+pub(super) struct Tracing<'a> {
+    pub(super) ctx: &'a EndContext<'a>,
+    pub(super) settings: &'a crate::MarchSettings,
+    pub(super) images: &'a Images,
+    pub(super) branch: u32,
+    pub(super) eta: u32,
+    pub(super) curves: Vec<Curve>,
+    pub(super) notes: Vec<String>,
+    /// Branch points met and not yet switched at.
+    pub(super) pending: Vec<MarchSpecial>,
+    /// Branch points switched at.
+    pub(super) switched: Vec<MarchSpecial>,
+    pub(super) steps: usize,
+    /// The seed of each followed curve (`None`: found by branch switching).
+    pub(super) seed_note: Vec<Option<String>>,
+}
+
+impl Tracing<'_> {
+    /// Follow the state `seeded` (solved at `lbar` as `seed` in `secs` seconds) unless it
+    /// is missing or on a known curve, then switch at every new branch point (a later seed
+    /// may lie on a family found by switching). `false` once the cap of followed curves is
+    /// reached.
+    pub(super) fn take(
+        &mut self,
+        lbar: f64,
+        seed: Seed,
+        seeded: Option<Vec<f64>>,
+        secs: f64,
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<bool, DiagramError> {
+        let (branch, eta) = (self.branch, self.eta);
+        let what = match seed {
+            Seed::Shifted(shift) => format!("origin moved by {shift:.4}"),
+            Seed::Solve { .. } => "as `rodloop solve` finds it".to_string(),
+        };
+        debug(|| {
+            format!(
+                "eta {eta} seed at {lbar:.3} ({what}): {} in {secs:.3} s",
+                seeded.is_some(),
+            )
+        });
+        let Some(x0) = seeded else {
+            return Ok(true);
+        };
+        if on_known(self.images, &self.curves, &x0, lbar) {
+            return Ok(true);
+        }
+        if self.curves.len() >= MAX_FAMILIES {
+            self.notes.push(format!(
+                "branch {branch} (η = {eta}): the cap of {MAX_FAMILIES} followed curves was \
+                 reached; further seeds were not followed"
+            ));
+            return Ok(false);
+        }
+        let ts = Instant::now();
+        let curve = follow_seed(
+            self.ctx,
+            self.settings,
+            &x0,
+            lbar,
+            &mut self.pending,
+            &mut self.steps,
+        )?;
+        let (cmin, cmax) = curve
+            .points
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                (a.min(p.value), b.max(p.value))
+            });
+        if cmax - cmin < 1e-3 {
+            self.notes.push(format!(
+                "branch {branch} (η = {eta}): a seed at L̄ = {lbar:.4} ({what}) could not be \
+                 followed ({}; {}): left out",
+                curve.start_end.1, curve.finish_end.1
+            ));
+            return Ok(true);
+        }
+        debug(|| {
+            format!(
+                "eta {eta} followed seed: {} points on {cmin:.4}–{cmax:.4} in {:.3} s",
+                curve.points.len(),
+                ts.elapsed().as_secs_f64()
+            )
+        });
+        self.seed_note.resize(self.curves.len(), None);
+        self.seed_note.push(Some(format!("L̄ = {lbar:.4}, {what}")));
+        self.curves.push(curve);
+        progress(Progress::BranchStep {
+            eta,
+            lbar,
+            steps: self.steps,
+        });
+        switch_all(
+            self.ctx,
+            self.settings,
+            self.images,
+            &mut self.curves,
+            &mut self.pending,
+            &mut self.switched,
+            &mut self.notes,
+            &mut self.steps,
+        );
+        Ok(true)
+    }
+
+    /// Whether a followed curve has a stable (index 0) state at `lbar`: the states on
+    /// either side of it on some curve both have index 0.
+    pub(super) fn stable_at(&self, lbar: f64) -> bool {
+        self.curves.iter().any(|c| {
+            c.points.windows(2).any(|w| {
+                let (lo, hi) = (w[0].value.min(w[1].value), w[0].value.max(w[1].value));
+                lo <= lbar && lbar <= hi && w[0].index == Some(0) && w[1].index == Some(0)
+            })
+        })
+    }
+}
+
+/// What the ends of followed curves need.
+pub(super) struct EndContext<'a> {
+    pub(super) opts: &'a DiagramOptions,
+    pub(super) problem: &'a ParamProblem<SurfaceModel>,
+    pub(super) lo: f64,
+    pub(super) hi: f64,
+}
+
+/// Follow a seed both ways; branch points go to `pending`.
+fn follow_seed(
+    ctx: &EndContext<'_>,
+    settings: &crate::MarchSettings,
+    x0: &[f64],
+    p0: f64,
+    pending: &mut Vec<MarchSpecial>,
+    steps: &mut usize,
+) -> Result<Curve, DiagramError> {
+    let cont = |e: rodloop_solver::SolverError| DiagramError::Continuation {
+        eta: 0,
+        reason: e.to_string(),
+    };
+    let mut up_s = settings.clone();
+    up_s.limit = ctx.hi;
+    up_s.far_limit = Some(ctx.lo);
+    let up = march(ctx.problem, x0, p0, &up_s, &mut |_, _| {}).map_err(cont)?;
+    *steps += up.steps;
+    pending.extend(up.branch_points().cloned());
+    let start = MarchPoint {
+        x: x0.to_vec(),
+        value: p0,
+        index: None,
+        source: PointSource::Seed,
+    };
+    if up.stop == MarchStop::ClosedLoop {
+        let mut points = vec![start];
+        points.extend(up.points);
+        let e = (
+            BranchEnd::Range { value: p0 },
+            "the family closes on itself (a loop in the diagram)".to_string(),
+        );
+        return Ok(Curve {
+            points,
+            start_end: e.clone(),
+            finish_end: e,
+        });
+    }
+    let mut down_s = settings.clone();
+    down_s.limit = ctx.lo;
+    down_s.far_limit = Some(ctx.hi);
+    let down = march(ctx.problem, x0, p0, &down_s, &mut |_, _| {}).map_err(cont)?;
+    *steps += down.steps;
+    pending.extend(down.branch_points().cloned());
+    let mut down_pts = down.points;
+    let start_end = finish_end(ctx, &down.stop, &mut down_pts, (x0, p0));
+    let mut up_pts = up.points;
+    let finish = finish_end(ctx, &up.stop, &mut up_pts, (x0, p0));
+    let mut points: Vec<MarchPoint> = down_pts.into_iter().rev().collect();
+    points.push(start);
+    points.extend(up_pts);
+    Ok(Curve {
+        points,
+        start_end,
+        finish_end: finish,
+    })
+}
+
+/// The end of a followed direction: the approach to a great circle where the march stopped
+/// near one, else the record of why it stopped.
+fn finish_end(
+    ctx: &EndContext<'_>,
+    stop: &MarchStop,
+    points: &mut Vec<MarchPoint>,
+    start: (&[f64], f64),
+) -> (BranchEnd, String) {
+    let last = points.last().map_or(start.1, |p| p.value);
+    match stop {
+        MarchStop::Reached => {
+            let at = if (last - ctx.lo).abs() < (last - ctx.hi).abs() {
+                ctx.lo
+            } else {
+                ctx.hi
+            };
+            (
+                BranchEnd::Range { value: last },
+                format!("stopped at L̄ = {at}, an end of the diagram's range"),
+            )
+        }
+        MarchStop::NearCircle { circle, .. } => {
+            let m = *circle;
+            let d = ctx.opts.end_distance;
+            let side = if last > m { 1.0 } else { -1.0 };
+            let target = m + side * d;
+            let mut chain: Vec<(Vec<f64>, f64)> = Vec::new();
+            if points.len() < 2 {
+                chain.push((start.0.to_vec(), start.1));
+            }
+            chain.extend(
+                points
+                    .iter()
+                    .rev()
+                    .take(3)
+                    .rev()
+                    .map(|r| (r.x.clone(), r.value)),
+            );
+            let found = approach_end(ctx.problem, &chain, m, target);
+            for (x, p) in found.points {
+                let index = ctx
+                    .problem
+                    .model_at(p)
+                    .and_then(|model| model.index(&x, crate::states::INDEX_TOLERANCE))
+                    .ok();
+                points.push(MarchPoint {
+                    x,
+                    value: p,
+                    index,
+                    source: PointSource::EndApproach,
+                });
+            }
+            let last = points.last().map_or(start.1, |p| p.value);
+            match found.failure {
+                None => (
+                    BranchEnd::GreatCircle {
+                        m: m.round() as u32,
+                        value: last,
+                        distance: (last - m).abs(),
+                    },
+                    format!(
+                        "stopped at L̄ = {last:.6}, {:.1e} from the {}-fold great circle, where \
+                         the family ends (the loop collapses onto it)",
+                        (last - m).abs(),
+                        m
+                    ),
+                ),
+                Some(reason) => (
+                    BranchEnd::Failed {
+                        value: last,
+                        target,
+                        reason: reason.clone(),
+                    },
+                    format!("stopped at L̄ = {last:.6} approaching L̄ = {m}: {reason}"),
+                ),
+            }
+        }
+        other => {
+            let reason = match other {
+                MarchStop::StepTooSmall { ds, value, cause } => format!(
+                    "the continuation step fell below its minimum ({ds:.1e}) at L̄ = {value:.6}{}",
+                    cause
+                        .as_ref()
+                        .map(|c| format!(" ({c})"))
+                        .unwrap_or_default()
+                ),
+                MarchStop::MaxSteps => {
+                    format!("the continuation used up its budget of {MAX_STEPS} steps")
+                }
+                MarchStop::ClosedLoop => "the family closes on itself".into(),
+                _ => "stopped".into(),
+            };
+            let failed = !matches!(other, MarchStop::ClosedLoop);
+            (
+                if failed {
+                    BranchEnd::Failed {
+                        value: last,
+                        target: f64::NAN,
+                        reason: reason.clone(),
+                    }
+                } else {
+                    BranchEnd::Range { value: last }
+                },
+                format!("stopped at L̄ = {last:.6}: {reason}"),
+            )
+        }
+    }
+}
+
+/// Switch at every pending branch point not met before, following the new curves (whose
+/// branch points join the queue).
+#[allow(clippy::too_many_arguments)]
+fn switch_all(
+    ctx: &EndContext<'_>,
+    settings: &crate::MarchSettings,
+    images: &Images,
+    curves: &mut Vec<Curve>,
+    pending: &mut Vec<MarchSpecial>,
+    switched: &mut Vec<MarchSpecial>,
+    notes: &mut Vec<String>,
+    steps: &mut usize,
+) {
+    while let Some(bp) = pending.pop() {
+        if bp.kind != SpecialKind::BranchPoint {
+            continue;
+        }
+        let seen = switched.iter().any(|s| {
+            (s.value - bp.value).abs() < 1e-5 && images.dist_images(&s.x, &bp.x) < SAME_STATE
+        });
+        if seen {
+            continue;
+        }
+        if switched.len() >= MAX_SWITCHES {
+            notes.push(format!(
+                "the cap of {MAX_SWITCHES} branch points switched at was reached (branch point \
+                 at L̄ = {:.6} not followed)",
+                bp.value
+            ));
+            pending.clear();
+            break;
+        }
+        switched.push(bp.clone());
+        // Both branches through it already known (two followed curves pass through it).
+        let through = curves
+            .iter()
+            .filter(|c| on_known(images, std::slice::from_ref(*c), &bp.x, bp.value))
+            .count();
+        if through >= 2 {
+            continue;
+        }
+        let bp_symmetric = images.symmetric(&bp.x);
+        for dir in [Direction::Forward, Direction::Backward] {
+            if curves.len() >= MAX_FAMILIES {
+                notes.push(format!(
+                    "the cap of {MAX_FAMILIES} followed curves was reached at the branch point \
+                     at L̄ = {:.6}",
+                    bp.value
+                ));
+                break;
+            }
+            // The first point off the branch point is one step (or less) away from it: it
+            // lies on a known curve only if much closer to that curve than to the branch
+            // point (near a great circle, or after a shortened first step, distinct
+            // branches are closer than SAME_STATE).
+            let known = |x: &[f64], p: f64| {
+                let tol = SAME_STATE.min(0.3 * images.dist(x, &bp.x));
+                on_known_within(images, curves, x, p, tol)
+            };
+            let mut s = settings.clone();
+            s.limit = ctx.hi;
+            s.far_limit = Some(ctx.lo);
+            let ts = Instant::now();
+            let run = march_switch(ctx.problem, &bp, dir, &s, &known, &mut |_, _| {});
+            debug(|| {
+                format!(
+                    "switch at {:.5} {dir:?}: {:?} in {:.3} s",
+                    bp.value,
+                    run.as_ref()
+                        .map(|r| (
+                            r.points.len(),
+                            r.stop.clone(),
+                            r.points
+                                .iter()
+                                .map(|p| p.value)
+                                .fold(f64::INFINITY, f64::min),
+                            r.points
+                                .iter()
+                                .map(|p| p.value)
+                                .fold(f64::NEG_INFINITY, f64::max),
+                            r.special.len(),
+                            r.points.iter().filter_map(|p| p.index).max(),
+                        ))
+                        .map_err(|e| e.to_string()),
+                    ts.elapsed().as_secs_f64()
+                )
+            });
+            let run = match run {
+                Ok(r) => r,
+                Err(e) => {
+                    notes.push(format!(
+                        "branch switching at the branch point at L̄ = {:.6} failed: {e}",
+                        bp.value
+                    ));
+                    continue;
+                }
+            };
+            if run.stop == MarchStop::Known {
+                continue;
+            }
+            // From a symmetric branch point onto an asymmetric branch: the other direction
+            // is its mirror image.
+            let mirror_pair =
+                bp_symmetric && run.points.get(1).is_some_and(|p| !images.symmetric(&p.x));
+            *steps += run.steps;
+            for b in run.branch_points() {
+                if (b.value - bp.value).abs() > 1e-6 {
+                    pending.push(b.clone());
+                }
+            }
+            let mut pts = run.points;
+            let bp_end = (
+                BranchEnd::BranchPoint { value: bp.value },
+                format!("branch point at L̄ = {:.6}", bp.value),
+            );
+            let end = finish_end(ctx, &run.stop, &mut pts, (&bp.x, bp.value));
+            curves.push(Curve {
+                points: pts,
+                start_end: bp_end,
+                finish_end: end,
+            });
+            if mirror_pair {
+                break;
+            }
+        }
+    }
+}

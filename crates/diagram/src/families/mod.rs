@@ -1,0 +1,271 @@
+//! Tracing every family of branch `η` of a non-uniform rod (paper Sec. 5, Figs. 9, 10, S7).
+//!
+//! A two-segment rod (Eq. (51)) keeps only the mirror symmetry `σ ↦ s0* + s1* − σ` of its
+//! stiffness profile, so branch `η` of the uniform rod (a circle of loops related by moving
+//! the arclength origin) splits into *families* by where the soft segment sits on the shape:
+//! mirror-symmetric families, and pairs of mirror-image asymmetric ones that meet the
+//! symmetric families at pitchforks. In `L̄` a pitchfork seen from the asymmetric side is a
+//! turning point.
+//!
+//! [`compute_families`]:
+//!
+//! 1. **Seeds** (`seeding.rs`): at mild contrast the Euler rotation curve `l = η` (Eqs. 4–8)
+//!    with its arclength origin moved by `j/(8η)` of the length (`j = 0…3`, half a period: a
+//!    shift by half a period is the loop's reflection `κ_g → −κ_g`), relaxed and solved at
+//!    three lengths inside the branch's range; at strong contrast the states `rodloop solve
+//!    --branch` finds there and the shifted direct solves at the lengths its continuation in
+//!    `L̄` starts from. A seed that lies on a family already traced (itself, its reflection,
+//!    its mirror image or both; `images.rs`) is dropped.
+//! 2. **Following** (`following.rs`): each new seed is followed in `L̄` in both directions
+//!    *through* its folds ([`FoldPolicy::Follow`]) with simple branch points detected, until
+//!    the range ends, the approach to a great-circle end (then `ends.rs` takes over down to
+//!    [`DiagramOptions::end_distance`]), a closed loop or the step budget.
+//! 3. **Switching** (`following.rs`): at every branch point not met before, the second
+//!    branch is followed in both directions ([`march_switch`](crate::march::march_switch))
+//!    unless its first point lies on a known family.
+//! 4. **Sheets** (`sheets.rs`): every followed curve is cut at its turning points into sheets
+//!    monotone in `L̄` (one [`TracedBranch`] each, with its family, position along the family
+//!    and direction); sheets that repeat a kept one (the mirror half of an asymmetric curve
+//!    traced through its pitchfork) are dropped, and every asymmetric sheet gets
+//!    multiplicity 2.
+//!
+//! Caps ([`MAX_FAMILIES`], [`MAX_SWITCHES`], the step budget) bound the work; reaching one is
+//! reported as a note.
+
+mod following;
+mod images;
+mod seeding;
+mod sheets;
+
+use std::time::Instant;
+
+use rodloop_exact::branch_of_eta;
+use rodloop_solver::{Confinement, Param, ParamProblem, Stiffness, SurfaceModel};
+
+use crate::ends::SWITCH_DISTANCE;
+use crate::march::{FoldPolicy, MarchPoint};
+use crate::parallel::run_parallel;
+use crate::trace::march_settings;
+use crate::types::{BranchEnd, BranchTimings, TracedBranch};
+use crate::{DiagramError, DiagramOptions, Progress};
+use following::{EndContext, Tracing};
+use images::Images;
+use seeding::{robust_seed, seed_jobs, seed_state, Seed, STRONG_BELOW};
+
+/// Most families (followed curves) per branch `η`.
+pub const MAX_FAMILIES: usize = 16;
+/// Most branch points switched at per branch `η`.
+pub const MAX_SWITCHES: usize = 16;
+/// Budget of continuation steps per followed direction.
+const MAX_STEPS: usize = 600;
+/// Width (arclength) to which the tracer locates folds, branch points and index changes.
+const TRACE_LOCATE_TOL: f64 = 1e-6;
+/// Distance (root-mean-square of `κ_g R`) below which two states count as the same.
+const SAME_STATE: f64 = 0.03;
+
+/// The traced sheets of branch `eta` and notes (caps reached, failed switches).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Families {
+    /// The sheets, by family and position along it.
+    pub sheets: Vec<TracedBranch>,
+    /// Notes for the diagram's warnings.
+    pub notes: Vec<String>,
+}
+
+/// A followed curve: its states in arclength order and how its two ends came about.
+struct Curve {
+    points: Vec<MarchPoint>,
+    start_end: (BranchEnd, String),
+    finish_end: (BranchEnd, String),
+}
+
+/// Trace every family of branch `eta` of a non-uniform rod (see the module docs).
+pub fn compute_families(
+    opts: &DiagramOptions,
+    eta: u32,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Families, DiagramError> {
+    opts.validate()?;
+    let t0 = Instant::now();
+    let branch = branch_of_eta(eta);
+    let e = f64::from(eta);
+    let (exist_lo, exist_hi) = (if eta == 1 { 0.0 } else { e - 1.0 }, e + 1.0);
+    if eta == 0 || !(exist_hi > opts.lbar_min && exist_lo < opts.lbar_max) {
+        return Err(DiagramError::BranchOutOfRange {
+            eta,
+            lo: exist_lo,
+            hi: exist_hi,
+            lbar_min: opts.lbar_min,
+            lbar_max: opts.lbar_max,
+        });
+    }
+    progress(Progress::BranchStarted { branch, eta });
+    let lo = opts.lbar_min.max(exist_lo);
+    let hi = opts.lbar_max.min(exist_hi);
+    let circles: Vec<f64> = [e - 1.0, e + 1.0]
+        .into_iter()
+        .filter(|&m| m >= 1.0 && m >= opts.lbar_min - 1e-12 && m <= opts.lbar_max + 1e-12)
+        .collect();
+    let cells = opts.trace_cells(eta);
+    let mid = 0.5 * (lo + hi);
+    let model = SurfaceModel::new(opts.radius, mid, cells, &opts.stiffness)?;
+    let problem = ParamProblem::new(model.clone(), Param::Lbar)?;
+    let images = Images::new(&model, &opts.stiffness);
+    let shape = model.dim() - model.n_constraints();
+    let mut settings = march_settings(opts, hi, shape);
+    settings.folds = FoldPolicy::Follow;
+    settings.detect_branch_points = true;
+    settings.far_limit = Some(lo);
+    settings.max_steps = MAX_STEPS;
+    settings.ds_min = 1e-5;
+    settings.circles = circles.clone();
+    settings.circle_distance = SWITCH_DISTANCE;
+    // Folds and branch points are located again at the reporting resolution
+    // (`crate::special`): the tracer needs them only to its own width.
+    settings.locate_tol = TRACE_LOCATE_TOL;
+
+    let span = hi - lo;
+    let seed_lengths: Vec<f64> = [0.5, 0.25, 0.75]
+        .iter()
+        .map(|f| lo + f * span)
+        .filter(|l| {
+            circles
+                .iter()
+                .all(|m| (l - m).abs() > 2.0 * SWITCH_DISTANCE)
+        })
+        .collect();
+    let end_ctx = EndContext {
+        opts,
+        problem: &problem,
+        lo,
+        hi,
+    };
+    let mut tr = Tracing {
+        ctx: &end_ctx,
+        settings: &settings,
+        images: &images,
+        branch,
+        eta,
+        curves: Vec::new(),
+        notes: Vec::new(),
+        pending: Vec::new(),
+        switched: Vec::new(),
+        steps: 0,
+        seed_note: Vec::new(),
+    };
+    let strong = matches!(&opts.stiffness, Stiffness::Tanh { d0, d1, .. }
+        if d1 / d0 < STRONG_BELOW);
+    let jobs = seed_jobs(
+        &seed_lengths,
+        eta,
+        (exist_lo, exist_hi),
+        (lo, hi),
+        &circles,
+        strong,
+    );
+    let seeds_tried = jobs.len();
+    // Every seed is solved before any is followed, on the crate's thread pool: the seeds are
+    // independent of each other and of the curves (which only decide whether a seed is
+    // new).
+    let solve_seed = |lbar: f64, seed: Seed| {
+        let ts = Instant::now();
+        let x = problem.model_at(lbar).ok().and_then(|m| match seed {
+            Seed::Solve { starts } => robust_seed(opts, &m, eta, lbar, starts),
+            Seed::Shifted(shift) => seed_state(&m, eta, lbar, shift),
+        });
+        (x, ts.elapsed().as_secs_f64())
+    };
+    let solved = run_parallel(
+        opts.worker_threads(),
+        jobs.clone(),
+        &mut |_| {},
+        &mut |_| {},
+        |(lbar, seed), _| solve_seed(lbar, seed),
+    );
+    let mut unsolved = Vec::new();
+    for (&(lbar, seed), (seeded, secs)) in jobs.iter().zip(solved) {
+        if seeded.is_none() && matches!(seed, Seed::Solve { .. }) {
+            unsolved.push(lbar);
+        }
+        if !tr.take(lbar, seed, seeded, secs, progress)? {
+            break;
+        }
+    }
+    // At strong contrast, `solve`'s homotopies in D1/D0 where its starts failed, one length
+    // at a time, and only where no traced family of the branch is stable yet: they cost
+    // 0.3–1 s each and serve to find a state of the branch where none is known.
+    for lbar in unsolved {
+        if tr.stable_at(lbar) {
+            debug(|| format!("eta {eta} at {lbar:.3}: a stable state is traced, no homotopy"));
+            continue;
+        }
+        let seed = Seed::Solve { starts: false };
+        let (seeded, secs) = solve_seed(lbar, seed);
+        if !tr.take(lbar, seed, seeded, secs, progress)? {
+            break;
+        }
+    }
+    let Tracing {
+        curves,
+        notes,
+        steps,
+        seed_note,
+        ..
+    } = tr;
+    if curves.is_empty() {
+        return Err(DiagramError::Seed {
+            eta,
+            lbar: mid,
+            source: rodloop_solver::SolverError::InvalidInput(format!(
+                "none of the {seeds_tried} seeds (Euler starts, shifted, solved directly or by \
+                 homotopy) converged to a loop with {eta} period(s) of κ_g"
+            )),
+        });
+    }
+    let t_trace = t0.elapsed().as_secs_f64();
+    debug(|| format!("eta {eta}: traced in {t_trace:.3} s"));
+
+    // Sheets.
+    let mut sheets = sheets::make_sheets(
+        opts,
+        &problem,
+        &images,
+        &curves,
+        &seed_note,
+        (branch, eta, cells),
+    );
+    let seconds = t0.elapsed().as_secs_f64();
+    debug(|| {
+        format!(
+            "eta {eta}: {} sheets of {} states in {:.3} s",
+            sheets.len(),
+            sheets.iter().map(|s| s.points.len()).sum::<usize>(),
+            seconds - t_trace
+        )
+    });
+    let count = sheets.len().max(1);
+    for s in &mut sheets {
+        s.steps = steps / count;
+        s.seconds = seconds / count as f64;
+        s.timings = BranchTimings {
+            seed: 0.0,
+            continuation: t_trace / count as f64,
+            end_approach: 0.0,
+            states: (seconds - t_trace) / count as f64,
+        };
+    }
+    progress(Progress::BranchFinished {
+        branch,
+        eta,
+        points: sheets.iter().map(|s| s.points.len()).sum(),
+        seconds,
+    });
+    Ok(Families { sheets, notes })
+}
+
+/// Diagnostics on stderr when `RODLOOP_DEBUG_FAMILIES` is set.
+fn debug(msg: impl FnOnce() -> String) {
+    if std::env::var_os("RODLOOP_DEBUG_FAMILIES").is_some() {
+        eprintln!("[families] {}", msg());
+    }
+}
