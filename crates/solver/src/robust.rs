@@ -248,9 +248,12 @@ pub fn solve_robust_with(
         for &from in MILD.iter().filter(|&&m| m > target) {
             for shift in std::iter::once(0.0).chain(shifts.iter().copied()) {
                 if !budget.spend() {
-                    tried.push(format!(
-                        "stopped after {} continuation steps and solves, the work budget of the fallback",
-                        fallbacks.budget
+                    tried.push((
+                        "work budget".to_string(),
+                        format!(
+                            "stopped after {} continuation steps and solves",
+                            fallbacks.budget
+                        ),
                     ));
                     break;
                 }
@@ -266,8 +269,11 @@ pub fn solve_robust_with(
                         ) {
                             Ok(acc) => acc,
                             Err(e) => {
-                                tried.push(format!(
-                                    "from D1/D0 = {from}, origin moved by {shift}: the companion solve failed ({e})"
+                                tried.push((
+                                    format!("continuation in D1/D0 from {from}"),
+                                    format!(
+                                        "origin moved by {shift:.4}: the companion solve failed ({e})"
+                                    ),
                                 ));
                                 continue;
                             }
@@ -283,9 +289,10 @@ pub fn solve_robust_with(
                         ));
                     }
                     Ok(None) => {}
-                    Err(e) => {
-                        tried.push(format!("from D1/D0 = {from}, origin moved by {shift}: {e}"))
-                    }
+                    Err(e) => tried.push((
+                        format!("continuation in D1/D0 from {from}"),
+                        format!("origin moved by {shift:.4}: {e}"),
+                    )),
                 }
             }
         }
@@ -331,16 +338,43 @@ pub fn solve_robust_with(
                         }
                     }
                     Ok(None) => {}
-                    Err(e) => tried.push(format!("from L̄ = {from}, origin moved by {shift}: {e}")),
+                    Err(e) => tried.push((
+                        format!("continuation in L̄ from {from}"),
+                        format!("origin moved by {shift:.4}: {e}"),
+                    )),
                 }
             }
         }
     }
+    let moved: Vec<String> = shifts.iter().map(|s| format!("{s:.4}")).collect();
     Err(SolverError::InvalidInput(format!(
-        "the direct solve {reason} (also with the start's origin moved by {shifts:?}); {}. \
+        "the direct solve {reason} (also with the start's origin moved by {}){}. \
          Try --from a state of this branch at a nearby length",
-        tried.join("; ")
+        moved.join(", "),
+        summarize_tried(&tried)
     )))
+}
+
+/// The failed fallbacks in one clause each: the path, how many starts failed on it, and the
+/// first failure (a full list repeats the same Newton failure a dozen times).
+fn summarize_tried(tried: &[(String, String)]) -> String {
+    let mut paths: Vec<(&str, usize, &str)> = Vec::new();
+    for (path, err) in tried {
+        match paths.iter_mut().find(|p| p.0 == path.as_str()) {
+            Some(p) => p.1 += 1,
+            None => paths.push((path, 1, err)),
+        }
+    }
+    paths
+        .iter()
+        .map(|(path, count, first)| {
+            if *count == 1 {
+                format!("; {path}: {first}")
+            } else {
+                format!("; {path}: {count} starts failed (first: {first})")
+            }
+        })
+        .collect()
 }
 
 /// A problem continued in `q = ln θ` instead of `θ` (three decades of `D1/D0` at even
@@ -592,5 +626,38 @@ fn run_to<P: rodloop_continuation::Problem>(
         if step.stop.is_some() {
             return Err((folds, closest));
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::summarize_tried;
+
+    /// Each fallback path is named once, with how many of its starts failed and the first
+    /// failure; the order of first appearance is kept.
+    #[test]
+    fn failed_fallbacks_are_summarised_per_path() {
+        let t = |p: &str, e: &str| (p.to_string(), e.to_string());
+        let tried = [
+            t(
+                "continuation in D1/D0 from 0.9",
+                "origin moved by 0.0000: A",
+            ),
+            t(
+                "continuation in D1/D0 from 0.9",
+                "origin moved by 0.0625: B",
+            ),
+            t("continuation in L̄ from 1.5", "origin moved by 0.0000: C"),
+            t(
+                "continuation in D1/D0 from 0.9",
+                "origin moved by 0.1250: D",
+            ),
+        ];
+        assert_eq!(
+            summarize_tried(&tried),
+            "; continuation in D1/D0 from 0.9: 3 starts failed (first: origin moved by 0.0000: A)\
+             ; continuation in L̄ from 1.5: origin moved by 0.0000: C"
+        );
+        assert_eq!(summarize_tried(&[]), "");
     }
 }
