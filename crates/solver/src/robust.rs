@@ -145,6 +145,24 @@ impl Budget {
 /// Mild contrasts tried as homotopy starts, in order.
 const MILD: [f64; 2] = [0.9, 0.6];
 
+/// Homotopy starts for a nearly uniform rod (`D1/D0` above every [`MILD`] value), followed
+/// up to the target. Near `D1/D0 = 1` the shift of the soft segment along the loop is nearly
+/// a symmetry, so Newton from an Euler start drifts along that nearly neutral direction
+/// (`solve` failed for every `D1/D0 ≥ 0.95` at `L̄ = 1.3`); at a clear contrast the placement
+/// is stiff, and the followed state keeps it as the contrast fades.
+const STRONGER: [f64; 2] = [0.8, 0.6];
+
+/// The homotopy starts for the contrast `target`: the [`MILD`] ones above it, else the
+/// [`STRONGER`] ones.
+fn homotopy_sources(target: f64) -> Vec<f64> {
+    let mild: Vec<f64> = MILD.iter().copied().filter(|&m| m > target).collect();
+    if mild.is_empty() && target < 1.0 {
+        STRONGER.to_vec()
+    } else {
+        mild
+    }
+}
+
 /// Solve a state of the branch with `eta` periods of `κ_g` at `lbar` (see
 /// [`crate::solve_with_accuracy`]), falling back to continuation in `D1/D0` for two-segment
 /// profiles when the direct solve fails or lands on another branch. `eta = None` accepts
@@ -245,7 +263,7 @@ pub fn solve_robust_with(
         // Energies of the mild-contrast states already followed: starts that relax to the same
         // state are not followed twice.
         let mut seen: Vec<f64> = Vec::new();
-        for &from in MILD.iter().filter(|&&m| m > target) {
+        for from in homotopy_sources(target) {
             for shift in std::iter::once(0.0).chain(shifts.iter().copied()) {
                 if !budget.spend() {
                     tried.push((

@@ -242,3 +242,86 @@ fn robust_solve_in_separate_passes_gives_the_same_state() {
         whole.energy.total
     );
 }
+
+/// Nearly uniform rods (`D1/D0` → 1): `solve_robust` reaches branch 1 (η = 2) at L̄ = 1.3
+/// for `D1/D0` = 0.95, 0.99, 0.999 (Newton from Euler starts drifts along the nearly
+/// neutral shift of the soft segment; the homotopy from a clear contrast does not), and the
+/// energies obey first-order perturbation theory about the uniform loop: with
+/// `D = D0 (1 − δ w(σ))`, `δ = 1 − D1/D0`, `E(δ) = E0 − δ a + O(δ²)` where
+/// `a = max_φ (R/2π) ∫ w(σ) κ²(σ + φ) ds` (Hellmann–Feynman; the soft segment sits where the
+/// uniform loop bends most, and the shift φ is a critical point). The slope, extrapolated
+/// from δ = 1e-3 and 1e-2, must equal the maximum of the correlation computed from the
+/// uniform solution alone.
+#[test]
+fn nearly_uniform_rods_solve_and_follow_first_order_perturbation_theory() {
+    use rodloop_solver::{solve_robust, Accuracy};
+    let lbar = 1.3;
+    let start = StartShape::Euler { l: 2 };
+    let opts = SolveOptions::default();
+    let energy = |d1: f64| {
+        let st = Stiffness::Tanh {
+            d0: 1.0,
+            d1,
+            s0: 0.3,
+            s1: 0.8,
+            gamma: 200.0,
+        };
+        let (acc, _) = solve_robust(1.0, lbar, &st, &start, Accuracy::Default, Some(2), &opts)
+            .unwrap_or_else(|e| panic!("D1/D0 = {d1}: {e}"));
+        (acc.energy.total, acc.energy_error)
+    };
+    // The uniform loop and its κ² as a trigonometric interpolant in σ = s/L.
+    let n = 1024;
+    let uni = solve_with(&Stiffness::Uniform { d: 1.0 }, lbar, n, 2);
+    let e0 = uni.energy().total;
+    let len = uni.length();
+    let k2: Vec<f64> = uni.profile().iter().map(|p| p.kappa * p.kappa).collect();
+    let k2 = TrigInterpolant::new(&k2).unwrap();
+    // w(σ) = (D0 − D(σ))/(D0 − D1), read off the profile with D0 = 1, D1 = 0.5 (Eq. 51 is
+    // linear in D1).
+    let w_model = SurfaceModel::new(1.0, lbar, 8, &tanh(0.5, 200.0)).unwrap();
+    let m = 8192;
+    let w: Vec<f64> = (0..m)
+        .map(|j| (1.0 - w_model.stiffness().eval(j as f64 / m as f64).d) / 0.5)
+        .collect();
+    let corr = |phi: f64| {
+        (0..m)
+            .map(|j| w[j] * k2.eval(j as f64 / m as f64 + phi))
+            .sum::<f64>()
+            * (len / m as f64)
+            / (2.0 * std::f64::consts::PI)
+    };
+    // Maximum over φ: a grid, then golden-section refinement around the best node.
+    let grid = 256;
+    let best = (0..grid)
+        .map(|j| j as f64 / grid as f64)
+        .max_by(|a, b| corr(*a).total_cmp(&corr(*b)))
+        .unwrap();
+    let (mut lo, mut hi) = (best - 1.0 / grid as f64, best + 1.0 / grid as f64);
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    for _ in 0..60 {
+        let (x1, x2) = (hi - g * (hi - lo), lo + g * (hi - lo));
+        if corr(x1) > corr(x2) {
+            hi = x2;
+        } else {
+            lo = x1;
+        }
+    }
+    let a = corr(0.5 * (lo + hi));
+    let (e95, _) = energy(0.95);
+    let (e99, err99) = energy(0.99);
+    let (e999, err999) = energy(0.999);
+    // Between the uniform rods of stiffness D1 and D0 (same shapes, smaller or equal D).
+    for (d1, e) in [(0.95, e95), (0.99, e99), (0.999, e999)] {
+        assert!(e < e0 && e > d1 * e0, "D1/D0 = {d1}: {e} vs {e0}");
+    }
+    let s = |e: f64, d: f64| (e0 - e) / d;
+    let (s1, s2) = (s(e999, 1e-3), s(e99, 1e-2));
+    let extrapolated = (s1 * 1e-2 - s2 * 1e-3) / (1e-2 - 1e-3);
+    // The slopes' own error: the energies' estimates over δ (1e-3 dominates).
+    let tol = 2.0 * (err999 / 1e-3 + err99 / 1e-2) + 1e-4 * a;
+    assert!(
+        (extrapolated - a).abs() <= tol,
+        "slope {extrapolated} (from {s1}, {s2}) vs first-order {a} (tol {tol})"
+    );
+}
