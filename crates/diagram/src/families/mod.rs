@@ -50,7 +50,7 @@ use crate::types::{BranchEnd, BranchTimings, TracedBranch};
 use crate::{DiagramError, DiagramOptions, Progress};
 use following::{EndContext, Tracing};
 use images::Images;
-use seeding::{robust_seed, seed_jobs, seed_state, Seed, STRONG_BELOW};
+use seeding::{robust_seed, seed_jobs, seed_state, Seed, NEARLY_UNIFORM, STRONG_BELOW};
 
 /// Most families (followed curves) per branch `η`.
 pub const MAX_FAMILIES: usize = 16;
@@ -153,8 +153,11 @@ pub fn compute_families(
         steps: 0,
         seed_note: Vec::new(),
     };
+    // Very soft segments, and nearly uniform rods (where Newton from Euler starts drifts
+    // along the nearly neutral placement of the soft segment), are seeded as `rodloop solve`
+    // finds the states.
     let strong = matches!(&opts.stiffness, Stiffness::Tanh { d0, d1, .. }
-        if d1 / d0 < STRONG_BELOW);
+        if d1 / d0 < STRONG_BELOW || d1 / d0 > NEARLY_UNIFORM);
     let jobs = seed_jobs(
         &seed_lengths,
         eta,

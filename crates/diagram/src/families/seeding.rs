@@ -105,6 +105,12 @@ pub(super) fn robust_seed(
 /// solves from Euler starts rarely converge there).
 pub(super) const STRONG_BELOW: f64 = crate::STRONG_CONTRAST;
 
+/// Contrast `D1/D0` above which the seeds are those of `rodloop solve --branch` too: near
+/// `D1/D0 = 1` the placement of the soft segment is nearly neutral and direct solves from
+/// Euler starts drift along it (`solve` reaches these states by continuation in `D1/D0` from
+/// a clearer contrast).
+pub(super) const NEARLY_UNIFORM: f64 = 0.9;
+
 /// The state of an Euler start of `eta` periods with its origin moved by `shift`, relaxed
 /// and solved on `model` (the tracing resolution), if it has `eta` periods of `κ_g`.
 pub(super) fn seed_state(
