@@ -49,7 +49,7 @@ use std::f64::consts::PI;
 
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
-use crate::frame::{exp_jet, expm_skew, hat};
+use crate::frame::{exp_jet, exp_jet_affine, expm_skew, hat};
 use crate::mesh::MeshMap;
 use crate::periodic::TrigInterpolant;
 use crate::stiffness::{Stiffness, StiffnessProfile};
@@ -426,14 +426,13 @@ impl SurfaceModel {
 
     pub(crate) fn chain(&self, kappa: &[f64]) -> Chain {
         let n = self.cells;
-        let zero = [[V3::zeros(); 2]; 2];
         let mut e = Vec::with_capacity(n);
         let mut de = Vec::with_capacity(n);
         let mut dde = Vec::with_capacity(n);
         for c in 0..n {
             let (w0, v1, v2) = self.cell_vectors(self.cell_length(c));
             let w = w0 + v1 * kappa[2 * c] + v2 * kappa[2 * c + 1];
-            let (ec, d, dd) = exp_jet::<2>(&w, &[v1, v2], &zero);
+            let (ec, d, dd) = exp_jet_affine::<2>(&w, &[v1, v2]);
             e.push(ec);
             de.push(d);
             dde.push([dd[0][0], dd[0][1], dd[1][1]]);
