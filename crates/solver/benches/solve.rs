@@ -1,9 +1,13 @@
 //! Benchmarks at the default resolution (branch η = 2 at L̄ = 1.2, `Accuracy::Default`):
-//! one equilibrium solve from an Euler-curve start (start construction included), and one
-//! stability evaluation of the converged equilibrium.
+//! one equilibrium solve from an Euler-curve start (start construction included), one
+//! stability evaluation of the converged equilibrium, and one `O(N)` factorisation of the
+//! Newton matrix with one solve (the core of a Newton step) at a two-segment rod's equilibrium.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use rodloop_solver::{solve, Accuracy, SolveOptions, StartShape, Stiffness, SurfaceModel};
+use nalgebra::DVector;
+use rodloop_solver::{
+    solve, Accuracy, KktFactor, SolveOptions, StartShape, Stiffness, SurfaceModel,
+};
 
 fn benches(c: &mut Criterion) {
     let st = Stiffness::uniform(1.0);
@@ -22,6 +26,26 @@ fn benches(c: &mut Criterion) {
     c.bench_function(&format!("stability_eta2_lbar1.2_N{cells}"), |b| {
         b.iter(|| eq.stability().unwrap())
     });
+    // The factorisation at an equilibrium of a two-segment rod (D1/D0 = 0.5, graded mesh,
+    // no phase condition): at a uniform rod's equilibrium the unbordered matrix is singular
+    // (the shift mode) and the factorisation declines.
+    let st = Stiffness::Tanh {
+        d0: 1.0,
+        d1: 0.5,
+        s0: 0.3,
+        s1: 0.8,
+        gamma: 200.0,
+    };
+    let cells = Accuracy::Default.cells(2, &st);
+    let model = SurfaceModel::new(1.0, 1.2, cells, &st).unwrap();
+    let k0 = start.gauss_values(&model).unwrap();
+    let eq = solve(&model, &k0, &opts).unwrap();
+    let (model, z) = (eq.model(), eq.state());
+    let rhs = DVector::from_fn(model.dim(), |i, _| ((i * 7919) % 101) as f64 / 101.0 - 0.5);
+    c.bench_function(
+        &format!("kkt_factor_and_solve_d1_0.5_lbar1.2_N{cells}"),
+        |b| b.iter(|| KktFactor::new(model, &z, 0.0).unwrap().solve(&rhs).unwrap()),
+    );
 }
 
 criterion_group! {

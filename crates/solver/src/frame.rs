@@ -48,35 +48,43 @@ pub fn expm_skew(w: &Matrix3<f64>) -> Matrix3<f64> {
 /// returns `[a, a', a'', b, b', b'']`.
 ///
 /// For `q < 1` the Maclaurin series `a = Σ (−q)^k/(2k+1)!`, `b = Σ (−q)^k/(2k+2)!` are summed
-/// (18 terms, error below 1e-30); otherwise the closed forms
+/// (until the terms fall below 1e-24, at most 18 terms); otherwise the closed forms
 /// `a' = (cos θ − a)/(2q)`, `a'' = −(a/2 + 3a')/(2q)`, `b' = (a/2 − b)/q`,
 /// `b'' = (a'/2 − 2b')/q` are used, which have no cancellation problem there.
 pub fn rodrigues_coefficients(q: f64) -> [f64; 6] {
     if q < 1.0 {
-        // pw[k] = (−q)^k, so that (−1)^k q^{k−1} = −pw[k−1] and (−1)^k q^{k−2} = pw[k−2].
-        let mut pw = [1.0; 18];
-        for k in 1..18 {
-            pw[k] = pw[k - 1] * (-q);
-        }
+        // Term k: a += (−q)^k/(2k+1)!, a' += −k (−q)^{k−1}/(2k+1)!,
+        // a'' += k(k−1) (−q)^{k−2}/(2k+1)! (same for b with (2k+2)!). For q < 1 the terms
+        // decrease in modulus, so the sum stops once the slowest-decaying one (a'') falls
+        // below 1e-24 (the sums are 1/360 or larger, so the rest is far below round-off).
         let mut out = [0.0; 6];
+        let mut pw = [1.0, 1.0, 1.0]; // (−q)^k, (−q)^{k−1}, (−q)^{k−2} (when k ≥ 1, 2)
         let mut fa = 1.0; // (2k+1)!
         let mut fb = 2.0; // (2k+2)!
         for k in 0..18 {
             let kf = k as f64;
-            out[0] += pw[k] / fa;
-            out[3] += pw[k] / fb;
+            out[0] += pw[0] / fa;
+            out[3] += pw[0] / fb;
             if k >= 1 {
-                let d1 = -kf * pw[k - 1];
+                let d1 = -kf * pw[1];
                 out[1] += d1 / fa;
                 out[4] += d1 / fb;
             }
             if k >= 2 {
-                let d2 = kf * (kf - 1.0) * pw[k - 2];
+                let d2 = kf * (kf - 1.0) * pw[2];
                 out[2] += d2 / fa;
                 out[5] += d2 / fb;
+                if (d2 / fa).abs() < 1e-24 {
+                    break;
+                }
             }
             fa *= (2.0 * kf + 2.0) * (2.0 * kf + 3.0);
             fb *= (2.0 * kf + 3.0) * (2.0 * kf + 4.0);
+            if k >= 1 {
+                pw[2] = pw[1];
+            }
+            pw[1] = pw[0];
+            pw[0] *= -q;
         }
         out
     } else {
@@ -116,6 +124,39 @@ pub fn exp_jet<const K: usize>(
     wi: &[Vector3<f64>; K],
     wij: &[[Vector3<f64>; K]; K],
 ) -> ExpJet<K> {
+    jet(w, wi, Some(wij))
+}
+
+/// [`exp_jet`] for `ω` affine in the variables (`∂²ω/∂x_i∂x_j = 0`), as for a cell
+/// propagator in its two curvature unknowns: the terms in `W_ij` are skipped.
+pub fn exp_jet_affine<const K: usize>(w: &Vector3<f64>, wi: &[Vector3<f64>; K]) -> ExpJet<K> {
+    jet(w, wi, None)
+}
+
+/// `exp(hat(ω))` and its first derivatives only (see [`exp_jet`]).
+pub fn exp_jet1<const K: usize>(
+    w: &Vector3<f64>,
+    wi: &[Vector3<f64>; K],
+) -> (Matrix3<f64>, [Matrix3<f64>; K]) {
+    let q = w.norm_squared();
+    let [a, a1, _, b, b1, _] = rodrigues_coefficients(q);
+    let wm = hat(w);
+    let w2 = wm * wm;
+    let e = Matrix3::identity() + wm * a + w2 * b;
+    let mut d = [Matrix3::zeros(); K];
+    for i in 0..K {
+        let wim = hat(&wi[i]);
+        let qi = 2.0 * w.dot(&wi[i]);
+        d[i] = wm * (a1 * qi) + wim * a + w2 * (b1 * qi) + (wim * wm + wm * wim) * b;
+    }
+    (e, d)
+}
+
+fn jet<const K: usize>(
+    w: &Vector3<f64>,
+    wi: &[Vector3<f64>; K],
+    wij: Option<&[[Vector3<f64>; K]; K]>,
+) -> ExpJet<K> {
     let q = w.norm_squared();
     let [a, a1, a2, b, b1, b2] = rodrigues_coefficients(q);
     let wm = hat(w);
@@ -134,20 +175,27 @@ pub fn exp_jet<const K: usize>(
     }
     for i in 0..K {
         for j in i..K {
-            let wijm = hat(&wij[i][j]);
-            let qij = 2.0 * (wi[i].dot(&wi[j]) + w.dot(&wij[i][j]));
-            let aij = a2 * qi[i] * qi[j] + a1 * qij;
-            let bij = b2 * qi[i] * qi[j] + b1 * qij;
             let (ai, aj) = (a1 * qi[i], a1 * qi[j]);
             let (bi, bj) = (b1 * qi[i], b1 * qi[j]);
+            let mut qij = 2.0 * wi[i].dot(&wi[j]);
+            let mut pair = wim[i] * wim[j] + wim[j] * wim[i];
+            let mut lin = Matrix3::zeros();
+            if let Some(wij) = wij {
+                let wijm = hat(&wij[i][j]);
+                qij += 2.0 * w.dot(&wij[i][j]);
+                pair += wijm * wm + wm * wijm;
+                lin = wijm * a;
+            }
+            let aij = a2 * qi[i] * qi[j] + a1 * qij;
+            let bij = b2 * qi[i] * qi[j] + b1 * qij;
             dd[i][j] = wm * aij
                 + wim[j] * ai
                 + wim[i] * aj
-                + wijm * a
+                + lin
                 + w2 * bij
                 + sym[j] * bi
                 + sym[i] * bj
-                + (wijm * wm + wm * wijm + wim[i] * wim[j] + wim[j] * wim[i]) * b;
+                + pair * b;
         }
     }
     (e, d, dd)
@@ -248,6 +296,61 @@ mod tests {
             sum += term;
         }
         assert!((expm_skew(&w) - sum).norm() < 1e-15);
+    }
+
+    #[test]
+    fn rodrigues_series_matches_closed_forms() {
+        // The (truncated) series for q < 1 against sin θ/θ, (1 − cos θ)/θ² and the closed
+        // forms of the derivatives, where those have no cancellation problem.
+        for q in [1e-4f64, 1e-2, 0.25, 0.5, 0.81, 0.999_999] {
+            let [a, a1, a2, b, b1, b2] = rodrigues_coefficients(q);
+            let th = q.sqrt();
+            let (s, c) = th.sin_cos();
+            assert!((a - s / th).abs() < 1e-15, "a at q = {q}");
+            assert!((b - (1.0 - c) / q).abs() < 1e-12, "b at q = {q}");
+            if q >= 0.25 {
+                let ea1 = (c - a) / (2.0 * q);
+                let ea2 = -(0.5 * a + 3.0 * ea1) / (2.0 * q);
+                let eb1 = (0.5 * a - b) / q;
+                let eb2 = (0.5 * ea1 - 2.0 * eb1) / q;
+                for (x, y) in [(a1, ea1), (a2, ea2), (b1, eb1), (b2, eb2)] {
+                    assert!((x - y).abs() < 1e-13, "q = {q}: {x} vs {y}");
+                }
+            }
+        }
+        // Continuity across the switch at q = 1.
+        let lo = rodrigues_coefficients(1.0 - 1e-13);
+        let hi = rodrigues_coefficients(1.0);
+        for k in 0..6 {
+            assert!((lo[k] - hi[k]).abs() < 1e-12, "coefficient {k}");
+        }
+    }
+
+    #[test]
+    fn affine_and_first_order_jets_match_the_general_jet() {
+        let w = Vector3::new(0.03, -0.2, 0.11);
+        let wi = [
+            Vector3::new(0.01, 0.0, -0.5),
+            Vector3::new(-0.01, 0.0, -0.5),
+        ];
+        let zero = [[Vector3::zeros(); 2]; 2];
+        let (e, d, dd) = exp_jet(&w, &wi, &zero);
+        let (ea, da, dda) = exp_jet_affine(&w, &wi);
+        let (e1, d1) = exp_jet1(&w, &wi);
+        assert!((e - ea).amax() < 1e-16 && (e - e1).amax() < 1e-16);
+        for i in 0..2 {
+            assert!((d[i] - da[i]).amax() < 1e-16 && (d[i] - d1[i]).amax() < 1e-16);
+            for j in i..2 {
+                assert!((dd[i][j] - dda[i][j]).amax() < 1e-15);
+            }
+        }
+        // The first derivative against a central difference of Rodrigues' formula.
+        let step = 1e-6;
+        for i in 0..2 {
+            let fd = (expm_skew(&hat(&(w + wi[i] * step))) - expm_skew(&hat(&(w - wi[i] * step))))
+                / (2.0 * step);
+            assert!((fd - d1[i]).amax() < 1e-9, "derivative {i}");
+        }
     }
 
     #[test]

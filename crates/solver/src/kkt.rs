@@ -43,7 +43,9 @@
 //! `1e-13` is reported as [`SolverError::SingularJacobian`], and callers fall back to the
 //! dense matrix (which can only happen at isolated points of a branch).
 
-use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use nalgebra::{
+    DMatrix, DVector, Matrix2, Matrix3, SMatrix, SVector, Vector2, Vector3, LU, U2, U8, U9,
+};
 
 use crate::frame::hat;
 use crate::model::{tr_prod, vee_skew, Chain, SurfaceModel};
@@ -139,20 +141,43 @@ impl CellTerms {
     }
 }
 
-/// One block of the factorisation.
-struct Block {
+type M8 = SMatrix<f64, 8, 8>;
+type M9 = SMatrix<f64, 9, 9>;
+type V8 = SVector<f64, 8>;
+type V9 = SVector<f64, 9>;
+/// The three nonzero columns of `G_c = D_{c−1}⁻¹ C_cᵀ` (`C_c` couples only the rows `η_c`
+/// of block `c` to block `c − 1`); rows beyond the previous block's size are zero.
+type Gc = SMatrix<f64, 8, 3>;
+
+/// The first block (`δκ_0`, 2×2).
+struct FirstBlock {
+    d: Matrix2<f64>,
+    lu: LU<f64, U2, U2>,
+}
+
+/// A middle block `(η_c, ξ_c, δκ_c)`, `0 < c < N` (8×8), stored on the stack.
+struct MidBlock {
     /// The pivot block `D_c` (symmetric), kept for the inertia.
-    d: DMatrix<f64>,
-    lu: nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>,
-    /// `G_c = D_{c−1}⁻¹ C_cᵀ` (`n_{c−1} × n_c`); empty for the first block.
-    g: DMatrix<f64>,
+    d: M8,
+    lu: LU<f64, U8, U8>,
+    g: Gc,
+}
+
+/// The last block `(η_N, ξ_N, δμ)` (9×9).
+struct LastBlock {
+    d: M9,
+    lu: LU<f64, U9, U9>,
+    g: Gc,
 }
 
 /// Block `LDLᵀ` factorisation of the lifted KKT matrix (see the module docs), optionally
 /// shifted by `−σW` in the curvature block, with the phase condition as a border.
 pub struct KktFactor {
     cells: usize,
-    blocks: Vec<Block>,
+    first: FirstBlock,
+    /// Blocks `c = 1..N` (index `c − 1`).
+    mid: Vec<MidBlock>,
+    last: LastBlock,
     /// Phase border: the column `b` (`−∇φ` on the curvature entries), `K₀⁻¹ b` and the
     /// Schur complement `s = −bᵀK₀⁻¹b`.
     border: Option<(DVector<f64>, DVector<f64>, f64)>,
@@ -215,9 +240,8 @@ impl KktProduct {
     }
 }
 
-/// `min |U_ii| / max |U_ii|` of an LU factorisation (0 if not finite).
-fn pivot_ratio(lu: &nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>) -> f64 {
-    let diag = lu.u().diagonal();
+/// `min |U_ii| / max |U_ii|` of the diagonal of an LU factor (0 if not finite).
+fn pivot_ratio(diag: &[f64]) -> f64 {
     let big = diag.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let small = diag.iter().fold(f64::INFINITY, |m, v| m.min(v.abs()));
     let r = small / big;
@@ -228,23 +252,66 @@ fn pivot_ratio(lu: &nalgebra::LU<f64, nalgebra::Dyn, nalgebra::Dyn>) -> f64 {
     }
 }
 
-fn block_size(c: usize, cells: usize) -> usize {
-    if c == 0 {
-        2
-    } else if c < cells {
-        8
-    } else {
-        9
+/// Sign and `ln |det|` of an LU factorisation from its permutation sign and `U` diagonal.
+fn det_parts(perm_sign: f64, diag: &[f64]) -> (f64, f64) {
+    let mut sign = perm_sign;
+    let mut log = 0.0;
+    for v in diag {
+        if *v < 0.0 {
+            sign = -sign;
+        }
+        log += v.abs().ln();
+    }
+    (sign, log)
+}
+
+/// The factorised block before block `c`: the first one or a middle one.
+#[derive(Clone, Copy)]
+enum Prev<'a> {
+    First(&'a LU<f64, U2, U2>),
+    Mid(&'a LU<f64, U8, U8>),
+}
+
+/// `G_c = D_{c−1}⁻¹ C_cᵀ` (its three nonzero columns) and the update `C_c G_c` of the
+/// `(η_c, η_c)` part of block `c`. `C_c` couples `η_c` with `(ξ_{c−1}, δκ_{c−1})`:
+/// `C_c = [E_{c−1}, a_{c−1,1}, a_{c−1,2}]` (no `ξ_0`).
+fn coupling(prev: Prev<'_>, e: &M3, a: &[V3; 2]) -> Option<(Gc, M3)> {
+    match prev {
+        Prev::First(lu) => {
+            let ct = SMatrix::<f64, 2, 3>::from_rows(&[a[0].transpose(), a[1].transpose()]);
+            let g2 = lu.solve(&ct)?;
+            let upd = ct.tr_mul(&g2);
+            let mut g = Gc::zeros();
+            g.fixed_rows_mut::<2>(0).copy_from(&g2);
+            Some((g, upd))
+        }
+        Prev::Mid(lu) => {
+            let mut ct = Gc::zeros();
+            ct.fixed_rows_mut::<3>(3).copy_from(&e.transpose());
+            ct.set_row(6, &a[0].transpose());
+            ct.set_row(7, &a[1].transpose());
+            let g = lu.solve(&ct)?;
+            let upd = ct.tr_mul(&g);
+            Some((g, upd))
+        }
     }
 }
 
-/// Offset of the curvature pair of cell `c` inside its block.
-fn kappa_offset(c: usize) -> usize {
-    if c == 0 {
-        0
-    } else {
-        6
+/// Block rows `(η, ξ)`: the `−I` couplings of an eliminated pair.
+fn pair_couplings<const S: usize>(k: &mut SMatrix<f64, S, S>) {
+    for i in 0..3 {
+        k[(i, 3 + i)] = -1.0;
+        k[(3 + i, i)] = -1.0;
     }
+}
+
+/// `[x_0 (2 entries), 0, …]` as an 8-vector, so that the first block's `G` (zero-padded
+/// rows) applies uniformly.
+fn pad2(x: &Vector2<f64>) -> V8 {
+    let mut v = V8::zeros();
+    v[0] = x[0];
+    v[1] = x[1];
+    v
 }
 
 impl KktFactor {
@@ -259,73 +326,86 @@ impl KktFactor {
         product: KktProduct,
         shift: f64,
     ) -> Result<Self, SolverError> {
+        let singular = || SolverError::SingularJacobian { iteration: 0 };
         let t = &product.terms;
         let n = model.cells();
         let d0 = model.stiffness().kind().reference();
-        let mut blocks: Vec<Block> = Vec::with_capacity(n + 1);
         let mut det_sign = 1.0;
         let mut log_abs_det = 0.0;
         let mut regularized = false;
-        for c in 0..=n {
-            let size = block_size(c, n);
-            let mut k = DMatrix::zeros(size, size);
-            if c > 0 {
-                for i in 0..3 {
-                    k[(i, 3 + i)] = -1.0;
-                    k[(3 + i, i)] = -1.0;
+        // Block 0: δκ_0.
+        let first = {
+            let sw = shift * d0 * model.cell_weight(0);
+            let [q11, q12, q22] = t.q[0];
+            let d = Matrix2::new(q11 - sw, q12, q12, q22 - sw);
+            let lu = d.lu();
+            let diag = lu.u().diagonal();
+            if pivot_ratio(diag.as_slice()) <= PIVOT_RATIO {
+                return Err(singular());
+            }
+            let (s, l) = det_parts(lu.p().determinant::<f64>(), diag.as_slice());
+            det_sign *= s;
+            log_abs_det += l;
+            FirstBlock { d, lu }
+        };
+        // Blocks 1..N: (η_c, ξ_c, δκ_c).
+        let mut mid: Vec<MidBlock> = Vec::with_capacity(n.saturating_sub(1));
+        for c in 1..n {
+            let mut k = M8::zeros();
+            pair_couplings(&mut k);
+            let sw = shift * d0 * model.cell_weight(c);
+            let [q11, q12, q22] = t.q[c];
+            k[(6, 6)] = q11 - sw;
+            k[(6, 7)] = q12;
+            k[(7, 6)] = q12;
+            k[(7, 7)] = q22 - sw;
+            for i in 0..2 {
+                for j in 0..3 {
+                    k[(6 + i, 3 + j)] = t.b[c][i][j];
+                    k[(3 + j, 6 + i)] = t.b[c][i][j];
                 }
             }
-            if c < n {
-                let o = kappa_offset(c);
-                let sw = shift * d0 * model.cell_weight(c);
-                let [q11, q12, q22] = t.q[c];
-                k[(o, o)] = q11 - sw;
-                k[(o, o + 1)] = q12;
-                k[(o + 1, o)] = q12;
-                k[(o + 1, o + 1)] = q22 - sw;
-                if c > 0 {
-                    for i in 0..2 {
-                        for j in 0..3 {
-                            k[(o + i, 3 + j)] = t.b[c][i][j];
-                            k[(3 + j, o + i)] = t.b[c][i][j];
-                        }
-                    }
-                }
+            let prev = if c == 1 {
+                Prev::First(&first.lu)
             } else {
-                for i in 0..3 {
-                    for j in 0..3 {
-                        k[(6 + i, 3 + j)] = -t.closure[(i, j)];
-                        k[(3 + j, 6 + i)] = -t.closure[(i, j)];
-                    }
-                }
-            }
-            let g = if c > 0 {
-                // C_c: rows η_c (0..3) against (ξ_{c−1}, δκ_{c−1}) of the previous block.
-                let prev = block_size(c - 1, n);
-                let mut cc = DMatrix::zeros(size, prev);
-                let po = kappa_offset(c - 1);
-                for i in 0..3 {
-                    if c - 1 > 0 {
-                        for j in 0..3 {
-                            cc[(i, 3 + j)] = t.e[c - 1][(i, j)];
-                        }
-                    }
-                    cc[(i, po)] = t.a[c - 1][0][i];
-                    cc[(i, po + 1)] = t.a[c - 1][1][i];
-                }
-                let g = blocks[c - 1]
-                    .lu
-                    .solve(&cc.transpose())
-                    .ok_or(SolverError::SingularJacobian { iteration: 0 })?;
-                k -= &cc * &g;
-                g
-            } else {
-                DMatrix::zeros(0, 0)
+                Prev::Mid(&mid[c - 2].lu)
             };
-            let mut d = (&k + k.transpose()) * 0.5;
-            let mut lu = d.clone().lu();
-            let mut ratio = pivot_ratio(&lu);
-            if c == n && ratio <= PIVOT_RATIO {
+            let (g, upd) = coupling(prev, &t.e[c - 1], &t.a[c - 1]).ok_or_else(singular)?;
+            let mut ee = k.fixed_view_mut::<3, 3>(0, 0);
+            ee -= upd;
+            let d = (k + k.transpose()) * 0.5;
+            let lu = d.lu();
+            let diag = lu.u().diagonal();
+            if pivot_ratio(diag.as_slice()) <= PIVOT_RATIO {
+                return Err(singular());
+            }
+            let (s, l) = det_parts(lu.p().determinant::<f64>(), diag.as_slice());
+            det_sign *= s;
+            log_abs_det += l;
+            mid.push(MidBlock { d, lu, g });
+        }
+        // Block N: (η_N, ξ_N, δμ).
+        let last = {
+            let mut k = M9::zeros();
+            pair_couplings(&mut k);
+            for i in 0..3 {
+                for j in 0..3 {
+                    k[(6 + i, 3 + j)] = -t.closure[(i, j)];
+                    k[(3 + j, 6 + i)] = -t.closure[(i, j)];
+                }
+            }
+            let prev = if n == 1 {
+                Prev::First(&first.lu)
+            } else {
+                Prev::Mid(&mid[n - 2].lu)
+            };
+            let (g, upd) = coupling(prev, &t.e[n - 1], &t.a[n - 1]).ok_or_else(singular)?;
+            let mut ee = k.fixed_view_mut::<3, 3>(0, 0);
+            ee -= upd;
+            let mut d = (k + k.transpose()) * 0.5;
+            let mut lu = d.lu();
+            let mut ratio = pivot_ratio(lu.u().diagonal().as_slice());
+            if ratio <= PIVOT_RATIO {
                 // Closure constraints of deficient rank (a great circle, or a planar start):
                 // regularise the multiplier block by −δI (δ = 1e-10 of the block's scale),
                 // as interior-point codes do for degenerate equality constraints. The
@@ -334,27 +414,24 @@ impl KktFactor {
                 for i in 6..9 {
                     d[(i, i)] -= 1e-10 * scale;
                 }
-                lu = d.clone().lu();
-                ratio = pivot_ratio(&lu);
+                lu = d.lu();
+                ratio = pivot_ratio(lu.u().diagonal().as_slice());
                 regularized = true;
             }
             if ratio <= PIVOT_RATIO {
-                return Err(SolverError::SingularJacobian { iteration: 0 });
+                return Err(singular());
             }
             let diag = lu.u().diagonal();
-            let mut sign = lu.p().determinant::<f64>();
-            for v in diag.iter() {
-                if *v < 0.0 {
-                    sign = -sign;
-                }
-                log_abs_det += v.abs().ln();
-            }
-            det_sign *= sign;
-            blocks.push(Block { d, lu, g });
-        }
+            let (s, l) = det_parts(lu.p().determinant::<f64>(), diag.as_slice());
+            det_sign *= s;
+            log_abs_det += l;
+            LastBlock { d, lu, g }
+        };
         let mut f = Self {
             cells: n,
-            blocks,
+            first,
+            mid,
+            last,
             border: None,
             det_sign,
             log_abs_det,
@@ -382,44 +459,71 @@ impl KktFactor {
     /// Solve without the phase border: `b` and the result have the layout `(κ, μ)`.
     fn solve_lifted(&self, b: &DVector<f64>) -> DVector<f64> {
         let n = self.cells;
-        // Scatter.
-        let mut w: Vec<DVector<f64>> = (0..=n).map(|c| DVector::zeros(block_size(c, n))).collect();
-        for c in 0..n {
-            let o = kappa_offset(c);
-            w[c][o] = b[2 * c];
-            w[c][o + 1] = b[2 * c + 1];
+        // Scatter; forward elimination w_c −= G_cᵀ w_{c−1} (only the η_c rows change).
+        let mut x0 = Vector2::new(b[0], b[1]);
+        let mut xm: Vec<V8> = Vec::with_capacity(n.saturating_sub(1));
+        for c in 1..n {
+            let mut v = V8::zeros();
+            v[6] = b[2 * c];
+            v[7] = b[2 * c + 1];
+            let prev = if c == 1 { pad2(&x0) } else { xm[c - 2] };
+            let upd = self.mid[c - 1].g.tr_mul(&prev);
+            let mut eta = v.fixed_rows_mut::<3>(0);
+            eta -= upd;
+            xm.push(v);
         }
+        let mut xl = V9::zeros();
         for i in 0..3 {
-            w[n][6 + i] = b[2 * n + i];
+            xl[6 + i] = b[2 * n + i];
         }
-        // Forward: w_c −= G_cᵀ w_{c−1}.
-        for c in 1..=n {
-            let upd = self.blocks[c].g.tr_mul(&w[c - 1]);
-            w[c] -= upd;
+        let prev = if n == 1 { pad2(&x0) } else { xm[n - 2] };
+        let upd = self.last.g.tr_mul(&prev);
+        let mut eta = xl.fixed_rows_mut::<3>(0);
+        eta -= upd;
+        // Diagonal solves.
+        fn nan_if<const S: usize>(ok: bool, v: &mut SVector<f64, S>) {
+            if !ok {
+                v.fill(f64::NAN);
+            }
         }
-        // Diagonal.
-        let mut x: Vec<DVector<f64>> = w
-            .iter()
-            .zip(&self.blocks)
-            .map(|(wc, bl)| {
-                bl.lu
-                    .solve(wc)
-                    .unwrap_or_else(|| DVector::from_element(wc.len(), f64::NAN))
-            })
-            .collect();
-        // Backward: x_{c−1} −= G_c x_c.
-        for c in (1..=n).rev() {
-            let upd = &self.blocks[c].g * &x[c];
-            x[c - 1] -= upd;
+        let ok = self.first.lu.solve_mut(&mut x0);
+        nan_if(ok, &mut x0);
+        for (v, bl) in xm.iter_mut().zip(&self.mid) {
+            let ok = bl.lu.solve_mut(v);
+            nan_if(ok, v);
+        }
+        let ok = self.last.lu.solve_mut(&mut xl);
+        nan_if(ok, &mut xl);
+        // Backward: x_{c−1} −= G_c x_c (G_c has nonzero columns only for η_c).
+        let apply_g = |g: &Gc, eta: V3, c: usize, x0: &mut Vector2<f64>, xm: &mut [V8]| {
+            let upd = g * eta;
+            if c == 1 {
+                x0[0] -= upd[0];
+                x0[1] -= upd[1];
+            } else {
+                xm[c - 2] -= upd;
+            }
+        };
+        apply_g(
+            &self.last.g,
+            xl.fixed_rows::<3>(0).into_owned(),
+            n,
+            &mut x0,
+            &mut xm,
+        );
+        for c in (1..n).rev() {
+            let eta = xm[c - 1].fixed_rows::<3>(0).into_owned();
+            apply_g(&self.mid[c - 1].g, eta, c, &mut x0, &mut xm);
         }
         let mut out = DVector::zeros(2 * n + 3);
-        for c in 0..n {
-            let o = kappa_offset(c);
-            out[2 * c] = x[c][o];
-            out[2 * c + 1] = x[c][o + 1];
+        out[0] = x0[0];
+        out[1] = x0[1];
+        for c in 1..n {
+            out[2 * c] = xm[c - 1][6];
+            out[2 * c + 1] = xm[c - 1][7];
         }
         for i in 0..3 {
-            out[2 * n + i] = x[n][6 + i];
+            out[2 * n + i] = xl[6 + i];
         }
         out
     }
@@ -475,34 +579,30 @@ impl KktFactor {
     /// the pair, `(3, 3, 0)`, plus that of `Σ_c = Q − B S Bᵀ` (2×2); the last block gives
     /// `(3, 3, 0)` plus the inertia of `−B_cl S B_clᵀ` (3×3, `B_cl` the closure map).
     pub fn negative_eigenvalues(&self) -> usize {
-        let n = self.cells;
-        let mut neg = 0usize;
-        for (c, b) in self.blocks.iter().enumerate() {
+        let d = &self.first.d;
+        let mut neg = negatives_2x2(d[(0, 0)], d[(0, 1)], d[(1, 1)]);
+        // S = −D[η, η]; Σ = D[κκ] + D[κξ] D[ηη] D[ξκ] (κ: rows 6.., ξ: 3..6, η: 0..3).
+        for b in &self.mid {
             let d = &b.d;
-            if c == 0 {
-                neg += negatives_2x2(d[(0, 0)], d[(0, 1)], d[(1, 1)]);
-                continue;
-            }
-            // S = −D[η, η]; Σ = D[κκ] + D[κξ] D[ηη] D[ξκ] (κ: rows 6.., ξ: 3..6, η: 0..3).
-            let dee = d.view((0, 0), (3, 3));
-            let tail = d.nrows() - 6;
-            let dkx = d.view((6, 3), (tail, 3));
-            let sigma = d.view((6, 6), (tail, tail)) + dkx * dee * dkx.transpose();
-            neg += 3;
-            neg += if c < n {
-                negatives_2x2(
-                    sigma[(0, 0)],
-                    0.5 * (sigma[(0, 1)] + sigma[(1, 0)]),
-                    sigma[(1, 1)],
-                )
-            } else {
-                let sym = (&sigma + sigma.transpose()) * 0.5;
-                sym.symmetric_eigenvalues()
-                    .iter()
-                    .filter(|v| **v < 0.0)
-                    .count()
-            };
+            let dee = d.fixed_view::<3, 3>(0, 0);
+            let dkx = d.fixed_view::<2, 3>(6, 3);
+            let sigma = d.fixed_view::<2, 2>(6, 6) + dkx * dee * dkx.transpose();
+            neg += 3 + negatives_2x2(
+                sigma[(0, 0)],
+                0.5 * (sigma[(0, 1)] + sigma[(1, 0)]),
+                sigma[(1, 1)],
+            );
         }
+        let d = &self.last.d;
+        let dee = d.fixed_view::<3, 3>(0, 0);
+        let dkx = d.fixed_view::<3, 3>(6, 3);
+        let sigma = d.fixed_view::<3, 3>(6, 6) + dkx * dee * dkx.transpose();
+        let sym = (sigma + sigma.transpose()) * 0.5;
+        neg += 3 + sym
+            .symmetric_eigenvalues()
+            .iter()
+            .filter(|v| **v < 0.0)
+            .count();
         if let Some((_, _, s)) = &self.border {
             if *s < 0.0 {
                 neg += 1;

@@ -49,7 +49,7 @@ use std::f64::consts::PI;
 
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
-use crate::frame::{exp_jet, expm_skew, hat};
+use crate::frame::{exp_jet, exp_jet1, exp_jet_affine, expm_skew, hat};
 use crate::mesh::MeshMap;
 use crate::periodic::TrigInterpolant;
 use crate::stiffness::{Stiffness, StiffnessProfile};
@@ -170,7 +170,7 @@ pub struct SurfaceModel {
 pub(crate) struct Chain {
     pub(crate) e: Vec<M3>,
     pub(crate) de: Vec<[M3; 2]>,
-    /// `[∂₁₁, ∂₁₂, ∂₂₂]`.
+    /// `[∂₁₁, ∂₁₂, ∂₂₂]` (empty for [`SurfaceModel::chain1`]).
     pub(crate) dde: Vec<[M3; 3]>,
     /// `P_c = E_{c−1}⋯E_0`, `c = 0..=N` (`P_N = H`).
     pub(crate) prefix: Vec<M3>,
@@ -424,19 +424,35 @@ impl SurfaceModel {
             .collect()
     }
 
+    /// The chain with second derivatives (what the Hessian and the Newton matrix need).
     pub(crate) fn chain(&self, kappa: &[f64]) -> Chain {
+        self.chain_with(kappa, true)
+    }
+
+    /// The chain without second derivatives (`dde` empty): enough for the KKT residual and
+    /// the closure Jacobian.
+    pub(crate) fn chain1(&self, kappa: &[f64]) -> Chain {
+        self.chain_with(kappa, false)
+    }
+
+    fn chain_with(&self, kappa: &[f64], second: bool) -> Chain {
         let n = self.cells;
-        let zero = [[V3::zeros(); 2]; 2];
         let mut e = Vec::with_capacity(n);
         let mut de = Vec::with_capacity(n);
-        let mut dde = Vec::with_capacity(n);
+        let mut dde = Vec::with_capacity(if second { n } else { 0 });
         for c in 0..n {
             let (w0, v1, v2) = self.cell_vectors(self.cell_length(c));
             let w = w0 + v1 * kappa[2 * c] + v2 * kappa[2 * c + 1];
-            let (ec, d, dd) = exp_jet::<2>(&w, &[v1, v2], &zero);
-            e.push(ec);
-            de.push(d);
-            dde.push([dd[0][0], dd[0][1], dd[1][1]]);
+            if second {
+                let (ec, d, dd) = exp_jet_affine::<2>(&w, &[v1, v2]);
+                e.push(ec);
+                de.push(d);
+                dde.push([dd[0][0], dd[0][1], dd[1][1]]);
+            } else {
+                let (ec, d) = exp_jet1::<2>(&w, &[v1, v2]);
+                e.push(ec);
+                de.push(d);
+            }
         }
         let (prefix, suffix) = prefix_suffix(&e);
         Chain {
@@ -477,7 +493,7 @@ impl SurfaceModel {
         kappa: &[f64],
     ) -> Result<([f64; 3], DMatrix<f64>), SolverError> {
         self.check_kappa(kappa)?;
-        let ch = self.chain(kappa);
+        let ch = self.chain1(kappa);
         let v = vee_skew(&ch.prefix[self.cells]);
         Ok(([v[0], v[1], v[2]], self.closure_jacobian_from(&ch)))
     }
@@ -532,7 +548,7 @@ impl SurfaceModel {
     /// Constraint Jacobian `∇c` (3 × 2N).
     pub fn closure_jacobian(&self, kappa: &[f64]) -> Result<DMatrix<f64>, SolverError> {
         self.check_kappa(kappa)?;
-        let ch = self.chain(kappa);
+        let ch = self.chain1(kappa);
         Ok(self.closure_jacobian_from(&ch))
     }
 
@@ -618,7 +634,7 @@ impl SurfaceModel {
     pub fn kkt_residual(&self, z: &[f64]) -> Result<DVector<f64>, SolverError> {
         let (kappa, mu, nu) = self.split(z)?;
         self.check_kappa(kappa)?;
-        let ch = self.chain(kappa);
+        let ch = self.chain1(kappa);
         Ok(self.kkt_residual_from(&ch, kappa, &V3::from(mu), nu))
     }
 
