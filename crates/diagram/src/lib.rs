@@ -86,7 +86,8 @@ pub use diagram::{
 };
 pub use labels::Label;
 pub use march::{
-    march, march_switch, FoldPolicy, March, MarchPoint, MarchSettings, MarchSpecial, MarchStop,
+    march, march_switch, march_switch_until, march_until, FoldPolicy, March, MarchPoint,
+    MarchSettings, MarchSpecial, MarchStop,
 };
 /// The error type a [`BranchHook`] returns.
 pub use rodloop_continuation::BoxError;

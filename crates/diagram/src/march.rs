@@ -145,7 +145,9 @@ pub enum MarchStop {
     MaxSteps,
     /// The branch closed a loop.
     ClosedLoop,
-    /// [`march_switch`]: the first point off the branch point lies on a known branch.
+    /// [`march_switch`]: the first point off the branch point lies on a known branch; or
+    /// ([`march_until`], [`march_switch_until`]) the caller's test `until` held for the
+    /// points marched so far.
     Known,
     /// The march came within [`MarchSettings::circle_distance`] of one of
     /// [`MarchSettings::circles`], heading towards it.
@@ -340,6 +342,22 @@ pub fn march<M: Confinement>(
     settings: &MarchSettings,
     progress: &mut dyn FnMut(f64, usize),
 ) -> Result<March, SolverError> {
+    march_until(problem, x0, p0, settings, &mut |_| false, progress)
+}
+
+/// [`march`], ending with [`MarchStop::Known`] as soon as `until(points)` holds for the
+/// points marched so far (called after every continuation point).
+///
+/// # Errors
+/// As [`march`].
+pub fn march_until<M: Confinement>(
+    problem: &ParamProblem<M>,
+    x0: &[f64],
+    p0: f64,
+    settings: &MarchSettings,
+    until: &mut dyn FnMut(&[MarchPoint]) -> bool,
+    progress: &mut dyn FnMut(f64, usize),
+) -> Result<March, SolverError> {
     let st = settings;
     let scaled = scaled_problem(problem, st)?;
     if x0.len() != problem.dim() {
@@ -365,7 +383,9 @@ pub fn march<M: Confinement>(
     let cont_settings = continuation_settings(st, side)?;
     let cont = with_index(Continuation::new(&scaled, cont_settings), &scaled, st);
     let stepper = cont.start(&scaled.scale(x0), p0).map_err(start_error)?;
-    Ok(run_loop(stepper, &scaled, st, side, p0, out, progress))
+    Ok(run_loop(
+        stepper, &scaled, st, side, p0, out, until, progress,
+    ))
 }
 
 /// The continuation settings of a march heading to `side` from `p0`.
@@ -412,6 +432,31 @@ pub fn march_switch<M: Confinement>(
     direction: Direction,
     settings: &MarchSettings,
     known: &dyn Fn(&[f64], f64) -> bool,
+    progress: &mut dyn FnMut(f64, usize),
+) -> Result<March, SolverError> {
+    march_switch_until(
+        problem,
+        bp,
+        direction,
+        settings,
+        known,
+        &mut |_| false,
+        progress,
+    )
+}
+
+/// [`march_switch`], ending with [`MarchStop::Known`] as soon as `until(points)` holds for
+/// the points marched so far (called after every continuation point after the first).
+///
+/// # Errors
+/// As [`march_switch`].
+pub fn march_switch_until<M: Confinement>(
+    problem: &ParamProblem<M>,
+    bp: &MarchSpecial,
+    direction: Direction,
+    settings: &MarchSettings,
+    known: &dyn Fn(&[f64], f64) -> bool,
+    until: &mut dyn FnMut(&[MarchPoint]) -> bool,
     progress: &mut dyn FnMut(f64, usize),
 ) -> Result<March, SolverError> {
     let st = settings;
@@ -468,10 +513,13 @@ pub fn march_switch<M: Confinement>(
         return Ok(out);
     }
     let side = if first.tangent[n] >= 0.0 { 1.0 } else { -1.0 };
-    Ok(run_loop(stepper, &scaled, st, side, first.p, out, progress))
+    Ok(run_loop(
+        stepper, &scaled, st, side, first.p, out, until, progress,
+    ))
 }
 
 /// The stepping loop of [`march`] and [`march_switch`].
+#[allow(clippy::too_many_arguments)]
 fn run_loop<M: Confinement>(
     mut stepper: rodloop_continuation::Stepper<'_, '_, Scaled<'_, M>>,
     scaled: &Scaled<'_, M>,
@@ -479,6 +527,7 @@ fn run_loop<M: Confinement>(
     side: f64,
     p0: f64,
     mut out: March,
+    until: &mut dyn FnMut(&[MarchPoint]) -> bool,
     progress: &mut dyn FnMut(f64, usize),
 ) -> March {
     let unscaled = |x: &DVector<f64>| scaled.unscale(x).as_slice().to_vec();
@@ -575,6 +624,9 @@ fn run_loop<M: Confinement>(
             }
             if step.stop.is_some() {
                 break stop_of(step.stop, None);
+            }
+            if until(&out.points) {
+                break MarchStop::Known;
             }
             let heading = point.tangent[n];
             if let Some(&m) = st.circles.iter().find(|&&m| {

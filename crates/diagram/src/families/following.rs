@@ -6,11 +6,11 @@ use std::time::Instant;
 use rodloop_continuation::{Direction, SpecialKind};
 use rodloop_solver::{Confinement, ParamProblem, SurfaceModel};
 
-use super::images::{on_known, on_known_within, Images};
+use super::images::{image_match, on_known, on_known_within, ImageMatch, Images};
 use super::seeding::Seed;
 use super::{debug, Curve, MAX_FAMILIES, MAX_STEPS, MAX_SWITCHES, SAME_STATE};
 use crate::ends::approach_end;
-use crate::march::{march, march_switch, MarchPoint, MarchSpecial, MarchStop};
+use crate::march::{march_switch_until, march_until, MarchPoint, MarchSpecial, MarchStop};
 use crate::types::{BranchEnd, PointSource};
 use crate::{DiagramError, DiagramOptions, Progress};
 
@@ -73,6 +73,8 @@ impl Tracing<'_> {
         let curve = follow_seed(
             self.ctx,
             self.settings,
+            self.images,
+            &self.curves,
             &x0,
             lbar,
             &mut self.pending,
@@ -85,10 +87,14 @@ impl Tracing<'_> {
                 (a.min(p.value), b.max(p.value))
             });
         if cmax - cmin < 1e-3 {
+            let why = if curve.start_end.1 == curve.finish_end.1 {
+                format!("both ways {}", curve.start_end.1)
+            } else {
+                format!("{}; {}", curve.start_end.1, curve.finish_end.1)
+            };
             self.notes.push(format!(
                 "branch {branch} (η = {eta}): a seed at L̄ = {lbar:.4} ({what}) could not be \
-                 followed ({}; {}): left out",
-                curve.start_end.1, curve.finish_end.1
+                 followed ({why}): left out"
             ));
             return Ok(true);
         }
@@ -140,10 +146,16 @@ pub(super) struct EndContext<'a> {
     pub(super) hi: f64,
 }
 
-/// Follow a seed both ways; branch points go to `pending`.
+/// Follow a seed both ways; branch points go to `pending`. Each direction ends where it
+/// goes on as a symmetry image of what is traced ([`image_match`]: of the known `curves` or
+/// of the curve itself), cut back to the symmetric branch point where it turned into its
+/// own mirror image.
+#[allow(clippy::too_many_arguments)]
 fn follow_seed(
     ctx: &EndContext<'_>,
     settings: &crate::MarchSettings,
+    images: &Images,
+    curves: &[Curve],
     x0: &[f64],
     p0: f64,
     pending: &mut Vec<MarchSpecial>,
@@ -153,18 +165,31 @@ fn follow_seed(
         eta: 0,
         reason: e.to_string(),
     };
-    let mut up_s = settings.clone();
-    up_s.limit = ctx.hi;
-    up_s.far_limit = Some(ctx.lo);
-    let up = march(ctx.problem, x0, p0, &up_s, &mut |_, _| {}).map_err(cont)?;
-    *steps += up.steps;
-    pending.extend(up.branch_points().cloned());
     let start = MarchPoint {
         x: x0.to_vec(),
         value: p0,
         index: None,
         source: PointSource::Seed,
     };
+    let mut up_s = settings.clone();
+    up_s.limit = ctx.hi;
+    up_s.far_limit = Some(ctx.lo);
+    let mut up_match = None;
+    let own = [start.clone()];
+    let mut until = |pts: &[MarchPoint]| {
+        up_match = image_match(images, curves, &own, pts);
+        up_match.is_some()
+    };
+    let mut up =
+        march_until(ctx.problem, x0, p0, &up_s, &mut until, &mut |_, _| {}).map_err(cont)?;
+    *steps += up.steps;
+    let up_image = up_match.map(|m| cut_at_image(images, &mut up.points, m));
+    pending.extend(
+        up.branch_points()
+            .filter(|b| up_image.as_ref().is_none_or(|c| c.keeps(b)))
+            .cloned(),
+    );
+    let up_image = up_image.map(|c| c.end);
     if up.stop == MarchStop::ClosedLoop {
         let mut points = vec![start];
         points.extend(up.points);
@@ -181,13 +206,33 @@ fn follow_seed(
     let mut down_s = settings.clone();
     down_s.limit = ctx.lo;
     down_s.far_limit = Some(ctx.hi);
-    let down = march(ctx.problem, x0, p0, &down_s, &mut |_, _| {}).map_err(cont)?;
+    let mut own: Vec<MarchPoint> = up.points.iter().rev().cloned().collect();
+    own.push(start.clone());
+    let mut down_match = None;
+    let mut until = |pts: &[MarchPoint]| {
+        down_match = image_match(images, curves, &own, pts);
+        down_match.is_some()
+    };
+    let mut down =
+        march_until(ctx.problem, x0, p0, &down_s, &mut until, &mut |_, _| {}).map_err(cont)?;
     *steps += down.steps;
-    pending.extend(down.branch_points().cloned());
+    let down_image = down_match.map(|m| cut_at_image(images, &mut down.points, m));
+    pending.extend(
+        down.branch_points()
+            .filter(|b| down_image.as_ref().is_none_or(|c| c.keeps(b)))
+            .cloned(),
+    );
+    let down_image = down_image.map(|c| c.end);
     let mut down_pts = down.points;
-    let start_end = finish_end(ctx, &down.stop, &mut down_pts, (x0, p0));
+    let start_end = match down_image {
+        Some(e) => e,
+        None => finish_end(ctx, &down.stop, &mut down_pts, (x0, p0)),
+    };
     let mut up_pts = up.points;
-    let finish = finish_end(ctx, &up.stop, &mut up_pts, (x0, p0));
+    let finish = match up_image {
+        Some(e) => e,
+        None => finish_end(ctx, &up.stop, &mut up_pts, (x0, p0)),
+    };
     let mut points: Vec<MarchPoint> = down_pts.into_iter().rev().collect();
     points.push(start);
     points.extend(up_pts);
@@ -370,7 +415,20 @@ fn switch_all(
             s.limit = ctx.hi;
             s.far_limit = Some(ctx.lo);
             let ts = Instant::now();
-            let run = march_switch(ctx.problem, &bp, dir, &s, &known, &mut |_, _| {});
+            let mut matched = None;
+            let mut until = |pts: &[MarchPoint]| {
+                matched = image_match(images, curves, &[], pts);
+                matched.is_some()
+            };
+            let run = march_switch_until(
+                ctx.problem,
+                &bp,
+                dir,
+                &s,
+                &known,
+                &mut until,
+                &mut |_, _| {},
+            );
             debug(|| {
                 format!(
                     "switch at {:.5} {dir:?}: {:?} in {:.3} s",
@@ -394,7 +452,7 @@ fn switch_all(
                     ts.elapsed().as_secs_f64()
                 )
             });
-            let run = match run {
+            let mut run = match run {
                 Ok(r) => r,
                 Err(e) => {
                     notes.push(format!(
@@ -404,7 +462,16 @@ fn switch_all(
                     continue;
                 }
             };
-            if run.stop == MarchStop::Known {
+            // Onto a known family (or an image of one) from its first point, or soon after.
+            let image_end = match matched {
+                Some(m) if !m.own => {
+                    *steps += run.steps;
+                    continue;
+                }
+                Some(m) => Some(cut_at_image(images, &mut run.points, m)),
+                None => None,
+            };
+            if run.stop == MarchStop::Known && image_end.is_none() {
                 continue;
             }
             // From a symmetric branch point onto an asymmetric branch: the other direction
@@ -412,7 +479,10 @@ fn switch_all(
             let mirror_pair =
                 bp_symmetric && run.points.get(1).is_some_and(|p| !images.symmetric(&p.x));
             *steps += run.steps;
-            for b in run.branch_points() {
+            for b in run
+                .branch_points()
+                .filter(|b| image_end.as_ref().is_none_or(|c| c.keeps(b)))
+            {
                 if (b.value - bp.value).abs() > 1e-6 {
                     pending.push(b.clone());
                 }
@@ -422,7 +492,10 @@ fn switch_all(
                 BranchEnd::BranchPoint { value: bp.value },
                 format!("branch point at L̄ = {:.6}", bp.value),
             );
-            let end = finish_end(ctx, &run.stop, &mut pts, (&bp.x, bp.value));
+            let end = match image_end {
+                Some(c) => c.end,
+                None => finish_end(ctx, &run.stop, &mut pts, (&bp.x, bp.value)),
+            };
             curves.push(Curve {
                 points: pts,
                 start_end: bp_end,
@@ -430,6 +503,104 @@ fn switch_all(
             });
             if mirror_pair {
                 break;
+            }
+        }
+    }
+}
+
+/// Where a march that went on as a symmetry image of a traced curve was cut
+/// ([`cut_at_image`]).
+struct ImageCut {
+    /// The end record of the cut curve.
+    end: (BranchEnd, String),
+    /// `L̄` of the branch points met before the cut (those to switch at).
+    branch_points: Vec<f64>,
+}
+
+impl ImageCut {
+    /// Whether the branch point `b` was met before the cut.
+    fn keeps(&self, b: &MarchSpecial) -> bool {
+        self.branch_points
+            .iter()
+            .any(|v| (v - b.value).abs() < 1e-12)
+    }
+}
+
+/// Cut a march that went on as a symmetry image of a traced curve (`m`, see
+/// [`image_match`]) where the image begins: at the pitchfork before the match where the
+/// curve passed into its own mirror image (the last run of located branch points and folds
+/// before the match, all mirror-symmetric, containing a branch point; of these only the
+/// turning point in `L̄` is kept, the extreme in the direction of the march before it),
+/// else at the first matched state.
+fn cut_at_image(images: &Images, points: &mut Vec<MarchPoint>, m: ImageMatch) -> ImageCut {
+    let first = m.first.min(points.len().saturating_sub(1));
+    let located = |p: &MarchPoint| matches!(p.source, PointSource::BranchPoint | PointSource::Fold);
+    let block = m
+        .own
+        .then(|| {
+            let end = points[..=first].iter().rposition(located)?;
+            let start = points[..=end]
+                .iter()
+                .rposition(|p| !located(p))
+                .map_or(0, |i| i + 1);
+            let ok = start >= 2
+                && points[start..=end]
+                    .iter()
+                    .any(|p| p.source == PointSource::BranchPoint)
+                && points[start..=end].iter().all(|p| images.symmetric(&p.x));
+            ok.then_some((start, end))
+        })
+        .flatten();
+    match block {
+        Some((start, end)) => {
+            let branch_points = points[..=end]
+                .iter()
+                .filter(|p| p.source == PointSource::BranchPoint)
+                .map(|p| p.value)
+                .collect();
+            let up = points[start - 1].value >= points[start - 2].value;
+            let turn = (start..=end)
+                .max_by(|&a, &b| {
+                    let (va, vb) = (points[a].value, points[b].value);
+                    if up {
+                        va.total_cmp(&vb)
+                    } else {
+                        vb.total_cmp(&va)
+                    }
+                })
+                .unwrap_or(end);
+            let mut kept = points[turn].clone();
+            kept.source = PointSource::BranchPoint;
+            points.truncate(start);
+            let value = kept.value;
+            points.push(kept);
+            ImageCut {
+                end: (
+                    BranchEnd::BranchPoint { value },
+                    format!(
+                        "branch point at L̄ = {value:.6}, beyond which the family is the \
+                         mirror image of its traced part"
+                    ),
+                ),
+                branch_points,
+            }
+        }
+        None => {
+            points.truncate(first + 1);
+            let value = points[first].value;
+            ImageCut {
+                end: (
+                    BranchEnd::Range { value },
+                    format!(
+                        "at L̄ = {value:.6} the family goes on as a symmetry image (mirror, \
+                         reflection) of a traced part: it closes on itself"
+                    ),
+                ),
+                branch_points: points
+                    .iter()
+                    .filter(|p| p.source == PointSource::BranchPoint)
+                    .map(|p| p.value)
+                    .collect(),
             }
         }
     }

@@ -19,10 +19,15 @@
 //! 2. **Following** (`following.rs`): each new seed is followed in `L̄` in both directions
 //!    *through* its folds ([`FoldPolicy::Follow`]) with simple branch points detected, until
 //!    the range ends, the approach to a great-circle end (then `ends.rs` takes over down to
-//!    [`DiagramOptions::end_distance`]), a closed loop or the step budget.
+//!    [`DiagramOptions::end_distance`]), a closed loop, the step budget, or the point where
+//!    it goes on as a symmetry image of a traced curve or of its own earlier part
+//!    (`images.rs`, `image_match`): an asymmetric family that passes
+//!    through a pitchfork into its own mirror image is cut back to the pitchfork, so that a
+//!    closed loop made of images of one sheet is traced once.
 //! 3. **Switching** (`following.rs`): at every branch point not met before, the second
 //!    branch is followed in both directions ([`march_switch`](crate::march::march_switch))
-//!    unless its first point lies on a known family.
+//!    unless its first point lies on a known family; a switch that runs onto an image of a
+//!    known family is dropped.
 //! 4. **Sheets** (`sheets.rs`): every followed curve is cut at its turning points into sheets
 //!    monotone in `L̄` (one [`TracedBranch`] each, with its family, position along the family
 //!    and direction); sheets that repeat a kept one (the mirror half of an asymmetric curve
