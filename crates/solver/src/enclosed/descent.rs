@@ -4,7 +4,7 @@
 //! the equilibrium that the unstable direction leads to (the enclosed diagram uses it
 //! where its lowest traced state is unstable, so that a lower state must exist).
 
-use nalgebra::{DMatrix, SymmetricEigen};
+use nalgebra::SymmetricEigen;
 
 use super::solve::{solve_enclosed, EnclosedOptions, EnclosedState};
 use crate::SolverError;
@@ -18,45 +18,8 @@ pub fn unstable_direction(
     state: &EnclosedState,
     tol: f64,
 ) -> Result<Option<(f64, Vec<f64>)>, SolverError> {
-    let m = &state.model;
-    let np = m.n_primal();
-    let n = m.cells();
-    let ev = m.evaluate(&state.z)?;
-    let lam = state.multipliers();
-    let lmax = lam.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-    let mass: Vec<f64> = (0..np)
-        .map(|a| {
-            if a < 4 * n {
-                0.5 * m.cell_length(a / 4)
-            } else {
-                m.length() / (m.radius() * m.radius())
-            }
-        })
-        .collect();
-    let s: Vec<f64> = mass.iter().map(|v| 1.0 / v.sqrt()).collect();
-    let w = DMatrix::from_fn(np, np, |i, j| ev.jacobian[(i, j)] * s[i] * s[j]);
-    let lo = m.lambda_offset();
-    let mut rows: Vec<usize> = (np..lo).collect();
-    for (j, &l) in lam.iter().enumerate() {
-        if l > tol * lmax.max(1e-300) {
-            rows.push(lo + j);
-        }
-    }
-    let a = DMatrix::from_fn(rows.len(), np, |r, i| ev.jacobian[(i, rows[r])] * s[i]);
-    let svd = a.svd(false, true);
-    let vt = svd
-        .v_t
-        .ok_or_else(|| SolverError::InvalidInput("svd".into()))?;
-    let smax = svd.singular_values.iter().fold(0.0f64, |x, &y| x.max(y));
-    let mut p = DMatrix::<f64>::identity(np, np);
-    for k in 0..svd.singular_values.len() {
-        if svd.singular_values[k] > 1e-10 * smax {
-            let v = vt.row(k).transpose();
-            p -= &v * v.transpose();
-        }
-    }
-    let beta = 10.0 * w.amax() + 1.0;
-    let pw = &p * &w * &p + (DMatrix::<f64>::identity(np, np) - &p) * beta;
+    let np = state.model.n_primal();
+    let (pw, s) = state.tangent_hessian(tol)?;
     let eig = SymmetricEigen::new(pw);
     let (k, &val) = eig
         .eigenvalues

@@ -606,12 +606,16 @@ impl EnclosedState {
         })
     }
 
-    /// Stability: eigenvalues (ascending, mass-normalised, units of `D0/R³·R`…) of the
-    /// Hessian of the Lagrangian on the tangent space of the closure, the gauges and the
-    /// strongly active wall constraints (`λ_j > tol·max λ`); returns `(index, lowest
-    /// eigenvalues)`. Symmetry modes are removed by the gauges. Dense symmetric
-    /// eigen-decomposition: `O(N³)`.
-    pub fn stability(&self, tol: f64) -> Result<(usize, Vec<f64>), SolverError> {
+    /// The mass-scaled Hessian of the Lagrangian on the tangent space of the closure, the
+    /// gauges and the strongly active wall constraints (`λ_j > tol·max λ`), as the symmetric
+    /// matrix `P W P + β (I − P)` (`β` above every tangent eigenvalue, so the complement's
+    /// eigenvalues sit apart), and the scaling `s_i = 1/√m_i` that maps its eigenvectors back
+    /// to the primal unknowns. Shared by [`EnclosedState::stability`] and
+    /// [`super::unstable_direction`].
+    pub(crate) fn tangent_hessian(
+        &self,
+        tol: f64,
+    ) -> Result<(DMatrix<f64>, Vec<f64>), SolverError> {
         let m = &self.model;
         let np = m.n_primal();
         let n = m.cells();
@@ -659,6 +663,16 @@ impl EnclosedState {
             t[(k, k)] += beta;
         }
         let pw = &w - &v * wv.transpose() - &wv * v.transpose() + &v * (t * v.transpose());
+        Ok((pw, s))
+    }
+
+    /// Stability: eigenvalues (ascending, mass-normalised, units of `D0/R³·R`…) of the
+    /// Hessian of the Lagrangian on the tangent space of the closure, the gauges and the
+    /// strongly active wall constraints (`λ_j > tol·max λ`); returns `(index, lowest
+    /// eigenvalues)`. Symmetry modes are removed by the gauges. Dense symmetric
+    /// eigen-decomposition: `O(N³)`.
+    pub fn stability(&self, tol: f64) -> Result<(usize, Vec<f64>), SolverError> {
+        let (pw, _) = self.tangent_hessian(tol)?;
         // Eigenvalues only (the index and the lowest values are all that is reported).
         let mut vals: Vec<f64> = pw.symmetric_eigenvalues().iter().copied().collect();
         vals.sort_by(f64::total_cmp);
