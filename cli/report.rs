@@ -466,14 +466,7 @@ pub fn run(args: &Args) -> Result<()> {
     // 5. The page.
     let t = Instant::now();
     let version = env!("CARGO_PKG_VERSION");
-    let mut figures = 0usize;
-    let mut fig = |svg: &str, label: &str, caption: &str, id: &str| {
-        figures += 1;
-        format!(
-            "<figure id=\"{id}\">\n{}\n<figcaption>{caption}</figcaption></figure>\n",
-            inline_svg(svg, &format!("f{figures}"), label)
-        )
-    };
+    let mut figs = crate::report_tables::Figures::default();
     let mut h = String::with_capacity(1 << 20);
     let _ = write!(
         h,
@@ -492,26 +485,26 @@ pub fn run(args: &Args) -> Result<()> {
     }
 
     h.push_str("<section id=\"diagram\">\n<h2>1. Energy against length</h2>\n");
-    h.push_str(&fig(
+    h.push_str(&figs.fig(
         &fig_energy,
         "bending energy against normalised length",
         "Bending energy E R/(πD₀) of every traced state against L̄ = L/(2πR) (paper Fig. 3a). One colour per branch; solid: stable (lowest energy), dashed: metastable (a local minimum with higher energy), dotted: unstable (Hessian index &gt; 0). Diamonds: crossings E<sub>a</sub> = E<sub>b</sub>; open squares: collapses onto an m-fold great circle.",
         "fig-energy",
     ));
-    h.push_str(&fig(
+    h.push_str(&figs.fig(
         &fig_split,
         "geodesic and normal energy split",
         "The energy split E = E<sub>g</sub> + E<sub>n</sub> into its geodesic-curvature and normal-curvature parts (paper Fig. 3b).",
         "fig-split",
     ));
-    h.push_str(&fig(
+    h.push_str(&figs.fig(
         &fig_lambda,
         "contact force extremes against length",
         "Largest and smallest contact force λR³/D₀ of every state (paper Fig. 7), with the great-circle buckling loads of Eqs. (33)–(34) at L̄ = m.",
         "fig-lambda",
     ));
     if let Some(k2) = &fig_k2 {
-        h.push_str(&fig(
+        h.push_str(&figs.fig(
             k2,
             "elliptic modulus against length",
             "k² of the exact loops of every branch against L̄ (paper Fig. 11), with the small-k² formula Eq. (B.4) dashed, evaluated with each branch's (η, p). The numeric model has no k; this figure is the exact layer's.",
@@ -555,7 +548,7 @@ pub fn run(args: &Args) -> Result<()> {
 
     h.push_str("<section id=\"atlas\">\n<h2>3. Branch atlas</h2>\n");
     match &fig_atlas {
-        Ok(svg) => h.push_str(&fig(
+        Ok(svg) => h.push_str(&figs.fig(
             svg,
             "branch atlas: shapes along every branch",
             &format!("The traced states along every branch (one row per branch, or per family of a non-uniform rod), {ATLAS_SHAPES} per row spread evenly over its traced range (paper Figs. 2, 9, 10), each labelled with L̄, its stability and E R/(πD₀). Every traced state is in <code>states/</code> (column <code>state_file</code> of <code>branches.csv</code>); <code>rodloop diagram --shapes K</code> draws this atlas with K columns."),
@@ -614,7 +607,7 @@ pub fn run(args: &Args) -> Result<()> {
             .and_then(|s| s.shape.as_ref())
             .map(|x| (st, x))
     }) {
-        h.push_str(&fig(
+        h.push_str(&figs.fig(
             svg,
             &format!("shape of branch {} against its Euler curve", st.branch),
             &format!(
@@ -627,7 +620,7 @@ pub fn run(args: &Args) -> Result<()> {
     for st in &states {
         if let Ok(s) = &st.outcome {
             let _ = writeln!(h, "<div class=\"state\" id=\"state-{}\">", st.branch);
-            h.push_str(&fig(
+            h.push_str(&figs.fig(
                 &s.picture,
                 &format!("loop of branch {} at length {}", st.branch, st.lbar),
                 &format!(
@@ -646,7 +639,7 @@ pub fn run(args: &Args) -> Result<()> {
                 ),
                 &format!("fig-loop-{}", st.branch),
             ));
-            h.push_str(&fig(
+            h.push_str(&figs.fig(
                 &s.force,
                 &format!("contact force along the loop of branch {}", st.branch),
                 &format!(
@@ -747,7 +740,7 @@ pub fn run(args: &Args) -> Result<()> {
         "states_dir": "states",
         "files": files,
         "bytes": h.len(),
-        "figures": figures,
+        "figures": figs.count,
         "states": state_notes,
         "paper_disagreements_exact": compare.iter().filter(|r| r.agrees_exact == Some(false)).count(),
         "paper_disagreements_numeric": compare.iter().filter(|r| r.agrees_numeric == Some(false)).count(),
@@ -767,7 +760,7 @@ pub fn run(args: &Args) -> Result<()> {
     outln!(
         "wrote report.html ({} KB, {} figures: diagram, energy split, lambda extremes, {}branch atlas, shape against the Euler curve, {} with their force plots), branches.csv, critical.csv, special_points.csv, diagram.svg, summary.json, states/ to {} in {:.2} s",
         h.len().div_ceil(1024),
-        figures,
+        figs.count,
         if fig_k2.is_some() { "k² (Fig. 11), " } else { "" },
         crate::output::plural((states.len() - failed) as u64, "loop picture"),
         args.out.display(),

@@ -27,7 +27,7 @@ use rodloop_scene::Scene;
 use rodloop_solver::Accuracy;
 
 use crate::output::{checked_json, OutputRun};
-use crate::report::{inline_svg, middle, Args, ATLAS_SHAPES, FIG_H, FIG_W, PANEL};
+use crate::report::{middle, Args, ATLAS_SHAPES, FIG_H, FIG_W, PANEL};
 use crate::report_tables::{sci, STYLE};
 
 /// A representative state of one branch.
@@ -288,14 +288,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     // 5. The page.
     let t = Instant::now();
     let version = env!("CARGO_PKG_VERSION");
-    let mut figures = 0usize;
-    let mut fig = |svg: &str, label: &str, caption: &str, id: &str| {
-        figures += 1;
-        format!(
-            "<figure id=\"{id}\">\n{}\n<figcaption>{caption}</figcaption></figure>\n",
-            inline_svg(svg, &format!("f{figures}"), label)
-        )
-    };
+    let mut figs = crate::report_tables::Figures::default();
     let mut h = String::with_capacity(1 << 20);
     let _ = write!(
         h,
@@ -316,7 +309,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
         let _ = writeln!(h, "<p class=\"note\">note: {}</p>", esc(n));
     }
     h.push_str("<section id=\"diagram\">\n<h2>1. Energy against length</h2>\n");
-    h.push_str(&fig(
+    h.push_str(&figs.fig(
         &fig_energy,
         "bending energy of the enclosed loops against normalised length",
         "Bending energy E R/(πD₀) of every sampled state against L̄ = L/(2πR) (the enclosed counterpart of Fig. 3a). One colour per branch; solid: stable (lowest energy, Hessian index 0 on the tangent space of the active constraints), dashed: metastable, dotted: unstable. The light band marks states that have lifted off the wall (somewhere R − |r| &gt; 0); elsewhere the loop is the surface loop of the exact layer. Diamonds: exchanges E<sub>a</sub> = E<sub>b</sub>; open squares: collapses onto an m-fold great circle; circles: lift-off and landing (λ<sub>min</sub> = 0, Eq. (38)), detachment (the last contact force vanishes) and branch points (the index of a lifted-off sheet changes).",
@@ -379,7 +372,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     h.push_str("<section id=\"atlas\">\n<h2>3. Branch atlas</h2>\n");
     match &atlas {
         Ok((svg, _, failed)) => {
-            h.push_str(&fig(
+            h.push_str(&figs.fig(
                 svg,
                 "branch atlas: shapes along every branch",
                 &format!("{ATLAS_SHAPES} states per branch spread over its sampled range, each solved again as <code>rodloop solve</code> solves it and saved in <code>states/</code> (enclosed <code>config.csv</code> columns, with <code>gap</code>); parts off the wall in amber. Labels: L̄, the diagram's stability label and E R/(πD₀). <code>rodloop diagram --shapes K</code> draws this atlas with K columns."),
@@ -440,7 +433,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     for st in &states {
         if let Ok(s) = &st.outcome {
             let _ = writeln!(h, "<div class=\"state\" id=\"state-{}\">", st.branch);
-            h.push_str(&fig(
+            h.push_str(&figs.fig(
                 &s.picture,
                 &format!("loop of branch {} at length {}", st.branch, st.lbar),
                 &format!(
@@ -461,7 +454,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
                 ),
                 &format!("fig-loop-{}", st.branch),
             ));
-            h.push_str(&fig(
+            h.push_str(&figs.fig(
                 &s.profile,
                 &format!("contact force and gap along the loop of branch {}", st.branch),
                 &format!(
@@ -557,7 +550,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     let report = checked_json!({
         "file": "report.html",
         "bytes": h.len(),
-        "figures": figures,
+        "figures": figs.count,
         "states": state_notes,
         "lowest_lifted_off": lifted,
         "atlas_rows": atlas.as_ref().ok().map(|(_, note, _)| note.rows.iter().map(|(b, _, c)| serde_json::json!({"branch": b, "lbar": c.iter().map(|x| x.0).collect::<Vec<_>>(), "state_files": c.iter().map(|x| x.1.clone()).collect::<Vec<_>>()})).collect::<Vec<_>>()),
@@ -574,7 +567,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     outln!(
         "wrote report.html ({} KB, {} figures: enclosed diagram, branch atlas, {} with their force and gap plots), branches.csv, critical.csv, special_points.csv, diagram.svg/.png, summary.json, states/ to {} in {:.2} s",
         h.len().div_ceil(1024),
-        figures,
+        figs.count,
         crate::output::plural((states.len() - failed) as u64, "loop picture"),
         args.out.display(),
         t_start.elapsed().as_secs_f64()

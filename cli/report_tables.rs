@@ -115,6 +115,26 @@ td.ok{color:#1b7a1b}td.bad{color:#c01818;font-weight:bold}td.src{color:#555;font
 dl{display:grid;grid-template-columns:max-content auto;gap:2px 16px;font-size:14px}dt{font-weight:bold}dd{margin:0}
 pre{background:#f6f8fa;padding:8px;font-size:12px;overflow-x:auto}";
 
+/// The figures of a report page, numbered in page order (the number keeps the ids inside
+/// each inlined SVG unique on the page).
+#[derive(Default)]
+pub struct Figures {
+    /// Figures so far.
+    pub count: usize,
+}
+
+impl Figures {
+    /// One `<figure id=…>`: the SVG inlined ([`crate::report::inline_svg`]) under `label`,
+    /// with its caption.
+    pub fn fig(&mut self, svg: &str, label: &str, caption: &str, id: &str) -> String {
+        self.count += 1;
+        format!(
+            "<figure id=\"{id}\">\n{}\n<figcaption>{caption}</figcaption></figure>\n",
+            crate::report::inline_svg(svg, &format!("f{}", self.count), label)
+        )
+    }
+}
+
 /// The "Settings" section of a report page: the scene rows first, then `extra` (what only
 /// this kind of report has), then the rows every report shows (accuracy and where it came
 /// from, version, platform, command line, run id, units), then the scene file's text.
