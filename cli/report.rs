@@ -586,14 +586,12 @@ pub fn run(args: &Args) -> Result<()> {
                 );
             }
             Err(e) => {
-                let _ = writeln!(
-                    h,
-                    "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td colspan=\"9\" class=\"bad\">not solved: {}</td></tr>",
-                    st.branch,
-                    st.eta,
-                    st.lbar,
-                    esc(&st.why),
-                    esc(e)
+                crate::report_tables::not_solved_row(
+                    &mut h,
+                    (st.branch, st.eta, st.lbar),
+                    &st.why,
+                    e,
+                    9,
                 );
             }
         }
@@ -687,7 +685,7 @@ pub fn run(args: &Args) -> Result<()> {
             scene_text: scene_text.as_deref(),
         },
     );
-    let stages: Vec<(String, f64)> = [
+    let stages = [
         ("diagram: tracing the branches", d.timings.tracing),
         ("diagram: critical lengths", d.timings.critical),
         ("diagram: great circles", d.timings.great_circles),
@@ -695,17 +693,7 @@ pub fn run(args: &Args) -> Result<()> {
         ("diagram figures", t_diagram_figures),
         ("branch atlas", t_atlas),
         ("exact layer and paper comparison", t_exact),
-        (
-            &format!(
-                "representative states ({} solves, in parallel)",
-                states.len()
-            ),
-            t_states,
-        ),
-    ]
-    .iter()
-    .map(|(k, v)| (k.to_string(), *v))
-    .collect();
+    ];
     let state_rows: Vec<(u32, f64, f64)> = states
         .iter()
         .filter_map(|st| {
@@ -715,7 +703,15 @@ pub fn run(args: &Args) -> Result<()> {
                 .map(|s| (st.branch, st.lbar, s.seconds))
         })
         .collect();
-    crate::report_tables::finish_page(&run, &mut h, 7, &stages, &state_rows, t_page, total)?;
+    crate::report_tables::finish_page(
+        &run,
+        &mut h,
+        7,
+        &stages,
+        (states.len(), t_states, &state_rows),
+        t_page,
+        total,
+    )?;
 
     let state_notes = states
         .iter()

@@ -417,14 +417,12 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
                 );
             }
             Err(e) => {
-                let _ = writeln!(
-                    h,
-                    "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td colspan=\"10\" class=\"bad\">not solved: {}</td></tr>",
-                    st.branch,
-                    st.eta,
-                    st.lbar,
-                    esc(&st.why),
-                    esc(e)
+                crate::report_tables::not_solved_row(
+                    &mut h,
+                    (st.branch, st.eta, st.lbar),
+                    &st.why,
+                    e,
+                    10,
                 );
             }
         }
@@ -504,21 +502,11 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
             scene_text: scene_text.as_deref(),
         },
     );
-    let stages: Vec<(String, f64)> = [
+    let stages = [
         ("enclosed diagram (with writing the CSV files)", t_diagram),
         ("diagram figure", t_figures),
         ("branch atlas (states re-solved)", t_atlas),
-        (
-            &format!(
-                "representative states ({} solves, in parallel)",
-                states.len()
-            ),
-            t_states,
-        ),
-    ]
-    .iter()
-    .map(|(k, v)| (k.to_string(), *v))
-    .collect();
+    ];
     let state_rows: Vec<(u32, f64, f64)> = states
         .iter()
         .filter_map(|st| {
@@ -528,7 +516,15 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
                 .map(|s| (st.branch, st.lbar, s.seconds))
         })
         .collect();
-    crate::report_tables::finish_page(&run, &mut h, 6, &stages, &state_rows, t_page, total)?;
+    crate::report_tables::finish_page(
+        &run,
+        &mut h,
+        6,
+        &stages,
+        (states.len(), t_states, &state_rows),
+        t_page,
+        total,
+    )?;
 
     let state_notes = states
         .iter()

@@ -115,6 +115,18 @@ td.ok{color:#1b7a1b}td.bad{color:#c01818;font-weight:bold}td.src{color:#555;font
 dl{display:grid;grid-template-columns:max-content auto;gap:2px 16px;font-size:14px}dt{font-weight:bold}dd{margin:0}
 pre{background:#f6f8fa;padding:8px;font-size:12px;overflow-x:auto}";
 
+/// A row of a representative-states table for a state that could not be solved: branch,
+/// `η`, `L̄`, why that length was chosen, and the error across the `span` remaining columns.
+pub fn not_solved_row(h: &mut String, state: (u32, u32, f64), why: &str, err: &str, span: usize) {
+    let (branch, eta, lbar) = state;
+    let _ = writeln!(
+        h,
+        "<tr><td>{branch}</td><td>{eta}</td><td>{lbar}</td><td>{}</td><td colspan=\"{span}\" class=\"bad\">not solved: {}</td></tr>",
+        esc(why),
+        esc(err)
+    );
+}
+
 /// The figures of a report page, numbered in page order (the number keeps the ids inside
 /// each inlined SVG unique on the page).
 #[derive(Default)]
@@ -210,15 +222,16 @@ pub fn settings_section(h: &mut String, run: &crate::output::OutputRun, s: &Sett
 }
 
 /// The end of a report page: the "Timings" section (numbered `number`) with the `stages`,
-/// one row per representative state `(branch, L̄, seconds)`, the page assembly and the total;
+/// the representative states (`states`: how many were solved, in parallel, the wall time,
+/// and one row per solved one `(branch, L̄, seconds)`), the page assembly and the total;
 /// then the footer. Refuses (and writes nothing) if the page holds a non-finite number;
 /// otherwise writes `report.html` into the run's staging directory.
 pub fn finish_page(
     run: &crate::output::OutputRun,
     h: &mut String,
     number: u32,
-    stages: &[(String, f64)],
-    state_rows: &[(u32, f64, f64)],
+    stages: &[(&str, f64)],
+    states: (usize, f64, &[(u32, f64, f64)]),
     t_page: f64,
     total: f64,
 ) -> anyhow::Result<()> {
@@ -232,7 +245,11 @@ pub fn finish_page(
     for (k, v) in stages {
         row(k, *v);
     }
-    for &(branch, lbar, secs) in state_rows {
+    row(
+        &format!("representative states ({} solves, in parallel)", states.0),
+        states.1,
+    );
+    for &(branch, lbar, secs) in states.2 {
         row(
             &format!("&nbsp;&nbsp;branch {branch} at L̄ = {lbar} (solve and picture)"),
             secs,
