@@ -303,6 +303,18 @@ fn very_soft_rod_states_lie_on_traced_sheets() {
         globalization: Globalization::Newton,
         ..SolveOptions::default()
     };
+    // Energies of the traced sheets over `lbar`, each re-solved there from its own state.
+    let sheet_energies = |model: &SurfaceModel, lbar: f64| -> Vec<f64> {
+        fam.sheets
+            .iter()
+            .filter(|b| b.covers(lbar))
+            .filter_map(|b| {
+                solve_from_state(model.clone(), sheet_state(b, lbar), &newton)
+                    .ok()
+                    .map(|q| q.energy().total)
+            })
+            .collect()
+    };
     let (mut checked, mut below) = (0, 0);
     for lbar in [1.02, 1.035, 1.06, 1.2, 1.4, 1.65, 1.9] {
         let model = SurfaceModel::new(1.0, lbar, cells, &rod).expect("model");
@@ -323,16 +335,7 @@ fn very_soft_rod_states_lie_on_traced_sheets() {
                 continue;
             }
             seen.push(e);
-            let on: Vec<f64> = fam
-                .sheets
-                .iter()
-                .filter(|b| b.covers(lbar))
-                .filter_map(|b| {
-                    solve_from_state(model.clone(), sheet_state(b, lbar), &newton)
-                        .ok()
-                        .map(|q| q.energy().total)
-                })
-                .collect();
+            let on = sheet_energies(&model, lbar);
             assert!(
                 on.iter().any(|s| (s - e).abs() <= 1e-5 * e),
                 "L̄ = {lbar}, start moved by {k}/8: E = {e} is on no traced sheet ({on:?})"
@@ -393,16 +396,7 @@ fn very_soft_rod_states_lie_on_traced_sheets() {
     }
     for (lbar, e) in swept {
         let model = model_at(lbar);
-        let on: Vec<f64> = fam
-            .sheets
-            .iter()
-            .filter(|b| b.covers(lbar))
-            .filter_map(|b| {
-                solve_from_state(model.clone(), sheet_state(b, lbar), &newton)
-                    .ok()
-                    .map(|q| q.energy().total)
-            })
-            .collect();
+        let on = sheet_energies(&model, lbar);
         assert!(
             on.iter().any(|s| (s - e).abs() <= 1e-5 * e),
             "L̄ = {lbar}, followed down from 1.65: E = {e} is on no traced sheet ({on:?})"
