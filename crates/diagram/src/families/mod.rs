@@ -161,7 +161,7 @@ pub fn compute_families(
     // Very soft segments, and nearly uniform rods (where Newton from Euler starts drifts
     // along the nearly neutral placement of the soft segment), are seeded as `rodloop solve`
     // finds the states.
-    let strong = matches!(&opts.stiffness, Stiffness::Tanh { d0, d1, .. }
+    let as_solve = matches!(&opts.stiffness, Stiffness::Tanh { d0, d1, .. }
         if d1 / d0 < STRONG_BELOW || d1 / d0 > NEARLY_UNIFORM);
     let jobs = seed_jobs(
         &seed_lengths,
@@ -169,7 +169,7 @@ pub fn compute_families(
         (exist_lo, exist_hi),
         (lo, hi),
         &circles,
-        strong,
+        as_solve,
     );
     let seeds_tried = jobs.len();
     // Every seed is solved before any is followed, on the crate's thread pool: the seeds are
@@ -199,9 +199,9 @@ pub fn compute_families(
             break;
         }
     }
-    // At strong contrast, `solve`'s homotopies in D1/D0 where its starts failed, one length
-    // at a time, and only where no traced family of the branch is stable yet: they cost
-    // 0.3–1 s each and serve to find a state of the branch where none is known.
+    // Where seeds are `solve`'s (`as_solve`), its homotopies in D1/D0 where its starts
+    // failed, one length at a time, and only where no traced family of the branch is stable
+    // yet: they cost 0.3–1 s each and serve to find a state of the branch where none is known.
     for lbar in unsolved {
         if tr.stable_at(lbar) {
             debug(|| format!("eta {eta} at {lbar:.3}: a stable state is traced, no homotopy"));

@@ -22,9 +22,9 @@ pub(super) enum Seed {
 /// The seeds of branch `eta` (existence interval `exist`, traced on `range`), in the order
 /// they are followed.
 ///
-/// At mild contrast, the Euler start `l = η` with its origin moved by `j/(8η)` (`j = 0…3`)
-/// at each of `lengths`. At strong contrast (`strong`) the state `rodloop solve --branch`
-/// finds at each of `lengths` (its direct and shifted starts and its homotopies in `D1/D0`)
+/// For `0.05 ≤ D1/D0 ≤ 0.9`, the Euler start `l = η` with its origin moved by `j/(8η)`
+/// (`j = 0…3`) at each of `lengths`. At strong contrast and for nearly uniform rods
+/// (`as_solve`) the state `rodloop solve --branch` finds at each of `lengths` (its direct and shifted starts and its homotopies in `D1/D0`)
 /// and, where `solve` would follow a family in `L̄` from another length of the branch's
 /// existence interval (its last fallback; [`rodloop_solver::Fallbacks::lbar_path`]), the
 /// direct solves from the eight shifted starts it uses there, if that length lies in the
@@ -37,10 +37,10 @@ pub(super) fn seed_jobs(
     exist: (f64, f64),
     range: (f64, f64),
     circles: &[f64],
-    strong: bool,
+    as_solve: bool,
 ) -> Vec<(f64, Seed)> {
     let e = f64::from(eta);
-    if !strong {
+    if !as_solve {
         return lengths
             .iter()
             .flat_map(|&l| (0..4).map(move |j| (l, Seed::Shifted(j as f64 / (8.0 * e)))))
