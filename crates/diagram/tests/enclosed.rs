@@ -1,4 +1,4 @@
-//! The enclosed diagram (`|r| ≤ R`, issue 9) on `[1, 3]`: first-order optimality of every
+//! The enclosed diagram (`|r| ≤ R`, paper Sec. 3.2) on `[1, 3]`: first-order optimality of every
 //! state, the exchanges against the surface ones where both states are attached and
 //! against independent 3-D solves where one has lifted off, the lift-off/landing events
 //! against independent 3-D solves on both sides, and the labels.

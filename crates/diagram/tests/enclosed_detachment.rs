@@ -1,4 +1,4 @@
-//! Branch 2 of a uniform rod below `L̄ = 1` (issue 9): the lifted-off figure-eight touches
+//! Branch 2 of a uniform rod in the ball below `L̄ = 1`: the lifted-off figure-eight touches
 //! the wall at two points whose force falls to zero at the length where Euler's free
 //! figure-eight elastica just fits in the ball, `L̄* = K(k)/(πk)` with `2E(k) = K(k)`; below
 //! it the branch is that free elastica, `E R/(πD) = 16K²(k² − 1/2)/(π² L̄)`. Both are

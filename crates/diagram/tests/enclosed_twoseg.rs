@@ -1,4 +1,4 @@
-//! The enclosed diagram of two-segment rods (Eq. (51); issue 9): first-order optimality of
+//! The enclosed diagram of two-segment rods (Eq. (51), `|r| ≤ R`): first-order optimality of
 //! every state, lifted-off states below the surface loops of their sheets, a landing event
 //! against independent surface and 3-D solves on both sides, and an exchange of the lowest
 //! branch against independent 3-D solves on both sides.

@@ -1,5 +1,5 @@
-//! The branch diagram of loops enclosed in the ball, `|r| ≤ R` (paper Sec. 3.2;
-//! issue 9): every paper branch traced through its attached and lifted-off parts, branch 0
+//! The branch diagram of loops enclosed in the ball, `|r| ≤ R` (paper Sec. 3.2): every
+//! paper branch traced through its attached and lifted-off parts, branch 0
 //! (the free planar circle) below `L̄ = 1`, the lift-off and landing events, the exchanges
 //! of the lowest branch with error estimates, and the Hessian index on the tangent space of
 //! the active constraints.

@@ -1,5 +1,5 @@
 //! The enclosed diagram of a non-uniform rod (two-segment stiffness, Eq. (51); paper Sec. 3.2
-//! with the rods of Sec. 5; issue 9).
+//! with the rods of Sec. 5).
 //!
 //! # Route
 //!

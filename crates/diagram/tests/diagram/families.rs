@@ -409,7 +409,7 @@ fn very_soft_rod_states_lie_on_traced_sheets() {
     // (Below the branch point of this family at 1.0412 the same route reaches, at 1.03, a
     // state of the other branch through it, E = 0.54269, which is not traced: there the
     // Jacobian has a second nearly singular direction and the computed secondary tangent
-    // leads back onto the traced family. Not checked; see the README.)
+    // leads back onto the traced family. Not checked; see docs/src/two-segment.md, Limitations.)
     assert!(
         checked >= 8 && below >= 5,
         "{checked} states, {below} below 1.1"
