@@ -1,4 +1,4 @@
-//! Fuzz-style property tests of the scene parser (issue 11): random and mutated scene files
+//! Fuzz-style property tests of the scene parser: random and mutated scene files
 //! never panic; each gives either a scene that passes validation or a short error.
 
 use proptest::prelude::*;

@@ -86,7 +86,7 @@ fn table_profile_parses() {
         .contains("stiffness.s"));
 }
 
-/// Issue 11: table entries are checked at load time and the message names the entry.
+/// Table entries are checked at load time and the message names the entry.
 #[test]
 fn table_entries_are_validated_by_name() {
     for (s, d, want) in [
@@ -127,7 +127,7 @@ fn table_entries_are_validated_by_name() {
     }
 }
 
-/// Issue 11: a missing key is named as missing (not "stiffness.s0 = : is required").
+/// A missing key is named as missing (not "stiffness.s0 = : is required").
 #[test]
 fn missing_keys_are_named() {
     let text = "[stiffness]\nkind = \"tanh\"\nd0 = 1\nd1 = 0.5\ns1 = 0.8\ngamma = 200\n";
@@ -182,7 +182,7 @@ fn toml_errors_are_one_line_with_the_source() {
     }
 }
 
-/// Issue 11: errors do not echo long arrays whole.
+/// Errors do not echo long arrays whole.
 #[test]
 fn long_arrays_are_not_echoed_whole() {
     let n = 3000;
