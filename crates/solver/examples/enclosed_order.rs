@@ -1,4 +1,4 @@
-//! Order of convergence of the enclosed model on a lifted-off state (issue 9): the
+//! Order of convergence of the enclosed model on a lifted-off state: the
 //! figure-eight (η = 1) at a given L̄, solved at N = 32 … 2048 cells by the cascade
 //! N/4, N/2, N; prints E_N, the difference to the finest, the observed order, the
 //! three-level estimate and the time of each cascade.

@@ -42,9 +42,9 @@ fn gd(x: f64) -> f64 {
 impl MeshMap {
     /// The mesh rodloop uses for a stiffness profile: uniform unless the profile has sharp
     /// transitions (Eq. (51) with `γ > 20`), then bumps of the transitions' width `1/γ` at
-    /// `s0*/L` and `s1*/L` whose cells are `1 + γ/80` times finer than elsewhere. These
+    /// `s0*/L` and `s1*/L` whose cells are `1 + γ/40` times finer than elsewhere. These
     /// constants were chosen with `rodloop converge` over bump widths `0.5/γ … 10/γ` and
-    /// refinements `1 + γ/10 … 1 + γ/160` at `D1/D0 = 0.5, 0.1, 0.001` (README).
+    /// refinements `1 + γ/10 … 1 + γ/160` at `D1/D0 = 0.5, 0.1, 0.001`.
     pub fn for_profile(stiffness: &Stiffness) -> Self {
         match stiffness {
             Stiffness::Tanh {

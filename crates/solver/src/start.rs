@@ -20,7 +20,7 @@ pub enum StartShape {
     /// Euler rotation curve of Eq. (4) with index `l`, built at the model's `L̄`
     /// (exists for `l − 1 < L̄ < l + 1`, Eq. (5)).
     Euler {
-        /// Periodicity index `l` (the issue uses `l = η` of the branch).
+        /// Periodicity index `l` (a branch with `η` periods starts from `l = η`).
         l: u32,
     },
     /// Exact homogeneous equilibrium of the paper's branch with `eta` periods of `κ_g`

@@ -564,7 +564,7 @@ mod tests {
         }
     }
 
-    /// A step table between 1 and 0.01 (issue 11): the periodic cubic spline undershot to
+    /// A step table between 1 and 0.01: a periodic cubic spline undershoots it to
     /// D = −0.0041 near s/L = 0.32; the shape-preserving interpolant stays within the data
     /// range between every pair of knots, and is continuous with a continuous slope.
     #[test]

@@ -1,5 +1,5 @@
-//! The enclosed model (issue 9): exact derivatives, exact states, lift-off, optimality and
-//! the order of convergence.
+//! The enclosed model (`|r| ≤ R`, paper Sec. 3.2): exact derivatives, exact states, lift-off,
+//! optimality and the order of convergence.
 
 use rodloop_exact::paper_branch_loop;
 use rodloop_solver::enclosed::{
@@ -246,7 +246,7 @@ fn figure_eight_lifts_off_with_lower_energy() {
     assert!(lmin >= -1e-8 && gmin >= -1e-8 && comp <= 1e-8 && stat <= 1e-7);
 }
 
-/// Point-like contact (issue 9): at L̄ = 1.2 the enclosed figure-eight touches the wall at
+/// Point-like contact: at L̄ = 1.2 the enclosed figure-eight touches the wall at
 /// two points only (runs of at most 4 cells). The energy converges irregularly there
 /// (errors against N = 1024 of 7.2e-7, 3.9e-7, 3.2e-9 relative at N = 64, 128, 256; the
 /// three-level rule at N = 128 gave 1.3e-7, 3× short), so the estimate takes order 1 over

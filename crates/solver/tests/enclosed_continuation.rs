@@ -1,4 +1,4 @@
-//! Continuation helpers of the enclosed model (issue 9): the secant predictor reaches the
+//! Continuation helpers of the enclosed model: the secant predictor reaches the
 //! same state as the plain warm start from a start much closer to it, and the pinned free
 //! step re-bases a loop whose node 0 touches the wall without changing the equilibrium.
 
