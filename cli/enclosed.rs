@@ -1,5 +1,5 @@
 //! `rodloop solve` and `rodloop compare --scene enclosed` for enclosed scenes (`|r| ≤ R`,
-//! paper Sec. 3.2; issue 9).
+//! paper Sec. 3.2).
 //!
 //! A branch's enclosed state starts from its surface loop. Where that loop has `λ ≥ 0`
 //! everywhere it satisfies every enclosed KKT condition (the wall may push, the loop

@@ -1,4 +1,4 @@
-//! `rodloop diagram` for enclosed scenes (`|r| ≤ R`, paper Sec. 3.2; issue 9): the
+//! `rodloop diagram` for enclosed scenes (`|r| ≤ R`, paper Sec. 3.2): the
 //! engine is `rodloop_diagram::enclosed` (attached parts from the exact layer, lifted-off
 //! parts from the 3-D model, events where `λ_min` crosses zero, exchanges re-solved where a
 //! branch has lifted off); non-uniform rods from their surface families.

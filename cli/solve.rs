@@ -225,7 +225,7 @@ pub fn config_table_in(profile: &[rodloop_solver::ProfilePoint], r: f64, d0: f64
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
-    // Enclosed scenes (|r| <= R) have their own model and outputs (issue 9).
+    // Enclosed scenes (|r| <= R) have their own model and outputs.
     if let Some(p) = args.scene.as_deref() {
         let scene = Scene::from_file(p)?;
         if scene.confinement == Confinement::Enclosed {

@@ -2,7 +2,7 @@
 # Time and accuracy of `rodloop diagram` (numeric model, default scene) at each accuracy level:
 # median wall time over RUNS whole-command runs, and the largest deviation of the numeric
 # critical lengths from the exact layer's (closed-form solutions, error ~1e-14).
-# Prints a Markdown table for the README. Needs only bash and awk.
+# Prints a Markdown table for the guide. Needs only bash and awk.
 #
 #   scripts/bench_diagram.sh [RUNS]        (default 5; builds the release binary first)
 set -euo pipefail

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The 60 states of issue 7 (branches 1-3 of the paper's two-segment rods, D1/D0 = 0.5, 0.1,
+# 60 hard states (branches 1-3 of the paper's two-segment rods, D1/D0 = 0.5, 0.1,
 # 0.001): solve each at the default accuracy and at --accuracy high, and print whether it
 # converged, the energy with its estimate, the difference to the high-accuracy energy, the
 # stability index and the wall time.

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The timed targets of issues 8 and 9 in one run: for each command, the median wall time of
+# The guide's timed diagrams, phase and enclosed solve: for each command, the median wall time of
 # RUNS whole-command runs (scripts/time_command.sh) and the critical lengths it printed
 # (critical.csv: kind, from → to, L̄_cr ± error estimate) or the solved energy.
 # Run it on an otherwise idle machine; it prints the load average before and after.

@@ -269,7 +269,7 @@ fn compare_puts_paper_values_next_to_exact_ones() {
     let rows: Vec<_> = rows.iter().filter(|r| !r[agrees].is_empty()).collect();
     assert!(rows.len() >= 20);
     for r in rows {
-        // The one known disagreement is the paper's p = 0 at L = 1.3 (README errata,
+        // The one known disagreement is the paper's p = 0 at L = 1.3 (docs/src/methods.md, errata,
         // confirmed by the independent mpmath solution in data/reference/exact_loops.csv).
         let expected = if r[id] == "p_b2_13" { "false" } else { "true" };
         assert_eq!(r[agrees], expected, "{}", r[id]);
@@ -464,7 +464,7 @@ fn solve_from_a_far_start_fails_cleanly() {
 }
 
 /// The main job: the numeric diagram of the default scene. Its critical crossings must agree
-/// with the exact layer's to 1e-6 at the default accuracy (issue 4), and the labels must
+/// with the exact layer's to 1e-6 at the default accuracy, and the labels must
 /// follow the paper (branch 1 stable at 1.2, branch 2 metastable there).
 #[test]
 fn numeric_diagram_of_the_default_scene() {
@@ -639,8 +639,7 @@ fn write_scene(name: &str, text: &str) -> PathBuf {
     p
 }
 
-/// Issue 11, item 0: a state of another branch given with --from is refused (the exact
-/// commands of the issue), and nothing is written.
+/// A state of another branch given with --from is refused, and nothing is written.
 #[test]
 fn solve_refuses_a_state_of_another_branch() {
     let xa = tmp("xa");
@@ -715,7 +714,7 @@ fn solve_refuses_a_state_of_another_branch() {
     assert!((s["energy"].as_f64().unwrap() - exact).abs() < 1e-6);
 }
 
-/// Issue 11, item 1: forces and lengths are normalised by D0 and R, so that a uniform scene
+/// Forces and lengths are normalised by D0 and R, so that a uniform scene
 /// with d = 2 or radius = 2 gives the default scene's numbers.
 #[test]
 fn outputs_are_normalised_by_d0_and_r() {
@@ -786,7 +785,7 @@ fn full_exact() -> rodloop_exact::diagram::Diagram {
     rodloop_exact::diagram::compute(&rodloop_exact::diagram::DiagramSettings::default()).unwrap()
 }
 
-/// Issue 11, item 2: the issue's three exact sub-ranges give the full diagram's branches,
+/// Three exact sub-ranges give the full diagram's branches,
 /// critical lengths (with their indices) and labels restricted to the window.
 #[test]
 fn exact_sub_ranges_match_the_full_diagram() {
@@ -856,7 +855,7 @@ fn exact_sub_ranges_match_the_full_diagram() {
     }
 }
 
-/// Issue 11, item 2 (numeric) and item 5 (progress): on a sub-range the "exact deviation" is
+/// On a sub-range the "exact deviation" is
 /// computed against the same critical length only; stderr that is not a terminal gets one
 /// line per traced branch; --resume with another accuracy says it re-traces.
 #[test]
@@ -900,7 +899,7 @@ fn numeric_sub_range_progress_and_resume_note() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("re-tracing"));
 }
 
-/// Issue 11, item 3: options that do not apply are rejected, --branch works everywhere, the
+/// Options that do not apply are rejected, --branch works everywhere, the
 /// two branches.csv share their common columns.
 #[test]
 fn flags_work_or_are_rejected() {
@@ -1047,7 +1046,7 @@ fn flags_work_or_are_rejected() {
     );
 }
 
-/// Issue 11, items 5 and 9: sizes and values the commands cannot honour are clear errors.
+/// Sizes and values the commands cannot honour are clear errors.
 #[test]
 fn huge_and_negative_values_are_clear_errors() {
     let out = tmp("huge");
@@ -1131,7 +1130,7 @@ fn huge_and_negative_values_are_clear_errors() {
     }
 }
 
-/// Issue 11, item 9: --from a directory, non-finite or unusable coordinates name the file.
+/// --from a directory, non-finite or unusable coordinates name the file.
 #[test]
 fn from_file_errors_name_the_file() {
     let dir = tmp("from-bad");
@@ -1192,7 +1191,7 @@ fn from_file_errors_name_the_file() {
     );
 }
 
-/// Issue 11, item 8: a scene called "nullable" works (finiteness is checked on typed values);
+/// A scene called "nullable" works (finiteness is checked on typed values);
 /// a run removes the outputs of a previous run it does not write (diagram_g.svg after
 /// switching model), records a run id, and leaves no temporary file.
 #[test]
@@ -1241,7 +1240,7 @@ fn outputs_are_one_consistent_set() {
     assert!(leftovers(&dir).is_empty(), "{:?}", leftovers(&dir));
 }
 
-/// Issue 11, item 8: a directory locked by a running rodloop process is refused; a lock left
+/// A directory locked by a running rodloop process is refused; a lock left
 /// by a dead process is taken over; --resume removes temporaries of a killed run.
 #[test]
 fn output_directory_lock_and_cleanup() {
@@ -1457,8 +1456,8 @@ fn draw_rejects_bad_width_and_tol_by_name() {
     }
 }
 
-/// Every `summary.json` has a `units` field (README, Commands): `compare --scene enclosed`'s
-/// had none.
+/// Every `summary.json` has a `units` field (docs/src/commands.md, Units), `compare --scene
+/// enclosed`'s included.
 #[test]
 fn enclosed_compare_summary_has_units() {
     let out = tmp("compare-enclosed-units");

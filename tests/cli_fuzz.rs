@@ -1,4 +1,4 @@
-//! Fuzz-style property test of the command-line layer (issue 11): argument vectors mutated
+//! Fuzz-style property test of the command-line layer: argument vectors mutated
 //! from cheap valid commands (values replaced by extremes and junk, flags dropped, duplicated
 //! or added) never panic or abort; each run ends in bounded time with exit 0 and a complete
 //! output set, or exit 1 (2 for clap's usage errors) with a short message and nothing

@@ -1,4 +1,4 @@
-//! The continuation controls of `diagram` (issue 11, item 3): each one changes what the
+//! The continuation controls of `diagram`: each one changes what the
 //! tracer does, bad values and the exact model are refused with a message.
 
 use std::path::{Path, PathBuf};

@@ -1,4 +1,4 @@
-//! `rodloop solve` and `rodloop compare --scene enclosed` on enclosed scenes (issue 9).
+//! `rodloop solve` and `rodloop compare --scene enclosed` on enclosed scenes.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

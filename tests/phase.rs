@@ -80,7 +80,7 @@ fn phase_follows_both_exchanges_to_the_uniform_rod_and_down() {
     // and has a row of the new pair.
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
-    // Every summary.json has a `units` field (README, Commands); phase's had none.
+    // Every summary.json has a `units` field (docs/src/commands.md, Units).
     assert!(summary["units"]
         .as_str()
         .is_some_and(|u| u.contains("E R/(pi D0)")));
