@@ -1300,7 +1300,7 @@ fn output_directory_lock_and_cleanup() {
 
 /// A failed run prints one line that names the problem (the context and its cause joined, a
 /// cause the message already quotes not repeated), exits non-zero and leaves no empty output
-/// directory behind (it used to leave `OUT/` and print the OS error twice, on two lines).
+/// directory behind (no empty `OUT/`, and the OS error once, on one line).
 #[test]
 fn failed_runs_print_one_line_and_leave_no_directory() {
     let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/scenes");

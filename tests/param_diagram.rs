@@ -172,7 +172,7 @@ fn bad_combinations_are_refused() {
             ],
             "two-segment",
         ),
-        // Options of the diagram in L̄ that --param used to ignore silently.
+        // Options of the diagram in L̄, which --param would otherwise ignore silently.
         (
             vec![
                 "diagram", "--scene", scene, "--param", "d1", "--lbar", "1.4", "--shapes", "3",
