@@ -33,7 +33,6 @@ mod report_enclosed;
 mod report_tables;
 mod solve;
 mod states;
-mod svg;
 
 use std::process::ExitCode;
 

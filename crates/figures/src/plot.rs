@@ -121,7 +121,75 @@ pub fn draw_mark(svg: &mut Svg, x: f64, y: f64, shape: Shape, color: &str, r: f6
     }
 }
 
+/// A y-range that keeps a few sharp outliers from flattening every curve: the 2nd to 98th
+/// percentile of `values`, widened by 15 % of its span (and to include 0 when it is near).
+/// Returns `Some((lo, hi))` only when some values lie more than half that span outside it
+/// (e.g. the contact-force spikes at the stiffness steps of a two-segment rod); `None` when
+/// the full range shows everything well.
+pub fn robust_range(values: &[f64]) -> Option<(f64, f64)> {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.len() < 20 {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    let q = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
+    let (lo, hi) = (q(0.02), q(0.98));
+    let span = hi - lo;
+    if span <= 0.0 {
+        return None;
+    }
+    let (min, max) = (v[0], v[v.len() - 1]);
+    if min >= lo - 0.5 * span && max <= hi + 0.5 * span {
+        return None;
+    }
+    let (mut a, mut b) = (lo - 0.15 * span, hi + 0.15 * span);
+    if a > 0.0 && a < 0.5 * span {
+        a = 0.0;
+    }
+    if b < 0.0 && -b < 0.5 * span {
+        b = 0.0;
+    }
+    Some((a, b))
+}
+
+/// The note of a panel clipped by [`robust_range`]: how far the values run off it.
+pub fn clipped_note(what: &str, values: &[f64], shown: (f64, f64)) -> String {
+    let (min, max) = values
+        .iter()
+        .filter(|x| x.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    format!(
+        "{what} axis clipped to {} … {}: values reach {} … {} (sharp peaks, e.g. at stiffness steps)",
+        tick_label(shown.0),
+        tick_label(shown.1),
+        tick_label((min * 1e3).round() / 1e3),
+        tick_label((max * 1e3).round() / 1e3)
+    )
+}
+
 impl Plot {
+    /// The x-range of the data (series and marks), for a caller that sets `range` itself.
+    pub fn x_range(&self) -> (f64, f64) {
+        let mut r = (f64::INFINITY, f64::NEG_INFINITY);
+        for (x, _) in self
+            .series
+            .iter()
+            .flat_map(|s| s.points.iter().copied())
+            .chain(self.marks.iter().map(|m| m.at))
+        {
+            if x.is_finite() {
+                r = (r.0.min(x), r.1.max(x));
+            }
+        }
+        if r.0.is_finite() {
+            r
+        } else {
+            (0.0, 1.0)
+        }
+    }
+
     /// The data range (with 4 % vertical padding) when none is set.
     pub fn data_range(&self) -> (f64, f64, f64, f64) {
         if let Some(r) = self.range {
