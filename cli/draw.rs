@@ -305,11 +305,12 @@ fn state_title(path: &Path, data: &LoopData, note: &StateNote) -> String {
             }
         }
     }
-    let mut title = parts.join(", ");
-    if title.chars().next().is_some_and(char::is_lowercase) {
-        title = title[..1].to_uppercase() + &title[1..];
+    let title = parts.join(", ");
+    // "Branch 1, …" (a title that starts with η stays as it is).
+    match title.strip_prefix("branch") {
+        Some(rest) => format!("Branch{rest}"),
+        None => title,
     }
-    title
 }
 
 /// `v` with `digits` significant digits, trailing zeros dropped (1.2, 1.9164126).
@@ -473,7 +474,7 @@ pub fn draw_diagram(dir: &Path, set: &DrawSettings) -> Result<Vec<String>> {
 
 /// Whether `dir` is the `states/` folder of a diagram (its parent holds the diagram's
 /// `branches.csv`).
-fn in_diagram_states(dir: &Path) -> bool {
+pub fn in_diagram_states(dir: &Path) -> bool {
     dir.file_name().is_some_and(|n| n == "states")
         && dir
             .parent()

@@ -495,6 +495,8 @@ const KNOWN_OUTPUTS: &[&str] = &[
     "diagram_lambda.svg",
     "diagram_lambda.png",
     "converge.csv",
+    "converge.svg",
+    "converge.png",
     "phase.csv",
     "phase.svg",
     "phase.png",

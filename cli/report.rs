@@ -362,7 +362,10 @@ fn force_figure(data: &LoopData, branch: u32) -> Result<String> {
     if let (Some(&s0), Some(&l0)) = (s.first(), lam.first()) {
         points.push((s0 / length + 1.0, l0));
     }
-    let clip = rodloop_figures::plot::robust_range(lam);
+    let clip = rodloop_figures::plot::robust_range(
+        lam,
+        Some(&rodloop_figures::plot::arclength_weights(s, length)),
+    );
     let mut plot = Plot {
         title: "Contact force along the loop".into(),
         xlabel: "s/L (s = 0 as marked on the loop)".into(),

@@ -843,7 +843,7 @@ pub fn lambda_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, FigureEr
         .iter()
         .flat_map(|p| [p.lambda_min, p.lambda_max])
         .collect();
-    if let Some(shown) = crate::plot::robust_range(&values) {
+    if let Some(shown) = crate::plot::robust_range(&values, None) {
         let (x0, x1, _, _) = plot.data_range();
         plot.range = Some((x0, x1, shown.0, shown.1));
         plot.note = crate::plot::clipped_note("λ", &values, shown);

@@ -6,7 +6,7 @@
 //! [`crate::plot::robust_range`], and says so under its axis.
 
 use crate::data::{column_label, LoopData};
-use crate::plot::{clipped_note, robust_range, LegendItem, Plot, Series};
+use crate::plot::{arclength_weights, clipped_note, robust_range, LegendItem, Plot, Series};
 use crate::svg::{Anchor, Svg};
 use crate::FigureError;
 
@@ -98,6 +98,7 @@ pub fn profiles_document(
     }
     let s = data.s();
     let length = data.length();
+    let weights = arclength_weights(s, length);
     // One closed curve against s/L: the first point repeated at s = L.
     let closed = |v: &[f64]| {
         let mut pts: Vec<(f64, f64)> = s.iter().zip(v).map(|(&a, &b)| (a / length, b)).collect();
@@ -109,7 +110,14 @@ pub fn profiles_document(
     for (k, c) in cols.iter().enumerate() {
         if *c == FORCES {
             let (px, py) = ((k % 2) as f64 * panel_w, top + (k / 2) as f64 * panel_h);
-            forces_panel(data, &closed, &mut svg, (px, py, panel_w, panel_h), k);
+            forces_panel(
+                data,
+                &closed,
+                &weights,
+                &mut svg,
+                (px, py, panel_w, panel_h),
+                k,
+            );
             continue;
         }
         let v = data.column(c).unwrap_or(&[]);
@@ -133,7 +141,7 @@ pub fn profiles_document(
                 points: q,
             });
         }
-        let clip = robust_range(v);
+        let clip = robust_range(v, Some(&weights));
         let mut plot = Plot {
             title: column_label(c),
             xlabel: "s/L".into(),
@@ -173,6 +181,7 @@ const FORCES: &str = "F (internal force)";
 fn forces_panel(
     data: &LoopData,
     closed: &dyn Fn(&[f64]) -> Vec<(f64, f64)>,
+    weights: &[f64],
     svg: &mut Svg,
     (px, py, w, h): (f64, f64, f64, f64),
     k: usize,
@@ -206,7 +215,8 @@ fn forces_panel(
         legend,
         ..Default::default()
     };
-    if let Some(shown) = robust_range(&all) {
+    let w3: Vec<f64> = weights.iter().cycle().take(all.len()).copied().collect();
+    if let Some(shown) = robust_range(&all, Some(&w3)) {
         let (x0, x1) = plot.x_range();
         plot.range = Some((x0, x1, shown.0, shown.1));
         plot.note = clipped_note("y", &all, shown);
