@@ -19,8 +19,9 @@ pub struct Args {
     /// Output directory.
     #[arg(long, default_value = "out/compare")]
     pub out: PathBuf,
-    /// Compare an enclosed scene with the surface: `enclosed` (the built-in homogeneous
-    /// enclosed scene) or a scene file with `confinement = "enclosed"`.
+    /// Compare a scene: `enclosed` (the built-in homogeneous enclosed scene) or a scene file
+    /// with `confinement = "enclosed"` (against the surface), or a two-segment scene on the
+    /// surface (against the paper's statements of Sec. 5).
     #[arg(long)]
     pub scene: Option<String>,
 }
@@ -268,6 +269,15 @@ pub fn compare_rows(nd: Option<&rodloop_diagram::NumericDiagram>) -> Result<Vec<
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
     if let Some(s) = &args.scene {
+        // A two-segment rod on the sphere: the paper's statements of Sec. 5.
+        if s != "enclosed" {
+            let scene = rodloop_scene::Scene::from_file(std::path::Path::new(s))?;
+            if scene.confinement == rodloop_scene::Confinement::Surface
+                && !scene.stiffness.is_uniform()
+            {
+                return crate::compare_segments::run(&scene, &args.out);
+            }
+        }
         return crate::enclosed::run_compare(s, &args.out);
     }
     let nd = rodloop_diagram::compute(

@@ -510,7 +510,7 @@ pub fn run(args: &Args) -> Result<()> {
         overlay: None,
         relative: args.relative,
     };
-    if args.relative && !args.file.file_name().is_some_and(|n| n == "branches.csv") {
+    if args.relative && args.file.file_name().is_none_or(|n| n != "branches.csv") {
         bail!("--relative applies to a diagram's branches.csv (energies relative to the stable state), not to a loop picture");
     }
     let is_diagram = args.file.file_name().is_some_and(|n| n == "branches.csv");

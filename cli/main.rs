@@ -16,6 +16,7 @@ macro_rules! outln {
 mod analytic;
 mod atlas;
 mod compare;
+mod compare_segments;
 mod converge;
 mod diagram;
 mod draw;

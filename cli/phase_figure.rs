@@ -12,6 +12,9 @@ use rodloop_solver::Param;
 
 const COLORS: [&str; 4] = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd"];
 
+/// Width reserved right of the axes for the legend, pixels.
+const LEGEND_W: f64 = 330.0;
+
 /// `L̄_cr` and the lowest branches `(below, above)` of `curve` at `x` (plot coordinate),
 /// linearly interpolated between its rows of one arm; `None` outside the curve.
 fn curve_at(c: &PhaseCurve, x: f64, xv: &dyn Fn(f64) -> f64) -> Option<(f64, u32, u32)> {
@@ -44,7 +47,8 @@ pub fn phase_svg(d: &PhaseDiagram, scene: &str, lbar_range: (f64, f64)) -> Strin
             d.param.name().into()
         },
         ylabel: "critical length L̄_cr = L/(2πR)".into(),
-        legend_width: 0.0,
+        // The legend beside the axes, where it cannot cover a curve.
+        legend_width: LEGEND_W,
         ..Default::default()
     };
     // The requested range, from the scene's value to --to, whatever the curves reach.
@@ -136,12 +140,13 @@ pub fn phase_svg(d: &PhaseDiagram, scene: &str, lbar_range: (f64, f64)) -> Strin
     }
     let range = (x0, x1.max(x0 + 1e-9), y0, y1);
     plot.range = Some(range);
-    let (w, h) = (820.0, 560.0);
+    let (w, h) = (820.0 + LEGEND_W, 560.0);
     let mut svg = Svg::new(w, h);
     svg.rect(0.0, 0.0, w, h, "white", "none", 0.0);
     plot.render(&mut svg, 0.0, 0.0, w, h, "phase");
-    // Margins of `Plot::render` with a title, no vline labels and no note: 68, 16, 36, 50.
-    let (px, py, pw, ph) = (68.0, 36.0, w - 68.0 - 16.0, h - 36.0 - 50.0);
+    // Margins of `Plot::render` with a title, no vline labels and no note: 68, 16 + the
+    // legend, 36, 50.
+    let (px, py, pw, ph) = (68.0, 36.0, w - 68.0 - 16.0 - LEGEND_W, h - 36.0 - 50.0);
     let sy = |v: f64| py + ph - (v - range.2) / (range.3 - range.2) * ph;
     let sx = |v: f64| px + (v - range.0) / (range.1 - range.0) * pw;
     for (x, y, why) in &ends {

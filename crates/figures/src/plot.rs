@@ -210,35 +210,6 @@ pub fn clipped_note(what: &str, values: &[f64], shown: (f64, f64)) -> String {
     )
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Two narrow spikes on a smooth curve are clipped, and only when the samples are
-    /// weighted by the arclength they stand for if the mesh crowds at the spikes.
-    #[test]
-    fn spikes_are_clipped_smooth_data_is_not() {
-        let smooth: Vec<f64> = (0..200).map(|i| (i as f64 * 0.05).sin()).collect();
-        assert_eq!(robust_range(&smooth, None), None);
-        let mut spiky = smooth.clone();
-        spiky[50] = 80.0;
-        spiky[150] = -80.0;
-        let (a, b) = robust_range(&spiky, None).unwrap();
-        assert!(a > -2.0 && a < -1.0 && b > 1.0 && b < 2.0, "{a} {b}");
-        // Forty samples at each spike (a refined mesh), each standing for a tiny length.
-        let mut v = smooth.clone();
-        let mut w = vec![1.0; v.len()];
-        for _ in 0..40 {
-            v.push(80.0);
-            v.push(-80.0);
-            w.push(1e-3);
-            w.push(1e-3);
-        }
-        assert_eq!(robust_range(&v, None), None);
-        assert!(robust_range(&v, Some(&w)).is_some());
-    }
-}
-
 impl Plot {
     /// The x-range of the data (series and marks), for a caller that sets `range` itself.
     pub fn x_range(&self) -> (f64, f64) {
@@ -453,5 +424,34 @@ impl Plot {
             };
             svg.text(lx + 38.0, yy + 4.5, 12.5, Anchor::Start, label);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two narrow spikes on a smooth curve are clipped, and only when the samples are
+    /// weighted by the arclength they stand for if the mesh crowds at the spikes.
+    #[test]
+    fn spikes_are_clipped_smooth_data_is_not() {
+        let smooth: Vec<f64> = (0..200).map(|i| (i as f64 * 0.05).sin()).collect();
+        assert_eq!(robust_range(&smooth, None), None);
+        let mut spiky = smooth.clone();
+        spiky[50] = 80.0;
+        spiky[150] = -80.0;
+        let (a, b) = robust_range(&spiky, None).unwrap();
+        assert!(a > -2.0 && a < -1.0 && b > 1.0 && b < 2.0, "{a} {b}");
+        // Forty samples at each spike (a refined mesh), each standing for a tiny length.
+        let mut v = smooth.clone();
+        let mut w = vec![1.0; v.len()];
+        for _ in 0..40 {
+            v.push(80.0);
+            v.push(-80.0);
+            w.push(1e-3);
+            w.push(1e-3);
+        }
+        assert_eq!(robust_range(&v, None), None);
+        assert!(robust_range(&v, Some(&w)).is_some());
     }
 }

@@ -170,6 +170,9 @@ pub fn profiles_document(
     Ok(svg)
 }
 
+/// A closed curve against `s/L` from a column's values.
+type ClosedCurve<'a> = &'a dyn Fn(&[f64]) -> Vec<(f64, f64)>;
+
 /// The columns of the internal force, drawn together in one panel.
 const FORCE_COLUMNS: [&str; 3] = ["F_t", "F_n", "F_b"];
 
@@ -180,7 +183,7 @@ const FORCES: &str = "F (internal force)";
 /// one panel with a legend, clipped to their bulk like the other panels.
 fn forces_panel(
     data: &LoopData,
-    closed: &dyn Fn(&[f64]) -> Vec<(f64, f64)>,
+    closed: ClosedCurve<'_>,
     weights: &[f64],
     svg: &mut Svg,
     (px, py, w, h): (f64, f64, f64, f64),

@@ -70,9 +70,9 @@ pub fn loop_vtp(data: &LoopData, field: &[(&str, f64)]) -> Result<String, Figure
     if !field.is_empty() {
         out.push_str("    <FieldData>\n");
         for (name, v) in field {
-            let _ = write!(
+            let _ = writeln!(
                 out,
-                "      <DataArray type=\"Float64\" Name=\"{}\" NumberOfTuples=\"1\" format=\"ascii\">{v:?}</DataArray>\n",
+                "      <DataArray type=\"Float64\" Name=\"{}\" NumberOfTuples=\"1\" format=\"ascii\">{v:?}</DataArray>",
                 attr(name)
             );
         }
