@@ -214,6 +214,9 @@ fn selected_branches(args: &Args, lbar_min: f64, lbar_max: f64) -> Result<Option
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
+    if args.relative && args.param.is_some() {
+        bail!("--relative draws the diagram in L̄ relative to its stable states; it does not apply to --param");
+    }
     if let Some(p) = &args.param {
         return crate::param_diagram::run(args, p);
     }
@@ -221,6 +224,9 @@ pub fn run(args: &Args) -> Result<()> {
         bail!("--lbar and --to belong to --param (the equilibria at a fixed length against a parameter); the diagram in L̄ takes --lbar-min and --lbar-max");
     }
     if let Some(scene) = crate::enclosed_diagram::enclosed_scene(args.scene.as_deref())? {
+        if args.relative {
+            bail!("--relative applies to surface diagrams; draw an enclosed diagram's branches.csv with `rodloop draw --relative` instead");
+        }
         return crate::enclosed_diagram::run(args, &scene);
     }
     let scene = crate::solve::load_scene(args.scene.as_deref())?;
@@ -469,9 +475,9 @@ fn run_numeric(
         None
     };
     outln!(
-        "Critical lengths (numeric model, scene {}, accuracy {}):",
+        "Critical lengths (numeric model, scene {}, accuracy {:?}):",
         scene.name,
-        format!("{accuracy:?}").to_lowercase()
+        accuracy
     );
     outln!(
         "  {:>2}  {:>18}  {:>9}  {:>8}  {:>16}  {:>9}{}",
