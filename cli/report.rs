@@ -450,6 +450,8 @@ pub fn run(args: &Args) -> Result<()> {
     let fig_energy = energy_figure(&dd, FIG_W, FIG_H)?;
     let fig_split = energy_split_figure(&dd, FIG_W, 480.0)?;
     let fig_lambda = lambda_figure(&dd, FIG_W, FIG_H)?;
+    // The energy figure beside the tables, as `rodloop diagram` writes it.
+    run.write_bytes("diagram.svg", fig_energy.as_bytes())?;
     let t_diagram_figures = t.elapsed().as_secs_f64();
     // The branch atlas from the staged state files (as `diagram --shapes` draws it).
     let t = Instant::now();
