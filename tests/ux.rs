@@ -481,3 +481,30 @@ fn compare_checks_the_two_segment_statements() {
     }
     std::fs::remove_dir_all(&d).ok();
 }
+
+/// The enclosed report does not try what does not apply: its atlas has no free planar circle
+/// at L̄ = 1 (where the circle is the great circle on the wall and the free-circle solve is
+/// singular), so every atlas state is solved.
+#[test]
+fn enclosed_report_atlas_solves_every_state() {
+    let d = tmp("report-enclosed");
+    let (ok, _, err) = run(bin()
+        .args([
+            "report",
+            "--scene",
+            "data/scenes/homogeneous-enclosed.toml",
+            "--accuracy",
+            "fast",
+            "--quiet",
+            "--out",
+        ])
+        .arg(&d));
+    assert!(ok, "{err}");
+    let html = std::fs::read_to_string(d.join("report.html")).unwrap();
+    assert!(
+        !html.contains("atlas: not solved"),
+        "an atlas state was not solved"
+    );
+    assert!(!html.contains("singular KKT"));
+    std::fs::remove_dir_all(&d).ok();
+}
