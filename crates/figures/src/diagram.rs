@@ -372,15 +372,19 @@ impl DiagramData {
 
     /// Energies relative to the stable state at the same length: every energy (states,
     /// critical points, special points) minus the lowest energy there, linearly interpolated
-    /// between the traced stable states. Where every branch lies close to one line (a very
+    /// between the traced stable states and the critical points. Where every branch lies close to one line (a very
     /// soft segment: `E ≈ L̄ ⟨D⟩/D₀`), this shows how far above the stable state each one is.
     /// The energy split is left as it is.
     pub fn relative_to_stable(&mut self) -> Result<(), FigureError> {
+        // The critical points lie on the lowest energy too (a crossing of the two lowest
+        // branches, a collapse of the lowest onto a great circle): they anchor the
+        // interpolation where the traced stable states are sparse.
         let mut stable: Vec<(f64, f64)> = self
             .points
             .iter()
             .filter(|p| p.stability == Stability::Stable)
             .map(|p| (p.lbar, p.energy))
+            .chain(self.critical.iter().map(|c| (c.lbar_cr, c.energy)))
             .collect();
         if stable.is_empty() {
             return Err(FigureError::Invalid(
@@ -697,7 +701,7 @@ fn energy_like_figure(
             "(E − E_stable(L̄)) R/(πD₀)".to_string(),
         ),
     };
-    let plot = Plot {
+    let mut plot = Plot {
         title,
         xlabel: "L̄ = L/(2πR)".into(),
         ylabel,
@@ -711,12 +715,22 @@ fn energy_like_figure(
         legend,
         legend_width: 270.0,
         note: if d.relative && !geodesic {
-            "critical lengths L̄_icr at the top (dotted lines); E_stable interpolated linearly between the stable states".into()
+            "critical lengths L̄_icr at the top (dotted lines); E_stable interpolated linearly between the stable states and critical points".into()
         } else {
             "critical lengths L̄_icr at the top (dotted lines)".into()
         },
         ..Default::default()
     };
+    // Relative energies span little except near a branch's end: clip a few outliers so that
+    // the differences between the branches stay visible, and say so.
+    if d.relative && !geodesic {
+        let values: Vec<f64> = d.points.iter().map(|p| p.energy).collect();
+        if let Some(shown) = crate::plot::robust_range(&values, None) {
+            let (x0, x1, _, _) = plot.data_range();
+            plot.range = Some((x0, x1, shown.0, shown.1));
+            plot.note = crate::plot::clipped_note("energy", &values, shown);
+        }
+    }
     let mut svg = Svg::new(w, h);
     plot.render(&mut svg, 0.0, 0.0, w, h, "energy");
     Ok(svg.finish())
