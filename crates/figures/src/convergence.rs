@@ -158,7 +158,7 @@ pub fn convergence_figure(
                     None => "too few rungs above the rounding level for an order".into(),
                 }
             } else {
-                String::new()
+                "one timed solve per rung: wall time, which varies with the machine's load".into()
             },
             ..Default::default()
         };
