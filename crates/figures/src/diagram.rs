@@ -1,12 +1,17 @@
 //! The branch diagram drawn from a diagram directory's `branches.csv` and `critical.csv`
 //! (either model): energy against length (Fig. 3a), the geodesic / normal energy split
-//! (Fig. 3b), and the contact-force extremes with the great-circle buckling loads of
-//! Eqs. (33)–(34) (Fig. 7).
+//! (Fig. 3b), the geodesic energy alone, and the contact-force extremes with the
+//! great-circle buckling loads of Eqs. (33)–(34) for a uniform rod (Fig. 7).
 //!
 //! Line styles mean the same in both models: solid = stable (lowest energy at that length),
 //! dashed = higher energy and not known to be unstable (metastable in the numeric model,
 //! where the Hessian index is 0; the exact model computes no index), dotted = unstable
 //! (Hessian index > 0, numeric model only).
+//!
+//! The file is longer than most because it is one job end to end: the tables of a diagram
+//! directory read into [`DiagramData`] (with the energy made relative to the stable state on
+//! request), and the four figures drawn from that one reading, so that every figure shows the
+//! same rows with the same styles.
 
 use std::collections::BTreeSet;
 use std::path::Path;
