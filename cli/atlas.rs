@@ -325,6 +325,11 @@ pub fn enclosed_rows(
     let mut jobs = Vec::new();
     for (&branch, g) in groups.iter_mut() {
         g.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
+        // The free planar circle (branch 0) is free only below L̄ = 1; at L̄ = 1 it is the
+        // great circle on the wall, where the free-circle solve is singular: not a state of it.
+        if branch == 0 {
+            g.retain(|p| p.lbar < 1.0 - 1e-9);
+        }
         let pos: Vec<f64> = g.iter().map(|p| p.lbar).collect();
         for (j, i) in spread(&pos, k).into_iter().enumerate() {
             jobs.push((branch, j, g[i]));

@@ -19,8 +19,9 @@ pub struct Args {
     /// Output directory.
     #[arg(long, default_value = "out/compare")]
     pub out: PathBuf,
-    /// Compare an enclosed scene with the surface: `enclosed` (the built-in homogeneous
-    /// enclosed scene) or a scene file with `confinement = "enclosed"`.
+    /// Compare a scene: `enclosed` (the built-in homogeneous enclosed scene) or a scene file
+    /// with `confinement = "enclosed"` (against the surface), or a two-segment scene on the
+    /// surface (against the paper's statements of Sec. 5).
     #[arg(long)]
     pub scene: Option<String>,
 }
@@ -87,16 +88,11 @@ fn exact_value(pv: &PaperValue, crit: &[rodloop_exact::diagram::Critical]) -> Re
             crit.iter().map(|c| (c.kind, c.lbar_cr)),
         ),
         "buckling_load" => {
-            // Contact force of the exact branch 1e-7 from its great-circle end: it tends to the
-            // buckling load as the branch collapses (λ is constant on the circle, Eq. 20).
+            // The great circle's buckling load, exact: Eq. (33) (m + 1)²/m² where the branch
+            // starts at L̄ = m, Eq. (34) (m − 1)²/m² where it ends there (Sec. 4).
             let m = pv.lbar.context("buckling_load needs lbar")?;
-            let l = if pv.side == "above" {
-                m + 1e-7
-            } else {
-                m - 1e-7
-            };
-            let lp = paper_branch_loop(eta, l)?;
-            Some(lp.lambda_range().1)
+            let k = if pv.side == "above" { m + 1.0 } else { m - 1.0 };
+            Some(k * k / (m * m))
         }
         "winding" => {
             let l = pv.lbar.context("winding needs lbar")?;
@@ -172,6 +168,9 @@ pub struct CompareRow {
     pub exact_deviation: Option<f64>,
     /// Whether the exact value agrees within the printed resolution.
     pub agrees_exact: Option<bool>,
+    /// The tolerance of the agreement: half a unit of the last printed digit, at least
+    /// 1e-6 relative (numeric kinds).
+    pub tolerance: Option<f64>,
     /// The numeric model's value (critical lengths and buckling loads).
     pub numeric: Option<f64>,
     /// `numeric − paper`.
@@ -238,6 +237,9 @@ pub fn compare_rows(nd: Option<&rodloop_diagram::NumericDiagram>) -> Result<Vec<
             None => judge(exact),
         };
         let (ndev, nagrees) = judge(numeric);
+        let tolerance = paper_num
+            .filter(|_| symmetry.is_none())
+            .map(|p| pv.resolution.unwrap_or(0.0).max(1e-6 * p.abs().max(1.0)));
         let numeric_minus_exact = match (numeric, exact) {
             (Some(n), Some(e)) => Some(n - e),
             _ => None,
@@ -254,6 +256,7 @@ pub fn compare_rows(nd: Option<&rodloop_diagram::NumericDiagram>) -> Result<Vec<
             symmetry,
             exact_deviation: dev,
             agrees_exact: agrees,
+            tolerance,
             numeric,
             numeric_deviation: ndev,
             agrees_numeric: nagrees,
@@ -266,6 +269,15 @@ pub fn compare_rows(nd: Option<&rodloop_diagram::NumericDiagram>) -> Result<Vec<
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
     if let Some(s) = &args.scene {
+        // A two-segment rod on the sphere: the paper's statements of Sec. 5.
+        if s != "enclosed" {
+            let scene = rodloop_scene::Scene::from_file(std::path::Path::new(s))?;
+            if scene.confinement == rodloop_scene::Confinement::Surface
+                && !scene.stiffness.is_uniform()
+            {
+                return crate::compare_segments::run(&scene, &args.out);
+            }
+        }
         return crate::enclosed::run_compare(s, &args.out);
     }
     let nd = rodloop_diagram::compute(
@@ -287,6 +299,7 @@ pub fn run(args: &Args) -> Result<()> {
             "exact",
             "exact_deviation",
             "within_resolution",
+            "tolerance",
             "numeric",
             "numeric_deviation",
             "numeric_within_resolution",
@@ -296,12 +309,13 @@ pub fn run(args: &Args) -> Result<()> {
     );
     let mut rows = Vec::new();
     outln!(
-        "{:<11} {:<15} {:>6} {:>5} {:>9} {:>17} {:>9} {:>6} {:>17} {:>9} {:>6}",
+        "{:<11} {:<15} {:>6} {:>5} {:>9} {:>8} {:>17} {:>9} {:>6} {:>17} {:>9} {:>6}",
         "id",
         "kind",
         "branch",
         "lbar",
         "paper",
+        "tol",
         "exact",
         "deviation",
         "agrees",
@@ -321,7 +335,7 @@ pub fn run(args: &Args) -> Result<()> {
         };
         let sci = |v: Option<f64>| v.map(|x| format!("{x:.1e}")).unwrap_or_else(|| "-".into());
         outln!(
-            "{:<11} {:<15} {:>6} {:>5} {:>9} {:>17} {:>9} {:>6} {:>17} {:>9} {:>6}",
+            "{:<11} {:<15} {:>6} {:>5} {:>9} {:>8} {:>17} {:>9} {:>6} {:>17} {:>9} {:>6}",
             r.id,
             r.kind,
             r.branch,
@@ -330,6 +344,10 @@ pub fn run(args: &Args) -> Result<()> {
                 &r.paper[..9]
             } else {
                 &r.paper
+            },
+            match (r.kind.as_str(), r.tolerance) {
+                ("winding", _) | (_, None) => "exact".to_string(),
+                (_, Some(t)) => format!("±{t:.0e}"),
             },
             r.exact_text(),
             sci(r.exact_deviation),
@@ -349,6 +367,7 @@ pub fn run(args: &Args) -> Result<()> {
             Cell::S(r.symmetry.clone().unwrap_or_else(|| opt(r.exact))),
             Cell::S(opt(r.exact_deviation)),
             Cell::S(r.agrees_exact.map(|a| a.to_string()).unwrap_or_default()),
+            Cell::S(opt(r.tolerance)),
             Cell::S(opt(r.numeric)),
             Cell::S(opt(r.numeric_deviation)),
             Cell::S(r.agrees_numeric.map(|a| a.to_string()).unwrap_or_default()),

@@ -231,12 +231,69 @@ pub fn run(args: &Args) -> Result<()> {
     });
     let summary = crate::output::strip_nulls(summary);
     crate::output::check_finite("summary.json", &summary)?;
+    // The figure: error against cells and time, log-log, with the fitted order. The error is
+    // against the exact value where there is one, else against the finest rung (which then
+    // has none); errors below the rounding level of the energy stay out of the fit.
+    let fig_rungs: Vec<rodloop_figures::convergence::Rung> = rungs
+        .iter()
+        .map(|r| rodloop_figures::convergence::Rung {
+            cells: r.cells,
+            error: (r.energy - reference).abs(),
+            seconds: r.seconds,
+        })
+        .take(if exact.is_some() {
+            rungs.len()
+        } else {
+            rungs.len() - 1
+        })
+        .collect();
+    let floor = 1e-13 * reference.abs().max(1.0);
+    let fig = rodloop_figures::convergence::convergence_figure(
+        &fig_rungs,
+        if exact.is_some() {
+            "|E − E_exact| R/(πD₀)"
+        } else {
+            "|E − E_finest| R/(πD₀)"
+        },
+        floor,
+        &format!(
+            "Convergence of branch {} (η = {eta}) at L̄ = {}, scene {}",
+            args.branch, args.lbar, scene.name
+        ),
+        960.0,
+        460.0,
+    );
     let run = OutputRun::begin(&args.out)?;
     run.write_table(&table)?;
+    let figure_note = match fig {
+        Ok(svg) => {
+            let png =
+                rodloop_figures::raster::svg_to_png(&svg, 1.0).context("rendering converge.png")?;
+            run.write_bytes("converge.svg", svg.as_bytes())?;
+            run.write_bytes("converge.png", &png)?;
+            ", converge.svg/.png".to_string()
+        }
+        Err(e) => {
+            eprintln!("note: no convergence figure: {e}");
+            String::new()
+        }
+    };
+    let mut summary = summary;
+    if let Some(obj) = summary.as_object_mut() {
+        let order = rodloop_figures::convergence::fitted_order(&fig_rungs, floor);
+        obj.insert("fitted_order".into(), json!(order));
+        obj.insert("fit_error_floor".into(), json!(floor));
+        if let Some(p) = order {
+            outln!(
+                "fitted order of convergence {p:.2} (least squares of log error against log cells, errors above {floor:.0e})"
+            );
+        }
+    }
+    let summary = crate::output::strip_nulls(summary);
     run.write_json("summary.json", &summary)?;
     run.commit()?;
     outln!(
-        "wrote converge.csv and summary.json to {}",
+        "wrote converge.csv{figure_note} and summary.json to {}",
         args.out.display()
     );
     Ok(())

@@ -8,7 +8,6 @@ use rodloop_exact::diagram::{compute, Diagram, DiagramSettings};
 use rodloop_exact::shape::{diagram_shapes, ShapeTolerances};
 
 use crate::output::{checked_json, critical_table, Cell, CriticalRow, OutputRun, Table};
-use crate::svg::{self, branch_color, Curve, Figure, LegendEntry, LineStyle, Marker};
 
 /// Which model computes the diagram.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -29,7 +28,7 @@ pub struct Args {
     #[arg(long)]
     pub scene: Option<PathBuf>,
     /// Accuracy: fast, default or high (overrides the scene's; numeric model only).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::solve::ACCURACY_CHOICES)]
     pub accuracy: Option<String>,
     /// Smallest normalised length (default: the scene's, 1).
     #[arg(long)]
@@ -86,18 +85,26 @@ pub struct Args {
     /// End value of --param (default 1e-3 for d1; the start is the scene's value).
     #[arg(long)]
     pub to: Option<f64>,
+    /// Draw the energy figure relative to the stable state at each length (E − E_stable(L̄)),
+    /// for diagrams whose branches lie close together (a very soft segment).
+    #[arg(long)]
+    pub relative: bool,
     /// Branch atlas: K shape thumbnails per branch spread along its range (in OUT/atlas/) and
     /// the composite atlas.svg/.png (rows = branches, columns = lengths); 0: none.
     #[arg(long, default_value_t = 0)]
     pub shapes: usize,
 }
 
-/// The figures of `draw_diagram` (diagram, diagram_split, diagram_lambda; SVG and PNG).
-fn draw_figures(args: &Args) -> Result<()> {
-    let mut set = crate::draw::DrawSettings::beside(&args.out);
+/// The figures of `draw_diagram` (diagram, diagram_split, diagram_lambda, and diagram_g for
+/// the exact model; SVG and PNG), drawn from the staged tables into the run's staging
+/// directory, so that they are committed with the tables as one set.
+fn draw_figures(args: &Args, run: &OutputRun) -> Result<()> {
+    let mut set = crate::draw::DrawSettings::beside(run.stage_dir());
     set.width = Some(args.width);
     set.height = Some(args.height);
-    crate::draw::draw_diagram(&args.out, &set)?;
+    set.relative = args.relative;
+    let names = crate::draw::draw_diagram(run.stage_dir(), &set)?;
+    run.record_staged(&names);
     Ok(())
 }
 
@@ -207,6 +214,9 @@ fn selected_branches(args: &Args, lbar_min: f64, lbar_max: f64) -> Result<Option
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
+    if args.relative && args.param.is_some() {
+        bail!("--relative draws the diagram in L̄ relative to its stable states; it does not apply to --param");
+    }
     if let Some(p) = &args.param {
         return crate::param_diagram::run(args, p);
     }
@@ -214,6 +224,9 @@ pub fn run(args: &Args) -> Result<()> {
         bail!("--lbar and --to belong to --param (the equilibria at a fixed length against a parameter); the diagram in L̄ takes --lbar-min and --lbar-max");
     }
     if let Some(scene) = crate::enclosed_diagram::enclosed_scene(args.scene.as_deref())? {
+        if args.relative {
+            bail!("--relative applies to surface diagrams; draw an enclosed diagram's branches.csv with `rodloop draw --relative` instead");
+        }
         return crate::enclosed_diagram::run(args, &scene);
     }
     let scene = crate::solve::load_scene(args.scene.as_deref())?;
@@ -331,10 +344,6 @@ pub fn run(args: &Args) -> Result<()> {
     let critical = critical_table(d.critical.iter().map(CriticalRow::from))?;
     run.write_table(&branches)?;
     run.write_table(&critical)?;
-    for (name, energy_g) in [("diagram.svg", false), ("diagram_g.svg", true)] {
-        let fig = figure(&d, energy_g);
-        run.write_bytes(name, svg::render(&fig).as_bytes())?;
-    }
     // Fig. 11: k² against L̄ with Eq. (B.4).
     let k2: Vec<rodloop_figures::k2::K2Point> = d
         .points
@@ -380,8 +389,8 @@ pub fn run(args: &Args) -> Result<()> {
         0 => None,
         k => Some(crate::atlas::write_exact_atlas(&run, k, &d.points)?),
     };
+    draw_figures(args, &run)?;
     run.commit()?;
-    draw_figures(args)?;
 
     outln!("Critical lengths (exact model, homogeneous loops on the sphere):");
     outln!(
@@ -406,7 +415,7 @@ pub fn run(args: &Args) -> Result<()> {
         );
     }
     outln!(
-        "{} on {}, {} continuation points, computed in {:.3} s; wrote branches.csv, critical.csv, diagram.svg/.png, diagram_g.svg, diagram_split.svg/.png, diagram_lambda.svg/.png, diagram_k2.svg/.png (Fig. 11), summary.json to {}",
+        "{} on {}, {} continuation points, computed in {:.3} s; wrote branches.csv, critical.csv, diagram.svg/.png, diagram_g.svg/.png, diagram_split.svg/.png, diagram_lambda.svg/.png, diagram_k2.svg/.png (Fig. 11), summary.json to {}",
         crate::output::plural(d.points.len() as u64, "state"),
         crate::output::plural(branch_count as u64, "branch"),
         d.continuation_steps,
@@ -448,6 +457,7 @@ fn run_numeric(
     };
     opts.validate()?;
     let run = OutputRun::begin(&args.out)?;
+    run.keep_branch_files();
     let d =
         crate::numeric_diagram::run_numeric(&opts, &args.out, args.resume, args.quiet, selection)?;
     crate::numeric_diagram::write_outputs(&d, &opts, &scene.name, &run)?;
@@ -455,8 +465,8 @@ fn run_numeric(
         0 => None,
         k => Some(crate::atlas::write_atlas(&run, k, &scene.name)?),
     };
+    draw_figures(args, &run)?;
     run.commit()?;
-    draw_figures(args)?;
     // For homogeneous scenes, show the exact layer's critical lengths next to the numeric ones:
     // the same critical length (same kind, same branches) of the exact diagram of this window.
     let exact = if scene.stiffness.is_uniform() {
@@ -524,7 +534,7 @@ fn run_numeric(
     outln!(
         "{} on {} in {:.2} s (tracing {:.2} s); wrote branches.csv, critical.csv, diagram.svg/.png, diagram_split.svg/.png, diagram_lambda.svg/.png, summary.json to {}",
         crate::output::plural(d.rows().len() as u64, "state"),
-        crate::output::plural(d.branches.len() as u64, "branch"),
+        crate::numeric_diagram::branch_count(&d.branches),
         d.timings.total,
         d.timings.tracing,
         args.out.display()
@@ -540,83 +550,4 @@ fn run_numeric(
         );
     }
     Ok(())
-}
-
-/// The energy (or its geodesic part) versus length, one colour per branch: solid where the
-/// branch has the lowest energy, dashed elsewhere (the exact model does not compute the Hessian
-/// index, so higher-energy states are not split into metastable and unstable), critical lengths
-/// as vertical markers.
-fn figure(d: &Diagram, energy_g: bool) -> Figure {
-    let mut curves = Vec::new();
-    let mut branches: Vec<u32> = d.points.iter().map(|p| p.branch).collect();
-    branches.sort_unstable();
-    branches.dedup();
-    for &b in &branches {
-        let pts: Vec<(f64, f64, bool)> = d
-            .points
-            .iter()
-            .filter(|p| p.branch == b)
-            .map(|p| {
-                (
-                    p.lbar,
-                    if energy_g { p.energy_g } else { p.energy },
-                    p.lowest,
-                )
-            })
-            .collect();
-        curves.extend(svg::runs(&pts, |lowest, points| Curve {
-            color: branch_color(b),
-            style: if lowest {
-                LineStyle::Solid
-            } else {
-                LineStyle::Dashed
-            },
-            width: if lowest { 2.2 } else { 1.3 },
-            points,
-        }));
-    }
-    let mut legend: Vec<LegendEntry> = branches
-        .iter()
-        .map(|&b| LegendEntry {
-            label: format!("branch {b} (eta = {})", rodloop_exact::eta_of_branch(b)),
-            color: branch_color(b),
-            style: LineStyle::Solid,
-        })
-        .collect();
-    legend.push(LegendEntry {
-        label: "solid: lowest energy".into(),
-        color: "black".into(),
-        style: LineStyle::Solid,
-    });
-    legend.push(LegendEntry {
-        label: "dashed: higher energy".into(),
-        color: "black".into(),
-        style: LineStyle::Dashed,
-    });
-    let markers = d
-        .critical
-        .iter()
-        .map(|c| Marker {
-            x: c.lbar_cr,
-            label: format!("{:.4}", c.lbar_cr),
-        })
-        .collect();
-    Figure {
-        title: if energy_g {
-            "Exact branches: geodesic-curvature energy E_g R/(pi D)".into()
-        } else {
-            "Exact branches: bending energy E R/(pi D) of homogeneous loops on the sphere".into()
-        },
-        xlabel: "L / (2 pi R)".into(),
-        ylabel: if energy_g {
-            "E_g R/(pi D)"
-        } else {
-            "E R/(pi D)"
-        }
-        .into(),
-        curves,
-        markers,
-        legend,
-        range: None,
-    }
 }

@@ -6,7 +6,9 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use rodloop_figures::data::LoopData;
-use rodloop_figures::diagram::{energy_figure, energy_split_figure, lambda_figure, DiagramData};
+use rodloop_figures::diagram::{
+    energy_figure, energy_g_figure, energy_split_figure, lambda_figure, DiagramData,
+};
 use rodloop_figures::loops::{loop_picture, LoopPictureOptions};
 use rodloop_figures::overlay::align;
 use rodloop_figures::paint::to_png;
@@ -70,7 +72,8 @@ pub struct Args {
     /// A loop table (config.csv from solve, loop-NN.csv from analytic, curve.csv from euler, or
     /// any CSV with columns s,x,y,z) or a diagram's branches.csv.
     pub file: PathBuf,
-    /// Output directory (default: the file's directory).
+    /// Output directory (default: the file's directory; out/draw for a state file in a
+    /// diagram's states/, which holds that diagram's files only).
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Column to colour the loop by (D, lambda, kappa_g, gap, kappa, tau, s, …; default:
@@ -91,6 +94,10 @@ pub struct Args {
     /// Figure height in pixels for diagrams.
     #[arg(long)]
     pub height: Option<u32>,
+    /// Diagrams: draw the energy relative to the stable state at each length
+    /// (E − E_stable(L̄)), for branches that lie close together (a very soft segment).
+    #[arg(long)]
+    pub relative: bool,
 }
 
 /// Resolved settings shared by `draw` and the `--draw` flags of other commands.
@@ -110,6 +117,8 @@ pub struct DrawSettings {
     pub height: Option<u32>,
     /// A curve to overlay (dashed, aligned) on the profiles, with its legend label (Fig. 5).
     pub overlay: Option<(LoopData, String)>,
+    /// Diagrams: energies relative to the stable state at each length.
+    pub relative: bool,
 }
 
 /// Samples of an overlay curve.
@@ -173,6 +182,7 @@ impl DrawSettings {
             width: None,
             height: None,
             overlay: None,
+            relative: false,
         }
     }
 }
@@ -213,15 +223,108 @@ fn write_pair(
     Ok(names)
 }
 
-/// The picture's title: the file with its folder (`solve-x/config.csv`), not the whole path,
-/// which for a temporary directory fills the title line.
-fn short_title(path: &Path) -> String {
-    let comps: Vec<String> = path
-        .components()
-        .map(|c| c.as_os_str().to_string_lossy().into_owned())
-        .filter(|c| c != "/" && c != ".")
-        .collect();
-    comps[comps.len().saturating_sub(2)..].join("/")
+/// What the table next to a loop file says about its state: `summary.json` of `rodloop
+/// solve` beside a `config.csv` (branch, L̄, energy, contact-force extremes).
+struct StateNote {
+    branch: Option<u64>,
+    lbar: Option<f64>,
+    energy: Option<f64>,
+    lambda: Option<(f64, f64)>,
+}
+
+fn state_note(path: &Path) -> StateNote {
+    let summary = (path.file_name().is_some_and(|n| n == "config.csv"))
+        .then(|| path.with_file_name("summary.json"))
+        .and_then(|p| std::fs::read_to_string(p).ok())
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .unwrap_or_default();
+    StateNote {
+        branch: summary["branch"].as_u64(),
+        lbar: summary["lbar"].as_f64(),
+        energy: summary["energy"].as_f64(),
+        lambda: summary["lambda_min"]
+            .as_f64()
+            .zip(summary["lambda_max"].as_f64()),
+    }
+}
+
+/// The bending energy `E R/(πD₀) = (1/2π) ∮ (D/D₀) (κR)² d(s/R)` of a loop table with
+/// columns `kappa` (and `D`, else a uniform rod), by the trapezoidal rule on the closed
+/// loop; `None` without `kappa`.
+fn table_energy(data: &LoopData) -> Option<f64> {
+    let kappa = data.column("kappa")?;
+    let d = data.column("D");
+    let s = data.s();
+    let n = s.len();
+    if n < 3 || kappa.len() != n {
+        return None;
+    }
+    let length = data.length();
+    let f = |i: usize| d.map_or(1.0, |d| d[i]) * kappa[i] * kappa[i];
+    let mut sum = 0.0;
+    for i in 0..n {
+        let h = if i + 1 < n {
+            s[i + 1] - s[i]
+        } else {
+            s[0] + length - s[n - 1]
+        };
+        sum += 0.5 * h * (f(i) + f((i + 1) % n));
+    }
+    Some(sum / (2.0 * std::f64::consts::PI * data.radius()))
+}
+
+/// The paper branch in a state file's name (`branch-B…` of a diagram's `states/`).
+fn branch_in_name(path: &Path) -> Option<u64> {
+    let stem = path.file_stem()?.to_str()?;
+    stem.strip_prefix("branch-")?
+        .split(|c: char| !c.is_ascii_digit())
+        .next()?
+        .parse()
+        .ok()
+}
+
+/// The picture's title: the state (branch, η, L̄, energy), not the file's path. Values come
+/// from the solve's `summary.json` beside a `config.csv` when there is one, else from the
+/// table itself (L̄ from its arclengths, η from the periods of its κ_g, the energy
+/// integrated from its κ and D, marked "from the table").
+fn state_title(path: &Path, data: &LoopData, note: &StateNote) -> String {
+    let mut parts = Vec::new();
+    if let Some(b) = note.branch.or_else(|| branch_in_name(path)) {
+        parts.push(format!("branch {b}"));
+    }
+    if let Some(eta) = data.eta() {
+        parts.push(format!("η = {eta}"));
+    }
+    let lbar = note.lbar.unwrap_or_else(|| data.lbar());
+    parts.push(format!("L̄ = {}", round_sig(lbar, 6)));
+    match note.energy {
+        Some(e) => parts.push(format!("E R/(πD₀) = {}", round_sig(e, 8))),
+        None => {
+            if let Some(e) = table_energy(data) {
+                parts.push(format!("E R/(πD₀) ≈ {} (from the table)", round_sig(e, 5)));
+            }
+        }
+    }
+    let title = parts.join(", ");
+    // "Branch 1, …" (a title that starts with η stays as it is).
+    match title.strip_prefix("branch") {
+        Some(rest) => format!("Branch{rest}"),
+        None => title,
+    }
+}
+
+/// `v` with `digits` significant digits, trailing zeros dropped (1.2, 1.9164126).
+fn round_sig(v: f64, digits: i32) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let dec = (digits - 1 - v.abs().log10().floor() as i32).max(0) as usize;
+    let s = format!("{v:.dec$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
 }
 
 /// Draw one loop file: the four-view picture, and a JSON note of what was found.
@@ -243,11 +346,19 @@ pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
         );
     }
     let panel = set.width.map_or(380.0, |w| f64::from(w) / 2.5);
+    let note = state_note(path);
+    let title = state_title(path, &data, &note);
+    let color_column = set
+        .color
+        .clone()
+        .unwrap_or_else(|| data.default_color_column().to_string());
     let opts = LoopPictureOptions {
         color: set.color.clone(),
         tol: set.tol,
         panel,
-        title: short_title(path),
+        title: title.clone(),
+        // The solve's contact-force extremes (between the nodes), which it also prints.
+        extremes: note.lambda.filter(|_| color_column == "lambda"),
     };
     let pic = loop_picture(&data, &opts)?;
     let t_picture = t0.elapsed().as_secs_f64();
@@ -265,10 +376,7 @@ pub fn draw_loop(path: &Path, set: &DrawSettings) -> Result<Vec<String>> {
         },
         480.0,
         260.0,
-        &format!(
-            "{}: quantities along the loop (Figs. 5, 6)",
-            short_title(path)
-        ),
+        &format!("{title}: quantities along the loop (Figs. 5, 6)"),
     )?;
     ensure_dir(&set.out)?;
     // The two figures are rasterised at once (each takes tens of milliseconds with PNG).
@@ -327,7 +435,12 @@ pub fn and_pictures(names: &[String]) -> String {
 /// `set.out`: `diagram` (Fig. 3a), `diagram_split` (Fig. 3b), `diagram_lambda` (Fig. 7); for
 /// an enclosed diagram only `diagram` (with its lifted-off parts and lift-off/landing events).
 pub fn draw_diagram(dir: &Path, set: &DrawSettings) -> Result<Vec<String>> {
-    let d = DiagramData::read(dir)?;
+    // Whether the buckling loads of Eqs. (33)–(34) apply follows from the rows (a
+    // non-uniform rod's branches are families numbered from 1; see `DiagramData`).
+    let mut d = DiagramData::read(dir)?;
+    if set.relative {
+        d.relative_to_stable()?;
+    }
     let w = f64::from(set.width.unwrap_or(960));
     let h = f64::from(set.height.unwrap_or(620));
     ensure_dir(&set.out)?;
@@ -335,6 +448,14 @@ pub fn draw_diagram(dir: &Path, set: &DrawSettings) -> Result<Vec<String>> {
     if !d.missing.is_empty() {
         // An enclosed diagram has no energy split and no largest contact force.
         return Ok(names);
+    }
+    if d.model == "exact" {
+        names.extend(write_figure(
+            &set.out,
+            "diagram_g",
+            &energy_g_figure(&d, w, h)?,
+            set.format,
+        )?);
     }
     names.extend(write_figure(
         &set.out,
@@ -351,6 +472,15 @@ pub fn draw_diagram(dir: &Path, set: &DrawSettings) -> Result<Vec<String>> {
     Ok(names)
 }
 
+/// Whether `dir` is the `states/` folder of a diagram (its parent holds the diagram's
+/// `branches.csv`).
+pub fn in_diagram_states(dir: &Path) -> bool {
+    dir.file_name().is_some_and(|n| n == "states")
+        && dir
+            .parent()
+            .is_some_and(|p| p.join("branches.csv").is_file())
+}
+
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
     let meta = std::fs::metadata(&args.file)
@@ -363,15 +493,26 @@ pub fn run(args: &Args) -> Result<()> {
         .parent()
         .map(Path::to_path_buf)
         .unwrap_or_else(|| PathBuf::from("."));
+    // A diagram's states/ holds that diagram's state files only: pictures of them go to
+    // out/draw unless --out says where.
+    let default_out = if in_diagram_states(&dir) {
+        PathBuf::from("out/draw")
+    } else {
+        dir
+    };
     let set = DrawSettings {
-        out: args.out.clone().unwrap_or(dir),
+        out: args.out.clone().unwrap_or(default_out),
         color: args.color.clone(),
         format: args.format,
         tol: args.tol,
         width: args.width,
         height: args.height,
         overlay: None,
+        relative: args.relative,
     };
+    if args.relative && args.file.file_name().is_none_or(|n| n != "branches.csv") {
+        bail!("--relative applies to a diagram's branches.csv (energies relative to the stable state), not to a loop picture");
+    }
     let is_diagram = args.file.file_name().is_some_and(|n| n == "branches.csv");
     let written = if is_diagram {
         let dir = args.file.parent().unwrap_or(Path::new("."));

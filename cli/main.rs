@@ -16,12 +16,14 @@ macro_rules! outln {
 mod analytic;
 mod atlas;
 mod compare;
+mod compare_segments;
 mod converge;
 mod diagram;
 mod draw;
 mod enclosed;
 mod enclosed_diagram;
 mod euler;
+mod export;
 mod numeric_diagram;
 mod output;
 mod param_diagram;
@@ -33,7 +35,6 @@ mod report_enclosed;
 mod report_tables;
 mod solve;
 mod states;
-mod svg;
 
 use std::process::ExitCode;
 
@@ -83,6 +84,9 @@ enum Command {
     /// picture and the contact force of each branch's stable state, settings and timings.
     #[command(allow_negative_numbers = true)]
     Report(report::Args),
+    /// Loop tables as VTK PolyData (.vtp) for ParaView: points, a closed polyline, and s, κ,
+    /// τ, κ_g, λ, F_t, F_n, F_b (every column of the table) as point data.
+    Export(export::Args),
     /// The critical lengths of a two-segment rod as curves in D1/D0 (or gamma, s0, s1):
     /// continuation of each exchange of the lowest branch, with error estimates.
     #[command(allow_negative_numbers = true)]
@@ -116,6 +120,7 @@ fn main() -> ExitCode {
         Command::Draw(a) => draw::run(&a),
         Command::Report(a) => report::run(&a),
         Command::Phase(a) => phase::run(&a),
+        Command::Export(a) => export::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

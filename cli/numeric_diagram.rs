@@ -9,16 +9,13 @@
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
-use rodloop_diagram::{
-    BranchHook, DiagramOptions, Label, NumericDiagram, Origin, Progress, TracedBranch,
-};
+use rodloop_diagram::{BranchHook, DiagramOptions, NumericDiagram, Origin, Progress, TracedBranch};
 use rodloop_exact::branch_of_eta;
 
 use crate::output::{
     checked_json, critical_table, ensure_dir, write_atomic, Cell, CriticalRow, OutputRun, Table,
 };
 use crate::progress::Progress as Bar;
-use crate::svg::{self, branch_color, Curve, Figure, LegendEntry, LineStyle, Marker};
 
 /// File name prefix of the per-branch families files of non-uniform rods
 /// (`families-branch-B.json`, written after every sheet file of the branch: its presence
@@ -91,6 +88,8 @@ impl BranchHook for BranchFiles<'_> {
             &format!("{FAMILIES_PREFIX}branch-{branch}.json"),
             text.as_bytes(),
         )?;
+        // One line (and one bar step) per branch: its families and sheets are parts of it.
+        self.bar.done(branch_line(branch, &families.sheets));
         Ok(())
     }
 
@@ -120,14 +119,62 @@ impl BranchHook for BranchFiles<'_> {
         write_atomic(&self.dir, &name, text.as_bytes())?;
         // The file name of older versions (by eta) is superseded.
         let _ = std::fs::remove_file(self.dir.join(format!("eta-{}.json", b.eta)));
-        self.bar.done(format!(
-            "branch {} traced ({} states, {:.2} s)",
-            b.branch,
-            b.points.len(),
-            b.seconds
-        ));
+        if b.family == 0 {
+            self.bar
+                .done(branch_line(b.branch, std::slice::from_ref(b)));
+        } else {
+            // A sheet of a non-uniform rod's branch: the branch's line comes with
+            // `finished_families`, once all its sheets are written.
+            self.bar.message(format!(
+                "branch {} family {} sheet {} written",
+                b.branch, b.family, b.sheet
+            ));
+        }
         Ok(())
     }
+}
+
+/// "3 branches" — or "3 branches (7 families, 15 sheets)" for a non-uniform rod, whose
+/// branches consist of several traced families and sheets.
+pub fn branch_count(traced: &[TracedBranch]) -> String {
+    let branches: std::collections::BTreeSet<u32> = traced.iter().map(|b| b.branch).collect();
+    let families: std::collections::BTreeSet<(u32, u32)> =
+        traced.iter().map(|b| (b.branch, b.family)).collect();
+    let words = crate::output::plural(branches.len() as u64, "branch");
+    if traced.len() > branches.len() {
+        format!(
+            "{words} ({}, {})",
+            crate::output::plural(families.len() as u64, "family"),
+            crate::output::plural(traced.len() as u64, "sheet")
+        )
+    } else {
+        words
+    }
+}
+
+/// The progress line of one traced branch: its states, and its families and sheets when it
+/// has several (a non-uniform rod); the wall time is the branch's (every sheet carries it).
+fn branch_line(branch: u32, sheets: &[TracedBranch]) -> String {
+    let states: usize = sheets.iter().map(|b| b.points.len()).sum();
+    let seconds = sheets.iter().map(|b| b.seconds).fold(0.0, f64::max);
+    let families = sheets
+        .iter()
+        .map(|b| b.family)
+        .collect::<std::collections::BTreeSet<_>>()
+        .len();
+    let parts = if sheets.len() > 1 {
+        format!(
+            "{}, {}: ",
+            crate::output::plural(families as u64, "family"),
+            crate::output::plural(sheets.len() as u64, "sheet")
+        )
+    } else {
+        String::new()
+    };
+    format!(
+        "branch {branch} traced ({parts}{}, {seconds:.2} s)",
+        crate::output::plural(states as u64, "state")
+    )
 }
 
 /// Trace every branch with [`rodloop_diagram::compute`] (in parallel), writing each branch
@@ -140,12 +187,15 @@ pub fn run_numeric(
     selection: Option<&[u32]>,
 ) -> Result<NumericDiagram> {
     let dir = out.join("branches");
-    ensure_dir(&dir)?;
     let previous = if resume {
         load_resume(out)?
     } else {
+        // A fresh run: the branch files of a previous run (other branches, other settings)
+        // are not this run's outputs.
+        crate::output::remove_branch_files(out)?;
         Vec::new()
     };
+    ensure_dir(&dir)?;
     let opts = DiagramOptions {
         only_branches: selection.map(<[u32]>::to_vec),
         ..opts.clone()
@@ -223,7 +273,8 @@ pub fn run_numeric(
     Ok(d)
 }
 
-/// Write branches.csv, critical.csv, diagram.svg, summary.json (the summary last).
+/// Write branches.csv, critical.csv, special_points.csv, states/, summary.json (the summary
+/// last); the figures are drawn from these files by [`crate::draw::draw_diagram`].
 pub fn write_outputs(
     d: &NumericDiagram,
     opts: &DiagramOptions,
@@ -294,7 +345,6 @@ pub fn write_outputs(
     run.write_table(&branches)?;
     run.write_table(&critical)?;
     run.write_table(&special)?;
-    run.write_bytes("diagram.svg", svg::render(&figure(d, scene)).as_bytes())?;
     let ends = d
         .branches
         .iter()
@@ -326,86 +376,4 @@ pub fn write_outputs(
     })?;
     run.write_json("summary.json", &crate::output::strip_nulls(summary))?;
     Ok(())
-}
-
-fn style_of(l: Label) -> (LineStyle, f64) {
-    match l {
-        Label::Stable => (LineStyle::Solid, 2.2),
-        Label::Metastable => (LineStyle::Dashed, 1.4),
-        Label::Unstable => (LineStyle::Dotted, 1.4),
-    }
-}
-
-/// Energy versus length: one colour per branch; solid stable, dashed metastable, dotted
-/// unstable; critical lengths marked (the paper's Fig. 3a).
-fn figure(d: &NumericDiagram, scene: &str) -> Figure {
-    let mut curves = Vec::new();
-    for (b, labels) in d.branches.iter().zip(&d.labels) {
-        // (lbar, energy, label) with a point inserted at every critical length where the label
-        // changes between two samples, so that the line style switches there and not at the
-        // next traced state.
-        let mut pts: Vec<(f64, f64, Label)> = Vec::new();
-        for (k, p) in b.points.iter().enumerate() {
-            if k > 0 && labels[k] != labels[k - 1] {
-                let q = &b.points[k - 1];
-                if let Some(c) = d
-                    .critical
-                    .iter()
-                    .find(|c| c.lbar_cr > q.value.min(p.value) && c.lbar_cr < q.value.max(p.value))
-                {
-                    let t = (c.lbar_cr - q.value) / (p.value - q.value);
-                    let e = q.energy + t * (p.energy - q.energy);
-                    pts.push((c.lbar_cr, e, labels[k - 1]));
-                    pts.push((c.lbar_cr, e, labels[k]));
-                }
-            }
-            pts.push((p.value, p.energy, labels[k]));
-        }
-        curves.extend(svg::runs(&pts, |label, points| {
-            let (style, width) = style_of(label);
-            Curve {
-                color: branch_color(b.branch),
-                style,
-                width,
-                points,
-            }
-        }));
-    }
-    let mut order: Vec<&TracedBranch> = d.branches.iter().collect();
-    order.sort_by_key(|b| b.branch);
-    let mut legend: Vec<LegendEntry> = order
-        .into_iter()
-        .map(|b| LegendEntry {
-            label: format!("branch {} (eta = {})", b.branch, b.eta),
-            color: branch_color(b.branch),
-            style: LineStyle::Solid,
-        })
-        .collect();
-    for (label, style) in [
-        ("stable", LineStyle::Solid),
-        ("metastable", LineStyle::Dashed),
-        ("unstable", LineStyle::Dotted),
-    ] {
-        legend.push(LegendEntry {
-            label: label.into(),
-            color: "black".into(),
-            style,
-        });
-    }
-    Figure {
-        title: format!("Numeric branches ({scene}): bending energy E R/(pi D0)"),
-        xlabel: "L / (2 pi R)".into(),
-        ylabel: "E R/(pi D0)".into(),
-        curves,
-        markers: d
-            .critical
-            .iter()
-            .map(|c| Marker {
-                x: c.lbar_cr,
-                label: format!("{:.4}", c.lbar_cr),
-            })
-            .collect(),
-        legend,
-        range: None,
-    }
 }

@@ -283,6 +283,11 @@ pub fn plural(n: impl Into<u64>, word: &str) -> String {
     let n = n.into();
     if n == 1 {
         format!("1 {word}")
+    } else if let Some(stem) = word
+        .strip_suffix('y')
+        .filter(|s| !s.ends_with(['a', 'e', 'o', 'u']))
+    {
+        format!("{n} {stem}ies")
     } else if word.ends_with("ch") || word.ends_with('s') {
         format!("{n} {word}es")
     } else {
@@ -476,6 +481,7 @@ const KNOWN_OUTPUTS: &[&str] = &[
     "special_points.csv",
     "diagram.svg",
     "diagram_g.svg",
+    "diagram_g.png",
     "curve.csv",
     "compare.csv",
     "report.html",
@@ -489,6 +495,8 @@ const KNOWN_OUTPUTS: &[&str] = &[
     "diagram_lambda.svg",
     "diagram_lambda.png",
     "converge.csv",
+    "converge.svg",
+    "converge.png",
     "phase.csv",
     "phase.svg",
     "phase.png",
@@ -513,6 +521,33 @@ fn is_known_output(name: &str) -> bool {
     KNOWN_OUTPUTS.contains(&name)
         || name.strip_suffix(".csv").is_some_and(is_loop_stem)
         || picture_of_table
+}
+
+/// Whether `name` is a branch file the numeric diagram writes into `branches/` for
+/// `--resume` (`branch-….json`, `families-branch-….json`, or `eta-N.json` of older versions).
+pub fn is_branch_file(name: &str) -> bool {
+    name.ends_with(".json")
+        && (name.starts_with("branch-")
+            || name.starts_with("families-branch-")
+            || name.starts_with("eta-"))
+}
+
+/// Remove the branch files of `dir/branches` (only rodloop's own, [`is_branch_file`]) and the
+/// folder itself when that leaves it empty.
+pub fn remove_branch_files(dir: &Path) -> Result<()> {
+    let bdir = dir.join("branches");
+    let Ok(entries) = fs::read_dir(&bdir) else {
+        return Ok(());
+    };
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().to_string();
+        if is_branch_file(&name) && e.path().is_file() {
+            fs::remove_file(e.path())
+                .with_context(|| format!("cannot remove stale output {}", e.path().display()))?;
+        }
+    }
+    let _ = fs::remove_dir(&bdir);
+    Ok(())
 }
 
 /// Name of the lock file that marks an output directory as in use.
@@ -543,6 +578,9 @@ pub struct OutputRun {
     run_id: String,
     written: std::cell::RefCell<Vec<String>>,
     dirs: std::cell::RefCell<Vec<String>>,
+    /// The run wrote `branches/` itself (the numeric diagram's files for `--resume`); any
+    /// other run removes the branch files a previous run left there.
+    keeps_branches: std::cell::Cell<bool>,
     committed: bool,
     /// Whether this run created `dir` (an uncommitted run then removes it if it is empty).
     created: bool,
@@ -609,6 +647,7 @@ impl OutputRun {
             run_id,
             written: std::cell::RefCell::new(Vec::new()),
             dirs: std::cell::RefCell::new(Vec::new()),
+            keeps_branches: std::cell::Cell::new(false),
             committed: false,
             created,
         };
@@ -662,6 +701,22 @@ impl OutputRun {
         Ok(path)
     }
 
+    /// This run's outputs include `branches/` (written in place, for `--resume`).
+    pub fn keep_branch_files(&self) {
+        self.keeps_branches.set(true);
+    }
+
+    /// Record files that were written straight into the staging directory (e.g. figures
+    /// drawn from the staged tables), so that [`OutputRun::commit`] moves them into place.
+    pub fn record_staged(&self, names: &[String]) {
+        let mut written = self.written.borrow_mut();
+        for name in names {
+            if !written.iter().any(|n| n == name) {
+                written.push(name.clone());
+            }
+        }
+    }
+
     /// The run id (`summary.json` carries it).
     pub fn run_id(&self) -> &str {
         &self.run_id
@@ -705,6 +760,9 @@ impl OutputRun {
                     })?;
                 }
             }
+        }
+        if !self.keeps_branches.get() {
+            remove_branch_files(&self.dir)?;
         }
         let dirs = self.dirs.borrow().clone();
         for name in KNOWN_OUTPUT_DIRS {

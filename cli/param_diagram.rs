@@ -230,7 +230,8 @@ fn figure(s: &ParamSweep, scene: &str, w: f64, h: f64) -> String {
             s.param.name().into()
         },
         ylabel: "energy E R/(π D0)".into(),
-        legend_width: 0.0,
+        // The legend beside the axes, where it cannot cover a curve.
+        legend_width: 190.0,
         ..Default::default()
     };
     let mut branches: Vec<u32> = s.families.iter().map(|f| f.branch).collect();

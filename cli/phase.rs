@@ -29,7 +29,7 @@ pub struct Args {
     #[arg(long, value_delimiter = ',')]
     pub at: Vec<f64>,
     /// Accuracy: fast, default or high (overrides the scene's).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::solve::ACCURACY_CHOICES)]
     pub accuracy: Option<String>,
     /// Output directory.
     #[arg(long, default_value = "out/phase")]
@@ -51,15 +51,23 @@ pub fn run(args: &Args) -> Result<()> {
         bail!("--at values must be finite numbers (got {v})");
     }
     let accuracy = accuracy_of(&scene, args.accuracy.as_deref())?;
+    let stiffness = stiffness_of(&scene.stiffness);
+    // The scene's own value always gets a row (an exact Newton solve there), as --at values do.
+    let mut at = args.at.clone();
+    if let Ok(v) = stiffness.param(param) {
+        if !at.iter().any(|a| (a - v).abs() <= 1e-12 * v.abs().max(1.0)) {
+            at.push(v);
+        }
+    }
     let settings = PhaseSettings {
         radius: scene.radius,
-        stiffness: stiffness_of(&scene.stiffness),
+        stiffness,
         param,
         target: args.to,
         lbar_min: scene.lbar_min,
         lbar_max: scene.lbar_max,
         accuracy,
-        at: args.at.clone(),
+        at,
         solve: SolveOptions::default(),
     };
     let run = OutputRun::begin(&args.out)?;
@@ -111,13 +119,20 @@ pub fn run(args: &Args) -> Result<()> {
         for e in &c.ends {
             eprintln!(
                 "phase: exchange {} -> {}: the curve ends at {} = {:.6} ({}): {}",
-                ex.from_branch, ex.to_branch, diagram.param, e.value, e.kind, e.reason
+                ex.from_branch,
+                ex.to_branch,
+                diagram.param,
+                e.value,
+                e.kind,
+                brief(&e.reason)
             );
         }
         for t in c.turns.iter().chain(&c.switches) {
             eprintln!(
-                "phase: exchange {} -> {}: {t}",
-                ex.from_branch, ex.to_branch
+                "phase: exchange {} -> {}: {}",
+                ex.from_branch,
+                ex.to_branch,
+                brief(t)
             );
         }
         if !c.checks.is_empty() {
@@ -135,12 +150,15 @@ pub fn run(args: &Args) -> Result<()> {
         }
         for n in &c.notes {
             eprintln!(
-                "phase: exchange {} -> {}: note: {n}",
-                ex.from_branch, ex.to_branch
+                "phase: exchange {} -> {}: note: {}",
+                ex.from_branch,
+                ex.to_branch,
+                brief(n)
             );
         }
     }
     outln!("time {seconds:.2} s");
+    let short = stopped_short(&diagram);
 
     let summary = serde_json::json!({
         "command": "phase",
@@ -163,6 +181,10 @@ pub fn run(args: &Args) -> Result<()> {
             "notes": c.notes,
         })).collect::<Vec<_>>(),
         "time_seconds": seconds,
+        "complete": short.is_empty(),
+        "stopped_short": short.iter().map(|s| serde_json::json!({
+            "exchange": [s.from, s.to], "value": s.value, "kind": s.kind,
+        })).collect::<Vec<_>>(),
         "files": ["phase.csv", "phase.svg", "phase.png"],
         "units": "lbar = L/(2 pi R); energy E R/(pi D0); value: d1 = D1/D0, gamma, or s0, s1 as fractions of L",
     });
@@ -173,9 +195,86 @@ pub fn run(args: &Args) -> Result<()> {
     run.write_json("summary.json", &strip_nulls(summary))?;
     run.commit()?;
     outln!("wrote {}", args.out.display());
+    if !short.is_empty() {
+        bail!(
+            "phase: {} short of --to {}: {}; the traced part is in {} (summary.json: \"complete\": false)",
+            if short.len() == 1 {
+                "one curve stopped"
+            } else {
+                "curves stopped"
+            },
+            args.to,
+            short
+                .iter()
+                .map(|s| format!(
+                    "exchange {} -> {} at {} = {:.6} ({})",
+                    s.from, s.to, diagram.param, s.value, s.kind
+                ))
+                .collect::<Vec<_>>()
+                .join(", "),
+            args.out.display()
+        );
+    }
     Ok(())
 }
 
+/// Longest message line: a longer explanation is cut at its first clause (the whole text is in
+/// `summary.json`).
+const BRIEF: usize = 200;
+
+/// `text` on one line of at most [`BRIEF`] characters: cut at the first `(` or `;` past 60
+/// characters, or hard at the limit, with a pointer to the full text.
+pub(crate) fn brief(text: &str) -> String {
+    let one: String = text.split_whitespace().collect::<Vec<_>>().join(" ");
+    if one.chars().count() <= BRIEF {
+        return one;
+    }
+    let limit: String = one.chars().take(BRIEF).collect();
+    let cut = limit
+        .char_indices()
+        .filter(|&(i, c)| i >= 60 && (c == '(' || c == ';'))
+        .map(|(i, _)| i)
+        .next()
+        .unwrap_or(limit.len());
+    format!("{} … (full text in summary.json)", limit[..cut].trim_end())
+}
+
+/// A curve end short of the requested range.
+pub(crate) struct Short {
+    pub from: u32,
+    pub to: u32,
+    pub value: f64,
+    pub kind: String,
+}
+
+/// The curve ends that stop between the scene's value and `--to` (not `reached`, not the
+/// uniform-rod `limit`).
+pub(crate) fn stopped_short(d: &PhaseDiagram) -> Vec<Short> {
+    d.curves
+        .iter()
+        .flat_map(|c| curve_stopped_short(c, d.scene_value, d.target))
+        .collect()
+}
+
+/// [`stopped_short`] for one curve.
+pub(crate) fn curve_stopped_short(
+    c: &rodloop_diagram::phase::PhaseCurve,
+    scene_value: f64,
+    target: f64,
+) -> Vec<Short> {
+    let (lo, hi) = (scene_value.min(target), scene_value.max(target));
+    c.ends
+        .iter()
+        .filter(|e| e.kind != "reached" && e.kind != "limit")
+        .filter(|e| e.value > lo && e.value < hi)
+        .map(|e| Short {
+            from: c.exchange.from_branch,
+            to: c.exchange.to_branch,
+            value: e.value,
+            kind: e.kind.clone(),
+        })
+        .collect()
+}
 /// `phase.csv`: one row per Maxwell point.
 fn phase_table(d: &PhaseDiagram) -> Result<Table> {
     let mut t = Table::new(

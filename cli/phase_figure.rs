@@ -1,7 +1,9 @@
 //! `phase.svg`: the critical lengths `L̄_cr` of a two-segment rod against the continued
 //! parameter (log axis for `d1`), every region between the curves and the collapses at the
-//! integers labelled by its lowest (stable) branch, switches onto other pairs of states and
-//! the `--at` rows marked.
+//! integers labelled by its lowest (stable) branch (once per band), switches onto other
+//! pairs of states, the exact rows (`--at` and the scene's value) and the ends of curves
+//! that stop short of the requested range marked with their reason. The horizontal axis
+//! covers the whole requested range, from the scene's value to `--to`.
 
 use rodloop_diagram::phase::{PhaseCurve, PhaseDiagram, RowSource};
 use rodloop_figures::plot::{LegendItem, Mark, Plot, Series, Shape};
@@ -9,6 +11,9 @@ use rodloop_figures::svg::{Anchor, Svg};
 use rodloop_solver::Param;
 
 const COLORS: [&str; 4] = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd"];
+
+/// Width reserved right of the axes for the legend, pixels.
+const LEGEND_W: f64 = 330.0;
 
 /// `L̄_cr` and the lowest branches `(below, above)` of `curve` at `x` (plot coordinate),
 /// linearly interpolated between its rows of one arm; `None` outside the curve.
@@ -42,10 +47,16 @@ pub fn phase_svg(d: &PhaseDiagram, scene: &str, lbar_range: (f64, f64)) -> Strin
             d.param.name().into()
         },
         ylabel: "critical length L̄_cr = L/(2πR)".into(),
-        legend_width: 0.0,
+        // The legend beside the axes, where it cannot cover a curve.
+        legend_width: LEGEND_W,
         ..Default::default()
     };
-    let (mut x0, mut x1) = (f64::INFINITY, f64::NEG_INFINITY);
+    // The requested range, from the scene's value to --to, whatever the curves reach.
+    let (mut x0, mut x1) = (
+        xv(d.scene_value).min(xv(d.target)),
+        xv(d.scene_value).max(xv(d.target)),
+    );
+    let mut ends: Vec<(f64, f64, String)> = Vec::new();
     let (mut y0, mut y1) = lbar_range;
     for (k, c) in d.curves.iter().enumerate() {
         let color = COLORS[k % COLORS.len()];
@@ -81,6 +92,22 @@ pub fn phase_svg(d: &PhaseDiagram, scene: &str, lbar_range: (f64, f64)) -> Strin
                 size: 4.5,
             });
         }
+        // Ends short of the requested range: an open square with the reason's kind.
+        for e in crate::phase::curve_stopped_short(c, d.scene_value, d.target) {
+            if let Some(r) = c.rows.iter().min_by(|a, b| {
+                (a.value - e.value)
+                    .abs()
+                    .total_cmp(&(b.value - e.value).abs())
+            }) {
+                plot.marks.push(Mark {
+                    at: (xv(r.value), r.lbar_cr),
+                    shape: Shape::OpenSquare,
+                    color: color.into(),
+                    size: 6.0,
+                });
+                ends.push((xv(r.value), r.lbar_cr, e.kind.replace('_', " ")));
+            }
+        }
         plot.legend.push(LegendItem::Line {
             label: format!(
                 "exchange {} → {} (uniform rod: {:.4})",
@@ -93,8 +120,12 @@ pub fn phase_svg(d: &PhaseDiagram, scene: &str, lbar_range: (f64, f64)) -> Strin
     }
     for (shape, label) in [
         (Shape::Diamond, "switch onto another pair of states"),
-        (Shape::Square, "--at row"),
+        (Shape::Square, "exact row (--at values, the scene's value)"),
         (Shape::Circle, "limit D1/D0 → 1"),
+        (
+            Shape::OpenSquare,
+            "curve stops short of --to (reason beside)",
+        ),
     ] {
         if plot.marks.iter().any(|m| m.shape == shape) {
             plot.legend.push(LegendItem::Mark {
@@ -109,14 +140,24 @@ pub fn phase_svg(d: &PhaseDiagram, scene: &str, lbar_range: (f64, f64)) -> Strin
     }
     let range = (x0, x1.max(x0 + 1e-9), y0, y1);
     plot.range = Some(range);
-    let (w, h) = (820.0, 560.0);
+    let (w, h) = (820.0 + LEGEND_W, 560.0);
     let mut svg = Svg::new(w, h);
     svg.rect(0.0, 0.0, w, h, "white", "none", 0.0);
     plot.render(&mut svg, 0.0, 0.0, w, h, "phase");
-    // Margins of `Plot::render` with a title, no vline labels and no note: 68, 16, 36, 50.
-    let (px, py, pw, ph) = (68.0, 36.0, w - 68.0 - 16.0, h - 36.0 - 50.0);
+    // Margins of `Plot::render` with a title, no vline labels and no note: 68, 16 + the
+    // legend, 36, 50.
+    let (px, py, pw, ph) = (68.0, 36.0, w - 68.0 - 16.0 - LEGEND_W, h - 36.0 - 50.0);
     let sy = |v: f64| py + ph - (v - range.2) / (range.3 - range.2) * ph;
     let sx = |v: f64| px + (v - range.0) / (range.1 - range.0) * pw;
+    for (x, y, why) in &ends {
+        svg.text(
+            sx(*x) + 8.0,
+            sy(*y) - 8.0,
+            11.0,
+            Anchor::Start,
+            &format!("stops: {why}"),
+        );
+    }
     // The scene's value.
     let xs = xv(d.scene_value);
     if xs >= range.0 && xs <= range.1 {
@@ -139,6 +180,8 @@ pub fn phase_svg(d: &PhaseDiagram, scene: &str, lbar_range: (f64, f64)) -> Strin
     // Region labels at two places along the axis: each band between neighbouring
     // boundaries (curves, integers) named by the lowest branch the curve below or above
     // it gives.
+    // A band already labelled at the first place is not labelled again at the second.
+    let mut placed: Vec<(u32, f64, f64)> = Vec::new();
     for frac in [0.18, 0.45] {
         let x = range.0 + frac * (range.1 - range.0);
         // (L̄, lowest below, lowest above) of each curve at x; integers carry none.
@@ -166,6 +209,13 @@ pub fn phase_svg(d: &PhaseDiagram, scene: &str, lbar_range: (f64, f64)) -> Strin
             if sy(lo.0) - sy(hi.0) < 22.0 {
                 continue;
             }
+            if placed
+                .iter()
+                .any(|&(b, a, c)| b == branch && lo.0 < c && hi.0 > a)
+            {
+                continue;
+            }
+            placed.push((branch, lo.0, hi.0));
             svg.text(
                 sx(x),
                 0.5 * (sy(lo.0) + sy(hi.0)) + 4.0,

@@ -1,5 +1,10 @@
 //! Progress reporting on stderr (indicatif): bars when stderr is a terminal; when it is not
 //! (logs, pipes), one line per finished branch or stage; nothing with `--quiet`.
+//!
+//! One bar counts one kind of thing, and a step is one of those things finished:
+//! `Progress::new(branches, "branches", quiet)`, then `message("tracing branch 2")` while
+//! working and `done("branch 2 traced (…)")` once per finished branch (a branch traced as
+//! several families or sheets is still one step), `finish()` at the end.
 
 use std::io::IsTerminal;
 

@@ -60,7 +60,7 @@ pub struct Args {
     #[arg(long)]
     pub scene: Option<PathBuf>,
     /// Accuracy: fast, default or high (overrides the scene's).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::solve::ACCURACY_CHOICES)]
     pub accuracy: Option<String>,
     /// No progress output on stderr.
     #[arg(long)]
@@ -104,17 +104,21 @@ struct SolvedState {
     seconds: f64,
 }
 
-/// The first stretch of a branch that the diagram labels stable (lowest energy): the lengths
-/// of its first and last consecutive stable traced states, in increasing `L̄`.
-fn first_stable_stretch(rows: &[DiagramRow], branch: u32) -> Option<(f64, f64)> {
-    let mut pts: Vec<&DiagramRow> = rows.iter().filter(|r| r.branch == branch).collect();
-    pts.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
-    let start = pts.iter().position(|r| r.stability == Label::Stable)?;
-    let len = pts[start..]
+/// The widest stretch of lengths over which the diagram labels branch `branch` stable: the
+/// stable rows of every branch in increasing `L̄`, split where another branch's stable row
+/// comes between (a non-uniform rod's branch has several families, so the rows of the branch
+/// alone interleave); the lengths of the first and last row of the widest run.
+fn widest_stable_stretch(rows: &[DiagramRow], branch: u32) -> Option<(f64, f64)> {
+    let mut stable: Vec<&DiagramRow> = rows
         .iter()
-        .take_while(|r| r.stability == Label::Stable)
-        .count();
-    Some((pts[start].lbar, pts[start + len - 1].lbar))
+        .filter(|r| r.stability == Label::Stable)
+        .collect();
+    stable.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
+    stable
+        .chunk_by(|a, b| (a.branch == branch) == (b.branch == branch))
+        .filter(|run| run[0].branch == branch)
+        .map(|run| (run[0].lbar, run[run.len() - 1].lbar))
+        .max_by(|a, b| (a.1 - a.0).total_cmp(&(b.1 - b.0)))
 }
 
 /// The middle of `(a, b)`, rounded to 0.01 when that stays well inside.
@@ -229,6 +233,11 @@ fn solve_state(
             tol: 1e-3,
             panel: PANEL,
             title: format!("Branch {branch} (η = {eta}) at L̄ = {lbar}: {label}"),
+            // The contact force's extremes between the nodes, as the states table gives them.
+            extremes: scene.stiffness.is_uniform().then(|| {
+                let unit = scene.radius.powi(3) / scene.stiffness.reference();
+                (res.lambda_range.0 * unit, res.lambda_range.1 * unit)
+            }),
         },
     )?;
     let force = force_figure(&data, branch)?;
@@ -272,25 +281,38 @@ fn representative_states(
     d: &NumericDiagram,
 ) -> Vec<StateEntry> {
     let rows = d.rows();
-    let mut plan: Vec<(u32, u32, f64, String)> = d
-        .branches
-        .iter()
-        .map(|b| match first_stable_stretch(&rows, b.branch) {
-            Some((a, c)) => (
-                b.branch,
-                b.eta,
+    // One entry per branch (a non-uniform rod's branch is traced as several families and
+    // sheets): its traced range is the union of theirs.
+    let mut spans: std::collections::BTreeMap<u32, (u32, f64, f64)> = Default::default();
+    for b in &d.branches {
+        let (a, c) = b.span();
+        let e = spans
+            .entry(b.branch)
+            .or_insert((b.eta, f64::INFINITY, f64::NEG_INFINITY));
+        e.1 = e.1.min(a);
+        e.2 = e.2.max(c);
+    }
+    let mut plan: Vec<(u32, u32, f64, String)> = spans
+        .into_iter()
+        .map(|(branch, (eta, lo, hi))| match widest_stable_stretch(&rows, branch) {
+            Some((a, c)) if c > a => (
+                branch,
+                eta,
                 middle(a, c),
-                format!("middle of its first stable stretch (traced states at {a:.4} ≤ L̄ ≤ {c:.4})"),
+                format!("middle of its widest stable stretch (traced states at {a:.4} ≤ L̄ ≤ {c:.4})"),
             ),
-            None => {
-                let (a, c) = b.span();
-                (
-                    b.branch,
-                    b.eta,
-                    middle(a, c),
-                    format!("middle of its traced range {a:.4} ≤ L̄ ≤ {c:.4} (never the lowest branch there)"),
-                )
-            }
+            Some((a, _)) => (
+                branch,
+                eta,
+                a,
+                format!("the one length where the diagram finds it the lowest branch (L̄ = {a:.4})"),
+            ),
+            None => (
+                branch,
+                eta,
+                middle(lo, hi),
+                format!("middle of its traced range {lo:.4} ≤ L̄ ≤ {hi:.4} (never the lowest branch there)"),
+            ),
         })
         .collect();
     plan.sort_by_key(|p| p.0);
@@ -340,7 +362,11 @@ fn force_figure(data: &LoopData, branch: u32) -> Result<String> {
     if let (Some(&s0), Some(&l0)) = (s.first(), lam.first()) {
         points.push((s0 / length + 1.0, l0));
     }
-    let plot = Plot {
+    let clip = rodloop_figures::plot::robust_range(
+        lam,
+        Some(&rodloop_figures::plot::arclength_weights(s, length)),
+    );
+    let mut plot = Plot {
         title: "Contact force along the loop".into(),
         xlabel: "s/L (s = 0 as marked on the loop)".into(),
         ylabel: "λR³/D₀".into(),
@@ -353,6 +379,11 @@ fn force_figure(data: &LoopData, branch: u32) -> Result<String> {
         hlines: vec![0.0],
         ..Default::default()
     };
+    if let Some(shown) = clip {
+        let (x0, x1) = plot.x_range();
+        plot.range = Some((x0, x1, shown.0, shown.1));
+        plot.note = rodloop_figures::plot::clipped_note("λ", lam, shown);
+    }
     let mut svg = Svg::new(FORCE_W, FORCE_H);
     plot.render(&mut svg, 0.0, 0.0, FORCE_W, FORCE_H, "force");
     Ok(svg.finish())
@@ -414,10 +445,13 @@ pub fn run(args: &Args) -> Result<()> {
 
     // 2. The diagram figures, from the staged CSV files as `rodloop draw` reads them.
     let t = Instant::now();
-    let dd = DiagramData::read(run.stage_dir())?;
+    let mut dd = DiagramData::read(run.stage_dir())?;
+    dd.buckling_loads = scene.stiffness.is_uniform();
     let fig_energy = energy_figure(&dd, FIG_W, FIG_H)?;
     let fig_split = energy_split_figure(&dd, FIG_W, 480.0)?;
     let fig_lambda = lambda_figure(&dd, FIG_W, FIG_H)?;
+    // The energy figure beside the tables, as `rodloop diagram` writes it.
+    run.write_bytes("diagram.svg", fig_energy.as_bytes())?;
     let t_diagram_figures = t.elapsed().as_secs_f64();
     // The branch atlas from the staged state files (as `diagram --shapes` draws it).
     let t = Instant::now();
@@ -470,14 +504,14 @@ pub fn run(args: &Args) -> Result<()> {
     let mut h = String::with_capacity(1 << 20);
     let _ = write!(
         h,
-        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>rodloop report: {name}</title>\n<style>\n{STYLE}\n</style>\n</head>\n<body>\n<h1>rodloop report: scene {name}</h1>\n<p class=\"lead\">{desc}. Numeric branch diagram for {lo} ≤ L̄ ≤ {hi} at accuracy <b>{acc}</b>: {nstates} traced states on {nbranches} branches, {ncrit} critical lengths. Elastic rod loops in a sphere after Wang, Li &amp; Yi, J. Mech. Phys. Solids (2024); equation and figure numbers refer to that paper.</p>\n<nav><a href=\"#diagram\">Diagram</a><a href=\"#critical\">Critical lengths</a><a href=\"#atlas\">Atlas</a><a href=\"#states\">States</a><a href=\"#paper\">Paper values</a><a href=\"#settings\">Settings</a><a href=\"#timings\">Timings</a></nav>\n",
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>rodloop report: {name}</title>\n<style>\n{STYLE}\n</style>\n</head>\n<body>\n<h1>rodloop report: scene {name}</h1>\n<p class=\"lead\">{desc}. Numeric branch diagram for {lo} ≤ L̄ ≤ {hi} at accuracy <b>{acc}</b>: {nstates} traced states on {nbranches}, {ncrit} critical lengths. Elastic rod loops in a sphere after Wang, Li &amp; Yi, J. Mech. Phys. Solids (2024); equation and figure numbers refer to that paper.</p>\n<nav><a href=\"#diagram\">Diagram</a><a href=\"#critical\">Critical lengths</a><a href=\"#atlas\">Atlas</a><a href=\"#states\">States</a><a href=\"#paper\">Paper values</a><a href=\"#settings\">Settings</a><a href=\"#timings\">Timings</a></nav>\n",
         name = esc(&scene.name),
         desc = esc(&d.scene),
         lo = opts.lbar_min,
         hi = opts.lbar_max,
         acc = format!("{accuracy:?}").to_lowercase(),
         nstates = d.rows().len(),
-        nbranches = d.branches.len(),
+        nbranches = crate::numeric_diagram::branch_count(&d.branches),
         ncrit = d.critical.len(),
     );
     for w in &d.warnings {
@@ -500,7 +534,11 @@ pub fn run(args: &Args) -> Result<()> {
     h.push_str(&figs.fig(
         &fig_lambda,
         "contact force extremes against length",
-        "Largest and smallest contact force λR³/D₀ of every state (paper Fig. 7), with the great-circle buckling loads of Eqs. (33)–(34) at L̄ = m.",
+        &if uniform {
+            "Largest and smallest contact force λR³/D₀ of every state (paper Fig. 7), with the great-circle buckling loads of Eqs. (33)–(34) at L̄ = m.".to_string()
+        } else {
+            "Largest and smallest contact force λR³/D₀ of every state (paper Fig. 7). The great-circle buckling loads of Eqs. (33)–(34) hold for a uniform rod only and are not marked. Where a few states have sharp force peaks at the stiffness steps, the axis shows the bulk of the values and the note under it gives the full range.".to_string()
+        },
         "fig-lambda",
     ));
     if let Some(k2) = &fig_k2 {
@@ -560,7 +598,7 @@ pub fn run(args: &Args) -> Result<()> {
     }
     h.push_str("</section>\n");
 
-    h.push_str("<section id=\"states\">\n<h2>4. The stable state of each branch</h2>\n<p>Each branch solved at one length (the middle of the first stretch where the diagram finds it the lowest branch), from the Euler rotation curve with l = η at the report's accuracy, as <code>rodloop solve</code> does; the converged state's branch is checked from the periods of its κ<sub>g</sub>. Each picture shows the loop on the sphere from an oblique view and along the three axes, coloured by the contact force λR³/D₀ (uniform rods) or by the stiffness D/D₀ (other profiles); nearer strands are darker and thicker. Red circles: self-contacts in 3-D.</p>\n");
+    h.push_str("<section id=\"states\">\n<h2>4. The stable state of each branch</h2>\n<p>Each branch solved at one length (the middle of the widest stretch where the diagram finds it the lowest branch), from the Euler rotation curve with l = η at the report's accuracy, as <code>rodloop solve</code> does; the converged state's branch is checked from the periods of its κ<sub>g</sub>. Each picture shows the loop on the sphere from an oblique view and along the three axes, coloured by the contact force λR³/D₀ (uniform rods) or by the stiffness D/D₀ (other profiles); nearer strands are darker and thicker. Red circles: self-contacts in 3-D.</p>\n");
     h.push_str("<table id=\"states-table\"><thead><tr><th>branch</th><th>η</th><th>L̄</th><th>chosen as</th><th>solved from</th><th>E R/(πD₀)</th><th>error</th><th>index</th><th>state</th><th>λR³/D₀ range</th><th>point group</th><th>self-contacts</th><th>cells</th></tr></thead><tbody>\n");
     for st in &states {
         match &st.outcome {

@@ -178,6 +178,7 @@ fn solve_one(
                     "on the wall"
                 }
             ),
+            extremes: None,
         },
     )?;
     let _ = eta;

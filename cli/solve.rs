@@ -39,7 +39,7 @@ pub struct Args {
     #[arg(long)]
     pub from: Option<PathBuf>,
     /// Accuracy: fast, default or high (overrides the scene's).
-    #[arg(long)]
+    #[arg(long, value_parser = crate::solve::ACCURACY_CHOICES)]
     pub accuracy: Option<String>,
     /// Also draw the loop (four views, SVG and PNG) next to the CSV (see `rodloop draw`).
     #[arg(long)]
@@ -87,6 +87,9 @@ pub fn load_scene(path: Option<&Path>) -> Result<Scene> {
     }
     Ok(scene)
 }
+
+/// The choices of `--accuracy` (clap checks them: an invalid one is a usage error, exit 2).
+pub const ACCURACY_CHOICES: [&str; 3] = ["fast", "default", "high"];
 
 /// Map the scene's accuracy (or the command-line override) to the solver's.
 pub fn accuracy_of(scene: &Scene, over: Option<&str>) -> Result<Accuracy> {

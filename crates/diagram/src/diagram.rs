@@ -456,12 +456,12 @@ pub fn assemble(
     }
     timings.total = start.elapsed().as_secs_f64();
     let scene = format!(
-        "R = {}, D = {:?}, {} ≤ L̄ ≤ {}, accuracy {:?}, tracing with {} cells per period",
+        "R = {}, {}, {} ≤ L̄ ≤ {}, accuracy {}, tracing with {} cells per period",
         opts.radius,
         opts.stiffness,
         opts.lbar_min,
         opts.lbar_max,
-        opts.accuracy,
+        format!("{:?}", opts.accuracy).to_lowercase(),
         opts.trace_cells_per_period()
     );
     Ok(NumericDiagram {

@@ -181,11 +181,24 @@ impl LoopData {
         self.points().iter().map(|p| p.norm()).fold(0.0, f64::max)
     }
 
-    /// Length of the closed curve: the last `s` plus the arc from the last point back to the
-    /// first (on the sphere of radius [`LoopData::radius`]).
+    /// Length of the closed curve. Points equally spaced in `s` (every table rodloop writes
+    /// on a uniform mesh) close the loop with one more spacing: `L = n (s_last − s_0)/(n − 1)`,
+    /// exact whatever the curvature. Otherwise: the last `s` plus the arc from the last point
+    /// back to the first (on the sphere of radius [`LoopData::radius`]), which is short by the
+    /// chord's sagitta.
     pub fn length(&self) -> f64 {
         let p = self.points();
         let s = self.s();
+        let n = s.len();
+        if n >= 3 {
+            let h = (s[n - 1] - s[0]) / (n - 1) as f64;
+            let uniform = h > 0.0
+                && s.windows(2)
+                    .all(|w| ((w[1] - w[0]) - h).abs() <= 1e-9 * h.max(1e-300));
+            if uniform {
+                return h * n as f64;
+            }
+        }
         let r = self.radius();
         let chord = (p[p.len() - 1] - p[0]).norm();
         let arc = 2.0 * r * (chord / (2.0 * r)).clamp(-1.0, 1.0).asin();

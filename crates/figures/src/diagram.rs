@@ -1,12 +1,17 @@
 //! The branch diagram drawn from a diagram directory's `branches.csv` and `critical.csv`
 //! (either model): energy against length (Fig. 3a), the geodesic / normal energy split
-//! (Fig. 3b), and the contact-force extremes with the great-circle buckling loads of
-//! Eqs. (33)–(34) (Fig. 7).
+//! (Fig. 3b), the geodesic energy alone, and the contact-force extremes with the
+//! great-circle buckling loads of Eqs. (33)–(34) for a uniform rod (Fig. 7).
 //!
 //! Line styles mean the same in both models: solid = stable (lowest energy at that length),
 //! dashed = higher energy and not known to be unstable (metastable in the numeric model,
 //! where the Hessian index is 0; the exact model computes no index), dotted = unstable
 //! (Hessian index > 0, numeric model only).
+//!
+//! The file is longer than most because it is one job end to end: the tables of a diagram
+//! directory read into [`DiagramData`] (with the energy made relative to the stable state on
+//! request), and the four figures drawn from that one reading, so that every figure shows the
+//! same rows with the same styles.
 
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -75,6 +80,9 @@ pub struct DiagramPoint {
     /// Enclosed diagrams (`attached` column): whether the state lies on the wall
     /// everywhere; `None` for surface diagrams.
     pub attached: Option<bool>,
+    /// The energy subtracted from `energy` by [`DiagramData::relative_to_stable`] (0
+    /// otherwise), so that `energy + shift` is the state's own energy.
+    pub shift: f64,
 }
 
 /// A special point of `special_points.csv` (fold, branch point, crossing, collapse).
@@ -116,6 +124,15 @@ pub struct DiagramData {
     pub critical: Vec<CriticalPoint>,
     /// Folds and branch points of `special_points.csv` (empty without the file).
     pub special: Vec<SpecialMark>,
+    /// Whether the great-circle buckling loads of Eqs. (33)–(34) apply (a uniform rod): the
+    /// contact-force figure marks them only then. [`DiagramData::read`] sets it for the exact
+    /// model and for a numeric diagram whose rows all have family 0 (the `family` column is 0
+    /// for a uniform rod; a non-uniform rod's branches are families numbered from 1); a
+    /// caller that knows the stiffness may set it itself.
+    pub buckling_loads: bool,
+    /// Energies are relative to the stable state at each length
+    /// ([`DiagramData::relative_to_stable`]).
+    pub relative: bool,
 }
 
 /// Read a CSV as named text columns.
@@ -264,6 +281,7 @@ impl DiagramData {
                 family: family.as_ref().map_or(0, |f| f[k] as u32),
                 arc: arc.as_ref().map(|a| a[k] as u64),
                 attached: attached.as_ref().map(|a| a[k] != 0.0),
+                shift: 0.0,
                 branch: branch[k] as u32,
                 eta: eta[k] as u32,
                 lbar: lbar[k],
@@ -327,13 +345,79 @@ impl DiagramData {
                 }
             }
         }
+        let buckling_loads = model == "exact"
+            || (model == "numeric" && family.as_ref().is_none_or(|f| f.iter().all(|&x| x == 0.0)));
         Ok(DiagramData {
             model,
             missing,
             points,
             critical,
             special,
+            buckling_loads,
+            relative: false,
         })
+    }
+
+    /// The stable energy at `lbar`: linear interpolation between the states labelled stable
+    /// (the lowest energy at their length), held constant beyond the first and last.
+    fn stable_energy(stable: &[(f64, f64)], lbar: f64) -> f64 {
+        let k = stable.partition_point(|p| p.0 < lbar);
+        if k == 0 {
+            return stable[0].1;
+        }
+        if k == stable.len() {
+            return stable[k - 1].1;
+        }
+        let (a, b) = (stable[k - 1], stable[k]);
+        if b.0 - a.0 <= 0.0 {
+            return a.1.min(b.1);
+        }
+        a.1 + (lbar - a.0) / (b.0 - a.0) * (b.1 - a.1)
+    }
+
+    /// Energies relative to the stable state at the same length: every energy (states,
+    /// critical points, special points) minus the lowest energy there, linearly interpolated
+    /// between the traced stable states and the critical points. Where every branch lies close to one line (a very
+    /// soft segment: `E ≈ L̄ ⟨D⟩/D₀`), this shows how far above the stable state each one is.
+    /// The energy split is left as it is.
+    pub fn relative_to_stable(&mut self) -> Result<(), FigureError> {
+        // The critical points lie on the lowest energy too (a crossing of the two lowest
+        // branches, a collapse of the lowest onto a great circle): they anchor the
+        // interpolation where the traced stable states are sparse.
+        let mut stable: Vec<(f64, f64)> = self
+            .points
+            .iter()
+            .filter(|p| p.stability == Stability::Stable)
+            .map(|p| (p.lbar, p.energy))
+            .chain(self.critical.iter().map(|c| (c.lbar_cr, c.energy)))
+            .collect();
+        if stable.is_empty() {
+            return Err(FigureError::Invalid(
+                "energies relative to the stable state need states labelled stable; this diagram has none".into(),
+            ));
+        }
+        stable.sort_by(|a, b| a.0.total_cmp(&b.0));
+        // One value per length: the lowest (two branches at a crossing).
+        stable.dedup_by(|b, a| {
+            if b.0 == a.0 {
+                a.1 = a.1.min(b.1);
+                true
+            } else {
+                false
+            }
+        });
+        for p in &mut self.points {
+            p.shift = Self::stable_energy(&stable, p.lbar);
+            p.energy -= p.shift;
+        }
+        for c in &mut self.critical {
+            c.energy -= Self::stable_energy(&stable, c.lbar_cr);
+        }
+        for m in &mut self.special {
+            m.energy -= Self::stable_energy(&stable, m.lbar);
+        }
+        self.relative = true;
+        Ok(())
     }
 
     fn branches(&self) -> Vec<(u32, u32)> {
@@ -402,20 +486,39 @@ impl DiagramData {
 
     /// Wide light bands under the runs of lifted-off states (enclosed diagrams), drawn
     /// before the branch lines.
+    ///
+    /// Each family is followed in its own order (arclength when the file has it), as its line
+    /// is: sorting a whole branch by `L̄` would zigzag between its families and smear the band
+    /// over every curve.
     fn lifted_off(&self, f: impl Fn(&DiagramPoint) -> f64) -> Vec<Series> {
         let mut out = Vec::new();
         for (b, _) in self.branches() {
-            let mut pts: Vec<&DiagramPoint> =
-                self.points.iter().filter(|p| p.branch == b).collect();
-            pts.sort_by(|a, c| a.lbar.total_cmp(&c.lbar));
-            for run in pts.split(|p| p.attached != Some(false)) {
-                if !run.is_empty() {
-                    out.push(Series {
-                        color: LIFTED.into(),
-                        width: 9.0,
-                        dash: String::new(),
-                        points: run.iter().map(|p| (p.lbar, f(p))).collect(),
-                    });
+            let families: BTreeSet<u32> = self
+                .points
+                .iter()
+                .filter(|p| p.branch == b)
+                .map(|p| p.family)
+                .collect();
+            for fam in families {
+                let mut pts: Vec<&DiagramPoint> = self
+                    .points
+                    .iter()
+                    .filter(|p| p.branch == b && p.family == fam)
+                    .collect();
+                if pts.iter().all(|p| p.arc.is_some()) {
+                    pts.sort_by_key(|p| p.arc);
+                } else {
+                    pts.sort_by(|a, c| a.lbar.total_cmp(&c.lbar));
+                }
+                for run in pts.split(|p| p.attached != Some(false)) {
+                    if run.len() >= 2 {
+                        out.push(Series {
+                            color: LIFTED.into(),
+                            width: LIFTED_WIDTH,
+                            dash: String::new(),
+                            points: run.iter().map(|p| (p.lbar, f(p))).collect(),
+                        });
+                    }
                 }
             }
         }
@@ -423,9 +526,12 @@ impl DiagramData {
     }
 
     fn legend(&self, used: &BTreeSet<Stability>) -> Vec<LegendItem> {
+        // Only branches drawn as a line (a branch with one state, such as the planar circle
+        // touching the wall at L̄ = 1 of an enclosed diagram, draws nothing).
         let mut legend: Vec<LegendItem> = self
             .branches()
             .into_iter()
+            .filter(|&(b, _)| self.points.iter().filter(|p| p.branch == b).count() >= 2)
             .map(|(b, eta)| LegendItem::Line {
                 label: if b == 0 {
                     "branch 0 (planar circle)".into()
@@ -451,7 +557,11 @@ impl DiagramData {
 }
 
 /// Colour of the band under the lifted-off parts of an enclosed diagram.
-const LIFTED: &str = "#f5d76e";
+const LIFTED: &str = "#f7e3a1";
+
+/// Width of that band, pixels: wider than the lines it underlies, narrow enough not to hide
+/// the curves near them.
+const LIFTED_WIDTH: f64 = 6.0;
 
 /// Marker of a special point: shape, colour, half-size, legend text.
 fn special_style(kind: &str) -> (Shape, &'static str, f64, &'static str) {
@@ -493,25 +603,44 @@ pub fn check_size(w: f64, h: f64) -> Result<(), FigureError> {
 }
 
 /// Fig. 3a: `E R/(πD₀)` against `L̄`, critical points marked (◆ crossing of two branches,
-/// □ collapse onto an m-fold great circle).
+/// □ collapse onto an m-fold great circle); relative to the stable state when
+/// [`DiagramData::relative`].
 pub fn energy_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, FigureError> {
+    energy_like_figure(d, w, h, false)
+}
+
+/// The geodesic-curvature energy `E_g R/(πD₀)` against `L̄`, one panel (the left panel of
+/// [`energy_split_figure`] at full size), critical lengths as dotted lines.
+pub fn energy_g_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, FigureError> {
+    require(d, "the geodesic energy")?;
+    energy_like_figure(d, w, h, true)
+}
+
+fn energy_like_figure(
+    d: &DiagramData,
+    w: f64,
+    h: f64,
+    geodesic: bool,
+) -> Result<String, FigureError> {
     check_size(w, h)?;
+    let f = |p: &DiagramPoint| if geodesic { p.energy_g } else { p.energy };
     let mut used = BTreeSet::new();
-    let mut series = d.lifted_off(|p| p.energy);
+    let mut series = d.lifted_off(f);
     let lifted = !series.is_empty();
-    series.extend(d.lines(|p| p.energy, &mut used));
+    series.extend(d.lines(f, &mut used));
     let mut legend = d.legend(&used);
     if lifted {
         legend.push(LegendItem::Line {
             label: "lifted off the wall (gap > 0)".into(),
             color: LIFTED.into(),
-            width: 9.0,
+            width: LIFTED_WIDTH,
             dash: String::new(),
         });
     }
     let mut marks = Vec::new();
     let mut kinds = BTreeSet::new();
-    for c in &d.critical {
+    // Critical and special points carry the total energy: drawn on the energy figure only.
+    for c in d.critical.iter().filter(|_| !geodesic) {
         let shape = if c.kind == "crossing" {
             Shape::Diamond
         } else {
@@ -526,7 +655,7 @@ pub fn energy_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, FigureEr
         });
     }
     let mut special_kinds = BTreeSet::new();
-    for p in &d.special {
+    for p in d.special.iter().filter(|_| !geodesic) {
         let (shape, color, size, _) = special_style(&p.kind);
         special_kinds.insert(p.kind.as_str());
         marks.push(Mark {
@@ -560,10 +689,27 @@ pub fn energy_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, FigureEr
             color: "#111".into(),
         });
     }
-    let plot = Plot {
-        title: format!("Bending energy of the branches ({} model)", d.model),
+    let (title, ylabel) = match (geodesic, d.relative) {
+        (true, _) => (
+            format!(
+                "Geodesic-curvature energy of the branches ({} model)",
+                d.model
+            ),
+            "E_g R/(πD₀)".to_string(),
+        ),
+        (false, false) => (
+            format!("Bending energy of the branches ({} model)", d.model),
+            "E R/(πD₀)".to_string(),
+        ),
+        (false, true) => (
+            format!("Bending energy above the stable state ({} model)", d.model),
+            "(E − E_stable(L̄)) R/(πD₀)".to_string(),
+        ),
+    };
+    let mut plot = Plot {
+        title,
         xlabel: "L̄ = L/(2πR)".into(),
-        ylabel: "E R/(πD₀)".into(),
+        ylabel,
         series,
         marks,
         vlines: d
@@ -573,9 +719,23 @@ pub fn energy_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, FigureEr
             .collect(),
         legend,
         legend_width: 270.0,
-        note: "critical lengths L̄_icr at the top (dotted lines)".into(),
+        note: if d.relative && !geodesic {
+            "critical lengths L̄_icr at the top (dotted lines); E_stable interpolated linearly between the stable states and critical points".into()
+        } else {
+            "critical lengths L̄_icr at the top (dotted lines)".into()
+        },
         ..Default::default()
     };
+    // Relative energies span little except near a branch's end: clip a few outliers so that
+    // the differences between the branches stay visible, and say so.
+    if d.relative && !geodesic {
+        let values: Vec<f64> = d.points.iter().map(|p| p.energy).collect();
+        if let Some(shown) = crate::plot::robust_range(&values, None) {
+            let (x0, x1, _, _) = plot.data_range();
+            plot.range = Some((x0, x1, shown.0, shown.1));
+            plot.note = crate::plot::clipped_note("energy", &values, shown);
+        }
+    }
     let mut svg = Svg::new(w, h);
     plot.render(&mut svg, 0.0, 0.0, w, h, "energy");
     Ok(svg.finish())
@@ -596,7 +756,7 @@ pub fn energy_split_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, Fi
         (
             "Normal-curvature energy",
             "E_n R/(πD₀)",
-            (|p: &DiagramPoint| p.energy - p.energy_g) as fn(&DiagramPoint) -> f64,
+            (|p: &DiagramPoint| p.energy + p.shift - p.energy_g) as fn(&DiagramPoint) -> f64,
         ),
     ]
     .into_iter()
@@ -630,8 +790,10 @@ pub fn energy_split_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, Fi
 }
 
 /// Fig. 7: the largest and smallest contact force `λR³/D₀` of each state against `L̄`, with
-/// the great-circle buckling loads at `L̄ = m`: Eq. (33) `(m + 1)²/m²` (■) and Eq. (34)
-/// `(m − 1)²/m²`, `m ≥ 2` (▲).
+/// the great-circle buckling loads at `L̄ = m` of a uniform rod
+/// ([`DiagramData::buckling_loads`]): Eq. (33) `(m + 1)²/m²` (■) and Eq. (34)
+/// `(m − 1)²/m²`, `m ≥ 2` (▲). The axis is clipped to the bulk of the values when a few
+/// states have sharp peaks ([`crate::plot::robust_range`]), and says so.
 pub fn lambda_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, FigureError> {
     check_size(w, h)?;
     require(d, "the contact-force figure")?;
@@ -647,7 +809,9 @@ pub fn lambda_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, FigureEr
         });
     let mut marks = Vec::new();
     let mut m = lo.ceil().max(1.0) as u32;
-    while f64::from(m) <= hi + 1e-9 {
+    // Eqs. (33)–(34) hold for a uniform rod only (a non-uniform rod's great circle carries a
+    // non-uniform load): no markers otherwise.
+    while d.buckling_loads && f64::from(m) <= hi + 1e-9 {
         let mf = f64::from(m);
         marks.push(Mark {
             at: (mf, (mf + 1.0).powi(2) / (mf * mf)),
@@ -679,7 +843,7 @@ pub fn lambda_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, FigureEr
             color: "#111".into(),
         });
     }
-    let plot = Plot {
+    let mut plot = Plot {
         title: "Extreme contact forces along the branches".into(),
         xlabel: "L̄ = L/(2πR)".into(),
         ylabel: "λ_max and λ_min, λR³/D₀".into(),
@@ -692,6 +856,17 @@ pub fn lambda_figure(d: &DiagramData, w: f64, h: f64) -> Result<String, FigureEr
             .into(),
         ..Default::default()
     };
+    // A few states with sharp peaks (at the stiffness steps) must not flatten every curve.
+    let values: Vec<f64> = d
+        .points
+        .iter()
+        .flat_map(|p| [p.lambda_min, p.lambda_max])
+        .collect();
+    if let Some(shown) = crate::plot::robust_range(&values, None) {
+        let (x0, x1, _, _) = plot.data_range();
+        plot.range = Some((x0, x1, shown.0, shown.1));
+        plot.note = crate::plot::clipped_note("λ", &values, shown);
+    }
     let mut svg = Svg::new(w, h);
     plot.render(&mut svg, 0.0, 0.0, w, h, "lambda");
     Ok(svg.finish())

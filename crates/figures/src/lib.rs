@@ -12,6 +12,7 @@ mod error;
 
 pub mod atlas;
 pub mod color;
+pub mod convergence;
 pub mod data;
 pub mod diagram;
 pub mod geometry;
@@ -24,5 +25,6 @@ pub mod profiles;
 pub mod raster;
 pub mod svg;
 pub mod view;
+pub mod vtk;
 
 pub use error::FigureError;

@@ -24,6 +24,11 @@ pub struct LoopPictureOptions {
     pub panel: f64,
     /// Title (first line).
     pub title: String,
+    /// The colour column's extremes as the caller knows them more accurately than the table's
+    /// samples (e.g. the contact force's extremes between the nodes, which `rodloop solve`
+    /// prints): the bar's end labels and the reported range use them, so that the picture
+    /// and the console give the same numbers.
+    pub extremes: Option<(f64, f64)>,
 }
 
 impl Default for LoopPictureOptions {
@@ -33,6 +38,7 @@ impl Default for LoopPictureOptions {
             tol: 1e-3,
             panel: 380.0,
             title: String::new(),
+            extremes: None,
         }
     }
 }
@@ -133,7 +139,17 @@ pub fn loop_picture(
             found: data.names.join(", "),
         })?
         .to_vec();
-    let (scale, full_range) = colour_scale(&values, data.s());
+    let (mut scale, mut full_range) = colour_scale(&values, data.s());
+    if let Some((lo, hi)) = opts
+        .extremes
+        .filter(|e| e.0.is_finite() && e.1.is_finite() && e.1 >= e.0)
+    {
+        let known = Scale { min: lo, max: hi };
+        match &mut full_range {
+            Some(f) => *f = known,
+            None => scale = known,
+        }
+    }
     let pts = data.points();
     let n = pts.len();
     let r = data.radius();

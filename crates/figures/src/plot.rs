@@ -121,7 +121,116 @@ pub fn draw_mark(svg: &mut Svg, x: f64, y: f64, shape: Shape, color: &str, r: f6
     }
 }
 
+/// A y-range that keeps a few sharp outliers from flattening every curve: the 2nd to 98th
+/// percentile of `values` (weighted by `weights` when given, e.g. the arclength each sample
+/// of a loop stands for, so that a mesh refined at the peaks does not count them many
+/// times), widened by 15 % of its span (and to include 0 when it is near). Returns
+/// `Some((lo, hi))` only when some values lie more than half that span outside it (e.g. the
+/// contact-force spikes at the stiffness steps of a two-segment rod); `None` when the full
+/// range shows everything well.
+pub fn robust_range(values: &[f64], weights: Option<&[f64]>) -> Option<(f64, f64)> {
+    let mut v: Vec<(f64, f64)> = values
+        .iter()
+        .enumerate()
+        .map(|(i, &x)| (x, weights.map_or(1.0, |w| w.get(i).copied().unwrap_or(0.0))))
+        .filter(|(x, w)| x.is_finite() && w.is_finite() && *w >= 0.0)
+        .collect();
+    if v.len() < 20 {
+        return None;
+    }
+    v.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let total: f64 = v.iter().map(|p| p.1).sum();
+    if total.is_nan() || total <= 0.0 {
+        return None;
+    }
+    let q = |p: f64| {
+        let mut acc = 0.0;
+        for &(x, w) in &v {
+            acc += w;
+            if acc >= p * total {
+                return x;
+            }
+        }
+        v[v.len() - 1].0
+    };
+    let (lo, hi) = (q(0.02), q(0.98));
+    let span = hi - lo;
+    if span <= 0.0 {
+        return None;
+    }
+    let (min, max) = (v[0].0, v[v.len() - 1].0);
+    if min >= lo - 0.5 * span && max <= hi + 0.5 * span {
+        return None;
+    }
+    let (mut a, mut b) = (lo - 0.15 * span, hi + 0.15 * span);
+    if a > 0.0 && a < 0.5 * span {
+        a = 0.0;
+    }
+    if b < 0.0 && -b < 0.5 * span {
+        b = 0.0;
+    }
+    Some((a, b))
+}
+
+/// The arclength each sample of a closed loop stands for: half the spacing to each
+/// neighbour (the last closes the loop at `length`), for [`robust_range`].
+pub fn arclength_weights(s: &[f64], length: f64) -> Vec<f64> {
+    let n = s.len();
+    (0..n)
+        .map(|i| {
+            let before = if i == 0 {
+                s[0] + length - s[n - 1]
+            } else {
+                s[i] - s[i - 1]
+            };
+            let after = if i + 1 == n {
+                s[0] + length - s[n - 1]
+            } else {
+                s[i + 1] - s[i]
+            };
+            0.5 * (before + after).max(0.0)
+        })
+        .collect()
+}
+
+/// The note of a panel clipped by [`robust_range`]: how far the values run off it.
+pub fn clipped_note(what: &str, values: &[f64], shown: (f64, f64)) -> String {
+    let (min, max) = values
+        .iter()
+        .filter(|x| x.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    format!(
+        "{what} axis clipped to {} … {}: values reach {} … {} (sharp peaks, e.g. at stiffness steps)",
+        tick_label((shown.0 * 1e3).round() / 1e3),
+        tick_label((shown.1 * 1e3).round() / 1e3),
+        tick_label((min * 1e3).round() / 1e3),
+        tick_label((max * 1e3).round() / 1e3)
+    )
+}
+
 impl Plot {
+    /// The x-range of the data (series and marks), for a caller that sets `range` itself.
+    pub fn x_range(&self) -> (f64, f64) {
+        let mut r = (f64::INFINITY, f64::NEG_INFINITY);
+        for (x, _) in self
+            .series
+            .iter()
+            .flat_map(|s| s.points.iter().copied())
+            .chain(self.marks.iter().map(|m| m.at))
+        {
+            if x.is_finite() {
+                r = (r.0.min(x), r.1.max(x));
+            }
+        }
+        if r.0.is_finite() {
+            r
+        } else {
+            (0.0, 1.0)
+        }
+    }
+
     /// The data range (with 4 % vertical padding) when none is set.
     pub fn data_range(&self) -> (f64, f64, f64, f64) {
         if let Some(r) = self.range {
@@ -315,5 +424,34 @@ impl Plot {
             };
             svg.text(lx + 38.0, yy + 4.5, 12.5, Anchor::Start, label);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two narrow spikes on a smooth curve are clipped, and only when the samples are
+    /// weighted by the arclength they stand for if the mesh crowds at the spikes.
+    #[test]
+    fn spikes_are_clipped_smooth_data_is_not() {
+        let smooth: Vec<f64> = (0..200).map(|i| (i as f64 * 0.05).sin()).collect();
+        assert_eq!(robust_range(&smooth, None), None);
+        let mut spiky = smooth.clone();
+        spiky[50] = 80.0;
+        spiky[150] = -80.0;
+        let (a, b) = robust_range(&spiky, None).unwrap();
+        assert!(a > -2.0 && a < -1.0 && b > 1.0 && b < 2.0, "{a} {b}");
+        // Forty samples at each spike (a refined mesh), each standing for a tiny length.
+        let mut v = smooth.clone();
+        let mut w = vec![1.0; v.len()];
+        for _ in 0..40 {
+            v.push(80.0);
+            v.push(-80.0);
+            w.push(1e-3);
+            w.push(1e-3);
+        }
+        assert_eq!(robust_range(&v, None), None);
+        assert!(robust_range(&v, Some(&w)).is_some());
     }
 }

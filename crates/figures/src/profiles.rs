@@ -1,9 +1,12 @@
 //! Quantities along the loop against arclength: position `x, y, z`, curvature `κ`, torsion
-//! `τ`, geodesic curvature `κ_g` (paper Fig. 5) and the contact force `λ(s)` (Fig. 6; Eq. 38
-//! for a uniform rod), one panel each, for the columns the table has.
+//! `τ`, geodesic curvature `κ_g` (paper Fig. 5), the contact force `λ(s)` (Fig. 6; Eq. 38
+//! for a uniform rod) and the internal force components `F_t, F_n, F_b` (one panel), one
+//! panel each, for the columns the table has. A panel whose values have a few sharp peaks
+//! (the forces at the stiffness steps of a two-segment rod) is clipped to its bulk by
+//! [`crate::plot::robust_range`], and says so under its axis.
 
 use crate::data::{column_label, LoopData};
-use crate::plot::{Plot, Series};
+use crate::plot::{arclength_weights, clipped_note, robust_range, LegendItem, Plot, Series};
 use crate::svg::{Anchor, Svg};
 use crate::FigureError;
 
@@ -57,11 +60,16 @@ pub fn profiles_document(
             });
         (hi - lo <= 1e-12 * hi.abs().max(1.0)).then_some(lo)
     });
-    let cols: Vec<&str> = PROFILE_COLUMNS
+    let mut cols: Vec<&str> = PROFILE_COLUMNS
         .iter()
         .copied()
         .filter(|c| data.column(c).is_some() && !(*c == "D" && constant_d.is_some()))
         .collect();
+    // The internal force (F_t, F_n, F_b) in one panel, when the table has all three.
+    let forces = FORCE_COLUMNS.iter().all(|c| data.column(c).is_some());
+    if forces {
+        cols.push(FORCES);
+    }
     let rows = cols.len().div_ceil(2).max(1);
     let top = if overlay.is_some() || constant_d.is_some() {
         60.0
@@ -90,18 +98,34 @@ pub fn profiles_document(
     }
     let s = data.s();
     let length = data.length();
-    for (k, c) in cols.iter().enumerate() {
-        let v = data.column(c).unwrap_or(&[]);
-        // Close the loop: repeat the first point at s = L.
+    let weights = arclength_weights(s, length);
+    // One closed curve against s/L: the first point repeated at s = L.
+    let closed = |v: &[f64]| {
         let mut pts: Vec<(f64, f64)> = s.iter().zip(v).map(|(&a, &b)| (a / length, b)).collect();
         if let (Some(&first), Some(&s0)) = (v.first(), s.first()) {
             pts.push((s0 / length + 1.0, first));
         }
+        pts
+    };
+    for (k, c) in cols.iter().enumerate() {
+        if *c == FORCES {
+            let (px, py) = ((k % 2) as f64 * panel_w, top + (k / 2) as f64 * panel_h);
+            forces_panel(
+                data,
+                &closed,
+                &weights,
+                &mut svg,
+                (px, py, panel_w, panel_h),
+                k,
+            );
+            continue;
+        }
+        let v = data.column(c).unwrap_or(&[]);
         let mut series = vec![Series {
             color: "#1f4fd1".into(),
             width: 1.8,
             dash: String::new(),
-            points: pts,
+            points: closed(v),
         }];
         if let Some(o) = overlay.and_then(|(o, _)| o.column(c).map(|v| (o.s(), v))) {
             let (os, ov) = o;
@@ -117,7 +141,8 @@ pub fn profiles_document(
                 points: q,
             });
         }
-        let plot = Plot {
+        let clip = robust_range(v, Some(&weights));
+        let mut plot = Plot {
             title: column_label(c),
             xlabel: "s/L".into(),
             ylabel: column_label(c)
@@ -134,8 +159,70 @@ pub fn profiles_document(
             range: None,
             ..Default::default()
         };
+        if let Some(shown) = clip {
+            let (x0, x1) = plot.x_range();
+            plot.range = Some((x0, x1, shown.0, shown.1));
+            plot.note = clipped_note("y", v, shown);
+        }
         let (px, py) = ((k % 2) as f64 * panel_w, top + (k / 2) as f64 * panel_h);
         plot.render(&mut svg, px, py, panel_w, panel_h, &format!("prof{k}"));
     }
     Ok(svg)
+}
+
+/// A closed curve against `s/L` from a column's values.
+type ClosedCurve<'a> = &'a dyn Fn(&[f64]) -> Vec<(f64, f64)>;
+
+/// The columns of the internal force, drawn together in one panel.
+const FORCE_COLUMNS: [&str; 3] = ["F_t", "F_n", "F_b"];
+
+/// The name of the internal-force panel among the profile columns.
+const FORCES: &str = "F (internal force)";
+
+/// The internal force `F = F_t t + F_n n + F_b b` along the loop, its three components in
+/// one panel with a legend, clipped to their bulk like the other panels.
+fn forces_panel(
+    data: &LoopData,
+    closed: ClosedCurve<'_>,
+    weights: &[f64],
+    svg: &mut Svg,
+    (px, py, w, h): (f64, f64, f64, f64),
+    k: usize,
+) {
+    let colors = ["#1f4fd1", "#d8600c", "#2a8a2a"];
+    let mut all = Vec::new();
+    let mut series = Vec::new();
+    let mut legend = Vec::new();
+    for (c, color) in FORCE_COLUMNS.iter().zip(colors) {
+        let v = data.column(c).unwrap_or(&[]);
+        all.extend_from_slice(v);
+        series.push(Series {
+            color: color.into(),
+            width: 1.6,
+            dash: String::new(),
+            points: closed(v),
+        });
+        legend.push(LegendItem::Line {
+            label: (*c).into(),
+            color: color.into(),
+            width: 1.6,
+            dash: String::new(),
+        });
+    }
+    let mut plot = Plot {
+        title: "internal force F R²/D₀ (tangent, normal, binormal)".into(),
+        xlabel: "s/L".into(),
+        ylabel: "F R²/D₀".into(),
+        series,
+        hlines: vec![0.0],
+        legend,
+        ..Default::default()
+    };
+    let w3: Vec<f64> = weights.iter().cycle().take(all.len()).copied().collect();
+    if let Some(shown) = robust_range(&all, Some(&w3)) {
+        let (x0, x1) = plot.x_range();
+        plot.range = Some((x0, x1, shown.0, shown.1));
+        plot.note = clipped_note("y", &all, shown);
+    }
+    plot.render(svg, px, py, w, h, &format!("prof{k}"));
 }

@@ -76,6 +76,39 @@ pub struct StiffnessProfile {
     slopes: Vec<f64>,
 }
 
+/// The profile in words, as a report or a summary shows it: `uniform D = 1`,
+/// `two-segment (Eq. 51): D0 = 1, D1 = 0.5, s0*/L = 0.3, s1*/L = 0.8, γ = 200`,
+/// `table of 5 points (s/L, D), D from 0.2 to 1`.
+impl std::fmt::Display for Stiffness {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Stiffness::Uniform { d } => write!(f, "uniform D = {d}"),
+            Stiffness::Tanh {
+                d0,
+                d1,
+                s0,
+                s1,
+                gamma,
+            } => write!(
+                f,
+                "two-segment (Eq. 51): D0 = {d0}, D1 = {d1}, s0*/L = {s0}, s1*/L = {s1}, γ = {gamma}"
+            ),
+            Stiffness::Table { s, d } => {
+                let (lo, hi) = d
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                        (a.min(v), b.max(v))
+                    });
+                write!(
+                    f,
+                    "table of {} points (s/L, D), D from {lo} to {hi}",
+                    s.len()
+                )
+            }
+        }
+    }
+}
+
 impl Stiffness {
     /// Homogeneous stiffness `d`.
     pub fn uniform(d: f64) -> Self {
