@@ -14,6 +14,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use rodloop_exact::{branch_of_eta, eta_of_branch, paper_branch_loop};
 use rodloop_scene::Scene;
+use rodloop_solver::enclosed::descent::descend_branch;
 use rodloop_solver::enclosed::{
     detached_intervals, enclosed_cells, enclosed_solve_cells, free_circle, solve_branch,
     solve_enclosed, solve_levels, start_from_shape, EnclosedOptions, EnclosedState, SavedShape,
@@ -45,13 +46,27 @@ pub struct EnclosedResult {
     pub model_energy: (f64, f64),
 }
 
-/// Solve branch `branch` of an enclosed scene at `lbar`.
+/// Solve branch `branch` of an enclosed scene at `lbar`, descending from a saddle to the
+/// local minimum of the branch below it ([`solve_state_with`]).
 pub fn solve_state(
     scene: &Scene,
     stiffness: &Stiffness,
     lbar: f64,
     branch: u32,
     accuracy: Accuracy,
+) -> Result<EnclosedResult> {
+    solve_state_with(scene, stiffness, lbar, branch, accuracy, false)
+}
+
+/// [`solve_state`]; `keep_saddle`: return the state Newton converges to even where it is a
+/// saddle.
+pub fn solve_state_with(
+    scene: &Scene,
+    stiffness: &Stiffness,
+    lbar: f64,
+    branch: u32,
+    accuracy: Accuracy,
+    keep_saddle: bool,
 ) -> Result<EnclosedResult> {
     let r = scene.radius;
     let opts = EnclosedOptions::default();
@@ -142,8 +157,14 @@ pub fn solve_state(
     }
     let b = solve_branch(r, lbar, stiffness, &source, cells, &opts)
         .with_context(|| format!("the enclosed loop of branch {branch} at lbar = {lbar}"))?;
+    let (b, descent) = if keep_saddle {
+        (b, None)
+    } else {
+        descend_branch(b, &opts).context("descending from the saddle Newton converged to")?
+    };
     let stability = b.coarsest().stability(1e-6)?;
-    let (energy, method) = if attached {
+    let moved = descent.as_ref().is_some_and(|d| d.moved());
+    let (energy, mut method) = if attached && !moved {
         (
             (e_surf, surface_error),
             format!(
@@ -154,7 +175,7 @@ pub fn solve_state(
         (
             (b.energy, b.energy_error),
             format!(
-                "3-D enclosed model, N = {cells} cells (semismooth Newton from the surface loop{}, lambda_min = {lam_min:.6} < 0); {}",
+                "3-D enclosed model, N = {cells} cells (semismooth Newton from the surface loop{}, lambda_min = {lam_min:.6}); {}",
                 if b.homotopy {
                     " by the pull homotopy"
                 } else {
@@ -164,6 +185,13 @@ pub fn solve_state(
             ),
         )
     };
+    if let Some(d) = descent.filter(|d| d.start().index > 0) {
+        method.push_str(&format!(
+            "; {} (descent at N/4 = {} cells, energies at N)",
+            d.describe(),
+            b.quarter.model.cells()
+        ));
+    }
     Ok(EnclosedResult {
         model_energy: (b.energy, b.energy_error),
         state: b.fine,
@@ -347,7 +375,9 @@ pub fn run_solve(args: &crate::solve::Args, scene: &Scene) -> Result<()> {
     let run = OutputRun::begin(&args.out)?;
     let res = match (&shape, branch) {
         (Some(sh), _) => solve_from_shape(scene, &stiffness, args.lbar, sh, branch, accuracy)?,
-        (None, Some(b)) => solve_state(scene, &stiffness, args.lbar, b, accuracy)?,
+        (None, Some(b)) => {
+            solve_state_with(scene, &stiffness, args.lbar, b, accuracy, args.keep_saddle)?
+        }
         (None, None) => unreachable!("a branch or --from is required above"),
     };
     let st = &res.state;

@@ -360,7 +360,11 @@ pub fn surface_unstable_modes(
     // `factor` is that of the last shift with no eigenvalue below it: just below the lowest
     // eigenvalue, not on it (a singular shift would lose the direction).
     let wdot = |a: &DVector<f64>, b: &DVector<f64>| -> f64 {
-        a.iter().zip(b.iter()).zip(&w).map(|((x, y), m)| x * y * m).sum()
+        a.iter()
+            .zip(b.iter())
+            .zip(&w)
+            .map(|((x, y), m)| x * y * m)
+            .sum()
     };
     let apply = |v: &DVector<f64>| -> Result<DVector<f64>, SolverError> {
         let mut b = DVector::zeros(model.dim());
@@ -414,7 +418,9 @@ pub fn surface_unstable_modes(
                     .map(DVector::from_vec)
             })
             .collect::<Result<_, _>>()?;
-        let a = DMatrix::from_fn(block, block, |i, j| 0.5 * (y[i].dot(&hy[j]) + y[j].dot(&hy[i])));
+        let a = DMatrix::from_fn(block, block, |i, j| {
+            0.5 * (y[i].dot(&hy[j]) + y[j].dot(&hy[i]))
+        });
         let se = SymmetricEigen::new(a);
         let mut order: Vec<usize> = (0..block).collect();
         order.sort_by(|&i, &j| se.eigenvalues[i].total_cmp(&se.eigenvalues[j]));
@@ -538,7 +544,14 @@ pub fn descend_accurate(
     if !d.moved() {
         return Ok((res, Some(d)));
     }
-    let out = finish_with_accuracy(d.state.clone(), radius, stiffness, start, res.accuracy, opts)?;
+    let out = finish_with_accuracy(
+        d.state.clone(),
+        radius,
+        stiffness,
+        start,
+        res.accuracy,
+        opts,
+    )?;
     let last = d.path.len() - 1;
     d.path[last] = DescentPoint {
         index: saddle.index(&out.equilibrium)?,

@@ -11,8 +11,9 @@
 
 use nalgebra::SymmetricEigen;
 
+use super::branch::{resample_state, solve_levels, solve_levels_from_fine, BranchSolve};
 use super::solve::{solve_enclosed, EnclosedOptions, EnclosedState};
-use crate::descend::SaddleModel;
+use crate::descend::{descend as descend_saddle, Descent, DescentSettings, SaddleModel};
 use crate::identify::{identify_periods, Periods};
 use crate::SolverError;
 
@@ -87,29 +88,40 @@ fn step_and_solve(
     solve_enclosed(&state.model, z, opts)
 }
 
-/// Periods of the geodesic curvature of an enclosed loop's radial projection: at every
-/// node `κ_g = κ·(u × t)` with `u = r/|r|`, the conormal of the surface model when the loop
-/// lies on the wall ([`crate::identify`] counts them). Nodes closer to the centre than
-/// `R/100`, where the projection is not defined, are left out.
+/// Periods of an enclosed loop's curvature, the branch number `η` of [`crate::identify`]:
+/// the curvature vector `(κ1, κ2)` in the rotation-minimising frame (periodic, since the
+/// model closes the frame) at the Gauss points, projected on its principal axis (the
+/// direction of largest variance about its mean), and the periods of that signal counted.
+/// On the wall the frame is the Darboux frame, `(κ1, κ2) = (κ_g, −1/R)`, so the signal is
+/// `κ_g` and the count is the surface one; a loop that lifts off keeps the count as long as
+/// its curvature keeps its pattern (a planar figure-eight: the signed curvature, one
+/// period).
 pub fn enclosed_periods(state: &EnclosedState) -> Result<Periods, SolverError> {
     let m = &state.model;
-    let p = m.transforms(&state.z)?;
-    let r0 = m.start_point(&state.z);
-    let (mut s, mut kg) = (Vec::new(), Vec::new());
-    for j in 0..m.cells() {
-        let rot = super::model::rotation(&p[j]);
-        let r = r0 + p[j].fixed_view::<3, 1>(0, 3).into_owned();
-        if r.norm() < 1e-2 * m.radius() {
-            continue;
-        }
-        let u = r / r.norm();
-        let (t, d1, d2) = (rot.column(0), rot.column(1), rot.column(2));
-        let (k1, k2) = state.node_curvature(j);
-        let kappa = d1 * k1 + d2 * k2;
-        s.push(m.bounds()[j] * m.length());
-        kg.push(kappa.dot(&u.cross(&t)));
+    let ng = 2 * m.cells();
+    let w: Vec<f64> = (0..ng).map(|g| m.cell_length(g / 2)).collect();
+    let total: f64 = w.iter().sum();
+    let k = |g: usize| (state.z[2 * g], state.z[2 * g + 1]);
+    let (mut m1, mut m2) = (0.0, 0.0);
+    for g in 0..ng {
+        m1 += w[g] * k(g).0 / total;
+        m2 += w[g] * k(g).1 / total;
     }
-    identify_periods(&s, &kg, m.length())
+    let (mut a, mut b, mut c) = (0.0, 0.0, 0.0);
+    for g in 0..ng {
+        let (x, y) = (k(g).0 - m1, k(g).1 - m2);
+        a += w[g] * x * x;
+        b += w[g] * x * y;
+        c += w[g] * y * y;
+    }
+    // Principal axis of [[a, b], [b, c]].
+    let theta = 0.5 * (2.0 * b).atan2(a - c);
+    let (e1, e2) = (theta.cos(), theta.sin());
+    let s: Vec<f64> = (0..ng).map(|g| m.gauss_sigma(g) * m.length()).collect();
+    let signal: Vec<f64> = (0..ng)
+        .map(|g| (k(g).0 - m1) * e1 + (k(g).1 - m2) * e2)
+        .collect();
+    identify_periods(&s, &signal, m.length())
 }
 
 /// The enclosed model as a [`SaddleModel`] (see [`crate::descend`]): index and directions
@@ -193,4 +205,69 @@ pub fn descend(
     }
     out.sort_by(|a, b| a.energy().total_cmp(&b.energy()));
     Ok(out)
+}
+
+/// [`crate::descend::descend`] for an enclosed solve with its levels. Where the `N/4`
+/// level has index > 0, the descent runs there and the levels `N/2, N` with the error
+/// estimate are redone from the state reached: by the cascade of [`solve_levels`], else
+/// from that state carried to `N` directly ([`solve_levels_from_fine`]). Where neither
+/// converges (point contacts: the coarse minimum's contact sits a node or two off the
+/// finer one's), the solve is returned as it was, with the reason in the descent's
+/// shortfall. Returns the (possibly new) solve and the descent (`None` when the `N/4`
+/// level has index 0); the ends of the descent's path carry the energies at `N`.
+pub fn descend_branch(
+    b: BranchSolve,
+    opts: &EnclosedOptions,
+) -> Result<(BranchSolve, Option<Descent<EnclosedState>>), SolverError> {
+    let saddle = EnclosedSaddle {
+        opts: opts.clone(),
+        ..EnclosedSaddle::default()
+    };
+    if saddle.index(&b.quarter)? == 0 {
+        return Ok((b, None));
+    }
+    // Semismooth Newton from the displaced state does not decrease the energy on its way:
+    // small steps fall back to the saddle, so larger ones are tried as well.
+    let settings = DescentSettings {
+        amplitudes: vec![0.02, 0.05, 0.15, 0.3, 0.5],
+        ..DescentSettings::default()
+    };
+    let mut d = descend_saddle(&saddle, b.quarter.clone(), &settings)?;
+    let reached = d.end();
+    d.path[0].energy = b.energy;
+    if !(d.moved() && reached.index == 0) {
+        return Ok((b, Some(d)));
+    }
+    let n = b.fine.model.cells();
+    let direct = || -> Result<BranchSolve, SolverError> {
+        let (m, z) = resample_state(&d.state, n)?;
+        let watchdog = EnclosedOptions {
+            watchdog: opts.watchdog.max(2),
+            ..opts.clone()
+        };
+        let fine =
+            solve_enclosed(&m, z.clone(), &watchdog).or_else(|_| solve_enclosed(&m, z, opts))?;
+        solve_levels_from_fine(fine, opts)
+    };
+    let cascade = solve_levels(&d.state.model, d.state.z.clone(), None, opts);
+    for out in [cascade, direct()].into_iter().flatten() {
+        if saddle.index(&out.quarter)? == 0 && out.energy < b.energy {
+            let last = d.path.len() - 1;
+            d.path[last].energy = out.energy;
+            return Ok((out, Some(d)));
+        }
+    }
+    let m = d.state.model.cells();
+    Ok((
+        b,
+        Some(Descent {
+            state: d.state,
+            path: vec![d.path[0]],
+            shortfall: Some(format!(
+                "at N/4 = {m} cells the descent reached an index-0 state of the same branch (E = {:.10} there), but the solves at {} and {n} cells did not converge from it",
+                reached.energy,
+                n / 2
+            )),
+        }),
+    ))
 }
