@@ -14,7 +14,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use rodloop_exact::{branch_of_eta, eta_of_branch, paper_branch_loop};
 use rodloop_scene::Scene;
-use rodloop_solver::enclosed::descent::descend_branch;
+use rodloop_solver::enclosed::descent::solve_branch_descended;
 use rodloop_solver::enclosed::{
     detached_intervals, enclosed_cells, enclosed_solve_cells, free_circle, solve_branch,
     solve_enclosed, solve_levels, start_from_shape, EnclosedOptions, EnclosedState, SavedShape,
@@ -155,13 +155,26 @@ pub fn solve_state_with(
         // (N/4) to resolve the transitions on the graded mesh.
         cells = cells.max(32 * (2 + eta as usize));
     }
-    let b = solve_branch(r, lbar, stiffness, &source, cells, &opts)
-        .with_context(|| format!("the enclosed loop of branch {branch} at lbar = {lbar}"))?;
-    let (b, descent) = if keep_saddle {
-        (b, None)
+    let (b, descent, given_up) = if keep_saddle {
+        let b = solve_branch(r, lbar, stiffness, &source, cells, &opts)
+            .with_context(|| format!("the enclosed loop of branch {branch} at lbar = {lbar}"))?;
+        (b, None, Vec::new())
     } else {
-        descend_branch(b, &opts).context("descending from the saddle Newton converged to")?
+        // Two-segment rods: where the mesh of this accuracy does not end at a local minimum,
+        // the meshes of the finer levels (and twice the finest) are tried.
+        let mut ladder = vec![cells];
+        if !stiffness.is_uniform() {
+            for a in [Accuracy::Default, Accuracy::High] {
+                ladder.push(enclosed_cells(a, eta).max(32 * (2 + eta as usize)));
+            }
+            ladder.push(2 * ladder[ladder.len() - 1]);
+            ladder.retain(|&n| n >= cells);
+            ladder.dedup();
+        }
+        solve_branch_descended(r, lbar, stiffness, &source, &ladder, &opts)
+            .with_context(|| format!("the enclosed loop of branch {branch} at lbar = {lbar}"))?
     };
+    let cells = b.fine.model.cells();
     let stability = b.coarsest().stability(1e-6)?;
     let moved = descent.as_ref().is_some_and(|d| d.moved());
     let (energy, mut method) = if attached && !moved {
@@ -185,6 +198,9 @@ pub fn solve_state_with(
             ),
         )
     };
+    for why in &given_up {
+        method.push_str(&format!("; {why}"));
+    }
     if let Some(d) = descent.filter(|d| d.start().index > 0) {
         method.push_str(&format!(
             "; {} (descent at N/4 = {} cells, energies at N)",

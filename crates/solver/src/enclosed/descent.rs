@@ -11,7 +11,9 @@
 
 use nalgebra::SymmetricEigen;
 
-use super::branch::{resample_state, solve_levels, solve_levels_from_fine, BranchSolve};
+use super::branch::{
+    resample_state, solve_branch, solve_levels, solve_levels_from_fine, BranchSolve, SurfaceSource,
+};
 use super::solve::{solve_enclosed, EnclosedOptions, EnclosedState};
 use crate::descend::{descend as descend_saddle, Descent, DescentSettings, SaddleModel};
 use crate::identify::{identify_periods, Periods};
@@ -207,13 +209,14 @@ pub fn descend(
     Ok(out)
 }
 
-/// [`crate::descend::descend`] for an enclosed solve with its levels. Where the `N/4`
-/// level has index > 0, the descent runs there and the levels `N/2, N` with the error
+/// [`crate::descend::descend`] for an enclosed solve with its levels. Where the coarsest
+/// level ([`BranchSolve::coarsest`]) has index > 0, the descent runs at the `N/4` level and
+/// the levels `N/2, N` with the error
 /// estimate are redone from the state reached: by the cascade of [`solve_levels`], else
 /// from that state carried to `N` directly ([`solve_levels_from_fine`]). Where neither
 /// converges (point contacts: the coarse minimum's contact sits a node or two off the
 /// finer one's), the solve is returned as it was, with the reason in the descent's
-/// shortfall. Returns the (possibly new) solve and the descent (`None` when the `N/4`
+/// shortfall. Returns the (possibly new) solve and the descent (`None` when the coarsest
 /// level has index 0); the ends of the descent's path carry the energies at `N`.
 pub fn descend_branch(
     b: BranchSolve,
@@ -223,7 +226,9 @@ pub fn descend_branch(
         opts: opts.clone(),
         ..EnclosedSaddle::default()
     };
-    if saddle.index(&b.quarter)? == 0 {
+    // The index where callers compute it (the coarsest level: `N/8` where the cascade has
+    // it, a dense eigen-decomposition).
+    if saddle.index(b.coarsest())? == 0 {
         return Ok((b, None));
     }
     // Semismooth Newton from the displaced state does not decrease the energy on its way:
@@ -270,4 +275,75 @@ pub fn descend_branch(
             )),
         }),
     ))
+}
+
+/// An enclosed solve that ends at a local minimum where it can: [`solve_branch`] at the
+/// first mesh of `ladder` (cells, increasing) from the surface loop `source`, then
+/// [`descend_branch`]. Where that does not end at an index-0 state (the cascade does not
+/// converge, or the finer levels do not converge from the state the descent reached — the
+/// semismooth Newton cycles between contact nodes on some meshes of point-contact
+/// states), the next mesh of the ladder is tried: from the index-0 state reached on a
+/// coarser mesh, resampled to its `N/4` ([`resample_state`], [`solve_levels`]), else from
+/// the surface loop. Returns the solve (the last one that converged where none ends at
+/// index 0), its descent, and one line per mesh given up, saying why. Errors only when no
+/// mesh of the ladder converges.
+pub fn solve_branch_descended(
+    radius: f64,
+    lbar: f64,
+    stiffness: &crate::Stiffness,
+    source: &SurfaceSource,
+    ladder: &[usize],
+    opts: &EnclosedOptions,
+) -> Result<(BranchSolve, Option<Descent<EnclosedState>>, Vec<String>), SolverError> {
+    let saddle = EnclosedSaddle {
+        opts: opts.clone(),
+        ..EnclosedSaddle::default()
+    };
+    let mut notes = Vec::new();
+    let mut start: Option<EnclosedState> = None;
+    let mut last: Option<(BranchSolve, Option<Descent<EnclosedState>>)> = None;
+    let mut first_error = None;
+    for &cells in ladder {
+        let attempt = match &start {
+            Some(s) => {
+                notes.push(format!(
+                    "at N = {cells} cells started from the index-0 state reached at {} cells",
+                    s.model.cells()
+                ));
+                resample_state(s, cells / 4).and_then(|(m, z)| solve_levels(&m, z, None, opts))
+            }
+            None => solve_branch(radius, lbar, stiffness, source, cells, opts),
+        };
+        let b = match attempt {
+            Ok(b) => b,
+            Err(e) => {
+                notes.push(format!(
+                    "at N = {cells} cells the solve did not converge ({e})"
+                ));
+                first_error.get_or_insert(e);
+                continue;
+            }
+        };
+        let (b, d) = descend_branch(b, opts)?;
+        if saddle.index(b.coarsest())? == 0 {
+            return Ok((b, d, notes));
+        }
+        notes.push(format!(
+            "at N = {cells} cells: {}",
+            d.as_ref().map_or("index > 0".to_string(), |d| d.describe())
+        ));
+        if let Some(d) = &d {
+            if saddle.index(&d.state)? == 0 && d.state.energy() < b.quarter.energy() {
+                start = Some(d.state.clone());
+            }
+        }
+        last = Some((b, d));
+    }
+    match (last, first_error) {
+        (Some((b, d)), _) => Ok((b, d, notes)),
+        (None, Some(e)) => Err(e),
+        (None, None) => Err(SolverError::InvalidInput(
+            "an empty ladder of meshes".into(),
+        )),
+    }
 }
