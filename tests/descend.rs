@@ -115,3 +115,56 @@ fn minimum_is_returned_as_it_is() {
     assert!(s["descent"].is_null(), "{s}");
     assert!(!String::from_utf8_lossy(&o.stdout).contains("descended"));
 }
+
+/// The two-segment enclosed scene at L̄ = 0.9, branch 2: one state, index 0, at every
+/// accuracy level, the energies within each other's estimates; `--keep-saddle` at `fast`
+/// keeps the index-1 state Newton reaches there, above it.
+#[test]
+fn enclosed_state_is_the_same_at_every_accuracy() {
+    let dir = tmp("descend-enclosed-0.9");
+    let run = |acc: &str, extra: &[&str]| -> serde_json::Value {
+        let out = dir.join(format!("{acc}{}", extra.len()));
+        let mut args = vec![
+            "solve",
+            "--scene",
+            "data/scenes/inhomogeneous-d1-0.5-enclosed.toml",
+            "--lbar",
+            "0.9",
+            "--branch",
+            "2",
+            "--accuracy",
+            acc,
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let o = rodloop(&args);
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+    };
+    let states: Vec<serde_json::Value> = ["fast", "default", "high"]
+        .iter()
+        .map(|a| run(a, &[]))
+        .collect();
+    for s in &states {
+        assert_eq!(s["index"], 0, "{s}");
+    }
+    for a in &states {
+        for b in &states {
+            let (ea, eb) = (f(a, "energy"), f(b, "energy"));
+            let tol = f(a, "error_estimate") + f(b, "error_estimate");
+            assert!((ea - eb).abs() <= tol, "{ea} vs {eb} (± {tol})");
+        }
+    }
+    let saddle = run("fast", &["--keep-saddle"]);
+    assert!(saddle["index"].as_u64().unwrap() >= 1, "{saddle}");
+    let low = f(&states[0], "energy");
+    assert!(
+        f(&saddle, "energy") > low + f(&states[0], "error_estimate"),
+        "{saddle}"
+    );
+}
