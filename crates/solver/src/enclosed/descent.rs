@@ -105,16 +105,16 @@ pub fn enclosed_periods(state: &EnclosedState) -> Result<Periods, SolverError> {
     let total: f64 = w.iter().sum();
     let k = |g: usize| (state.z[2 * g], state.z[2 * g + 1]);
     let (mut m1, mut m2) = (0.0, 0.0);
-    for g in 0..ng {
-        m1 += w[g] * k(g).0 / total;
-        m2 += w[g] * k(g).1 / total;
+    for (g, wg) in w.iter().enumerate() {
+        m1 += wg * k(g).0 / total;
+        m2 += wg * k(g).1 / total;
     }
     let (mut a, mut b, mut c) = (0.0, 0.0, 0.0);
-    for g in 0..ng {
+    for (g, wg) in w.iter().enumerate() {
         let (x, y) = (k(g).0 - m1, k(g).1 - m2);
-        a += w[g] * x * x;
-        b += w[g] * x * y;
-        c += w[g] * y * y;
+        a += wg * x * x;
+        b += wg * x * y;
+        c += wg * y * y;
     }
     // Principal axis of [[a, b], [b, c]].
     let theta = 0.5 * (2.0 * b).atan2(a - c);
@@ -277,6 +277,9 @@ pub fn descend_branch(
     ))
 }
 
+/// What [`solve_branch_descended`] returns: the solve, its descent, the meshes given up.
+pub type DescendedSolve = (BranchSolve, Option<Descent<EnclosedState>>, Vec<String>);
+
 /// An enclosed solve that ends at a local minimum where it can: [`solve_branch`] at the
 /// first mesh of `ladder` (cells, increasing) from the surface loop `source`, then
 /// [`descend_branch`]. Where that does not end at an index-0 state (the cascade does not
@@ -294,7 +297,7 @@ pub fn solve_branch_descended(
     source: &SurfaceSource,
     ladder: &[usize],
     opts: &EnclosedOptions,
-) -> Result<(BranchSolve, Option<Descent<EnclosedState>>, Vec<String>), SolverError> {
+) -> Result<DescendedSolve, SolverError> {
     let saddle = EnclosedSaddle {
         opts: opts.clone(),
         ..EnclosedSaddle::default()
