@@ -14,7 +14,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use rodloop_exact::{branch_of_eta, eta_of_branch, paper_branch_loop};
 use rodloop_scene::Scene;
-use rodloop_solver::enclosed::descent::solve_branch_descended;
+use rodloop_solver::enclosed::descent::{descend_branch, solve_branch_descended};
 use rodloop_solver::enclosed::{
     detached_intervals, enclosed_cells, enclosed_solve_cells, free_circle, solve_branch,
     solve_enclosed, solve_levels, start_from_shape, EnclosedOptions, EnclosedState, SavedShape,
@@ -314,6 +314,7 @@ fn solve_from_shape(
     shape: &SavedShape,
     branch: Option<u32>,
     accuracy: Accuracy,
+    keep_saddle: bool,
 ) -> Result<EnclosedResult> {
     let eta = branch.filter(|&b| b > 0).map_or(2, eta_of_branch);
     let mut cells = if stiffness.is_uniform() {
@@ -325,18 +326,32 @@ fn solve_from_shape(
         cells = cells.max(32 * (2 + eta as usize));
     }
     let (model, z0) = start_from_shape(scene.radius, lbar, cells / 4, stiffness, shape)?;
-    let b = solve_levels(&model, z0, None, &EnclosedOptions::default())
-        .context("the enclosed loop from the saved shape")?;
+    let opts = EnclosedOptions::default();
+    let b =
+        solve_levels(&model, z0, None, &opts).context("the enclosed loop from the saved shape")?;
+    let (b, descent) = if keep_saddle {
+        (b, None)
+    } else {
+        descend_branch(b, &opts).context("descending from the saddle Newton converged to")?
+    };
     let stability = b.coarsest().stability(1e-6)?;
+    let mut method = format!(
+        "3-D enclosed model, N = {cells} cells (semismooth Newton from the saved shape); {}",
+        b.estimate_method()
+    );
+    if let Some(d) = descent.filter(|d| d.start().index > 0) {
+        method.push_str(&format!(
+            "; {} (descent at N/4 = {} cells, energies at N)",
+            d.describe(),
+            b.quarter.model.cells()
+        ));
+    }
     Ok(EnclosedResult {
         model_energy: (b.energy, b.energy_error),
         energy: (b.energy, b.energy_error),
         surface: None,
         stability,
-        method: format!(
-            "3-D enclosed model, N = {cells} cells (semismooth Newton from the saved shape); {}",
-            b.estimate_method()
-        ),
+        method,
         state: b.fine,
     })
 }
@@ -390,7 +405,15 @@ pub fn run_solve(args: &crate::solve::Args, scene: &Scene) -> Result<()> {
     };
     let run = OutputRun::begin(&args.out)?;
     let res = match (&shape, branch) {
-        (Some(sh), _) => solve_from_shape(scene, &stiffness, args.lbar, sh, branch, accuracy)?,
+        (Some(sh), _) => solve_from_shape(
+            scene,
+            &stiffness,
+            args.lbar,
+            sh,
+            branch,
+            accuracy,
+            args.keep_saddle,
+        )?,
         (None, Some(b)) => {
             solve_state_with(scene, &stiffness, args.lbar, b, accuracy, args.keep_saddle)?
         }
