@@ -21,12 +21,15 @@
 //!   modes are never taken for unstable directions;
 //! * the enclosed model ([`crate::enclosed::descent::EnclosedSaddle`]): the mass-normalised
 //!   tangent Hessian on the active constraints (gauges remove the symmetry modes), the
-//!   semismooth Newton from the displaced shape, branches by the periods of the geodesic
-//!   curvature of the loop's radial projection.
+//!   semismooth Newton from the displaced shape, branches by the periods of the curvature
+//!   vector's principal oscillation in the rotation-minimising frame (`κ_g` on the wall).
 //!
 //! [`descend_accurate`] applies [`descend`] to a surface solve with its error estimate:
 //! the descent runs at the main resolution and the companion solve of the estimate is
 //! redone from the state reached.
+//!
+//! (Over 600 lines with its tests: the trait, the routine, the surface side and its test on
+//! random two-segment rods are one job; the enclosed side lives with the enclosed model.)
 
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 

@@ -6,8 +6,7 @@
 //!
 //! [`EnclosedSaddle`] is the enclosed model's side of the one descent routine
 //! ([`crate::descend::descend`]): the same unstable directions and Newton solves, with the
-//! branch of a state read from the geodesic curvature of its radial projection
-//! ([`enclosed_periods`]).
+//! branch of a state read from the periods of its curvature ([`enclosed_periods`]).
 
 use nalgebra::SymmetricEigen;
 
