@@ -349,3 +349,35 @@ pub fn solve_branch_descended(
         )),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Stiffness;
+
+    /// Enclosed states started from the exact loops of the paper's branches (uniform rod):
+    /// [`enclosed_periods`] names the branch of the state reached, attached (η = 2 at
+    /// L̄ = 1.5, η = 3 at 2.5) or lifted off (the figure-eight, η = 1, at L̄ = 1.4).
+    #[test]
+    fn enclosed_states_are_identified_as_their_branch() {
+        let st = Stiffness::Uniform { d: 1.0 };
+        for (eta, lbar) in [(2u32, 1.5), (1, 1.4), (3, 2.5)] {
+            let l = rodloop_exact::paper_branch_loop(eta, lbar).unwrap();
+            let b = solve_branch(
+                1.0,
+                lbar,
+                &st,
+                &SurfaceSource::Exact(l),
+                64,
+                &EnclosedOptions::default(),
+            )
+            .unwrap();
+            let p = enclosed_periods(&b.fine).unwrap();
+            assert_eq!(p.eta, eta, "eta {eta} at {lbar}: {p:?}");
+            assert!(p.consistent(), "eta {eta} at {lbar}: {p:?}");
+            // Attached where the surface loop needs no pulling wall, lifted off otherwise.
+            let attached = b.fine.contact(1e-9).unwrap().fraction >= 1.0;
+            assert_eq!(attached, eta != 1, "eta {eta} at {lbar}");
+        }
+    }
+}
