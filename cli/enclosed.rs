@@ -14,6 +14,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use rodloop_exact::{branch_of_eta, eta_of_branch, paper_branch_loop};
 use rodloop_scene::Scene;
+use rodloop_solver::enclosed::descent::{descend_branch, solve_branch_descended};
 use rodloop_solver::enclosed::{
     detached_intervals, enclosed_cells, enclosed_solve_cells, free_circle, solve_branch,
     solve_enclosed, solve_levels, start_from_shape, EnclosedOptions, EnclosedState, SavedShape,
@@ -45,13 +46,27 @@ pub struct EnclosedResult {
     pub model_energy: (f64, f64),
 }
 
-/// Solve branch `branch` of an enclosed scene at `lbar`.
+/// Solve branch `branch` of an enclosed scene at `lbar`, descending from a saddle to the
+/// local minimum of the branch below it ([`solve_state_with`]).
 pub fn solve_state(
     scene: &Scene,
     stiffness: &Stiffness,
     lbar: f64,
     branch: u32,
     accuracy: Accuracy,
+) -> Result<EnclosedResult> {
+    solve_state_with(scene, stiffness, lbar, branch, accuracy, false)
+}
+
+/// [`solve_state`]; `keep_saddle`: return the state Newton converges to even where it is a
+/// saddle.
+pub fn solve_state_with(
+    scene: &Scene,
+    stiffness: &Stiffness,
+    lbar: f64,
+    branch: u32,
+    accuracy: Accuracy,
+    keep_saddle: bool,
 ) -> Result<EnclosedResult> {
     let r = scene.radius;
     let opts = EnclosedOptions::default();
@@ -140,10 +155,29 @@ pub fn solve_state(
         // (N/4) to resolve the transitions on the graded mesh.
         cells = cells.max(32 * (2 + eta as usize));
     }
-    let b = solve_branch(r, lbar, stiffness, &source, cells, &opts)
-        .with_context(|| format!("the enclosed loop of branch {branch} at lbar = {lbar}"))?;
+    let (b, descent, given_up) = if keep_saddle {
+        let b = solve_branch(r, lbar, stiffness, &source, cells, &opts)
+            .with_context(|| format!("the enclosed loop of branch {branch} at lbar = {lbar}"))?;
+        (b, None, Vec::new())
+    } else {
+        // Two-segment rods: where the mesh of this accuracy does not end at a local minimum,
+        // the meshes of the finer levels (and twice the finest) are tried.
+        let mut ladder = vec![cells];
+        if !stiffness.is_uniform() {
+            for a in [Accuracy::Default, Accuracy::High] {
+                ladder.push(enclosed_cells(a, eta).max(32 * (2 + eta as usize)));
+            }
+            ladder.push(2 * ladder[ladder.len() - 1]);
+            ladder.retain(|&n| n >= cells);
+            ladder.dedup();
+        }
+        solve_branch_descended(r, lbar, stiffness, &source, &ladder, &opts)
+            .with_context(|| format!("the enclosed loop of branch {branch} at lbar = {lbar}"))?
+    };
+    let cells = b.fine.model.cells();
     let stability = b.coarsest().stability(1e-6)?;
-    let (energy, method) = if attached {
+    let moved = descent.as_ref().is_some_and(|d| d.moved());
+    let (energy, mut method) = if attached && !moved {
         (
             (e_surf, surface_error),
             format!(
@@ -154,7 +188,7 @@ pub fn solve_state(
         (
             (b.energy, b.energy_error),
             format!(
-                "3-D enclosed model, N = {cells} cells (semismooth Newton from the surface loop{}, lambda_min = {lam_min:.6} < 0); {}",
+                "3-D enclosed model, N = {cells} cells (semismooth Newton from the surface loop{}, lambda_min = {lam_min:.6}); {}",
                 if b.homotopy {
                     " by the pull homotopy"
                 } else {
@@ -164,6 +198,16 @@ pub fn solve_state(
             ),
         )
     };
+    for why in &given_up {
+        method.push_str(&format!("; {why}"));
+    }
+    if let Some(d) = descent.filter(|d| d.start().index > 0) {
+        method.push_str(&format!(
+            "; {} (descent at N/4 = {} cells, energies at N)",
+            d.describe(),
+            b.quarter.model.cells()
+        ));
+    }
     Ok(EnclosedResult {
         model_energy: (b.energy, b.energy_error),
         state: b.fine,
@@ -270,6 +314,7 @@ fn solve_from_shape(
     shape: &SavedShape,
     branch: Option<u32>,
     accuracy: Accuracy,
+    keep_saddle: bool,
 ) -> Result<EnclosedResult> {
     let eta = branch.filter(|&b| b > 0).map_or(2, eta_of_branch);
     let mut cells = if stiffness.is_uniform() {
@@ -281,18 +326,32 @@ fn solve_from_shape(
         cells = cells.max(32 * (2 + eta as usize));
     }
     let (model, z0) = start_from_shape(scene.radius, lbar, cells / 4, stiffness, shape)?;
-    let b = solve_levels(&model, z0, None, &EnclosedOptions::default())
-        .context("the enclosed loop from the saved shape")?;
+    let opts = EnclosedOptions::default();
+    let b =
+        solve_levels(&model, z0, None, &opts).context("the enclosed loop from the saved shape")?;
+    let (b, descent) = if keep_saddle {
+        (b, None)
+    } else {
+        descend_branch(b, &opts).context("descending from the saddle Newton converged to")?
+    };
     let stability = b.coarsest().stability(1e-6)?;
+    let mut method = format!(
+        "3-D enclosed model, N = {cells} cells (semismooth Newton from the saved shape); {}",
+        b.estimate_method()
+    );
+    if let Some(d) = descent.filter(|d| d.start().index > 0) {
+        method.push_str(&format!(
+            "; {} (descent at N/4 = {} cells, energies at N)",
+            d.describe(),
+            b.quarter.model.cells()
+        ));
+    }
     Ok(EnclosedResult {
         model_energy: (b.energy, b.energy_error),
         energy: (b.energy, b.energy_error),
         surface: None,
         stability,
-        method: format!(
-            "3-D enclosed model, N = {cells} cells (semismooth Newton from the saved shape); {}",
-            b.estimate_method()
-        ),
+        method,
         state: b.fine,
     })
 }
@@ -346,8 +405,18 @@ pub fn run_solve(args: &crate::solve::Args, scene: &Scene) -> Result<()> {
     };
     let run = OutputRun::begin(&args.out)?;
     let res = match (&shape, branch) {
-        (Some(sh), _) => solve_from_shape(scene, &stiffness, args.lbar, sh, branch, accuracy)?,
-        (None, Some(b)) => solve_state(scene, &stiffness, args.lbar, b, accuracy)?,
+        (Some(sh), _) => solve_from_shape(
+            scene,
+            &stiffness,
+            args.lbar,
+            sh,
+            branch,
+            accuracy,
+            args.keep_saddle,
+        )?,
+        (None, Some(b)) => {
+            solve_state_with(scene, &stiffness, args.lbar, b, accuracy, args.keep_saddle)?
+        }
         (None, None) => unreachable!("a branch or --from is required above"),
     };
     let st = &res.state;

@@ -41,6 +41,11 @@ pub struct Args {
     /// Accuracy: fast, default or high (overrides the scene's).
     #[arg(long, value_parser = crate::solve::ACCURACY_CHOICES)]
     pub accuracy: Option<String>,
+    /// Keep the state Newton converges to even where it is a saddle (index > 0). By default
+    /// a saddle is left along its unstable directions for the local minimum of the same
+    /// branch below it, and the output says so.
+    #[arg(long)]
+    pub keep_saddle: bool,
     /// Also draw the loop (four views, SVG and PNG) next to the CSV (see `rodloop draw`).
     #[arg(long)]
     pub draw: bool,
@@ -293,6 +298,19 @@ pub fn run(args: &Args) -> Result<()> {
             args.lbar
         ))
     })?;
+    // A saddle is not what the loop settles into: descend to the local minimum of its branch.
+    let (res, descent) = if args.keep_saddle {
+        (res, None)
+    } else {
+        rodloop_solver::descend::descend_accurate(
+            res,
+            scene.radius,
+            &stiffness,
+            &start,
+            &SolveOptions::default(),
+        )
+        .context("descending from the saddle Newton converged to")?
+    };
     let eq = &res.equilibrium;
     let report = eq.report();
     if !report.converged {
@@ -357,6 +375,15 @@ pub fn run(args: &Args) -> Result<()> {
         "iterations": report.iterations,
         "relax_iterations": report.relax_iterations,
         "strategy": strategy.describe(),
+        "descent": descent.as_ref().map(|d| serde_json::json!({
+            "from_index": d.start().index,
+            "from_energy": d.start().energy,
+            "to_index": d.end().index,
+            "to_energy": d.end().energy,
+            "path": d.path,
+            "description": d.describe(),
+        })),
+        "keep_saddle": args.keep_saddle,
         "units": UNITS,
     })?;
     crate::draw::add_shape(&mut summary, &shape);
@@ -383,6 +410,9 @@ pub fn run(args: &Args) -> Result<()> {
     );
     if strategy != Strategy::Direct {
         outln!("reached by {}", strategy.describe());
+    }
+    if let Some(d) = descent.as_ref().filter(|d| d.start().index > 0) {
+        outln!("{}", d.describe());
     }
     outln!(
         "{} nodes, {} Newton iterations, KKT residual {:.1e}; wrote config.csv, summary.json{} to {}",

@@ -14,6 +14,8 @@
 //! * [`solve()`]: globalised Newton on the KKT system → [`Equilibrium`] (forces, profiles,
 //!   energies) with a [`ConvergenceReport`].
 //! * [`stability`]: constrained Hessian spectrum, index and symmetry modes.
+//! * [`descend`](mod@descend): from a saddle along its unstable directions to a local minimum
+//!   of the same branch (both confinement models).
 //! * [`start`]: starting shapes (Euler rotation curves, exact loops, point clouds, resampled
 //!   equilibria).
 //! * [`accuracy`]: resolution choice and Richardson extrapolation.
@@ -27,6 +29,7 @@
 
 pub mod accuracy;
 pub mod continuation;
+pub mod descend;
 pub mod enclosed;
 pub mod frame;
 pub mod identify;

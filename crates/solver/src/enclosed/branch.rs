@@ -5,7 +5,8 @@
 use rodloop_exact::ExactLoop;
 
 use super::solve::{
-    solve_by_pull_homotopy, solve_enclosed, start_from_surface, EnclosedOptions, EnclosedState,
+    solve_by_pull_homotopy, solve_enclosed, start_from_curvature, start_from_surface,
+    transfer_multipliers, EnclosedOptions, EnclosedState,
 };
 use crate::solve::Equilibrium;
 use crate::stiffness::Stiffness;
@@ -198,6 +199,60 @@ fn solve_ladder(
     let coarse = ladder.pop().expect("N/2");
     let quarter = ladder.pop().expect("N/4");
     let eighth = ladder.pop();
+    assemble(fine, coarse, quarter, eighth, homotopy)
+}
+
+/// The state `state` carried to `cells` cells: its curvature interpolated
+/// ([`EnclosedState::curvature_at`]), the same start point, the multipliers carried over
+/// ([`transfer_multipliers`]); a start for [`solve_enclosed`].
+pub fn resample_state(
+    state: &EnclosedState,
+    cells: usize,
+) -> Result<(super::model::EnclosedModel, Vec<f64>), SolverError> {
+    let m = &state.model;
+    let r0 = m.start_point(&state.z);
+    let stiff = m.stiffness().kind().clone();
+    let (model, mut z) = start_from_curvature(
+        m.radius(),
+        m.lbar(),
+        cells,
+        &stiff,
+        |s| state.curvature_at(s),
+        [r0[0], r0[1], r0[2]],
+    )?;
+    transfer_multipliers(m, &state.z, &model, &mut z);
+    Ok((model, z))
+}
+
+/// The levels `N/2, N/4` of a state solved at `N` cells (each re-solved from `fine`
+/// resampled, [`resample_state`]) and the error estimate of [`solve_levels`]: for a state
+/// found at the finest level (a descent from a saddle there).
+pub fn solve_levels_from_fine(
+    fine: EnclosedState,
+    opts: &EnclosedOptions,
+) -> Result<BranchSolve, SolverError> {
+    let n = fine.model.cells();
+    if n < 32 || n % 4 != 0 {
+        return Err(SolverError::InvalidInput(format!(
+            "enclosed solves need a multiple of 4 cells, at least 32 (got {n})"
+        )));
+    }
+    let (m2, z2) = resample_state(&fine, n / 2)?;
+    let coarse = solve_enclosed(&m2, z2, opts)?;
+    let (m4, z4) = resample_state(&fine, n / 4)?;
+    let quarter = solve_enclosed(&m4, z4, opts)?;
+    assemble(fine, coarse, quarter, None, false)
+}
+
+/// A [`BranchSolve`] from its levels: the contact summary of the finest and the error
+/// estimate (see [`BranchSolve::energy_error`]).
+fn assemble(
+    fine: EnclosedState,
+    coarse: EnclosedState,
+    quarter: EnclosedState,
+    eighth: Option<EnclosedState>,
+    homotopy: bool,
+) -> Result<BranchSolve, SolverError> {
     let energy = fine.energy();
     let contact = fine.contact(1e-9)?;
     let attached = contact.fraction >= 1.0;

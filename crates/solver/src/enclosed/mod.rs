@@ -15,7 +15,9 @@
 //! * [`solve`](mod@solve): semismooth Newton, starts (surface loop, free circle), contact
 //!   summary, stability on the active constraints' tangent space.
 //! * [`from_shape`]: a start from a saved shape (`solve --from`).
-//! * [`descent`]: leaving a saddle along its unstable direction.
+//! * [`descent`]: leaving a saddle along its unstable direction; the enclosed side of the
+//!   one descent routine ([`crate::descend`]) and an enclosed solve that ends at a local
+//!   minimum.
 //! * [`continuation`]: natural-parameter steps in `L̄` (the enclosed diagram's tracer).
 //! * [`branch`]: a paper branch in an enclosed scene with the two-resolution error estimate.
 
