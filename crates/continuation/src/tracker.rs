@@ -6,7 +6,7 @@ use nalgebra::DVector;
 use crate::branch::{Branch, SpecialKind, SpecialPoint};
 use crate::error::{BoxError, ContinuationError};
 use crate::linalg::{self, Evaluator, Tangent};
-use crate::newton::{correct_bordered, newton_fixed, Corrected, CorrectorTol};
+use crate::newton::{correct_bordered, Corrected, CorrectorTol};
 use crate::problem::{Problem, Stability};
 use crate::settings::PseudoArclength;
 

@@ -330,11 +330,14 @@ pub(crate) fn analyse_circle(
         // Three-level Richardson (errors ∝ h⁴, h⁶): see the module docs.
         let (lambda, err) = match (at(&coarse), at(&finest)) {
             (Some(l0), Some(l2)) => {
-                let r1 = l1 + (l1 - l0) / 15.0;
-                let r2 = l2 + (l2 - l1) / 15.0;
+                let r1 = rodloop_solver::richardson(l1, l0);
+                let r2 = rodloop_solver::richardson(l2, l1);
                 (r2 + (r2 - r1) / 63.0, 2.0 * (r2 - r1).abs() / 63.0)
             }
-            (Some(l0), None) => (l1 + (l1 - l0) / 15.0, (l1 - l0).abs() / 15.0),
+            (Some(l0), None) => (
+                rodloop_solver::richardson(l1, l0),
+                rodloop_solver::richardson_error(l1, l0),
+            ),
             _ => (l1, 0.0),
         };
         let n = mode.periods;

@@ -82,6 +82,22 @@ impl Accuracy {
     }
 }
 
+/// Order `p` of the scheme's discretisation error in the cell length `h` (energies and
+/// `λ`; see the module docs): halving `h` divides the error by `2^p = 16`.
+pub const ORDER: i32 = 4;
+
+/// Richardson extrapolation of a quantity computed with cells of length `h` (`fine`) and
+/// `2h` (`coarse`) by a scheme of order [`ORDER`]: `X* = X_h + (X_h − X_2h)/(2⁴ − 1)`.
+pub fn richardson(fine: f64, coarse: f64) -> f64 {
+    fine + (fine - coarse) / 15.0
+}
+
+/// Error estimate of the finer of two values at `h` and `2h` (order [`ORDER`]):
+/// `|X_h − X_2h|/(2⁴ − 1)` (also a conservative bound for [`richardson`]'s value).
+pub fn richardson_error(fine: f64, coarse: f64) -> f64 {
+    (fine - coarse).abs() / 15.0
+}
+
 /// Result of [`solve_with_accuracy`].
 #[derive(Clone, Debug)]
 pub struct AccurateEquilibrium {
@@ -175,10 +191,10 @@ pub fn finish_with_accuracy(
     };
     let (ef, ec) = (fine.energy(), coarse.energy());
     let (lf, lc) = (fine.lambda_range(), coarse.lambda_range());
-    let energy_error = (ef.total - ec.total).abs() / 15.0;
-    let lambda_error = ((lf.0 - lc.0).abs()).max((lf.1 - lc.1).abs()) / 15.0;
+    let energy_error = richardson_error(ef.total, ec.total);
+    let lambda_error = richardson_error(lf.0, lc.0).max(richardson_error(lf.1, lc.1));
     let (energy, lambda_range) = if accuracy == Accuracy::High {
-        let rich = |f: f64, c: f64| f + (f - c) / 15.0;
+        let rich = richardson;
         (
             EnergyReport {
                 total: rich(ef.total, ec.total),
