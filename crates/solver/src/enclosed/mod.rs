@@ -17,6 +17,7 @@
 //! * [`from_shape`]: a start from a saved shape (`solve --from`).
 //! * [`descent`]: leaving a saddle along its unstable direction.
 //! * [`continuation`]: natural-parameter steps in `L̄` (the enclosed diagram's tracer).
+//! * [`seam`]: the model behind [`crate::Confinement`] (continuation through the seam).
 //! * [`branch`]: a paper branch in an enclosed scene with the two-resolution error estimate.
 
 pub mod branch;
@@ -26,6 +27,7 @@ pub mod from_shape;
 pub mod jet;
 pub mod lifted;
 pub mod model;
+pub mod seam;
 pub mod solve;
 
 pub use branch::{
@@ -35,6 +37,7 @@ pub use branch::{
 };
 pub use from_shape::{start_from_shape, SavedShape};
 pub use model::{EnclosedModel, Gauge};
+pub use seam::EnclosedFactor;
 pub use solve::{
     free_circle, solve_enclosed, start_from_surface, Contact, EnclosedOptions, EnclosedState,
 };
