@@ -11,6 +11,13 @@
 //! determinant yet). Parameter derivatives `∂F/∂θ` are central differences of the residual
 //! ([`rodloop_continuation::fd_dparam`], error `O(δ²)`): the chain of cell propagators
 //! depends on `L̄` through every cell length, and its analytic derivative is not written yet.
+//!
+//! Where the contact set changes (nodes touching down with zero force, or letting go),
+//! `min(λ_j, σ g_j)` has a kink: Newton at a fixed parameter (the natural-parameter loop,
+//! [`rodloop_continuation::natural`]) passes it, while the bordered corrector of
+//! pseudo-arclength stalls there (measured on the lifted-off figure-eight at `L̄ ≈ 1.4198`,
+//! `N = 64`, in this module's tests): tracing through contact changes needs events on
+//! `λ_j` and `g_j` and a switch of the active set.
 
 use std::cell::OnceCell;
 
@@ -252,6 +259,45 @@ mod tests {
             let gaps = model.gaps(pt.x.as_slice()).unwrap();
             assert!(gaps.iter().all(|g| *g > -1e-9), "L̄ = {l}");
         }
+    }
+
+    #[test]
+    fn pseudo_arclength_through_the_seam_reaches_the_tracer_state() {
+        // The continuation crate's pseudo-arclength homotopy (target::reach) on the seam from
+        // L̄ = 1.40 to 1.415, corrected there by Newton through the seam: the energy of the
+        // tracer's state at 1.415 (three step_to steps).
+        use rodloop_continuation::target::{reach, ReachLimits};
+        use rodloop_continuation::{newton, PseudoArclength};
+        let a = figure_eight(1.40);
+        let problem = ParamProblem::new(a.model.clone(), Param::Lbar).unwrap();
+        let settings = PseudoArclength::new()
+            .with_ds(0.005)
+            .and_then(|s| s.with_ds_bounds(1e-6, 0.01))
+            .and_then(|s| s.with_detect_branch_points(false))
+            .unwrap();
+        let z0 = DVector::from_column_slice(&a.z);
+        let limits = ReachLimits::default();
+        let r = reach(&problem, &settings, &z0, 1.40, 1.415, &limits, || true).unwrap();
+        assert!(r.folds.is_empty());
+        let (x, _) = newton(&problem, &r.x, 1.415, 1e-10, 30).unwrap();
+        let model = problem.model_at(1.415).unwrap();
+        let e_seam = Confinement::energy(&model, x.as_slice()).unwrap();
+        let opts = EnclosedOptions::default();
+        let mut cur = a.clone();
+        for l in [1.405, 1.41, 1.415] {
+            cur = cur.step_to(l, &opts).unwrap();
+        }
+        let e_tracer = cur.energy();
+        assert!(
+            (e_seam - e_tracer).abs() < 1e-9 * e_tracer,
+            "seam {e_seam}, tracer {e_tracer}"
+        );
+        // Where the contact set changes (four nodes touch down with zero force near
+        // L̄ = 1.4198) the semismooth residual has a kink and the bordered corrector stalls:
+        // pseudo-arclength through the seam stops there (the natural-parameter loop, Newton
+        // at fixed L̄, passes it; see the test above).
+        let stop = reach(&problem, &settings, &z0, 1.40, 1.43, &limits, || true).unwrap_err();
+        assert!((stop.closest - 1.4198).abs() < 1e-3, "{}", stop.closest);
     }
 
     #[test]
