@@ -37,9 +37,7 @@
 
 use nalgebra::DVector;
 use rodloop_solver::stability::TangentReduction;
-use rodloop_solver::{
-    solve, Accuracy, Equilibrium, Globalization, SolveOptions, SolverError, SurfaceModel,
-};
+use rodloop_solver::{solve, Equilibrium, Globalization, SolveOptions, SolverError, SurfaceModel};
 use serde::{Deserialize, Serialize};
 
 use crate::refine::resolve;
@@ -245,11 +243,7 @@ fn dominant_frequency(v: &DVector<f64>, cells: usize) -> u32 {
 /// Coarsest of the resolutions `(N, 2N, 4N)` of the buckling loads of the m-fold circle:
 /// `N = c (m + 2)` with `c` = 4, 8, 16 for fast, default, high.
 fn load_cells(opts: &DiagramOptions, m: u32) -> usize {
-    let base = match opts.accuracy {
-        Accuracy::Fast => 4 * (m as usize + 2),
-        Accuracy::Default => 8 * (m as usize + 2),
-        Accuracy::High => 16 * (m as usize + 2),
-    };
+    let base = opts.accuracy.pick(rodloop_solver::accuracy::LOAD_CELLS) * (m as usize + 2);
     base.div_ceil(2) * 2
 }
 
