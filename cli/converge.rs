@@ -164,7 +164,8 @@ pub fn run(args: &Args) -> Result<()> {
     );
     let mut rows = Vec::new();
     for (i, r) in rungs.iter().enumerate() {
-        let estimate = (i > 0).then(|| (r.energy - rungs[i - 1].energy).abs() / 15.0);
+        let estimate =
+            (i > 0).then(|| rodloop_solver::richardson_error(r.energy, rungs[i - 1].energy));
         let vs_finest = (i + 1 < rungs.len()).then(|| (r.energy - finest_e).abs());
         let vs_exact = exact.map(|x| (r.energy - x).abs());
         // Order from three consecutive rungs: log2(|E_{N/2} − E_N| / |E_N − E_{2N}|).

@@ -88,7 +88,7 @@ pub fn solve_state_with(
         let (cm, cz) = free_circle(r, lbar, cells / 2, stiffness)?;
         let comp = solve_enclosed(&cm, cz, &opts)?;
         let e = state.energy();
-        let est = (e - comp.energy()).abs() / 15.0;
+        let est = rodloop_solver::richardson_error(e, comp.energy());
         let stability = comp.stability(1e-6)?;
         let exact = if stiffness.is_uniform() {
             Some(1.0 / lbar)

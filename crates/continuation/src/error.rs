@@ -118,3 +118,26 @@ impl ContinuationError {
         }
     }
 }
+
+/// Errors of the [root finders](crate::roots): the caller's function failed, or the
+/// bracket has no sign change. Generic over the function's own error `E`, which is
+/// handed back unchanged (an unconverged iteration is not an error: it is reported in
+/// the [`Root`](crate::roots::Root)).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RootError<E> {
+    /// The function failed at some `x`.
+    #[error("{0}")]
+    Function(E),
+    /// `f(a)` and `f(b)` have the same strict sign.
+    #[error("no sign change in [{a}, {b}] (f = {fa:e}, {fb:e})")]
+    NoBracket {
+        /// Left end.
+        a: f64,
+        /// Right end.
+        b: f64,
+        /// `f(a)`.
+        fa: f64,
+        /// `f(b)`.
+        fb: f64,
+    },
+}

@@ -17,6 +17,13 @@
 //!   special points and stop; `run` and `switch_branch` are loops over it.
 //! * [`newton`] solves at a fixed parameter; [`solve_at`] re-solves a computed branch
 //!   at an exact parameter value.
+//! * [`target::reach`] continues a solution until the parameter reaches a target value
+//!   (a homotopy through folds); [`natural`] holds the natural-parameter loop (step the
+//!   parameter, correct with the caller's solver, halve on failure) for any state type
+//!   and corrector, and [`natural::natural_branch`] for a [`Problem`].
+//! * [`axis`] continues a problem in `ln θ` instead of `θ` ([`axis::OnAxis`]).
+//! * [`roots`] holds the one-dimensional root finders (secant, Illinois, Brent) used
+//!   to locate special points and exchanges of stability.
 //!
 //! Linear algebra: every solve with the Jacobian goes through
 //! [`Problem::factorize`], which returns a [`Factorization`] of `J = ∂F/∂x` — by
@@ -65,19 +72,23 @@
 
 #![warn(missing_docs)]
 
+pub mod axis;
 mod branch;
 mod error;
 mod factorization;
 mod linalg;
+pub mod natural;
 mod newton;
 mod problem;
+pub mod roots;
 mod settings;
 mod stepper;
 mod switching;
+pub mod target;
 mod tracker;
 
 pub use branch::{Branch, Point, SpecialKind, SpecialPoint, StopReason};
-pub use error::{BoxError, ContinuationError, SharedError};
+pub use error::{BoxError, ContinuationError, RootError, SharedError};
 pub use factorization::{DenseLu, Factorization};
 pub use newton::{newton, solve_all_at, solve_at, NewtonReport};
 pub use problem::{fd_dparam, fd_jacobian, Problem, Stability};

@@ -450,6 +450,61 @@ impl<'c, 'a, P: Problem + ?Sized> Stepper<'c, 'a, P> {
     }
 }
 
+/// Running a [`Continuation`]: [`Continuation::run`] and [`Continuation::start`] live here,
+/// beside the [`Stepper`] they return, so that the tracker does not depend on the stepper.
+impl<'a, P: Problem + ?Sized> Continuation<'a, P> {
+    /// Traces the branch through the solution near `(x0, p0)`.
+    ///
+    /// `x0` is first corrected at fixed `p0` by Newton's method (skipped if
+    /// `‖F(x0, p0)‖∞ ≤ tol` already, so that a run may start exactly at a singular
+    /// point). The first tangent is oriented by the settings' direction (towards
+    /// increasing `p` for [`Direction::Forward`](crate::Direction::Forward)); if the
+    /// start is a fold, the tangent is the kernel vector of `[∂F/∂x ∂F/∂p]` with the
+    /// sign of its `p`-component undetermined.
+    ///
+    /// # Errors
+    /// Invalid settings, a wrong `x0` length, `p0` outside the range, failure of the
+    /// initial Newton correction, and errors of the problem or the stability callback.
+    /// Difficulties met later end the run with a [`StopReason`](crate::StopReason) instead.
+    pub fn run(&self, x0: &DVector<f64>, p0: f64) -> Result<Branch, ContinuationError> {
+        let mut stepper = self.start(x0, p0)?;
+        while stepper.step()?.stop.is_none() {}
+        Ok(stepper.finish())
+    }
+
+    /// Prepares a run from the solution near `(x0, p0)` without taking a step: the
+    /// returned [`Stepper`] holds the corrected first point and its tangent, and
+    /// advances one accepted step per [`Stepper::step`].
+    ///
+    /// `x0` is corrected and the first tangent oriented exactly as in
+    /// [`Continuation::run`], which is this function followed by calls of
+    /// [`Stepper::step`] until one reports a stop, and [`Stepper::finish`].
+    ///
+    /// # Errors
+    /// As [`Continuation::run`] for the set-up: invalid settings, a wrong `x0` length,
+    /// `p0` outside the range, failure of the initial Newton correction, and errors of
+    /// the problem or the stability callback.
+    pub fn start(
+        &self,
+        x0: &DVector<f64>,
+        p0: f64,
+    ) -> Result<Stepper<'_, 'a, P>, ContinuationError> {
+        let st = self.settings();
+        st.validate()?;
+        let ev = Evaluator::new(self.problem());
+        ev.check_state(x0)?;
+        self.check_in_range(p0)?;
+        let n = ev.n;
+        let (x, _) = newton_fixed(&ev, x0.clone(), p0, st.tol, st.max_iterations)?;
+        let y0 = ev.join(&x, p0);
+        let mut border = DVector::zeros(n + 1);
+        border[n] = st.direction.sign();
+        let tan = linalg::tangent(&ev, &y0, &border)?;
+        let node0 = self.make_node(&ev, y0, tan, 0.0, 0.0)?;
+        Ok(Stepper::from_nodes(self, vec![node0], st.ds, 0))
+    }
+}
+
 impl<P: Problem + ?Sized> Iterator for Stepper<'_, '_, P> {
     type Item = Result<Step, ContinuationError>;
 

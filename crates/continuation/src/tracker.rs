@@ -6,10 +6,9 @@ use nalgebra::DVector;
 use crate::branch::{Branch, SpecialKind, SpecialPoint};
 use crate::error::{BoxError, ContinuationError};
 use crate::linalg::{self, Evaluator, Tangent};
-use crate::newton::{correct_bordered, newton_fixed, Corrected, CorrectorTol};
+use crate::newton::{correct_bordered, Corrected, CorrectorTol};
 use crate::problem::{Problem, Stability};
 use crate::settings::PseudoArclength;
-use crate::stepper::Stepper;
 
 /// Type of a user event function `g(x, p)`.
 type EventFn<'a> = Box<dyn Fn(&DVector<f64>, f64) -> f64 + 'a>;
@@ -78,8 +77,9 @@ impl<F: Fn(&DVector<f64>, f64) -> usize> Stability for FnStability<F> {
 ///
 /// # Stepping
 /// [`Continuation::run`] is [`Continuation::start`] followed by
-/// [`Stepper::step`] until a stop; callers wanting control between steps use the
-/// [`Stepper`] directly.
+/// [`Stepper::step`](crate::Stepper::step) until a stop; callers wanting control between
+/// steps use the [`Stepper`](crate::Stepper) directly (both live in the stepper module,
+/// which depends on this one and not the other way round).
 /// * **Index changes** (with a stability callback): the integer index differs between
 ///   the points.
 /// * **Events**: a user function `g(x, p)` changes sign.
@@ -234,57 +234,6 @@ impl<'a, P: Problem + ?Sized> Continuation<'a, P> {
     /// The problem.
     pub fn problem(&self) -> &'a P {
         self.problem
-    }
-
-    /// Traces the branch through the solution near `(x0, p0)`.
-    ///
-    /// `x0` is first corrected at fixed `p0` by Newton's method (skipped if
-    /// `‖F(x0, p0)‖∞ ≤ tol` already, so that a run may start exactly at a singular
-    /// point). The first tangent is oriented by the settings' direction (towards
-    /// increasing `p` for [`Direction::Forward`](crate::Direction::Forward)); if the
-    /// start is a fold, the tangent is the kernel vector of `[∂F/∂x ∂F/∂p]` with the
-    /// sign of its `p`-component undetermined.
-    ///
-    /// # Errors
-    /// Invalid settings, a wrong `x0` length, `p0` outside the range, failure of the
-    /// initial Newton correction, and errors of the problem or the stability callback.
-    /// Difficulties met later end the run with a [`StopReason`](crate::StopReason) instead.
-    pub fn run(&self, x0: &DVector<f64>, p0: f64) -> Result<Branch, ContinuationError> {
-        let mut stepper = self.start(x0, p0)?;
-        while stepper.step()?.stop.is_none() {}
-        Ok(stepper.finish())
-    }
-
-    /// Prepares a run from the solution near `(x0, p0)` without taking a step: the
-    /// returned [`Stepper`] holds the corrected first point and its tangent, and
-    /// advances one accepted step per [`Stepper::step`].
-    ///
-    /// `x0` is corrected and the first tangent oriented exactly as in
-    /// [`Continuation::run`], which is this function followed by calls of
-    /// [`Stepper::step`] until one reports a stop, and [`Stepper::finish`].
-    ///
-    /// # Errors
-    /// As [`Continuation::run`] for the set-up: invalid settings, a wrong `x0` length,
-    /// `p0` outside the range, failure of the initial Newton correction, and errors of
-    /// the problem or the stability callback.
-    pub fn start(
-        &self,
-        x0: &DVector<f64>,
-        p0: f64,
-    ) -> Result<Stepper<'_, 'a, P>, ContinuationError> {
-        let st = &self.settings;
-        st.validate()?;
-        let ev = Evaluator::new(self.problem);
-        ev.check_state(x0)?;
-        self.check_in_range(p0)?;
-        let n = ev.n;
-        let (x, _) = newton_fixed(&ev, x0.clone(), p0, st.tol, st.max_iterations)?;
-        let y0 = ev.join(&x, p0);
-        let mut border = DVector::zeros(n + 1);
-        border[n] = st.direction.sign();
-        let tan = linalg::tangent(&ev, &y0, &border)?;
-        let node0 = self.make_node(&ev, y0, tan, 0.0, 0.0)?;
-        Ok(Stepper::from_nodes(self, vec![node0], st.ds, 0))
     }
 
     pub(crate) fn check_in_range(&self, p: f64) -> Result<(), ContinuationError> {

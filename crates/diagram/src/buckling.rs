@@ -37,9 +37,7 @@
 
 use nalgebra::DVector;
 use rodloop_solver::stability::TangentReduction;
-use rodloop_solver::{
-    solve, Accuracy, Equilibrium, Globalization, SolveOptions, SolverError, SurfaceModel,
-};
+use rodloop_solver::{solve, Equilibrium, Globalization, SolveOptions, SolverError, SurfaceModel};
 use serde::{Deserialize, Serialize};
 
 use crate::refine::resolve;
@@ -245,11 +243,7 @@ fn dominant_frequency(v: &DVector<f64>, cells: usize) -> u32 {
 /// Coarsest of the resolutions `(N, 2N, 4N)` of the buckling loads of the m-fold circle:
 /// `N = c (m + 2)` with `c` = 4, 8, 16 for fast, default, high.
 fn load_cells(opts: &DiagramOptions, m: u32) -> usize {
-    let base = match opts.accuracy {
-        Accuracy::Fast => 4 * (m as usize + 2),
-        Accuracy::Default => 8 * (m as usize + 2),
-        Accuracy::High => 16 * (m as usize + 2),
-    };
+    let base = opts.accuracy.pick(rodloop_solver::accuracy::LOAD_CELLS) * (m as usize + 2);
     base.div_ceil(2) * 2
 }
 
@@ -330,11 +324,14 @@ pub(crate) fn analyse_circle(
         // Three-level Richardson (errors ∝ h⁴, h⁶): see the module docs.
         let (lambda, err) = match (at(&coarse), at(&finest)) {
             (Some(l0), Some(l2)) => {
-                let r1 = l1 + (l1 - l0) / 15.0;
-                let r2 = l2 + (l2 - l1) / 15.0;
+                let r1 = rodloop_solver::richardson(l1, l0);
+                let r2 = rodloop_solver::richardson(l2, l1);
                 (r2 + (r2 - r1) / 63.0, 2.0 * (r2 - r1).abs() / 63.0)
             }
-            (Some(l0), None) => (l1 + (l1 - l0) / 15.0, (l1 - l0).abs() / 15.0),
+            (Some(l0), None) => (
+                rodloop_solver::richardson(l1, l0),
+                rodloop_solver::richardson_error(l1, l0),
+            ),
             _ => (l1, 0.0),
         };
         let n = mode.periods;

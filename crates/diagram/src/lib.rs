@@ -348,11 +348,8 @@ impl DiagramOptions {
 
     /// Cells per period of the tracing resolution.
     pub fn trace_cells_per_period(&self) -> usize {
-        self.trace_cells_per_period.unwrap_or(match self.accuracy {
-            Accuracy::Fast => 8,
-            Accuracy::Default => 12,
-            Accuracy::High => 16,
-        })
+        self.trace_cells_per_period
+            .unwrap_or(self.accuracy.pick(rodloop_solver::accuracy::TRACE_CELLS))
     }
 
     /// Number of cells of the tracing resolution of branch `eta`:

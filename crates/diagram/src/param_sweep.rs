@@ -255,7 +255,7 @@ fn energy_with_estimate(
         .map_err(|e| format!("companion at {nc} cells: {e}"))?
         .energy()
         .total;
-    Ok((e, (e - ec).abs() / 15.0))
+    Ok((e, rodloop_solver::richardson_error(e, ec)))
 }
 
 /// Trace every family (see the module docs).
@@ -275,8 +275,8 @@ pub fn sweep_param(s: &SweepSettings) -> Result<ParamSweep, DiagramError> {
         let model = SurfaceModel::new(s.radius, s.lbar, cells, &s.stiffness)?;
         let cont = Continued {
             model: model.clone(),
-            // d1 and gamma are positive scale parameters: continued in their logarithm.
-            log: matches!(s.param, Param::D1 | Param::Gamma),
+            // The parameter's own axis (Param::axis: d1 and gamma in their logarithm).
+            log: s.param.axis() == rodloop_continuation::axis::Axis::Log,
         };
         let problem = ParamProblem::new(cont.clone(), s.param)?;
         let shape = model.n_kappa();
@@ -538,6 +538,7 @@ impl Continued {
 }
 
 impl Confinement for Continued {
+    type Factor = ModelFactor;
     fn dim(&self) -> usize {
         Confinement::dim(&self.model)
     }

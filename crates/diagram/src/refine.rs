@@ -94,8 +94,8 @@ impl BranchRefiner {
         let (ef, ec) = (self.fine.energy().total, self.coarse.energy().total);
         let sf = energy_slope(self.fine.model(), &self.fine.state())?;
         let sc = energy_slope(self.coarse.model(), &self.coarse.state())?;
-        let energy = ef + (ef - ec) / 15.0;
-        let slope = sf + (sf - sc) / 15.0;
+        let energy = rodloop_solver::richardson(ef, ec);
+        let slope = rodloop_solver::richardson(sf, sc);
         Ok(Refined { energy, slope })
     }
 
@@ -114,7 +114,7 @@ impl BranchRefiner {
     pub fn error_estimate(&self, opts: &DiagramOptions, eta: u32) -> f64 {
         let (ef, ec) = (self.fine.energy().total, self.coarse.energy().total);
         let rounding = 8.0 * f64::EPSILON * ef.abs();
-        let fallback = (ef - ec).abs() / 15.0 + rounding;
+        let fallback = rodloop_solver::richardson_error(ef, ec) + rounding;
         let nq = self.coarse.model().cells() / 2;
         if nq < 4 * (eta.max(1) as usize + 1) || nq < crate::profile_cells(&opts.stiffness) {
             return fallback;
@@ -122,8 +122,8 @@ impl BranchRefiner {
         match resolve(opts, &self.coarse, nq) {
             Ok(q) => {
                 let eq = q.energy().total;
-                let rf = ef + (ef - ec) / 15.0;
-                let rc = ec + (ec - eq) / 15.0;
+                let rf = rodloop_solver::richardson(ef, ec);
+                let rc = rodloop_solver::richardson(ec, eq);
                 (2.0 * (rf - rc).abs() / 63.0).min(fallback) + rounding
             }
             Err(_) => fallback,

@@ -7,12 +7,12 @@
 use std::f64::consts::PI;
 
 use rodloop_solver::{
-    solve, solve_from_state, Confinement, Equilibrium, Globalization, ParamProblem, Phase,
+    solve, solve_from_state, Confinement, Equilibrium, Globalization, Param, ParamProblem, Phase,
     SolveOptions, SolverError, SurfaceModel,
 };
 
 use crate::march::MarchPoint;
-use crate::types::TracedPoint;
+use crate::types::{TracedBranch, TracedPoint};
 use crate::DiagramOptions;
 
 /// Threshold below which an eigenvalue (units of `D0`) counts as negative (the solver's
@@ -92,11 +92,11 @@ pub(crate) fn finish_point(
         Some(h) => {
             let eh = h.energy();
             let (hmin, hmax) = h.lambda_range();
-            let rich = |f: f64, c: f64| f + (f - c) / 15.0;
+            let rich = rodloop_solver::richardson;
             (
                 rich(en.total, eh.total),
                 rich(en.geodesic, eh.geodesic),
-                Some((en.total - eh.total).abs() / 15.0),
+                Some(rodloop_solver::richardson_error(en.total, eh.total)),
                 rich(lmin, hmin),
                 rich(lmax, hmax),
             )
@@ -136,4 +136,78 @@ pub(crate) fn half_resolution(
     let kappa = eq.resample(cells).ok()?;
     let model = model_with_phase(opts, eq.lbar(), cells, &kappa).ok()?;
     solve(&model, &kappa, &newton_options()).ok()
+}
+
+/// Re-solving a traced branch's states (here, beside the solver helpers they use, so that
+/// the data type [`TracedBranch`] does not depend on this module).
+impl TracedBranch {
+    /// The model of the tracing resolution at `lbar`, with a phase condition taken from
+    /// `state` (uniform stiffness) so that `state` satisfies it exactly.
+    pub(crate) fn model_for(
+        &self,
+        opts: &DiagramOptions,
+        lbar: f64,
+        state: &[f64],
+    ) -> Result<SurfaceModel, SolverError> {
+        model_with_phase(opts, lbar, self.cells, &state[..2 * self.cells])
+    }
+
+    /// The equilibrium of traced state `k` itself, at the tracing resolution: Newton from its
+    /// own KKT state (already converged, so normally no step), giving its profile
+    /// (positions, forces). Only for branches traced in `lbar`.
+    pub fn equilibrium_of(
+        &self,
+        opts: &DiagramOptions,
+        k: usize,
+    ) -> Result<Equilibrium, SolverError> {
+        let p = self.points.get(k).ok_or_else(|| {
+            SolverError::InvalidInput(format!(
+                "branch eta = {} has {} states, no state {k}",
+                self.eta,
+                self.points.len()
+            ))
+        })?;
+        if self.param != Param::Lbar {
+            return Err(SolverError::InvalidInput(format!(
+                "branch eta = {} was traced in {}, not in lbar",
+                self.eta, self.param
+            )));
+        }
+        let dim = 2 * self.cells + 3 + usize::from(self.phase);
+        if p.state.len() != dim {
+            return Err(SolverError::WrongLength {
+                expected: dim,
+                found: p.state.len(),
+            });
+        }
+        let model = self.model_for(opts, p.value, &p.state)?;
+        // The traced state met the corrector's tolerance: accept it as it is unless its
+        // residual has grown above 1e-8 (a state read from an older file).
+        let accept = rodloop_solver::SolveOptions {
+            tolerance: 1e-8,
+            ..newton_options()
+        };
+        solve_from_state(model, p.state.clone(), &accept)
+    }
+
+    /// The equilibrium of this branch at `lbar` at the tracing resolution (Newton from the
+    /// interpolated traced states). Only for branches traced in `lbar`.
+    pub fn solve_at(&self, opts: &DiagramOptions, lbar: f64) -> Result<Equilibrium, SolverError> {
+        if self.param != Param::Lbar {
+            return Err(SolverError::InvalidInput(format!(
+                "branch eta = {} was traced in {}, not in lbar",
+                self.eta, self.param
+            )));
+        }
+        let z = self.state_near(lbar);
+        let dim = 2 * self.cells + 3 + usize::from(self.phase);
+        if z.len() != dim {
+            return Err(SolverError::WrongLength {
+                expected: dim,
+                found: z.len(),
+            });
+        }
+        let model = self.model_for(opts, lbar, &z)?;
+        solve_from_state(model, z, &newton_options())
+    }
 }

@@ -10,11 +10,8 @@
 //! so that branch files written before this change still resume (and the user-visible
 //! `summary.json` keeps its keys).
 
-use rodloop_solver::{solve_from_state, Equilibrium, Param, SolverError, SurfaceModel};
+use rodloop_solver::Param;
 use serde::{Deserialize, Serialize};
-
-use crate::states::{model_with_phase, newton_options};
-use crate::DiagramOptions;
 
 /// How one end of a traced branch came about.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -182,7 +179,7 @@ pub struct TracedBranch {
     /// energy, reported once), 1 otherwise.
     #[serde(default = "one")]
     pub multiplicity: u32,
-    /// [`DiagramOptions::fingerprint`] of the options it was traced with.
+    /// [`DiagramOptions::fingerprint`](crate::DiagramOptions::fingerprint) of the options it was traced with.
     pub fingerprint: String,
     /// Tracing resolution (cells).
     pub cells: usize,
@@ -267,17 +264,6 @@ impl TracedBranch {
         Some(h00 * p0.energy + h10 * h * p0.slope + h01 * p1.energy + h11 * h * p1.slope)
     }
 
-    /// The model of the tracing resolution at `lbar`, with a phase condition taken from
-    /// `state` (uniform stiffness) so that `state` satisfies it exactly.
-    pub(crate) fn model_for(
-        &self,
-        opts: &DiagramOptions,
-        lbar: f64,
-        state: &[f64],
-    ) -> Result<SurfaceModel, SolverError> {
-        model_with_phase(opts, lbar, self.cells, &state[..2 * self.cells])
-    }
-
     /// Linear interpolation of the traced states at `value` (nearest end outside the span;
     /// empty for a branch without states).
     pub(crate) fn state_near(&self, value: f64) -> Vec<f64> {
@@ -304,65 +290,6 @@ impl TracedBranch {
             .zip(&b.state)
             .map(|(x, y)| x + t * (y - x))
             .collect()
-    }
-
-    /// The equilibrium of traced state `k` itself, at the tracing resolution: Newton from its
-    /// own KKT state (already converged, so normally no step), giving its profile
-    /// (positions, forces). Only for branches traced in `lbar`.
-    pub fn equilibrium_of(
-        &self,
-        opts: &DiagramOptions,
-        k: usize,
-    ) -> Result<Equilibrium, SolverError> {
-        let p = self.points.get(k).ok_or_else(|| {
-            SolverError::InvalidInput(format!(
-                "branch eta = {} has {} states, no state {k}",
-                self.eta,
-                self.points.len()
-            ))
-        })?;
-        if self.param != Param::Lbar {
-            return Err(SolverError::InvalidInput(format!(
-                "branch eta = {} was traced in {}, not in lbar",
-                self.eta, self.param
-            )));
-        }
-        let dim = 2 * self.cells + 3 + usize::from(self.phase);
-        if p.state.len() != dim {
-            return Err(SolverError::WrongLength {
-                expected: dim,
-                found: p.state.len(),
-            });
-        }
-        let model = self.model_for(opts, p.value, &p.state)?;
-        // The traced state met the corrector's tolerance: accept it as it is unless its
-        // residual has grown above 1e-8 (a state read from an older file).
-        let accept = rodloop_solver::SolveOptions {
-            tolerance: 1e-8,
-            ..newton_options()
-        };
-        solve_from_state(model, p.state.clone(), &accept)
-    }
-
-    /// The equilibrium of this branch at `lbar` at the tracing resolution (Newton from the
-    /// interpolated traced states). Only for branches traced in `lbar`.
-    pub fn solve_at(&self, opts: &DiagramOptions, lbar: f64) -> Result<Equilibrium, SolverError> {
-        if self.param != Param::Lbar {
-            return Err(SolverError::InvalidInput(format!(
-                "branch eta = {} was traced in {}, not in lbar",
-                self.eta, self.param
-            )));
-        }
-        let z = self.state_near(lbar);
-        let dim = 2 * self.cells + 3 + usize::from(self.phase);
-        if z.len() != dim {
-            return Err(SolverError::WrongLength {
-                expected: dim,
-                found: z.len(),
-            });
-        }
-        let model = self.model_for(opts, lbar, &z)?;
-        solve_from_state(model, z, &newton_options())
     }
 }
 

@@ -50,7 +50,36 @@ pub const DEFAULT_CELLS_PER_PERIOD: usize = 56;
 /// Cells per period of `κ_g` (plus one) at the fast accuracy.
 pub const FAST_CELLS_PER_PERIOD: usize = 20;
 
+/// The resolution table: cells per period of `κ_g` at the levels `[fast, default, high]`
+/// for each use (each count is then multiplied by the use's number of periods, see the
+/// functions named). One place for every level-to-cells rule of the workspace.
+///
+/// Surface solve, [`Accuracy::cells`]: `N = c (1 + η)` (plus `c` on a graded mesh).
+pub const SOLVE_CELLS: [usize; 3] = [
+    FAST_CELLS_PER_PERIOD,
+    DEFAULT_CELLS_PER_PERIOD,
+    DEFAULT_CELLS_PER_PERIOD,
+];
+/// Surface tracing resolution of the diagram (`rodloop_diagram::DiagramOptions::trace_cells`):
+/// `c (η + 1)`.
+pub const TRACE_CELLS: [usize; 3] = [8, 12, 16];
+/// Buckling loads of the m-fold great circle (`rodloop_diagram`'s `load_cells`): `c (m + 2)`.
+pub const LOAD_CELLS: [usize; 3] = [4, 8, 16];
+/// Enclosed diagram levels ([`crate::enclosed::enclosed_cells`]): `c (1 + η)`, at least 32.
+pub const ENCLOSED_TRACE_CELLS: [usize; 3] = [16, 32, 64];
+/// A single enclosed solve ([`crate::enclosed::enclosed_solve_cells`]): `c (1 + η)`.
+pub const ENCLOSED_SOLVE_CELLS: [usize; 3] = [16, 192, 256];
+
 impl Accuracy {
+    /// The entry of a `[fast, default, high]` row (e.g. of the resolution table above).
+    pub fn pick<T: Copy>(self, row: [T; 3]) -> T {
+        match self {
+            Accuracy::Fast => row[0],
+            Accuracy::Default => row[1],
+            Accuracy::High => row[2],
+        }
+    }
+
     /// Number of cells of the main solve for a loop whose geodesic curvature has `periods`
     /// oscillation periods (`η` of the branch; see [`StartShape::periods`]):
     /// `N = c (1 + η)` with `c = 56` (default, high) or `20` (fast). The discretisation error
@@ -62,10 +91,7 @@ impl Accuracy {
     /// ones get at least `2γ` cells (`γ` for `Fast`), tables two per point. Rounded up to a
     /// multiple of 4. For `High` this is the coarse one of the pair `(N, 2N)`.
     pub fn cells(self, periods: usize, stiffness: &Stiffness) -> usize {
-        let per = match self {
-            Accuracy::Fast => FAST_CELLS_PER_PERIOD,
-            Accuracy::Default | Accuracy::High => DEFAULT_CELLS_PER_PERIOD,
-        };
+        let per = self.pick(SOLVE_CELLS);
         let mut n = per * (1 + periods.max(1));
         let factor = if self == Accuracy::Fast { 1.0 } else { 2.0 };
         if !crate::MeshMap::for_profile(stiffness).is_uniform() {
@@ -80,6 +106,22 @@ impl Accuracy {
         }
         n.div_ceil(4) * 4
     }
+}
+
+/// Order `p` of the scheme's discretisation error in the cell length `h` (energies and
+/// `λ`; see the module docs): halving `h` divides the error by `2^p = 16`.
+pub const ORDER: i32 = 4;
+
+/// Richardson extrapolation of a quantity computed with cells of length `h` (`fine`) and
+/// `2h` (`coarse`) by a scheme of order [`ORDER`]: `X* = X_h + (X_h − X_2h)/(2⁴ − 1)`.
+pub fn richardson(fine: f64, coarse: f64) -> f64 {
+    fine + (fine - coarse) / 15.0
+}
+
+/// Error estimate of the finer of two values at `h` and `2h` (order [`ORDER`]):
+/// `|X_h − X_2h|/(2⁴ − 1)` (also a conservative bound for [`richardson`]'s value).
+pub fn richardson_error(fine: f64, coarse: f64) -> f64 {
+    (fine - coarse).abs() / 15.0
 }
 
 /// Result of [`solve_with_accuracy`].
@@ -175,10 +217,10 @@ pub fn finish_with_accuracy(
     };
     let (ef, ec) = (fine.energy(), coarse.energy());
     let (lf, lc) = (fine.lambda_range(), coarse.lambda_range());
-    let energy_error = (ef.total - ec.total).abs() / 15.0;
-    let lambda_error = ((lf.0 - lc.0).abs()).max((lf.1 - lc.1).abs()) / 15.0;
+    let energy_error = richardson_error(ef.total, ec.total);
+    let lambda_error = richardson_error(lf.0, lc.0).max(richardson_error(lf.1, lc.1));
     let (energy, lambda_range) = if accuracy == Accuracy::High {
-        let rich = |f: f64, c: f64| f + (f - c) / 15.0;
+        let rich = richardson;
         (
             EnergyReport {
                 total: rich(ef.total, ec.total),

@@ -48,7 +48,8 @@ pub mod start;
 pub mod stiffness;
 
 pub use accuracy::{
-    finish_with_accuracy, solve_cells, solve_with_accuracy, Accuracy, AccurateEquilibrium,
+    finish_with_accuracy, richardson, richardson_error, solve_cells, solve_with_accuracy, Accuracy,
+    AccurateEquilibrium,
 };
 pub use continuation::LbarProblem;
 pub use kkt::KktFactor;
@@ -56,7 +57,7 @@ pub use mesh::MeshMap;
 pub use model::{Phase, SurfaceModel};
 pub use param::Param;
 pub use robust::{solve_robust, solve_robust_with, Fallbacks, Strategy};
-pub use seam::{Confinement, ModelFactor, ParamProblem};
+pub use seam::{Confinement, Inertia, ModelFactor, ParamProblem};
 pub use solve::{
     solve, solve_from_state, ConvergenceReport, EnergyReport, Equilibrium, Globalization,
     ProfilePoint, SolveOptions,

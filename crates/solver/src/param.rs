@@ -1,5 +1,7 @@
 //! Scene parameters that continuation can move, chosen by name.
 
+use rodloop_continuation::axis::Axis;
+
 use crate::SolverError;
 
 /// A continuation parameter (in the spirit of BifurcationKit's lenses): `lbar` =
@@ -29,6 +31,16 @@ impl Param {
             Param::Gamma => "gamma",
             Param::S0 => "s0",
             Param::S1 => "s1",
+        }
+    }
+
+    /// The axis the parameter is continued on: `d1` and `gamma` are positive scale
+    /// parameters spanning decades and are continued in their logarithm (equal steps are
+    /// equal factors); the others on a linear axis.
+    pub fn axis(self) -> Axis {
+        match self {
+            Param::D1 | Param::Gamma => Axis::Log,
+            Param::Lbar | Param::S0 | Param::S1 => Axis::Linear,
         }
     }
 

@@ -9,7 +9,9 @@
 //! contrast (it is reported as such).
 
 use nalgebra::DVector;
-use rodloop_continuation::{Continuation, Direction, PseudoArclength};
+use rodloop_continuation::axis::{Axis, OnAxis};
+use rodloop_continuation::target::{reach, NotReached, ReachLimits};
+use rodloop_continuation::{Direction, PseudoArclength};
 
 use crate::accuracy::{finish_with_accuracy, solve_cells, Accuracy, AccurateEquilibrium};
 use crate::identify::identify_equilibrium;
@@ -395,33 +397,6 @@ fn summarize_tried(tried: &[(String, String)]) -> String {
         .collect()
 }
 
-/// A problem continued in `q = ln θ` instead of `θ` (three decades of `D1/D0` at even
-/// steps).
-struct LogParam<P>(P);
-
-impl<P: rodloop_continuation::Problem> rodloop_continuation::Problem for LogParam<P> {
-    type Error = P::Error;
-    fn dim(&self) -> usize {
-        self.0.dim()
-    }
-    fn residual(&self, x: &DVector<f64>, q: f64) -> Result<DVector<f64>, P::Error> {
-        self.0.residual(x, q.exp())
-    }
-    fn jacobian(&self, x: &DVector<f64>, q: f64) -> Result<nalgebra::DMatrix<f64>, P::Error> {
-        self.0.jacobian(x, q.exp())
-    }
-    fn dparam(&self, x: &DVector<f64>, q: f64) -> Result<DVector<f64>, P::Error> {
-        Ok(self.0.dparam(x, q.exp())? * q.exp())
-    }
-    fn factorize(
-        &self,
-        x: &DVector<f64>,
-        q: f64,
-    ) -> Result<Box<dyn rodloop_continuation::Factorization + '_>, P::Error> {
-        self.0.factorize(x, q.exp())
-    }
-}
-
 /// Solve at `from` (mild contrast), check the branch, continue in `D1/D0` to `target`.
 /// `Ok(None)` when the mild-contrast state is one already followed (`seen`).
 #[allow(clippy::too_many_arguments)]
@@ -557,12 +532,9 @@ fn follow_to(
     opts: &SolveOptions,
     budget: &Budget,
 ) -> Result<(Equilibrium, usize), Stuck> {
-    let (q0, qt) = if log {
-        (from.ln(), target.ln())
-    } else {
-        (from, target)
-    };
-    let value = |q: f64| if log { q.exp() } else { q };
+    let axis = if log { Axis::Log } else { Axis::Linear };
+    let (q0, qt) = (axis.coordinate(from), axis.coordinate(target));
+    let value = |q: f64| axis.value(q);
     let stuck = |folds: Vec<f64>, reached: f64| Stuck { folds, reached };
     let direction = if qt < q0 {
         Direction::Backward
@@ -578,15 +550,24 @@ fn follow_to(
         .and_then(|s| s.with_detect_branch_points(false))
         .map_err(|_| stuck(vec![], from))?;
     let x0 = DVector::from_vec(eq0.state());
+    // The continuation crate's homotopy loop: through at most 4 folds, giving up once the
+    // family turns 0.05 back past its start (in q) or the shared work budget is spent.
+    let limits = ReachLimits::default();
+    let spend = || budget.spend();
     let outcome = if log {
-        let lp = LogParam(problem.clone());
-        run_to(&lp, &settings, &x0, q0, qt, budget)
+        let lp = OnAxis {
+            problem: problem.clone(),
+            axis,
+        };
+        reach(&lp, &settings, &x0, q0, qt, &limits, spend)
     } else {
-        run_to(problem, &settings, &x0, q0, qt, budget)
+        reach(problem, &settings, &x0, q0, qt, &limits, spend)
     };
-    let (z, steps) = outcome.map_err(|(folds, reached)| {
-        stuck(folds.into_iter().map(value).collect(), value(reached))
-    })?;
+    let (z, steps) = outcome
+        .map(|r| (r.x, r.steps))
+        .map_err(|NotReached { folds, closest }| {
+            stuck(folds.into_iter().map(value).collect(), value(closest))
+        })?;
     let model = problem
         .model_at(target)
         .map_err(|_| stuck(vec![], target))?;
@@ -597,54 +578,6 @@ fn follow_to(
     let eq = solve_from_state(model, z.as_slice().to_vec(), &newton)
         .map_err(|_| stuck(vec![], target))?;
     Ok((eq, steps))
-}
-
-/// The stepping loop of [`follow_to`] in the continued parameter `q`: the state linearly
-/// interpolated at `qt` once bracketed, with the number of steps; else the folds passed and
-/// the closest `q` reached.
-fn run_to<P: rodloop_continuation::Problem>(
-    problem: &P,
-    settings: &PseudoArclength,
-    x0: &DVector<f64>,
-    q0: f64,
-    qt: f64,
-    budget: &Budget,
-) -> Result<(DVector<f64>, usize), (Vec<f64>, f64)> {
-    let cont = Continuation::new(problem, settings.clone());
-    let mut stepper = cont.start(x0, q0).map_err(|_| (vec![], q0))?;
-    let sign = (qt - q0).signum();
-    let mut prev = (x0.clone(), q0);
-    let mut folds = Vec::new();
-    let mut closest = q0;
-    loop {
-        if !budget.spend() {
-            return Err((folds, closest));
-        }
-        let step = stepper.step().map_err(|_| (folds.clone(), closest))?;
-        folds.extend(
-            step.special
-                .iter()
-                .filter(|sp| sp.kind == rodloop_continuation::SpecialKind::Fold)
-                .map(|sp| sp.p),
-        );
-        if let Some(pt) = &step.point {
-            if (pt.p - qt) * sign >= 0.0 {
-                let t = (qt - prev.1) / (pt.p - prev.1);
-                return Ok((&prev.0 + (&pt.x - &prev.0) * t, stepper.steps()));
-            }
-            if (pt.p - closest) * sign > 0.0 {
-                closest = pt.p;
-            }
-            // Turned back past the start, or folded too often: this family does not reach.
-            if (pt.p - q0) * sign < -0.05 || folds.len() > 4 {
-                return Err((folds, closest));
-            }
-            prev = (pt.x.clone(), pt.p);
-        }
-        if step.stop.is_some() {
-            return Err((folds, closest));
-        }
-    }
 }
 
 #[cfg(test)]

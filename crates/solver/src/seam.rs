@@ -20,6 +20,9 @@ use crate::SolverError;
 /// Jacobian and the parameter derivatives are its exact derivatives (tests compare them
 /// with finite differences).
 pub trait Confinement: Clone + Send + Sync {
+    /// The model's own factorisation of its Jacobian (block-banded for the surface
+    /// model), which knows its inertia.
+    type Factor: Factorization + Inertia + 'static;
     /// Number of unknowns (and equations) of the KKT system.
     fn dim(&self) -> usize;
     /// Number of equality constraints (their multipliers are among the unknowns).
@@ -30,7 +33,7 @@ pub trait Confinement: Clone + Send + Sync {
     fn jacobian(&self, z: &[f64]) -> Result<DMatrix<f64>, SolverError>;
     /// `∂F/∂z` factorised, shifted by `−shift·W` in the model's energy metric `W` (shift 0
     /// for Newton steps); the factorisation knows its inertia.
-    fn factorize(&self, z: &[f64], shift: f64) -> Result<ModelFactor, SolverError>;
+    fn factorize(&self, z: &[f64], shift: f64) -> Result<Self::Factor, SolverError>;
     /// `(∂F/∂z) dz` without forming the matrix.
     fn apply(&self, z: &[f64], dz: &[f64]) -> Result<DVector<f64>, SolverError>;
     /// The value of a named parameter.
@@ -46,6 +49,19 @@ pub trait Confinement: Clone + Send + Sync {
     fn energy(&self, z: &[f64]) -> Result<f64, SolverError>;
     /// Resolution-independent norm of a residual (convergence tests).
     fn residual_norm(&self, f: &DVector<f64>) -> f64;
+}
+
+/// The inertia a model's factorisation reports: the stability index at a shift comes
+/// from it (Sylvester's law), without an eigen-decomposition.
+pub trait Inertia {
+    /// Number of eigenvalues below the shift of the constrained Hessian.
+    fn reduced_negative_count(&self) -> usize;
+}
+
+impl Inertia for ModelFactor {
+    fn reduced_negative_count(&self) -> usize {
+        self.inner.reduced_negative_count()
+    }
 }
 
 /// A factorised model Jacobian with its inertia.
@@ -81,6 +97,7 @@ impl Factorization for ModelFactor {
 }
 
 impl Confinement for SurfaceModel {
+    type Factor = ModelFactor;
     fn dim(&self) -> usize {
         SurfaceModel::dim(self)
     }

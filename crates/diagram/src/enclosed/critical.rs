@@ -47,30 +47,31 @@ pub(super) fn branch_energy(
 /// returns `(x, f', last step, f's error, mean energy)`.
 pub(super) fn secant<F>(
     mut f: F,
-    mut xa: f64,
-    mut xb: f64,
+    xa: f64,
+    xb: f64,
 ) -> Result<(f64, f64, f64, f64, f64), SolverError>
 where
     F: FnMut(f64) -> Result<(f64, f64, f64), SolverError>,
 {
-    let (mut fa, _, _) = f(xa)?;
-    let (mut fb, mut err, mut e) = f(xb)?;
-    for _ in 0..30 {
-        let slope = (fb - fa) / (xb - xa);
-        if fb == 0.0 || !slope.is_finite() || slope == 0.0 {
-            return Ok((xb, slope, (xb - xa).abs(), err, e));
-        }
-        let xn = xb - fb / slope;
-        let (fnew, errn, en) = f(xn)?;
-        let step = (xn - xb).abs();
-        (xa, fa, xb, fb, err, e) = (xb, fb, xn, fnew, errn, en);
-        if step < 1e-12 {
-            return Ok((xn, slope, step, err, e));
-        }
+    use rodloop_continuation::roots::{self, RootStop, SecantSettings};
+    let r = roots::secant(
+        |x| f(x).map(|(v, err, e)| (v, (err, e))),
+        xa,
+        xb,
+        &SecantSettings::default(),
+    )
+    .map_err(|e| match e {
+        rodloop_continuation::RootError::Function(e) => e,
+        other => SolverError::InvalidInput(other.to_string()),
+    })?;
+    let (err, e) = r.payload;
+    match r.stop {
+        RootStop::Step => Ok((r.x, r.step_slope, r.width, err, e)),
+        RootStop::Residual | RootStop::FlatSlope => Ok((r.x, r.slope, r.width, err, e)),
+        RootStop::MaxIterations => Err(SolverError::InvalidInput(
+            "the secant iteration did not converge in 30 steps".into(),
+        )),
     }
-    Err(SolverError::InvalidInput(
-        "the secant iteration did not converge in 30 steps".into(),
-    ))
 }
 
 /// A lifted-off state of one branch at one length on a ladder of meshes `N, 2N, …` (the

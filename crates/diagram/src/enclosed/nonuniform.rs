@@ -165,36 +165,23 @@ pub(super) fn surface_energy(
         ))
     })?;
     let (a, b) = (e1.energy().total, e2.energy().total);
-    Ok((b, (b - a).abs() / 15.0))
+    Ok((b, rodloop_solver::richardson_error(b, a)))
 }
 
 /// Root of `f` in `[a, b]` (`f(a) f(b) < 0`) by the Illinois method, to a bracket of `tol`.
 /// Returns `(root, bracket width)`.
-fn illinois<F>(mut f: F, mut a: f64, mut b: f64, tol: f64) -> Result<(f64, f64), SolverError>
+fn illinois<F>(f: F, a: f64, b: f64, tol: f64) -> Result<(f64, f64), SolverError>
 where
     F: FnMut(f64) -> Result<f64, SolverError>,
 {
-    let (mut fa, mut fb) = (f(a)?, f(b)?);
-    if fa * fb > 0.0 {
-        return Err(SolverError::InvalidInput(format!(
+    use rodloop_continuation::{roots, RootError};
+    match roots::illinois(f, a, b, tol, 60) {
+        Ok(r) => Ok((r.x, r.width)),
+        Err(RootError::Function(e)) => Err(e),
+        Err(RootError::NoBracket { .. }) => Err(SolverError::InvalidInput(format!(
             "no sign change of lambda_min in [{a}, {b}] at this resolution"
-        )));
+        ))),
     }
-    // `b` is the newest iterate, `a` the retained end of the bracket.
-    for _ in 0..60 {
-        if (b - a).abs() < tol || fb == 0.0 {
-            break;
-        }
-        let c = (a * fb - b * fa) / (fb - fa);
-        let fc = f(c)?;
-        if fc * fb < 0.0 {
-            (a, fa) = (b, fb);
-        } else {
-            fa *= 0.5;
-        }
-        (b, fb) = (c, fc);
-    }
-    Ok((b, (b - a).abs()))
 }
 
 /// Locate the event between traced states at `a` and `b` of `sheet` (see the module docs).

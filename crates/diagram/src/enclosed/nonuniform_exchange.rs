@@ -154,28 +154,29 @@ pub(super) fn locate_crossing(
 /// steps are taken (the energies of lifted-off states carry discretisation noise where
 /// contact ends cross nodes, so the last step, which enters the error, may stay above the
 /// tolerance); returns `(x, f', last step, f's error, mean energy)`.
-fn secant_loose<F>(
-    mut f: F,
-    mut xa: f64,
-    mut xb: f64,
-) -> Result<(f64, f64, f64, f64, f64), SolverError>
+fn secant_loose<F>(mut f: F, xa: f64, xb: f64) -> Result<(f64, f64, f64, f64, f64), SolverError>
 where
     F: FnMut(f64) -> Result<(f64, f64, f64), SolverError>,
 {
-    let (mut fa, _, _) = f(xa)?;
-    let (mut fb, mut err, mut e) = f(xb)?;
-    let mut step = (xb - xa).abs();
-    for _ in 0..12 {
-        let slope = (fb - fa) / (xb - xa);
-        if fb == 0.0 || !slope.is_finite() || slope == 0.0 || step < 1e-10 {
-            return Ok((xb, slope, step, err, e));
-        }
-        let xn = xb - fb / slope;
-        let (fnew, errn, en) = f(xn)?;
-        step = (xn - xb).abs();
-        (xa, fa, xb, fb, err, e) = (xb, fb, xn, fnew, errn, en);
+    use rodloop_continuation::roots::{self, SecantSettings};
+    let settings = SecantSettings {
+        xtol: 1e-10,
+        max_iter: 12,
+        ..SecantSettings::default()
+    };
+    if (xb - xa).abs() < settings.xtol {
+        let (fa, _, _) = f(xa)?;
+        let (fb, err, e) = f(xb)?;
+        return Ok((xb, (fb - fa) / (xb - xa), (xb - xa).abs(), err, e));
     }
-    Ok((xb, (fb - fa) / (xb - xa), step, err, e))
+    let r = roots::secant(|x| f(x).map(|(v, err, e)| (v, (err, e))), xa, xb, &settings).map_err(
+        |e| match e {
+            rodloop_continuation::RootError::Function(e) => e,
+            other => SolverError::InvalidInput(other.to_string()),
+        },
+    )?;
+    let (err, e) = r.payload;
+    Ok((r.x, r.slope, r.width, err, e))
 }
 
 /// Distance from a great circle `L̄ = m` within which a change of the lowest sheet is

@@ -114,13 +114,15 @@ impl<'a> RowMaker<'a> {
         let (ec, _) = cp.energies(&y, p).map_err(|e| e.to_string())?;
         self.companion = Some((cp, y));
         let (lbar_cr, energy, est) = match self.accuracy {
-            _ if finer && self.accuracy != Accuracy::High => (lbar, ea, (lc - lbar).abs() / 15.0),
+            _ if finer && self.accuracy != Accuracy::High => {
+                (lbar, ea, rodloop_solver::richardson_error(lc, lbar))
+            }
             Accuracy::High => (
-                lc + (lc - lbar) / 15.0,
-                ec + (ec - ea) / 15.0,
-                (lc - lbar).abs() / 15.0,
+                rodloop_solver::richardson(lc, lbar),
+                rodloop_solver::richardson(ec, ea),
+                rodloop_solver::richardson_error(lc, lbar),
             ),
-            _ => (lbar, ea, (lbar - lc).abs() / 15.0),
+            _ => (lbar, ea, rodloop_solver::richardson_error(lbar, lc)),
         };
         Ok(PhaseRow {
             value: pb.theta(p),

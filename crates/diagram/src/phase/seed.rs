@@ -124,33 +124,43 @@ pub fn maxwell_by_secant(
     b: &Equilibrium,
     opts: &SolveOptions,
 ) -> Result<(Equilibrium, Equilibrium, f64), SolverError> {
-    let mut l0 = a.lbar();
-    let (mut f0, mut a0, mut b0) = energy_gap(a, b, l0, opts)?;
-    let mut l1 = l0 + 1e-3;
-    let (mut f1, mut a1, mut b1) = energy_gap(&a0, &b0, l1, opts)?;
-    for _ in 0..30 {
-        let slope = (f1 - f0) / (l1 - l0);
-        // The energies of re-solved states carry noise of about 1e-11 (the KKT tolerance):
-        // stop at 1e-10 (L̄ to ~1e-11 for slopes of order 1); the augmented Newton polishes.
-        if f1.abs() < 1e-10 {
-            return Ok((a1, b1, slope));
+    use rodloop_continuation::roots::{self, RootStop, SecantSettings};
+    // Each solve starts from the pair solved last; the pair at the root is the last one
+    // solved.
+    let mut last: Option<(Equilibrium, Equilibrium)> = None;
+    let gap = |l: f64| -> Result<(f64, ()), SolverError> {
+        let (f, ea, eb) = match &last {
+            None => energy_gap(a, b, l, opts)?,
+            Some((pa, pb)) => energy_gap(pa, pb, l, opts)?,
+        };
+        last = Some((ea, eb));
+        Ok((f, ()))
+    };
+    // The energies of re-solved states carry noise of about 1e-11 (the KKT tolerance):
+    // stop at |E_a − E_b| < 1e-10 (L̄ to ~1e-11 for slopes of order 1); the augmented
+    // Newton polishes. Steps are clamped to 0.05.
+    let settings = SecantSettings {
+        xtol: 1e-13,
+        ftol: 1e-10,
+        max_step: 0.05,
+        max_iter: 30,
+    };
+    let r = roots::secant(gap, a.lbar(), a.lbar() + 1e-3, &settings).map_err(|e| match e {
+        rodloop_continuation::RootError::Function(e) => e,
+        other => SolverError::InvalidInput(other.to_string()),
+    })?;
+    let slope = match r.stop {
+        RootStop::Residual => r.slope,
+        RootStop::Step => r.step_slope,
+        RootStop::FlatSlope | RootStop::MaxIterations => {
+            return Err(SolverError::InvalidInput(format!(
+                "the secant method for E_a = E_b did not converge (last L̄ = {}, gap {:.3e})",
+                r.x, r.fx
+            )))
         }
-        if !(slope.is_finite() && slope != 0.0) {
-            break;
-        }
-        let step = (-f1 / slope).clamp(-0.05, 0.05);
-        let l2 = l1 + step;
-        let (f2, a2, b2) = energy_gap(&a1, &b1, l2, opts)?;
-        (l0, f0, a0, b0) = (l1, f1, a1, b1);
-        (l1, f1, a1, b1) = (l2, f2, a2, b2);
-        if (l1 - l0).abs() < 1e-13 {
-            return Ok((a1, b1, slope));
-        }
-    }
-    let _ = (a0, b0);
-    Err(SolverError::InvalidInput(format!(
-        "the secant method for E_a = E_b did not converge (last L̄ = {l1}, gap {f1:.3e})"
-    )))
+    };
+    let (ea, eb) = last.expect("the secant evaluates twice before it stops");
+    Ok((ea, eb, slope))
 }
 
 /// The start of a curve: the Maxwell point of the lowest stable states of the exchange's two

@@ -399,11 +399,7 @@ pub const LIFTED_OFF_MAX_ORDER: f64 = 2.5;
 /// Cells of an enclosed solve for a branch with `eta` periods: `c (1 + η)` with `c = 16`
 /// (fast), `32` (default) or `64` (high), at least 32: the enclosed diagram's levels.
 pub fn enclosed_cells(accuracy: crate::Accuracy, eta: u32) -> usize {
-    let c = match accuracy {
-        crate::Accuracy::Fast => 16,
-        crate::Accuracy::Default => 32,
-        crate::Accuracy::High => 64,
-    };
+    let c = accuracy.pick(crate::accuracy::ENCLOSED_TRACE_CELLS);
     (c * (1 + eta as usize)).max(32)
 }
 
@@ -415,11 +411,7 @@ pub fn enclosed_cells(accuracy: crate::Accuracy, eta: u32) -> usize {
 /// keeps [`enclosed_cells`]: its natural-parameter tracer stalls on the point contacts of
 /// the figure-eight below `L̄ ≈ 1.3` at `N = 256`.)
 pub fn enclosed_solve_cells(accuracy: crate::Accuracy, eta: u32) -> usize {
-    let c = match accuracy {
-        crate::Accuracy::Fast => 16,
-        crate::Accuracy::Default => 192,
-        crate::Accuracy::High => 256,
-    };
+    let c = accuracy.pick(crate::accuracy::ENCLOSED_SOLVE_CELLS);
     (c * (1 + eta as usize)).max(32)
 }
 

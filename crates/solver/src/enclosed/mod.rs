@@ -19,6 +19,7 @@
 //!   one descent routine ([`crate::descend`]) and an enclosed solve that ends at a local
 //!   minimum.
 //! * [`continuation`]: natural-parameter steps in `L̄` (the enclosed diagram's tracer).
+//! * [`seam`]: the model behind [`crate::Confinement`] (continuation through the seam).
 //! * [`branch`]: a paper branch in an enclosed scene with the two-resolution error estimate.
 
 pub mod branch;
@@ -28,6 +29,7 @@ pub mod from_shape;
 pub mod jet;
 pub mod lifted;
 pub mod model;
+pub mod seam;
 pub mod solve;
 
 pub use branch::{
@@ -37,6 +39,7 @@ pub use branch::{
 };
 pub use from_shape::{start_from_shape, SavedShape};
 pub use model::{EnclosedModel, Gauge};
+pub use seam::EnclosedFactor;
 pub use solve::{
     free_circle, solve_enclosed, start_from_surface, Contact, EnclosedOptions, EnclosedState,
 };

@@ -1,0 +1,379 @@
+//! Natural-parameter continuation: the parameter itself is stepped towards a target and
+//! each step is corrected at the new parameter value by the caller's solver.
+//!
+//! Where a branch is a graph over the parameter (no folds between the targets) this is
+//! all a tracer needs, and it works with solvers that are not a smooth [`Problem`] (a
+//! semismooth Newton on a contact set, a solver with its own fallbacks). It cannot pass a
+//! fold: there the corrector fails, the step is halved until the budget of halvings is
+//! spent, and the walk reports where it got stuck ([`Stuck`]); pseudo-arclength
+//! ([`Continuation`](crate::Continuation)) passes folds.
+//!
+//! * [`walk`]: from a state to one target value of the parameter, with any state type
+//!   `S` and any step function (`(current, previous, to, halvings) → next`), so that
+//!   the caller keeps its predictors and fallbacks.
+//! * [`natural_branch`]: the same loop for a [`Problem`], with the secant predictor
+//!   through the last two points and Newton's method as corrector.
+//!
+//! Reference: E. L. Allgower & K. Georg, *Introduction to Numerical Continuation
+//! Methods*, SIAM 2003, ch. 2 (embedding and natural parametrisation).
+
+use nalgebra::DVector;
+
+use crate::error::ContinuationError;
+use crate::newton::newton;
+use crate::problem::Problem;
+
+/// Settings of a natural-parameter [`walk`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NaturalSettings {
+    /// Largest parameter step (the first step is `target − p` clamped to this).
+    pub max_step: f64,
+    /// A failed step halves the step; the walk gives up after this many halvings (in
+    /// total, not per step: the step never grows back).
+    pub max_halvings: usize,
+    /// The walk has arrived once `|target − p| ≤ arrive`.
+    pub arrive: f64,
+    /// The next step goes straight to the target when the remaining distance is at most
+    /// `|h|·(1 + snap)`.
+    pub snap: f64,
+}
+
+impl Default for NaturalSettings {
+    /// Unbounded steps, 6 halvings, arrival to `1e-14`, no snapping tolerance.
+    fn default() -> Self {
+        Self {
+            max_step: f64::INFINITY,
+            max_halvings: 6,
+            arrive: 1e-14,
+            snap: 0.0,
+        }
+    }
+}
+
+/// A walk that reached its target.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Walked<S> {
+    /// The state at the target.
+    pub last: S,
+    /// The state before it (`None` if no step was taken and none was given).
+    pub prev: Option<S>,
+    /// Accepted steps.
+    pub steps: usize,
+    /// Halvings spent.
+    pub halvings: usize,
+}
+
+/// A walk that could not reach its target: the last accepted state and the error of
+/// the last failed step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stuck<S, E> {
+    /// The last accepted state.
+    pub last: S,
+    /// The accepted state before it.
+    pub prev: Option<S>,
+    /// The error of the step that spent the last halving.
+    pub error: E,
+    /// Accepted steps.
+    pub steps: usize,
+}
+
+/// Walks from `start` (with `prev`, the state accepted before it, if any, for the
+/// caller's predictor) to the parameter value `target`: each step asks
+/// `step(current, previous, to, halvings)` for the state at `to`; a failed step halves
+/// the step length and is retried from the same state, until `settings.max_halvings`
+/// halvings are spent. `param` reads the parameter of a state.
+///
+/// # Errors
+/// [`Stuck`] with the last accepted state when the halvings are spent.
+pub fn walk<S, E, P, F>(
+    start: S,
+    prev: Option<S>,
+    target: f64,
+    param: P,
+    settings: &NaturalSettings,
+    mut step: F,
+) -> Result<Walked<S>, Stuck<S, E>>
+where
+    P: Fn(&S) -> f64,
+    F: FnMut(&S, Option<&S>, f64, usize) -> Result<S, E>,
+{
+    let mut cur = start;
+    let mut prev = prev;
+    let mut h = (target - param(&cur)).clamp(-settings.max_step, settings.max_step);
+    let mut halvings = 0;
+    let mut steps = 0;
+    while (target - param(&cur)).abs() > settings.arrive {
+        let p = param(&cur);
+        let to = if (target - p).abs() <= h.abs() * (1.0 + settings.snap) {
+            target
+        } else {
+            p + h
+        };
+        match step(&cur, prev.as_ref(), to, halvings) {
+            Ok(next) => {
+                prev = Some(std::mem::replace(&mut cur, next));
+                steps += 1;
+            }
+            Err(error) => {
+                halvings += 1;
+                if halvings > settings.max_halvings {
+                    return Err(Stuck {
+                        last: cur,
+                        prev,
+                        error,
+                        steps,
+                    });
+                }
+                h *= 0.5;
+            }
+        }
+    }
+    Ok(Walked {
+        last: cur,
+        prev,
+        steps,
+        halvings,
+    })
+}
+
+/// A point of a [`natural_branch`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct NaturalPoint {
+    /// The state.
+    pub x: DVector<f64>,
+    /// The parameter.
+    pub p: f64,
+}
+
+/// The result of [`natural_branch`]: the points at the start and at each target reached
+/// (in order), and the error that stopped the walk before the last target, if any.
+#[derive(Debug, Clone)]
+pub struct NaturalBranch {
+    /// The start (corrected) and the states at the targets reached.
+    pub points: Vec<NaturalPoint>,
+    /// The last state accepted before the walk got stuck (not at a target), and why.
+    pub stuck: Option<(NaturalPoint, ContinuationError)>,
+}
+
+/// Natural-parameter continuation of a [`Problem`] from `(x0, p0)` through the parameter
+/// values `targets` (in the order given): each step starts Newton's method (tolerance
+/// `tol`, `max_iter` iterations) from the secant predictor through the last two
+/// accepted states (the last state alone at the first step) and [`walk`]s with
+/// `settings`.
+///
+/// # Errors
+/// The correction of the start at `p0`. Trouble later ends the branch with
+/// [`NaturalBranch::stuck`].
+pub fn natural_branch<P: Problem + ?Sized>(
+    problem: &P,
+    x0: &DVector<f64>,
+    p0: f64,
+    targets: &[f64],
+    settings: &NaturalSettings,
+    tol: f64,
+    max_iter: usize,
+) -> Result<NaturalBranch, ContinuationError> {
+    let (x, _) = newton(problem, x0, p0, tol, max_iter)?;
+    let mut points = vec![NaturalPoint { x, p: p0 }];
+    let mut prev: Option<NaturalPoint> = None;
+    for &target in targets {
+        let cur = points.last().cloned().expect("the start");
+        let walked = walk(
+            cur,
+            prev.clone(),
+            target,
+            |s: &NaturalPoint| s.p,
+            settings,
+            |cur, prev, to, _| {
+                let guess = match prev {
+                    Some(q) if q.p != cur.p => {
+                        &cur.x + (&cur.x - &q.x) * ((to - cur.p) / (cur.p - q.p))
+                    }
+                    _ => cur.x.clone(),
+                };
+                newton(problem, &guess, to, tol, max_iter).map(|(x, _)| NaturalPoint { x, p: to })
+            },
+        );
+        match walked {
+            Ok(w) => {
+                prev = w.prev;
+                points.push(w.last);
+            }
+            Err(s) => {
+                return Ok(NaturalBranch {
+                    points,
+                    stuck: Some((s.last, s.error)),
+                })
+            }
+        }
+    }
+    Ok(NaturalBranch {
+        points,
+        stuck: None,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::DMatrix;
+    use std::convert::Infallible;
+
+    /// The fold `x² + λ = 0`: two branches `x = ±√(−λ)` for `λ ≤ 0`, a fold at `λ = 0`.
+    struct Fold;
+    impl Problem for Fold {
+        type Error = Infallible;
+        fn dim(&self) -> usize {
+            1
+        }
+        fn residual(&self, x: &DVector<f64>, p: f64) -> Result<DVector<f64>, Infallible> {
+            Ok(DVector::from_element(1, x[0] * x[0] + p))
+        }
+        fn jacobian(&self, x: &DVector<f64>, _p: f64) -> Result<DMatrix<f64>, Infallible> {
+            Ok(DMatrix::from_element(1, 1, 2.0 * x[0]))
+        }
+        fn dparam(&self, _x: &DVector<f64>, _p: f64) -> Result<DVector<f64>, Infallible> {
+            Ok(DVector::from_element(1, 1.0))
+        }
+    }
+
+    /// The pitchfork `x³ − λx = 0`: the trivial branch and `x = ±√λ` for `λ > 0`.
+    struct Pitchfork;
+    impl Problem for Pitchfork {
+        type Error = Infallible;
+        fn dim(&self) -> usize {
+            1
+        }
+        fn residual(&self, x: &DVector<f64>, p: f64) -> Result<DVector<f64>, Infallible> {
+            Ok(DVector::from_element(1, x[0].powi(3) - p * x[0]))
+        }
+        fn jacobian(&self, x: &DVector<f64>, p: f64) -> Result<DMatrix<f64>, Infallible> {
+            Ok(DMatrix::from_element(1, 1, 3.0 * x[0] * x[0] - p))
+        }
+        fn dparam(&self, x: &DVector<f64>, _p: f64) -> Result<DVector<f64>, Infallible> {
+            Ok(DVector::from_element(1, -x[0]))
+        }
+    }
+
+    fn grid(a: f64, b: f64, n: usize) -> Vec<f64> {
+        (1..=n).map(|k| a + (b - a) * k as f64 / n as f64).collect()
+    }
+
+    #[test]
+    fn fold_branch_is_exact_and_stops_at_the_fold() {
+        // From λ = −1 (x = 1) towards λ = 0.5: the states at the targets below the fold
+        // are x = √(−λ); the walk gets stuck between the last target before the fold and
+        // the fold λ = 0, never beyond it.
+        let targets = grid(-1.0, 0.5, 31); // no target at the fold itself
+        let s = NaturalSettings {
+            max_step: 0.05,
+            max_halvings: 20,
+            ..NaturalSettings::default()
+        };
+        let b = natural_branch(
+            &Fold,
+            &DVector::from_element(1, 1.1),
+            -1.0,
+            &targets,
+            &s,
+            1e-13,
+            30,
+        )
+        .unwrap();
+        for pt in &b.points {
+            assert!((pt.x[0] - (-pt.p).sqrt()).abs() < 1e-10, "{pt:?}");
+        }
+        let last = b.points.last().unwrap().p;
+        assert!(last < 0.0 && last > -0.06, "{last}");
+        let (at, _) = b.stuck.expect("stuck at the fold");
+        assert!(at.p <= 0.0 && at.p > -1e-4, "stuck at {}", at.p);
+        assert!((at.x[0] - (-at.p).sqrt()).abs() < 1e-8);
+    }
+
+    #[test]
+    fn pitchfork_branches_follow_their_exact_curves() {
+        // The upper branch x = √λ from λ = 1 down to λ = 0.01, and the trivial branch
+        // x = 0 straight through the pitchfork at λ = 0.
+        let s = NaturalSettings {
+            max_step: 0.1,
+            ..NaturalSettings::default()
+        };
+        let down = grid(1.0, 0.01, 20);
+        let b = natural_branch(
+            &Pitchfork,
+            &DVector::from_element(1, 0.9),
+            1.0,
+            &down,
+            &s,
+            1e-14,
+            30,
+        )
+        .unwrap();
+        assert!(b.stuck.is_none());
+        assert_eq!(b.points.len(), 21);
+        for pt in &b.points {
+            assert!((pt.x[0] - pt.p.sqrt()).abs() < 1e-9, "{pt:?}");
+        }
+        let through = grid(-1.0, 1.0, 8);
+        let t = natural_branch(
+            &Pitchfork,
+            &DVector::from_element(1, 0.1),
+            -1.0,
+            &through,
+            &s,
+            1e-14,
+            30,
+        )
+        .unwrap();
+        // x = 0 at λ = 0 has a singular Jacobian but a zero residual: Newton accepts it.
+        assert!(t.stuck.is_none());
+        assert!(t.points.iter().all(|pt| pt.x[0].abs() < 1e-12));
+        assert!((t.points.last().unwrap().p - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn walk_halves_failed_steps_and_reports_where_it_stuck() {
+        // A "solver" that accepts only steps of at most 0.3 and never beyond 1.0: from
+        // 0 to 2 the first step (2) is halved to 1, 0.5, 0.25; it then walks in steps of
+        // 0.25 up to 1.0 and spends its halvings there.
+        let s = NaturalSettings {
+            max_halvings: 8,
+            ..NaturalSettings::default()
+        };
+        let mut calls = Vec::new();
+        let r = walk(
+            0.0f64,
+            None,
+            2.0,
+            |x| *x,
+            &s,
+            |cur, _, to, h| {
+                calls.push((*cur, to, h));
+                if (to - cur).abs() <= 0.3 && to <= 1.0 {
+                    Ok(to)
+                } else {
+                    Err(to)
+                }
+            },
+        );
+        let stuck = r.unwrap_err();
+        assert_eq!(stuck.last, 1.0);
+        assert_eq!(stuck.prev, Some(0.75));
+        assert_eq!(stuck.steps, 4);
+        // Halvings: 2 → 1 → 0.5 → 0.25 (three), then at 1.0 six more (0.125 … 0.0039).
+        assert_eq!(calls.iter().filter(|c| c.0 == 1.0).count(), 6);
+        assert_eq!(calls[0], (0.0, 2.0, 0));
+        assert_eq!(calls[3], (0.0, 0.25, 3));
+        // An infallible step reaches the target in one step when nothing bounds it.
+        let r: Result<_, Stuck<f64, Infallible>> = walk(
+            0.0f64,
+            None,
+            2.0,
+            |x| *x,
+            &NaturalSettings::default(),
+            |_, _, to, _| Ok(to),
+        );
+        let w = r.unwrap();
+        assert_eq!((w.last, w.steps, w.halvings), (2.0, 1, 0));
+    }
+}

@@ -1,0 +1,316 @@
+//! The enclosed model behind the model seam: [`EnclosedModel`] implements
+//! [`Confinement`], so that [`ParamProblem`](crate::ParamProblem) and the continuation
+//! crate's loops trace enclosed states as they trace surface ones.
+//!
+//! The KKT system is the model's semismooth one ([`EnclosedModel::residual`]: stationarity,
+//! closure, gauges and `min(λ_j, σ g_j) = 0` at the nodes); its Jacobian is the generalised
+//! (active-set) Jacobian of [`EnclosedModel::evaluate`], so Newton's method through the seam
+//! is the semismooth Newton method without globalisation (the model's own
+//! [`solve_enclosed`](super::solve_enclosed) adds backtracking). The factorisation is a dense
+//! LU (`O(N³)`; the `O(N)` block form of [`super::lifted`] gives Newton steps but no
+//! determinant yet). Parameter derivatives `∂F/∂θ` are central differences of the residual
+//! ([`rodloop_continuation::fd_dparam`], error `O(δ²)`): the chain of cell propagators
+//! depends on `L̄` through every cell length, and its analytic derivative is not written yet.
+//!
+//! Where the contact set changes (nodes touching down with zero force, or letting go),
+//! `min(λ_j, σ g_j)` has a kink: Newton at a fixed parameter (the natural-parameter loop,
+//! [`rodloop_continuation::natural`]) passes it, while the bordered corrector of
+//! pseudo-arclength stalls there (measured on the lifted-off figure-eight at `L̄ ≈ 1.4198`,
+//! `N = 64`, in this module's tests): tracing through contact changes needs events on
+//! `λ_j` and `g_j` and a switch of the active set.
+
+use std::cell::OnceCell;
+
+use nalgebra::{DMatrix, DVector};
+use rodloop_continuation::{DenseLu, Factorization};
+
+use super::model::EnclosedModel;
+use super::solve::EnclosedState;
+use crate::param::Param;
+use crate::seam::{Confinement, Inertia};
+use crate::SolverError;
+
+/// A factorised enclosed KKT Jacobian (dense LU), with the stability index of its state
+/// computed on first request.
+pub struct EnclosedFactor {
+    lu: DenseLu,
+    model: EnclosedModel,
+    z: Vec<f64>,
+    shift: f64,
+    negative: OnceCell<usize>,
+}
+
+impl Factorization for EnclosedFactor {
+    fn solve(&self, b: &DVector<f64>) -> Option<DVector<f64>> {
+        self.lu.solve(b)
+    }
+    fn apply(&self, v: &DVector<f64>) -> DVector<f64> {
+        self.lu.apply(v)
+    }
+    fn det_sign(&self) -> f64 {
+        self.lu.det_sign()
+    }
+    fn log_abs_det(&self) -> f64 {
+        self.lu.log_abs_det()
+    }
+}
+
+impl Inertia for EnclosedFactor {
+    /// Eigenvalues below the shift of the mass-scaled Hessian of the Lagrangian on the
+    /// tangent space of the equalities and the strongly active wall constraints
+    /// (`EnclosedState::tangent_hessian`, activity threshold `1e-6`); a dense symmetric
+    /// eigen-decomposition. `usize::MAX` if the Hessian cannot be evaluated.
+    fn reduced_negative_count(&self) -> usize {
+        *self.negative.get_or_init(|| {
+            let state = state_of(&self.model, &self.z);
+            match state.tangent_hessian(1e-6) {
+                Ok((pw, _)) => {
+                    let vals = pw.symmetric_eigenvalues();
+                    let scale = vals.iter().fold(0.0f64, |x, y| x.max(y.abs())).max(1e-300);
+                    vals.iter()
+                        .filter(|&&v| v < self.shift - 1e-9 * scale)
+                        .count()
+                }
+                Err(_) => usize::MAX,
+            }
+        })
+    }
+}
+
+/// An [`EnclosedState`] view of `(model, z)` (no solve).
+fn state_of(model: &EnclosedModel, z: &[f64]) -> EnclosedState {
+    EnclosedState {
+        model: model.clone(),
+        z: z.to_vec(),
+        iterations: 0,
+        residual: f64::NAN,
+    }
+}
+
+/// The mass of the primal unknowns (node length share for the curvatures, `L/R²` for the
+/// start point), zero for the multipliers: the metric of the shift.
+fn mass(model: &EnclosedModel) -> Vec<f64> {
+    let n = model.cells();
+    let np = model.n_primal();
+    (0..model.dim())
+        .map(|a| {
+            if a < 4 * n {
+                0.5 * model.cell_length(a / 4)
+            } else if a < np {
+                model.length() / (model.radius() * model.radius())
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+impl Confinement for EnclosedModel {
+    type Factor = EnclosedFactor;
+
+    fn dim(&self) -> usize {
+        EnclosedModel::dim(self)
+    }
+    /// Closure, gauges and one wall constraint per node.
+    fn n_constraints(&self) -> usize {
+        self.n_equalities() + self.cells()
+    }
+    fn residual(&self, z: &[f64]) -> Result<DVector<f64>, SolverError> {
+        EnclosedModel::residual(self, z)
+    }
+    fn jacobian(&self, z: &[f64]) -> Result<DMatrix<f64>, SolverError> {
+        Ok(self.evaluate(z)?.jacobian)
+    }
+    fn factorize(&self, z: &[f64], shift: f64) -> Result<EnclosedFactor, SolverError> {
+        let mut j = self.evaluate(z)?.jacobian;
+        if shift != 0.0 {
+            for (a, m) in mass(self).into_iter().enumerate() {
+                j[(a, a)] -= shift * m;
+            }
+        }
+        let lu = DenseLu::new(j);
+        if lu.log_abs_det() == f64::NEG_INFINITY {
+            return Err(SolverError::SingularJacobian { iteration: 0 });
+        }
+        Ok(EnclosedFactor {
+            lu,
+            model: self.clone(),
+            z: z.to_vec(),
+            shift,
+            negative: OnceCell::new(),
+        })
+    }
+    fn apply(&self, z: &[f64], dz: &[f64]) -> Result<DVector<f64>, SolverError> {
+        Ok(self.evaluate(z)?.jacobian * DVector::from_column_slice(dz))
+    }
+    fn param(&self, p: Param) -> Result<f64, SolverError> {
+        match p {
+            Param::Lbar => Ok(self.lbar()),
+            _ => self.stiffness().kind().param(p),
+        }
+    }
+    /// The same mesh, gauge and pull with `p` changed.
+    fn with_param(&self, p: Param, value: f64) -> Result<Self, SolverError> {
+        let (lbar, stiffness) = match p {
+            Param::Lbar => (value, self.stiffness().kind().clone()),
+            _ => (self.lbar(), self.stiffness().kind().with_param(p, value)?),
+        };
+        EnclosedModel::new(
+            self.radius(),
+            lbar,
+            self.cells(),
+            &stiffness,
+            self.gauge().clone(),
+        )?
+        .with_pull(self.pull())
+    }
+    /// Central difference of the residual in the parameter (see the module docs).
+    fn dparam(&self, z: &[f64], p: Param) -> Result<DVector<f64>, SolverError> {
+        let theta = Confinement::param(self, p)?;
+        rodloop_continuation::fd_dparam(|t| Confinement::with_param(self, p, t)?.residual(z), theta)
+    }
+    /// The index of [`EnclosedState::stability`] with activity threshold `tolerance`.
+    fn index(&self, z: &[f64], tolerance: f64) -> Result<usize, SolverError> {
+        Ok(state_of(self, z).stability(tolerance)?.0)
+    }
+    fn energy(&self, z: &[f64]) -> Result<f64, SolverError> {
+        EnclosedModel::energy(self, z)
+    }
+    fn residual_norm(&self, f: &DVector<f64>) -> f64 {
+        EnclosedModel::residual_norm(self, f)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::enclosed::{solve_branch, EnclosedOptions, SurfaceSource};
+    use crate::{ParamProblem, Stiffness};
+    use rodloop_continuation::natural::{natural_branch, NaturalSettings};
+
+    /// The lifted-off figure-eight (branch 2) at `lbar`, `N = 64` cells.
+    fn figure_eight(lbar: f64) -> EnclosedState {
+        let l = rodloop_exact::paper_branch_loop(1, lbar).unwrap();
+        solve_branch(
+            1.0,
+            lbar,
+            &Stiffness::uniform(1.0),
+            &SurfaceSource::Exact(l),
+            64,
+            &EnclosedOptions::default(),
+        )
+        .unwrap()
+        .fine
+    }
+
+    #[test]
+    fn parameter_derivative_matches_a_wider_difference() {
+        // The central difference of the seam against one with a ten times wider step: both
+        // O(δ²), so they agree to the scale of the second difference.
+        let a = figure_eight(1.40);
+        let d = Confinement::dparam(&a.model, &a.z, Param::Lbar).unwrap();
+        let h = 1e-4;
+        let fp = Confinement::with_param(&a.model, Param::Lbar, 1.40 + h)
+            .unwrap()
+            .residual(&a.z)
+            .unwrap();
+        let fm = Confinement::with_param(&a.model, Param::Lbar, 1.40 - h)
+            .unwrap()
+            .residual(&a.z)
+            .unwrap();
+        let wide = (fp - fm) / (2.0 * h);
+        let err = (&d - &wide).amax() / d.amax();
+        assert!(err < 1e-5, "relative difference {err:.3e}");
+        assert!(d.amax() > 0.0);
+    }
+
+    #[test]
+    fn the_continuation_loop_traces_an_enclosed_branch_through_the_seam() {
+        // The natural-parameter loop of the continuation crate on ParamProblem<EnclosedModel>
+        // (Newton with the seam's residual and factorisation, the gauge of the start held)
+        // against the enclosed tracer's own steps (EnclosedState::step_to: a new gauge and
+        // the backtracking semismooth Newton at every length): the same states, so the same
+        // energies, at L̄ = 1.41, 1.42, 1.43.
+        let a = figure_eight(1.40);
+        let problem = ParamProblem::new(a.model.clone(), Param::Lbar).unwrap();
+        let targets = [1.41, 1.42, 1.43];
+        let settings = NaturalSettings {
+            max_step: 0.005,
+            ..NaturalSettings::default()
+        };
+        let z0 = DVector::from_column_slice(&a.z);
+        let traced = natural_branch(&problem, &z0, 1.40, &targets, &settings, 1e-10, 30).unwrap();
+        assert!(traced.stuck.is_none(), "{:?}", traced.stuck.map(|s| s.1));
+        assert_eq!(traced.points.len(), 4);
+        let opts = EnclosedOptions::default();
+        let mut cur = a.clone();
+        for (pt, &l) in traced.points[1..].iter().zip(&targets) {
+            cur = cur.step_to(l, &opts).unwrap();
+            let model = problem.model_at(l).unwrap();
+            let e_seam = Confinement::energy(&model, pt.x.as_slice()).unwrap();
+            let e_tracer = cur.energy();
+            assert!(
+                (e_seam - e_tracer).abs() < 1e-9 * e_tracer,
+                "L̄ = {l}: seam {e_seam}, tracer {e_tracer}"
+            );
+            // A closed loop inside the ball at a KKT point of the enclosed model.
+            let r = model.residual_norm(&model.residual(pt.x.as_slice()).unwrap());
+            assert!(r < 1e-6, "L̄ = {l}: residual {r:.3e}");
+            let gaps = model.gaps(pt.x.as_slice()).unwrap();
+            assert!(gaps.iter().all(|g| *g > -1e-9), "L̄ = {l}");
+        }
+    }
+
+    #[test]
+    fn pseudo_arclength_through_the_seam_reaches_the_tracer_state() {
+        // The continuation crate's pseudo-arclength homotopy (target::reach) on the seam from
+        // L̄ = 1.40 to 1.415, corrected there by Newton through the seam: the energy of the
+        // tracer's state at 1.415 (three step_to steps).
+        use rodloop_continuation::target::{reach, ReachLimits};
+        use rodloop_continuation::{newton, PseudoArclength};
+        let a = figure_eight(1.40);
+        let problem = ParamProblem::new(a.model.clone(), Param::Lbar).unwrap();
+        let settings = PseudoArclength::new()
+            .with_ds(0.005)
+            .and_then(|s| s.with_ds_bounds(1e-6, 0.01))
+            .and_then(|s| s.with_detect_branch_points(false))
+            .unwrap();
+        let z0 = DVector::from_column_slice(&a.z);
+        let limits = ReachLimits::default();
+        let r = reach(&problem, &settings, &z0, 1.40, 1.415, &limits, || true).unwrap();
+        assert!(r.folds.is_empty());
+        let (x, _) = newton(&problem, &r.x, 1.415, 1e-10, 30).unwrap();
+        let model = problem.model_at(1.415).unwrap();
+        let e_seam = Confinement::energy(&model, x.as_slice()).unwrap();
+        let opts = EnclosedOptions::default();
+        let mut cur = a.clone();
+        for l in [1.405, 1.41, 1.415] {
+            cur = cur.step_to(l, &opts).unwrap();
+        }
+        let e_tracer = cur.energy();
+        assert!(
+            (e_seam - e_tracer).abs() < 1e-9 * e_tracer,
+            "seam {e_seam}, tracer {e_tracer}"
+        );
+        // Where the contact set changes (four nodes touch down with zero force near
+        // L̄ = 1.4198) the semismooth residual has a kink and the bordered corrector stalls:
+        // pseudo-arclength through the seam stops there (the natural-parameter loop, Newton
+        // at fixed L̄, passes it; see the test above).
+        let stop = reach(&problem, &settings, &z0, 1.40, 1.43, &limits, || true).unwrap_err();
+        assert!((stop.closest - 1.4198).abs() < 1e-3, "{}", stop.closest);
+    }
+
+    #[test]
+    fn factor_inertia_matches_the_state_stability() {
+        let a = figure_eight(1.40);
+        let f = Confinement::factorize(&a.model, &a.z, 0.0).unwrap();
+        let (index, _) = a.stability(1e-6).unwrap();
+        assert_eq!(f.reduced_negative_count(), index);
+        assert_eq!(Confinement::index(&a.model, &a.z, 1e-6).unwrap(), index);
+        // The factorisation solves with the Jacobian it factorised.
+        let j = Confinement::jacobian(&a.model, &a.z).unwrap();
+        let b = DVector::from_fn(j.nrows(), |i, _| (i as f64).sin());
+        let x = f.solve(&b).unwrap();
+        assert!((&j * &x - &b).amax() < 1e-8 * b.amax() * j.amax().max(1.0));
+    }
+}
