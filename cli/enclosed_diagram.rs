@@ -114,9 +114,16 @@ pub(crate) fn write_outputs(
             "sheet",
             "multiplicity",
             "surface_energy",
+            "state_file",
         ],
     );
-    for p in &d.points {
+    // Every point's loop in states/ (cli/states.rs), named in the last column.
+    let (state_files, state_warnings) =
+        crate::states::write_enclosed_states(d, opts.radius, opts.stiffness.reference(), run)?;
+    for w in &state_warnings {
+        eprintln!("warning: {w}");
+    }
+    for (p, file) in d.points.iter().zip(&state_files) {
         branches.push(vec![
             Cell::I(p.branch.into()),
             Cell::I(p.eta.into()),
@@ -145,6 +152,7 @@ pub(crate) fn write_outputs(
             Cell::I(p.sheet.into()),
             Cell::I(p.multiplicity.into()),
             p.surface_energy.map_or(Cell::S(String::new()), Cell::F),
+            Cell::S(file.clone()),
         ])?;
     }
     // critical.csv has the surface diagram's columns; the surface values and the methods
@@ -189,7 +197,8 @@ pub(crate) fn write_outputs(
         "special_points": d.events,
         "lowest_lifted_off": lowest_lifted,
         "cells": d.cells,
-        "warnings": d.warnings,
+        "warnings": d.warnings.iter().chain(&state_warnings).collect::<Vec<_>>(),
+        "states_dir": "states",
         "notes": d.notes,
         "timings": d.seconds,
         "units": crate::diagram::UNITS,

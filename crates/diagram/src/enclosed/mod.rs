@@ -52,9 +52,10 @@
 use std::time::Instant;
 
 use rodloop_exact::diagram::{compute, Critical, CriticalKind, DiagramSettings};
+use rodloop_exact::ExactLoop;
 use rodloop_exact::{branch_of_eta, eta_of_branch};
-use rodloop_solver::enclosed::enclosed_cells;
-use rodloop_solver::{Accuracy, SolverError, Stiffness};
+use rodloop_solver::enclosed::{enclosed_cells, EnclosedState};
+use rodloop_solver::{Accuracy, Equilibrium, SolverError, Stiffness};
 use serde::Serialize;
 
 use crate::labels::Label;
@@ -150,6 +151,22 @@ pub enum PointSource {
     Surface,
 }
 
+/// The loop behind a point of the enclosed diagram (what `diagram` writes to `states/`).
+#[derive(Clone, Debug, Default)]
+pub enum PointShape {
+    /// The reported 3-D state (lifted off: the finest of the levels `N/4, N/2, N`).
+    Model(Box<EnclosedState>),
+    /// The surface equilibrium of an attached state (non-uniform rods, `λ_min > 0`).
+    Surface(Box<Equilibrium>),
+    /// The exact surface loop of an attached state (uniform rods).
+    Exact(ExactLoop),
+    /// The free planar circle of radius `R L̄` through the centre's plane (branch 0).
+    Circle,
+    /// No shape kept (the surface state could not be re-evaluated).
+    #[default]
+    Missing,
+}
+
 /// One state of the enclosed diagram.
 #[derive(Clone, Debug, Serialize)]
 pub struct EnclosedPoint {
@@ -199,6 +216,9 @@ pub struct EnclosedPoint {
     pub multiplicity: u32,
     /// Energy of the branch's surface loop at this length (`None` for the free circle).
     pub surface_energy: Option<f64>,
+    /// The loop itself (for `states/`; not serialised).
+    #[serde(skip)]
+    pub shape: PointShape,
 }
 
 /// Kind of an event on a branch.

@@ -50,7 +50,7 @@ use super::nonuniform_special::{branch_points, classify_stops};
 use super::trace::{follow, Levels, TraceStop};
 use super::{
     EnclosedCritical, EnclosedDiagram, EnclosedDiagramOptions, EnclosedEvent, EnclosedPoint,
-    EnclosedTimings, EventKind, PointSource,
+    EnclosedTimings, EventKind, PointShape, PointSource,
 };
 use crate::families::compute_families;
 use crate::labels::Label;
@@ -256,9 +256,13 @@ fn samples(sheet: &TracedBranch, lo: f64, hi: f64, step: f64) -> Vec<usize> {
     out
 }
 
-/// An attached sample: the surface state itself.
-fn surface_point(sheet: &TracedBranch, k: usize) -> EnclosedPoint {
+/// An attached sample: the surface state itself (its equilibrium re-evaluated at the
+/// tracing resolution for `states/`).
+fn surface_point(dopts: &DiagramOptions, sheet: &TracedBranch, k: usize) -> EnclosedPoint {
     let p = &sheet.points[k];
+    let shape = sheet
+        .equilibrium_of(dopts, k)
+        .map_or(PointShape::Missing, |eq| PointShape::Surface(Box::new(eq)));
     EnclosedPoint {
         branch: sheet.branch,
         eta: sheet.eta,
@@ -282,6 +286,7 @@ fn surface_point(sheet: &TracedBranch, k: usize) -> EnclosedPoint {
         sheet: sheet.sheet,
         multiplicity: sheet.multiplicity,
         surface_energy: Some(p.energy),
+        shape,
     }
 }
 
@@ -485,7 +490,7 @@ fn trace_sheet(
         !repeats.iter().any(|&(a, b)| x > a - 1e-9 && x < b + 1e-9)
     });
     for &k in chosen.iter().filter(|&&k| pts[k].lambda_min > 0.0) {
-        out.points.push(surface_point(sheet, k));
+        out.points.push(surface_point(dopts, sheet, k));
     }
     out.attached_s = ta.elapsed().as_secs_f64();
     // Lifted-off runs of consecutive samples.
