@@ -6,7 +6,9 @@
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
-use rodloop_diagram::enclosed::{enclosed_diagram, EnclosedDiagram, EnclosedDiagramOptions};
+use rodloop_diagram::enclosed::{
+    enclosed_diagram_with, EnclosedDiagram, EnclosedDiagramOptions, EnclosedProgress,
+};
 use rodloop_figures::raster::svg_to_png;
 use rodloop_scene::{Confinement, Scene};
 
@@ -71,7 +73,18 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
         opts.branches = Some(sel);
     }
     let run = OutputRun::begin(&args.out)?;
-    let d = enclosed_diagram(&opts).context("the enclosed diagram")?;
+    // Progress on stderr (cli/progress.rs): a bar on a terminal, one line per task otherwise.
+    let bar = crate::progress::Progress::new(0, "enclosed", args.quiet);
+    let mut planned = 0u64;
+    let d = enclosed_diagram_with(&opts, &mut |p| match p {
+        EnclosedProgress::Planned(n) => {
+            planned += n as u64;
+            bar.set_length(planned);
+        }
+        EnclosedProgress::Done(msg) => bar.done(msg),
+    })
+    .context("the enclosed diagram")?;
+    bar.finish();
     write_outputs(&d, &opts, &scene.name, &run, args)?;
     if args.shapes > 0 {
         // The branch atlas (cli/atlas.rs): states re-solved along each branch, in states/.

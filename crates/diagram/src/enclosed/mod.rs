@@ -323,11 +323,28 @@ pub struct EnclosedTimings {
     pub surface: f64,
 }
 
+/// A stage of [`enclosed_diagram_with`] for progress reports (sent on the calling thread).
+#[derive(Clone, Debug, PartialEq)]
+pub enum EnclosedProgress {
+    /// This many more tasks (branches, surface families, sheets, stages) are planned.
+    Planned(usize),
+    /// One task finished (what it was, for a status line).
+    Done(String),
+}
+
 /// Compute the enclosed diagram (see the module docs).
 pub fn enclosed_diagram(opts: &EnclosedDiagramOptions) -> Result<EnclosedDiagram, DiagramError> {
+    enclosed_diagram_with(opts, &mut |_| {})
+}
+
+/// [`enclosed_diagram`], reporting its tasks to `progress` as they are planned and done.
+pub fn enclosed_diagram_with(
+    opts: &EnclosedDiagramOptions,
+    progress: &mut dyn FnMut(EnclosedProgress),
+) -> Result<EnclosedDiagram, DiagramError> {
     opts.validate()?;
     if !opts.stiffness.is_uniform() {
-        return nonuniform::nonuniform_diagram(opts);
+        return nonuniform::nonuniform_diagram(opts, progress);
     }
     let t0 = Instant::now();
     let (lo, hi) = (opts.lbar_min, opts.lbar_max);
@@ -355,11 +372,21 @@ pub fn enclosed_diagram(opts: &EnclosedDiagramOptions) -> Result<EnclosedDiagram
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut order: Vec<u32> = etas.clone();
     order.sort_by_key(|&e| u32::from(e != 1));
+    // Tasks: the branches, then the critical lengths.
+    progress(EnclosedProgress::Planned(order.len() + 1));
     let outs = run_parallel(
         threads,
         order.clone(),
         &mut |_| {},
-        &mut |_: &Result<BranchOut, DiagramError>| {},
+        &mut |o: &Result<BranchOut, DiagramError>| {
+            if let Ok(o) = o {
+                progress(EnclosedProgress::Done(format!(
+                    "branch {} traced ({} states)",
+                    o.points.first().map_or(0, |p| p.branch),
+                    o.points.len()
+                )));
+            }
+        },
         |eta, _| trace_branch(opts, eta),
     );
     let mut outs: Vec<(u32, Result<BranchOut, DiagramError>)> =
@@ -464,6 +491,10 @@ pub fn enclosed_diagram(opts: &EnclosedDiagramOptions) -> Result<EnclosedDiagram
     }
 
     timings.critical = tc.elapsed().as_secs_f64();
+    progress(EnclosedProgress::Done(format!(
+        "{} critical lengths located",
+        critical.len()
+    )));
     label(&mut points, &critical, &mut warnings);
     timings.total = t0.elapsed().as_secs_f64();
     Ok(EnclosedDiagram {

@@ -50,7 +50,7 @@ use super::nonuniform_special::{branch_points, classify_stops};
 use super::trace::{follow, Levels, TraceStop};
 use super::{
     EnclosedCritical, EnclosedDiagram, EnclosedDiagramOptions, EnclosedEvent, EnclosedPoint,
-    EnclosedTimings, EventKind, PointShape, PointSource,
+    EnclosedProgress, EnclosedTimings, EventKind, PointShape, PointSource,
 };
 use crate::families::compute_families;
 use crate::labels::Label;
@@ -636,6 +636,7 @@ fn trace_sheet(
 /// The enclosed diagram of a non-uniform rod (see the module docs).
 pub(super) fn nonuniform_diagram(
     opts: &EnclosedDiagramOptions,
+    progress: &mut dyn FnMut(EnclosedProgress),
 ) -> Result<EnclosedDiagram, DiagramError> {
     let t0 = Instant::now();
     if opts.lbar_min < 1.0 {
@@ -656,11 +657,22 @@ pub(super) fn nonuniform_diagram(
     let mut timings = EnclosedTimings::default();
     // 1. Surface families.
     let ts = Instant::now();
+    // Tasks: the surface families of each branch, then (once they are known) the sheets,
+    // and the three stages after them (descent, branch points, exchanges).
+    progress(EnclosedProgress::Planned(etas.len() + 3));
     let fams = run_parallel(
         threads,
         etas.clone(),
         &mut |_| {},
-        &mut |_: &Result<_, DiagramError>| {},
+        &mut |f: &Result<crate::families::Families, DiagramError>| {
+            if let Ok(f) = f {
+                progress(EnclosedProgress::Done(format!(
+                    "surface families of branch {} traced ({} sheets)",
+                    f.sheets.first().map_or(0, |s| s.branch),
+                    f.sheets.len()
+                )));
+            }
+        },
         |eta, _| compute_families(&dopts, eta, &mut |_| {}),
     );
     let mut sheets: Vec<TracedBranch> = Vec::new();
@@ -687,11 +699,21 @@ pub(super) fn nonuniform_diagram(
             ));
         }
     }
+    progress(EnclosedProgress::Planned(order.len()));
     let outs = run_parallel(
         threads,
         order.clone(),
         &mut |_| {},
-        &mut |_: &Result<SheetOut, DiagramError>| {},
+        &mut |o: &Result<SheetOut, DiagramError>| {
+            if let Ok(o) = o {
+                progress(EnclosedProgress::Done(format!(
+                    "branch {} family {} traced ({} states)",
+                    o.branch,
+                    o.family,
+                    o.points.len()
+                )));
+            }
+        },
         |i, _| trace_sheet(opts, &dopts, &sheets[i], &repeats[i]),
     );
     let mut traced: Vec<(usize, SheetOut)> = Vec::new();
@@ -709,6 +731,9 @@ pub(super) fn nonuniform_diagram(
     warnings.extend(w);
     idx.extend(parents);
     timings.lifted_off += tdesc.elapsed().as_secs_f64();
+    progress(EnclosedProgress::Done(
+        "descent from unstable lowest states".into(),
+    ));
     // 2c. Branch points where a lifted-off sheet's index changes; the traces' stops.
     let tbp = Instant::now();
     let found = run_parallel(
@@ -727,6 +752,7 @@ pub(super) fn nonuniform_diagram(
     notes.extend(stop_notes);
     warnings.extend(stop_warnings);
     timings.lifted_off += tbp.elapsed().as_secs_f64();
+    progress(EnclosedProgress::Done("branch points located".into()));
     let surf: Vec<&TracedBranch> = idx.iter().map(|&i| &sheets[i]).collect();
     // 3. Exchanges of the lowest branch.
     let tc = Instant::now();
@@ -851,6 +877,10 @@ pub(super) fn nonuniform_diagram(
         c.critical.index = i + 1;
     }
     timings.critical = tc.elapsed().as_secs_f64();
+    progress(EnclosedProgress::Done(format!(
+        "{} critical lengths located",
+        critical.len()
+    )));
     // 4. Lowest flags and labels.
     let mut points = Vec::new();
     let mut events = Vec::new();
