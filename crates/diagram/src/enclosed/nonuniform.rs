@@ -89,6 +89,9 @@ pub(super) struct SheetOut {
     warnings: Vec<String>,
     /// Where its lifted-off traces stopped (classified in `nonuniform_special.rs`).
     pub(super) stops: Vec<TraceStop>,
+    /// `L̄` of the states whose index was taken on the finest level, not the coarsest
+    /// (`nonuniform_descent.rs`).
+    pub(super) fine_index: Vec<f64>,
     attached_s: f64,
     lifted_s: f64,
 }
@@ -105,6 +108,7 @@ impl SheetOut {
             events: Vec::new(),
             warnings: Vec::new(),
             stops: Vec::new(),
+            fine_index: Vec::new(),
             attached_s: 0.0,
             lifted_s: 0.0,
         }
@@ -443,6 +447,7 @@ fn trace_sheet(
         events: Vec::new(),
         warnings: Vec::new(),
         stops: Vec::new(),
+        fine_index: Vec::new(),
         attached_s: 0.0,
         lifted_s: 0.0,
     };
