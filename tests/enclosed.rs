@@ -466,3 +466,50 @@ fn enclosed_diagram_writes_states() {
         );
     }
 }
+
+/// The enclosed diagram of a two-segment rod carries its completeness certificate in
+/// summary.json: at lowest states spread over the range, `solve`'s state of every branch
+/// there, none below the diagram's lowest state by more than the two estimates, and the
+/// lowest branch's own `solve` state equal to the diagram's within them.
+#[test]
+fn two_segment_enclosed_diagram_certificate() {
+    let dir = out("enclosed-diagram-certificate");
+    let sc = Path::new(env!("CARGO_TARGET_TMPDIR")).join("mild-enclosed.toml");
+    std::fs::write(
+        &sc,
+        "name = \"mild-enclosed\"\nradius = 1.0\nconfinement = \"enclosed\"\nlbar_min = 1.6\nlbar_max = 1.75\n\n[stiffness]\nkind = \"tanh\"\nd0 = 1.0\nd1 = 0.9\ns0 = 0.3\ns1 = 0.8\ngamma = 20.0\n",
+    )
+    .unwrap();
+    let o = rodloop(&[
+        "diagram",
+        "--scene",
+        sc.to_str().unwrap(),
+        "--branch",
+        "2",
+        "--step",
+        "0.02",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let cert = summary["certificate"].as_array().expect("a certificate");
+    assert!(cert.len() >= 2, "{cert:?}");
+    for c in cert {
+        assert_eq!(c["below"], false, "{c}");
+        let e = c["solve_energy"][0]
+            .as_f64()
+            .expect("solve found the state");
+        let de = c["solve_energy"][1].as_f64().unwrap();
+        let (lb, le, lde) = (
+            c["lowest"][0].as_u64().unwrap(),
+            c["lowest"][2].as_f64().unwrap(),
+            c["lowest"][3].as_f64().unwrap(),
+        );
+        assert!(e + de >= le - lde, "{c}");
+        if c["branch"].as_u64() == Some(lb) {
+            assert!((e - le).abs() <= de + lde + 1e-12, "{c}");
+        }
+    }
+}
