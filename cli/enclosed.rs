@@ -358,9 +358,12 @@ fn solve_from_shape(
 
 /// `config.csv` of an enclosed state: one row per node.
 pub(crate) fn config_table(st: &EnclosedState, scene: &Scene) -> Result<Table> {
+    config_table_in(st, scene.radius, scene.stiffness.reference())
+}
+
+/// [`config_table`] for a ball of radius `r` and reference stiffness `d0`.
+pub(crate) fn config_table_in(st: &EnclosedState, r: f64, d0: f64) -> Result<Table> {
     let m = &st.model;
-    let r = scene.radius;
-    let d0 = scene.stiffness.reference();
     let lam = m.contact_force(&st.z);
     let mut table = Table::new(
         "config.csv",

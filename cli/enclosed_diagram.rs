@@ -6,7 +6,9 @@
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
-use rodloop_diagram::enclosed::{enclosed_diagram, EnclosedDiagram, EnclosedDiagramOptions};
+use rodloop_diagram::enclosed::{
+    enclosed_diagram_with, EnclosedDiagram, EnclosedDiagramOptions, EnclosedProgress,
+};
 use rodloop_figures::raster::svg_to_png;
 use rodloop_scene::{Confinement, Scene};
 
@@ -71,15 +73,151 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
         opts.branches = Some(sel);
     }
     let run = OutputRun::begin(&args.out)?;
-    let d = enclosed_diagram(&opts).context("the enclosed diagram")?;
+    // Progress on stderr (cli/progress.rs): a bar on a terminal, one line per task otherwise.
+    let bar = crate::progress::Progress::new(0, "enclosed", args.quiet);
+    let mut planned = 0u64;
+    let d = enclosed_diagram_with(&opts, &mut |p| match p {
+        EnclosedProgress::Planned(n) => {
+            planned += n as u64;
+            bar.set_length(planned);
+        }
+        EnclosedProgress::Done(msg) => bar.done(msg),
+    })
+    .context("the enclosed diagram")?;
+    bar.finish();
+    // The completeness certificate (the same search `solve` runs) goes into summary.json.
+    let cert = certificate(&d, scene, &opts);
     write_outputs(&d, &opts, &scene.name, &run, args)?;
+    let mut summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(run.stage_dir().join("summary.json"))?)?;
+    summary["certificate"] = serde_json::to_value(&cert)?;
+    run.write_json("summary.json", &summary)?;
     if args.shapes > 0 {
         // The branch atlas (cli/atlas.rs): states re-solved along each branch, in states/.
         crate::atlas::write_enclosed_atlas(&run, args.shapes, scene, accuracy, &d)?;
     }
     run.commit()?;
     print(&d, scene, &opts, &args.out);
+    print_certificate(&cert);
     Ok(())
+}
+
+/// One check of the completeness certificate: `solve`'s state of a branch at the length
+/// of a lowest state of the diagram.
+#[derive(Clone, Debug, serde::Serialize)]
+pub(crate) struct CertificateCheck {
+    /// `L̄` (that of the diagram's lowest state).
+    lbar: f64,
+    /// The branch `solve` was asked for.
+    branch: u32,
+    /// `solve`'s energy and error estimate (`None` where it found no state).
+    solve_energy: Option<(f64, f64)>,
+    /// The diagram's lowest state there: branch, family, energy, error estimate.
+    lowest: (u32, u32, f64, f64),
+    /// `solve`'s state lies below the lowest state by more than the two estimates.
+    below: bool,
+    /// Why `solve` found no state (empty otherwise).
+    note: String,
+}
+
+/// Lowest states at which the certificate runs `solve`: three, spread over the range.
+const CERTIFICATE_SAMPLES: usize = 3;
+
+/// The completeness certificate of a non-uniform rod's diagram: at the lengths of
+/// [`CERTIFICATE_SAMPLES`] lowest states of the diagram spread over its range, `solve`'s
+/// search (surface loop of each branch that exists there, then the enclosed loop from it,
+/// cli/enclosed.rs) for every selected branch; a state of `solve` below the diagram's lowest
+/// one by more than the two error estimates is a state the diagram missed. (A uniform rod's
+/// diagram and `solve` start from the same exact surface loops: no check there.)
+fn certificate(
+    d: &EnclosedDiagram,
+    scene: &Scene,
+    opts: &EnclosedDiagramOptions,
+) -> Vec<CertificateCheck> {
+    if opts.stiffness.is_uniform() {
+        return Vec::new();
+    }
+    let mut lowest: Vec<_> = d
+        .points
+        .iter()
+        .filter(|p| p.lowest && p.branch > 0)
+        .collect();
+    lowest.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
+    if lowest.is_empty() {
+        return Vec::new();
+    }
+    let n = lowest.len();
+    let mut picks: Vec<usize> = (0..CERTIFICATE_SAMPLES)
+        .map(|i| ((2 * i + 1) * n / (2 * CERTIFICATE_SAMPLES)).min(n - 1))
+        .collect();
+    picks.dedup();
+    let wanted = |b: u32| opts.branches.as_ref().is_none_or(|s| s.contains(&b));
+    let mut jobs = Vec::new();
+    for &i in &picks {
+        let p = lowest[i];
+        let top = p.lbar.floor() as u32 + 1;
+        for eta in 1..=top {
+            let e = f64::from(eta);
+            let branch = rodloop_exact::branch_of_eta(eta);
+            if p.lbar > e - 1.0 && p.lbar < e + 1.0 && wanted(branch) {
+                jobs.push((p, branch));
+            }
+        }
+    }
+    let stiffness = opts.stiffness.clone();
+    crate::states::parallel_map(&jobs, |&(p, branch)| {
+        let lowest = (p.branch, p.family, p.energy, p.energy_error);
+        match crate::enclosed::solve_state(scene, &stiffness, p.lbar, branch, opts.accuracy) {
+            Ok(res) => {
+                let (e, err) = res.energy;
+                CertificateCheck {
+                    lbar: p.lbar,
+                    branch,
+                    solve_energy: Some((e, err)),
+                    lowest,
+                    below: e + err < p.energy - p.energy_error,
+                    note: String::new(),
+                }
+            }
+            Err(e) => CertificateCheck {
+                lbar: p.lbar,
+                branch,
+                solve_energy: None,
+                lowest,
+                below: false,
+                note: format!("{e:#}"),
+            },
+        }
+    })
+}
+
+/// One line per length of the certificate, a warning per state below the diagram's.
+fn print_certificate(cert: &[CertificateCheck]) {
+    let mut xs: Vec<f64> = cert.iter().map(|c| c.lbar).collect();
+    xs.dedup();
+    for x in xs {
+        let here: Vec<_> = cert.iter().filter(|c| c.lbar == x).collect();
+        let (b, f, e, de) = here[0].lowest;
+        let found: Vec<String> = here
+            .iter()
+            .map(|c| match c.solve_energy {
+                Some((v, err)) => format!("branch {} {v:.10} ± {err:.1e}", c.branch),
+                None => format!("branch {} none", c.branch),
+            })
+            .collect();
+        outln!(
+            "  certificate at lbar = {x:.6}: lowest branch {b} family {f}, E R/(pi D) = {e:.10} ± {de:.1e}; solve finds {}",
+            found.join(", ")
+        );
+        for c in here.iter().filter(|c| c.below) {
+            if let Some((v, err)) = c.solve_energy {
+                eprintln!(
+                    "warning: solve finds branch {} at lbar = {x:.6} with E R/(pi D) = {v:.10} ± {err:.1e}, below the diagram's lowest state ({e:.10} ± {de:.1e}): the diagram missed it",
+                    c.branch
+                );
+            }
+        }
+    }
 }
 
 pub(crate) fn write_outputs(
@@ -114,9 +252,16 @@ pub(crate) fn write_outputs(
             "sheet",
             "multiplicity",
             "surface_energy",
+            "state_file",
         ],
     );
-    for p in &d.points {
+    // Every point's loop in states/ (cli/states.rs), named in the last column.
+    let (state_files, state_warnings) =
+        crate::states::write_enclosed_states(d, opts.radius, opts.stiffness.reference(), run)?;
+    for w in &state_warnings {
+        eprintln!("warning: {w}");
+    }
+    for (p, file) in d.points.iter().zip(&state_files) {
         branches.push(vec![
             Cell::I(p.branch.into()),
             Cell::I(p.eta.into()),
@@ -145,6 +290,7 @@ pub(crate) fn write_outputs(
             Cell::I(p.sheet.into()),
             Cell::I(p.multiplicity.into()),
             p.surface_energy.map_or(Cell::S(String::new()), Cell::F),
+            Cell::S(file.clone()),
         ])?;
     }
     // critical.csv has the surface diagram's columns; the surface values and the methods
@@ -189,7 +335,8 @@ pub(crate) fn write_outputs(
         "special_points": d.events,
         "lowest_lifted_off": lowest_lifted,
         "cells": d.cells,
-        "warnings": d.warnings,
+        "warnings": d.warnings.iter().chain(&state_warnings).collect::<Vec<_>>(),
+        "states_dir": "states",
         "notes": d.notes,
         "timings": d.seconds,
         "units": crate::diagram::UNITS,

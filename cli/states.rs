@@ -124,3 +124,171 @@ pub fn files_in(dir: &std::path::Path) -> Result<Vec<String>> {
     out.sort();
     Ok(out)
 }
+
+/// The file of point `k` of an enclosed diagram (`k` counts the points of its branch, family
+/// and sheet in increasing `L̄`): `states/enclosed-branch-B-KKK.csv`, or
+/// `states/enclosed-branch-B-family-F-sheet-S-KKK.csv` for a family of a non-uniform rod.
+pub fn enclosed_file_name(p: &rodloop_diagram::enclosed::EnclosedPoint, k: usize) -> String {
+    if p.family == 0 {
+        format!("states/enclosed-branch-{}-{k:03}.csv", p.branch)
+    } else {
+        format!(
+            "states/enclosed-branch-{}-family-{}-sheet-{}-{k:03}.csv",
+            p.branch, p.family, p.sheet
+        )
+    }
+}
+
+/// The enclosed `config.csv` table (columns of `solve` on an enclosed scene, units of `R`
+/// and `D0`) of a loop on the sphere of radius `r` given as `(s, x, y, z, κ_g, λ, D)` rows
+/// in the model's units: the surface loop is the enclosed state where it is attached, with
+/// curvature vector `(κ1, κ2) = (κ_g, −1/R)` in the Darboux frame (rotation-minimising on
+/// the sphere, as in the 3-D model's start from a surface loop).
+fn sphere_table(rows: &[[f64; 7]], r: f64, d0: f64) -> Result<crate::output::Table> {
+    use crate::output::{Cell, Table};
+    let mut table = Table::new(
+        "config.csv",
+        &[
+            "s", "x", "y", "z", "gap", "kappa", "kappa_1", "kappa_2", "lambda", "D",
+        ],
+    );
+    for &[s, x, y, z, kg, lam, d] in rows {
+        let rad = (x * x + y * y + z * z).sqrt();
+        table.push(vec![
+            Cell::F(s / r),
+            Cell::F(x / r),
+            Cell::F(y / r),
+            Cell::F(z / r),
+            Cell::F((r - rad) / r),
+            Cell::F((kg * kg + 1.0 / (r * r)).sqrt() * r),
+            Cell::F(kg * r),
+            Cell::F(-1.0),
+            Cell::F(lam * r * r * r / d0),
+            Cell::F(d / d0),
+        ])?;
+    }
+    Ok(table)
+}
+
+/// The table of one enclosed diagram point's loop (see [`sphere_table`] for attached ones).
+fn enclosed_table(
+    p: &rodloop_diagram::enclosed::EnclosedPoint,
+    r: f64,
+    d0: f64,
+) -> Result<crate::output::Table> {
+    use rodloop_diagram::enclosed::PointShape;
+    use std::f64::consts::PI;
+    match &p.shape {
+        PointShape::Model(st) => crate::enclosed::config_table_in(st, r, d0),
+        PointShape::Surface(eq) => {
+            let m = STATE_POINTS.max(eq.model().cells());
+            let rows: Vec<[f64; 7]> = eq
+                .profile_uniform(m)?
+                .iter()
+                .map(|q| [q.s, q.x, q.y, q.z, q.kappa_g, q.lambda, q.d])
+                .collect();
+            sphere_table(&rows, r, d0)
+        }
+        PointShape::Exact(l) => {
+            // The exact loop lives on the unit sphere, in units of `R` and `D`.
+            let len = l.length();
+            let rows = (0..STATE_POINTS)
+                .map(|i| {
+                    let q = l.point(len * i as f64 / STATE_POINTS as f64)?;
+                    Ok([
+                        q.s * r,
+                        q.x * r,
+                        q.y * r,
+                        q.z * r,
+                        q.kappa_g / r,
+                        q.lambda * d0 / (r * r * r),
+                        d0,
+                    ])
+                })
+                .collect::<Result<Vec<_>>>()?;
+            sphere_table(&rows, r, d0)
+        }
+        PointShape::Circle => {
+            // Radius `ρ = R L̄` about the centre, in the plane y = 0; curvature vector
+            // (0, −1/ρ) in the frame whose tangent starts along x (the model's start).
+            use crate::output::{Cell, Table};
+            let rho = p.lbar;
+            let mut table = Table::new(
+                "config.csv",
+                &[
+                    "s", "x", "y", "z", "gap", "kappa", "kappa_1", "kappa_2", "lambda", "D",
+                ],
+            );
+            for i in 0..STATE_POINTS {
+                let a = 2.0 * PI * i as f64 / STATE_POINTS as f64;
+                table.push(vec![
+                    Cell::F(rho * a),
+                    Cell::F(rho * a.sin()),
+                    Cell::F(0.0),
+                    Cell::F(rho * a.cos()),
+                    Cell::F(1.0 - rho),
+                    Cell::F(1.0 / rho),
+                    Cell::F(0.0),
+                    Cell::F(-1.0 / rho),
+                    Cell::F(0.0),
+                    Cell::F(1.0),
+                ])?;
+            }
+            Ok(table)
+        }
+        PointShape::Missing => anyhow::bail!("its surface state could not be re-evaluated"),
+    }
+}
+
+/// Write every point of an enclosed diagram into the run's `states/` directory (in
+/// parallel): the lifted-off 3-D states as they are, attached ones as their surface loop.
+/// Returns the file of every point of `d.points`, in that order (empty where none was
+/// written), and the warnings for those.
+pub fn write_enclosed_states(
+    d: &rodloop_diagram::enclosed::EnclosedDiagram,
+    radius: f64,
+    d0: f64,
+    run: &OutputRun,
+) -> Result<(Vec<String>, Vec<String>)> {
+    let dir = run.subdir("states")?;
+    // Number the points of each (branch, family, sheet) in increasing L̄.
+    let mut order: Vec<usize> = (0..d.points.len()).collect();
+    let key = |i: usize| {
+        let p = &d.points[i];
+        (p.branch, p.family, p.sheet)
+    };
+    order.sort_by(|&a, &b| {
+        key(a)
+            .cmp(&key(b))
+            .then(d.points[a].lbar.total_cmp(&d.points[b].lbar))
+    });
+    let mut names = vec![String::new(); d.points.len()];
+    let mut count = 0;
+    for (pos, &i) in order.iter().enumerate() {
+        if pos > 0 && key(order[pos - 1]) != key(i) {
+            count = 0;
+        }
+        names[i] = enclosed_file_name(&d.points[i], count);
+        count += 1;
+    }
+    let jobs: Vec<usize> = (0..d.points.len()).collect();
+    let results = parallel_map(&jobs, |&i| {
+        let table = enclosed_table(&d.points[i], radius, d0).map_err(|e| format!("{e:#}"))?;
+        let bytes = table.to_bytes().map_err(|e| format!("{e:#}"))?;
+        let file = names[i].trim_start_matches("states/");
+        crate::output::write_atomic(&dir, file, &bytes).map_err(|e| format!("{e:#}"))?;
+        Ok::<(), String>(())
+    });
+    let mut warnings = Vec::new();
+    for (i, res) in results.into_iter().enumerate() {
+        if let Err(e) = res {
+            let p = &d.points[i];
+            warnings.push(format!(
+                "the state of branch {} family {} at L̄ = {} has no state file: {e}",
+                p.branch, p.family, p.lbar
+            ));
+            names[i].clear();
+        }
+    }
+    Ok((names, warnings))
+}

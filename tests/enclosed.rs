@@ -344,3 +344,172 @@ fn figure_eight_touches_along_two_equal_arcs() {
         assert!(l0 > 0.0 && (l0 - l1).abs() < 1e-9, "{lbar}: {runs:?}");
     }
 }
+
+/// The column `name` of a CSV text (header in the first line) as strings.
+fn column<'a>(text: &'a str, name: &str) -> Vec<&'a str> {
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let k = header
+        .iter()
+        .position(|h| *h == name)
+        .unwrap_or_else(|| panic!("no column {name} in {header:?}"));
+    lines.map(|l| l.split(',').nth(k).unwrap()).collect()
+}
+
+/// `rodloop diagram` on an enclosed scene writes every state's loop into `states/` and
+/// names it in branches.csv: every file exists, lies in the ball and closes up, a
+/// lifted-off state and an attached (exact) one re-solve from their files (`solve --from`)
+/// to their row's energy within the two error estimates, and the free circle's file is the
+/// circle of radius `L̄ R`.
+#[test]
+fn enclosed_diagram_writes_states() {
+    let dir = out("enclosed-diagram-states");
+    let sc = scene();
+    let o = rodloop(&[
+        "diagram",
+        "--scene",
+        &sc,
+        "--lbar-min",
+        "0.9",
+        "--lbar-max",
+        "1.7",
+        "--step",
+        "0.1",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let branches = std::fs::read_to_string(dir.join("branches.csv")).unwrap();
+    let files = column(&branches, "state_file");
+    let f64s = |name: &str| -> Vec<f64> {
+        column(&branches, name)
+            .iter()
+            .map(|v| v.parse().unwrap())
+            .collect()
+    };
+    let (branch, lbar, energy, error) = (
+        column(&branches, "branch"),
+        f64s("lbar"),
+        f64s("energy"),
+        f64s("energy_error"),
+    );
+    let source = column(&branches, "source");
+    assert!(!files.is_empty());
+    for f in &files {
+        assert!(f.starts_with("states/"), "{f}");
+        let text = std::fs::read_to_string(dir.join(f)).unwrap();
+        let (x, y, z) = (column(&text, "x"), column(&text, "y"), column(&text, "z"));
+        let pts: Vec<[f64; 3]> = (0..x.len())
+            .map(|i| {
+                [
+                    x[i].parse().unwrap(),
+                    y[i].parse().unwrap(),
+                    z[i].parse().unwrap(),
+                ]
+            })
+            .collect();
+        assert!(pts.len() >= 32, "{f}");
+        for p in &pts {
+            let r = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+            assert!(r <= 1.0 + 1e-9, "{f}: |r| = {r}");
+        }
+        // Closed: the chord back to the first point is no longer than the longest step.
+        let d = |a: &[f64; 3], b: &[f64; 3]| {
+            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+        };
+        let step = pts.windows(2).map(|w| d(&w[0], &w[1])).fold(0.0, f64::max);
+        assert!(d(&pts[pts.len() - 1], &pts[0]) <= 1.5 * step, "{f}");
+    }
+    let c = source
+        .iter()
+        .position(|s| *s == "circle")
+        .expect("a circle state");
+    let text = std::fs::read_to_string(dir.join(files[c])).unwrap();
+    for (gap, k2) in column(&text, "gap").iter().zip(column(&text, "kappa_2")) {
+        let (gap, k2): (f64, f64) = (gap.parse().unwrap(), k2.parse().unwrap());
+        assert!((gap - (1.0 - lbar[c])).abs() < 1e-12, "{gap}");
+        assert!((k2 + 1.0 / lbar[c]).abs() < 1e-12, "{k2}");
+    }
+    for kind in ["model", "exact"] {
+        let k = source.iter().position(|s| *s == kind).unwrap_or_else(|| {
+            panic!("no {kind} state in {branches}");
+        });
+        let re = out(&format!("enclosed-diagram-states-{kind}"));
+        let from = dir.join(files[k]);
+        let x = format!("{}", lbar[k]);
+        let o = rodloop(&[
+            "solve",
+            "--scene",
+            &sc,
+            "--from",
+            from.to_str().unwrap(),
+            "--lbar",
+            &x,
+            "--branch",
+            branch[k],
+            "--out",
+            re.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(re.join("summary.json")).unwrap())
+                .unwrap();
+        let (e, de) = (
+            s["energy"].as_f64().unwrap(),
+            s["error_estimate"].as_f64().unwrap(),
+        );
+        assert!(
+            (e - energy[k]).abs() <= de + error[k] + 1e-12,
+            "{kind} at {x}: re-solved {e} ± {de}, row {} ± {}",
+            energy[k],
+            error[k]
+        );
+    }
+}
+
+/// The enclosed diagram of a two-segment rod carries its completeness certificate in
+/// summary.json: at lowest states spread over the range, `solve`'s state of every branch
+/// there, none below the diagram's lowest state by more than the two estimates, and the
+/// lowest branch's own `solve` state equal to the diagram's within them.
+#[test]
+fn two_segment_enclosed_diagram_certificate() {
+    let dir = out("enclosed-diagram-certificate");
+    let sc = Path::new(env!("CARGO_TARGET_TMPDIR")).join("mild-enclosed.toml");
+    std::fs::write(
+        &sc,
+        "name = \"mild-enclosed\"\nradius = 1.0\nconfinement = \"enclosed\"\nlbar_min = 1.6\nlbar_max = 1.75\n\n[stiffness]\nkind = \"tanh\"\nd0 = 1.0\nd1 = 0.9\ns0 = 0.3\ns1 = 0.8\ngamma = 20.0\n",
+    )
+    .unwrap();
+    let o = rodloop(&[
+        "diagram",
+        "--scene",
+        sc.to_str().unwrap(),
+        "--branch",
+        "2",
+        "--step",
+        "0.02",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let cert = summary["certificate"].as_array().expect("a certificate");
+    assert!(cert.len() >= 2, "{cert:?}");
+    for c in cert {
+        assert_eq!(c["below"], false, "{c}");
+        let e = c["solve_energy"][0]
+            .as_f64()
+            .expect("solve found the state");
+        let de = c["solve_energy"][1].as_f64().unwrap();
+        let (lb, le, lde) = (
+            c["lowest"][0].as_u64().unwrap(),
+            c["lowest"][2].as_f64().unwrap(),
+            c["lowest"][3].as_f64().unwrap(),
+        );
+        assert!(e + de >= le - lde, "{c}");
+        if c["branch"].as_u64() == Some(lb) {
+            assert!((e - le).abs() <= de + lde + 1e-12, "{c}");
+        }
+    }
+}

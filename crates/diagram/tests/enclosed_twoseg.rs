@@ -295,3 +295,22 @@ fn the_lowest_states_next_to_the_exchange_are_stable() {
         "{p:?} against {e} ± {err:.1e}"
     );
 }
+
+/// The whole diagram of the scene (`L̄` from 1 to 3): every lowest state has index 0 on the
+/// state reported (its finest level), and no warning says a lowest state is unstable. Just
+/// below the 3-fold great circle, where branch 1's families collapse onto the wall, the
+/// lowest eigenvalue is small and the coarsest level (`N/4 = 32` cells) gets its sign wrong
+/// at `L̄ = 2.99722` (branch 1 family 2: `−2.0e-2` there, `+0.15` at `N = 128`).
+#[test]
+fn every_lowest_state_of_the_scene_is_stable() {
+    let o = EnclosedDiagramOptions::new(1.0, sharp(), 1.0, 3.0);
+    let d = enclosed_diagram(&o).expect("two-segment enclosed diagram, 1 to 3");
+    for w in &d.warnings {
+        assert!(!w.contains("index >= 1"), "{w}");
+    }
+    let lowest: Vec<_> = d.points.iter().filter(|p| p.lowest).collect();
+    assert!(lowest.len() >= 2, "{:?}", d.points);
+    for p in &lowest {
+        assert_eq!(p.index, 0, "{p:?}");
+    }
+}

@@ -52,9 +52,10 @@
 use std::time::Instant;
 
 use rodloop_exact::diagram::{compute, Critical, CriticalKind, DiagramSettings};
+use rodloop_exact::ExactLoop;
 use rodloop_exact::{branch_of_eta, eta_of_branch};
-use rodloop_solver::enclosed::enclosed_cells;
-use rodloop_solver::{Accuracy, SolverError, Stiffness};
+use rodloop_solver::enclosed::{enclosed_cells, EnclosedState};
+use rodloop_solver::{Accuracy, Equilibrium, SolverError, Stiffness};
 use serde::Serialize;
 
 use crate::labels::Label;
@@ -150,6 +151,22 @@ pub enum PointSource {
     Surface,
 }
 
+/// The loop behind a point of the enclosed diagram (what `diagram` writes to `states/`).
+#[derive(Clone, Debug, Default)]
+pub enum PointShape {
+    /// The reported 3-D state (lifted off: the finest of the levels `N/4, N/2, N`).
+    Model(Box<EnclosedState>),
+    /// The surface equilibrium of an attached state (non-uniform rods, `λ_min > 0`).
+    Surface(Box<Equilibrium>),
+    /// The exact surface loop of an attached state (uniform rods).
+    Exact(ExactLoop),
+    /// The free planar circle of radius `R L̄` through the centre's plane (branch 0).
+    Circle,
+    /// No shape kept (the surface state could not be re-evaluated).
+    #[default]
+    Missing,
+}
+
 /// One state of the enclosed diagram.
 #[derive(Clone, Debug, Serialize)]
 pub struct EnclosedPoint {
@@ -199,6 +216,9 @@ pub struct EnclosedPoint {
     pub multiplicity: u32,
     /// Energy of the branch's surface loop at this length (`None` for the free circle).
     pub surface_energy: Option<f64>,
+    /// The loop itself (for `states/`; not serialised).
+    #[serde(skip)]
+    pub shape: PointShape,
 }
 
 /// Kind of an event on a branch.
@@ -303,11 +323,28 @@ pub struct EnclosedTimings {
     pub surface: f64,
 }
 
+/// A stage of [`enclosed_diagram_with`] for progress reports (sent on the calling thread).
+#[derive(Clone, Debug, PartialEq)]
+pub enum EnclosedProgress {
+    /// This many more tasks (branches, surface families, sheets, stages) are planned.
+    Planned(usize),
+    /// One task finished (what it was, for a status line).
+    Done(String),
+}
+
 /// Compute the enclosed diagram (see the module docs).
 pub fn enclosed_diagram(opts: &EnclosedDiagramOptions) -> Result<EnclosedDiagram, DiagramError> {
+    enclosed_diagram_with(opts, &mut |_| {})
+}
+
+/// [`enclosed_diagram`], reporting its tasks to `progress` as they are planned and done.
+pub fn enclosed_diagram_with(
+    opts: &EnclosedDiagramOptions,
+    progress: &mut dyn FnMut(EnclosedProgress),
+) -> Result<EnclosedDiagram, DiagramError> {
     opts.validate()?;
     if !opts.stiffness.is_uniform() {
-        return nonuniform::nonuniform_diagram(opts);
+        return nonuniform::nonuniform_diagram(opts, progress);
     }
     let t0 = Instant::now();
     let (lo, hi) = (opts.lbar_min, opts.lbar_max);
@@ -335,11 +372,21 @@ pub fn enclosed_diagram(opts: &EnclosedDiagramOptions) -> Result<EnclosedDiagram
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut order: Vec<u32> = etas.clone();
     order.sort_by_key(|&e| u32::from(e != 1));
+    // Tasks: the branches, then the critical lengths.
+    progress(EnclosedProgress::Planned(order.len() + 1));
     let outs = run_parallel(
         threads,
         order.clone(),
         &mut |_| {},
-        &mut |_: &Result<BranchOut, DiagramError>| {},
+        &mut |o: &Result<BranchOut, DiagramError>| {
+            if let Ok(o) = o {
+                progress(EnclosedProgress::Done(format!(
+                    "branch {} traced ({} states)",
+                    o.points.first().map_or(0, |p| p.branch),
+                    o.points.len()
+                )));
+            }
+        },
         |eta, _| trace_branch(opts, eta),
     );
     let mut outs: Vec<(u32, Result<BranchOut, DiagramError>)> =
@@ -444,6 +491,10 @@ pub fn enclosed_diagram(opts: &EnclosedDiagramOptions) -> Result<EnclosedDiagram
     }
 
     timings.critical = tc.elapsed().as_secs_f64();
+    progress(EnclosedProgress::Done(format!(
+        "{} critical lengths located",
+        critical.len()
+    )));
     label(&mut points, &critical, &mut warnings);
     timings.total = t0.elapsed().as_secs_f64();
     Ok(EnclosedDiagram {

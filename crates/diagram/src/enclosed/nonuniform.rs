@@ -50,7 +50,7 @@ use super::nonuniform_special::{branch_points, classify_stops};
 use super::trace::{follow, Levels, TraceStop};
 use super::{
     EnclosedCritical, EnclosedDiagram, EnclosedDiagramOptions, EnclosedEvent, EnclosedPoint,
-    EnclosedTimings, EventKind, PointSource,
+    EnclosedProgress, EnclosedTimings, EventKind, PointShape, PointSource,
 };
 use crate::families::compute_families;
 use crate::labels::Label;
@@ -89,6 +89,9 @@ pub(super) struct SheetOut {
     warnings: Vec<String>,
     /// Where its lifted-off traces stopped (classified in `nonuniform_special.rs`).
     pub(super) stops: Vec<TraceStop>,
+    /// `L̄` of the states whose index was taken on the finest level, not the coarsest
+    /// (`nonuniform_descent.rs`).
+    pub(super) fine_index: Vec<f64>,
     attached_s: f64,
     lifted_s: f64,
 }
@@ -105,6 +108,7 @@ impl SheetOut {
             events: Vec::new(),
             warnings: Vec::new(),
             stops: Vec::new(),
+            fine_index: Vec::new(),
             attached_s: 0.0,
             lifted_s: 0.0,
         }
@@ -243,9 +247,13 @@ fn samples(sheet: &TracedBranch, lo: f64, hi: f64, step: f64) -> Vec<usize> {
     out
 }
 
-/// An attached sample: the surface state itself.
-fn surface_point(sheet: &TracedBranch, k: usize) -> EnclosedPoint {
+/// An attached sample: the surface state itself (its equilibrium re-evaluated at the
+/// tracing resolution for `states/`).
+fn surface_point(dopts: &DiagramOptions, sheet: &TracedBranch, k: usize) -> EnclosedPoint {
     let p = &sheet.points[k];
+    let shape = sheet
+        .equilibrium_of(dopts, k)
+        .map_or(PointShape::Missing, |eq| PointShape::Surface(Box::new(eq)));
     EnclosedPoint {
         branch: sheet.branch,
         eta: sheet.eta,
@@ -269,6 +277,7 @@ fn surface_point(sheet: &TracedBranch, k: usize) -> EnclosedPoint {
         sheet: sheet.sheet,
         multiplicity: sheet.multiplicity,
         surface_energy: Some(p.energy),
+        shape,
     }
 }
 
@@ -425,6 +434,7 @@ fn trace_sheet(
         events: Vec::new(),
         warnings: Vec::new(),
         stops: Vec::new(),
+        fine_index: Vec::new(),
         attached_s: 0.0,
         lifted_s: 0.0,
     };
@@ -472,7 +482,7 @@ fn trace_sheet(
         !repeats.iter().any(|&(a, b)| x > a - 1e-9 && x < b + 1e-9)
     });
     for &k in chosen.iter().filter(|&&k| pts[k].lambda_min > 0.0) {
-        out.points.push(surface_point(sheet, k));
+        out.points.push(surface_point(dopts, sheet, k));
     }
     out.attached_s = ta.elapsed().as_secs_f64();
     // Lifted-off runs of consecutive samples.
@@ -618,6 +628,7 @@ fn trace_sheet(
 /// The enclosed diagram of a non-uniform rod (see the module docs).
 pub(super) fn nonuniform_diagram(
     opts: &EnclosedDiagramOptions,
+    progress: &mut dyn FnMut(EnclosedProgress),
 ) -> Result<EnclosedDiagram, DiagramError> {
     let t0 = Instant::now();
     if opts.lbar_min < 1.0 {
@@ -638,11 +649,22 @@ pub(super) fn nonuniform_diagram(
     let mut timings = EnclosedTimings::default();
     // 1. Surface families.
     let ts = Instant::now();
+    // Tasks: the surface families of each branch, then (once they are known) the sheets,
+    // and the three stages after them (descent, branch points, exchanges).
+    progress(EnclosedProgress::Planned(etas.len() + 3));
     let fams = run_parallel(
         threads,
         etas.clone(),
         &mut |_| {},
-        &mut |_: &Result<_, DiagramError>| {},
+        &mut |f: &Result<crate::families::Families, DiagramError>| {
+            if let Ok(f) = f {
+                progress(EnclosedProgress::Done(format!(
+                    "surface families of branch {} traced ({} sheets)",
+                    f.sheets.first().map_or(0, |s| s.branch),
+                    f.sheets.len()
+                )));
+            }
+        },
         |eta, _| compute_families(&dopts, eta, &mut |_| {}),
     );
     let mut sheets: Vec<TracedBranch> = Vec::new();
@@ -669,11 +691,21 @@ pub(super) fn nonuniform_diagram(
             ));
         }
     }
+    progress(EnclosedProgress::Planned(order.len()));
     let outs = run_parallel(
         threads,
         order.clone(),
         &mut |_| {},
-        &mut |_: &Result<SheetOut, DiagramError>| {},
+        &mut |o: &Result<SheetOut, DiagramError>| {
+            if let Ok(o) = o {
+                progress(EnclosedProgress::Done(format!(
+                    "branch {} family {} traced ({} states)",
+                    o.branch,
+                    o.family,
+                    o.points.len()
+                )));
+            }
+        },
         |i, _| trace_sheet(opts, &dopts, &sheets[i], &repeats[i]),
     );
     let mut traced: Vec<(usize, SheetOut)> = Vec::new();
@@ -691,6 +723,9 @@ pub(super) fn nonuniform_diagram(
     warnings.extend(w);
     idx.extend(parents);
     timings.lifted_off += tdesc.elapsed().as_secs_f64();
+    progress(EnclosedProgress::Done(
+        "descent from unstable lowest states".into(),
+    ));
     // 2c. Branch points where a lifted-off sheet's index changes; the traces' stops.
     let tbp = Instant::now();
     let found = run_parallel(
@@ -709,6 +744,7 @@ pub(super) fn nonuniform_diagram(
     notes.extend(stop_notes);
     warnings.extend(stop_warnings);
     timings.lifted_off += tbp.elapsed().as_secs_f64();
+    progress(EnclosedProgress::Done("branch points located".into()));
     let surf: Vec<&TracedBranch> = idx.iter().map(|&i| &sheets[i]).collect();
     // 3. Exchanges of the lowest branch.
     let tc = Instant::now();
@@ -833,6 +869,10 @@ pub(super) fn nonuniform_diagram(
         c.critical.index = i + 1;
     }
     timings.critical = tc.elapsed().as_secs_f64();
+    progress(EnclosedProgress::Done(format!(
+        "{} critical lengths located",
+        critical.len()
+    )));
     // 4. Lowest flags and labels.
     let mut points = Vec::new();
     let mut events = Vec::new();

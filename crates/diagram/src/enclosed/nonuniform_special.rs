@@ -51,11 +51,29 @@ pub(super) fn branch_points(s: &SheetOut) -> (Vec<EnclosedEvent>, Vec<String>) {
             let (Some(a), Some(b)) = (find(p.lbar), find(q.lbar)) else {
                 continue;
             };
-            let k = p.index.min(q.index);
-            // The crossing eigenvalue at the two states (the index's own level, N/4),
-            // interpolated linearly; the estimate is half the bracket.
-            let located = eigenvalue(a, 0, k).and_then(|fa| {
-                let fb = eigenvalue(b, 0, k)?;
+            // Both indices on one level: the coarsest (where the traces take it), or the
+            // finest where one of the two was taken there (`nonuniform_descent.rs`); an
+            // index change that is not there on the finest level is no branch point.
+            let fine = [p.lbar, q.lbar]
+                .iter()
+                .any(|x| s.fine_index.iter().any(|f| (f - x).abs() < 1e-12));
+            let lvl = if fine { 2 } else { 0 };
+            let (ip, iq) = if fine {
+                match (a.states[2].stability(1e-6), b.states[2].stability(1e-6)) {
+                    (Ok((ip, _)), Ok((iq, _))) => (ip, iq),
+                    _ => (p.index, q.index),
+                }
+            } else {
+                (p.index, q.index)
+            };
+            if ip == iq {
+                continue;
+            }
+            let k = ip.min(iq);
+            // The crossing eigenvalue at the two states (on that level), interpolated
+            // linearly; the estimate is half the bracket.
+            let located = eigenvalue(a, lvl, k).and_then(|fa| {
+                let fb = eigenvalue(b, lvl, k)?;
                 let t = if fa * fb < 0.0 { fa / (fa - fb) } else { 0.5 };
                 let x = a.lbar + t * (b.lbar - a.lbar);
                 let energy = p.energy + t * (q.energy - p.energy);
@@ -69,8 +87,8 @@ pub(super) fn branch_points(s: &SheetOut) -> (Vec<EnclosedEvent>, Vec<String>) {
                     lbar: x,
                     error_estimate: err,
                     energy,
-                    index_before: p.index,
-                    index_after: q.index,
+                    index_before: ip,
+                    index_after: iq,
                 }),
                 Err(e) => warnings.push(format!(
                     "branch {} (eta = {}) family {}: the index changes from {} to {} between lbar = {:.6} and {:.6}, but the branch point was not located ({e})",

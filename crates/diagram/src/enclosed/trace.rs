@@ -13,7 +13,9 @@ use rodloop_solver::enclosed::{
 };
 use rodloop_solver::{Accuracy, SolverError, Stiffness};
 
-use super::{EnclosedDiagramOptions, EnclosedEvent, EnclosedPoint, EventKind, PointSource, TOUCH};
+use super::{
+    EnclosedDiagramOptions, EnclosedEvent, EnclosedPoint, EventKind, PointShape, PointSource, TOUCH,
+};
 use crate::labels::Label;
 use crate::DiagramError;
 
@@ -146,6 +148,7 @@ impl Levels {
             sheet: 0,
             multiplicity: 1,
             surface_energy: None,
+            shape: PointShape::Model(Box::new(fine.clone())),
         })
     }
 }
@@ -242,6 +245,7 @@ pub(super) fn exact_point(
         sheet: 0,
         multiplicity: 1,
         surface_energy: Some(l.energy()?),
+        shape: PointShape::Exact(*l),
     })
 }
 
@@ -271,6 +275,7 @@ pub(super) fn circle_point(lbar: f64) -> EnclosedPoint {
         sheet: 0,
         multiplicity: 1,
         surface_energy: None,
+        shape: PointShape::Circle,
     }
 }
 
