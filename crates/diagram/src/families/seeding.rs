@@ -17,6 +17,8 @@ pub(super) enum Seed {
     /// The Euler start with its origin moved by the fraction given, solved directly
     /// ([`seed_state`]).
     Shifted(f64),
+    /// A state found by the diagram's completeness certificate (`crate::certificate`).
+    Found,
 }
 
 /// The seeds of branch `eta` (existence interval `exist`, traced on `range`), in the order
