@@ -307,10 +307,10 @@ impl TracedSet for SurfaceTraced<'_> {
 }
 
 /// The search of the surface model of a two-segment rod at one length: for every branch of
-/// the diagram that exists there, what `rodloop solve --branch` runs (Newton from the Euler
-/// curve, then from the Euler curve with its origin moved by eighths of a period;
-/// [`solve_robust_with`], fast accuracy; its continuations in `D1/D0` and `L̄` are left to
-/// the tracer, which follows families in `L̄` itself), plus, at every other sample length
+/// the diagram that exists there, what `rodloop solve --branch` runs first (Newton from the
+/// Euler curve after relaxation; [`solve_robust_with`], fast accuracy; its shifted starts and
+/// its continuations in `D1/D0` and `L̄` are left out: the tracer follows families in `L̄`
+/// itself, and the shifted starts cost three times the rest at strong contrast), plus, at every other sample length
 /// (`feature_lengths`), solves (relaxation, then Newton) from the Euler curve placed by the
 /// profile's own features: each end of the soft segment (`s0*`, `s1*`) at the phases `0`
 /// and `1/2` of a half period of `κ_g` (`1/(2η)` of the length: an extremum of `κ_g²`
@@ -402,11 +402,14 @@ impl StateSearch for SurfaceSearch<'_> {
                 Accuracy::Fast,
                 Some(eta),
                 &SolveOptions::default(),
+                // The direct start only: its shifted starts cost three times the rest of
+                // the search at strong contrast (D1/D0 = 0.001) and are covered by the
+                // feature-placed starts below.
                 Fallbacks {
                     starts: true,
                     homotopy: false,
                     lbar_path: false,
-                    ..Fallbacks::default()
+                    budget: 0,
                 },
             ) {
                 out.extend(self.found(
