@@ -364,7 +364,7 @@ impl<'a> SurfaceSearch<'a> {
         how: String,
     ) -> Option<Found> {
         let periods = rodloop_solver::identify::identify_equilibrium(eq).ok()?.eta;
-        if periods != eta {
+        if periods != eta || !closes(eq) {
             return None;
         }
         let index = eq
@@ -381,6 +381,22 @@ impl<'a> SurfaceSearch<'a> {
             how,
             seed,
         })
+    }
+}
+
+/// Whether the loop of `eq` closes: the gap between its last and first node is at most
+/// twice the largest distance between consecutive nodes. A KKT point whose holonomy is a
+/// half-turn satisfies the closure residual without closing (gaps of 0.5–2 R); it is not
+/// an equilibrium of the loop and is not counted.
+fn closes(eq: &rodloop_solver::Equilibrium) -> bool {
+    let p = eq.profile();
+    let d = |a: &rodloop_solver::ProfilePoint, b: &rodloop_solver::ProfilePoint| {
+        ((a.x - b.x).powi(2) + (a.y - b.y).powi(2) + (a.z - b.z).powi(2)).sqrt()
+    };
+    let step = p.windows(2).map(|w| d(&w[0], &w[1])).fold(0.0, f64::max);
+    match (p.first(), p.last()) {
+        (Some(a), Some(b)) => d(b, a) <= 2.0 * step,
+        _ => false,
     }
 }
 
