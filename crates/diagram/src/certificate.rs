@@ -388,7 +388,7 @@ impl<'a> SurfaceSearch<'a> {
 /// twice the largest distance between consecutive nodes. A KKT point whose holonomy is a
 /// half-turn satisfies the closure residual without closing (gaps of 0.5–2 R); it is not
 /// an equilibrium of the loop and is not counted.
-fn closes(eq: &rodloop_solver::Equilibrium) -> bool {
+pub(crate) fn closes(eq: &rodloop_solver::Equilibrium) -> bool {
     let p = eq.profile();
     let d = |a: &rodloop_solver::ProfilePoint, b: &rodloop_solver::ProfilePoint| {
         ((a.x - b.x).powi(2) + (a.y - b.y).powi(2) + (a.z - b.z).powi(2)).sqrt()

@@ -100,7 +100,18 @@ pub(super) fn robust_seed(
     let kappa = acc.equilibrium.resample(model.cells()).ok()?;
     solve(model, &kappa, &crate::states::newton_options())
         .ok()
+        .filter(|eq| open_dropped(eq, eta, lbar))
         .map(|eq| eq.state())
+}
+
+/// `true` if `eq` closes ([`crate::certificate::closes`]); an open KKT point (half-turn
+/// holonomy) is no seed.
+fn open_dropped(eq: &rodloop_solver::Equilibrium, eta: u32, lbar: f64) -> bool {
+    let ok = crate::certificate::closes(eq);
+    if !ok {
+        debug(|| format!("seed of eta {eta} at {lbar}: the loop does not close, dropped"));
+    }
+    ok
 }
 
 /// Contrast `D1/D0` below which the seeds are those of `rodloop solve --branch` (direct
@@ -126,5 +137,5 @@ pub(super) fn seed_state(
     let eq = solve(model, &kappa, &SolveOptions::default())
         .map_err(|e| debug(|| format!("seed solve failed: {e}")))
         .ok()?;
-    (periods_of(&eq).ok()? == eta as usize).then(|| eq.state())
+    (periods_of(&eq).ok()? == eta as usize && open_dropped(&eq, eta, lbar)).then(|| eq.state())
 }
