@@ -335,23 +335,9 @@ impl<'a> SurfaceSearch<'a> {
     }
 
     /// The origin shifts of the feature-placed starts of `eta` (fractions of the length):
-    /// `s − j/(8η)` for each stiffness feature `s` and `j = 0, 2`, without repeats.
+    /// [`feature_shifts`] at the phases `j = 0, 2`.
     pub fn feature_shifts(stiffness: &Stiffness, eta: u32) -> Vec<f64> {
-        let features: Vec<f64> = match stiffness {
-            Stiffness::Tanh { s0, s1, .. } => vec![*s0, *s1],
-            _ => Vec::new(),
-        };
-        let e = f64::from(eta);
-        let mut out: Vec<f64> = Vec::new();
-        for s in features {
-            for j in [0, 2] {
-                let shift = (s - f64::from(j) / (8.0 * e)).rem_euclid(1.0 / (2.0 * e));
-                if !out.iter().any(|&o| (o - shift).abs() < 1e-9) {
-                    out.push(shift);
-                }
-            }
-        }
-        out
+        feature_shifts(stiffness, eta, &[0, 2], true)
     }
 
     fn found(
@@ -382,6 +368,31 @@ impl<'a> SurfaceSearch<'a> {
             seed,
         })
     }
+}
+
+/// Origin shifts (fractions of the length, in `[0, 1/(2η))`) that put the point of phase
+/// `j/(8η)` of the Euler curve of `eta` periods (`j` in `phases`) at each stiffness change:
+/// `s0*`, and `s1*` too if `both`. [`StartShape::shifted`] samples the start at `σ + shift`,
+/// so the start's point `σ₀` lands at `σ₀ − shift`; the shift that puts phase `φ` at `s` is
+/// `φ − s` (modulo the half period `1/(2η)`, a shift by which is the reflection
+/// `κ_g → −κ_g`). Empty for a profile without stiffness changes.
+pub fn feature_shifts(stiffness: &Stiffness, eta: u32, phases: &[u32], both: bool) -> Vec<f64> {
+    let features: Vec<f64> = match stiffness {
+        Stiffness::Tanh { s0, s1, .. } if both => vec![*s0, *s1],
+        Stiffness::Tanh { s0, .. } => vec![*s0],
+        _ => Vec::new(),
+    };
+    let e = f64::from(eta.max(1));
+    let mut out: Vec<f64> = Vec::new();
+    for s in features {
+        for &j in phases {
+            let shift = (f64::from(j) / (8.0 * e) - s).rem_euclid(1.0 / (2.0 * e));
+            if !out.iter().any(|&o| (o - shift).abs() < 1e-9) {
+                out.push(shift);
+            }
+        }
+    }
+    out
 }
 
 /// Whether the loop of `eq` closes: the gap between its last and first node is at most
@@ -519,16 +530,21 @@ mod tests {
             gamma: 100.0,
         };
         let s = SurfaceSearch::feature_shifts(&st, 2);
-        // Half period 1/4: s0 = 0.2 gives 0.2 and 0.2 − 2/16 = 0.075; s1 = 0.4 ≡ 0.15 gives
-        // 0.15 and 0.025.
+        // Half period 1/4: phase 0 at s0 = 0.2 is the shift −0.2 ≡ 0.05, phase 2/16 at s0 is
+        // 0.125 − 0.2 ≡ 0.175; at s1 = 0.4: 0.1 and 0.225.
         assert_eq!(s.len(), 4);
-        assert!(s.iter().any(|&x| (x - 0.075).abs() < 1e-12));
-        assert!(s.iter().any(|&x| (x - 0.025).abs() < 1e-12));
-        for &x in &s {
-            assert!((0.0..0.25).contains(&x));
+        for want in [0.05, 0.175, 0.1, 0.225] {
+            assert!(s.iter().any(|&x| (x - want).abs() < 1e-12), "{s:?}");
         }
-        assert!(s.iter().any(|&x| (x - 0.2).abs() < 1e-12));
-        assert!(s.iter().any(|&x| (x - 0.15).abs() < 1e-12));
+        // The start sampled at σ + shift puts its point of phase 0 at σ = −shift = 0.95, and
+        // half a period on (σ = 0.2 = s0) the reflected point: κ_g there is ∓ κ_g(0).
+        let start = StartShape::Euler { l: 2 };
+        let shifted = start.shifted(1.5, s[0]).unwrap();
+        let t = |sh: &StartShape, sigma: f64| sh.interpolant(1.5).unwrap().eval(sigma);
+        let k0 = t(&start, 0.0);
+        assert!(k0.abs() > 0.1);
+        assert!((t(&shifted, 0.95) - k0).abs() < 1e-9 * k0.abs());
+        assert!((t(&shifted, 0.2).abs() - k0.abs()).abs() < 1e-9 * k0.abs());
     }
 
     /// A found state counts as missed only beyond its margin, and anywhere nothing is traced.

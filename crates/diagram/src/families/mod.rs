@@ -10,8 +10,8 @@
 //! [`compute_families`]:
 //!
 //! 1. **Seeds** (`seeding.rs`): at mild contrast the Euler rotation curve `l = η` (Eqs. 4–8)
-//!    with its arclength origin moved by `j/(8η)` of the length (`j = 0…3`, half a period: a
-//!    shift by half a period is the loop's reflection `κ_g → −κ_g`), relaxed and solved at
+//!    placed with its phases `j/(8η)` (`j = 0…3`, half a period: a shift by half a period is
+//!    the loop's reflection `κ_g → −κ_g`) at the stiffness change `s0*`, relaxed and solved at
 //!    three lengths inside the branch's range; at strong contrast the states `rodloop solve
 //!    --branch` finds there and the shifted direct solves at the lengths its continuation in
 //!    `L̄` starts from. A seed that lies on a family already traced (itself, its reflection,
@@ -136,6 +136,7 @@ pub fn compute_families(
         (lo, hi),
         &circles,
         as_solve,
+        &crate::certificate::feature_shifts(&opts.stiffness, eta, &[0, 1, 2, 3], false),
     );
     let seeds_tried = jobs.len();
     // Every seed is solved before any is followed, on the crate's thread pool: the seeds are

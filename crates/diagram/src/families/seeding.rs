@@ -24,8 +24,9 @@ pub(super) enum Seed {
 /// The seeds of branch `eta` (existence interval `exist`, traced on `range`), in the order
 /// they are followed.
 ///
-/// For `0.05 ≤ D1/D0 ≤ 0.9`, the Euler start `l = η` with its origin moved by `j/(8η)`
-/// (`j = 0…3`) at each of `lengths`. At strong contrast and for nearly uniform rods
+/// For `0.05 ≤ D1/D0 ≤ 0.9`, the Euler start `l = η` placed by the profile's features
+/// (`anchored`: the shifts that put its phases `j/(8η)`, `j = 0…3`, at `s0*`,
+/// [`crate::certificate::feature_shifts`]) at each of `lengths`. At strong contrast and for nearly uniform rods
 /// (`as_solve`) the state `rodloop solve --branch` finds at each of `lengths` (its direct and shifted starts and its homotopies in `D1/D0`)
 /// and, where `solve` would follow a family in `L̄` from another length of the branch's
 /// existence interval (its last fallback; [`rodloop_solver::Fallbacks::lbar_path`]), the
@@ -40,12 +41,20 @@ pub(super) fn seed_jobs(
     range: (f64, f64),
     circles: &[f64],
     as_solve: bool,
+    anchored: &[f64],
 ) -> Vec<(f64, Seed)> {
     let e = f64::from(eta);
     if !as_solve {
+        // The start's phases j/(8η), j = 0…3, at the soft segment's first end (the mirror
+        // symmetry of the profile carries these placements to its other end).
+        let shifts = if anchored.is_empty() {
+            (0..4).map(|j| j as f64 / (8.0 * e)).collect()
+        } else {
+            anchored.to_vec()
+        };
         return lengths
             .iter()
-            .flat_map(|&l| (0..4).map(move |j| (l, Seed::Shifted(j as f64 / (8.0 * e)))))
+            .flat_map(|&l| shifts.iter().map(move |&sh| (l, Seed::Shifted(sh))))
             .collect();
     }
     let mut jobs: Vec<(f64, Seed)> = lengths
