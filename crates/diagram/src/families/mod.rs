@@ -36,6 +36,10 @@
 //!
 //! Caps ([`MAX_FAMILIES`], [`MAX_SWITCHES`], the step budget) bound the work; reaching one is
 //! reported as a note.
+//!
+//! [`extend_families`] follows further seeds the same way, given the sheets traced so far:
+//! the diagram's completeness certificate (`crate::certificate`) hands it the states its
+//! search finds below the traced ones.
 
 mod following;
 mod images;
