@@ -4,7 +4,8 @@
 //! (dominant harmonic of `κ_g`) and the energy of its row; labels agree with the traced
 //! energies (the lowest index-0 state is "stable", other index-0 states "metastable",
 //! index > 0 "unstable"); and `rodloop solve --branch B` finds no state below the diagram's
-//! stable one at sample lengths.
+//! stable one at sample lengths (a `solve` result whose loop does not close is no equilibrium
+//! and is not compared; it is printed).
 //!
 //! `RODLOOP_RANDOM_SCENES=N` checks `N` scenes (default 2) on `RODLOOP_RANDOM_SPAN` of `L̄`
 //! (default 0.3); `scripts/random_scenes.sh` runs more on longer ranges.
@@ -330,6 +331,21 @@ fn check_diagram(dir: &Path, scene_file: &Path, lo: f64, hi: f64, what: &str) ->
                 out.to_str().unwrap(),
             ]);
             if !o.status.success() {
+                continue;
+            }
+            // A state whose loop does not close (a KKT point with a half-turn holonomy, which
+            // `solve` can return: its defect, checked by its own tests) is no equilibrium.
+            let st = state(&out.join("config.csv"));
+            let m = st.len();
+            let gap = ((st[m - 1][1] - st[0][1]).powi(2)
+                + (st[m - 1][2] - st[0][2]).powi(2)
+                + (st[m - 1][3] - st[0][3]).powi(2))
+            .sqrt();
+            if gap > 1.5 * (st[1][0] - st[0][0]) {
+                eprintln!(
+                    "{what}: solve --branch {branch} at L̄ = {l:.4} returned an open loop (gap \
+                     {gap:.3} R): not compared"
+                );
                 continue;
             }
             let s: serde_json::Value =
