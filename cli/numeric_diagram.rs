@@ -372,6 +372,7 @@ pub fn write_outputs(
         "states_dir": "states",
         "warnings": d.warnings.iter().chain(&state_warnings).collect::<Vec<_>>(),
         "timings": d.timings,
+        "certificate": d.certificate,
         "units": crate::diagram::UNITS,
     })?;
     run.write_json("summary.json", &crate::output::strip_nulls(summary))?;

@@ -241,8 +241,26 @@ pub fn compute(
         )));
     }
     have.sort_by_key(|b| (b.eta, b.family, b.sheet));
+    // Completeness certificate of a two-segment rod: the search of `rodloop solve` at
+    // sample lengths; families of states found below the traced ones are traced too.
+    let mut failures = failures;
+    let certificate = (!uniform).then(|| {
+        let (lo, hi) = (opts.lbar_min, opts.lbar_max);
+        let (lengths, spacing) = crate::certificate::sample_lengths(lo, hi);
+        let search = crate::certificate::SurfaceSearch::new(opts, &lengths);
+        let mut set = crate::certificate::SurfaceTraced {
+            opts,
+            sheets: &mut have,
+            notes: &mut failures,
+        };
+        crate::certificate::certify(&search, &mut set, &lengths, spacing, opts.worker_threads())
+    });
     let tracing_seconds = start.elapsed().as_secs_f64();
     let mut d = assemble(opts, have, progress)?;
+    if let Some(c) = &certificate {
+        failures.extend(c.warnings());
+    }
+    d.certificate = certificate;
     d.warnings.splice(0..0, failures);
     d.timings.tracing = tracing_seconds;
     d.timings.total = start.elapsed().as_secs_f64();

@@ -77,6 +77,8 @@ pub struct NumericDiagram {
     pub warnings: Vec<String>,
     /// Wall times.
     pub timings: Timings,
+    /// Completeness certificate (two-segment surface diagrams; `None` where not run).
+    pub certificate: Option<crate::certificate::Certificate>,
 }
 
 /// One row of the branch table (`branches.csv`).
@@ -135,6 +137,8 @@ pub struct DiagramSummary<'a> {
     pub warnings: &'a [String],
     /// Wall times.
     pub timings: Timings,
+    /// Completeness certificate (`None` where not run).
+    pub certificate: Option<&'a crate::certificate::Certificate>,
 }
 
 /// Summary of one traced branch.
@@ -202,6 +206,7 @@ impl NumericDiagram {
             great_circles: self.great_circles.as_ref(),
             warnings: &self.warnings,
             timings: self.timings,
+            certificate: self.certificate.as_ref(),
         }
     }
 
@@ -477,6 +482,7 @@ pub fn assemble(
         great_circles: great,
         warnings,
         timings,
+        certificate: None,
     })
 }
 

@@ -96,7 +96,80 @@ pub(crate) fn lowest_etas(
         .collect()
 }
 
-/// Labels of every traced state of every sheet.
+/// Relative margin by which another index-0 sheet must lie below the sheet the critical
+/// lengths name before the label follows the energies instead: the Hermite interpolation of
+/// traced energies between samples (their spacing is at most a few `10⁻²` in `L̄`) is
+/// accurate to far better than this, and within it of a located crossing the critical
+/// length decides.
+const LABEL_MARGIN: f64 = 1e-7;
+
+/// Whether sheet `b` has stability index 0 at `lbar`: at a traced state, that state's
+/// index; between two, both neighbours' (`None` outside the traced span).
+fn index0_at(b: &TracedBranch, lbar: f64) -> Option<bool> {
+    if !b.covers(lbar) {
+        return None;
+    }
+    let k = b.points.partition_point(|p| p.value < lbar);
+    let at = |i: usize| b.points.get(i);
+    match (k.checked_sub(1).and_then(at), at(k)) {
+        (_, Some(p)) if p.value == lbar => Some(p.index == 0),
+        (Some(a), Some(c)) => Some(a.index == 0 && c.index == 0),
+        (None, Some(c)) => Some(c.index == 0),
+        (Some(a), None) => Some(a.index == 0),
+        _ => None,
+    }
+}
+
+/// The sheets (positions in `branches`) of the stable state at `lbar`: the lowest state
+/// of stability index 0 among the traced sheets (GUIDE §1: stable = global minimum among
+/// the equilibria at that length, metastable = another local minimum).
+///
+/// Where the sheets the critical lengths name as lowest ([`lowest_sheets`]) have index 0
+/// there and no other index-0 sheet lies below them by more than [`LABEL_MARGIN`]
+/// (relative), those (so labels agree with the located critical lengths, not with the
+/// interpolated samples). Otherwise the index-0 sheet of lowest interpolated energy: the
+/// critical lengths are exchanges between branches, and the lowest family within one branch
+/// can change without one (two families of branch 1 at `D1/D0 = 0.001` near `L̄ = 2.85`),
+/// or the lowest state can be a saddle (then a lower minimum was not traced, and the lowest
+/// traced minimum is the stable state of the traced set). Empty where no traced state of
+/// index 0 covers `lbar` (and at a collapse length, where the lowest state is the great
+/// circle).
+pub(crate) fn stable_sheets(
+    branches: &[TracedBranch],
+    critical: &[CriticalLength],
+    lbar: f64,
+) -> Vec<usize> {
+    let by_critical = lowest_sheets(branches, critical, lbar);
+    let tol = 1e-12 * lbar.abs().max(1.0);
+    if critical
+        .iter()
+        .any(|c| c.kind == CriticalKind::Collapse && (c.lbar_cr - lbar).abs() <= tol)
+    {
+        return Vec::new();
+    }
+    let minima: Vec<(usize, f64)> = branches
+        .iter()
+        .enumerate()
+        .filter(|(_, b)| index0_at(b, lbar) == Some(true))
+        .filter_map(|(i, b)| b.energy_at(lbar).map(|e| (i, e)))
+        .collect();
+    let Some(&(best, e_min)) = minima.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
+        return Vec::new();
+    };
+    let margin = LABEL_MARGIN * e_min.abs().max(1.0);
+    let named: Vec<usize> = by_critical
+        .into_iter()
+        .filter(|i| minima.iter().any(|&(j, e)| j == *i && e <= e_min + margin))
+        .collect();
+    if named.is_empty() {
+        vec![best]
+    } else {
+        named
+    }
+}
+
+/// Labels of every traced state of every sheet: index > 0 "unstable"; index 0 "stable"
+/// where its sheet is one of the [`stable_sheets`] at its length, else "metastable".
 pub(crate) fn label_all(branches: &[TracedBranch], critical: &[CriticalLength]) -> Vec<Vec<Label>> {
     branches
         .iter()
@@ -107,7 +180,7 @@ pub(crate) fn label_all(branches: &[TracedBranch], critical: &[CriticalLength]) 
                 .map(|p| {
                     if p.index > 0 {
                         Label::Unstable
-                    } else if lowest_sheets(branches, critical, p.value).contains(&i) {
+                    } else if stable_sheets(branches, critical, p.value).contains(&i) {
                         Label::Stable
                     } else {
                         Label::Metastable
@@ -116,4 +189,111 @@ pub(crate) fn label_all(branches: &[TracedBranch], critical: &[CriticalLength]) 
                 .collect()
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::types::{BranchEnd, BranchTimings, PointSource, TracedPoint};
+
+    /// A sheet of branch 1 (η = 2) with energy `e0 + slope (L̄ − 1)` and the given indices at
+    /// `L̄ = 1.0, 1.1, …`.
+    fn sheet(family: u32, e0: f64, slope: f64, indices: &[usize]) -> TracedBranch {
+        let points = indices
+            .iter()
+            .enumerate()
+            .map(|(k, &index)| {
+                let value = 1.0 + 0.1 * k as f64;
+                TracedPoint {
+                    value,
+                    energy: e0 + slope * (value - 1.0),
+                    energy_g: 0.0,
+                    energy_error: None,
+                    energy_trace: e0 + slope * (value - 1.0),
+                    slope,
+                    index,
+                    lambda_min: 0.0,
+                    lambda_max: 0.0,
+                    amplitude: 0.0,
+                    source: PointSource::Continuation,
+                    state: Vec::new(),
+                }
+            })
+            .collect();
+        TracedBranch {
+            branch: 1,
+            eta: 2,
+            param: rodloop_solver::Param::Lbar,
+            family,
+            sheet: 0,
+            reversed: false,
+            multiplicity: 1,
+            fingerprint: String::new(),
+            cells: 0,
+            phase: false,
+            points,
+            low_end: BranchEnd::Range { value: 1.0 },
+            high_end: BranchEnd::Range { value: 1.4 },
+            stop_low: String::new(),
+            stop_high: String::new(),
+            seed: String::new(),
+            index_changes: Vec::new(),
+            steps: 0,
+            seconds: 0.0,
+            timings: BranchTimings::default(),
+        }
+    }
+
+    /// A critical length that names `sheet` lowest above `lbar_cr`.
+    fn handing_to(sheet: usize, lbar_cr: f64) -> CriticalLength {
+        CriticalLength {
+            index: 1,
+            lbar_cr,
+            kind: CriticalKind::Crossing,
+            from_branch: 2,
+            to_branch: 1,
+            from_eta: 1,
+            to_eta: 2,
+            energy: 1.0,
+            error_estimate: 0.0,
+            slope_difference: 0.0,
+            iterations: 0,
+            note: String::new(),
+            from_sheet: None,
+            to_sheet: Some(sheet),
+        }
+    }
+
+    /// Two index-0 families of one branch whose energies cross without a critical length
+    /// (the critical lengths are exchanges between branches): the lower one is stable on
+    /// each side of the crossing, the other metastable.
+    #[test]
+    fn lowest_family_of_one_branch_is_stable() {
+        let a = sheet(1, 1.0, 1.0, &[0, 0, 0, 0, 0]);
+        let b = sheet(2, 1.2, -1.0, &[0, 0, 0, 0, 0]);
+        let branches = vec![a, b];
+        let critical = vec![handing_to(0, 0.9)];
+        let labels = label_all(&branches, &critical);
+        // a: 1.0, 1.1, 1.2, 1.3, 1.4; b: 1.2, 1.1, 1.0, 0.9, 0.8 (equal at 1.1, where the
+        // sheet the critical length names keeps the label).
+        use Label::{Metastable as M, Stable as S};
+        assert_eq!(labels[0], vec![S, S, M, M, M]);
+        assert_eq!(labels[1], vec![M, M, S, S, S]);
+    }
+
+    /// The lowest traced state is a saddle: the lowest index-0 state is stable (and a length
+    /// with no index-0 state has no stable label at all).
+    #[test]
+    fn lowest_minimum_is_stable_below_a_saddle() {
+        let saddle = sheet(1, 1.0, 0.0, &[1, 1, 1, 1, 1]);
+        let minimum = sheet(2, 1.5, 0.0, &[0, 0, 0, 1, 1]);
+        let branches = vec![saddle, minimum];
+        let critical = vec![handing_to(0, 0.9)];
+        let labels = label_all(&branches, &critical);
+        use Label::{Stable as S, Unstable as U};
+        assert_eq!(labels[0], vec![U; 5]);
+        assert_eq!(labels[1], vec![S, S, S, U, U]);
+        assert!(stable_sheets(&branches, &critical, 1.35).is_empty());
+        assert_eq!(stable_sheets(&branches, &critical, 1.15), vec![1]);
+    }
 }

@@ -55,6 +55,7 @@
 #![warn(missing_docs)]
 
 pub mod buckling;
+pub mod certificate;
 mod compute;
 pub mod critical;
 mod diagram;

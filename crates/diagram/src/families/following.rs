@@ -49,6 +49,7 @@ impl Tracing<'_> {
         let what = match seed {
             Seed::Shifted(shift) => format!("origin moved by {shift:.4}"),
             Seed::Solve { .. } => "as `rodloop solve` finds it".to_string(),
+            Seed::Found => "found below the traced states by the completeness certificate".into(),
         };
         debug(|| {
             format!(
@@ -144,6 +145,8 @@ pub(super) struct EndContext<'a> {
     pub(super) problem: &'a ParamProblem<SurfaceModel>,
     pub(super) lo: f64,
     pub(super) hi: f64,
+    /// Smallest continuation step ([`crate::MarchSettings::ds_min`]).
+    pub(super) ds_min: f64,
 }
 
 /// Follow a seed both ways; branch points go to `pending`. Each direction ends where it
@@ -323,7 +326,9 @@ fn finish_end(
         other => {
             let reason = match other {
                 MarchStop::StepTooSmall { ds, value, cause } => format!(
-                    "the continuation step fell below its minimum ({ds:.1e}) at L̄ = {value:.6}{}",
+                    "the continuation step fell below its minimum {:.1e} (rejected step \
+                     {ds:.1e}) at L̄ = {value:.6}{}",
+                    ctx.ds_min,
                     cause
                         .as_ref()
                         .map(|c| format!(" ({c})"))

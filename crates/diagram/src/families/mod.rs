@@ -10,8 +10,8 @@
 //! [`compute_families`]:
 //!
 //! 1. **Seeds** (`seeding.rs`): at mild contrast the Euler rotation curve `l = η` (Eqs. 4–8)
-//!    with its arclength origin moved by `j/(8η)` of the length (`j = 0…3`, half a period: a
-//!    shift by half a period is the loop's reflection `κ_g → −κ_g`), relaxed and solved at
+//!    placed with its phases `j/(8η)` (`j = 0…3`, half a period: a shift by half a period is
+//!    the loop's reflection `κ_g → −κ_g`) at the stiffness change `s0*`, relaxed and solved at
 //!    three lengths inside the branch's range; at strong contrast the states `rodloop solve
 //!    --branch` finds there and the shifted direct solves at the lengths its continuation in
 //!    `L̄` starts from. A seed that lies on a family already traced (itself, its reflection,
@@ -36,6 +36,10 @@
 //!
 //! Caps ([`MAX_FAMILIES`], [`MAX_SWITCHES`], the step budget) bound the work; reaching one is
 //! reported as a note.
+//!
+//! [`extend_families`] follows further seeds the same way, given the sheets traced so far:
+//! the diagram's completeness certificate (`crate::certificate`) hands it the states its
+//! search finds below the traced ones.
 
 mod following;
 mod images;
@@ -92,42 +96,13 @@ pub fn compute_families(
 ) -> Result<Families, DiagramError> {
     opts.validate()?;
     let t0 = Instant::now();
-    let branch = branch_of_eta(eta);
-    let e = f64::from(eta);
-    let (exist_lo, exist_hi) = (if eta == 1 { 0.0 } else { e - 1.0 }, e + 1.0);
-    if eta == 0 || !(exist_hi > opts.lbar_min && exist_lo < opts.lbar_max) {
-        return Err(DiagramError::BranchOutOfRange {
-            eta,
-            lo: exist_lo,
-            hi: exist_hi,
-            lbar_min: opts.lbar_min,
-            lbar_max: opts.lbar_max,
-        });
-    }
+    let su = Setup::new(opts, eta)?;
+    let branch = su.branch;
     progress(Progress::BranchStarted { branch, eta });
-    let lo = opts.lbar_min.max(exist_lo);
-    let hi = opts.lbar_max.min(exist_hi);
-    let circles: Vec<f64> = [e - 1.0, e + 1.0]
-        .into_iter()
-        .filter(|&m| m >= 1.0 && m >= opts.lbar_min - 1e-12 && m <= opts.lbar_max + 1e-12)
-        .collect();
-    let cells = opts.trace_cells(eta);
-    let mid = 0.5 * (lo + hi);
-    let model = SurfaceModel::new(opts.radius, mid, cells, &opts.stiffness)?;
-    let problem = ParamProblem::new(model.clone(), Param::Lbar)?;
-    let images = Images::new(&model, &opts.stiffness);
-    let shape = model.dim() - model.n_constraints();
-    let mut settings = march_settings(opts, hi, shape);
-    settings.folds = FoldPolicy::Follow;
-    settings.detect_branch_points = true;
-    settings.far_limit = Some(lo);
-    settings.max_steps = MAX_STEPS;
-    settings.ds_min = 1e-5;
-    settings.circles = circles.clone();
-    settings.circle_distance = SWITCH_DISTANCE;
-    // Folds and branch points are located again at the reporting resolution
-    // (`crate::special`): the tracer needs them only to its own width.
-    settings.locate_tol = TRACE_LOCATE_TOL;
+    let (lo, hi, mid, cells) = (su.lo, su.hi, su.mid, su.cells);
+    let (exist_lo, exist_hi) = su.exist;
+    let circles = su.settings.circles.clone();
+    let (problem, images, settings) = (&su.problem, &su.images, &su.settings);
 
     let span = hi - lo;
     let seed_lengths: Vec<f64> = [0.5, 0.25, 0.75]
@@ -139,16 +114,11 @@ pub fn compute_families(
                 .all(|m| (l - m).abs() > 2.0 * SWITCH_DISTANCE)
         })
         .collect();
-    let end_ctx = EndContext {
-        opts,
-        problem: &problem,
-        lo,
-        hi,
-    };
+    let end_ctx = su.end_context(opts);
     let mut tr = Tracing {
         ctx: &end_ctx,
-        settings: &settings,
-        images: &images,
+        settings,
+        images,
         branch,
         eta,
         curves: Vec::new(),
@@ -170,6 +140,7 @@ pub fn compute_families(
         (lo, hi),
         &circles,
         as_solve,
+        &crate::certificate::feature_shifts(&opts.stiffness, eta, &[0, 1, 2, 3], false),
     );
     let seeds_tried = jobs.len();
     // Every seed is solved before any is followed, on the crate's thread pool: the seeds are
@@ -180,6 +151,7 @@ pub fn compute_families(
         let x = problem.model_at(lbar).ok().and_then(|m| match seed {
             Seed::Solve { starts } => robust_seed(opts, &m, eta, lbar, starts),
             Seed::Shifted(shift) => seed_state(&m, eta, lbar, shift),
+            Seed::Found => None,
         });
         (x, ts.elapsed().as_secs_f64())
     };
@@ -236,8 +208,8 @@ pub fn compute_families(
     // Sheets.
     let mut sheets = sheets::make_sheets(
         opts,
-        &problem,
-        &images,
+        problem,
+        images,
         &curves,
         &seed_note,
         (branch, eta, cells),
@@ -269,6 +241,209 @@ pub fn compute_families(
         seconds,
     });
     Ok(Families { sheets, notes })
+}
+
+/// What tracing the families of one branch needs: its range, the model and its symmetry
+/// images, the march settings.
+struct Setup {
+    branch: u32,
+    /// Existence interval of the branch, `(η − 1, η + 1)` (`(0, 2)` for `η = 1`).
+    exist: (f64, f64),
+    lo: f64,
+    hi: f64,
+    mid: f64,
+    cells: usize,
+    problem: ParamProblem<SurfaceModel>,
+    images: Images,
+    settings: crate::MarchSettings,
+}
+
+impl Setup {
+    fn new(opts: &DiagramOptions, eta: u32) -> Result<Self, DiagramError> {
+        let branch = branch_of_eta(eta);
+        let e = f64::from(eta);
+        let (exist_lo, exist_hi) = (if eta == 1 { 0.0 } else { e - 1.0 }, e + 1.0);
+        if eta == 0 || !(exist_hi > opts.lbar_min && exist_lo < opts.lbar_max) {
+            return Err(DiagramError::BranchOutOfRange {
+                eta,
+                lo: exist_lo,
+                hi: exist_hi,
+                lbar_min: opts.lbar_min,
+                lbar_max: opts.lbar_max,
+            });
+        }
+        let lo = opts.lbar_min.max(exist_lo);
+        let hi = opts.lbar_max.min(exist_hi);
+        let circles: Vec<f64> = [e - 1.0, e + 1.0]
+            .into_iter()
+            .filter(|&m| m >= 1.0 && m >= opts.lbar_min - 1e-12 && m <= opts.lbar_max + 1e-12)
+            .collect();
+        let cells = opts.trace_cells(eta);
+        let mid = 0.5 * (lo + hi);
+        let model = SurfaceModel::new(opts.radius, mid, cells, &opts.stiffness)?;
+        let problem = ParamProblem::new(model.clone(), Param::Lbar)?;
+        let images = Images::new(&model, &opts.stiffness);
+        let shape = model.dim() - model.n_constraints();
+        let mut settings = march_settings(opts, hi, shape);
+        settings.folds = FoldPolicy::Follow;
+        settings.detect_branch_points = true;
+        settings.far_limit = Some(lo);
+        settings.max_steps = MAX_STEPS;
+        settings.circles = circles;
+        settings.circle_distance = SWITCH_DISTANCE;
+        // Folds and branch points are located again at the reporting resolution
+        // (`crate::special`): the tracer needs them only to its own width.
+        settings.locate_tol = TRACE_LOCATE_TOL;
+        Ok(Self {
+            branch,
+            exist: (exist_lo, exist_hi),
+            lo,
+            hi,
+            mid,
+            cells,
+            problem,
+            images,
+            settings,
+        })
+    }
+
+    fn end_context<'a>(&'a self, opts: &'a DiagramOptions) -> EndContext<'a> {
+        EndContext {
+            opts,
+            problem: &self.problem,
+            lo: self.lo,
+            hi: self.hi,
+            ds_min: self.settings.ds_min,
+        }
+    }
+}
+
+/// What became of a seed given to [`extend_families`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SeedOutcome {
+    /// Newton did not converge from it at the tracing resolution.
+    Unsolved,
+    /// It lies on a family traced before (or on a symmetry image of one).
+    Known,
+    /// A new family was followed from it.
+    Traced,
+    /// It could not be followed (or a cap was reached).
+    NotFollowed,
+}
+
+/// Trace the families of branch `eta` through further seeds, given the sheets of the branch
+/// traced so far (`known`): each seed `(L̄, κ)` (Gauss values at the tracing resolution) is
+/// solved, and followed like the seeds of [`compute_families`] (both ways through its folds,
+/// switching at its branch points) unless it lies on a known family or on one traced from an
+/// earlier seed. Returns the new sheets (families numbered after those of `known`), notes,
+/// and what became of each seed.
+pub fn extend_families(
+    opts: &DiagramOptions,
+    eta: u32,
+    known: &[TracedBranch],
+    seeds: &[(f64, Vec<f64>)],
+) -> Result<(Families, Vec<SeedOutcome>), DiagramError> {
+    opts.validate()?;
+    let t0 = Instant::now();
+    let su = Setup::new(opts, eta)?;
+    let end_ctx = su.end_context(opts);
+    let known_curves: Vec<Curve> = known
+        .iter()
+        .filter(|b| b.eta == eta && b.cells == su.cells)
+        .map(|b| Curve {
+            points: b
+                .points
+                .iter()
+                .map(|p| MarchPoint {
+                    x: p.state.clone(),
+                    value: p.value,
+                    index: Some(p.index),
+                    source: p.source,
+                })
+                .collect(),
+            start_end: (b.low_end.clone(), b.stop_low.clone()),
+            finish_end: (b.high_end.clone(), b.stop_high.clone()),
+        })
+        .collect();
+    let n_known = known_curves.len();
+    let mut tr = Tracing {
+        ctx: &end_ctx,
+        settings: &su.settings,
+        images: &su.images,
+        branch: su.branch,
+        eta,
+        curves: known_curves,
+        notes: Vec::new(),
+        pending: Vec::new(),
+        switched: Vec::new(),
+        steps: 0,
+        seed_note: vec![None; n_known],
+    };
+    let mut outcomes = Vec::with_capacity(seeds.len());
+    for (lbar, kappa) in seeds {
+        let lbar = *lbar;
+        let Some(x0) = su
+            .problem
+            .model_at(lbar)
+            .ok()
+            .and_then(|m| rodloop_solver::solve(&m, kappa, &crate::states::newton_options()).ok())
+            .map(|eq| eq.state())
+        else {
+            outcomes.push(SeedOutcome::Unsolved);
+            continue;
+        };
+        if images::on_known(&su.images, &tr.curves, &x0, lbar) {
+            outcomes.push(SeedOutcome::Known);
+            continue;
+        }
+        let before = tr.curves.len();
+        let seed = Seed::Found;
+        if !tr.take(lbar, seed, Some(x0), 0.0, &mut |_| {})? {
+            outcomes.push(SeedOutcome::NotFollowed);
+            break;
+        }
+        outcomes.push(if tr.curves.len() > before {
+            SeedOutcome::Traced
+        } else {
+            SeedOutcome::NotFollowed
+        });
+    }
+    outcomes.resize(seeds.len(), SeedOutcome::NotFollowed);
+    let Tracing {
+        curves,
+        notes,
+        steps,
+        mut seed_note,
+        ..
+    } = tr;
+    let new_curves = &curves[n_known..];
+    seed_note.resize(curves.len(), None);
+    let family0 = known
+        .iter()
+        .filter(|b| b.eta == eta)
+        .map(|b| b.family)
+        .max()
+        .unwrap_or(0);
+    let mut sheets = sheets::make_sheets(
+        opts,
+        &su.problem,
+        &su.images,
+        new_curves,
+        &seed_note[n_known..],
+        (su.branch, eta, su.cells),
+    );
+    let seconds = t0.elapsed().as_secs_f64();
+    let count = sheets.len().max(1);
+    for s in &mut sheets {
+        s.family += family0;
+        s.steps = steps / count;
+        s.seconds = seconds / count as f64;
+        s.timings = BranchTimings {
+            continuation: seconds / count as f64,
+            ..BranchTimings::default()
+        };
+    }
+    Ok((Families { sheets, notes }, outcomes))
 }
 
 /// Diagnostics on stderr when `RODLOOP_DEBUG_FAMILIES` is set.

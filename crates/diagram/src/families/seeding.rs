@@ -17,13 +17,16 @@ pub(super) enum Seed {
     /// The Euler start with its origin moved by the fraction given, solved directly
     /// ([`seed_state`]).
     Shifted(f64),
+    /// A state found by the diagram's completeness certificate (`crate::certificate`).
+    Found,
 }
 
 /// The seeds of branch `eta` (existence interval `exist`, traced on `range`), in the order
 /// they are followed.
 ///
-/// For `0.05 ≤ D1/D0 ≤ 0.9`, the Euler start `l = η` with its origin moved by `j/(8η)`
-/// (`j = 0…3`) at each of `lengths`. At strong contrast and for nearly uniform rods
+/// For `0.05 ≤ D1/D0 ≤ 0.9`, the Euler start `l = η` placed by the profile's features
+/// (`anchored`: the shifts that put its phases `j/(8η)`, `j = 0…3`, at `s0*`,
+/// [`crate::certificate::feature_shifts`]) at each of `lengths`. At strong contrast and for nearly uniform rods
 /// (`as_solve`) the state `rodloop solve --branch` finds at each of `lengths` (its direct and shifted starts and its homotopies in `D1/D0`)
 /// and, where `solve` would follow a family in `L̄` from another length of the branch's
 /// existence interval (its last fallback; [`rodloop_solver::Fallbacks::lbar_path`]), the
@@ -38,12 +41,20 @@ pub(super) fn seed_jobs(
     range: (f64, f64),
     circles: &[f64],
     as_solve: bool,
+    anchored: &[f64],
 ) -> Vec<(f64, Seed)> {
     let e = f64::from(eta);
     if !as_solve {
+        // The start's phases j/(8η), j = 0…3, at the soft segment's first end (the mirror
+        // symmetry of the profile carries these placements to its other end).
+        let shifts = if anchored.is_empty() {
+            (0..4).map(|j| j as f64 / (8.0 * e)).collect()
+        } else {
+            anchored.to_vec()
+        };
         return lengths
             .iter()
-            .flat_map(|&l| (0..4).map(move |j| (l, Seed::Shifted(j as f64 / (8.0 * e)))))
+            .flat_map(|&l| shifts.iter().map(move |&sh| (l, Seed::Shifted(sh))))
             .collect();
     }
     let mut jobs: Vec<(f64, Seed)> = lengths
@@ -98,7 +109,18 @@ pub(super) fn robust_seed(
     let kappa = acc.equilibrium.resample(model.cells()).ok()?;
     solve(model, &kappa, &crate::states::newton_options())
         .ok()
+        .filter(|eq| open_dropped(eq, eta, lbar))
         .map(|eq| eq.state())
+}
+
+/// `true` if `eq` closes ([`crate::certificate::closes`]); an open KKT point (half-turn
+/// holonomy) is no seed.
+fn open_dropped(eq: &rodloop_solver::Equilibrium, eta: u32, lbar: f64) -> bool {
+    let ok = crate::certificate::closes(eq);
+    if !ok {
+        debug(|| format!("seed of eta {eta} at {lbar}: the loop does not close, dropped"));
+    }
+    ok
 }
 
 /// Contrast `D1/D0` below which the seeds are those of `rodloop solve --branch` (direct
@@ -124,5 +146,5 @@ pub(super) fn seed_state(
     let eq = solve(model, &kappa, &SolveOptions::default())
         .map_err(|e| debug(|| format!("seed solve failed: {e}")))
         .ok()?;
-    (periods_of(&eq).ok()? == eta as usize).then(|| eq.state())
+    (periods_of(&eq).ok()? == eta as usize && open_dropped(&eq, eta, lbar)).then(|| eq.state())
 }

@@ -1,0 +1,567 @@
+//! Completeness certificate of a branch diagram: at sample lengths spread over the range,
+//! the search `rodloop solve` runs (plus starts placed by the stiffness profile's own
+//! features) looks for equilibria, and every one found below the lowest traced state is
+//! reported (GUIDE §2, "Completeness is systematic"). The diagram seeds a family from each
+//! such state and traces it; what is still below the traced set afterwards is *unexplained*:
+//! a loud warning and a field of `summary.json`.
+//!
+//! The search is a [`StateSearch`] ("the equilibria found at `L̄`"), so that any model (the
+//! surface model here, the enclosed model too) can be certified the same way; the surface
+//! model's search is [`SurfaceSearch`].
+
+use rodloop_exact::branch_of_eta;
+use rodloop_solver::{
+    solve, solve_robust_with, Accuracy, Confinement, Fallbacks, SolveOptions, StartShape,
+    Stiffness, SurfaceModel,
+};
+use serde::Serialize;
+
+use crate::parallel::run_parallel;
+use crate::types::TracedBranch;
+use crate::DiagramOptions;
+
+/// Spacing in `L̄` of the certificate's sample lengths (at most; the range is cut into equal
+/// parts no longer than this).
+pub const SAMPLE_SPACING: f64 = 0.05;
+
+/// An equilibrium a [`StateSearch`] found at one length.
+#[derive(Clone, Debug)]
+pub struct Found {
+    /// Normalised length.
+    pub lbar: f64,
+    /// Periods of `κ_g` of the state (its branch).
+    pub eta: u32,
+    /// `E R/(π D0)`.
+    pub energy: f64,
+    /// Estimated absolute error of `energy`.
+    pub error: f64,
+    /// Stability index (if computed).
+    pub index: Option<usize>,
+    /// How it was found (human-readable).
+    pub how: String,
+    /// A start for tracing the state's family: its unknowns at the model's tracing resolution.
+    pub seed: Option<Vec<f64>>,
+}
+
+/// Finds equilibria at a given length: what the certificate runs at every sample length.
+pub trait StateSearch: Sync {
+    /// The equilibria found at `lbar`, given the lowest traced energy there (`lowest`): a
+    /// search may skip the error estimate of states clearly above it.
+    fn states_at(&self, lbar: f64, lowest: Option<f64>) -> Vec<Found>;
+}
+
+impl<F: Fn(f64, Option<f64>) -> Vec<Found> + Sync> StateSearch for F {
+    fn states_at(&self, lbar: f64, lowest: Option<f64>) -> Vec<Found> {
+        self(lbar, lowest)
+    }
+}
+
+/// A state found below the lowest traced one.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Finding {
+    /// Normalised length.
+    pub lbar: f64,
+    /// Paper branch of the state.
+    pub branch: u32,
+    /// Periods of `κ_g`.
+    pub eta: u32,
+    /// `E R/(π D0)` of the state found.
+    pub energy: f64,
+    /// Its estimated error.
+    pub error: f64,
+    /// Its stability index (if computed).
+    pub index: Option<usize>,
+    /// The lowest traced energy at `lbar` when it was found (`None`: no traced state there).
+    pub lowest_traced: Option<f64>,
+    /// How it was found.
+    pub how: String,
+}
+
+/// The certificate of a diagram (`summary.json`, field `certificate`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Certificate {
+    /// Sample lengths searched.
+    pub lengths_checked: usize,
+    /// Their spacing in `L̄`.
+    pub spacing: f64,
+    /// Equilibria the search found in all (on traced families or not).
+    pub states_found: usize,
+    /// Those found below the lowest traced state (by more than [`margin`]).
+    pub found_below: Vec<Finding>,
+    /// Families traced from them.
+    pub families_seeded: usize,
+    /// Those still below the traced set after seeding: the diagram may be incomplete there.
+    pub unexplained: Vec<Finding>,
+    /// Wall time of the search, in seconds.
+    pub search_seconds: f64,
+    /// Wall time of the search and the seeded tracing, in seconds.
+    pub seconds: f64,
+}
+
+impl Certificate {
+    /// One warning per unexplained state.
+    pub fn warnings(&self) -> Vec<String> {
+        self.unexplained
+            .iter()
+            .map(|f| {
+                format!(
+                    "CERTIFICATE: at L̄ = {:.4} the search of `rodloop solve` finds a state of \
+                     branch {} (η = {}) with E R/(π D0) = {:.8} ± {:.1e}, below the lowest \
+                     traced state ({}); its family could not be traced: the diagram may miss \
+                     the stable state there",
+                    f.lbar,
+                    f.branch,
+                    f.eta,
+                    f.energy,
+                    f.error,
+                    f.lowest_traced
+                        .map_or("none traced there".to_string(), |e| format!("{e:.8}"))
+                )
+            })
+            .collect()
+    }
+}
+
+/// Sample lengths of the range `[lo, hi]`: the midpoints of `n = ⌈(hi − lo)/`
+/// [`SAMPLE_SPACING`]`⌉` equal parts (so never an end of the range, where a family may end,
+/// and never an integer length inside it, where the great circles are, unless a part's
+/// midpoint falls there), and the spacing.
+pub fn sample_lengths(lo: f64, hi: f64) -> (Vec<f64>, f64) {
+    let span = (hi - lo).max(0.0);
+    let n = ((span / SAMPLE_SPACING).ceil() as usize).max(1);
+    let h = span / n as f64;
+    ((0..n).map(|k| lo + (k as f64 + 0.5) * h).collect(), h)
+}
+
+/// How far below the lowest traced energy a found state must lie to count as missed:
+/// three times its error estimate plus `10⁻⁶` relative (the traced energies' own errors are
+/// far smaller).
+pub fn margin(found: &Found) -> f64 {
+    3.0 * found.error + 1e-6 * found.energy.abs().max(1.0)
+}
+
+/// The lowest traced energy at `lbar` (cubic Hermite interpolation of each sheet).
+pub fn lowest_traced(branches: &[TracedBranch], lbar: f64) -> Option<f64> {
+    branches
+        .iter()
+        .filter_map(|b| b.energy_at(lbar))
+        .min_by(f64::total_cmp)
+}
+
+/// Whether `found` lies below the traced set (`lowest` at its length) by more than its
+/// [`margin`].
+pub fn is_below(found: &Found, lowest: Option<f64>) -> bool {
+    lowest.is_none_or(|e| found.energy < e - margin(found))
+}
+
+/// Run `search` at every one of `lengths` (with the lowest traced energies `lowest`) on
+/// `threads` threads: all equilibria found, in the order of `lengths`.
+pub fn search_all(
+    search: &dyn StateSearch,
+    lengths: &[f64],
+    lowest: &[Option<f64>],
+    threads: usize,
+) -> Vec<Found> {
+    let jobs: Vec<(f64, Option<f64>)> = lengths
+        .iter()
+        .copied()
+        .zip(lowest.iter().copied())
+        .collect();
+    run_parallel(threads, jobs, &mut |_| {}, &mut |_| {}, |(l, low), _| {
+        search.states_at(l, low)
+    })
+    .into_iter()
+    .flatten()
+    .collect()
+}
+
+/// The finding of a state found below the traced set.
+pub fn finding(found: &Found, lowest: Option<f64>) -> Finding {
+    Finding {
+        lbar: found.lbar,
+        branch: branch_of_eta(found.eta),
+        eta: found.eta,
+        energy: found.energy,
+        error: found.error,
+        index: found.index,
+        lowest_traced: lowest,
+        how: found.how.clone(),
+    }
+}
+
+/// The traced set a certificate checks and extends.
+pub trait TracedSet {
+    /// The lowest traced energy at `lbar` (`None`: nothing traced there).
+    fn lowest(&self, lbar: f64) -> Option<f64>;
+    /// Trace families from `found` (states below the traced set, in increasing `L̄`):
+    /// the number of families added and, for each state, whether it now lies on a traced
+    /// family.
+    fn extend(&mut self, found: &[Found]) -> (usize, Vec<bool>);
+}
+
+/// The certificate of `traced` at `lengths` (spacing `spacing`): `search` at every length
+/// (on `threads` threads), the states below the traced set handed to
+/// [`TracedSet::extend`], and those still below afterwards reported as unexplained.
+pub fn certify(
+    search: &dyn StateSearch,
+    traced: &mut dyn TracedSet,
+    lengths: &[f64],
+    spacing: f64,
+    threads: usize,
+) -> Certificate {
+    let t0 = std::time::Instant::now();
+    let lowest: Vec<Option<f64>> = lengths.iter().map(|&l| traced.lowest(l)).collect();
+    let found = search_all(search, lengths, &lowest, threads);
+    let search_seconds = t0.elapsed().as_secs_f64();
+    let mut below: Vec<Found> = found
+        .iter()
+        .filter(|f| is_below(f, traced.lowest(f.lbar)))
+        .cloned()
+        .collect();
+    below.sort_by(|a, b| {
+        a.lbar
+            .total_cmp(&b.lbar)
+            .then(a.energy.total_cmp(&b.energy))
+    });
+    let found_below: Vec<Finding> = below
+        .iter()
+        .map(|f| finding(f, traced.lowest(f.lbar)))
+        .collect();
+    let (families_seeded, on_traced) = if below.is_empty() {
+        (0, Vec::new())
+    } else {
+        traced.extend(&below)
+    };
+    let unexplained = below
+        .iter()
+        .enumerate()
+        .filter(|&(k, f)| {
+            !on_traced.get(k).copied().unwrap_or(false) && is_below(f, traced.lowest(f.lbar))
+        })
+        .map(|(_, f)| finding(f, traced.lowest(f.lbar)))
+        .collect();
+    Certificate {
+        lengths_checked: lengths.len(),
+        spacing,
+        states_found: found.len(),
+        found_below,
+        families_seeded,
+        unexplained,
+        search_seconds,
+        seconds: t0.elapsed().as_secs_f64(),
+    }
+}
+
+/// The traced sheets of a two-segment surface diagram as a [`TracedSet`]: new families are
+/// traced by [`crate::families::extend_families`]; its notes join `notes`.
+pub struct SurfaceTraced<'a> {
+    /// The diagram's options.
+    pub opts: &'a DiagramOptions,
+    /// The traced sheets (new ones are appended).
+    pub sheets: &'a mut Vec<TracedBranch>,
+    /// Notes for the diagram's warnings.
+    pub notes: &'a mut Vec<String>,
+}
+
+impl TracedSet for SurfaceTraced<'_> {
+    fn lowest(&self, lbar: f64) -> Option<f64> {
+        lowest_traced(self.sheets, lbar)
+    }
+
+    fn extend(&mut self, found: &[Found]) -> (usize, Vec<bool>) {
+        use crate::families::{extend_families, SeedOutcome};
+        let mut on = vec![false; found.len()];
+        let mut families = 0;
+        let mut etas: Vec<u32> = found.iter().map(|f| f.eta).collect();
+        etas.sort_unstable();
+        etas.dedup();
+        for eta in etas {
+            let picks: Vec<usize> = (0..found.len())
+                .filter(|&k| found[k].eta == eta && found[k].seed.is_some())
+                .collect();
+            let seeds: Vec<(f64, Vec<f64>)> = picks
+                .iter()
+                .filter_map(|&k| found[k].seed.clone().map(|s| (found[k].lbar, s)))
+                .collect();
+            match extend_families(self.opts, eta, self.sheets, &seeds) {
+                Ok((f, outcomes)) => {
+                    let mut fams: Vec<u32> = f.sheets.iter().map(|s| s.family).collect();
+                    fams.dedup();
+                    families += fams.len();
+                    self.sheets.extend(f.sheets);
+                    self.notes.extend(f.notes);
+                    for (&k, o) in picks.iter().zip(outcomes) {
+                        on[k] = matches!(o, SeedOutcome::Known | SeedOutcome::Traced);
+                    }
+                }
+                Err(e) => self.notes.push(format!(
+                    "branch {} (η = {eta}): the families of the states the completeness \
+                     certificate found could not be traced: {e}",
+                    branch_of_eta(eta)
+                )),
+            }
+        }
+        self.sheets.sort_by_key(|b| (b.eta, b.family, b.sheet));
+        (families, on)
+    }
+}
+
+/// The search of the surface model of a two-segment rod at one length: for every branch of
+/// the diagram that exists there, what `rodloop solve --branch` runs first (Newton from the
+/// Euler curve after relaxation; [`solve_robust_with`], fast accuracy; its shifted starts and
+/// its continuations in `D1/D0` and `L̄` are left out: the tracer follows families in `L̄`
+/// itself, and the shifted starts cost three times the rest at strong contrast), plus, at every other sample length
+/// (`feature_lengths`), solves (relaxation, then Newton) from the Euler curve placed by the
+/// profile's own features: each end of the soft segment (`s0*`, `s1*`) at the phases `0`
+/// and `1/2` of a half period of `κ_g` (`1/(2η)` of the length: an extremum of `κ_g²`
+/// and a point between two; a shift by half a period is the reflection `κ_g → −κ_g`).
+/// The feature starts cost three quarters of the search at every length; at every other
+/// length they keep the certificate's time within that of the tracing.
+pub struct SurfaceSearch<'a> {
+    opts: &'a DiagramOptions,
+    etas: Vec<u32>,
+    feature_lengths: Vec<f64>,
+}
+
+impl<'a> SurfaceSearch<'a> {
+    /// The search over the branches `opts` traces, with feature-placed starts at every other
+    /// one of the sample `lengths`.
+    pub fn new(opts: &'a DiagramOptions, lengths: &[f64]) -> Self {
+        Self {
+            opts,
+            etas: opts.etas(),
+            feature_lengths: lengths.iter().step_by(2).copied().collect(),
+        }
+    }
+
+    /// The origin shifts of the feature-placed starts of `eta` (fractions of the length):
+    /// [`feature_shifts`] at the phases `j = 0, 2`.
+    pub fn feature_shifts(stiffness: &Stiffness, eta: u32) -> Vec<f64> {
+        feature_shifts(stiffness, eta, &[0, 2], true)
+    }
+
+    fn found(
+        &self,
+        lbar: f64,
+        eta: u32,
+        eq: &rodloop_solver::Equilibrium,
+        energy: f64,
+        error: f64,
+        how: String,
+    ) -> Option<Found> {
+        let periods = rodloop_solver::identify::identify_equilibrium(eq).ok()?.eta;
+        if periods != eta || !closes(eq) {
+            return None;
+        }
+        let index = eq
+            .model()
+            .index(&eq.state(), crate::states::INDEX_TOLERANCE)
+            .ok();
+        let seed = eq.resample(self.opts.trace_cells(eta)).ok();
+        Some(Found {
+            lbar,
+            eta,
+            energy,
+            error,
+            index,
+            how,
+            seed,
+        })
+    }
+}
+
+/// Origin shifts (fractions of the length, in `[0, 1/(2η))`) that put the point of phase
+/// `j/(8η)` of the Euler curve of `eta` periods (`j` in `phases`) at each stiffness change:
+/// `s0*`, and `s1*` too if `both`. [`StartShape::shifted`] samples the start at `σ + shift`,
+/// so the start's point `σ₀` lands at `σ₀ − shift`; the shift that puts phase `φ` at `s` is
+/// `φ − s` (modulo the half period `1/(2η)`, a shift by which is the reflection
+/// `κ_g → −κ_g`). Empty for a profile without stiffness changes.
+pub fn feature_shifts(stiffness: &Stiffness, eta: u32, phases: &[u32], both: bool) -> Vec<f64> {
+    let features: Vec<f64> = match stiffness {
+        Stiffness::Tanh { s0, s1, .. } if both => vec![*s0, *s1],
+        Stiffness::Tanh { s0, .. } => vec![*s0],
+        _ => Vec::new(),
+    };
+    let e = f64::from(eta.max(1));
+    let mut out: Vec<f64> = Vec::new();
+    for s in features {
+        for &j in phases {
+            let shift = (f64::from(j) / (8.0 * e) - s).rem_euclid(1.0 / (2.0 * e));
+            if !out.iter().any(|&o| (o - shift).abs() < 1e-9) {
+                out.push(shift);
+            }
+        }
+    }
+    out
+}
+
+/// Whether the loop of `eq` closes: the gap between its last and first node is at most
+/// twice the largest distance between consecutive nodes. A KKT point whose holonomy is a
+/// half-turn satisfies the closure residual without closing (gaps of 0.5–2 R); it is not
+/// an equilibrium of the loop and is not counted.
+pub(crate) fn closes(eq: &rodloop_solver::Equilibrium) -> bool {
+    let p = eq.profile();
+    let d = |a: &rodloop_solver::ProfilePoint, b: &rodloop_solver::ProfilePoint| {
+        ((a.x - b.x).powi(2) + (a.y - b.y).powi(2) + (a.z - b.z).powi(2)).sqrt()
+    };
+    let step = p.windows(2).map(|w| d(&w[0], &w[1])).fold(0.0, f64::max);
+    match (p.first(), p.last()) {
+        (Some(a), Some(b)) => d(b, a) <= 2.0 * step,
+        _ => false,
+    }
+}
+
+impl StateSearch for SurfaceSearch<'_> {
+    fn states_at(&self, lbar: f64, lowest: Option<f64>) -> Vec<Found> {
+        let opts = self.opts;
+        let mut out = Vec::new();
+        for &eta in &self.etas {
+            let e = f64::from(eta);
+            if !(lbar > (e - 1.0).max(0.0) && lbar < e + 1.0) {
+                continue;
+            }
+            let start = StartShape::Euler { l: eta };
+            if let Ok((acc, strategy)) = solve_robust_with(
+                opts.radius,
+                lbar,
+                &opts.stiffness,
+                &start,
+                Accuracy::Fast,
+                Some(eta),
+                &SolveOptions::default(),
+                // The direct start only: its shifted starts cost three times the rest of
+                // the search at strong contrast (D1/D0 = 0.001) and are covered by the
+                // feature-placed starts below.
+                Fallbacks {
+                    starts: true,
+                    homotopy: false,
+                    lbar_path: false,
+                    budget: 0,
+                },
+            ) {
+                out.extend(self.found(
+                    lbar,
+                    eta,
+                    &acc.equilibrium,
+                    acc.energy.total,
+                    acc.energy_error,
+                    format!(
+                        "rodloop solve --branch {}: {}",
+                        branch_of_eta(eta),
+                        strategy.describe()
+                    ),
+                ));
+            }
+            let cells = Accuracy::Fast.cells(eta as usize, &opts.stiffness);
+            let Ok(model) = SurfaceModel::new(opts.radius, lbar, cells, &opts.stiffness) else {
+                continue;
+            };
+            if !self
+                .feature_lengths
+                .iter()
+                .any(|&l| (l - lbar).abs() < 1e-12)
+            {
+                continue;
+            }
+            for shift in Self::feature_shifts(&opts.stiffness, eta) {
+                let Some(eq) = start
+                    .shifted(lbar, shift)
+                    .and_then(|s| s.gauss_values(&model))
+                    .and_then(|k| solve(&model, &k, &SolveOptions::default()))
+                    .ok()
+                else {
+                    continue;
+                };
+                let en = eq.energy().total;
+                // Only a state that may lie below the traced set needs its error estimate
+                // (its half-resolution partner); the others are counted with none.
+                let maybe_below = lowest.is_none_or(|l| en < l + 1e-3 * l.abs().max(1.0));
+                let (energy, error) = if maybe_below {
+                    let Some(half) = crate::states::half_resolution(opts, &eq, cells / 2) else {
+                        continue;
+                    };
+                    let eh = half.energy().total;
+                    (en + (en - eh) / 15.0, (en - eh).abs() / 15.0)
+                } else {
+                    (en, 0.0)
+                };
+                out.extend(self.found(
+                    lbar,
+                    eta,
+                    &eq,
+                    energy,
+                    error,
+                    format!(
+                        "Newton from the Euler curve l = {eta} with its origin moved by \
+                         {shift:.4} (a stiffness change at a phase of κ_g)"
+                    ),
+                ));
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Sample lengths: midpoints of equal parts no longer than the spacing.
+    #[test]
+    fn sample_lengths_cover_the_range() {
+        let (l, h) = sample_lengths(1.0, 3.0);
+        assert_eq!(l.len(), 40);
+        assert!((h - 0.05).abs() < 1e-15);
+        assert!((l[0] - 1.025).abs() < 1e-12 && (l[39] - 2.975).abs() < 1e-12);
+        assert!(l.iter().all(|x| (x - x.round()).abs() > 0.02));
+        let (l, h) = sample_lengths(1.0, 1.12);
+        assert_eq!(l.len(), 3);
+        assert!((h - 0.04).abs() < 1e-12);
+    }
+
+    /// Feature-placed starts: each stiffness change at two phases of the half period.
+    #[test]
+    fn feature_shifts_place_each_change_at_two_phases() {
+        let st = Stiffness::Tanh {
+            d0: 1.0,
+            d1: 0.3,
+            s0: 0.2,
+            s1: 0.4,
+            gamma: 100.0,
+        };
+        let s = SurfaceSearch::feature_shifts(&st, 2);
+        // Half period 1/4: phase 0 at s0 = 0.2 is the shift −0.2 ≡ 0.05, phase 2/16 at s0 is
+        // 0.125 − 0.2 ≡ 0.175; at s1 = 0.4: 0.1 and 0.225.
+        assert_eq!(s.len(), 4);
+        for want in [0.05, 0.175, 0.1, 0.225] {
+            assert!(s.iter().any(|&x| (x - want).abs() < 1e-12), "{s:?}");
+        }
+        // The start sampled at σ + shift puts its point of phase 0 at σ = −shift = 0.95, and
+        // half a period on (σ = 0.2 = s0) the reflected point: κ_g there is ∓ κ_g(0).
+        let start = StartShape::Euler { l: 2 };
+        let shifted = start.shifted(1.5, s[0]).unwrap();
+        let t = |sh: &StartShape, sigma: f64| sh.interpolant(1.5).unwrap().eval(sigma);
+        let k0 = t(&start, 0.0);
+        assert!(k0.abs() > 0.1);
+        assert!((t(&shifted, 0.95) - k0).abs() < 1e-9 * k0.abs());
+        assert!((t(&shifted, 0.2).abs() - k0.abs()).abs() < 1e-9 * k0.abs());
+    }
+
+    /// A found state counts as missed only beyond its margin, and anywhere nothing is traced.
+    #[test]
+    fn below_means_beyond_the_margin() {
+        let f = |energy: f64, error: f64| Found {
+            lbar: 1.5,
+            eta: 2,
+            energy,
+            error,
+            index: Some(0),
+            how: String::new(),
+            seed: None,
+        };
+        assert!(is_below(&f(1.0, 1e-4), Some(1.001)));
+        assert!(!is_below(&f(1.0, 1e-3), Some(1.001)));
+        assert!(!is_below(&f(1.0, 0.0), Some(1.0000005)));
+        assert!(is_below(&f(1.0, 0.0), None));
+    }
+}
