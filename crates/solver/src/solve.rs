@@ -133,6 +133,29 @@ pub struct Equilibrium {
     report: ConvergenceReport,
 }
 
+#[cfg(test)]
+impl Equilibrium {
+    /// A state with the given curvature, zero multipliers and an empty report, for tests of
+    /// checks that must refuse it.
+    pub(crate) fn for_test(model: SurfaceModel, kappa: Vec<f64>) -> Self {
+        Self {
+            model,
+            kappa,
+            mu: [0.0; 3],
+            nu: 0.0,
+            report: ConvergenceReport {
+                iterations: 0,
+                residual: 0.0,
+                closure: 0.0,
+                converged: true,
+                history: Vec::new(),
+                step_lengths: Vec::new(),
+                relax_iterations: 0,
+            },
+        }
+    }
+}
+
 /// Least-squares closure multiplier for a given `κ`: minimises the stationarity residual
 /// `Σ_a (∇E_a − (∇cᵀμ)_a)²` over `μ`.
 fn initial_multiplier(model: &SurfaceModel, kappa: &[f64]) -> Result<[f64; 3], SolverError> {
