@@ -130,9 +130,10 @@ fn solve_is_verified_or_refused(scene: &str, lbar: &str, branch: &str, extra: &[
     }
 }
 
-/// Loops whose holonomy was a half-turn (open by up to 2 R) were reported as converged
-/// equilibria; they now close, with the branch-2 energy (0.9445606845 at L̄ = 1.4 on
-/// D1/D0 = 0.1, 17 % above the open loop's 0.7856813854).
+/// Scenes and lengths where Newton meets holonomies near a half-turn (an open loop with a
+/// closure residual `vee(skew H) = 0`, up to 2 R from closing): `solve` writes a closed,
+/// verified loop or refuses. On D1/D0 = 0.1 at L̄ = 1.4, branch 2 is the closed state of
+/// energy 0.9445606845 (the open half-turn loop has 0.7856813854).
 #[test]
 fn half_turn_loops_are_not_reported() {
     solve_is_verified_or_refused("inhomogeneous-d1-0.1", "1.4", "2", &[], 1);
