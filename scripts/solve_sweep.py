@@ -8,7 +8,8 @@ scene, branches 1-4 at 5 lengths evenly inside each branch's range (eta-1, eta+1
 (0, 2)), alternately at the scene's accuracy and --accuracy fast. Each written config.csv is
 checked by scripts/state_check.py (closure, on the sphere, energy recomputed from the file,
 branch). Prints the counts: runs, verified states, clean errors, open loops, states off the
-sphere, energy mismatches, branch contradictions, other failures, and the first examples.
+sphere, energy mismatches, branch contradictions (each also counted separately for enclosed
+scenes), other failures, and the first examples.
 
 Usage: scripts/solve_sweep.py [COUNT=40] [BIN=target/release/rodloop] [SECONDS=30] [JOBS=1]
 """
@@ -67,7 +68,8 @@ def run(job, tmp, idx):
         return job, ["over time limit"], ""
     if p.returncode == 0:
         probs = check_state(out, branch, enclosed)
-        return job, (probs or ["verified"]), ""
+        suffix = " (enclosed)" if enclosed else ""
+        return job, [p + suffix for p in probs] or ["verified"], ""
     if "panicked" in p.stderr or p.returncode < 0 or p.returncode == 101:
         return job, ["panic or abort"], p.stderr[-300:]
     if p.stderr.startswith("error: ") and p.stderr.strip().count("\n") == 0:
@@ -96,6 +98,8 @@ def main():
     for k in ["verified", "clean error", "open loop", "off the sphere", "energy mismatch",
               "branch contradiction", "unreadable", "unclear error", "panic or abort", "over time limit"]:
         print(f"  {k}: {counts[k]}")
+        if counts[k + " (enclosed)"]:
+            print(f"  {k} (enclosed): {counts[k + ' (enclosed)']}")
     for k, ex in examples.items():
         for e in ex:
             print(f"--- {k}: {e}")

@@ -107,7 +107,7 @@ pub fn verify_state(
         h[(1, 0)] - h[(0, 1)],
     );
     let angle = (0.5 * skew.norm()).atan2(0.5 * (h.trace() - 1.0));
-    if !(angle <= MAX_HOLONOMY_ANGLE) {
+    if angle.is_nan() || angle > MAX_HOLONOMY_ANGLE {
         return fail(format!(
             "the loop does not close: its frame comes back turned by {angle:.3e} rad (at most \
              {MAX_HOLONOMY_ANGLE:e})"
@@ -149,7 +149,8 @@ pub fn verify_state(
         + claim.profile_error.abs()
         + (fine - coarse).abs()
         + ENERGY_RELATIVE_SLACK * claim.energy.abs().max(1.0);
-    if !((fine - claim.energy).abs() <= energy_tolerance) {
+    let gap = (fine - claim.energy).abs();
+    if gap.is_nan() || gap > energy_tolerance {
         return fail(format!(
             "the energy recomputed from the written profile, {fine:.10}, differs from the reported \
              {:.10} by more than {energy_tolerance:.1e}",
