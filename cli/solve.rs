@@ -323,12 +323,13 @@ pub fn run(args: &Args) -> Result<()> {
     let profile = eq.profile();
     // Closed, on the sphere, energy reproduced by the written profile (the same profile as
     // `eq.profile()`), branch from the state.
-    if let Err(e) = verify_accurate(&res, Some(eta)) {
-        bail!(
+    let verification = match verify_accurate(&res, Some(eta)) {
+        Ok(v) => v,
+        Err(e) => bail!(
             "branch {branch} at lbar = {}: {e}; nothing was written",
             args.lbar
-        );
-    }
+        ),
+    };
     let stab = eq.stability()?;
     let table = config_table(&profile, &scene)?;
     let r = scene.radius;
@@ -362,6 +363,7 @@ pub fn run(args: &Args) -> Result<()> {
         "iterations": report.iterations,
         "relax_iterations": report.relax_iterations,
         "strategy": strategy.describe(),
+        "verification": verification,
         "units": UNITS,
     })?;
     crate::draw::add_shape(&mut summary, &shape);
