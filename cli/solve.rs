@@ -284,6 +284,9 @@ pub fn run(args: &Args) -> Result<()> {
         let advice = if matches!(e, rodloop_solver::SolverError::NewtonNotConverged { .. }) {
             " (tried: Newton with relaxation from the start; next: --from a state solved at a \
              nearby length, another --accuracy, or for a two-segment rod a milder D1/D0 first)"
+        } else if matches!(e, rodloop_solver::SolverError::Unverified(_)) {
+            " (nothing was written; start from a state of this branch solved at a nearby \
+             length with --from, or from the Euler curve without --from)"
         } else {
             ""
         };
