@@ -8,7 +8,9 @@ use rodloop_exact::{branch_of_eta, eta_of_branch};
 use rodloop_scene::{Confinement, Scene, StiffnessSpec};
 use rodloop_solver::identify::identify_equilibrium;
 use rodloop_solver::start::from_points;
-use rodloop_solver::{solve_robust, Accuracy, SolveOptions, StartShape, Stiffness, Strategy};
+use rodloop_solver::{
+    solve_robust, verify_accurate, Accuracy, SolveOptions, StartShape, Stiffness, Strategy,
+};
 
 use crate::output::{checked_json, plural, Cell, OutputRun, Table};
 
@@ -290,6 +292,9 @@ pub fn run(args: &Args) -> Result<()> {
         let advice = if matches!(e, rodloop_solver::SolverError::NewtonNotConverged { .. }) {
             " (tried: Newton with relaxation from the start; next: --from a state solved at a \
              nearby length, another --accuracy, or for a two-segment rod a milder D1/D0 first)"
+        } else if matches!(e, rodloop_solver::SolverError::Unverified(_)) {
+            " (nothing was written; start from a state of this branch solved at a nearby \
+             length with --from, or from the Euler curve without --from)"
         } else {
             ""
         };
@@ -322,13 +327,11 @@ pub fn run(args: &Args) -> Result<()> {
         );
     }
     // The start (a --from file above all) carries no branch label: identify the branch of the
-    // converged state from its own geodesic curvature and refuse a state of another branch.
-    // A state reached by continuation in D1/D0 was identified at the mild contrast it was
-    // followed from (the count of sign changes is not meaningful where the stiff segment is
-    // a geodesic arc, κ_g ≈ 0); its periods are still reported.
+    // converged state from its own geodesic curvature and refuse a state of another branch,
+    // however it was reached (see rodloop_solver::verify).
     let periods =
         identify_equilibrium(eq).context("cannot tell which branch the converged state is on")?;
-    if periods.eta != eta && strategy == Strategy::Direct {
+    if periods.eta != eta {
         bail!(
             "the converged state has {} of kappa_g, so it is branch {} (eta = {}), not the requested branch {branch} (eta = {eta}); nothing was written. {}",
             plural(periods.eta, "period"),
@@ -341,8 +344,17 @@ pub fn run(args: &Args) -> Result<()> {
             }
         );
     }
-    let stab = eq.stability()?;
     let profile = eq.profile();
+    // Closed, on the sphere, energy reproduced by the written profile (the same profile as
+    // `eq.profile()`), branch from the state.
+    let verification = match verify_accurate(&res, Some(eta)) {
+        Ok(v) => v,
+        Err(e) => bail!(
+            "branch {branch} at lbar = {}: {e}; nothing was written",
+            args.lbar
+        ),
+    };
+    let stab = eq.stability()?;
     let table = config_table(&profile, &scene)?;
     let r = scene.radius;
     let d0 = scene.stiffness.reference();
@@ -384,6 +396,7 @@ pub fn run(args: &Args) -> Result<()> {
             "description": d.describe(),
         })),
         "keep_saddle": args.keep_saddle,
+        "verification": verification,
         "units": UNITS,
     })?;
     crate::draw::add_shape(&mut summary, &shape);

@@ -5,11 +5,16 @@ Mutates the shipped scene files (values, keys, types, truncation, junk) and argu
 runs `rodloop solve ... --accuracy fast` on each with a time limit, and counts outcomes:
 success, clean error (non-zero exit with a one-line "error:" message), panic, abort (killed
 by a signal), over the time limit. Prints the counts and the first examples of anything but
-success/clean error.
+success/clean error. Every state a successful run writes is checked by
+scripts/state_check.py (closed, on the sphere, energy recomputed from config.csv, branch);
+a success whose files fail a check is counted under that problem instead.
 
 Usage: scripts/fuzz_cli.py [N=10000] [BIN=target/release/rodloop] [SECONDS=20] [VALID=0.8]
 """
 import os, random, subprocess, sys, tempfile, collections, glob
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from state_check import check_state  # noqa: E402
 
 N = int(sys.argv[1]) if len(sys.argv) > 1 else 10000
 BIN = sys.argv[2] if len(sys.argv) > 2 else "target/release/rodloop"
@@ -70,7 +75,14 @@ with tempfile.TemporaryDirectory() as tmp:
             p = subprocess.run(cmd, capture_output=True, text=True, timeout=LIMIT)
             err = p.stderr
             if p.returncode == 0:
-                kind = "success"
+                text = open(path).read()
+                try:
+                    branch = int(cmd[cmd.index("--branch") + 1])
+                except ValueError:
+                    branch = None
+                probs = check_state(os.path.join(tmp, "out"), branch,
+                                    'confinement = "enclosed"' in text.replace("'", '"'))
+                kind = "success" if not probs else "written state: " + ", ".join(probs)
             elif "panicked" in err or p.returncode == 101:
                 kind = "panic"
             elif p.returncode < 0:
@@ -89,6 +101,8 @@ with tempfile.TemporaryDirectory() as tmp:
             print(f"{i + 1} runs: {dict(counts)}", file=sys.stderr, flush=True)
 print(f"{N} runs (rodloop solve --accuracy fast, {LIMIT:.0f} s limit each, {VALID:.0%} with a valid branch and length):")
 for k in ["success", "clean error", "unclear error", "panic", "abort", "over time limit"]:
+    print(f"  {k}: {counts[k]}")
+for k in sorted(c for c in counts if c.startswith("written state")):
     print(f"  {k}: {counts[k]}")
 for k, ex in examples.items():
     for scene, args, err in ex:

@@ -308,6 +308,39 @@ impl StiffnessSpec {
     }
 }
 
+/// Largest factor by which the sphere radius `R` and the product `R·D_ref` (`D_ref` the
+/// reference stiffness: `d`, `d0`, or the table's largest value) may differ from 1, in the
+/// scene's units (the other stiffness values are bounded relative to `D_ref` by
+/// [`MIN_CONTRAST`] and [`MAX_CONTRAST`]).
+///
+/// The solver works in the scene's dimensional units. One pivot block of its KKT
+/// factorisation (`rodloop_solver::kkt`) holds numbers of size 1 (frame recursions), `R`
+/// (closure derivatives, `∝ h`) and `R·D` (bending, `∝ h D`), and a block whose pivot ratio
+/// falls below `1e-13` counts as singular; the stability analysis searches its shifts on
+/// an absolute scale. Measured with `rodloop solve` (branches 1 and 2 of a two-segment rod,
+/// `D1/D0 = 0.5`, at `R·D0 = 1`): `R` from `1e-4` to `1e3` gives the same normalised energy
+/// to 1e-10, `R = 3e3` fails in the stability analysis; `R·D0` from `1e-4` to `1e4` at
+/// `R = 1` gives the same energies. `[1e-3, 1e3]` for both keeps one order of margin. A
+/// scene in other units can be rescaled (only `L̄`, `D/D0` and `E R/D0` matter).
+pub const MAX_SCALE: f64 = 1e3;
+
+/// Smallest ratio `D/D_ref` of a stiffness value to the reference stiffness (`d0`, or the
+/// table's largest value).
+///
+/// Newton stops at a KKT residual of `1e-10` in units of `D_ref/R`. On a segment of
+/// stiffness `D` the stationarity residual changes by `D δκ_g`, so that tolerance fixes the
+/// segment's curvature only to `δκ_g R ≲ 1e-10 D_ref/D`; `D/D_ref ≥ 1e-6` keeps that below
+/// `1e-4`, the accuracy at which the contact force is reported.
+pub const MIN_CONTRAST: f64 = 1e-6;
+
+/// Largest ratio `D/D_ref` (a segment stiffer than the reference `d0`).
+///
+/// The KKT residual is measured in units of `D_ref/R`; its round-off floor grows like
+/// `ε D/D_ref` times the curvature (`ε ≈ 2.2e-16`) summed over the cells, so above `1e4`
+/// the floor (`≳ 1e-11` for the hundreds of cells of a solve) meets the tolerance `1e-10`
+/// and Newton cannot certify convergence.
+pub const MAX_CONTRAST: f64 = 1e4;
+
 /// A validated scene.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
@@ -399,7 +432,8 @@ impl Scene {
         Self::from_toml(&text, &path.display().to_string())
     }
 
-    /// Check every value's domain.
+    /// Check every value's domain, including the magnitudes double precision can resolve
+    /// ([`MAX_SCALE`], [`MIN_CONTRAST`], [`MAX_CONTRAST`]).
     pub fn validate(&self, origin: &str) -> Result<(), SceneError> {
         let bad = |key: &str, value: String, reason: &str| SceneError::Invalid {
             path: origin.to_string(),
@@ -431,6 +465,86 @@ impl Scene {
                 "must be at most 50",
             ));
         }
+        self.validate_domains(origin)?;
+        self.validate_magnitudes(origin)
+    }
+
+    /// Magnitudes (see [`MAX_SCALE`], [`MIN_CONTRAST`], [`MAX_CONTRAST`]), once every value
+    /// is known to be positive and finite.
+    fn validate_magnitudes(&self, origin: &str) -> Result<(), SceneError> {
+        let bad = |key: &str, value: f64, reason: String| SceneError::Invalid {
+            path: origin.to_string(),
+            key: key.to_string(),
+            value: if (1e-3..1e6).contains(&value) {
+                value.to_string()
+            } else {
+                format!("{value:e}")
+            },
+            reason,
+        };
+        let r = self.radius;
+        if !(1.0 / MAX_SCALE..=MAX_SCALE).contains(&r) {
+            return Err(bad(
+                "radius",
+                r,
+                format!("must lie in [{:e}, {MAX_SCALE:e}] (the solver works in the scene's units; see rodloop_scene::MAX_SCALE)", 1.0 / MAX_SCALE),
+            ));
+        }
+        let values: Vec<(String, f64)> = match &self.stiffness {
+            StiffnessSpec::Uniform { d } => vec![("stiffness.d".into(), *d)],
+            StiffnessSpec::Tanh { d0, d1, .. } => {
+                vec![("stiffness.d0".into(), *d0), ("stiffness.d1".into(), *d1)]
+            }
+            StiffnessSpec::Table { d, .. } => d
+                .iter()
+                .enumerate()
+                .map(|(i, v)| (format!("stiffness.d[{i}]"), *v))
+                .collect(),
+        };
+        let reference = self.stiffness.reference();
+        if let Some((key, d)) = values.iter().find(|(_, d)| *d == reference) {
+            let rd = r * d;
+            if !(1.0 / MAX_SCALE..=MAX_SCALE).contains(&rd) {
+                return Err(bad(
+                    key,
+                    *d,
+                    format!(
+                        "times radius = {r} gives {rd:e}, which must lie in [{:e}, {MAX_SCALE:e}] (see rodloop_scene::MAX_SCALE)",
+                        1.0 / MAX_SCALE
+                    ),
+                ));
+            }
+        }
+        for (key, d) in values.iter().filter(|(_, d)| *d != reference) {
+            let ratio = d / reference;
+            if !(MIN_CONTRAST..=MAX_CONTRAST).contains(&ratio) {
+                return Err(bad(
+                    key,
+                    *d,
+                    format!(
+                        "is {ratio:e} times the reference stiffness {reference}; the ratio must lie in [{MIN_CONTRAST:e}, {MAX_CONTRAST:e}] (see rodloop_scene::MIN_CONTRAST)"
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Domains of the single values (positive, fractions, ordering).
+    fn validate_domains(&self, origin: &str) -> Result<(), SceneError> {
+        let bad = |key: &str, value: String, reason: &str| SceneError::Invalid {
+            path: origin.to_string(),
+            key: key.to_string(),
+            value: truncate(&value, 80),
+            reason: reason.to_string(),
+        };
+        let positive = |key: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(bad(key, v.to_string(), "must be a positive finite number"))
+            }
+        };
         match &self.stiffness {
             StiffnessSpec::Uniform { d } => positive("stiffness.d", *d)?,
             StiffnessSpec::Tanh {

@@ -3,7 +3,7 @@
 //!
 //! # Why the dense matrix is never formed
 //!
-//! The closure `c(κ) = vee(skew H)` with the holonomy `H = E_{N−1}⋯E_0` couples every cell
+//! The closure `c(κ) = c(H)` (see [`crate::model`]) with the holonomy `H = E_{N−1}⋯E_0` couples every cell
 //! with every other, so the Hessian of `ℒ = E − μ·c` in the curvature unknowns alone is
 //! dense. Introducing the first variation of the prefix frames as auxiliary unknowns makes
 //! it local, as multiple shooting does for boundary-value problems: with `P_c = E_{c−1}⋯E_0`
@@ -11,12 +11,15 @@
 //!
 //! ```text
 //! ξ_{c+1} = E_c ξ_c + Σ_i a_ci δκ_ci,   a_ci = vee(∂_iE_c E_cᵀ),   ξ_0 = 0,
-//! δc = B ξ_N,                            B e_k = vee(skew(hat(e_k) H)),
+//! δc = J ξ_N,                            (J the derivative of c(H) along δH = hat(ξ)H),
 //! ```
 //!
-//! and the second variation of `f = −μ·c = ½ tr(hat(μ) H)` is a sum of cell terms,
-//! `Σ_c [δκ_cᵀ A_c δκ_c + 2 δκ_cᵀ B_c ξ_c]` with `A_c,ij = ½ tr(hat(μ) S_c ∂_ijE_c P_c)` and
-//! the rows `B_c,i = −vee(skew(P_c hat(μ) S_c ∂_iE_c))` (`S_c = E_{N−1}⋯E_{c+1}`).
+//! and, with `D(μ·c)[X] = −½ tr(M X)` and `D²(μ·c)[hat(ξ)H, hat(ζ)H] = ξᵀKζ` (for the
+//! quaternion closure of [`crate::model`]; `M = hat(μ)`, `K = 0` for `c = vee(skew H)`),
+//! the second variation of `f = −μ·c` is a sum of cell terms plus one term in `ξ_N`,
+//! `Σ_c [δκ_cᵀ A_c δκ_c + 2 δκ_cᵀ B_c ξ_c] − ξ_Nᵀ K ξ_N` with
+//! `A_c,ij = ½ tr(M S_c ∂_ijE_c P_c)` and the rows `B_c,i = −vee(skew(P_c M S_c ∂_iE_c))`
+//! (`S_c = E_{N−1}⋯E_{c+1}`).
 //! The Newton matrix of [`SurfaceModel::kkt_jacobian`] is exactly the Schur complement of
 //! the symmetric block-tridiagonal matrix in the unknowns
 //!
@@ -47,8 +50,7 @@ use nalgebra::{
     DMatrix, DVector, Matrix2, Matrix3, SMatrix, SVector, Vector2, Vector3, LU, U2, U8, U9,
 };
 
-use crate::frame::hat;
-use crate::model::{tr_prod, vee_skew, Chain, SurfaceModel};
+use crate::model::{tr_prod, vee_skew, Chain, Closure, SurfaceModel};
 use crate::SolverError;
 
 type M3 = Matrix3<f64>;
@@ -67,15 +69,18 @@ pub(crate) struct CellTerms {
     pub b: Vec<[V3; 2]>,
     /// `diag(w D) + A_c` (2×2, symmetric): `[q11, q12, q22]`.
     pub q: Vec<[f64; 3]>,
-    /// Closure map `B` (columns `vee(skew(hat(e_k) H))`).
+    /// Closure map `J` (`δc = J ξ_N`).
     pub closure: M3,
+    /// `−K`, the `(ξ_N, ξ_N)` block (zero at a closed loop).
+    pub xi_block: M3,
 }
 
 impl CellTerms {
     pub(crate) fn new(model: &SurfaceModel, ch: &Chain, kappa_len: usize, mu: &V3) -> Self {
         let n = model.cells();
         debug_assert_eq!(kappa_len, 2 * n);
-        let m = hat(mu);
+        let cl = Closure::of(&ch.prefix[n]);
+        let m = cl.first(mu);
         let d = model.d_gauss();
         let mut a = Vec::with_capacity(n);
         let mut b = Vec::with_capacity(n);
@@ -96,18 +101,13 @@ impl CellTerms {
                 w * d[2 * c + 1] + 0.5 * tr_prod(&ch.dde[c][2], &pms),
             ]);
         }
-        let hol = ch.prefix[n];
-        let mut closure = M3::zeros();
-        for k in 0..3 {
-            let col = vee_skew(&(hat(&V3::ith(k, 1.0)) * hol));
-            closure.set_column(k, &col);
-        }
         Self {
             e: ch.e.clone(),
             a,
             b,
             q,
-            closure,
+            closure: cl.jac,
+            xi_block: -cl.second(mu),
         }
     }
 
@@ -121,8 +121,9 @@ impl CellTerms {
             xi[c + 1] = self.e[c] * xi[c] + self.a[c][0] * v[2 * c] + self.a[c][1] * v[2 * c + 1];
         }
         let mut out = vec![0.0; 2 * n];
-        // Direct terms: Q v + B ξ, and the ξ-gradient g_c = B_cᵀ v_c.
+        // Direct terms: Q v + B ξ, and the ξ-gradient g_c = B_cᵀ v_c (g_N = −K ξ_N).
         let mut g = vec![V3::zeros(); n + 1];
+        g[n] = self.xi_block * xi[n];
         for c in 0..n {
             let [q11, q12, q22] = self.q[c];
             let (v1, v2) = (v[2 * c], v[2 * c + 1]);
@@ -390,6 +391,7 @@ impl KktFactor {
             pair_couplings(&mut k);
             for i in 0..3 {
                 for j in 0..3 {
+                    k[(3 + i, 3 + j)] = t.xi_block[(i, j)];
                     k[(6 + i, 3 + j)] = -t.closure[(i, j)];
                     k[(3 + j, 6 + i)] = -t.closure[(i, j)];
                 }
@@ -593,16 +595,7 @@ impl KktFactor {
                 sigma[(1, 1)],
             );
         }
-        let d = &self.last.d;
-        let dee = d.fixed_view::<3, 3>(0, 0);
-        let dkx = d.fixed_view::<3, 3>(6, 3);
-        let sigma = d.fixed_view::<3, 3>(6, 6) + dkx * dee * dkx.transpose();
-        let sym = (sigma + sigma.transpose()) * 0.5;
-        neg += 3 + sym
-            .symmetric_eigenvalues()
-            .iter()
-            .filter(|v| **v < 0.0)
-            .count();
+        neg += last_block_negatives(&self.last.d);
         if let Some((_, _, s)) = &self.border {
             if *s < 0.0 {
                 neg += 1;
@@ -616,6 +609,38 @@ impl KktFactor {
     /// when the shift is `−tolerance`.
     pub fn reduced_negative_count(&self) -> usize {
         self.negative_eigenvalues().saturating_sub(self.n_mult)
+    }
+}
+
+/// Negative eigenvalues of the last pivot block `D = [[−S, −I, 0], [−I, K, Jᵀ], [0, J, Q]]`
+/// (rows `η_N, ξ_N, δμ`). The pair `P = [[−S, −I], [−I, K]]` has inertia `(3, 3, 0)` while
+/// `I + SK` stays invertible on the way from `K = 0` (`K` vanishes at a closed loop), and
+/// `(P⁻¹)_ξξ = (I + SK)⁻¹S`, so `D` adds 3 plus the negatives of
+/// `Σ = Q − J (I + SK)⁻¹S Jᵀ` (Haynsworth). If `I + SK` is (nearly) singular, the
+/// eigenvalues of `D` itself are counted (Sylvester).
+fn last_block_negatives(d: &M9) -> usize {
+    let count = |m: &SMatrix<f64, 3, 3>| {
+        let sym = (m + m.transpose()) * 0.5;
+        sym.symmetric_eigenvalues()
+            .iter()
+            .filter(|v| **v < 0.0)
+            .count()
+    };
+    let s = -d.fixed_view::<3, 3>(0, 0).into_owned();
+    let k = d.fixed_view::<3, 3>(3, 3).into_owned();
+    let dkx = d.fixed_view::<3, 3>(6, 3).into_owned();
+    let pair = M3::identity() + s * k;
+    let well_posed = pair.iter().all(|v| v.is_finite())
+        && pair.lu().u().diagonal().iter().all(|v| v.abs() > 1e-8);
+    if let (true, Some(inv)) = (well_posed, pair.try_inverse()) {
+        let sigma = d.fixed_view::<3, 3>(6, 6) - dkx * inv * s * dkx.transpose();
+        3 + count(&sigma)
+    } else {
+        let sym = (d + d.transpose()) * 0.5;
+        sym.symmetric_eigenvalues()
+            .iter()
+            .filter(|v| **v < 0.0)
+            .count()
     }
 }
 

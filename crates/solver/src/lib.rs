@@ -19,6 +19,8 @@
 //! * [`start`]: starting shapes (Euler rotation curves, exact loops, point clouds, resampled
 //!   equilibria).
 //! * [`accuracy`]: resolution choice and Richardson extrapolation.
+//! * [`verify`]: the checks every reported state passes (closed, on the sphere, energy
+//!   recomputable from the written profile, branch identified from the state).
 //! * [`continuation`]: the KKT system as a [`rodloop_continuation::Problem`] in `L̄`.
 //!
 //! Units: everything is dimensional in the model's `R` and `D`; with `R = 1` and `D0 = 1`
@@ -46,6 +48,7 @@ pub mod solve;
 pub mod stability;
 pub mod start;
 pub mod stiffness;
+pub mod verify;
 
 pub use accuracy::{
     finish_with_accuracy, richardson, richardson_error, solve_cells, solve_with_accuracy, Accuracy,
@@ -65,6 +68,7 @@ pub use solve::{
 pub use stability::{Stability, StabilityOptions};
 pub use start::StartShape;
 pub use stiffness::{Stiffness, StiffnessProfile};
+pub use verify::{profile_energy, verify_accurate, verify_state, Claim, Verification};
 
 /// Errors of the solver crate.
 #[derive(Debug, thiserror::Error)]
@@ -102,6 +106,11 @@ pub enum SolverError {
         /// Iteration at which it happened.
         iteration: usize,
     },
+    /// A converged state that fails a check of [`verify::verify_state`] (not closed, off the
+    /// sphere, an energy the written profile does not reproduce, or another branch): it is
+    /// not reported.
+    #[error("the state fails verification: {0}")]
+    Unverified(String),
     /// An error of the exact layer (starting shapes, references).
     #[error("exact layer: {0}")]
     Exact(String),

@@ -25,8 +25,12 @@
 //!   `Θ_c = (h/2)(Ω(κ_c1) + Ω(κ_c2)) + (√3/12)h² [Ω(κ_c2), Ω(κ_c1)]`. As `Ω = κA + B` is
 //!   affine in `κ`, the commutator is `(κ_c2 − κ_c1)[A, B]` and `Θ_c` is affine in the two
 //!   cell unknowns. Holonomy `H = E_{N−1} ⋯ E_0`.
-//! * Closure `c(κ) = vee(skew H) = ((H₃₂ − H₂₃), (H₁₃ − H₃₁), (H₂₁ − H₁₂))/2`, zero iff
-//!   `H = I` near the identity; `μ·c = −½ tr(hat(μ) H)`.
+//! * Closure `c(κ) = 2 vee(skew H)/√(1 + tr H)` (`vee(skew H) = ((H₃₂ − H₂₃), (H₁₃ − H₃₁),
+//!   (H₂₁ − H₁₂))/2`): twice the vector part of the holonomy's unit quaternion with its
+//!   scalar part non-negative, `2 sin(θ/2) u` for a rotation by `θ` about `u`. It is zero
+//!   only at `H = I`; `vee(skew H)` alone also vanishes at every half-turn, which would let
+//!   Newton converge to an open loop. Near `H = I`, `μ·c = −½ tr(hat(μ) H) + O(|H − I|²)`;
+//!   the exact first and second derivatives are given with the internal `Closure` map.
 //! * Lagrangian `ℒ = E − μ·c − ν φ`, with the phase condition `φ` (uniform `D` only, see
 //!   [`Phase`]). KKT residual `F(z) = (∇E − ∇cᵀμ − ν∇φ, −c, −φ)`, `z = (κ, μ, ν)`, whose
 //!   Jacobian `[[∇²ℒ, −∇cᵀ, −∇φ], [−∇c, 0, 0], [−∇φᵀ, 0, 0]]` is symmetric.
@@ -185,6 +189,110 @@ pub(crate) fn vee_skew(x: &M3) -> V3 {
         0.5 * (x[(0, 2)] - x[(2, 0)]),
         0.5 * (x[(1, 0)] - x[(0, 1)]),
     )
+}
+
+/// The closure residual as a function of the holonomy `H` (a rotation by `θ` about `u`):
+/// `c(H) = 2 vee(skew H)/√(1 + tr H)`, twice the vector part of the unit quaternion of `H`
+/// with its scalar part taken non-negative, `c = 2 sin(θ/2) u` for `θ ∈ [0, π)`.
+///
+/// `vee(skew H) = sin θ u` alone vanishes at half-turns (`θ = π`) as well as at the
+/// identity, so Newton could converge to an open loop; `|c| = 2 sin(θ/2)` vanishes only at
+/// `H = I` (and tends to 2 at a half-turn). Near the identity `c = θu + O(θ³)`, as
+/// `vee(skew H)` is, and at `H = I` both have the same Jacobian, so the multiplier keeps its
+/// meaning (`𝓜 = −μ`) and the constrained Hessian at an equilibrium is unchanged (the extra
+/// terms below vanish there). No smooth map `SO(3) → ℝ³` with an invertible Jacobian at `I`
+/// vanishes only at `I` (the sphere around `I` would have degree ±1 and bound `ℝP²`), so
+/// some singularity is unavoidable: here it is at the half-turns (`1 + tr H → 0`), where
+/// `|c| → 2`, far from a root. There the value comes from Shepperd's stable quaternion
+/// extraction and the derivatives from the formula with `1 + tr H` floored at
+/// [`HALF_TURN_FLOOR`] (no Newton iterate converges there).
+///
+/// With `v = vee(skew H)`, `t = tr H`, `s(t) = 2/√(1 + t)` and a variation `δH = hat(ξ) H`:
+/// `δv = B ξ` (`B e_k = vee(skew(hat(e_k) H))`), `δt = −2 v·ξ`, so
+/// `δc = J ξ` with `J = s B − 2 s' v vᵀ`; for `φ = μ·c`,
+/// `Dφ[X] = s μ·vee(skew X) + s'(μ·v) tr X = −½ tr(M X)` with `M = s hat(μ) − 2s'(μ·v) I`,
+/// and `D²φ[hat(ξ)H, hat(ζ)H] = ξᵀ K ζ` with
+/// `K = −2s'(Bᵀμ vᵀ + v μᵀB) + 4 s''(μ·v) v vᵀ`.
+#[derive(Clone, Debug)]
+pub(crate) struct Closure {
+    /// `c(H)`.
+    pub(crate) value: V3,
+    /// `J`, the derivative of `c` along `δH = hat(ξ)H`.
+    pub(crate) jac: M3,
+    v: V3,
+    b: M3,
+    s: f64,
+    s1: f64,
+    s2: f64,
+}
+
+/// Floor of `1 + tr H` (`= 4 cos²(θ/2)`) in the closure derivatives; below it (`θ` within
+/// about `1e-4` of a half-turn) the value of the residual comes from Shepperd's method.
+pub const HALF_TURN_FLOOR: f64 = 1e-8;
+
+impl Closure {
+    pub(crate) fn of(h: &M3) -> Self {
+        let v = vee_skew(h);
+        let t = h.trace();
+        let p = (1.0 + t).max(HALF_TURN_FLOOR);
+        let s = 2.0 / p.sqrt();
+        let s1 = -1.0 / (p * p.sqrt());
+        let s2 = 1.5 / (p * p * p.sqrt());
+        let mut b = M3::zeros();
+        for k in 0..3 {
+            b.set_column(k, &vee_skew(&(hat(&V3::ith(k, 1.0)) * h)));
+        }
+        let jac = b * s - v * v.transpose() * (2.0 * s1);
+        let value = if 1.0 + t >= HALF_TURN_FLOOR {
+            v * s
+        } else {
+            half_turn_residual(h)
+        };
+        Self {
+            value,
+            jac,
+            v,
+            b,
+            s,
+            s1,
+            s2,
+        }
+    }
+
+    /// `M` with `D(μ·c)[X] = −½ tr(M X)`.
+    pub(crate) fn first(&self, mu: &V3) -> M3 {
+        hat(mu) * self.s - M3::identity() * (2.0 * self.s1 * mu.dot(&self.v))
+    }
+
+    /// `K` with `D²(μ·c)[hat(ξ)H, hat(ζ)H] = ξᵀ K ζ` (symmetric).
+    pub(crate) fn second(&self, mu: &V3) -> M3 {
+        let btm = self.b.transpose() * mu;
+        let cross = btm * self.v.transpose();
+        (cross + cross.transpose()) * (-2.0 * self.s1)
+            + self.v * self.v.transpose() * (4.0 * self.s2 * mu.dot(&self.v))
+    }
+}
+
+/// `2 q_v` of the unit quaternion `(q_w, q_v)` of the rotation `h`, `q_w ≥ 0`, by Shepperd's
+/// method from the largest diagonal entry (stable at a half-turn, where `q_w → 0`).
+fn half_turn_residual(h: &M3) -> V3 {
+    let t = h.trace();
+    let i = (0..3)
+        .max_by(|&a, &b| h[(a, a)].total_cmp(&h[(b, b)]))
+        .unwrap_or(0);
+    let (j, k) = ((i + 1) % 3, (i + 2) % 3);
+    let xi = 0.5 * (1.0 + 2.0 * h[(i, i)] - t).max(0.0).sqrt();
+    let mut x = V3::zeros();
+    x[i] = xi;
+    if xi > 0.0 {
+        x[j] = (h[(i, j)] + h[(j, i)]) / (4.0 * xi);
+        x[k] = (h[(i, k)] + h[(k, i)]) / (4.0 * xi);
+        let w = vee_skew(h)[i] / (2.0 * xi);
+        if w < 0.0 {
+            x = -x;
+        }
+    }
+    x * 2.0
 }
 
 /// `tr(A B)`.
@@ -494,14 +602,15 @@ impl SurfaceModel {
     ) -> Result<([f64; 3], DMatrix<f64>), SolverError> {
         self.check_kappa(kappa)?;
         let ch = self.chain1(kappa);
-        let v = vee_skew(&ch.prefix[self.cells]);
+        let v = Closure::of(&ch.prefix[self.cells]).value;
         Ok(([v[0], v[1], v[2]], self.closure_jacobian_from(&ch)))
     }
 
-    /// Closure residual `c(κ) = vee(skew H)`.
+    /// Closure residual `c(κ) = 2 vee(skew H)/√(1 + tr H)`, zero only when the holonomy `H`
+    /// is the identity (see the module docs).
     pub fn closure(&self, kappa: &[f64]) -> Result<[f64; 3], SolverError> {
         let h = self.holonomy(kappa)?;
-        let v = vee_skew(&h);
+        let v = Closure::of(&h).value;
         Ok([v[0], v[1], v[2]])
     }
 
@@ -553,10 +662,13 @@ impl SurfaceModel {
     }
 
     pub(crate) fn closure_jacobian_from(&self, ch: &Chain) -> DMatrix<f64> {
+        let cl = Closure::of(&ch.prefix[self.cells]);
         let mut j = DMatrix::zeros(3, self.n_kappa());
         for c in 0..self.cells {
             for i in 0..2 {
-                let v = vee_skew(&(ch.suffix[c] * ch.de[c][i] * ch.prefix[c]));
+                // δc = s δv + s' v δt for the variation X = ∂H/∂κ_a.
+                let x = ch.suffix[c] * ch.de[c][i] * ch.prefix[c];
+                let v = vee_skew(&x) * cl.s + cl.v * (cl.s1 * x.trace());
                 for k in 0..3 {
                     j[(k, 2 * c + i)] = v[k];
                 }
@@ -565,10 +677,13 @@ impl SurfaceModel {
         j
     }
 
-    /// Hessian of `μ·c(κ)` (2N × 2N), `μ·c = −½ tr(hat(μ) H)`.
+    /// Hessian of `μ·c(κ)` (2N × 2N): `−½ tr(M ∂²H)` with `M` from `Closure::first`, plus
+    /// `Ξᵀ K Ξ` (`Closure::second`) with the columns `Ξ_a = vee(∂_aH Hᵀ)`.
     fn closure_hessian_from(&self, ch: &Chain, mu: &V3) -> DMatrix<f64> {
         let n = self.cells;
-        let m = hat(mu);
+        let hol = ch.prefix[n];
+        let cl = Closure::of(&hol);
+        let m = cl.first(mu);
         // K_c = M S_c and G_{c,i} = K_c ∂_i E_c, so that tr(∂_i E_c R M S_c) = tr(R G_{c,i}).
         let k: Vec<M3> = ch.suffix.iter().map(|s| m * s).collect();
         let g: Vec<[M3; 2]> = (0..n)
@@ -595,6 +710,21 @@ impl SurfaceModel {
                         hess[(2 * c + j, 2 * cp + i)] = v;
                     }
                     r = ch.e[cp] * r;
+                }
+            }
+        }
+        let kmat = cl.second(mu);
+        if kmat.amax() > 0.0 {
+            let ht = hol.transpose();
+            let xi: Vec<V3> = (0..2 * n)
+                .map(|a| {
+                    vee_skew(&(ch.suffix[a / 2] * ch.de[a / 2][a % 2] * ch.prefix[a / 2] * ht))
+                })
+                .collect();
+            let kxi: Vec<V3> = xi.iter().map(|x| kmat * x).collect();
+            for a in 0..2 * n {
+                for b in 0..2 * n {
+                    hess[(a, b)] += xi[a].dot(&kxi[b]);
                 }
             }
         }
@@ -641,7 +771,8 @@ impl SurfaceModel {
     fn kkt_residual_from(&self, ch: &Chain, kappa: &[f64], mu: &V3, nu: f64) -> DVector<f64> {
         let n = self.n_kappa();
         let mut f = DVector::zeros(self.dim());
-        let m = hat(mu);
+        let closure = Closure::of(&ch.prefix[self.cells]);
+        let m = closure.first(mu);
         for c in 0..self.cells {
             let w = self.cell_weight(c);
             let pk = ch.prefix[c] * (m * ch.suffix[c]);
@@ -652,9 +783,8 @@ impl SurfaceModel {
                 f[a] = w * self.d_gauss[a] * kappa[a] - dmuc;
             }
         }
-        let cl = vee_skew(&ch.prefix[self.cells]);
         for k in 0..3 {
-            f[n + k] = -cl[k];
+            f[n + k] = -closure.value[k];
         }
         if let Some(ph) = &self.phase {
             for (a, g) in ph.gradient().iter().enumerate() {
@@ -753,7 +883,11 @@ impl SurfaceModel {
         for c in (1..n).rev() {
             dsuffix[c - 1] = dsuffix[c] * e[c] + suffix[c] * dh[c];
         }
-        let m = hat(&V3::from(mu));
+        let mu = V3::from(mu);
+        let hol = prefix[n];
+        let cl = Closure::of(&hol);
+        let m = cl.first(&mu);
+        let kxh = cl.second(&mu) * vee_skew(&(dprefix[n] * hol.transpose()));
         let mut out = DVector::zeros(self.dim());
         for c in 0..n {
             let wgt = self.cell_weight(c);
@@ -763,12 +897,14 @@ impl SurfaceModel {
                 let d2h = dsuffix[c] * dk[c][i] * prefix[c]
                     + suffix[c] * dkh[c][i] * prefix[c]
                     + suffix[c] * dk[c][i] * dprefix[c];
-                let d2f = -0.5 * tr_prod(&m, &d2h);
+                // ∂_h∂_a(μ·c) = −½ tr(M ∂_a∂_h H) + Ξ_aᵀ K Ξ_h.
+                let xa = vee_skew(&(suffix[c] * dk[c][i] * prefix[c] * hol.transpose()));
+                let d2f = -0.5 * tr_prod(&m, &d2h) + xa.dot(&kxh);
                 // F_a = ∇E_a − ∂_a(μ·c) − ν∂_aφ; ∇E_a ∝ h.
                 out[a] = wgt * self.d_gauss[a] * kappa[a] / self.lbar - d2f;
             }
         }
-        let dc = vee_skew(&dprefix[n]);
+        let dc = vee_skew(&dprefix[n]) * cl.s + cl.v * (cl.s1 * dprefix[n].trace());
         let nk = self.n_kappa();
         for k in 0..3 {
             out[nk + k] = -dc[k];

@@ -3,8 +3,10 @@
 //! stiffness ratio `D1/D0` from a mild contrast where the direct solve is easy (a homotopy,
 //! Allgower & Georg 2003, ch. 1), and say what was done.
 //!
-//! The branch is identified once, at the mild contrast, from the periods of `κ_g`
-//! ([`crate::identify`]); along the homotopy the state stays on that branch by continuity.
+//! The branch is identified from the periods of `κ_g` ([`crate::identify`]) at the mild
+//! contrast and again at the end of the path: every returned state passes
+//! [`crate::verify::verify_state`] for the requested branch, and a state whose count changed
+//! along the homotopy is not returned (the next fallback is tried).
 //! A fold in `D1/D0` before the target means the branch does not exist at the target
 //! contrast (it is reported as such).
 
@@ -21,6 +23,7 @@ use crate::seam::ParamProblem;
 use crate::solve::{solve_from_state, Equilibrium, Globalization, SolveOptions};
 use crate::start::StartShape;
 use crate::stiffness::Stiffness;
+use crate::verify::verify_accurate;
 use crate::SolverError;
 
 /// How a robust solve reached its equilibrium.
@@ -95,6 +98,14 @@ impl Strategy {
 /// attempt is started and a running continuation stops, with a message. A count, not a
 /// wall-clock time, so that a result does not depend on the machine's load.
 pub const BUDGET: usize = 1500;
+
+/// Largest number of cells of a solve (the finer one of an accuracy pair). Newton falls
+/// back to the dense KKT matrix (`(2N + 4)²` numbers) where the block factorisation of
+/// [`crate::kkt`] meets a singular pivot: at `N = 4096` that matrix takes 512 MiB and its
+/// LU about `(2N)³·2/3 ≈ 4·10¹¹` operations (minutes), the most one solve can be asked to
+/// afford on a workstation. Cells grow like `N = c (1 + η)` ([`Accuracy::cells`]), so this
+/// admits `η` up to about 70 (default accuracy) or 35 (high).
+pub const MAX_CELLS: usize = 4096;
 
 /// Which attempts [`solve_robust_with`] makes: the direct and shifted starts, then the
 /// continuation fallbacks.
@@ -207,6 +218,16 @@ pub fn solve_robust_with(
 ) -> Result<(AccurateEquilibrium, Strategy), SolverError> {
     let periods = start.periods(lbar)?;
     let n = accuracy.cells(periods, stiffness);
+    let finest = if accuracy == Accuracy::High { 2 * n } else { n };
+    if finest > MAX_CELLS {
+        return Err(SolverError::InvalidInput(format!(
+            "a loop with {periods} periods of κ_g needs {finest} cells at {} accuracy, above the \
+             limit of {MAX_CELLS} cells (the dense fallback of Newton's method would need {:.0} \
+             GiB)",
+            format!("{accuracy:?}").to_lowercase(),
+            8.0 * ((2 * finest + 4) as f64).powi(2) / 1024f64.powi(3)
+        )));
+    }
     let check = |res: Result<Equilibrium, SolverError>| -> Result<Equilibrium, String> {
         let eq = res.map_err(|e| format!("failed ({e})"))?;
         match (eta, identify_equilibrium(&eq)) {
@@ -219,18 +240,23 @@ pub fn solve_robust_with(
             (Some(_), Err(e)) => Err(format!("gave a state whose branch is unclear ({e})")),
         }
     };
-    // A solve at the main resolution that is on the branch, completed by its companion.
+    // A solve at the main resolution that is on the branch, completed by its companion and
+    // verified.
     let attempt = |start: &StartShape| -> Result<AccurateEquilibrium, String> {
         let main = check(solve_cells(radius, lbar, n, stiffness, start, None, opts))?;
-        finish_with_accuracy(main, radius, stiffness, start, accuracy, opts).map_err(|e| {
-            format!("converged, but not its companion solve for the error estimate ({e})")
-        })
+        let acc =
+            finish_with_accuracy(main, radius, stiffness, start, accuracy, opts).map_err(|e| {
+                format!("converged, but not its companion solve for the error estimate ({e})")
+            })?;
+        verified(acc, eta)
     };
     if stiffness.is_uniform() {
         // Nothing to gain from other arrangements or a homotopy: the result as it is (a
-        // state on another branch is the caller's to refuse, with its own message).
+        // state on another branch is the caller's to refuse, with its own message), if it
+        // passes the checks of every reported state.
         let main = solve_cells(radius, lbar, n, stiffness, start, None, opts)?;
         let acc = finish_with_accuracy(main, radius, stiffness, start, accuracy, opts)?;
+        verify_accurate(&acc, None)?;
         return Ok((acc, Strategy::Direct));
     }
     let reason = if fallbacks.starts {
@@ -286,14 +312,15 @@ pub fn solve_robust_with(
                     Ok(Some((main, steps))) => {
                         let acc = match finish_with_accuracy(
                             main, radius, stiffness, &shifted, accuracy, opts,
-                        ) {
+                        )
+                        .map_err(|e| format!("the companion solve failed ({e})"))
+                        .and_then(|acc| verified(acc, eta))
+                        {
                             Ok(acc) => acc,
                             Err(e) => {
                                 tried.push((
                                     format!("continuation in D1/D0 from {from}"),
-                                    format!(
-                                        "origin moved by {shift:.4}: the companion solve failed ({e})"
-                                    ),
+                                    format!("origin moved by {shift:.4}: {e}"),
                                 ));
                                 continue;
                             }
@@ -342,19 +369,26 @@ pub fn solve_robust_with(
                     radius, lbar, n, stiffness, &shifted, from, want, opts, &mut seen, &budget,
                 ) {
                     Ok(Some((main, steps))) => {
-                        if let Ok(acc) = check(Ok(main)).and_then(|main| {
+                        match check(Ok(main)).and_then(|main| {
                             finish_with_accuracy(main, radius, stiffness, start, accuracy, opts)
                                 .map_err(|e| e.to_string())
+                                .and_then(|acc| verified(acc, Some(want)))
                         }) {
-                            return Ok((
-                                acc,
-                                Strategy::ContinuationInLbar {
-                                    shift,
-                                    from,
-                                    steps,
-                                    reason,
-                                },
-                            ));
+                            Ok(acc) => {
+                                return Ok((
+                                    acc,
+                                    Strategy::ContinuationInLbar {
+                                        shift,
+                                        from,
+                                        steps,
+                                        reason,
+                                    },
+                                ));
+                            }
+                            Err(e) => tried.push((
+                                format!("continuation in L̄ from {from}"),
+                                format!("origin moved by {shift:.4}: {e}"),
+                            )),
                         }
                     }
                     Ok(None) => {}
@@ -373,6 +407,14 @@ pub fn solve_robust_with(
         moved.join(", "),
         summarize_tried(&tried)
     )))
+}
+
+/// `acc` if it passes [`verify_accurate`] for the requested `eta`, else why not.
+fn verified(acc: AccurateEquilibrium, eta: Option<u32>) -> Result<AccurateEquilibrium, String> {
+    match verify_accurate(&acc, eta) {
+        Ok(_) => Ok(acc),
+        Err(e) => Err(format!("gave a state that fails verification ({e})")),
+    }
 }
 
 /// The failed fallbacks in one clause each: the path, how many starts failed on it, and the

@@ -133,6 +133,29 @@ pub struct Equilibrium {
     report: ConvergenceReport,
 }
 
+#[cfg(test)]
+impl Equilibrium {
+    /// A state with the given curvature, zero multipliers and an empty report, for tests of
+    /// checks that must refuse it.
+    pub(crate) fn for_test(model: SurfaceModel, kappa: Vec<f64>) -> Self {
+        Self {
+            model,
+            kappa,
+            mu: [0.0; 3],
+            nu: 0.0,
+            report: ConvergenceReport {
+                iterations: 0,
+                residual: 0.0,
+                closure: 0.0,
+                converged: true,
+                history: Vec::new(),
+                step_lengths: Vec::new(),
+                relax_iterations: 0,
+            },
+        }
+    }
+}
+
 /// Least-squares closure multiplier for a given `κ`: minimises the stationarity residual
 /// `Σ_a (∇E_a − (∇cᵀμ)_a)²` over `μ`.
 fn initial_multiplier(model: &SurfaceModel, kappa: &[f64]) -> Result<[f64; 3], SolverError> {
@@ -273,21 +296,21 @@ fn restore(model: &SurfaceModel, kappa: &[f64]) -> Result<Vec<f64>, SolverError>
         }
     }
     let (c, _) = constraints(model, &k)?;
-    // vee(skew H) also vanishes when the holonomy is a half-turn: that is no loop.
-    let hol = model.holonomy(&k)?;
-    let angle = ((hol.trace() - 1.0) / 2.0).clamp(-1.0, 1.0).acos();
-    if c.norm() < 1e-10 && angle > 1e-6 {
+    // The closure residual is zero only at H = I (see crate::model): |c| = 2 sin(θ/2) of the
+    // holonomy angle θ, so a projection that stalls near |c| = 2 is stuck at a half-turn.
+    let norm = c.norm();
+    if norm < 1e-10 {
+        Ok(k)
+    } else if norm > 1.9 {
         Err(SolverError::InvalidInput(format!(
             "the start cannot be closed at this length: the nearest closure leaves the frame \
-             turned by {angle:.3} rad (a half-turn), so the start is too far from a loop of \
-             this length; start from an Euler curve or from a state solved at a nearby length"
+             turned by {:.3} rad (about a half-turn), so the start is too far from a loop of \
+             this length; start from an Euler curve or from a state solved at a nearby length",
+            2.0 * (0.5 * norm.min(2.0)).asin()
         )))
-    } else if c.norm() < 1e-10 {
-        Ok(k)
     } else {
         Err(SolverError::InvalidInput(format!(
-            "could not restore closure of the start (|c| = {:.3e})",
-            c.norm()
+            "could not restore closure of the start (|c| = {norm:.3e})"
         )))
     }
 }

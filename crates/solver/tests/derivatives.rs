@@ -248,3 +248,47 @@ fn parameter_derivatives_match_finite_differences() {
         }
     }
 }
+
+/// The closure residual is zero only at the identity: over half of a small circle (constant
+/// `κ_g`, for which the Magnus propagator is exact) the holonomy is a half-turn, where
+/// `vee(skew H)` vanishes but the closure `2 sin(θ/2) u` has length 2.
+#[test]
+fn closure_residual_does_not_vanish_at_a_half_turn() {
+    let kg = 0.75f64;
+    let lbar = 0.5 / (1.0 + kg * kg).sqrt();
+    let model = SurfaceModel::new(1.0, lbar, 16, &Stiffness::uniform(1.0)).unwrap();
+    let kappa = vec![kg; model.n_kappa()];
+    let h = model.holonomy(&kappa).unwrap();
+    let skew = (h - h.transpose()).norm();
+    assert!(skew < 1e-12, "a half-turn: skew part {skew:e}");
+    assert!((h.trace() + 1.0).abs() < 1e-12, "trace {}", h.trace());
+    let c = model.closure(&kappa).unwrap();
+    let norm = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+    assert!((norm - 2.0).abs() < 1e-6, "|c| = {norm}");
+}
+
+/// Closure, its Jacobian, the Lagrangian Hessian, the KKT Jacobian and `∂F/∂L̄` against
+/// finite differences near a half-turn holonomy (angle ≈ 3.0 rad), where the quaternion
+/// closure's extra terms (`s(tr H)` far from 1) are large, and `|c| = 2 sin(θ/2)` there.
+#[test]
+fn derivatives_near_a_half_turn() {
+    let kg = 0.75f64;
+    let lbar = 0.5 / (1.0 + kg * kg).sqrt() * (3.0 / std::f64::consts::PI);
+    for st in [Stiffness::uniform(1.0), tanh_profile()] {
+        let model = SurfaceModel::new(1.0, lbar, 12, &st).unwrap();
+        let mut seed = 3;
+        let kappa: Vec<f64> = (0..model.n_kappa())
+            .map(|_| kg + 0.01 * lcg(&mut seed))
+            .collect();
+        let h = model.holonomy(&kappa).unwrap();
+        let angle = ((h.trace() - 1.0) / 2.0).acos();
+        assert!((angle - 3.0).abs() < 0.05, "angle {angle}");
+        let c = model.closure(&kappa).unwrap();
+        let norm = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+        assert!(
+            (norm - 2.0 * (angle / 2.0).sin()).abs() < 1e-12,
+            "|c| = {norm}"
+        );
+        check_model(&model, &kappa, [0.4, -0.3, 0.7], 1e-6);
+    }
+}

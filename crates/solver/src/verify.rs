@@ -1,0 +1,330 @@
+//! Verification of a state before it is reported: every surface state that `solve`, a
+//! diagram, `phase`, `report` or `converge` writes goes through [`verify_state`].
+//!
+//! A converged Newton run proves only that the KKT residual is small. The checks here are
+//! made on the state itself and on the representation that is written (`config.csv`:
+//! the profile of [`Equilibrium::profile`] at the cell boundaries):
+//!
+//! * **closed**: the holonomy `H = X(L) X(0)ᵀ` of the frame is within
+//!   [`MAX_HOLONOMY_ANGLE`] of the identity, and the written polyline closes: the chord from
+//!   its last point back to its first is no longer than the arclength between them (a
+//!   chord of a closed smooth curve never is), up to [`POSITION_SLACK`]`·R`;
+//! * **on the sphere**: every written point has `||r| − R| ≤ `[`POSITION_SLACK`]`·R`;
+//! * **energy**: `E R/(π D0) = (R/π D0) ∮ ½ D κ² ds` recomputed from the written `s`, `κ`
+//!   and `D` columns by the periodic trapezoidal rule equals the reported energy within
+//!   the sum of: the reported error estimate; the error estimate of the recomputation
+//!   itself ([`Claim::profile_error`]: the written `κ_g = 𝓜·n/D` (Eq. (41)) at the cell
+//!   boundaries is a second `O(h⁴)` discretisation of the state, so its energy is compared
+//!   with the same recomputation on the companion solve of half (or, for `high`, the main)
+//!   resolution); the quadrature's error (`|T_h − T_2h|`, the rule on every point against
+//!   every other point); and [`ENERGY_RELATIVE_SLACK`] of the energy. As `κ_g` is computed
+//!   from the conserved moment, not copied from the unknowns, the check also fails when
+//!   the state does not satisfy the equilibrium equations;
+//! * **branch**: the number `η` of periods of the written `κ_g` ([`crate::identify`]) is the
+//!   requested one.
+//!
+//! # How the branch of a state is identified
+//!
+//! Always from the state: `η` is the dominant Fourier harmonic of `κ_g(s)` of the state that
+//! is written ([`crate::identify::identify_periods`]). A state reached by continuation (in
+//! `L̄` or in `D1/D0`) is counted again at its end point; where the count changed along the
+//! path (a very soft segment, `D1/D0 ≪ 1`, where the stiff segment is nearly a geodesic arc
+//! and the harmonics of the soft one dominate), the state is refused rather than reported
+//! under the branch the path started from. `solve` then tries its next fallback, and
+//! says so if none passes.
+
+use std::f64::consts::PI;
+
+use crate::identify::identify_periods;
+use crate::solve::{Equilibrium, ProfilePoint};
+use crate::SolverError;
+
+/// Largest holonomy angle (radians) of a verified state. Newton stops at a KKT residual
+/// norm of `1e-10` (which includes the closure residual `2 sin(θ/2)`), so a converged state
+/// has `θ ≤ 1e-10`; the bound leaves three orders of magnitude for states converged to a
+/// looser tolerance by continuation.
+pub const MAX_HOLONOMY_ANGLE: f64 = 1e-7;
+
+/// Slack (in units of `R`) of the position checks: the points are `R n` with `n` a row of a
+/// rotation matrix, exact to round-off.
+pub const POSITION_SLACK: f64 = 1e-9;
+
+/// Relative slack of the energy check (round-off of the sums).
+pub const ENERGY_RELATIVE_SLACK: f64 = 1e-9;
+
+/// What a reported state claims to be.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Claim {
+    /// Reported energy `E R/(π D0)`.
+    pub energy: f64,
+    /// Reported error estimate of `energy` (absolute).
+    pub energy_error: f64,
+    /// Estimated error of the energy recomputed from the written profile (the difference
+    /// of that recomputation between the state and its companion solve; see
+    /// [`verify_accurate`] and [`profile_energy`]).
+    pub profile_error: f64,
+    /// Requested number of periods `η` (`None`: any branch).
+    pub eta: Option<u32>,
+}
+
+/// The measured quantities of a verified state.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Verification {
+    /// Rotation angle of the holonomy (radians).
+    pub holonomy_angle: f64,
+    /// Chord from the last written point to the first, in units of `R`.
+    pub closing_chord: f64,
+    /// Arclength from the last written point to the end of the loop, in units of `R`.
+    pub closing_arc: f64,
+    /// Largest `||r| − R|/R` over the written points.
+    pub radius_deviation: f64,
+    /// Energy `E R/(π D0)` recomputed from the written profile.
+    pub energy_from_profile: f64,
+    /// Allowed `|energy_from_profile − claimed energy|`.
+    pub energy_tolerance: f64,
+    /// Number of periods of the written `κ_g`.
+    pub eta: u32,
+}
+
+/// Verify a state and the profile written for it (see the module docs). `profile` is what
+/// the caller writes (normally `eq.profile()`, dimensional in the model's `R` and `D`).
+///
+/// Errors: [`SolverError::Unverified`] naming the first check that fails, with its numbers.
+pub fn verify_state(
+    eq: &Equilibrium,
+    profile: &[ProfilePoint],
+    claim: &Claim,
+) -> Result<Verification, SolverError> {
+    let model = eq.model();
+    let r = model.radius();
+    let length = model.length();
+    let d0 = model.stiffness().kind().reference();
+    let fail = |m: String| Err(SolverError::Unverified(m));
+    let h = model.holonomy(eq.kappa())?;
+    let skew = nalgebra::Vector3::new(
+        h[(2, 1)] - h[(1, 2)],
+        h[(0, 2)] - h[(2, 0)],
+        h[(1, 0)] - h[(0, 1)],
+    );
+    let angle = (0.5 * skew.norm()).atan2(0.5 * (h.trace() - 1.0));
+    if angle.is_nan() || angle > MAX_HOLONOMY_ANGLE {
+        return fail(format!(
+            "the loop does not close: its frame comes back turned by {angle:.3e} rad (at most \
+             {MAX_HOLONOMY_ANGLE:e})"
+        ));
+    }
+    let n = profile.len();
+    if n < 8 {
+        return fail(format!(
+            "the profile has {n} points (at least 8 are needed)"
+        ));
+    }
+    if profile.iter().any(|p| {
+        ![p.s, p.x, p.y, p.z, p.kappa, p.kappa_g, p.d]
+            .iter()
+            .all(|v| v.is_finite())
+    }) {
+        return fail("the profile has a value that is not finite".into());
+    }
+    let pos = |p: &ProfilePoint| nalgebra::Vector3::new(p.x, p.y, p.z);
+    let radius_deviation = profile
+        .iter()
+        .map(|p| (pos(p).norm() - r).abs() / r)
+        .fold(0.0, f64::max);
+    if radius_deviation > POSITION_SLACK {
+        return fail(format!(
+            "a written point is off the sphere by {radius_deviation:.3e} R"
+        ));
+    }
+    let closing_chord = (pos(&profile[n - 1]) - pos(&profile[0])).norm() / r;
+    let closing_arc = (length + profile[0].s - profile[n - 1].s) / r;
+    if !(closing_arc > 0.0 && closing_chord <= closing_arc * (1.0 + 1e-12) + POSITION_SLACK) {
+        return fail(format!(
+            "the written polyline does not close: its last point is {closing_chord:.3e} R from \
+             the first, {closing_arc:.3e} R of arclength away"
+        ));
+    }
+    let (fine, coarse) = profile_energy(profile, length, r, d0);
+    let energy_tolerance = claim.energy_error.abs()
+        + claim.profile_error.abs()
+        + (fine - coarse).abs()
+        + ENERGY_RELATIVE_SLACK * claim.energy.abs().max(1.0);
+    let gap = (fine - claim.energy).abs();
+    if gap.is_nan() || gap > energy_tolerance {
+        return fail(format!(
+            "the energy recomputed from the written profile, {fine:.10}, differs from the reported \
+             {:.10} by more than {energy_tolerance:.1e}",
+            claim.energy
+        ));
+    }
+    let s: Vec<f64> = profile.iter().map(|p| p.s).collect();
+    let kg: Vec<f64> = profile.iter().map(|p| p.kappa_g).collect();
+    let periods = identify_periods(&s, &kg, length)
+        .map_err(|e| SolverError::Unverified(format!("its branch cannot be identified ({e})")))?;
+    if let Some(want) = claim.eta {
+        if periods.eta != want {
+            return fail(format!(
+                "its geodesic curvature has {} periods, not the requested {want}",
+                periods.eta
+            ));
+        }
+    }
+    Ok(Verification {
+        holonomy_angle: angle,
+        closing_chord,
+        closing_arc,
+        radius_deviation,
+        energy_from_profile: fine,
+        energy_tolerance,
+        eta: periods.eta,
+    })
+}
+
+/// Energy `E R/(π D0)` of a written profile (dimensional, of a loop of length `length` on a
+/// sphere of radius `radius`, reference stiffness `d0`) by the periodic trapezoidal rule on
+/// every point and on every other point: `(T_h, T_2h)`.
+pub fn profile_energy(profile: &[ProfilePoint], length: f64, radius: f64, d0: f64) -> (f64, f64) {
+    let n = profile.len();
+    let density: Vec<f64> = profile
+        .iter()
+        .map(|p| 0.5 * p.d * p.kappa * p.kappa)
+        .collect();
+    let trapezoid = |step: usize| {
+        let idx: Vec<usize> = (0..n).step_by(step).collect();
+        let m = idx.len();
+        (0..m)
+            .map(|j| {
+                let (a, b) = (idx[j], idx[(j + 1) % m]);
+                let ds = if j + 1 < m {
+                    profile[b].s - profile[a].s
+                } else {
+                    length + profile[b].s - profile[a].s
+                };
+                0.5 * (density[a] + density[b]) * ds
+            })
+            .sum::<f64>()
+            * radius
+            / (PI * d0)
+    };
+    (trapezoid(1), trapezoid(2))
+}
+
+/// [`verify_state`] of an accurate solve ([`crate::AccurateEquilibrium`]) against its own
+/// reported energy and error estimate, with the profile of its finest state.
+///
+/// The error estimate of the energy recomputed from the profile is the difference of that
+/// recomputation between the state and its companion solve (`|P_N − P_{N/2}|`, which bounds
+/// the error of the coarser one, hence of the finer one, for an `O(h⁴)` quantity).
+pub fn verify_accurate(
+    acc: &crate::AccurateEquilibrium,
+    eta: Option<u32>,
+) -> Result<Verification, SolverError> {
+    let eq = &acc.equilibrium;
+    let profile = eq.profile();
+    let model = eq.model();
+    let d0 = model.stiffness().kind().reference();
+    let energy = |eq: &Equilibrium, p: &[ProfilePoint]| {
+        profile_energy(p, eq.model().length(), eq.model().radius(), d0).0
+    };
+    let companion = &acc.companion;
+    let profile_error = (energy(eq, &profile) - energy(companion, &companion.profile())).abs();
+    verify_state(
+        eq,
+        &profile,
+        &Claim {
+            energy: acc.energy.total,
+            energy_error: acc.energy_error,
+            profile_error,
+            eta,
+        },
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{solve, Accuracy, SurfaceModel};
+    use crate::{StartShape, Stiffness};
+
+    fn solved() -> crate::AccurateEquilibrium {
+        crate::solve_with_accuracy(
+            1.0,
+            1.2,
+            &Stiffness::uniform(1.0),
+            &StartShape::Exact { eta: 2 },
+            Accuracy::Default,
+            &Default::default(),
+        )
+        .unwrap()
+    }
+
+    /// A solved state passes; each kind of false claim or doctored profile is refused.
+    #[test]
+    fn accepts_a_solved_state_and_refuses_false_claims() {
+        let acc = solved();
+        let eq = &acc.equilibrium;
+        let profile = eq.profile();
+        let v0 = verify_accurate(&acc, Some(2)).unwrap();
+        let claim = Claim {
+            energy: acc.energy.total,
+            energy_error: acc.energy_error,
+            profile_error: v0.energy_tolerance,
+            eta: Some(2),
+        };
+        let v = verify_state(eq, &profile, &claim).unwrap();
+        assert_eq!(v.eta, 2);
+        assert!(v.holonomy_angle < 1e-9, "{v:?}");
+        assert!(v.closing_chord <= v.closing_arc, "{v:?}");
+        assert!((v.energy_from_profile - acc.energy.total).abs() <= v.energy_tolerance);
+        // The energy tolerance is the error estimates', not a blanket one.
+        assert!(v.energy_tolerance < 1e-5, "{v:?}");
+        let wrong_energy = Claim {
+            energy: acc.energy.total * (1.0 + 1e-4),
+            ..claim
+        };
+        assert!(matches!(
+            verify_state(eq, &profile, &wrong_energy),
+            Err(SolverError::Unverified(_))
+        ));
+        let wrong_branch = Claim {
+            eta: Some(3),
+            ..claim
+        };
+        assert!(verify_state(eq, &profile, &wrong_branch).is_err());
+        let mut open = profile.clone();
+        let last = open.len() - 1;
+        // The last point turned by 0.3 rad about the x axis, away from the first (which is
+        // on the z axis, X(0) = I), staying on the sphere.
+        let (y, z) = (open[last].y, open[last].z);
+        let (c, s) = (0.3f64.cos(), 0.3f64.sin());
+        open[last].y = c * y - s * z;
+        open[last].z = s * y + c * z;
+        let e = verify_state(eq, &open, &claim).unwrap_err().to_string();
+        assert!(e.contains("does not close"), "{e}");
+        let mut off = profile.clone();
+        off[3].z *= 1.001;
+        assert!(verify_state(eq, &off, &claim).is_err());
+    }
+
+    /// A loop whose frame comes back turned by a half-turn is refused, although
+    /// `vee(skew H)` vanishes there: constant `κ_g` over half a small circle.
+    #[test]
+    fn refuses_a_half_turn_holonomy() {
+        let kg = 0.75f64;
+        // Half of the small circle of circumference 2π/√(1 + κ_g²) (R = 1).
+        let lbar = 0.5 / (1.0 + kg * kg).sqrt();
+        let model = SurfaceModel::new(1.0, lbar, 16, &Stiffness::uniform(1.0)).unwrap();
+        let kappa = vec![kg; model.n_kappa()];
+        let eq = solve::Equilibrium::for_test(model, kappa);
+        let claim = Claim {
+            energy: 0.0,
+            energy_error: 1.0,
+            profile_error: 1.0,
+            eta: None,
+        };
+        let e = verify_state(&eq, &eq.profile(), &claim)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("turned by 3.14"), "{e}");
+    }
+}

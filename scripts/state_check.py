@@ -1,0 +1,115 @@
+"""Checks of a state written by `rodloop solve` (config.csv + summary.json), independent of
+rodloop's own code: python3 standard library only. Shared by scripts/solve_sweep.py and
+scripts/fuzz_cli.py.
+
+check_state(out_dir, branch) returns a list of problems, each one of:
+  "open loop"            the chord from the last point back to the first is longer than the
+                         arclength between them (a closed curve's chord never is);
+  "off the sphere"       a point with | |r| - R | > 1e-9 R (surface) or |r| > R (1 + 1e-9)
+                         (enclosed), in the file's units of R;
+  "energy mismatch"      E R/(pi D0) = (1/pi) sum 1/2 D kappa^2 ds by the periodic trapezoidal
+                         rule on the file differs from the printed energy by more than
+                         the tolerance summary.json states (verification.energy_tolerance:
+                         the printed error estimate plus that of the recomputation, from the
+                         companion solve) + |T_h - T_2h| + 1e-9 max(1, |E|); without that
+                         field, 16 x the printed error estimate stands for the stated part:
+                         the file's kappa = sqrt(kappa_g^2 + 1) with kappa_g = M.n/D at the cell
+                         boundaries is a second O(h^4) discretisation of the state, whose error
+                         is bounded by that of the half-resolution companion solve,
+                         |E_N - E_N/2| = 15 x the estimate (measured on the shipped scenes:
+                         at most about 12 x);
+  "branch contradiction" summary.json names another branch than the one asked, or the
+                         dominant Fourier harmonic of the file's kappa_g (its number of
+                         periods eta) is not the asked branch's eta;
+  "unreadable"           the files are missing or malformed.
+"""
+import csv, json, math, os
+
+
+def eta_of_branch(branch):
+    """Paper numbering: branch 1 has eta = 2, branch 2 has eta = 1, branch B >= 3 has eta = B."""
+    return {1: 2, 2: 1}.get(branch, branch)
+
+
+def _rows(path):
+    with open(path) as f:
+        lines = [l for l in f if not l.startswith("#")]
+    r = csv.DictReader(lines)
+    return [{k.strip(): float(v) for k, v in row.items()} for row in r]
+
+
+def dominant_harmonic(s, kg, length):
+    """Number of periods of kappa_g: the k >= 1 with the largest |Fourier coefficient|."""
+    n = len(s)
+    w = []
+    for j in range(n):
+        nxt = s[j + 1] - s[j] if j + 1 < n else s[0] + length - s[j]
+        prv = s[j] - s[j - 1] if j > 0 else s[0] + length - s[n - 1]
+        w.append(0.5 * (nxt + prv))
+    mean = sum(a * b for a, b in zip(kg, w)) / length
+    best, amp_best = 0, -1.0
+    for k in range(1, max(2, n // 4 + 1)):
+        re = sum(wj * (v - mean) * math.cos(2 * math.pi * k * sj / length) for sj, v, wj in zip(s, kg, w))
+        im = sum(wj * (v - mean) * math.sin(2 * math.pi * k * sj / length) for sj, v, wj in zip(s, kg, w))
+        a = math.hypot(re, im)
+        if a > amp_best:
+            best, amp_best = k, a
+    return best
+
+
+def check_state(out_dir, branch, enclosed=False):
+    try:
+        with open(os.path.join(out_dir, "summary.json")) as f:
+            summary = json.load(f)
+        rows = _rows(os.path.join(out_dir, "config.csv"))
+    except (OSError, ValueError, KeyError) as e:
+        return ["unreadable"]
+    problems = []
+    if len(rows) < 8 or not all(c in rows[0] for c in ("x", "y", "z")):
+        return ["unreadable"]
+    if any(not math.isfinite(v) for r in rows for v in r.values()):
+        return ["unreadable"]
+    lbar = summary.get("lbar")
+    length = 2 * math.pi * lbar if isinstance(lbar, (int, float)) else None
+    pos = [(r["x"], r["y"], r["z"]) for r in rows]
+    if "s" in rows[0] and length:
+        chord = math.dist(pos[-1], pos[0])
+        arc = length + rows[0]["s"] - rows[-1]["s"]
+        if not (arc > 0 and chord <= arc * (1 + 1e-9) + 1e-9):
+            problems.append("open loop")
+    for p in pos:
+        rad = math.sqrt(sum(c * c for c in p))
+        if (rad > 1 + 1e-9) if enclosed else (abs(rad - 1) > 1e-9):
+            problems.append("off the sphere")
+            break
+    energy = summary.get("energy")
+    if all(c in rows[0] for c in ("s", "kappa", "D")) and length and isinstance(energy, (int, float)):
+        dens = [0.5 * r["D"] * r["kappa"] ** 2 for r in rows]
+        s = [r["s"] for r in rows]
+
+        def trap(step):
+            idx = list(range(0, len(rows), step))
+            tot = 0.0
+            for j, a in enumerate(idx):
+                b = idx[(j + 1) % len(idx)]
+                ds = s[b] - s[a] if j + 1 < len(idx) else length + s[b] - s[a]
+                tot += 0.5 * (dens[a] + dens[b]) * ds
+            return tot / math.pi
+
+        fine, coarse = trap(1), trap(2)
+        err = summary.get("error_estimate") or 0.0
+        stated = (summary.get("verification") or {}).get("energy_tolerance")
+        allowed = stated if isinstance(stated, (int, float)) else 16 * abs(err)
+        tol = allowed + abs(fine - coarse) + 1e-9 * max(1.0, abs(energy))
+        if abs(fine - energy) > tol:
+            problems.append("energy mismatch")
+    want = eta_of_branch(branch)
+    contradiction = summary.get("branch") not in (None, branch)
+    if summary.get("identified_eta") not in (None, want):
+        contradiction = True
+    if "kappa_g" in rows[0] and "s" in rows[0] and length:
+        if dominant_harmonic([r["s"] for r in rows], [r["kappa_g"] for r in rows], length) != want:
+            contradiction = True
+    if contradiction:
+        problems.append("branch contradiction")
+    return problems
