@@ -42,12 +42,13 @@ use std::time::Instant;
 use rodloop_exact::branch_of_eta;
 use rodloop_exact::diagram::{Critical, CriticalKind};
 use rodloop_solver::enclosed::{enclosed_cells, solve_branch, EnclosedOptions, SurfaceSource};
-use rodloop_solver::{solve_from_state, Accuracy, Equilibrium, SolverError, SurfaceModel};
+use rodloop_solver::{solve_from_state, Accuracy, SolverError, SurfaceModel};
 
 use super::nonuniform_descent::descend_unstable;
 use super::nonuniform_exchange::{interp, locate_crossing, lowest_at, mean_stiffness, CIRCLE};
+use super::nonuniform_sheet::{step_options, surface_at, surface_energy, SheetOut};
 use super::nonuniform_special::{branch_points, classify_stops};
-use super::trace::{follow, Levels, TraceStop};
+use super::trace::{follow, Levels};
 use super::{
     EnclosedCritical, EnclosedDiagram, EnclosedDiagramOptions, EnclosedEvent, EnclosedPoint,
     EnclosedProgress, EnclosedTimings, EventKind, PointShape, PointSource,
@@ -55,7 +56,7 @@ use super::{
 use crate::families::compute_families;
 use crate::labels::Label;
 use crate::parallel::run_parallel;
-use crate::states::{half_resolution, newton_options};
+use crate::states::newton_options;
 use crate::types::TracedBranch;
 use crate::{DiagramError, DiagramOptions};
 
@@ -78,69 +79,6 @@ fn surface_options(opts: &EnclosedDiagramOptions) -> DiagramOptions {
     }
 }
 
-/// One sheet's share of the diagram.
-pub(super) struct SheetOut {
-    pub(super) branch: u32,
-    pub(super) eta: u32,
-    pub(super) family: u32,
-    pub(super) points: Vec<EnclosedPoint>,
-    pub(super) levels: Vec<Levels>,
-    events: Vec<EnclosedEvent>,
-    warnings: Vec<String>,
-    /// Where its lifted-off traces stopped (classified in `nonuniform_special.rs`).
-    pub(super) stops: Vec<TraceStop>,
-    /// `L̄` of the states whose index was taken on the finest level, not the coarsest
-    /// (`nonuniform_descent.rs`).
-    pub(super) fine_index: Vec<f64>,
-    attached_s: f64,
-    lifted_s: f64,
-}
-
-impl SheetOut {
-    /// A sheet of branch `branch` (`eta`), family `family`, with no states yet.
-    pub(super) fn empty(branch: u32, eta: u32, family: u32) -> Self {
-        Self {
-            branch,
-            eta,
-            family,
-            points: Vec::new(),
-            levels: Vec::new(),
-            events: Vec::new(),
-            warnings: Vec::new(),
-            stops: Vec::new(),
-            fine_index: Vec::new(),
-            attached_s: 0.0,
-            lifted_s: 0.0,
-        }
-    }
-}
-
-/// The surface equilibrium of `sheet` at `x` with `cells` cells: Newton at the tracing
-/// resolution from the traced state nearest in `L̄`, then (for other `cells`) re-solved
-/// there.
-fn surface_at(
-    dopts: &DiagramOptions,
-    sheet: &TracedBranch,
-    x: f64,
-    cells: usize,
-) -> Result<Equilibrium, SolverError> {
-    let p = sheet
-        .points
-        .iter()
-        .min_by(|a, b| (a.value - x).abs().total_cmp(&(b.value - x).abs()))
-        .ok_or_else(|| SolverError::InvalidInput("an empty sheet".into()))?;
-    let model = SurfaceModel::new(dopts.radius, x, sheet.cells, &dopts.stiffness)?;
-    let eq = solve_from_state(model, p.state.clone(), &newton_options())?;
-    if cells == sheet.cells {
-        return Ok(eq);
-    }
-    half_resolution(dopts, &eq, cells).ok_or_else(|| {
-        SolverError::InvalidInput(format!(
-            "the surface state at lbar = {x} did not re-solve at {cells} cells"
-        ))
-    })
-}
-
 /// `λ_min R³/D0` of the surface state of `sheet` at `x` (`cells` cells).
 fn lambda_min_at(
     dopts: &DiagramOptions,
@@ -151,25 +89,6 @@ fn lambda_min_at(
     let eq = surface_at(dopts, sheet, x, cells)?;
     let r = dopts.radius;
     Ok(eq.lambda_range().0 * r.powi(3) / dopts.stiffness.reference())
-}
-
-/// Surface energy of `sheet` at `x` with its error: `N` and `2N` cells,
-/// `E_2N` and `|E_2N − E_N|/15` (fourth order on the graded mesh).
-pub(super) fn surface_energy(
-    dopts: &DiagramOptions,
-    sheet: &TracedBranch,
-    x: f64,
-) -> Result<(f64, f64), SolverError> {
-    let n = sheet.cells;
-    let e1 = surface_at(dopts, sheet, x, n)?;
-    let e2 = half_resolution(dopts, &e1, 2 * n).ok_or_else(|| {
-        SolverError::InvalidInput(format!(
-            "the surface state at lbar = {x} at {} cells",
-            2 * n
-        ))
-    })?;
-    let (a, b) = (e1.energy().total, e2.energy().total);
-    Ok((b, rodloop_solver::richardson_error(b, a)))
 }
 
 /// Root of `f` in `[a, b]` (`f(a) f(b) < 0`) by the Illinois method, to a bracket of `tol`.
@@ -279,56 +198,6 @@ fn surface_point(dopts: &DiagramOptions, sheet: &TracedBranch, k: usize) -> Encl
         surface_energy: Some(p.energy),
         shape,
     }
-}
-
-/// Newton options of the continuation steps: a step that needs more than 30 iterations is
-/// halved instead (most steps take 2–6; with 12, steps that were converging slowly, at
-/// residuals 1e-8, stopped the traces; the default 80 makes a failing step 2.7× dearer), and
-/// one that has not halved its residual in 6 iterations is given up (it is shedding the old
-/// contact set node by node; a shorter step does better).
-pub(super) fn step_options() -> EnclosedOptions {
-    EnclosedOptions {
-        max_iterations: 30,
-        stall_window: 6,
-        ..EnclosedOptions::default()
-    }
-}
-
-/// Step `t` to `x` in steps of at most `0.01`, halving a failed step up to 6 times; after
-/// the first step, each step starts from the secant predictor through the last two states
-/// (the plain warm start where that fails).
-pub(super) fn walk(t: &Levels, x: f64) -> Result<Levels, SolverError> {
-    walk_with(t, x, &step_options())
-}
-
-/// [`walk`] with the Newton options `opts`.
-pub(super) fn walk_with(t: &Levels, x: f64, opts: &EnclosedOptions) -> Result<Levels, SolverError> {
-    let mut cur = t.clone();
-    let mut prev: Option<Levels> = None;
-    let mut h = (x - cur.lbar).clamp(-0.01, 0.01);
-    let mut fails = 0;
-    while (x - cur.lbar).abs() > 1e-15 {
-        let to = if (x - cur.lbar).abs() <= h.abs() {
-            x
-        } else {
-            cur.lbar + h
-        };
-        let predicted = match &prev {
-            Some(p) => cur.step_predicted(p, to, opts),
-            None => Err(SolverError::InvalidInput("no predictor".into())),
-        };
-        match predicted.or_else(|_| cur.step_to(to, opts)) {
-            Ok(n) => prev = Some(std::mem::replace(&mut cur, n)),
-            Err(e) => {
-                fails += 1;
-                if fails > 6 {
-                    return Err(e);
-                }
-                h *= 0.5;
-            }
-        }
-    }
-    Ok(cur)
 }
 
 /// `E_N` of `sheet` at `x` by cubic Hermite interpolation of its traced states (energy at the

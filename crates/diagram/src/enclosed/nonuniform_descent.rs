@@ -15,8 +15,8 @@
 use rodloop_solver::enclosed::descent::descend;
 use rodloop_solver::enclosed::{solve_levels, EnclosedOptions};
 
-use super::nonuniform::{step_options, SheetOut};
 use super::nonuniform_exchange::{interp, lowest_at};
+use super::nonuniform_sheet::{step_options, SheetOut};
 use super::trace::{follow, Levels, TraceStop};
 use super::PointSource;
 use crate::parallel::run_parallel;

@@ -5,7 +5,7 @@
 use rodloop_solver::SolverError;
 
 use super::critical::secant;
-use super::nonuniform::{surface_energy, walk, SheetOut};
+use super::nonuniform_sheet::{surface_energy, walk, SheetOut};
 use super::trace::Levels;
 use super::{EnclosedDiagramOptions, PointSource};
 use crate::types::TracedBranch;

@@ -19,7 +19,7 @@
 
 use rodloop_solver::SolverError;
 
-use super::nonuniform::SheetOut;
+use super::nonuniform_sheet::SheetOut;
 use super::trace::Levels;
 use super::{EnclosedEvent, EventKind, PointSource};
 

@@ -6,6 +6,7 @@
 
 use std::time::Instant;
 
+use rodloop_continuation::natural::{walk, NaturalSettings};
 use rodloop_exact::{branch_of_eta, paper_branch_loop, ExactLoop};
 use rodloop_solver::enclosed::{
     detached_intervals, enclosed_cells, solve_branch, solve_enclosed, start_from_surface,
@@ -342,12 +343,12 @@ pub(super) struct TraceStop {
 }
 
 /// Follow a lifted-off state `first` (at `xs[mid]`) through the sample lengths `xs` both
-/// ways by natural-parameter steps, halving a failed step up to 6 times (5 with `extend`); a
-/// trace that still fails stops there with a warning naming `what`. With `extend`, a failed
-/// step is
-/// retried once as a jump past the target and back (over a singular point such as a
-/// pitchfork of the lifted-off branch), and a trace that stops keeps the last state it
-/// reached. A stop is recorded in `stops`. Returns the states in increasing `L̄`.
+/// ways, one natural-parameter [`walk`] per sample length ([`step`] corrects each step),
+/// halving a failed step up to 6 times (5 with `extend`); a trace that still fails stops
+/// there with a warning naming `what`. With `extend`, a walk that gets stuck is retried
+/// once as a jump past the target and back (over a singular point such as a pitchfork of
+/// the lifted-off branch), and a trace that stops keeps the last state it reached. A stop
+/// is recorded in `stops`. Returns the states in increasing `L̄`.
 pub(super) fn follow(
     first: Levels,
     xs: &[f64],
@@ -357,94 +358,107 @@ pub(super) fn follow(
     extend: bool,
     stops: &mut Vec<TraceStop>,
 ) -> Vec<Levels> {
+    let settings = NaturalSettings {
+        max_step: f64::INFINITY,
+        max_halvings: if extend { 5 } else { 6 },
+        arrive: 1e-14,
+        snap: 1e-9,
+    };
     let mut up = vec![first.clone()];
     let mut down = vec![first];
-    let max_halvings = if extend { 5 } else { 6 };
     for (dir, out) in [(1i64, &mut up), (-1i64, &mut down)] {
         let targets: Vec<f64> = if dir > 0 {
             xs[mid + 1..].to_vec()
         } else {
             xs[..mid].iter().rev().copied().collect()
         };
-        'targets: for &x in &targets {
-            let mut cur = out.last().expect("seed").clone();
-            let mut prev: Option<Levels> = out.len().checked_sub(2).map(|k| out[k].clone());
-            let mut h = x - cur.lbar;
-            let mut halvings = 0;
-            while (x - cur.lbar).abs() > 1e-14 {
-                let to = if (x - cur.lbar).abs() <= h.abs() * (1.0 + 1e-9) {
-                    x
-                } else {
-                    cur.lbar + h
-                };
-                let predicted = match &prev {
-                    Some(p) if !cur.free() => cur.step_predicted(p, to, sopts),
-                    _ => Err(SolverError::InvalidInput("no predictor".into())),
-                };
-                // The plain warm start as a fallback once the step has been halved twice
-                // (trying it on every failed predicted step doubled the cost of failures).
-                let try_plain = prev.is_none() || cur.free() || halvings >= 2;
-                let stepped = predicted
-                    .or_else(|e| {
-                        if try_plain {
-                            cur.step_to(to, sopts)
-                        } else {
-                            Err(e)
-                        }
-                    })
-                    .or_else(|e| {
-                        // Point contacts whose force is vanishing: try leaving the wall.
-                        let point_like = !cur.free()
-                            && cur.states[2]
-                                .contact(TOUCH)
-                                .is_ok_and(|c| c.fraction > 0.0 && c.fraction < 0.1);
-                        if point_like {
-                            cur.leave_wall(to, sopts).map_err(|_| e)
-                        } else {
-                            Err(e)
-                        }
-                    });
-                match stepped {
-                    Ok(next) => prev = Some(std::mem::replace(&mut cur, next)),
-                    Err(e) => {
-                        halvings += 1;
-                        if halvings > max_halvings && extend {
-                            let over = x + (x - cur.lbar);
-                            let jumped = cur.step_to(over, sopts).and_then(|j| j.step_to(x, sopts));
-                            if let Ok(at) = jumped {
-                                prev = None;
-                                cur = at;
-                                continue;
-                            }
-                            if (cur.lbar - out.last().expect("seed").lbar).abs() > 1e-12 {
-                                out.push(cur.clone());
-                            }
-                        }
-                        if halvings > max_halvings {
-                            let c = cur.states[2].contact(TOUCH).ok();
-                            stops.push(TraceStop {
-                                lbar: cur.lbar,
-                                text: format!(
-                                "{what}: the lifted-off trace stops at lbar = {:.6} ({e}); the last state touches the wall on {:.1}% of its length with contact forces in [{:.3e}, {:.3e}]; Newton failed under {max_halvings} step halvings (perhaps a fold or a bifurcation of the lifted-off branch; not traced further)",
-                                cur.lbar,
-                                100.0 * c.as_ref().map_or(f64::NAN, |c| c.fraction),
-                                c.as_ref().map_or(f64::NAN, |c| c.lambda_range.0),
-                                c.as_ref().map_or(f64::NAN, |c| c.lambda_range.1),
-                                ),
-                            });
-                            break 'targets;
-                        }
-                        h *= 0.5;
-                    }
+        for &x in &targets {
+            let start = out.last().expect("seed").clone();
+            let prev = out.len().checked_sub(2).map(|k| out[k].clone());
+            let walked = walk(
+                start,
+                prev,
+                x,
+                |l: &Levels| l.lbar,
+                &settings,
+                |cur, prev, to, halvings| step(cur, prev, to, halvings, sopts),
+            );
+            let stuck = match walked {
+                Ok(w) => {
+                    out.push(w.last);
+                    continue;
+                }
+                Err(stuck) => stuck,
+            };
+            let cur = stuck.last;
+            if extend {
+                let over = x + (x - cur.lbar);
+                if let Ok(at) = cur.step_to(over, sopts).and_then(|j| j.step_to(x, sopts)) {
+                    out.push(at);
+                    continue;
+                }
+                if (cur.lbar - out.last().expect("seed").lbar).abs() > 1e-12 {
+                    out.push(cur.clone());
                 }
             }
-            out.push(cur);
+            let c = cur.states[2].contact(TOUCH).ok();
+            stops.push(TraceStop {
+                lbar: cur.lbar,
+                text: format!(
+                    "{what}: the lifted-off trace stops at lbar = {:.6} ({}); the last state touches the wall on {:.1}% of its length with contact forces in [{:.3e}, {:.3e}]; Newton failed under {} step halvings (perhaps a fold or a bifurcation of the lifted-off branch; not traced further)",
+                    cur.lbar,
+                    stuck.error,
+                    100.0 * c.as_ref().map_or(f64::NAN, |c| c.fraction),
+                    c.as_ref().map_or(f64::NAN, |c| c.lambda_range.0),
+                    c.as_ref().map_or(f64::NAN, |c| c.lambda_range.1),
+                    settings.max_halvings,
+                ),
+            });
+            break;
         }
     }
     down.remove(0);
     down.reverse();
     down.extend(up);
     down
+}
+
+/// One step of [`follow`] from `cur` to `to`: from the secant predictor through `prev`
+/// (not for a free loop); the plain warm start where there is no predictor, for a free
+/// loop, or once the step has been halved twice (trying it on every failed predicted step
+/// doubled the cost of failures); leaving the wall where the contact has shrunk to points
+/// whose force is vanishing ([`Levels::leave_wall`]).
+fn step(
+    cur: &Levels,
+    prev: Option<&Levels>,
+    to: f64,
+    halvings: usize,
+    sopts: &EnclosedOptions,
+) -> Result<Levels, SolverError> {
+    let predicted = match prev {
+        Some(p) if !cur.free() => cur.step_predicted(p, to, sopts),
+        _ => Err(SolverError::InvalidInput("no predictor".into())),
+    };
+    let try_plain = prev.is_none() || cur.free() || halvings >= 2;
+    predicted
+        .or_else(|e| {
+            if try_plain {
+                cur.step_to(to, sopts)
+            } else {
+                Err(e)
+            }
+        })
+        .or_else(|e| {
+            let point_like = !cur.free()
+                && cur.states[2]
+                    .contact(TOUCH)
+                    .is_ok_and(|c| c.fraction > 0.0 && c.fraction < 0.1);
+            if point_like {
+                cur.leave_wall(to, sopts).map_err(|_| e)
+            } else {
+                Err(e)
+            }
+        })
 }
 
 /// One branch's share of the diagram.

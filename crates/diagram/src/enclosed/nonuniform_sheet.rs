@@ -1,0 +1,143 @@
+//! One sheet of the non-uniform enclosed diagram ([`super::nonuniform`]): its share of the
+//! output ([`SheetOut`]), its surface states re-solved at a length ([`surface_at`],
+//! [`surface_energy`]), and its lifted-off states walked to a length ([`walk`]). The
+//! diagram's route, its exchanges, special points and descents all build on these.
+
+use rodloop_continuation::natural::{self, NaturalSettings};
+use rodloop_solver::enclosed::EnclosedOptions;
+use rodloop_solver::{solve_from_state, Equilibrium, SolverError, SurfaceModel};
+
+use super::trace::{Levels, TraceStop};
+use super::{EnclosedEvent, EnclosedPoint};
+use crate::states::{half_resolution, newton_options};
+use crate::types::TracedBranch;
+use crate::DiagramOptions;
+
+/// One sheet's share of the diagram.
+pub(super) struct SheetOut {
+    pub(super) branch: u32,
+    pub(super) eta: u32,
+    pub(super) family: u32,
+    pub(super) points: Vec<EnclosedPoint>,
+    pub(super) levels: Vec<Levels>,
+    pub(super) events: Vec<EnclosedEvent>,
+    pub(super) warnings: Vec<String>,
+    /// Where its lifted-off traces stopped (classified in `nonuniform_special.rs`).
+    pub(super) stops: Vec<TraceStop>,
+    /// `L̄` of the states whose index was taken on the finest level, not the coarsest
+    /// (`nonuniform_descent.rs`).
+    pub(super) fine_index: Vec<f64>,
+    pub(super) attached_s: f64,
+    pub(super) lifted_s: f64,
+}
+
+impl SheetOut {
+    /// A sheet of branch `branch` (`eta`), family `family`, with no states yet.
+    pub(super) fn empty(branch: u32, eta: u32, family: u32) -> Self {
+        Self {
+            branch,
+            eta,
+            family,
+            points: Vec::new(),
+            levels: Vec::new(),
+            events: Vec::new(),
+            warnings: Vec::new(),
+            stops: Vec::new(),
+            fine_index: Vec::new(),
+            attached_s: 0.0,
+            lifted_s: 0.0,
+        }
+    }
+}
+
+/// The surface equilibrium of `sheet` at `x` with `cells` cells: Newton at the tracing
+/// resolution from the traced state nearest in `L̄`, then (for other `cells`) re-solved
+/// there.
+pub(super) fn surface_at(
+    dopts: &DiagramOptions,
+    sheet: &TracedBranch,
+    x: f64,
+    cells: usize,
+) -> Result<Equilibrium, SolverError> {
+    let p = sheet
+        .points
+        .iter()
+        .min_by(|a, b| (a.value - x).abs().total_cmp(&(b.value - x).abs()))
+        .ok_or_else(|| SolverError::InvalidInput("an empty sheet".into()))?;
+    let model = SurfaceModel::new(dopts.radius, x, sheet.cells, &dopts.stiffness)?;
+    let eq = solve_from_state(model, p.state.clone(), &newton_options())?;
+    if cells == sheet.cells {
+        return Ok(eq);
+    }
+    half_resolution(dopts, &eq, cells).ok_or_else(|| {
+        SolverError::InvalidInput(format!(
+            "the surface state at lbar = {x} did not re-solve at {cells} cells"
+        ))
+    })
+}
+
+/// Surface energy of `sheet` at `x` with its error: `N` and `2N` cells,
+/// `E_2N` and `|E_2N − E_N|/15` (fourth order on the graded mesh).
+pub(super) fn surface_energy(
+    dopts: &DiagramOptions,
+    sheet: &TracedBranch,
+    x: f64,
+) -> Result<(f64, f64), SolverError> {
+    let n = sheet.cells;
+    let e1 = surface_at(dopts, sheet, x, n)?;
+    let e2 = half_resolution(dopts, &e1, 2 * n).ok_or_else(|| {
+        SolverError::InvalidInput(format!(
+            "the surface state at lbar = {x} at {} cells",
+            2 * n
+        ))
+    })?;
+    let (a, b) = (e1.energy().total, e2.energy().total);
+    Ok((b, rodloop_solver::richardson_error(b, a)))
+}
+
+/// Newton options of the continuation steps: a step that needs more than 30 iterations is
+/// halved instead (most steps take 2–6; with 12, steps that were converging slowly, at
+/// residuals 1e-8, stopped the traces; the default 80 makes a failing step 2.7× dearer), and
+/// one that has not halved its residual in 6 iterations is given up (it is shedding the old
+/// contact set node by node; a shorter step does better).
+pub(super) fn step_options() -> EnclosedOptions {
+    EnclosedOptions {
+        max_iterations: 30,
+        stall_window: 6,
+        ..EnclosedOptions::default()
+    }
+}
+
+/// Step `t` to `x` in steps of at most `0.01`, halving a failed step up to 6 times; after
+/// the first step, each step starts from the secant predictor through the last two states
+/// (the plain warm start where that fails).
+pub(super) fn walk(t: &Levels, x: f64) -> Result<Levels, SolverError> {
+    walk_with(t, x, &step_options())
+}
+
+/// [`walk`] with the Newton options `opts`: a natural-parameter [`natural::walk`] with
+/// steps of at most `0.01`, 6 halvings and arrival to `1e-15`.
+pub(super) fn walk_with(t: &Levels, x: f64, opts: &EnclosedOptions) -> Result<Levels, SolverError> {
+    const SETTINGS: NaturalSettings = NaturalSettings {
+        max_step: 0.01,
+        max_halvings: 6,
+        arrive: 1e-15,
+        snap: 0.0,
+    };
+    natural::walk(
+        t.clone(),
+        None,
+        x,
+        |l: &Levels| l.lbar,
+        &SETTINGS,
+        |cur, prev, to, _| {
+            let predicted = match prev {
+                Some(p) => cur.step_predicted(p, to, opts),
+                None => Err(SolverError::InvalidInput("no predictor".into())),
+            };
+            predicted.or_else(|_| cur.step_to(to, opts))
+        },
+    )
+    .map(|w| w.last)
+    .map_err(|s| s.error)
+}
