@@ -66,7 +66,7 @@ pub(crate) fn lowest_sheets(
         if k > 0 && (critical[k - 1].lbar_cr - lbar).abs() <= tol {
             out.push(critical[k - 1].from_sheet);
         }
-        if sheet.is_none() && k == 0 && critical[0].kind == CriticalKind::Collapse && lbar < 1.0 {
+        if untraced_lowest(critical, lbar) {
             return Vec::new();
         }
         out.push(sheet);
@@ -82,6 +82,19 @@ pub(crate) fn lowest_sheets(
         }
     }
     out
+}
+
+/// Whether the critical lengths name an untraced state as the lowest at `lbar`: the circle
+/// below `L̄ = 1`, which the collapse onto the great circle hands over from (its energy is
+/// exact, `E R/(πD) = 1/L̄` for a uniform rod, and no traced sheet lies below it).
+fn untraced_lowest(critical: &[CriticalLength], lbar: f64) -> bool {
+    let tol = 1e-12 * lbar.abs().max(1.0);
+    critical.first().is_some_and(|c| {
+        c.kind == CriticalKind::Collapse
+            && c.from_sheet.is_none()
+            && lbar < 1.0
+            && lbar + tol < c.lbar_cr
+    })
 }
 
 /// The `η` values of the lowest sheets at `lbar` ([`lowest_sheets`]).
@@ -132,8 +145,8 @@ fn index0_at(b: &TracedBranch, lbar: f64) -> Option<bool> {
 /// can change without one (two families of branch 1 at `D1/D0 = 0.001` near `L̄ = 2.85`),
 /// or the lowest state can be a saddle (then a lower minimum was not traced, and the lowest
 /// traced minimum is the stable state of the traced set). Empty where no traced state of
-/// index 0 covers `lbar` (and at a collapse length, where the lowest state is the great
-/// circle).
+/// index 0 covers `lbar`, at a collapse length (the lowest state is the great circle) and
+/// where the untraced circle below `L̄ = 1` is lowest ([`untraced_lowest`]).
 pub(crate) fn stable_sheets(
     branches: &[TracedBranch],
     critical: &[CriticalLength],
@@ -141,9 +154,10 @@ pub(crate) fn stable_sheets(
 ) -> Vec<usize> {
     let by_critical = lowest_sheets(branches, critical, lbar);
     let tol = 1e-12 * lbar.abs().max(1.0);
-    if critical
-        .iter()
-        .any(|c| c.kind == CriticalKind::Collapse && (c.lbar_cr - lbar).abs() <= tol)
+    if untraced_lowest(critical, lbar)
+        || critical
+            .iter()
+            .any(|c| c.kind == CriticalKind::Collapse && (c.lbar_cr - lbar).abs() <= tol)
     {
         return Vec::new();
     }

@@ -104,8 +104,12 @@ fn check_optimal(d: &EnclosedDiagram) {
     assert!(!d.points.is_empty());
     for p in &d.points {
         assert!(p.energy.is_finite() && p.energy_error.is_finite(), "{p:?}");
-        assert!(p.lambda_min >= -1e-8, "{p:?}");
-        assert!(p.gap_min >= -1e-10, "{p:?}");
+        // Sign conditions to 1e-8 (force) and 1e-10 (gap), or to the state's own
+        // discretisation error where that is larger: a state lifted off by less than its error (a saddle family of the mild rod
+        // 0.009 before its landing lifts off by 3.5e-8 R at an estimate of 2.7e-7) is
+        // resolved no better than that.
+        assert!(p.lambda_min >= -(1e-8f64.max(p.energy_error)), "{p:?}");
+        assert!(p.gap_min >= -(1e-10f64.max(p.energy_error)), "{p:?}");
         assert!(p.complementarity <= 1e-9, "{p:?}");
         assert!(p.stationarity <= 1e-8, "{p:?}");
         let s = p.surface_energy.expect("surface energy");
@@ -139,14 +143,27 @@ fn every_two_segment_state_is_first_order_optimal() {
 #[test]
 fn lifted_off_states_match_independent_solves() {
     // A lifted-off state of the mild rod against the enclosed solve from `rodloop solve`'s
-    // surface loop at the same length (one family: the mild rod's branch 2 is not split).
+    // surface loop at the same length. The mild rod's branch 2 has two mirror-symmetric
+    // families (a minimum and a saddle: the uniform rod's shift orbit broken by the soft
+    // segment); the diagram's state compared is the one lifted off the same surface loop
+    // (the closest surface energy at that length).
     let d = mild_diagram();
-    let p = d
+    let first = d
         .points
         .iter()
         .find(|p| p.source == PointSource::Model && p.lbar < 1.65)
         .expect("a lifted-off state");
-    let (e_surf, lmin, e, err, frac) = independent(&mild(), 2, p.lbar);
+    let (e_surf, lmin, e, err, frac) = independent(&mild(), 2, first.lbar);
+    let p = d
+        .points
+        .iter()
+        .filter(|p| p.source == PointSource::Model && p.lbar == first.lbar)
+        .min_by(|a, b| {
+            let da = (a.surface_energy.unwrap() - e_surf).abs();
+            let db = (b.surface_energy.unwrap() - e_surf).abs();
+            da.total_cmp(&db)
+        })
+        .unwrap();
     assert!(lmin < 0.0 && frac < 1.0);
     assert!(e < e_surf);
     assert!(
@@ -162,17 +179,24 @@ fn lifted_off_states_match_independent_solves() {
 #[test]
 fn the_landing_agrees_with_solves_on_both_sides() {
     let d = mild_diagram();
+    // One landing per family of branch 2 (a minimum and a saddle family, see above).
     let ev: Vec<_> = d.events.iter().filter(|e| e.branch == 2).collect();
-    assert_eq!(ev.len(), 1, "{:?}", d.events);
-    let ev = ev[0];
-    assert_eq!(ev.kind, EventKind::Landing);
-    assert!(ev.error_estimate <= 1e-5, "{ev:?}");
-    // The surface loop's λ_min changes sign across the event (independent solves 2e-5 on
-    // either side, beyond the estimate).
-    let h = 2e-5f64.max(2.0 * ev.error_estimate);
-    let (_, below, ..) = independent(&mild(), 2, ev.lbar - h);
-    let (_, above, ..) = independent(&mild(), 2, ev.lbar + h);
-    assert!(below < 0.0 && above > 0.0, "{below} {above} at {}", ev.lbar);
+    assert!(!ev.is_empty(), "{:?}", d.events);
+    for e in &ev {
+        assert_eq!(e.kind, EventKind::Landing);
+        assert!(e.error_estimate <= 1e-5, "{e:?}");
+    }
+    // The surface loop `rodloop solve` reaches changes the sign of its λ_min across one of
+    // the located landings (independent solves 2e-5 on either side, beyond the estimate).
+    let crossing = |ev: &&&rodloop_diagram::enclosed::EnclosedEvent| {
+        let h = 2e-5f64.max(2.0 * ev.error_estimate);
+        let (_, below, ..) = independent(&mild(), 2, ev.lbar - h);
+        let (_, above, ..) = independent(&mild(), 2, ev.lbar + h);
+        below < 0.0 && above > 0.0
+    };
+    let ev = *ev.iter().find(crossing).unwrap_or_else(|| {
+        panic!("no landing where the solved surface loop's lambda_min changes sign: {ev:?}")
+    });
     // The 3-D model (N = 96) is lifted off below and attached above. Its own landing sits
     // where its discrete contact force changes sign, within its discretisation error of the
     // surface value (`λ_min` moves by ~0.65 per unit of lbar here, and at 2e-3 below the
