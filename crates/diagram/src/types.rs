@@ -6,8 +6,8 @@
 //!
 //! A branch is traced in one continued parameter, [`TracedBranch::param`] (`lbar` for the
 //! branch diagram, the default when a file does not say). The Rust fields that hold its
-//! value are called `value`; in the files they keep the name `lbar` they had in version 1,
-//! so that branch files written before this change still resume (and the user-visible
+//! value are called `value`; in the files they keep the name `lbar` of the first file
+//! format, so that branch files of that format still resume (and the user-visible
 //! `summary.json` keeps its keys).
 
 use rodloop_solver::Param;
