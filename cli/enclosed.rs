@@ -469,6 +469,8 @@ pub fn run_solve(args: &crate::solve::Args, scene: &Scene) -> Result<()> {
     if let Some(sh) = &shape {
         crate::draw::add_shape(&mut summary, sh);
     }
+    // Fields that do not apply (no surface loop) are absent keys, not null.
+    let summary = crate::output::strip_nulls(summary);
     run.write_table(&table)?;
     run.write_json("summary.json", &summary)?;
     run.commit()?;

@@ -400,6 +400,8 @@ pub fn run(args: &Args) -> Result<()> {
         "units": UNITS,
     })?;
     crate::draw::add_shape(&mut summary, &shape);
+    // No descent is an absent key, not null (null is how serde_json writes NaN).
+    let summary = crate::output::strip_nulls(summary);
     run.write_table(&table)?;
     run.write_json("summary.json", &summary)?;
     run.commit()?;
