@@ -9,7 +9,7 @@
 use std::path::Path;
 
 mod common;
-use common::{rodloop, tmp};
+use common::{rodloop, rodloop_ok, tmp};
 
 const SCENE: &str = "data/scenes/inhomogeneous-d1-0.5.toml";
 
@@ -26,12 +26,7 @@ fn solve(out: &Path, extra: &[&str]) -> serde_json::Value {
         out.to_str().unwrap(),
     ];
     args.extend_from_slice(extra);
-    let o = rodloop(&args);
-    assert!(
-        o.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let o = rodloop_ok(&args);
     let s = std::fs::read_to_string(out.join("summary.json")).unwrap();
     let mut v: serde_json::Value = serde_json::from_str(&s).unwrap();
     v["stdout"] = String::from_utf8_lossy(&o.stdout).to_string().into();
@@ -138,12 +133,7 @@ fn enclosed_state_is_the_same_at_every_accuracy() {
             out.to_str().unwrap(),
         ];
         args.extend_from_slice(extra);
-        let o = rodloop(&args);
-        assert!(
-            o.status.success(),
-            "{args:?}: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
+        rodloop_ok(&args);
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
     };
     let states: Vec<serde_json::Value> = ["fast", "default", "high"]

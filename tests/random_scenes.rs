@@ -14,7 +14,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{rodloop, tmp};
+use common::{rodloop, rodloop_ok, tmp};
 
 /// A small linear congruential generator (Knuth's MMIX constants): the scenes are the same
 /// on every machine.
@@ -379,12 +379,7 @@ fn run_diagram(scene: &Path, out: &Path, extra: &[&str]) {
         out.to_str().unwrap(),
     ];
     args.extend_from_slice(extra);
-    let o = rodloop(&args);
-    assert!(
-        o.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    rodloop_ok(&args);
 }
 
 #[test]

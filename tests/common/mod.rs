@@ -20,6 +20,17 @@ pub fn tmp(name: &str) -> PathBuf {
     d
 }
 
+/// Run the built binary and require success (the arguments and stderr in the message).
+pub fn rodloop_ok(args: &[&str]) -> Output {
+    let o = rodloop(args);
+    assert!(
+        o.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
 /// The command fails with an error that contains `msg`, without a panic.
 pub fn assert_refused(args: &[&str], msg: &str) {
     let r = rodloop(args);
