@@ -341,6 +341,30 @@ pub const MIN_CONTRAST: f64 = 1e-6;
 /// and Newton cannot certify convergence.
 pub const MAX_CONTRAST: f64 = 1e4;
 
+/// The error for a value outside its domain (the value cut to 80 characters).
+fn invalid(origin: &str, key: &str, value: String, reason: &str) -> SceneError {
+    SceneError::Invalid {
+        path: origin.to_string(),
+        key: key.to_string(),
+        value: truncate(&value, 80),
+        reason: reason.to_string(),
+    }
+}
+
+/// `v` is a positive finite number.
+fn positive(origin: &str, key: &str, v: f64) -> Result<(), SceneError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(invalid(
+            origin,
+            key,
+            v.to_string(),
+            "must be a positive finite number",
+        ))
+    }
+}
+
 /// A validated scene.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
@@ -435,19 +459,8 @@ impl Scene {
     /// Check every value's domain, including the magnitudes double precision can resolve
     /// ([`MAX_SCALE`], [`MIN_CONTRAST`], [`MAX_CONTRAST`]).
     pub fn validate(&self, origin: &str) -> Result<(), SceneError> {
-        let bad = |key: &str, value: String, reason: &str| SceneError::Invalid {
-            path: origin.to_string(),
-            key: key.to_string(),
-            value: truncate(&value, 80),
-            reason: reason.to_string(),
-        };
-        let positive = |key: &str, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(bad(key, v.to_string(), "must be a positive finite number"))
-            }
-        };
+        let bad = |key: &str, value: String, reason: &str| invalid(origin, key, value, reason);
+        let positive = |key: &str, v: f64| positive(origin, key, v);
         positive("radius", self.radius)?;
         positive("lbar_min", self.lbar_min)?;
         positive("lbar_max", self.lbar_max)?;
@@ -532,19 +545,8 @@ impl Scene {
 
     /// Domains of the single values (positive, fractions, ordering).
     fn validate_domains(&self, origin: &str) -> Result<(), SceneError> {
-        let bad = |key: &str, value: String, reason: &str| SceneError::Invalid {
-            path: origin.to_string(),
-            key: key.to_string(),
-            value: truncate(&value, 80),
-            reason: reason.to_string(),
-        };
-        let positive = |key: &str, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(bad(key, v.to_string(), "must be a positive finite number"))
-            }
-        };
+        let bad = |key: &str, value: String, reason: &str| invalid(origin, key, value, reason);
+        let positive = |key: &str, v: f64| positive(origin, key, v);
         match &self.stiffness {
             StiffnessSpec::Uniform { d } => positive("stiffness.d", *d)?,
             StiffnessSpec::Tanh {
