@@ -294,19 +294,7 @@ fn trace_sheet(
         "branch {} (eta = {}) family {} sheet {}",
         sheet.branch, sheet.eta, sheet.family, sheet.sheet
     );
-    let mut out = SheetOut {
-        branch: sheet.branch,
-        eta: sheet.eta,
-        family: sheet.family,
-        points: Vec::new(),
-        levels: Vec::new(),
-        events: Vec::new(),
-        warnings: Vec::new(),
-        stops: Vec::new(),
-        fine_index: Vec::new(),
-        attached_s: 0.0,
-        lifted_s: 0.0,
-    };
+    let mut out = SheetOut::empty(sheet.branch, sheet.eta, sheet.family);
     let pts = &sheet.points;
     // Events between consecutive traced states.
     let ta = Instant::now();
