@@ -645,7 +645,7 @@ fn large_l_limit_of_eq5() {
 
 #[test]
 fn reported_energies() {
-    // Energies the lead compares with the exact elastic solutions (Fig. 5 lengths).
+    // Energies compared with the exact elastic solutions (Fig. 5 lengths).
     for (l, lbar) in [(2u32, 1.2), (1, 1.7), (3, 2.2), (2, 2.8)] {
         let c = EulerCurve::from_lbar(l, lbar).unwrap();
         let e = c.bending_energy();
