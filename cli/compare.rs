@@ -272,7 +272,7 @@ pub fn run(args: &Args) -> Result<()> {
         // A two-segment rod on the sphere: the paper's statements of Sec. 5.
         if s != "enclosed" {
             let scene = rodloop_scene::Scene::from_file(std::path::Path::new(s))?;
-            if scene.confinement == rodloop_scene::Confinement::Surface
+            if crate::engine::kind_of(&scene) == crate::engine::EngineKind::Surface
                 && !scene.stiffness.is_uniform()
             {
                 return crate::compare_segments::run(&scene, &args.out);

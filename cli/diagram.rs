@@ -1,13 +1,18 @@
 //! `rodloop diagram`: the energy-versus-length diagram and its critical lengths.
 
 use std::path::PathBuf;
-use std::time::Instant;
 
 use anyhow::{bail, Result};
-use rodloop_exact::diagram::{compute, Diagram, DiagramSettings};
-use rodloop_exact::shape::{diagram_shapes, ShapeTolerances};
+use rodloop_diagram::{Engine, ExactEngine};
+use rodloop_exact::diagram::Diagram;
 
-use crate::output::{checked_json, critical_table, Cell, CriticalRow, OutputRun, Table};
+use crate::engine::EngineKind;
+use crate::output::OutputRun;
+
+pub use rodloop_diagram::engine::{etas_in, exact_window};
+
+/// Default size of the diagram figures in pixels (width, height).
+pub const FIGURE_SIZE: (u32, u32) = (960, 620);
 
 /// Which model computes the diagram.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -70,10 +75,10 @@ pub struct Args {
     #[arg(long, default_value = "out/diagram")]
     pub out: PathBuf,
     /// Width of the diagram figures in pixels.
-    #[arg(long, default_value_t = 960)]
+    #[arg(long, default_value_t = FIGURE_SIZE.0)]
     pub width: u32,
     /// Height of the diagram figures in pixels.
-    #[arg(long, default_value_t = 620)]
+    #[arg(long, default_value_t = FIGURE_SIZE.1)]
     pub height: u32,
     /// Trace the equilibria at the fixed length --lbar against this parameter of a
     /// two-segment scene (d1 = D1/D0 on a log axis, gamma, s0, s1) instead of against L̄.
@@ -106,59 +111,6 @@ fn draw_figures(args: &Args, run: &OutputRun) -> Result<()> {
     let names = crate::draw::draw_diagram(run.stage_dir(), &set)?;
     run.record_staged(&names);
     Ok(())
-}
-
-/// Units of the diagram outputs.
-pub const UNITS: &str =
-    "lengths lbar = L/(2 pi R); energy E R/(pi D0) (D0 = D for a uniform rod); lambda R^3/D0";
-
-/// The branches `η` that meet the open length window `(lbar_min, lbar_max)`: branch `η`
-/// lives for `η − 1 < L̄ < η + 1`.
-pub fn etas_in(lbar_min: f64, lbar_max: f64) -> Vec<u32> {
-    let top = lbar_max.ceil() as u32 + 1;
-    (1..=top)
-        .filter(|&e| {
-            let e = f64::from(e);
-            e - 1.0 < lbar_max && e + 1.0 > lbar_min
-        })
-        .collect()
-}
-
-/// The exact diagram restricted to `[lbar_min, lbar_max]`, equal to the full diagram there:
-/// every branch that meets the window is sampled on it; the critical lengths are those of the
-/// diagram from `min(lbar_min, 1)` to `lbar_max` with the same branches (so that the indices
-/// are the paper's `L̄_icr`, counted from `L̄_1cr = 1`) that fall in the window; and below
-/// `L̄ = 1` a state is the lowest only if it lies below the circle (branch 0,
-/// `E R/(πD) = 1/L̄`).
-pub fn exact_window(lbar_min: f64, lbar_max: f64, step: f64) -> Result<Diagram> {
-    let etas = etas_in(lbar_min, lbar_max);
-    let eta_max = etas.iter().copied().max().unwrap_or(1);
-    let mut d = compute(&DiagramSettings {
-        lbar_min,
-        lbar_max,
-        eta_max,
-        step,
-    })?;
-    if lbar_min > 1.0 {
-        let from_one = compute(&DiagramSettings {
-            lbar_min: 1.0,
-            lbar_max,
-            eta_max,
-            step: step.max(0.01),
-        })?;
-        let tol = 1e-12;
-        d.critical = from_one
-            .critical
-            .into_iter()
-            .filter(|c| c.lbar_cr >= lbar_min - tol && c.lbar_cr <= lbar_max + tol)
-            .collect();
-    }
-    for p in &mut d.points {
-        if p.lbar < 1.0 && 1.0 / p.lbar < p.energy {
-            p.lowest = false;
-        }
-    }
-    Ok(d)
 }
 
 /// The exact diagram's counterpart of a numeric critical length: the same kind between the
@@ -223,13 +175,13 @@ pub fn run(args: &Args) -> Result<()> {
     if args.lbar.is_some() || args.to.is_some() {
         bail!("--lbar and --to belong to --param (the equilibria at a fixed length against a parameter); the diagram in L̄ takes --lbar-min and --lbar-max");
     }
-    if let Some(scene) = crate::enclosed_diagram::enclosed_scene(args.scene.as_deref())? {
+    let (scene, engine) = crate::engine::load(args.scene.as_deref())?;
+    if engine == EngineKind::Enclosed {
         if args.relative {
             bail!("--relative applies to surface diagrams; draw an enclosed diagram's branches.csv with `rodloop draw --relative` instead");
         }
         return crate::enclosed_diagram::run(args, &scene);
     }
-    let scene = crate::solve::load_scene(args.scene.as_deref())?;
     let lbar_min = args.lbar_min.unwrap_or(scene.lbar_min);
     let lbar_max = args.lbar_max.unwrap_or(scene.lbar_max);
     if !(lbar_min > 0.0 && lbar_max > lbar_min && lbar_max <= 50.0) {
@@ -291,59 +243,17 @@ pub fn run(args: &Args) -> Result<()> {
         );
     }
     let run = OutputRun::begin(&args.out)?;
-    let t0 = Instant::now();
-    let mut d = exact_window(lbar_min, lbar_max, step)?;
-    if let Some(sel) = &selection {
-        d.points.retain(|p| sel.contains(&p.branch));
-        d.critical
-            .retain(|c| sel.contains(&c.from_branch) || sel.contains(&c.to_branch));
-    }
-    let elapsed = t0.elapsed();
-
-    let mut branches = Table::new(
-        "branches.csv",
-        &[
-            "branch",
-            "eta",
-            "lbar",
-            "energy",
-            "energy_g",
-            "lambda_min",
-            "lambda_max",
-            "p",
-            "k",
-            "c",
-            "closure_residual",
-            "lowest",
-            "point_group",
-            "self_intersections",
-        ],
-    );
-    let t_shapes = Instant::now();
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let shapes = diagram_shapes(&d.points, ShapeTolerances::default(), threads)?;
-    let t_shapes = t_shapes.elapsed().as_secs_f64();
-    for (p, sh) in d.points.iter().zip(&shapes) {
-        branches.push(vec![
-            Cell::I(p.branch.into()),
-            Cell::I(p.eta.into()),
-            Cell::F(p.lbar),
-            Cell::F(p.energy),
-            Cell::F(p.energy_g),
-            Cell::F(p.lambda_min),
-            Cell::F(p.lambda_max),
-            Cell::I(p.p.into()),
-            Cell::F(p.k),
-            Cell::F(p.c),
-            Cell::F(p.closure_residual),
-            Cell::I(p.lowest.into()),
-            Cell::S(sh.point_group.clone()),
-            Cell::S(sh.self_intersections_label()),
-        ])?;
-    }
-    let critical = critical_table(d.critical.iter().map(CriticalRow::from))?;
-    run.write_table(&branches)?;
-    run.write_table(&critical)?;
+    let mut engine = ExactEngine {
+        lbar_min,
+        lbar_max,
+        step,
+        branches: selection,
+        threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    let out = engine.run(&mut |()| {})?;
+    let mut schema = engine.schema(&out, &scene.name)?;
+    crate::output::write_diagram(&run, &mut schema)?;
+    let d = &out.diagram;
     // Fig. 11: k² against L̄ with Eq. (B.4).
     let k2: Vec<rodloop_figures::k2::K2Point> = d
         .points
@@ -369,22 +279,6 @@ pub fn run(args: &Args) -> Result<()> {
         .map(|p| p.branch)
         .collect::<std::collections::BTreeSet<_>>()
         .len();
-    let summary = checked_json!({
-        "model": "exact",
-        "scene": scene.name,
-        "lbar_min": lbar_min,
-        "lbar_max": lbar_max,
-        "step": step,
-        "branches": branch_count,
-        "states": d.points.len(),
-        "continuation_points": d.continuation_steps,
-        "critical": d.critical,
-        "seconds": elapsed.as_secs_f64(),
-        "seconds_shapes": t_shapes,
-        "shape_tolerance": ShapeTolerances::default(),
-        "units": UNITS,
-    })?;
-    run.write_json("summary.json", &summary)?;
     let atlas = match args.shapes {
         0 => None,
         k => Some(crate::atlas::write_exact_atlas(&run, k, &d.points)?),
@@ -419,7 +313,7 @@ pub fn run(args: &Args) -> Result<()> {
         crate::output::plural(d.points.len() as u64, "state"),
         crate::output::plural(branch_count as u64, "branch"),
         d.continuation_steps,
-        elapsed.as_secs_f64(),
+        out.seconds,
         args.out.display()
     );
     if let Some(a) = atlas {

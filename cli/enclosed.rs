@@ -523,7 +523,7 @@ pub fn run_compare(scene_arg: &str, out: &Path) -> Result<()> {
     } else {
         Scene::from_file(Path::new(scene_arg))?
     };
-    if scene.confinement != rodloop_scene::Confinement::Enclosed {
+    if crate::engine::kind_of(&scene) != crate::engine::EngineKind::Enclosed {
         bail!(
             "compare --scene needs an enclosed scene (confinement = \"enclosed\"); {} is not",
             scene.name

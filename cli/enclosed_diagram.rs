@@ -6,21 +6,14 @@
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
-use rodloop_diagram::enclosed::{
-    enclosed_diagram_with, EnclosedDiagram, EnclosedDiagramOptions, EnclosedProgress,
-};
+use rodloop_diagram::enclosed::{EnclosedDiagram, EnclosedDiagramOptions, EnclosedProgress};
+use rodloop_diagram::engine::lowest_lifted_off;
+use rodloop_diagram::{EnclosedEngine, Engine};
 use rodloop_figures::raster::svg_to_png;
-use rodloop_scene::{Confinement, Scene};
+use rodloop_scene::Scene;
 
 use crate::diagram::{Args, Model};
-use crate::output::{checked_json, critical_table, Cell, CriticalRow, OutputRun, Table};
-
-/// The scene of `path` when it is an enclosed scene (the default scene is a surface one).
-pub fn enclosed_scene(path: Option<&Path>) -> Result<Option<Scene>> {
-    let Some(p) = path else { return Ok(None) };
-    let scene = Scene::from_file(p)?;
-    Ok((scene.confinement == Confinement::Enclosed).then_some(scene))
-}
+use crate::output::OutputRun;
 
 /// Run `rodloop diagram` on an enclosed scene.
 pub fn run(args: &Args, scene: &Scene) -> Result<()> {
@@ -76,28 +69,29 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     // Progress on stderr (cli/progress.rs): a bar on a terminal, one line per task otherwise.
     let bar = crate::progress::Progress::new(0, "enclosed", args.quiet);
     let mut planned = 0u64;
-    let d = enclosed_diagram_with(&opts, &mut |p| match p {
-        EnclosedProgress::Planned(n) => {
-            planned += n as u64;
-            bar.set_length(planned);
-        }
-        EnclosedProgress::Done(msg) => bar.done(msg),
-    })
-    .context("the enclosed diagram")?;
+    let mut engine = EnclosedEngine { opts };
+    let d = engine
+        .run(&mut |p| match p {
+            EnclosedProgress::Planned(n) => {
+                planned += n as u64;
+                bar.set_length(planned);
+            }
+            EnclosedProgress::Done(msg) => bar.done(msg),
+        })
+        .context("the enclosed diagram")?;
     bar.finish();
+    let opts = &engine.opts;
     // The completeness certificate (the same search `solve` runs) goes into summary.json.
-    let cert = certificate(&d, scene, &opts);
-    write_outputs(&d, &opts, &scene.name, &run, args)?;
-    let mut summary: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(run.stage_dir().join("summary.json"))?)?;
-    summary["certificate"] = serde_json::to_value(&cert)?;
-    run.write_json("summary.json", &summary)?;
+    let cert = certificate(&d, scene, opts);
+    let mut schema = engine.schema(&d, &scene.name)?;
+    schema.set_certificate(&cert)?;
+    write_outputs(&mut schema, &d, opts, &run, args.width, args.height)?;
     if args.shapes > 0 {
         // The branch atlas (cli/atlas.rs): states re-solved along each branch, in states/.
         crate::atlas::write_enclosed_atlas(&run, args.shapes, scene, accuracy, &d)?;
     }
     run.commit()?;
-    print(&d, scene, &opts, &args.out);
+    print(&d, scene, opts, &args.out);
     print_certificate(&cert);
     Ok(())
 }
@@ -220,181 +214,38 @@ fn print_certificate(cert: &[CertificateCheck]) {
     }
 }
 
+/// Write states/, the diagram's files in the result schema (branches.csv, critical.csv,
+/// special_points.csv, summary.json) and diagram.svg/.png drawn from the staged tables.
 pub(crate) fn write_outputs(
+    schema: &mut rodloop_schema::Diagram,
     d: &EnclosedDiagram,
     opts: &EnclosedDiagramOptions,
-    scene: &str,
     run: &OutputRun,
-    args: &Args,
+    width: u32,
+    height: u32,
 ) -> Result<()> {
-    let mut branches = Table::new(
-        "branches.csv",
-        &[
-            "branch",
-            "eta",
-            "lbar",
-            "energy",
-            "energy_error",
-            "attached",
-            "contact_fraction",
-            "contact_intervals",
-            "max_gap",
-            "lambda_min",
-            "gap_min",
-            "complementarity",
-            "stationarity",
-            "index",
-            "label",
-            "lowest",
-            "cells",
-            "source",
-            "family",
-            "sheet",
-            "multiplicity",
-            "surface_energy",
-            "state_file",
-        ],
-    );
     // Every point's loop in states/ (cli/states.rs), named in the last column.
     let (state_files, state_warnings) =
         crate::states::write_enclosed_states(d, opts.radius, opts.stiffness.reference(), run)?;
     for w in &state_warnings {
         eprintln!("warning: {w}");
     }
-    for (p, file) in d.points.iter().zip(&state_files) {
-        branches.push(vec![
-            Cell::I(p.branch.into()),
-            Cell::I(p.eta.into()),
-            Cell::F(p.lbar),
-            Cell::F(p.energy),
-            Cell::F(p.energy_error),
-            Cell::I(p.attached.into()),
-            Cell::F(p.contact_fraction),
-            Cell::I(p.contact_intervals as i64),
-            Cell::F(p.max_gap),
-            Cell::F(p.lambda_min),
-            Cell::F(p.gap_min),
-            Cell::F(p.complementarity),
-            Cell::F(p.stationarity),
-            Cell::I(p.index as i64),
-            Cell::S(p.label.as_str().into()),
-            Cell::I(p.lowest.into()),
-            Cell::I(p.cells as i64),
-            Cell::S(
-                serde_json::to_value(p.source)?
-                    .as_str()
-                    .unwrap_or("")
-                    .to_string(),
-            ),
-            Cell::I(p.family.into()),
-            Cell::I(p.sheet.into()),
-            Cell::I(p.multiplicity.into()),
-            p.surface_energy.map_or(Cell::S(String::new()), Cell::F),
-            Cell::S(file.clone()),
-        ])?;
+    for (p, file) in schema.points.iter_mut().zip(state_files) {
+        p.state_file = Some(file);
     }
-    // critical.csv has the surface diagram's columns; the surface values and the methods
-    // are in summary.json.
-    let critical = critical_table(d.critical.iter().map(|c| CriticalRow::from(&c.critical)))?;
-    let special =
-        crate::output::special_table(d.events.iter().map(|e| crate::output::SpecialRow {
-            kind: e.kind.as_str().into(),
-            lbar: e.lbar,
-            energy: e.energy,
-            branch: e.branch,
-            family: e.family,
-            index_before: e.index_before,
-            index_after: e.index_after,
-            error_estimate: Some(e.error_estimate),
-        }))?;
-    run.write_table(&branches)?;
-    run.write_table(&critical)?;
-    run.write_table(&special)?;
+    schema
+        .warnings
+        .get_or_insert_with(Vec::new)
+        .extend(state_warnings);
+    crate::output::write_diagram(run, schema)?;
     // The figure from the staged CSV files, as `rodloop draw` and `report` draw it (real
     // symbols, the lifted-off band, lift-off/landing and critical markers).
     let data = rodloop_figures::diagram::DiagramData::read(run.stage_dir())?;
-    let text = rodloop_figures::diagram::energy_figure(
-        &data,
-        f64::from(args.width),
-        f64::from(args.height),
-    )?;
+    let text = rodloop_figures::diagram::energy_figure(&data, f64::from(width), f64::from(height))?;
     run.write_bytes("diagram.svg", text.as_bytes())?;
     let png = svg_to_png(&text, 1.0).context("rendering diagram.png")?;
     run.write_bytes("diagram.png", &png)?;
-    // With --branch, "lowest" is among the selected branches only: no hypothesis verdict.
-    let lowest_lifted = opts.branches.is_none().then(|| lowest_lifted_off(d));
-    let summary = checked_json!({
-        "model": "enclosed",
-        "scene": scene,
-        "lbar_min": opts.lbar_min,
-        "lbar_max": opts.lbar_max,
-        "accuracy": format!("{:?}", opts.accuracy).to_lowercase(),
-        "step": opts.step,
-        "states": d.points.len(),
-        "critical": d.critical,
-        "special_points": d.events,
-        "lowest_lifted_off": lowest_lifted,
-        "cells": d.cells,
-        "warnings": d.warnings.iter().chain(&state_warnings).collect::<Vec<_>>(),
-        "states_dir": "states",
-        "notes": d.notes,
-        "timings": d.seconds,
-        "units": crate::diagram::UNITS,
-    })?;
-    run.write_json("summary.json", &summary)?;
     Ok(())
-}
-
-/// The `L̄` intervals where the lowest state is a paper branch that has lifted off (branch
-/// 0, the free circle below `L̄ = 1`, is not counted): from each critical length or event to
-/// the next, when the lowest branch there is lifted off at the samples between.
-pub(crate) fn lowest_lifted_off(d: &EnclosedDiagram) -> Vec<(f64, f64)> {
-    let mut cuts: Vec<f64> = d
-        .critical
-        .iter()
-        .map(|c| c.critical.lbar_cr)
-        .chain(
-            d.events
-                .iter()
-                .filter(|e| {
-                    matches!(
-                        e.kind,
-                        rodloop_diagram::enclosed::EventKind::LiftOff
-                            | rodloop_diagram::enclosed::EventKind::Landing
-                    )
-                })
-                .map(|e| e.lbar),
-        )
-        .collect();
-    cuts.push(
-        d.points
-            .iter()
-            .map(|p| p.lbar)
-            .fold(f64::INFINITY, f64::min),
-    );
-    cuts.push(
-        d.points
-            .iter()
-            .map(|p| p.lbar)
-            .fold(f64::NEG_INFINITY, f64::max),
-    );
-    cuts.sort_by(f64::total_cmp);
-    cuts.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
-    let mut out: Vec<(f64, f64)> = Vec::new();
-    for w in cuts.windows(2) {
-        let inside: Vec<_> = d
-            .points
-            .iter()
-            .filter(|p| p.lowest && p.branch > 0 && p.lbar > w[0] + 1e-9 && p.lbar < w[1] - 1e-9)
-            .collect();
-        if !inside.is_empty() && inside.iter().all(|p| !p.attached) {
-            match out.last_mut() {
-                Some(last) if (last.1 - w[0]).abs() < 1e-12 => last.1 = w[1],
-                _ => out.push((w[0], w[1])),
-            }
-        }
-    }
-    out
 }
 
 fn print(d: &EnclosedDiagram, scene: &Scene, opts: &EnclosedDiagramOptions, out: &Path) {

@@ -22,6 +22,7 @@ mod diagram;
 mod draw;
 mod enclosed;
 mod enclosed_diagram;
+mod engine;
 mod euler;
 mod export;
 mod numeric_diagram;

@@ -9,12 +9,13 @@
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
-use rodloop_diagram::{BranchHook, DiagramOptions, NumericDiagram, Origin, Progress, TracedBranch};
+use rodloop_diagram::{
+    BranchHook, DiagramOptions, Engine, NumericDiagram, Origin, Progress, SurfaceEngine,
+    TracedBranch,
+};
 use rodloop_exact::branch_of_eta;
 
-use crate::output::{
-    checked_json, critical_table, ensure_dir, write_atomic, Cell, CriticalRow, OutputRun, Table,
-};
+use crate::output::{ensure_dir, write_atomic, OutputRun};
 use crate::progress::Progress as Bar;
 
 /// File name prefix of the per-branch families files of non-uniform rods
@@ -233,7 +234,11 @@ pub fn run_numeric(
             retrace.clear();
         }
     };
-    let result = rodloop_diagram::compute(&opts, &mut hook, &mut |p| match p {
+    let mut engine = SurfaceEngine {
+        opts,
+        hook: &mut hook,
+    };
+    let result = engine.run(&mut |p| match p {
         Progress::BranchResumeRejected { eta, .. } => retrace.push(branch_of_eta(eta)),
         Progress::BranchStarted { branch, .. } => {
             note(&mut retrace);
@@ -273,108 +278,24 @@ pub fn run_numeric(
     Ok(d)
 }
 
-/// Write branches.csv, critical.csv, special_points.csv, states/, summary.json (the summary
-/// last); the figures are drawn from these files by [`crate::draw::draw_diagram`].
+/// Write states/ and the diagram's files in the result schema (branches.csv, critical.csv,
+/// special_points.csv, summary.json); the figures are drawn from these files by
+/// [`crate::draw::draw_diagram`].
 pub fn write_outputs(
     d: &NumericDiagram,
     opts: &DiagramOptions,
     scene: &str,
     run: &OutputRun,
 ) -> Result<()> {
-    // The common columns first, in the order of the exact model's branches.csv.
-    let mut branches = Table::new(
-        "branches.csv",
-        &[
-            "branch",
-            "eta",
-            "lbar",
-            "energy",
-            "energy_g",
-            "lambda_min",
-            "lambda_max",
-            "energy_error",
-            "stability",
-            "index",
-            "family",
-            "arc",
-            "multiplicity",
-            "point_group",
-            "self_intersections",
-            "state_file",
-        ],
-    );
+    let mut schema = rodloop_diagram::engine::surface_schema(d, opts, scene)?;
     // Every traced state's shape in states/ (cli/states.rs), named in the last column.
     let (state_files, state_warnings) = crate::states::write_states(d, opts, run)?;
-    // The model works in the scene's R and D; report lambda R^3/D0.
-    let lam_unit = opts.radius.powi(3) / opts.stiffness.reference();
-    for (r, file) in d.rows().into_iter().zip(state_files) {
-        branches.push(vec![
-            Cell::I(r.branch.into()),
-            Cell::I(r.eta.into()),
-            Cell::F(r.lbar),
-            Cell::F(r.energy),
-            Cell::F(r.energy_g),
-            Cell::F(r.lambda_min * lam_unit),
-            Cell::F(r.lambda_max * lam_unit),
-            match r.energy_error {
-                Some(e) => Cell::F(e),
-                None => Cell::S(String::new()),
-            },
-            Cell::S(r.stability.as_str().into()),
-            Cell::I(r.index as i64),
-            Cell::I(r.family.into()),
-            Cell::I(r.arc as i64),
-            Cell::I(r.multiplicity.into()),
-            Cell::S(r.shape.point_group.clone().unwrap_or_default()),
-            Cell::S(r.shape.self_intersections_label()),
-            Cell::S(file),
-        ])?;
+    for (p, file) in schema.points.iter_mut().zip(state_files) {
+        p.state_file = Some(file);
     }
-    let special =
-        crate::output::special_table(d.special.iter().map(|p| crate::output::SpecialRow {
-            kind: p.kind.as_str().into(),
-            lbar: p.lbar,
-            energy: p.energy,
-            branch: p.branch,
-            family: p.family,
-            index_before: p.index_before,
-            index_after: p.index_after,
-            error_estimate: p.error_estimate,
-        }))?;
-    let critical = critical_table(d.critical.iter().map(CriticalRow::from))?;
-    run.write_table(&branches)?;
-    run.write_table(&critical)?;
-    run.write_table(&special)?;
-    let ends = d
-        .branches
-        .iter()
-        .map(|b| {
-            checked_json!({
-                "branch": b.branch, "eta": b.eta, "family": b.family, "sheet": b.sheet,
-                "multiplicity": b.multiplicity, "span": [b.span().0, b.span().1],
-                "states": b.points.len(), "cells": b.cells,
-                "low_end": b.stop_low, "high_end": b.stop_high, "seed": b.seed, "seconds": b.seconds,
-            })
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let summary = checked_json!({
-        "model": "numeric",
-        "scene": scene,
-        "description": d.scene,
-        "accuracy": format!("{:?}", opts.accuracy).to_lowercase(),
-        "lbar_min": opts.lbar_min,
-        "lbar_max": opts.lbar_max,
-        "critical": d.critical,
-        "special_points": d.special,
-        "branches": ends,
-        "great_circles": d.great_circles,
-        "shape_tolerance": d.shape_tolerance,
-        "states_dir": "states",
-        "warnings": d.warnings.iter().chain(&state_warnings).collect::<Vec<_>>(),
-        "timings": d.timings,
-        "certificate": d.certificate,
-        "units": crate::diagram::UNITS,
-    })?;
-    run.write_json("summary.json", &crate::output::strip_nulls(summary))?;
-    Ok(())
+    schema
+        .warnings
+        .get_or_insert_with(Vec::new)
+        .extend(state_warnings);
+    crate::output::write_diagram(run, &mut schema)
 }

@@ -103,157 +103,27 @@ impl Table {
     }
 }
 
-/// Drop the keys whose value is `null` from a JSON summary: they stand for absent optional
-/// values (`None`). Note that serde_json also turns a non-finite float into `null`, so a
-/// summary must only hold numbers that were checked elsewhere: every command writes its
-/// numbers to a CSV table first ([`Table::push`] rejects non-finite values) or derives them
-/// from those.
+/// Drop the keys whose value is `null` from a JSON summary ([`rodloop_schema::strip_nulls`]):
+/// a summary must only hold numbers checked with [`check_finite`] first.
 pub fn strip_nulls(v: serde_json::Value) -> serde_json::Value {
-    match v {
-        serde_json::Value::Object(map) => serde_json::Value::Object(
-            map.into_iter()
-                .filter(|(_, v)| !v.is_null())
-                .map(|(k, v)| (k, strip_nulls(v)))
-                .collect(),
-        ),
-        serde_json::Value::Array(a) => {
-            serde_json::Value::Array(a.into_iter().map(strip_nulls).collect())
-        }
-        other => other,
+    rodloop_schema::strip_nulls(v)
+}
+
+/// Stage the files of a diagram in the result schema (`branches.csv`, `critical.csv`,
+/// `special_points.csv`, `summary.json` with this run's id): the one writer of every diagram
+/// ([`rodloop_schema::Diagram::files`]; nothing is staged if any number is not finite).
+pub fn write_diagram(run: &OutputRun, d: &mut rodloop_schema::Diagram) -> Result<()> {
+    d.run_id = Some(run.run_id().to_string());
+    for (name, bytes) in d.files()? {
+        run.write_bytes(&name, &bytes)?;
     }
-}
-
-/// One row of `critical.csv`, the same columns for the exact and the numeric model.
-pub struct CriticalRow {
-    /// Index `i` of `L̄_icr`.
-    pub index: usize,
-    /// The critical length.
-    pub lbar_cr: f64,
-    /// Crossing or collapse.
-    pub kind: rodloop_exact::diagram::CriticalKind,
-    /// Lowest branch below.
-    pub from_branch: u32,
-    /// Lowest branch above.
-    pub to_branch: u32,
-    /// Energy at the critical length.
-    pub energy: f64,
-    /// Estimated error of `lbar_cr`.
-    pub error_estimate: f64,
-}
-
-impl From<&rodloop_exact::diagram::Critical> for CriticalRow {
-    /// A critical length of the exact diagram (also the surface part of an enclosed one).
-    fn from(c: &rodloop_exact::diagram::Critical) -> Self {
-        Self {
-            index: c.index,
-            lbar_cr: c.lbar_cr,
-            kind: c.kind,
-            from_branch: c.from_branch,
-            to_branch: c.to_branch,
-            energy: c.energy,
-            error_estimate: c.error_estimate,
-        }
-    }
-}
-
-impl From<&rodloop_diagram::CriticalLength> for CriticalRow {
-    /// A critical length of the numeric diagram.
-    fn from(c: &rodloop_diagram::CriticalLength) -> Self {
-        Self {
-            index: c.index,
-            lbar_cr: c.lbar_cr,
-            kind: c.kind,
-            from_branch: c.from_branch,
-            to_branch: c.to_branch,
-            energy: c.energy,
-            error_estimate: c.error_estimate,
-        }
-    }
-}
-
-/// One row of `special_points.csv` (numeric and enclosed diagrams).
-pub struct SpecialRow {
-    /// Kind of the point (fold, branch point, crossing, collapse, lift-off, landing …).
-    pub kind: String,
-    /// Where it is.
-    pub lbar: f64,
-    /// Energy there.
-    pub energy: f64,
-    /// Branch it is on.
-    pub branch: u32,
-    /// Family of the branch (0 for uniform rods).
-    pub family: u32,
-    /// Hessian index on either side.
-    pub index_before: usize,
-    /// See [`SpecialRow::index_before`].
-    pub index_after: usize,
-    /// Estimated error of `lbar` (empty when the point was not located again).
-    pub error_estimate: Option<f64>,
-}
-
-/// The `special_points.csv` table.
-pub fn special_table(rows: impl IntoIterator<Item = SpecialRow>) -> Result<Table> {
-    let mut t = Table::new(
-        "special_points.csv",
-        &[
-            "kind",
-            "lbar",
-            "energy",
-            "branch",
-            "family",
-            "index_before",
-            "index_after",
-            "error_estimate",
-        ],
-    );
-    for p in rows {
-        t.push(vec![
-            Cell::S(p.kind),
-            Cell::F(p.lbar),
-            Cell::F(p.energy),
-            Cell::I(p.branch.into()),
-            Cell::I(p.family.into()),
-            Cell::I(p.index_before as i64),
-            Cell::I(p.index_after as i64),
-            p.error_estimate.map_or(Cell::S(String::new()), Cell::F),
-        ])?;
-    }
-    Ok(t)
-}
-
-/// The `critical.csv` table.
-pub fn critical_table(rows: impl IntoIterator<Item = CriticalRow>) -> Result<Table> {
-    let mut t = Table::new(
-        "critical.csv",
-        &[
-            "index",
-            "lbar_cr",
-            "kind",
-            "from_branch",
-            "to_branch",
-            "energy",
-            "error_estimate",
-        ],
-    );
-    for c in rows {
-        t.push(vec![
-            Cell::I(c.index as i64),
-            Cell::F(c.lbar_cr),
-            Cell::S(c.kind.to_string()),
-            Cell::I(c.from_branch.into()),
-            Cell::I(c.to_branch.into()),
-            Cell::F(c.energy),
-            Cell::F(c.error_estimate),
-        ])?;
-    }
-    Ok(t)
+    Ok(())
 }
 
 /// Check that a typed value holds no non-finite float anywhere (fields, vectors, options),
 /// before it is turned into JSON; `what` names it in the error.
 pub fn check_finite<T: serde::Serialize + ?Sized>(what: &str, value: &T) -> Result<()> {
-    value
-        .serialize(finite::FiniteCheck)
+    rodloop_schema::check_finite(value)
         .map_err(|e| anyhow::anyhow!("{what}: {e}; nothing was written"))
 }
 
@@ -304,169 +174,6 @@ pub fn check_lbar(lbar: f64) -> Result<()> {
         bail!("lbar must be positive (got {lbar})");
     }
     Ok(())
-}
-
-/// A serde serializer that only checks floats for finiteness.
-mod finite {
-    use serde::ser::{self, Serialize};
-
-    /// The error: a non-finite number.
-    #[derive(Debug)]
-    pub struct NotFinite(pub String);
-
-    impl std::fmt::Display for NotFinite {
-        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-            f.write_str(&self.0)
-        }
-    }
-    impl std::error::Error for NotFinite {}
-    impl ser::Error for NotFinite {
-        fn custom<T: std::fmt::Display>(msg: T) -> Self {
-            NotFinite(msg.to_string())
-        }
-    }
-
-    /// Walks a value; fails on the first NaN or infinity.
-    pub struct FiniteCheck;
-
-    type R = Result<(), NotFinite>;
-
-    fn float(v: f64) -> R {
-        if v.is_finite() {
-            Ok(())
-        } else {
-            Err(NotFinite(format!("a value is not finite ({v})")))
-        }
-    }
-
-    macro_rules! ok_fns {
-        ($($name:ident($t:ty)),*) => { $( fn $name(self, _v: $t) -> R { Ok(()) } )* };
-    }
-
-    impl ser::Serializer for FiniteCheck {
-        type Ok = ();
-        type Error = NotFinite;
-        type SerializeSeq = Self;
-        type SerializeTuple = Self;
-        type SerializeTupleStruct = Self;
-        type SerializeTupleVariant = Self;
-        type SerializeMap = Self;
-        type SerializeStruct = Self;
-        type SerializeStructVariant = Self;
-        ok_fns!(
-            serialize_bool(bool),
-            serialize_i8(i8),
-            serialize_i16(i16),
-            serialize_i32(i32),
-            serialize_i64(i64),
-            serialize_u8(u8),
-            serialize_u16(u16),
-            serialize_u32(u32),
-            serialize_u64(u64),
-            serialize_char(char),
-            serialize_str(&str),
-            serialize_bytes(&[u8]),
-            serialize_unit_struct(&'static str)
-        );
-        fn serialize_f32(self, v: f32) -> R {
-            float(v.into())
-        }
-        fn serialize_f64(self, v: f64) -> R {
-            float(v)
-        }
-        fn serialize_none(self) -> R {
-            Ok(())
-        }
-        fn serialize_some<T: Serialize + ?Sized>(self, v: &T) -> R {
-            v.serialize(self)
-        }
-        fn serialize_unit(self) -> R {
-            Ok(())
-        }
-        fn serialize_unit_variant(self, _: &'static str, _: u32, _: &'static str) -> R {
-            Ok(())
-        }
-        fn serialize_newtype_struct<T: Serialize + ?Sized>(self, _: &'static str, v: &T) -> R {
-            v.serialize(self)
-        }
-        fn serialize_newtype_variant<T: Serialize + ?Sized>(
-            self,
-            _: &'static str,
-            _: u32,
-            _: &'static str,
-            v: &T,
-        ) -> R {
-            v.serialize(self)
-        }
-        fn serialize_seq(self, _: Option<usize>) -> Result<Self, NotFinite> {
-            Ok(self)
-        }
-        fn serialize_tuple(self, _: usize) -> Result<Self, NotFinite> {
-            Ok(self)
-        }
-        fn serialize_tuple_struct(self, _: &'static str, _: usize) -> Result<Self, NotFinite> {
-            Ok(self)
-        }
-        fn serialize_tuple_variant(
-            self,
-            _: &'static str,
-            _: u32,
-            _: &'static str,
-            _: usize,
-        ) -> Result<Self, NotFinite> {
-            Ok(self)
-        }
-        fn serialize_map(self, _: Option<usize>) -> Result<Self, NotFinite> {
-            Ok(self)
-        }
-        fn serialize_struct(self, _: &'static str, _: usize) -> Result<Self, NotFinite> {
-            Ok(self)
-        }
-        fn serialize_struct_variant(
-            self,
-            _: &'static str,
-            _: u32,
-            _: &'static str,
-            _: usize,
-        ) -> Result<Self, NotFinite> {
-            Ok(self)
-        }
-    }
-
-    macro_rules! compound {
-        ($tr:ident, $method:ident $(, $key:ty)?) => {
-            impl ser::$tr for FiniteCheck {
-                type Ok = ();
-                type Error = NotFinite;
-                fn $method<T: Serialize + ?Sized>(&mut self, $(_: $key,)? v: &T) -> R {
-                    v.serialize(FiniteCheck)
-                }
-                fn end(self) -> R {
-                    Ok(())
-                }
-            }
-        };
-    }
-    compound!(SerializeSeq, serialize_element);
-    compound!(SerializeTuple, serialize_element);
-    compound!(SerializeTupleStruct, serialize_field);
-    compound!(SerializeTupleVariant, serialize_field);
-    compound!(SerializeStruct, serialize_field, &'static str);
-    compound!(SerializeStructVariant, serialize_field, &'static str);
-
-    impl ser::SerializeMap for FiniteCheck {
-        type Ok = ();
-        type Error = NotFinite;
-        fn serialize_key<T: Serialize + ?Sized>(&mut self, k: &T) -> R {
-            k.serialize(FiniteCheck)
-        }
-        fn serialize_value<T: Serialize + ?Sized>(&mut self, v: &T) -> R {
-            v.serialize(FiniteCheck)
-        }
-        fn end(self) -> R {
-            Ok(())
-        }
-    }
 }
 
 /// Names of every file a rodloop command writes into its output directory (and `loop-NN.csv`,

@@ -415,10 +415,10 @@ pub fn inline_svg(svg: &str, prefix: &str, label: &str) -> String {
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
     let t_start = Instant::now();
-    if let Some(scene) = crate::enclosed_diagram::enclosed_scene(args.scene.as_deref())? {
+    let (scene, engine) = crate::engine::load(args.scene.as_deref())?;
+    if engine == crate::engine::EngineKind::Enclosed {
         return crate::report_enclosed::run(args, &scene);
     }
-    let scene = crate::solve::load_scene(args.scene.as_deref())?;
     let scene_text = match &args.scene {
         Some(p) => Some(
             std::fs::read_to_string(p).with_context(|| format!("cannot read {}", p.display()))?,

@@ -10,12 +10,12 @@
 //! is attached), the settings and the timings.
 
 use std::fmt::Write as _;
-use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use rodloop_diagram::enclosed::{enclosed_diagram, EnclosedDiagram, EnclosedDiagramOptions};
+use rodloop_diagram::enclosed::{EnclosedDiagram, EnclosedDiagramOptions};
 use rodloop_diagram::Label;
+use rodloop_diagram::{EnclosedEngine, Engine};
 use rodloop_figures::atlas::atlas_figure;
 use rodloop_figures::color::branch_color;
 use rodloop_figures::data::LoopData;
@@ -199,14 +199,6 @@ fn solve_one(
     })
 }
 
-/// The options `rodloop diagram` would use with no flags (for [`write_outputs`]).
-fn diagram_args(out: &Path) -> Result<crate::diagram::Args> {
-    use clap::{Args as _, FromArgMatches as _};
-    let cmd = crate::diagram::Args::augment_args(clap::Command::new("diagram"));
-    let m = cmd.try_get_matches_from(["diagram", "--out", &out.display().to_string()])?;
-    Ok(crate::diagram::Args::from_arg_matches(&m)?)
-}
-
 /// Run `rodloop report` on an enclosed scene.
 pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     let t_start = Instant::now();
@@ -224,7 +216,6 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
         scene.lbar_max,
     );
     opts.accuracy = accuracy;
-    let dargs = diagram_args(&args.out)?;
     let run = OutputRun::begin(&args.out)?;
 
     // 1. The enclosed diagram, written as `rodloop diagram` writes it.
@@ -235,9 +226,13 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
             opts.lbar_min, opts.lbar_max
         );
     }
-    let d = enclosed_diagram(&opts).context("the enclosed diagram")?;
-    crate::enclosed_diagram::write_outputs(&d, &opts, &scene.name, &run, &dargs)?;
-    let lifted = crate::enclosed_diagram::lowest_lifted_off(&d);
+    let mut engine = EnclosedEngine { opts };
+    let d = engine.run(&mut |_| {}).context("the enclosed diagram")?;
+    let opts = engine.opts.clone();
+    let mut schema = engine.schema(&d, &scene.name)?;
+    let (w, h) = crate::diagram::FIGURE_SIZE;
+    crate::enclosed_diagram::write_outputs(&mut schema, &d, &opts, &run, w, h)?;
+    let lifted = rodloop_diagram::engine::lowest_lifted_off(&d);
     let t_diagram = t.elapsed().as_secs_f64();
 
     // 2. The diagram figure, from the staged CSV files as `rodloop draw` reads them.

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 use rodloop_exact::ShapeTolerances;
 use rodloop_exact::{branch_of_eta, eta_of_branch};
-use rodloop_scene::{Confinement, Scene, StiffnessSpec};
+use rodloop_scene::{Scene, StiffnessSpec};
 use rodloop_solver::identify::identify_equilibrium;
 use rodloop_solver::start::from_points;
 use rodloop_solver::{
@@ -86,7 +86,7 @@ pub fn load_scene(path: Option<&Path>) -> Result<Scene> {
         Some(p) => Scene::from_file(p)?,
         None => Scene::default(),
     };
-    if scene.confinement == Confinement::Enclosed {
+    if crate::engine::kind_of(&scene) == crate::engine::EngineKind::Enclosed {
         bail!(
             "scene {}: confinement = \"enclosed\" is handled by `rodloop solve`, `rodloop diagram`, `rodloop report` and `rodloop compare --scene enclosed`; this command runs the surface model only (converge and phase are built on the surface model's O(N) factorisation and its diagram; the enclosed model is dense and has its own diagram). See the README, Enclosed loops",
             scene.name
@@ -238,7 +238,7 @@ pub fn run(args: &Args) -> Result<()> {
     // Enclosed scenes (|r| <= R) have their own model and outputs.
     if let Some(p) = args.scene.as_deref() {
         let scene = Scene::from_file(p)?;
-        if scene.confinement == Confinement::Enclosed {
+        if crate::engine::kind_of(&scene) == crate::engine::EngineKind::Enclosed {
             return crate::enclosed::run_solve(args, &scene);
         }
     }

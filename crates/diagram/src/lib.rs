@@ -48,6 +48,7 @@
 //! | `trace.rs` | [`compute_branch`]: seed, march both ways, ends, states |
 //! | `compute.rs` | [`compute`] with its [`BranchHook`] (resume, save) |
 //! | `parallel.rs` | the thread pool |
+//! | `engine.rs` | the [`Engine`] interface of every diagram model and its result in the schema |
 //! | `refine.rs`, `critical.rs`, `labels.rs`, `buckling.rs`, `diagram.rs` | the assembly |
 //!
 //! Energies are `E R/(π D0)`, forces `λR³/D0` (with `R`, `D0` of the scene), as in the paper.
@@ -61,6 +62,7 @@ pub mod critical;
 mod diagram;
 pub mod enclosed;
 mod ends;
+pub mod engine;
 pub mod families;
 mod labels;
 pub mod march;
@@ -79,6 +81,7 @@ pub mod types;
 
 pub use buckling::{Buckling, BucklingReport, Switching};
 pub use compute::{compute, BranchHook, Origin, Resume};
+pub use engine::{EnclosedEngine, Engine, ExactEngine, ExactOutput, SurfaceEngine};
 // (TraceControls is defined in this file.)
 pub use critical::{CriticalKind, CriticalLength};
 pub use diagram::{
@@ -162,6 +165,10 @@ pub enum DiagramError {
     /// The per-branch hook of [`compute`] failed (e.g. a branch file could not be written).
     #[error("branch hook: {0}")]
     Hook(#[source] rodloop_continuation::BoxError),
+    /// A result that does not fit the result schema (a non-finite number, a value without a
+    /// column).
+    #[error("result schema: {0}")]
+    Schema(#[from] rodloop_schema::SchemaError),
     /// An error of the solver outside the cases above.
     #[error("solver: {0}")]
     Solver(#[from] SolverError),

@@ -1,0 +1,265 @@
+//! The writer and the reader of the result schema: what is written is read back equal, and a
+//! diagram that cannot be written faithfully (a non-finite number, a value without a column,
+//! a key the schema owns) is refused before any file is written.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use rodloop_schema::{Axis, Cell, Critical, Curve, Diagram, Point, SchemaError, SpecialPoint};
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("rodloop-schema-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A diagram using every kind of field: optional values present and absent, empty cells,
+/// numbers that print in exponent form, extras of every type.
+fn sample() -> Diagram {
+    let mut d = Diagram::new(
+        "numeric",
+        "a scene, with a comma",
+        vec![Axis {
+            name: "lbar".into(),
+            min: 1.0,
+            max: 2.5,
+        }],
+        "energy E R/(pi D0)",
+    );
+    d.accuracy = Some("default".into());
+    d.columns = [
+        "branch",
+        "eta",
+        "lbar",
+        "energy",
+        "energy_g",
+        "energy_error",
+        "stability",
+        "index",
+        "family",
+        "sheet",
+        "arc",
+        "point_group",
+        "surface_energy",
+        "state_file",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    for k in 0..5u32 {
+        let x = 1.0 + 0.3 * f64::from(k) + 1e-13;
+        d.points.push(Point {
+            branch: 1 + k % 2,
+            eta: 2 + k % 2,
+            family: Some(k / 2),
+            sheet: Some(k % 3),
+            coords: vec![x],
+            energy: 1.0 / x + 1e-9 * f64::from(k),
+            energy_error: (k % 2 == 0).then_some(3.7e-12 * f64::from(k + 1)),
+            index: Some(k as usize % 2),
+            label: Some(["stable", "unstable"][k as usize % 2].into()),
+            state_file: Some(format!("states/b{k}.csv")),
+            extra: BTreeMap::from([
+                ("energy_g".into(), Cell::F(-0.125 * f64::from(k))),
+                ("arc".into(), Cell::I(1_000_000 * i64::from(k))),
+                (
+                    "point_group".into(),
+                    Cell::S(if k == 0 { "" } else { "D2d" }.into()),
+                ),
+                (
+                    "surface_energy".into(),
+                    if k == 3 { Cell::Empty } else { Cell::F(1e-300) },
+                ),
+            ]),
+        });
+    }
+    d.curves.push(Curve {
+        branch: 1,
+        eta: 2,
+        family: 0,
+        sheet: 1,
+        multiplicity: 2,
+        span: (1.0, 2.2),
+        states: 3,
+        cells: 48,
+        low_end: "great circle m = 1".into(),
+        high_end: "fold".into(),
+        seed: "Euler curve".into(),
+        seconds: 0.25,
+    });
+    d.critical.push(Critical {
+        index: 2,
+        lbar_cr: 1.234_567_890_123_4,
+        kind: "crossing".into(),
+        from_branch: 1,
+        to_branch: 2,
+        energy: 0.987_654_321,
+        error_estimate: 2.5e-11,
+        extra: BTreeMap::from([
+            ("method".into(), serde_json::json!("re-solved")),
+            ("iterations".into(), serde_json::json!(4)),
+        ]),
+    });
+    d.special = Some(vec![
+        SpecialPoint {
+            kind: "fold".into(),
+            lbar: 2.1,
+            energy: 0.5,
+            error_estimate: None,
+            branch: 2,
+            family: 1,
+            index_before: 0,
+            index_after: 1,
+        },
+        SpecialPoint {
+            kind: "lift-off".into(),
+            lbar: 2.2,
+            energy: 0.6,
+            error_estimate: Some(1e-9),
+            branch: 1,
+            family: 0,
+            index_before: 1,
+            index_after: 1,
+        },
+    ]);
+    d.set_certificate(&serde_json::json!({"checks": 3, "below": false}))
+        .unwrap();
+    d.warnings = Some(vec!["one warning".into()]);
+    d.timings = Some(BTreeMap::from([
+        ("total".into(), 1.5),
+        ("tracing".into(), 1.0),
+    ]));
+    d.states_dir = Some("states".into());
+    d.run_id = Some("abc-1".into());
+    d.put("great_circles", &vec![(1u32, 8.0f64)]).unwrap();
+    d
+}
+
+#[test]
+fn written_diagram_reads_back_equal() {
+    let dir = scratch("roundtrip");
+    let d = sample();
+    d.write(&dir).unwrap();
+    let back = Diagram::read(&dir).unwrap();
+    assert_eq!(back, d);
+    // Written twice, the files are the same bytes.
+    let again = back.files().unwrap();
+    assert_eq!(again, d.files().unwrap());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn exact_layer_shape_reads_back_equal() {
+    // The exact layer: no family, index, label or state columns, no special points, no
+    // warnings, a count under `branches` instead of a list of curves.
+    let dir = scratch("exact");
+    let mut d = Diagram::new(
+        "exact",
+        "homogeneous",
+        vec![Axis {
+            name: "lbar".into(),
+            min: 1.0,
+            max: 5.0,
+        }],
+        "u",
+    );
+    d.columns = ["branch", "eta", "lbar", "energy", "p", "lowest"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    d.points.push(Point {
+        branch: 3,
+        eta: 4,
+        coords: vec![3.5],
+        energy: 3.75,
+        extra: BTreeMap::from([("p".into(), Cell::I(-1)), ("lowest".into(), Cell::I(0))]),
+        ..Point::default()
+    });
+    d.put("branches", &1usize).unwrap();
+    d.write(&dir).unwrap();
+    let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+    assert!(!text.contains("null"), "{text}");
+    assert!(!dir.join("special_points.csv").exists());
+    assert_eq!(Diagram::read(&dir).unwrap(), d);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn summary_has_no_null() {
+    let mut d = sample();
+    d.put("lowest_lifted_off", &None::<Vec<(f64, f64)>>)
+        .unwrap();
+    d.put(
+        "nested",
+        &serde_json::json!({"a": null, "b": [1, {"c": null}]}),
+    )
+    .unwrap();
+    let text = serde_json::to_string(&d.summary().unwrap()).unwrap();
+    assert!(!text.contains("null"), "{text}");
+    // The error estimate of the fold is absent, that of the lift-off present.
+    let s = d.summary().unwrap();
+    assert!(s["special_points"][0].get("error_estimate").is_none());
+    assert_eq!(s["special_points"][1]["error_estimate"], 1e-9);
+    assert_eq!(s["schema_version"], rodloop_schema::VERSION);
+}
+
+#[test]
+fn non_finite_numbers_are_refused() {
+    let mut d = sample();
+    d.points[3].energy = f64::NAN;
+    match d.files() {
+        Err(SchemaError::NotFinite { column, row, .. }) => {
+            assert_eq!((column.as_str(), row), ("energy", 4))
+        }
+        other => panic!("expected NotFinite, got {other:?}"),
+    }
+    let mut d = sample();
+    d.points[0]
+        .extra
+        .insert("energy_g".into(), Cell::F(f64::INFINITY));
+    assert!(matches!(d.files(), Err(SchemaError::NotFinite { .. })));
+    let mut d = sample();
+    d.critical[0].error_estimate = f64::NAN;
+    assert!(matches!(d.files(), Err(SchemaError::NotFinite { .. })));
+    // A summary value: serde_json would write null; the checked setter refuses it.
+    let mut d = sample();
+    assert!(d.put("x", &vec![1.0, f64::NAN]).is_err());
+    // Nothing is written into the directory on a refusal.
+    let dir = scratch("refused");
+    let mut d = sample();
+    d.points[0].coords[0] = f64::NEG_INFINITY;
+    assert!(d.write(&dir).is_err());
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn values_without_columns_and_clashing_keys_are_refused() {
+    let mut d = sample();
+    d.columns.retain(|c| c != "sheet");
+    assert!(matches!(
+        d.branches_csv(),
+        Err(SchemaError::NoColumn { field: "sheet", .. })
+    ));
+    let mut d = sample();
+    d.points[1].extra.insert("k".into(), Cell::F(0.5));
+    assert!(matches!(
+        d.branches_csv(),
+        Err(SchemaError::NoColumn { .. })
+    ));
+    let mut d = sample();
+    d.columns.push("no_such_column".into());
+    assert!(matches!(
+        d.branches_csv(),
+        Err(SchemaError::UnknownColumn(_))
+    ));
+    for key in ["critical", "lbar_min", "branches"] {
+        let mut d = sample();
+        d.put(key, &1).unwrap();
+        assert!(
+            matches!(d.summary(), Err(SchemaError::KeyClash(_))),
+            "{key}"
+        );
+    }
+}
