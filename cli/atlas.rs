@@ -317,7 +317,7 @@ pub fn enclosed_rows(
     states: Option<&Path>,
 ) -> Result<(Vec<AtlasRow>, AtlasNote, Vec<String>)> {
     check_shapes(k)?;
-    let stiffness = crate::solve::stiffness_of(&scene.stiffness);
+    let stiffness = crate::args::stiffness_of(&scene.stiffness);
     let mut groups: BTreeMap<u32, Vec<&rodloop_diagram::enclosed::EnclosedPoint>> = BTreeMap::new();
     for p in &d.points {
         groups.entry(p.branch).or_default().push(p);

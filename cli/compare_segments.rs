@@ -63,10 +63,10 @@ pub fn run(scene: &Scene, out: &Path) -> Result<()> {
     };
     let opts = DiagramOptions {
         radius: scene.radius,
-        stiffness: crate::solve::stiffness_of(&scene.stiffness),
+        stiffness: crate::args::stiffness_of(&scene.stiffness),
         lbar_min: scene.lbar_min,
         lbar_max: scene.lbar_max,
-        accuracy: crate::solve::accuracy_of(scene, None)?,
+        accuracy: crate::args::accuracy_of(scene, None)?,
         ..Default::default()
     };
     opts.validate()?;

@@ -10,8 +10,8 @@ use rodloop_scene::StiffnessSpec;
 use rodloop_solver::{solve_cells, Accuracy, SolveOptions, StartShape};
 use serde_json::json;
 
+use crate::args::{load_scene, stiffness_of};
 use crate::output::{Cell, OutputRun, Table};
-use crate::solve::{load_scene, stiffness_of};
 
 /// Arguments of `rodloop converge`.
 #[derive(clap::Args, Debug)]

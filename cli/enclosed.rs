@@ -391,7 +391,7 @@ pub(crate) fn config_table_in(st: &EnclosedState, r: f64, d0: f64) -> Result<Tab
 }
 
 /// `rodloop solve` for an enclosed scene.
-pub fn run_solve(args: &crate::solve::Args, scene: &Scene) -> Result<()> {
+pub fn run_solve(args: &crate::args::SolveArgs, scene: &Scene) -> Result<()> {
     let t0 = Instant::now();
     crate::output::check_lbar(args.lbar)?;
     let branch = match (args.branch, args.eta) {
@@ -400,8 +400,8 @@ pub fn run_solve(args: &crate::solve::Args, scene: &Scene) -> Result<()> {
         (None, None) if args.from.is_some() => None,
         _ => bail!("give --branch B (0 to 1000; 0 = the planar circle) or --eta N (1 to 1000)"),
     };
-    let accuracy = crate::solve::accuracy_of(scene, args.accuracy.as_deref())?;
-    let stiffness = crate::solve::stiffness_of(&scene.stiffness);
+    let accuracy = crate::args::accuracy_of(scene, args.accuracy.as_deref())?;
+    let stiffness = crate::args::stiffness_of(&scene.stiffness);
     let shape = match &args.from {
         Some(p) => Some(read_shape(p, scene.radius)?),
         None => None,
@@ -532,7 +532,7 @@ pub fn run_compare(scene_arg: &str, out: &Path) -> Result<()> {
     if !scene.stiffness.is_uniform() {
         bail!("compare --scene supports homogeneous enclosed scenes (the lift-off lengths come from the exact layer); {} is not homogeneous", scene.name);
     }
-    let stiffness = crate::solve::stiffness_of(&scene.stiffness);
+    let stiffness = crate::args::stiffness_of(&scene.stiffness);
     let run = OutputRun::begin(out)?;
     let (lo, hi) = (1.0, 3.0);
     let mut table = Table::new(

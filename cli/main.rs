@@ -14,6 +14,7 @@ macro_rules! outln {
 }
 
 mod analytic;
+mod args;
 mod atlas;
 mod compare;
 mod compare_segments;
@@ -21,19 +22,14 @@ mod converge;
 mod diagram;
 mod draw;
 mod enclosed;
-mod enclosed_diagram;
 mod engine;
 mod euler;
 mod export;
-mod numeric_diagram;
 mod output;
-mod param_diagram;
 mod phase;
 mod phase_figure;
 mod progress;
 mod report;
-mod report_enclosed;
-mod report_tables;
 mod solve;
 mod states;
 

@@ -9,9 +9,9 @@ use rodloop_diagram::phase::{trace_phase, PhaseDiagram, PhaseSettings, RowSource
 use rodloop_figures::raster::svg_to_png;
 use rodloop_solver::{Param, SolveOptions};
 
+use crate::args::{accuracy_of, load_scene, stiffness_of};
 use crate::output::{check_finite, strip_nulls, Cell, OutputRun, Table};
-use crate::phase_figure::phase_svg;
-use crate::solve::{accuracy_of, load_scene, stiffness_of};
+use crate::phase_figure::{phase_svg, stopped_short};
 
 /// Arguments of `rodloop phase`.
 #[derive(clap::Args, Debug)]
@@ -29,7 +29,7 @@ pub struct Args {
     #[arg(long, value_delimiter = ',')]
     pub at: Vec<f64>,
     /// Accuracy: fast, default or high (overrides the scene's).
-    #[arg(long, value_parser = crate::solve::ACCURACY_CHOICES)]
+    #[arg(long, value_parser = crate::args::ACCURACY_CHOICES)]
     pub accuracy: Option<String>,
     /// Output directory.
     #[arg(long, default_value = "out/phase")]
@@ -239,42 +239,6 @@ pub(crate) fn brief(text: &str) -> String {
     format!("{} … (full text in summary.json)", limit[..cut].trim_end())
 }
 
-/// A curve end short of the requested range.
-pub(crate) struct Short {
-    pub from: u32,
-    pub to: u32,
-    pub value: f64,
-    pub kind: String,
-}
-
-/// The curve ends that stop between the scene's value and `--to` (not `reached`, not the
-/// uniform-rod `limit`).
-pub(crate) fn stopped_short(d: &PhaseDiagram) -> Vec<Short> {
-    d.curves
-        .iter()
-        .flat_map(|c| curve_stopped_short(c, d.scene_value, d.target))
-        .collect()
-}
-
-/// [`stopped_short`] for one curve.
-pub(crate) fn curve_stopped_short(
-    c: &rodloop_diagram::phase::PhaseCurve,
-    scene_value: f64,
-    target: f64,
-) -> Vec<Short> {
-    let (lo, hi) = (scene_value.min(target), scene_value.max(target));
-    c.ends
-        .iter()
-        .filter(|e| e.kind != "reached" && e.kind != "limit")
-        .filter(|e| e.value > lo && e.value < hi)
-        .map(|e| Short {
-            from: c.exchange.from_branch,
-            to: c.exchange.to_branch,
-            value: e.value,
-            kind: e.kind.clone(),
-        })
-        .collect()
-}
 /// `phase.csv`: one row per Maxwell point.
 fn phase_table(d: &PhaseDiagram) -> Result<Table> {
     let mut t = Table::new(

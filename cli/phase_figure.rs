@@ -93,7 +93,7 @@ pub fn phase_svg(d: &PhaseDiagram, scene: &str, lbar_range: (f64, f64)) -> Strin
             });
         }
         // Ends short of the requested range: an open square with the reason's kind.
-        for e in crate::phase::curve_stopped_short(c, d.scene_value, d.target) {
+        for e in curve_stopped_short(c, d.scene_value, d.target) {
             if let Some(r) = c.rows.iter().min_by(|a, b| {
                 (a.value - e.value)
                     .abs()
@@ -226,4 +226,41 @@ pub fn phase_svg(d: &PhaseDiagram, scene: &str, lbar_range: (f64, f64)) -> Strin
         }
     }
     svg.finish()
+}
+
+/// A curve end short of the requested range.
+pub(crate) struct Short {
+    pub from: u32,
+    pub to: u32,
+    pub value: f64,
+    pub kind: String,
+}
+
+/// The curve ends that stop between the scene's value and `--to` (not `reached`, not the
+/// uniform-rod `limit`).
+pub(crate) fn stopped_short(d: &PhaseDiagram) -> Vec<Short> {
+    d.curves
+        .iter()
+        .flat_map(|c| curve_stopped_short(c, d.scene_value, d.target))
+        .collect()
+}
+
+/// [`stopped_short`] for one curve.
+pub(crate) fn curve_stopped_short(
+    c: &rodloop_diagram::phase::PhaseCurve,
+    scene_value: f64,
+    target: f64,
+) -> Vec<Short> {
+    let (lo, hi) = (scene_value.min(target), scene_value.max(target));
+    c.ends
+        .iter()
+        .filter(|e| e.kind != "reached" && e.kind != "limit")
+        .filter(|e| e.value > lo && e.value < hi)
+        .map(|e| Short {
+            from: c.exchange.from_branch,
+            to: c.exchange.to_branch,
+            value: e.value,
+            kind: e.kind.clone(),
+        })
+        .collect()
 }

@@ -5,19 +5,19 @@
 //! homogeneous scenes), the branch atlas (Figs. 2, 9, 10; [`crate::atlas`]), a picture and the
 //! contact force `λ(s)` of the stable state of every branch at one length, the shape of the
 //! first against its Euler curve (Fig. 5), the run's settings and its timings. The tables and
-//! the style sheet are in `report_tables.rs`.
+//! the style sheet are in `tables.rs`, the arguments and page sizes in `args.rs`, the page of an
+//! enclosed scene in `enclosed.rs`.
 //!
 //! The page needs no network and no file beside it: every figure is an inline `<svg>`, the
 //! style sheet is inline, there is no script and no external font (the figures name
 //! DejaVu Sans with a generic sans-serif fallback). Nothing here recomputes what other
-//! commands compute: the diagram comes from [`crate::numeric_diagram::run_numeric`] and
-//! [`crate::numeric_diagram::write_outputs`], the figures from [`rodloop_figures`] (read back
+//! commands compute: the diagram comes from [`crate::diagram::surface::run_numeric`] and
+//! [`crate::diagram::surface::write_outputs`], the figures from [`rodloop_figures`] (read back
 //! from the staged `branches.csv`/`critical.csv`, as `rodloop draw` reads them), the paper
 //! comparison from [`crate::compare::compare_rows`], the states from
 //! [`rodloop_solver::solve_with_accuracy`] as `rodloop solve` calls it.
 
 use std::fmt::Write as _;
-use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
@@ -36,40 +36,18 @@ use rodloop_solver::{
 };
 
 use crate::output::{checked_json, OutputRun};
-use crate::report_tables::{compare_html, critical_html, sci, STYLE};
+mod args;
+mod enclosed;
+mod tables;
 
-/// Width of the diagram figures in the page, pixels.
-pub(crate) const FIG_W: f64 = 960.0;
-/// Height of the diagram figures in the page, pixels.
-pub(crate) const FIG_H: f64 = 560.0;
-/// Side of one view of a loop picture, pixels (four views per picture): the smallest at which
-/// the view titles and the legend of [`loop_picture`] fit, so that its text is drawn at its
-/// own size (the picture is 2·PANEL + 208 pixels wide).
-pub(crate) const PANEL: f64 = 300.0;
-/// Columns of the branch atlas in the page.
-pub(crate) const ATLAS_SHAPES: usize = 5;
+pub use args::Args;
+use args::{middle, ATLAS_SHAPES, FIG_H, FIG_W, PANEL};
+use tables::{compare_html, critical_html, sci, STYLE};
+
 /// Size of the force plot beside each loop picture, pixels.
 const FORCE_W: f64 = 360.0;
 /// Height of the force plot beside each loop picture, pixels.
 const FORCE_H: f64 = 300.0;
-
-/// Arguments of `rodloop report`.
-#[derive(clap::Args, Debug)]
-pub struct Args {
-    /// Scene file (TOML; see data/scenes/). Default: homogeneous loops on the unit sphere.
-    #[arg(long)]
-    pub scene: Option<PathBuf>,
-    /// Accuracy: fast, default or high (overrides the scene's).
-    #[arg(long, value_parser = crate::solve::ACCURACY_CHOICES)]
-    pub accuracy: Option<String>,
-    /// No progress output on stderr.
-    #[arg(long)]
-    pub quiet: bool,
-    /// Output directory: report.html, with the diagram's branches.csv, critical.csv,
-    /// diagram.svg and summary.json.
-    #[arg(long, default_value = "out/report")]
-    pub out: PathBuf,
-}
 
 /// The representative state of one branch: where it was taken and what came out.
 struct StateEntry {
@@ -121,17 +99,6 @@ fn widest_stable_stretch(rows: &[DiagramRow], branch: u32) -> Option<(f64, f64)>
         .max_by(|a, b| (a.1 - a.0).total_cmp(&(b.1 - b.0)))
 }
 
-/// The middle of `(a, b)`, rounded to 0.01 when that stays well inside.
-pub(crate) fn middle(a: f64, b: f64) -> f64 {
-    let m = 0.5 * (a + b);
-    let r = (m * 100.0).round() / 100.0;
-    if r > a + 0.25 * (b - a) && r < b - 0.25 * (b - a) {
-        r
-    } else {
-        m
-    }
-}
-
 /// An accurate equilibrium at `lbar` from `start`, checked to have converged onto branch
 /// `eta` (identified from the periods of its own `κ_g`, as `rodloop solve` does).
 fn solve_checked(
@@ -141,7 +108,7 @@ fn solve_checked(
     lbar: f64,
     start: &StartShape,
 ) -> Result<AccurateEquilibrium> {
-    let stiffness = crate::solve::stiffness_of(&scene.stiffness);
+    let stiffness = crate::args::stiffness_of(&scene.stiffness);
     let res = solve_with_accuracy(
         scene.radius,
         lbar,
@@ -389,35 +356,12 @@ fn force_figure(data: &LoopData, branch: u32) -> Result<String> {
     Ok(svg.finish())
 }
 
-/// Prepare a standalone SVG document for inlining into HTML: ids (clip paths, gradients) get
-/// a per-figure prefix so that figures cannot take each other's definitions, the namespace
-/// declaration goes (the HTML parser supplies it), and the root element gets a class and an
-/// accessible name.
-pub fn inline_svg(svg: &str, prefix: &str, label: &str) -> String {
-    let body = svg
-        .trim_start()
-        .trim_start_matches(|c| c != '<')
-        // HTML puts <svg> in the SVG namespace itself; the page names no URL at all.
-        .replace(" xmlns=\"http://www.w3.org/2000/svg\"", "")
-        .replace("id=\"", &format!("id=\"{prefix}-"))
-        .replace("url(#", &format!("url(#{prefix}-"))
-        .replace("href=\"#", &format!("href=\"#{prefix}-"));
-    body.replacen(
-        "<svg ",
-        &format!(
-            "<svg class=\"fig\" role=\"img\" aria-label=\"{}\" ",
-            esc(label)
-        ),
-        1,
-    )
-}
-
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
     let t_start = Instant::now();
     let (scene, engine) = crate::engine::load(args.scene.as_deref())?;
     if engine == crate::engine::EngineKind::Enclosed {
-        return crate::report_enclosed::run(args, &scene);
+        return enclosed::run(args, &scene);
     }
     let scene_text = match &args.scene {
         Some(p) => Some(
@@ -425,10 +369,10 @@ pub fn run(args: &Args) -> Result<()> {
         ),
         None => None,
     };
-    let accuracy = crate::solve::accuracy_of(&scene, args.accuracy.as_deref())?;
+    let accuracy = crate::args::accuracy_of(&scene, args.accuracy.as_deref())?;
     let opts = DiagramOptions {
         radius: scene.radius,
-        stiffness: crate::solve::stiffness_of(&scene.stiffness),
+        stiffness: crate::args::stiffness_of(&scene.stiffness),
         lbar_min: scene.lbar_min,
         lbar_max: scene.lbar_max,
         accuracy,
@@ -439,8 +383,8 @@ pub fn run(args: &Args) -> Result<()> {
 
     // 1. The numeric diagram (branch files go to the staging directory and vanish with it).
     let t = Instant::now();
-    let d = crate::numeric_diagram::run_numeric(&opts, run.stage_dir(), false, args.quiet, None)?;
-    crate::numeric_diagram::write_outputs(&d, &opts, &scene.name, &run)?;
+    let d = crate::diagram::surface::run_numeric(&opts, run.stage_dir(), false, args.quiet, None)?;
+    crate::diagram::surface::write_outputs(&d, &opts, &scene.name, &run)?;
     let t_diagram = t.elapsed().as_secs_f64();
 
     // 2. The diagram figures, from the staged CSV files as `rodloop draw` reads them.
@@ -500,7 +444,7 @@ pub fn run(args: &Args) -> Result<()> {
     // 5. The page.
     let t = Instant::now();
     let version = env!("CARGO_PKG_VERSION");
-    let mut figs = crate::report_tables::Figures::default();
+    let mut figs = tables::Figures::default();
     let mut h = String::with_capacity(1 << 20);
     let _ = write!(
         h,
@@ -511,7 +455,7 @@ pub fn run(args: &Args) -> Result<()> {
         hi = opts.lbar_max,
         acc = format!("{accuracy:?}").to_lowercase(),
         nstates = d.rows().len(),
-        nbranches = crate::numeric_diagram::branch_count(&d.branches),
+        nbranches = crate::diagram::surface::branch_count(&d.branches),
         ncrit = d.critical.len(),
     );
     for w in &d.warnings {
@@ -624,13 +568,7 @@ pub fn run(args: &Args) -> Result<()> {
                 );
             }
             Err(e) => {
-                crate::report_tables::not_solved_row(
-                    &mut h,
-                    (st.branch, st.eta, st.lbar),
-                    &st.why,
-                    e,
-                    9,
-                );
+                tables::not_solved_row(&mut h, (st.branch, st.eta, st.lbar), &st.why, e, 9);
             }
         }
     }
@@ -703,10 +641,10 @@ pub fn run(args: &Args) -> Result<()> {
 
     let t_page = t.elapsed().as_secs_f64();
     let total = t_start.elapsed().as_secs_f64();
-    crate::report_tables::settings_section(
+    tables::settings_section(
         &mut h,
         &run,
-        &crate::report_tables::Settings {
+        &tables::Settings {
             number: 6,
             scene_name: &scene.name,
             scene_file: args.scene.as_deref(),
@@ -741,7 +679,7 @@ pub fn run(args: &Args) -> Result<()> {
                 .map(|s| (st.branch, st.lbar, s.seconds))
         })
         .collect();
-    crate::report_tables::finish_page(
+    tables::finish_page(
         &run,
         &mut h,
         7,
@@ -790,7 +728,7 @@ pub fn run(args: &Args) -> Result<()> {
         }),
     })?;
     let failed = states.iter().filter(|s| s.outcome.is_err()).count();
-    crate::report_tables::commit_report(run, report, failed, states.len())?;
+    tables::commit_report(run, report, failed, states.len())?;
     outln!(
         "wrote report.html ({} KB, {} figures: diagram, energy split, lambda extremes, {}branch atlas, shape against the Euler curve, {} with their force plots), branches.csv, critical.csv, special_points.csv, diagram.svg, summary.json, states/ to {} in {:.2} s",
         h.len().div_ceil(1024),

@@ -1,7 +1,7 @@
 //! `rodloop report` for enclosed scenes (`|r| ≤ R`, paper Sec. 3.2): the same one-page HTML
 //! report as [`crate::report`], built on the enclosed diagram
 //! ([`rodloop_diagram::enclosed`], written as `rodloop diagram` writes it by
-//! [`crate::enclosed_diagram::write_outputs`]): the energy diagram with its lifted-off parts
+//! [`crate::diagram::enclosed::write_outputs`]): the energy diagram with its lifted-off parts
 //! and the lift-off / landing events, the critical lengths with their error estimates next to
 //! the surface values, the lengths where the lowest state has lifted off the wall (where the
 //! Sec. 3.2 hypothesis fails), the branch atlas (states re-solved along each branch,
@@ -26,9 +26,9 @@ use rodloop_figures::svg::{esc, Svg};
 use rodloop_scene::Scene;
 use rodloop_solver::Accuracy;
 
+use super::args::{middle, Args, ATLAS_SHAPES, FIG_H, FIG_W, PANEL};
+use super::tables::{sci, STYLE};
 use crate::output::{checked_json, OutputRun};
-use crate::report::{middle, Args, ATLAS_SHAPES, FIG_H, FIG_W, PANEL};
-use crate::report_tables::{sci, STYLE};
 
 /// A representative state of one branch.
 struct EnclosedEntry {
@@ -142,7 +142,7 @@ fn solve_one(
     lowest: bool,
 ) -> Result<Solved> {
     let t0 = Instant::now();
-    let stiffness = crate::solve::stiffness_of(&scene.stiffness);
+    let stiffness = crate::args::stiffness_of(&scene.stiffness);
     let res = crate::enclosed::solve_state(scene, &stiffness, lbar, branch, accuracy)?;
     let table = crate::enclosed::config_table(&res.state, scene)?;
     let data = LoopData::parse(
@@ -208,10 +208,10 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
         ),
         None => None,
     };
-    let accuracy = crate::solve::accuracy_of(scene, args.accuracy.as_deref())?;
+    let accuracy = crate::args::accuracy_of(scene, args.accuracy.as_deref())?;
     let mut opts = EnclosedDiagramOptions::new(
         scene.radius,
-        crate::solve::stiffness_of(&scene.stiffness),
+        crate::args::stiffness_of(&scene.stiffness),
         scene.lbar_min,
         scene.lbar_max,
     );
@@ -231,7 +231,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     let opts = engine.opts.clone();
     let mut schema = engine.schema(&d, &scene.name)?;
     let (w, h) = crate::diagram::FIGURE_SIZE;
-    crate::enclosed_diagram::write_outputs(&mut schema, &d, &opts, &run, w, h)?;
+    crate::diagram::enclosed::write_outputs(&mut schema, &d, &opts, &run, w, h)?;
     let lifted = rodloop_diagram::engine::lowest_lifted_off(&d);
     let t_diagram = t.elapsed().as_secs_f64();
 
@@ -284,7 +284,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     // 5. The page.
     let t = Instant::now();
     let version = env!("CARGO_PKG_VERSION");
-    let mut figs = crate::report_tables::Figures::default();
+    let mut figs = super::tables::Figures::default();
     let mut h = String::with_capacity(1 << 20);
     let _ = write!(
         h,
@@ -413,13 +413,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
                 );
             }
             Err(e) => {
-                crate::report_tables::not_solved_row(
-                    &mut h,
-                    (st.branch, st.eta, st.lbar),
-                    &st.why,
-                    e,
-                    10,
-                );
+                super::tables::not_solved_row(&mut h, (st.branch, st.eta, st.lbar), &st.why, e, 10);
             }
         }
     }
@@ -467,10 +461,10 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
 
     let t_page = t.elapsed().as_secs_f64();
     let total = t_start.elapsed().as_secs_f64();
-    crate::report_tables::settings_section(
+    super::tables::settings_section(
         &mut h,
         &run,
-        &crate::report_tables::Settings {
+        &super::tables::Settings {
             number: 5,
             scene_name: &scene.name,
             scene_file: args.scene.as_deref(),
@@ -512,7 +506,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
                 .map(|s| (st.branch, st.lbar, s.seconds))
         })
         .collect();
-    crate::report_tables::finish_page(
+    super::tables::finish_page(
         &run,
         &mut h,
         6,
@@ -555,7 +549,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
         }),
     })?;
     let failed = states.iter().filter(|s| s.outcome.is_err()).count();
-    crate::report_tables::commit_report(run, report, failed, states.len())?;
+    super::tables::commit_report(run, report, failed, states.len())?;
     outln!(
         "wrote report.html ({} KB, {} figures: enclosed diagram, branch atlas, {} with their force and gap plots), branches.csv, critical.csv, special_points.csv, diagram.svg/.png, summary.json, states/ to {} in {:.2} s",
         h.len().div_ceil(1024),

@@ -12,9 +12,9 @@ use rodloop_figures::raster::svg_to_png;
 use rodloop_figures::svg::Svg;
 use rodloop_solver::{Param, SolveOptions};
 
-use crate::diagram::{Args, Model};
+use super::args::{Args, Model};
+use crate::args::{accuracy_of, load_scene, stiffness_of};
 use crate::output::{check_finite, strip_nulls, Cell, OutputRun, Table};
-use crate::solve::{accuracy_of, load_scene, stiffness_of};
 
 /// Run `diagram --param`.
 pub fn run(args: &Args, param: &str) -> Result<()> {

@@ -12,7 +12,7 @@ use rodloop_diagram::{EnclosedEngine, Engine};
 use rodloop_figures::raster::svg_to_png;
 use rodloop_scene::Scene;
 
-use crate::diagram::{Args, Model};
+use super::args::{Args, Model};
 use crate::output::OutputRun;
 
 /// Run `rodloop diagram` on an enclosed scene.
@@ -37,10 +37,10 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     if !(lbar_min > 0.0 && lbar_max > lbar_min && lbar_max <= 20.0) {
         bail!("need 0 < --lbar-min < --lbar-max <= 20 for an enclosed diagram (got {lbar_min} and {lbar_max})");
     }
-    let accuracy = crate::solve::accuracy_of(scene, args.accuracy.as_deref())?;
+    let accuracy = crate::args::accuracy_of(scene, args.accuracy.as_deref())?;
     let mut opts = EnclosedDiagramOptions::new(
         scene.radius,
-        crate::solve::stiffness_of(&scene.stiffness),
+        crate::args::stiffness_of(&scene.stiffness),
         lbar_min,
         lbar_max,
     );

@@ -136,13 +136,13 @@ pub struct Figures {
 }
 
 impl Figures {
-    /// One `<figure id=…>`: the SVG inlined ([`crate::report::inline_svg`]) under `label`,
+    /// One `<figure id=…>`: the SVG inlined ([`inline_svg`]) under `label`,
     /// with its caption.
     pub fn fig(&mut self, svg: &str, label: &str, caption: &str, id: &str) -> String {
         self.count += 1;
         format!(
             "<figure id=\"{id}\">\n{}\n<figcaption>{caption}</figcaption></figure>\n",
-            crate::report::inline_svg(svg, &format!("f{}", self.count), label)
+            inline_svg(svg, &format!("f{}", self.count), label)
         )
     }
 }
@@ -298,4 +298,27 @@ pub fn commit_report(
         );
     }
     Ok(())
+}
+
+/// Prepare a standalone SVG document for inlining into HTML: ids (clip paths, gradients) get
+/// a per-figure prefix so that figures cannot take each other's definitions, the namespace
+/// declaration goes (the HTML parser supplies it), and the root element gets a class and an
+/// accessible name.
+pub fn inline_svg(svg: &str, prefix: &str, label: &str) -> String {
+    let body = svg
+        .trim_start()
+        .trim_start_matches(|c| c != '<')
+        // HTML puts <svg> in the SVG namespace itself; the page names no URL at all.
+        .replace(" xmlns=\"http://www.w3.org/2000/svg\"", "")
+        .replace("id=\"", &format!("id=\"{prefix}-"))
+        .replace("url(#", &format!("url(#{prefix}-"))
+        .replace("href=\"#", &format!("href=\"#{prefix}-"));
+    body.replacen(
+        "<svg ",
+        &format!(
+            "<svg class=\"fig\" role=\"img\" aria-label=\"{}\" ",
+            esc(label)
+        ),
+        1,
+    )
 }
