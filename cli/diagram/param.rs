@@ -125,7 +125,7 @@ pub fn run(args: &Args, param: &str) -> Result<()> {
         "files": ["branches.csv", "special_points.csv", "diagram.svg", "diagram.png", "summary.json"],
     });
     check_finite("summary.json", &summary)?;
-    run.write_table(&branches_table(&sweep)?)?;
+    run.write_bytes("branches.csv", &branches_csv(&sweep)?)?;
     run.write_table(&special_table(&sweep)?)?;
     run.write_bytes("diagram.svg", svg.as_bytes())?;
     run.write_bytes("diagram.png", &png)?;
@@ -135,39 +135,59 @@ pub fn run(args: &Args, param: &str) -> Result<()> {
     Ok(())
 }
 
-fn branches_table(s: &ParamSweep) -> Result<Table> {
-    let mut t = Table::new(
-        "branches.csv",
-        &[
-            "branch",
-            "eta",
-            "family",
-            "param",
-            "value",
-            "lbar",
-            "energy",
-            "index",
-            "stability",
-            "arc",
-        ],
-    );
+/// `branches.csv` by the schema's writer: one row per traced state, the continued parameter
+/// (`param`, `value`) and the fixed length (`lbar`) as the two axes of every point.
+fn branches_csv(s: &ParamSweep) -> Result<Vec<u8>> {
+    use rodloop_schema::{Axis, Cell as Value, Diagram, Point};
+    let axes = vec![
+        Axis {
+            name: "value".into(),
+            min: s.scene_value.min(s.target),
+            max: s.scene_value.max(s.target),
+        },
+        Axis {
+            name: "lbar".into(),
+            min: s.lbar,
+            max: s.lbar,
+        },
+    ];
+    let mut d = Diagram::new("numeric", "", axes, "");
+    d.columns = [
+        "branch",
+        "eta",
+        "family",
+        "param",
+        "value",
+        "lbar",
+        "energy",
+        "index",
+        "stability",
+        "arc",
+    ]
+    .iter()
+    .map(|c| c.to_string())
+    .collect();
     for f in &s.families {
         for p in &f.points {
-            t.push(vec![
-                Cell::I(f.branch.into()),
-                Cell::I(f.eta.into()),
-                Cell::I(f.family as i64),
-                Cell::S(s.param.name().into()),
-                Cell::F(p.value),
-                Cell::F(s.lbar),
-                Cell::F(p.energy),
-                Cell::I(p.index as i64),
-                Cell::S(p.label.as_str().into()),
-                Cell::I(p.arc as i64),
-            ])?;
+            d.points.push(Point {
+                branch: f.branch,
+                eta: f.eta,
+                family: Some(f.family as u32),
+                coords: vec![p.value, s.lbar],
+                energy: p.energy,
+                index: Some(p.index),
+                label: Some(p.label.as_str().into()),
+                extra: [
+                    ("param".to_string(), Value::S(s.param.name().into())),
+                    ("arc".to_string(), Value::I(p.arc as i64)),
+                ]
+                .into_iter()
+                .collect(),
+                ..Point::default()
+            });
         }
     }
-    Ok(t)
+    Ok(d.branches_csv()?)
 }
 
 fn special_table(s: &ParamSweep) -> Result<Table> {

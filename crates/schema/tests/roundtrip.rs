@@ -263,3 +263,39 @@ fn values_without_columns_and_clashing_keys_are_refused() {
         );
     }
 }
+
+#[test]
+fn two_axes_read_back_in_their_order() {
+    // A diagram against a parameter at a fixed length: every point has (value, lbar).
+    let dir = scratch("two-axes");
+    let axis = |name: &str, min, max| Axis {
+        name: name.into(),
+        min,
+        max,
+    };
+    let mut d = Diagram::new(
+        "numeric",
+        "two-segment",
+        vec![axis("value", 1e-3, 0.5), axis("lbar", 1.2, 1.2)],
+        "u",
+    );
+    d.columns = ["branch", "eta", "param", "value", "lbar", "energy"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    for (k, v) in [0.5, 0.1, 1e-3].into_iter().enumerate() {
+        d.points.push(Point {
+            branch: 1,
+            eta: 2,
+            coords: vec![v, 1.2],
+            energy: 2.0 - 0.1 * k as f64,
+            extra: BTreeMap::from([("param".into(), Cell::S("d1".into()))]),
+            ..Point::default()
+        });
+    }
+    d.write(&dir).unwrap();
+    let csv = std::fs::read_to_string(dir.join("branches.csv")).unwrap();
+    assert_eq!(csv.lines().nth(3), Some("1,2,d1,0.001,1.2,1.8"));
+    assert_eq!(Diagram::read(&dir).unwrap(), d);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
