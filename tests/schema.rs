@@ -81,3 +81,41 @@ fn numeric_diagram_is_the_schema() {
             && p.coords[0] <= c.span.1 + 1e-12));
     }
 }
+
+#[test]
+fn enclosed_diagram_is_the_schema() {
+    let out = tmp("schema-enclosed");
+    rodloop_ok(&[
+        "diagram",
+        "--scene",
+        "data/scenes/homogeneous-enclosed.toml",
+        "--lbar-max",
+        "2.5",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let d = reads_back_byte_for_byte(&out);
+    assert_eq!(d.model, "enclosed");
+    // Lift-off and landing events are special points; a homogeneous scene needs no
+    // certificate search (an empty list).
+    let special = d.special.as_ref().expect("special_points.csv");
+    assert!(special
+        .iter()
+        .all(|s| ["lift-off", "landing", "detachment", "branch_point"].contains(&s.kind.as_str())));
+    assert_eq!(d.certificate, Some(serde_json::json!([])));
+    // Every state names its loop table; one that could not be written is a warning.
+    let mut unwritten = 0;
+    for p in &d.points {
+        assert!(matches!(
+            p.label.as_deref(),
+            Some("stable" | "metastable" | "unstable")
+        ));
+        match p.state_file.as_deref() {
+            Some("") => unwritten += 1,
+            Some(f) => assert!(out.join(f).is_file(), "{f}"),
+            None => panic!("no state_file column"),
+        }
+    }
+    assert!(unwritten <= d.warnings.as_ref().map_or(0, Vec::len));
+}
