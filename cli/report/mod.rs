@@ -20,7 +20,7 @@
 use std::fmt::Write as _;
 use std::time::Instant;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use rodloop_diagram::{DiagramOptions, DiagramRow, Label, NumericDiagram};
 use rodloop_figures::color::branch_color;
 use rodloop_figures::data::LoopData;
@@ -29,11 +29,7 @@ use rodloop_figures::loops::{loop_picture, point_group, LoopPictureOptions};
 use rodloop_figures::plot::{Plot, Series};
 use rodloop_figures::svg::{esc, Svg};
 use rodloop_scene::Scene;
-use rodloop_solver::identify::identify_equilibrium;
-use rodloop_solver::start::from_points;
-use rodloop_solver::{
-    solve_with_accuracy, Accuracy, AccurateEquilibrium, SolveOptions, StartShape,
-};
+use rodloop_solver::Accuracy;
 
 use crate::output::{checked_json, OutputRun};
 mod args;
@@ -99,41 +95,6 @@ fn widest_stable_stretch(rows: &[DiagramRow], branch: u32) -> Option<(f64, f64)>
         .max_by(|a, b| (a.1 - a.0).total_cmp(&(b.1 - b.0)))
 }
 
-/// An accurate equilibrium at `lbar` from `start`, checked to have converged onto branch
-/// `eta` (identified from the periods of its own `κ_g`, as `rodloop solve` does).
-fn solve_checked(
-    scene: &Scene,
-    accuracy: Accuracy,
-    eta: u32,
-    lbar: f64,
-    start: &StartShape,
-) -> Result<AccurateEquilibrium> {
-    let stiffness = crate::args::stiffness_of(&scene.stiffness);
-    let res = solve_with_accuracy(
-        scene.radius,
-        lbar,
-        &stiffness,
-        start,
-        accuracy,
-        &SolveOptions::default(),
-    )?;
-    let report = res.equilibrium.report();
-    if !report.converged {
-        bail!(
-            "the solve did not converge (KKT residual {:.1e})",
-            report.residual
-        );
-    }
-    let periods = identify_equilibrium(&res.equilibrium)?;
-    if periods.eta != eta {
-        bail!(
-            "the solve converged onto a state with eta = {} instead of {eta}",
-            periods.eta
-        );
-    }
-    Ok(res)
-}
-
 /// Solve branch `eta` at `lbar` from the Euler curve `l = η` (as `rodloop solve` does) or,
 /// when that fails, from the diagram's own state of the branch there (re-solved at the tracing
 /// resolution and passed on as points, as `solve --from` takes them); then draw it.
@@ -148,30 +109,7 @@ fn solve_state(
 ) -> Result<SolvedState> {
     let t0 = Instant::now();
     let (res, start) =
-        match solve_checked(scene, accuracy, eta, lbar, &StartShape::Euler { l: eta }) {
-            Ok(r) => (r, format!("the Euler curve l = {eta}")),
-            Err(euler) => {
-                let traced = d
-                    .branch_by_eta(eta)
-                    .context("the branch is not traced")
-                    .and_then(|b| Ok(b.solve_at(opts, lbar)?))
-                    .and_then(|eq| {
-                        let pts: Vec<[f64; 3]> =
-                            eq.profile().iter().map(|p| [p.x, p.y, p.z]).collect();
-                        Ok(from_points(&pts)?.0)
-                    })
-                    .and_then(|start| solve_checked(scene, accuracy, eta, lbar, &start));
-                match traced {
-                    Ok(r) => (
-                        r,
-                        format!("the diagram's traced state (from the Euler curve: {euler:#})"),
-                    ),
-                    Err(e) => bail!(
-                        "from the Euler curve: {euler:#}; from the diagram's traced state: {e:#}"
-                    ),
-                }
-            }
-        };
+        rodloop_diagram::representative::solve_on_branch(d, opts, accuracy, eta, lbar)?;
     let eq = &res.equilibrium;
     let index = eq.stability()?.index;
     let label = if index > 0 {

@@ -72,6 +72,7 @@ pub mod param_sweep;
 pub mod phase;
 mod placements;
 pub mod refine;
+pub mod representative;
 mod seed;
 pub mod shapes;
 mod special;
@@ -165,6 +166,9 @@ pub enum DiagramError {
     /// The per-branch hook of [`compute`] failed (e.g. a branch file could not be written).
     #[error("branch hook: {0}")]
     Hook(#[source] rodloop_continuation::BoxError),
+    /// A state that could not be solved on its branch (every start tried, each reason given).
+    #[error("{0}")]
+    Unsolved(String),
     /// A result that does not fit the result schema (a non-finite number, a value without a
     /// column).
     #[error("result schema: {0}")]
