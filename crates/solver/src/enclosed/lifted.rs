@@ -46,7 +46,7 @@
 
 use nalgebra::{Const, DVector, Matrix3, Matrix4, SMatrix, SVector, Vector3};
 
-use super::model::{rotation, tr4, translation, vee_skew3, EnclosedModel};
+use super::model::{tr4, translation, vee_skew3, EnclosedModel};
 use crate::SolverError;
 
 const B: usize = 17;
@@ -425,9 +425,7 @@ impl EnclosedModel {
             })
             .collect();
         let mu = &z[np..np + 6];
-        let kmu = Self::closure_functional(mu, &ch.prefix[n]);
-        let closure = crate::model::Closure::of(&rotation(&ch.prefix[n]));
-        let k2 = closure.second(&V3::new(mu[0], mu[1], mu[2]));
+        let kmu = Self::closure_functional(mu);
         let gauges = self.gauge_rows();
 
         let mut sys = Lifted {
@@ -544,28 +542,21 @@ impl EnclosedModel {
             } else {
                 // δm_{N−1} = −hat(ξ_N)P_N K(μ) − P_N K(δμ), paired with se(3).
                 let pn = &ch.prefix[n];
-                // The closure's second derivative (Closure::second) in the rotations.
                 for k in 0..6 {
                     for l in 0..6 {
                         d[(M0 + k, X0 + l)] = tr4(&(basis[k] * basis[l] * pn), &kmu);
-                        if k < 3 && l < 3 {
-                            d[(M0 + k, X0 + l)] += k2[(k, l)];
-                        }
                     }
                     for l in 0..6 {
                         let mut e = [0.0; 6];
                         e[l] = 1.0;
-                        let kl = Self::closure_functional(&e, pn);
+                        let kl = Self::closure_functional(&e);
                         sys.bcol[c][(M0 + k, gmu + l)] = tr4(&(basis[k] * pn), &kl);
                     }
                 }
                 d[(L0, L0)] = 1.0;
-                // Closure rows: δF = −(J ω, hat ω p_N + v), J of Closure.
+                // Closure rows: δF = −(vee skew(hat ω R_N), hat ω p_N + v).
                 for l in 0..6 {
-                    let mut v = vee6(&(basis[l] * pn));
-                    for k in 0..3 {
-                        v[k] = if l < 3 { closure.jac[(k, l)] } else { 0.0 };
-                    }
+                    let v = vee6(&(basis[l] * pn));
                     for k in 0..6 {
                         sys.brow[c][(gmu + k, X0 + l)] = -v[k];
                     }

@@ -18,12 +18,7 @@
 //!
 //! Positions and frames at the nodes `s_j` (cell boundaries) follow from the SE(3) Magnus
 //! chain `P_{c+1} = P_c exp(Θ_c)` ([`super::jet`]), `r_j = r0 + p_j`. Closure of position
-//! and frame, `C = (c(X_N), p_N) = 0` (6 equations), with the quaternion residual
-//! `c(X) = 2 vee(skew X)/√(1 + tr X)` of [`crate::model::Closure`]: `2 sin(θ/2) u` for a
-//! rotation by `θ` about `u`, zero only at `X = I` (`vee(skew X) = sin θ u` alone vanishes at
-//! every half-turn too, where the loop closes in position with its frame turned). At
-//! `X_N = I` both residuals have the same derivative, so multipliers, constrained Hessian and
-//! stability at a solution are those of `vee(skew X_N)`. The wall
+//! and frame, `C = (vee(skew(X_N)), p_N) = 0` (6 equations). The wall
 //! `g_j = R² − |r_j|² ≥ 0` is imposed at the `N` nodes; its multipliers `λ_j ≥ 0` are the
 //! nodal contact impulses (the force per unit length is `λ(s_j) ≈ 2Rλ_j/w_j`, `w_j` the
 //! node's share of the length; Sec. 3.2 with Eq. (38)'s sign: `λ > 0` pushes inward).
@@ -36,10 +31,9 @@
 //!
 //! `∂P_j/∂κ_a = P_c ∂E_c E_{c+1}⋯E_{j−1}` for an unknown of cell `c < j`. The gradient of
 //! `Ψ = Σ_j λ_j |r_j|² − μ·C` uses the adjoint `A_c = 2λ_{c+1} e4 ρ_{c+1}ᵀ + E_{c+1}A_{c+1}`,
-//! `A_{N−1} = −K` (`D(μ·C)[δP_N] = tr(δP_N K)`, `ρ = (r, 0)`): `∂Ψ/∂κ_a = tr(P_c ∂_aE_c A_c)`; its
+//! `A_{N−1} = −K` (`μ·C = tr(P_N K)`, `ρ = (r, 0)`): `∂Ψ/∂κ_a = tr(P_c ∂_aE_c A_c)`; its
 //! Hessian is `tr(P_c ∂_aE_c E_{c+1}⋯E_{c'−1} ∂_bE_{c'} A_{c'})` (cells `c < c'`),
-//! `tr(P_c ∂²_{ab}E_c A_c)` (one cell) plus `Σ_j 2λ_j ∂_a p_j·∂_b p_j` and the closure's own
-//! curvature `−ω_aᵀ K_c ω_b` (`∂_aX_N = hat(ω_a)X_N`, `K_c` of `Closure::second`). All exact (the cell
+//! `tr(P_c ∂²_{ab}E_c A_c)` (one cell) plus `Σ_j 2λ_j ∂_a p_j·∂_b p_j`. All exact (the cell
 //! jets come from [`super::jet::cell_jet`]); checked against finite differences in tests.
 //! Assembly costs `O(N²)` 4×4 products plus one `O(N³)` product for the last term.
 
@@ -51,7 +45,6 @@ use nalgebra::{DMatrix, DVector, Matrix3, Matrix4, Vector3};
 
 use super::jet::{cell_exp, cell_grad, cell_jet};
 use crate::mesh::MeshMap;
-use crate::model::Closure;
 use crate::model::GAUSS_OFFSETS;
 use crate::periodic::TrigInterpolant;
 use crate::stiffness::{Stiffness, StiffnessProfile};
@@ -377,12 +370,11 @@ impl EnclosedModel {
             .collect())
     }
 
-    /// Closure residual `(c(X_N), p_N)`, `c` the quaternion residual of
-    /// [`crate::model::Closure`] (zero only at `X_N = I`).
+    /// Closure residual `(vee(skew X_N), p_N)`.
     pub fn closure(&self, z: &[f64]) -> Result<[f64; 6], SolverError> {
         let p = self.transforms(z)?;
         let pn = &p[self.cells];
-        let v = Closure::of(&rotation(pn)).value;
+        let v = vee_skew3(pn);
         let t = translation(pn);
         Ok([v[0], v[1], v[2], t[0], t[1], t[2]])
     }
@@ -513,15 +505,14 @@ impl EnclosedModel {
         ch
     }
 
-    /// `K` with `D(μ·C)[δP] = tr(δP K)` at the end transform `pn` (rotation block
-    /// `−½ M` with `M` of [`Closure::first`]; for `X_N = I` it is `−½ hat(μ_r)`, the
-    /// derivative of `μ_r·vee(skew X)`), linear in `μ`.
-    pub(super) fn closure_functional(mu: &[f64], pn: &M4) -> M4 {
+    /// `K` with `μ·C = tr(P_N K)`.
+    pub(super) fn closure_functional(mu: &[f64]) -> M4 {
         let mut k = M4::zeros();
-        let m = Closure::of(&rotation(pn)).first(&V3::new(mu[0], mu[1], mu[2]));
+        // Rotation: μ_r·vee(skew X) = −½ tr(hat(μ_r) X).
+        let h = crate::frame::hat(&V3::new(mu[0], mu[1], mu[2]));
         for i in 0..3 {
             for j in 0..3 {
-                k[(i, j)] = -0.5 * m[(i, j)];
+                k[(i, j)] = -0.5 * h[(i, j)];
             }
             k[(3, i)] = mu[3 + i];
         }
@@ -541,7 +532,7 @@ impl EnclosedModel {
         let lo = self.lambda_offset();
         let mu = &z[self.n_primal()..self.n_primal() + 6];
         let mut a = vec![M4::zeros(); n];
-        a[n - 1] = -Self::closure_functional(mu, &ch.prefix[n]);
+        a[n - 1] = -Self::closure_functional(mu);
         for c in (0..n - 1).rev() {
             let j = c + 1;
             let r = r0 + translation(&ch.prefix[j]);
@@ -595,7 +586,7 @@ impl EnclosedModel {
         }
         // Closure.
         let pn = &ch.prefix[n];
-        let v = Closure::of(&rotation(pn)).value;
+        let v = vee_skew3(pn);
         let t = translation(pn);
         for k in 0..3 {
             f[np + k] = -v[k];
@@ -634,9 +625,7 @@ impl EnclosedModel {
         let pos: Vec<V3> = (0..=n).map(|j| r0 + translation(&ch.prefix[j])).collect();
         // dp[j] (3 × 4N) for nodes j = 1..=N, and the rotation closure Jacobian.
         let mut jp = DMatrix::<f64>::zeros(3 * n, nk); // rows 3(j−1)+k, j = 1..=N
-                                                       // Spatial rotation rates ω_a (∂X_N = hat(ω_a) X_N) of the end frame.
-        let mut omega = DMatrix::<f64>::zeros(3, nk);
-        let xn = rotation(&ch.prefix[n]);
+        let mut jrot = DMatrix::<f64>::zeros(3, nk);
         for c in 0..n {
             for i in 0..4 {
                 let a = 4 * c + i;
@@ -647,9 +636,9 @@ impl EnclosedModel {
                         jp[(3 * (j - 1) + k, a)] = t[k];
                     }
                     if j == n {
-                        let w = crate::model::vee_skew(&(rotation(&m) * xn.transpose()));
+                        let v = vee_skew3(&m);
                         for k in 0..3 {
-                            omega[(k, a)] = w[k];
+                            jrot[(k, a)] = v[k];
                         }
                     } else {
                         m *= ch.e[j];
@@ -720,17 +709,6 @@ impl EnclosedModel {
         for k in 0..3 {
             jac[(nk + k, nk + k)] += 2.0 * lam_sum;
         }
-        // The closure's own second derivative, D²(μ·c)[∂_aX, ∂_bX] = ω_aᵀ K ω_b (zero at
-        // X_N = I; Closure::second), and its Jacobian ∇c = J ω.
-        let cl = Closure::of(&xn);
-        let mu = &z[np..np + 3];
-        let k2 = cl.second(&V3::new(mu[0], mu[1], mu[2]));
-        let k2o = DMatrix::from_fn(3, 3, |i, j| k2[(i, j)]) * &omega;
-        {
-            let mut blk = jac.view_mut((0, 0), (nk, nk));
-            blk -= omega.transpose() * k2o;
-        }
-        let jrot = DMatrix::from_fn(3, 3, |i, j| cl.jac[(i, j)]) * &omega;
         // Closure columns/rows: ∂F_x/∂μ = −∇Cᵀ, F_μ = −C.
         for a in 0..nk {
             for k in 0..3 {
