@@ -91,7 +91,7 @@ fn confirm_on_finest(outs: &mut [SheetOut]) {
             let Some(lv) = s.levels.iter().find(|l| (l.lbar - x).abs() < 1e-12) else {
                 continue;
             };
-            let Ok((index, _)) = lv.states[2].stability(1e-6) else {
+            let Ok(index) = lv.states[2].index(1e-6) else {
                 continue;
             };
             for p in s.points.iter_mut().filter(|p| (p.lbar - x).abs() < 1e-12) {

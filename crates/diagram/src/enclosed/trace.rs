@@ -124,8 +124,8 @@ impl Levels {
         let (energy, energy_error) = self.energy();
         let c = fine.contact(TOUCH)?;
         let (lmin, gmin, comp, stat) = fine.optimality()?;
-        // The index on the coarsest level: the eigen-decomposition is dense, O(N³).
-        let (index, _) = self.states[0].stability(1e-6)?;
+        // The index on the coarsest level (a dense factorisation, O(N³)).
+        let index = self.states[0].index(1e-6)?;
         Ok(EnclosedPoint {
             branch,
             eta,
@@ -213,7 +213,7 @@ pub(super) fn attached_index(
             .unwrap_or(f64::NAN)
     })?;
     let st = solve_enclosed(&model, z0, &EnclosedOptions::default())?;
-    Ok(st.stability(1e-6)?.0)
+    st.index(1e-6)
 }
 
 pub(super) fn exact_point(

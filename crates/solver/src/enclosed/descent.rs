@@ -154,7 +154,7 @@ impl SaddleModel for EnclosedSaddle {
     }
 
     fn index(&self, state: &EnclosedState) -> Result<usize, SolverError> {
-        Ok(state.stability(self.tol)?.0)
+        state.index(self.tol)
     }
 
     fn unstable_directions(

@@ -13,8 +13,9 @@
 //! * [`model`]: [`EnclosedModel`] (energy, closure, wall, KKT residual and exact Jacobian).
 //! * [`lifted`]: the Newton step in `O(N)` from a block-tridiagonal form of that Jacobian.
 //! * [`solve`](mod@solve): semismooth Newton, starts (surface loop, free circle), contact
-//!   summary, stability on the active constraints' tangent space.
+//!   summary, the spectrum on the active constraints' tangent space.
 //! * [`from_shape`]: a start from a saved shape (`solve --from`).
+//! * [`inertia`]: the stability index from the inertia of the bordered KKT matrix.
 //! * [`descent`]: leaving a saddle along its unstable direction; the enclosed side of the
 //!   one descent routine ([`crate::descend`]) and an enclosed solve that ends at a local
 //!   minimum.
@@ -26,6 +27,7 @@ pub mod branch;
 pub mod continuation;
 pub mod descent;
 pub mod from_shape;
+pub mod inertia;
 pub mod jet;
 pub mod lifted;
 pub mod model;

@@ -57,22 +57,14 @@ impl Factorization for EnclosedFactor {
 
 impl Inertia for EnclosedFactor {
     /// Eigenvalues below the shift of the mass-scaled Hessian of the Lagrangian on the
-    /// tangent space of the equalities and the strongly active wall constraints
-    /// (`EnclosedState::tangent_hessian`, activity threshold `1e-6`); a dense symmetric
-    /// eigen-decomposition. `usize::MAX` if the Hessian cannot be evaluated.
+    /// tangent space of the equalities and the strongly active wall constraints (activity
+    /// threshold `1e-6`), from the inertia of the bordered KKT matrix
+    /// ([`EnclosedState::count_below`]). `usize::MAX` if the Hessian cannot be evaluated.
     fn reduced_negative_count(&self) -> usize {
         *self.negative.get_or_init(|| {
-            let state = state_of(&self.model, &self.z);
-            match state.tangent_hessian(1e-6) {
-                Ok((pw, _)) => {
-                    let vals = pw.symmetric_eigenvalues();
-                    let scale = vals.iter().fold(0.0f64, |x, y| x.max(y.abs())).max(1e-300);
-                    vals.iter()
-                        .filter(|&&v| v < self.shift - 1e-9 * scale)
-                        .count()
-                }
-                Err(_) => usize::MAX,
-            }
+            state_of(&self.model, &self.z)
+                .count_below(1e-6, self.shift)
+                .unwrap_or(usize::MAX)
         })
     }
 }
@@ -169,9 +161,9 @@ impl Confinement for EnclosedModel {
         let theta = Confinement::param(self, p)?;
         rodloop_continuation::fd_dparam(|t| Confinement::with_param(self, p, t)?.residual(z), theta)
     }
-    /// The index of [`EnclosedState::stability`] with activity threshold `tolerance`.
+    /// The index of [`EnclosedState::index`] with activity threshold `tolerance`.
     fn index(&self, z: &[f64], tolerance: f64) -> Result<usize, SolverError> {
-        Ok(state_of(self, z).stability(tolerance)?.0)
+        state_of(self, z).index(tolerance)
     }
     fn energy(&self, z: &[f64]) -> Result<f64, SolverError> {
         EnclosedModel::energy(self, z)

@@ -606,33 +606,38 @@ impl EnclosedState {
         })
     }
 
-    /// The mass-scaled Hessian of the Lagrangian on the tangent space of the closure, the
-    /// gauges and the strongly active wall constraints (`λ_j > tol·max λ`), as the symmetric
-    /// matrix `P W P + β (I − P)` (`β` above every tangent eigenvalue, so the complement's
-    /// eigenvalues sit apart), and the scaling `s_i = 1/√m_i` that maps its eigenvectors back
-    /// to the primal unknowns. Shared by [`EnclosedState::stability`] and
-    /// [`super::unstable_direction`].
-    pub(crate) fn tangent_hessian(
+    /// The scaling `s_i = 1/√m_i` of the primal unknowns by their mass (node length share
+    /// `h/2` for a curvature unknown, `L/R²` for the start point).
+    pub(crate) fn mass_scaling(&self) -> Vec<f64> {
+        let m = &self.model;
+        let n = m.cells();
+        (0..m.n_primal())
+            .map(|a| {
+                let mass = if a < 4 * n {
+                    0.5 * m.cell_length(a / 4)
+                } else {
+                    m.length() / (m.radius() * m.radius())
+                };
+                1.0 / mass.sqrt()
+            })
+            .collect()
+    }
+
+    /// The blocks of the mass-scaled KKT matrix on the active set: `W = S ∇²ℒ S` (primal ×
+    /// primal, symmetric) and the rows `B = ∇c S` of the closure, the gauges and the
+    /// strongly active wall constraints (`λ_j > tol·max λ`), `S = diag(s)` of
+    /// [`Self::mass_scaling`].
+    pub(crate) fn scaled_kkt_blocks(
         &self,
         tol: f64,
-    ) -> Result<(DMatrix<f64>, Vec<f64>), SolverError> {
+    ) -> Result<(DMatrix<f64>, DMatrix<f64>), SolverError> {
         let m = &self.model;
         let np = m.n_primal();
         let n = m.cells();
         let ev = m.evaluate(&self.z)?;
         let lam = self.multipliers();
         let lmax = lam.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-        // Mass: node length share for κ (per Gauss point h/2), 1/R² for r0.
-        let mass: Vec<f64> = (0..np)
-            .map(|a| {
-                if a < 4 * n {
-                    0.5 * m.cell_length(a / 4)
-                } else {
-                    m.length() / (m.radius() * m.radius())
-                }
-            })
-            .collect();
-        let s: Vec<f64> = mass.iter().map(|v| 1.0 / v.sqrt()).collect();
+        let s = self.mass_scaling();
         let w = DMatrix::from_fn(np, np, |i, j| ev.jacobian[(i, j)] * s[i] * s[j]);
         let lo = m.lambda_offset();
         let mut rows: Vec<usize> = (np..lo).collect();
@@ -643,6 +648,22 @@ impl EnclosedState {
         }
         // Constraint gradients are the (negated) columns ∂F_x/∂y.
         let a = DMatrix::from_fn(rows.len(), np, |r, i| ev.jacobian[(i, rows[r])] * s[i]);
+        Ok((w, a))
+    }
+
+    /// The mass-scaled Hessian of the Lagrangian on the tangent space of the closure, the
+    /// gauges and the strongly active wall constraints (`λ_j > tol·max λ`), as the symmetric
+    /// matrix `P W P + β (I − P)` (`β` above every tangent eigenvalue, so the complement's
+    /// eigenvalues sit apart), and the scaling `s_i = 1/√m_i` that maps its eigenvectors back
+    /// to the primal unknowns. Shared by [`EnclosedState::stability`] and
+    /// [`super::unstable_direction`].
+    pub(crate) fn tangent_hessian(
+        &self,
+        tol: f64,
+    ) -> Result<(DMatrix<f64>, Vec<f64>), SolverError> {
+        let (w, a) = self.scaled_kkt_blocks(tol)?;
+        let s = self.mass_scaling();
+        let np = w.nrows();
         let svd = a.svd(false, true);
         let vt = svd.v_t.ok_or(SolverError::InvalidInput("svd".into()))?;
         let smax = svd.singular_values.iter().fold(0.0f64, |x, &y| x.max(y));
@@ -666,20 +687,18 @@ impl EnclosedState {
         Ok((pw, s))
     }
 
-    /// Stability: eigenvalues (ascending, mass-normalised, units of `D0/R³·R`…) of the
-    /// Hessian of the Lagrangian on the tangent space of the closure, the gauges and the
-    /// strongly active wall constraints (`λ_j > tol·max λ`); returns `(index, lowest
-    /// eigenvalues)`. Symmetry modes are removed by the gauges. Dense symmetric
-    /// eigen-decomposition: `O(N³)`.
+    /// Stability: the index ([`Self::index`], from the inertia of the bordered KKT matrix)
+    /// and the lowest eigenvalues (ascending, mass-normalised) of the Hessian of the
+    /// Lagrangian on the tangent space of the closure, the gauges and the strongly active
+    /// wall constraints (`λ_j > tol·max λ`), at most 8. Symmetry modes are removed by the
+    /// gauges. The eigenvalues come from a dense symmetric eigen-decomposition, `O(N³)`:
+    /// callers that need only the index call [`Self::index`].
     pub fn stability(&self, tol: f64) -> Result<(usize, Vec<f64>), SolverError> {
         let (pw, _) = self.tangent_hessian(tol)?;
-        // Eigenvalues only (the index and the lowest values are all that is reported).
         let mut vals: Vec<f64> = pw.symmetric_eigenvalues().iter().copied().collect();
         vals.sort_by(f64::total_cmp);
-        let scale = vals.iter().fold(0.0f64, |x, y| x.max(y.abs())).max(1e-300);
-        let index = vals.iter().filter(|&&v| v < -1e-9 * scale).count();
         vals.truncate(8);
-        Ok((index, vals))
+        Ok((self.index(tol)?, vals))
     }
 
     /// The curvature vector `(κ1, κ2)` at `σ`, interpolated (periodic four-point Lagrange
