@@ -1,7 +1,8 @@
 //! Two-segment scenes a user might write, through the binary: randomly generated profiles
 //! (own generator, fixed seed) and the profile `d1 = 0.3, s0 = 0.2, s1 = 0.4, gamma = 100`.
 //! For each diagram: every state file closes, lies on the sphere, has the branch of its row
-//! (dominant harmonic of `κ_g`) and the energy of its row; labels agree with the traced
+//! (dominant harmonic of `κ_g`, or a family with states of that harmonic) and the energy of
+//! its row; the completeness certificate leaves nothing unexplained; labels agree with the traced
 //! energies (the lowest index-0 state is "stable", other index-0 states "metastable",
 //! index > 0 "unstable"); and `rodloop solve --branch B` finds no state below the diagram's
 //! stable one at sample lengths (a `solve` result whose loop does not close is no equilibrium
@@ -229,7 +230,21 @@ fn check_diagram(dir: &Path, scene_file: &Path, lo: f64, hi: f64, what: &str) ->
     let mut bad = Vec::new();
     let rows = rows(dir);
     assert!(!rows.is_empty(), "{what}: no rows");
-    // State files: closed, on the sphere, the row's branch and energy.
+    // The completeness certificate: nothing found below the traced states is left
+    // unexplained.
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let unexplained = summary["certificate"]["unexplained"]
+        .as_array()
+        .map_or(0, Vec::len);
+    if summary["certificate"].is_null() || unexplained > 0 {
+        bad.push(format!(
+            "{what}: the certificate leaves {unexplained} state(s) unexplained: {}",
+            summary["certificate"]["unexplained"]
+        ));
+    }
+    // State files: closed, on the sphere, the row's energy; their dominant harmonics.
+    let mut harmonics = Vec::with_capacity(rows.len());
     for r in &rows {
         let st = state(&dir.join(&r.file));
         let m = st.len();
@@ -258,11 +273,22 @@ fn check_diagram(dir: &Path, scene_file: &Path, lo: f64, hi: f64, what: &str) ->
             ));
         }
         let kg: Vec<f64> = st.iter().map(|p| p[5]).collect();
-        let eta = dominant_harmonic(&kg);
-        if eta != r.eta {
+        harmonics.push(dominant_harmonic(&kg));
+    }
+    // Branch identity: a state's dominant harmonic of `κ_g` is its row's `η`, or, where a
+    // soft segment bends the loop so that another harmonic dominates, the state lies on a
+    // family (one curve followed by continuation from its seed) that has states of `η`
+    // periods: its branch is the seed's, by continuation.
+    for (r, &h) in rows.iter().zip(&harmonics) {
+        let family_has_eta = rows
+            .iter()
+            .zip(&harmonics)
+            .any(|(o, &ho)| (o.branch, o.family) == (r.branch, r.family) && ho == r.eta);
+        if h != r.eta && !family_has_eta {
             bad.push(format!(
-                "{what}: {} (row of branch {}, η = {}) has {eta} periods of κ_g",
-                r.file, r.branch, r.eta
+                "{what}: {} (row of branch {}, η = {}) has {h} periods of κ_g, and no state of \
+                 its family has {}",
+                r.file, r.branch, r.eta, r.eta
             ));
         }
     }
@@ -473,5 +499,28 @@ fn state_files_hold_their_rows_at_strong_contrast() {
             ));
         }
     }
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
+}
+
+/// A profile drawn at random (`d1 = 0.054, s0 = 0.001, s1 = 0.502, gamma = 297`) on the
+/// default range `1 ≤ L̄ ≤ 3`: a contrast close to the strong one with a sharp transition
+/// at the loop's origin.
+#[test]
+fn random_profile_sharp_transition_at_the_origin() {
+    let dir = tmp("sharp-origin");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("scene.toml");
+    let sc = Scene {
+        d1: 0.054,
+        s0: 0.001,
+        s1: 0.502,
+        gamma: 297.0,
+        lo: 1.0,
+        hi: 3.0,
+    };
+    std::fs::write(&file, sc.toml()).unwrap();
+    let out = dir.join("diagram");
+    run_diagram(&file, &out, &[]);
+    let bad = check_diagram(&out, &file, 1.0, 3.0, "sharp transition at the origin");
     assert!(bad.is_empty(), "{}", bad.join("\n"));
 }

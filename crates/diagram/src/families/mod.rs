@@ -9,13 +9,15 @@
 //!
 //! [`compute_families`]:
 //!
-//! 1. **Seeds** (`seeding.rs`): at mild contrast the Euler rotation curve `l = η` (Eqs. 4–8)
-//!    placed with its phases `j/(8η)` (`j = 0…3`, half a period: a shift by half a period is
-//!    the loop's reflection `κ_g → −κ_g`) at the stiffness change `s0*`, relaxed and solved at
-//!    three lengths inside the branch's range; at strong contrast the states `rodloop solve
-//!    --branch` finds there and the shifted direct solves at the lengths its continuation in
-//!    `L̄` starts from. A seed that lies on a family already traced (itself, its reflection,
-//!    its mirror image or both; `images.rs`) is dropped.
+//! 1. **Seeds** (`seeding.rs`): the uniform rod's exact loop of `η` periods at every
+//!    placement where a family leaves the uniform circle of loops as `D1/D0` departs from 1
+//!    (the critical points of the placed loop's energy on the scene's profile,
+//!    [`crate::placements::uniform_placements`]), continued in `ln(D1/D0)` from 0 to the
+//!    scene's contrast by pseudo-arclength; at one length of every stretch of the range over
+//!    which the number of these placements is the same. Where none of them reaches the
+//!    scene's contrast, the states `rodloop solve --branch` finds there. A seed that lies on
+//!    a family already traced (itself, its reflection, its mirror image or both;
+//!    `images.rs`) is dropped.
 //! 2. **Following** (`following.rs`): each new seed is followed in `L̄` in both directions
 //!    *through* its folds ([`FoldPolicy::Follow`]) with simple branch points detected, until
 //!    the range ends, the approach to a great-circle end (then `ends.rs` takes over down to
@@ -49,7 +51,7 @@ mod sheets;
 use std::time::Instant;
 
 use rodloop_exact::branch_of_eta;
-use rodloop_solver::{Confinement, Param, ParamProblem, Stiffness, SurfaceModel};
+use rodloop_solver::{Confinement, Param, ParamProblem, SurfaceModel};
 
 use crate::ends::SWITCH_DISTANCE;
 use crate::march::{FoldPolicy, MarchPoint};
@@ -59,7 +61,7 @@ use crate::types::{BranchEnd, BranchTimings, TracedBranch};
 use crate::{DiagramError, DiagramOptions, Progress};
 use following::{EndContext, Tracing};
 use images::Images;
-use seeding::{robust_seed, seed_jobs, seed_state, Seed, NEARLY_UNIFORM, STRONG_BELOW};
+use seeding::{robust_seed, seed_jobs, uniform_seed, Seed};
 
 /// Most families (followed curves) per branch `η`.
 pub const MAX_FAMILIES: usize = 16;
@@ -100,20 +102,9 @@ pub fn compute_families(
     let branch = su.branch;
     progress(Progress::BranchStarted { branch, eta });
     let (lo, hi, mid, cells) = (su.lo, su.hi, su.mid, su.cells);
-    let (exist_lo, exist_hi) = su.exist;
     let circles = su.settings.circles.clone();
     let (problem, images, settings) = (&su.problem, &su.images, &su.settings);
 
-    let span = hi - lo;
-    let seed_lengths: Vec<f64> = [0.5, 0.25, 0.75]
-        .iter()
-        .map(|f| lo + f * span)
-        .filter(|l| {
-            circles
-                .iter()
-                .all(|m| (l - m).abs() > 2.0 * SWITCH_DISTANCE)
-        })
-        .collect();
     let end_ctx = su.end_context(opts);
     let mut tr = Tracing {
         ctx: &end_ctx,
@@ -128,21 +119,14 @@ pub fn compute_families(
         steps: 0,
         seed_note: Vec::new(),
     };
-    // Very soft segments, and nearly uniform rods (where Newton from Euler starts drifts
-    // along the nearly neutral placement of the soft segment), are seeded as `rodloop solve`
-    // finds the states.
-    let as_solve = matches!(&opts.stiffness, Stiffness::Tanh { d0, d1, .. }
-        if d1 / d0 < STRONG_BELOW || d1 / d0 > NEARLY_UNIFORM);
-    let jobs = seed_jobs(
-        &seed_lengths,
-        eta,
-        (exist_lo, exist_hi),
-        (lo, hi),
-        &circles,
-        as_solve,
-        &crate::certificate::feature_shifts(&opts.stiffness, eta, &[0, 1, 2, 3], false),
-    );
-    let seeds_tried = jobs.len();
+    let jobs = seed_jobs(&opts.stiffness, eta, (lo, hi), &circles);
+    let seed_lengths: Vec<f64> = jobs.iter().fold(Vec::new(), |mut v, &(l, _)| {
+        if !v.contains(&l) {
+            v.push(l);
+        }
+        v
+    });
+    let mut seeds_tried = jobs.len();
     // Every seed is solved before any is followed, on the crate's thread pool: the seeds are
     // independent of each other and of the curves (which only decide whether a seed is
     // new).
@@ -150,7 +134,7 @@ pub fn compute_families(
         let ts = Instant::now();
         let x = problem.model_at(lbar).ok().and_then(|m| match seed {
             Seed::Solve { starts } => robust_seed(opts, &m, eta, lbar, starts),
-            Seed::Shifted(shift) => seed_state(&m, eta, lbar, shift),
+            Seed::Uniform(shift) => uniform_seed(&m, &opts.stiffness, eta, lbar, shift),
             Seed::Found => None,
         });
         (x, ts.elapsed().as_secs_f64())
@@ -162,27 +146,28 @@ pub fn compute_families(
         &mut |_| {},
         |(lbar, seed), _| solve_seed(lbar, seed),
     );
-    let mut unsolved = Vec::new();
     for (&(lbar, seed), (seeded, secs)) in jobs.iter().zip(solved) {
-        if seeded.is_none() && matches!(seed, Seed::Solve { .. }) {
-            unsolved.push(lbar);
-        }
         if !tr.take(lbar, seed, seeded, secs, progress)? {
             break;
         }
     }
-    // Where seeds are `solve`'s (`as_solve`), its homotopies in D1/D0 where its starts
-    // failed, one length at a time, and only where no traced family of the branch is stable
-    // yet: they cost 0.3–1 s each and serve to find a state of the branch where none is known.
-    for lbar in unsolved {
-        if tr.stable_at(lbar) {
-            debug(|| format!("eta {eta} at {lbar:.3}: a stable state is traced, no homotopy"));
-            continue;
-        }
-        let seed = Seed::Solve { starts: false };
-        let (seeded, secs) = solve_seed(lbar, seed);
-        if !tr.take(lbar, seed, seeded, secs, progress)? {
-            break;
+    // Where no family of the uniform rod reaches the scene's contrast at the seed lengths,
+    // the states `rodloop solve --branch` finds there: its direct and shifted starts, then
+    // its homotopies in D1/D0 where those fail.
+    if tr.curves.is_empty() {
+        for lbar in seed_lengths {
+            for starts in [true, false] {
+                let seed = Seed::Solve { starts };
+                seeds_tried += 1;
+                let (seeded, secs) = solve_seed(lbar, seed);
+                let found = seeded.is_some();
+                if !tr.take(lbar, seed, seeded, secs, progress)? {
+                    break;
+                }
+                if found {
+                    break;
+                }
+            }
         }
     }
     let Tracing {
@@ -197,8 +182,9 @@ pub fn compute_families(
             eta,
             lbar: mid,
             source: rodloop_solver::SolverError::InvalidInput(format!(
-                "none of the {seeds_tried} seeds (Euler starts, shifted, solved directly or by \
-                 homotopy) converged to a loop with {eta} period(s) of κ_g"
+                "none of the {seeds_tried} seeds (the uniform rod's loop continued in D1/D0 \
+                 at each placement, then `rodloop solve --branch`) converged to a loop with \
+                 {eta} period(s) of κ_g"
             )),
         });
     }
@@ -247,8 +233,6 @@ pub fn compute_families(
 /// images, the march settings.
 struct Setup {
     branch: u32,
-    /// Existence interval of the branch, `(η − 1, η + 1)` (`(0, 2)` for `η = 1`).
-    exist: (f64, f64),
     lo: f64,
     hi: f64,
     mid: f64,
@@ -296,7 +280,6 @@ impl Setup {
         settings.locate_tol = TRACE_LOCATE_TOL;
         Ok(Self {
             branch,
-            exist: (exist_lo, exist_hi),
             lo,
             hi,
             mid,
