@@ -64,8 +64,9 @@ const HALF_PERIOD_SAMPLES: usize = 512;
 /// minima over the half period `1/(2η)` of `κ_g²` (a shift by `1/(2η)` is the reflection
 /// `κ_g → −κ_g`). They follow from the profile's features (for Eq. (51), the soft segment's
 /// centre at an extreme or a zero of `κ_g`, and any asymmetric placements its length
-/// selects) and from the branch's period count. Empty where `f` is constant to rounding (a
-/// soft segment of a whole number of half periods, where first order selects nothing).
+/// selects) and from the branch's period count. Where `f` is constant to rounding (a soft
+/// segment of a whole number of half periods: first order selects nothing) only the
+/// mirror-symmetric placements remain.
 pub(crate) fn uniform_placements(
     stiffness: &Stiffness,
     eta: u32,
@@ -81,10 +82,30 @@ pub(crate) fn uniform_placements(
     let f: Vec<f64> = (0..half)
         .map(|k| (0..m).map(|j| d[j] * k2[(j + k) % m]).sum::<f64>() / m as f64)
         .collect();
-    Ok(critical_points(&f)
+    let mut out: Vec<f64> = critical_points(&f)
         .into_iter()
         .map(|x| x / m as f64)
-        .collect())
+        .collect();
+    // The mirror-symmetric placements are critical at every order (the energy is even about
+    // them): the soft segment's centre `c` at the extreme of `κ_g` at the loop's origin
+    // (shift `−c`) and at the zero a quarter period on (`1/(4η) − c`). They are the only
+    // placements where a soft segment of a whole number of half periods makes `f` constant.
+    if let Stiffness::Tanh { s0, s1, .. } = stiffness {
+        let hp = 0.5 / f64::from(eta.max(1));
+        let c = 0.5 * (s0 + s1);
+        for sh in [-c, 0.5 * hp - c] {
+            let sh = sh.rem_euclid(hp);
+            let dist = |o: f64| {
+                let d = (o - sh).rem_euclid(hp);
+                d.min(hp - d)
+            };
+            if out.iter().all(|&o| dist(o) > 1e-6 * hp) {
+                out.push(sh);
+            }
+        }
+    }
+    out.sort_by(f64::total_cmp);
+    Ok(out)
 }
 
 /// The maxima and minima of the periodic samples `f` (positions in samples, refined by the
@@ -186,6 +207,10 @@ mod tests {
         for (eta, lbar) in [(1u32, 1.4), (2, 1.7), (3, 2.6)] {
             let ps = uniform_placements(&st, eta, lbar).unwrap();
             assert!(ps.len() >= 2, "eta {eta}: {ps:?}");
+            // The symmetric placements are among the critical points found from `f`: no
+            // more than the critical points of `f` are returned for this (non-degenerate)
+            // profile, and the count of extremes of a periodic function is even.
+            assert_eq!(ps.len() % 2, 0, "eta {eta}: {ps:?}");
             let kg = StartShape::Exact { eta }.interpolant(lbar).unwrap();
             // f(φ) by the trapezoidal rule on 20000 points (independent of the samples).
             let f = |phi: f64| {

@@ -50,6 +50,7 @@ impl Tracing<'_> {
             Seed::Uniform(shift) => format!(
                 "the uniform rod's loop with its origin moved by {shift:.4}, continued in D1/D0"
             ),
+            Seed::Shifted(shift) => format!("Euler curve, origin moved by {shift:.4}"),
             Seed::Solve { .. } => "as `rodloop solve` finds it".to_string(),
             Seed::Found => "found below the traced states by the completeness certificate".into(),
         };

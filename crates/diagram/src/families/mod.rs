@@ -13,9 +13,12 @@
 //!    placement where a family leaves the uniform circle of loops as `D1/D0` departs from 1
 //!    (the critical points of the placed loop's energy on the scene's profile,
 //!    [`crate::placements::uniform_placements`]), continued in `ln(D1/D0)` from 0 to the
-//!    scene's contrast by pseudo-arclength; at one length of every stretch of the range over
-//!    which the number of these placements is the same. Where none of them reaches the
-//!    scene's contrast, the states `rodloop solve --branch` finds there. A seed that lies on
+//!    scene's contrast by pseudo-arclength, and the Euler rotation curve `l = η` (Eqs. 4–8)
+//!    with each stiffness change at the phases `j/(8η)` (`j = 0…3`) of its `κ_g`, solved
+//!    directly; at the middle length of every stretch of the range over which the number of
+//!    these placements is the same (where no seed converges there, at the next of its
+//!    lengths outwards where one does). Where no seed converges anywhere, the states
+//!    `rodloop solve --branch` finds at the stretches' middles. A seed that lies on
 //!    a family already traced (itself, its reflection, its mirror image or both;
 //!    `images.rs`) is dropped.
 //! 2. **Following** (`following.rs`): each new seed is followed in `L̄` in both directions
@@ -61,7 +64,7 @@ use crate::types::{BranchEnd, BranchTimings, TracedBranch};
 use crate::{DiagramError, DiagramOptions, Progress};
 use following::{EndContext, Tracing};
 use images::Images;
-use seeding::{robust_seed, seed_jobs, uniform_seed, Seed};
+use seeding::{robust_seed, seed_jobs, seed_lengths, seed_state, uniform_seed, Seed};
 
 /// Most families (followed curves) per branch `η`.
 pub const MAX_FAMILIES: usize = 16;
@@ -119,38 +122,50 @@ pub fn compute_families(
         steps: 0,
         seed_note: Vec::new(),
     };
-    let jobs = seed_jobs(&opts.stiffness, eta, (lo, hi), &circles);
-    let seed_lengths: Vec<f64> = jobs.iter().fold(Vec::new(), |mut v, &(l, _)| {
-        if !v.contains(&l) {
-            v.push(l);
-        }
-        v
-    });
-    let mut seeds_tried = jobs.len();
-    // Every seed is solved before any is followed, on the crate's thread pool: the seeds are
-    // independent of each other and of the curves (which only decide whether a seed is
-    // new).
+    let stretches = seed_lengths(&opts.stiffness, eta, (lo, hi), &circles);
+    let mut seeds_tried = 0;
+    // Every seed of a length is solved before any is followed, on the crate's thread pool:
+    // the seeds are independent of each other and of the curves (which only decide whether
+    // a seed is new).
     let solve_seed = |lbar: f64, seed: Seed| {
         let ts = Instant::now();
         let x = problem.model_at(lbar).ok().and_then(|m| match seed {
             Seed::Solve { starts } => robust_seed(opts, &m, eta, lbar, starts),
             Seed::Uniform(shift) => uniform_seed(&m, &opts.stiffness, eta, lbar, shift),
+            Seed::Shifted(shift) => seed_state(&m, eta, lbar, shift),
             Seed::Found => None,
         });
         (x, ts.elapsed().as_secs_f64())
     };
-    let solved = run_parallel(
-        opts.worker_threads(),
-        jobs.clone(),
-        &mut |_| {},
-        &mut |_| {},
-        |(lbar, seed), _| solve_seed(lbar, seed),
-    );
-    for (&(lbar, seed), (seeded, secs)) in jobs.iter().zip(solved) {
-        if !tr.take(lbar, seed, seeded, secs, progress)? {
-            break;
+    // Each stretch is seeded at its middle length, or where no seed converges there, at the
+    // next of its lengths (outwards from the middle) where one does.
+    'stretches: for stretch in &stretches {
+        for &l in stretch {
+            let jobs = seed_jobs(&opts.stiffness, eta, l);
+            seeds_tried += jobs.len();
+            let solved = run_parallel(
+                opts.worker_threads(),
+                jobs.clone(),
+                &mut |_| {},
+                &mut |_| {},
+                |(lbar, seed), _| solve_seed(lbar, seed),
+            );
+            let mut any = false;
+            for (&(lbar, seed), (seeded, secs)) in jobs.iter().zip(solved) {
+                any |= seeded.is_some();
+                if !tr.take(lbar, seed, seeded, secs, progress)? {
+                    break 'stretches;
+                }
+            }
+            if any {
+                break;
+            }
         }
     }
+    let seed_lengths: Vec<f64> = stretches
+        .iter()
+        .filter_map(|s| s.first().copied())
+        .collect();
     // Where no family of the uniform rod reaches the scene's contrast at the seed lengths,
     // the states `rodloop solve --branch` finds there: its direct and shifted starts, then
     // its homotopies in D1/D0 where those fail.

@@ -25,47 +25,50 @@ pub(super) enum Seed {
     /// The uniform rod's exact loop with its origin moved by the fraction given, continued
     /// in `D1/D0` from 1 to the scene's contrast ([`uniform_seed`]).
     Uniform(f64),
+    /// The Euler start `l = η` with its origin moved by the fraction given (a stiffness
+    /// change at a phase of its `κ_g`), solved directly ([`seed_state`]).
+    Shifted(f64),
     /// A state found by the diagram's completeness certificate (`crate::certificate`).
     Found,
 }
 
-/// The seeds of branch `eta` on `range`, in the order they are followed: at each length of
-/// [`seed_lengths`], every placement of [`crate::placements::uniform_placements`] there
-/// (the feature placements of [`crate::certificate::feature_shifts`] where the first-order
-/// energy does not select any).
-pub(super) fn seed_jobs(
-    stiffness: &Stiffness,
-    eta: u32,
-    range: (f64, f64),
-    circles: &[f64],
-) -> Vec<(f64, Seed)> {
-    let mut jobs = Vec::new();
-    for l in seed_lengths(stiffness, eta, range, circles) {
-        let mut shifts = crate::placements::uniform_placements(stiffness, eta, l)
-            .map_err(|e| debug(|| format!("placements of eta {eta} at {l}: {e}")))
-            .unwrap_or_default();
-        if shifts.is_empty() {
-            shifts = crate::certificate::feature_shifts(stiffness, eta, &[0, 1, 2, 3], true);
-        }
-        debug(|| format!("eta {eta} at {l:.4}: placements {shifts:.4?}"));
-        jobs.extend(shifts.into_iter().map(|sh| (l, Seed::Uniform(sh))));
-    }
+/// The seeds of branch `eta` at `l`, in the order they are followed: every placement of
+/// [`crate::placements::uniform_placements`] there (the critical points of the placed
+/// loop's energy and the mirror-symmetric placements) continued from the uniform rod, and
+/// the Euler start `l = η` with the stiffness change `s0*` at the phases `j/(8η)`,
+/// `j = 0…3`, of its `κ_g` ([`crate::certificate::feature_shifts`]; half a period, a shift
+/// by half a period is the reflection `κ_g → −κ_g`, and the profile's mirror symmetry
+/// carries them to `s1*`), solved directly: a family that folds away before the scene's
+/// contrast at this length, or reaches it with another dominant harmonic, may still have
+/// states of `η` periods there.
+pub(super) fn seed_jobs(stiffness: &Stiffness, eta: u32, l: f64) -> Vec<(f64, Seed)> {
+    let shifts = crate::placements::uniform_placements(stiffness, eta, l)
+        .map_err(|e| debug(|| format!("placements of eta {eta} at {l}: {e}")))
+        .unwrap_or_default();
+    debug(|| format!("eta {eta} at {l:.4}: placements {shifts:.4?}"));
+    let mut jobs: Vec<(f64, Seed)> = shifts
+        .into_iter()
+        .map(|sh| (l, Seed::Uniform(sh)))
+        .collect();
+    let features = crate::certificate::feature_shifts(stiffness, eta, &[0, 1, 2, 3], false);
+    jobs.extend(features.into_iter().map(|sh| (l, Seed::Shifted(sh))));
     jobs
 }
 
-/// The lengths at which branch `eta` is seeded: on the certificate's sample lengths of
-/// `range` (those at least `2 ×` [`SWITCH_DISTANCE`] from a great circle), the number of
-/// placements where families leave the uniform circle
+/// The lengths at which branch `eta` is seeded, by stretch: on the certificate's sample
+/// lengths of `range` (those at least `2 ×` [`SWITCH_DISTANCE`] from a great circle), the
+/// number of placements where families leave the uniform circle
 /// ([`crate::placements::uniform_placements`]) is counted; each run of consecutive lengths
-/// with the same count is seeded at its middle length. Where the count changes, families are
-/// born or end in pairs (a fold of the placement's energy), so every stretch of the range
-/// with a different set of families gets its own seeds.
+/// with the same count is a stretch, its lengths ordered from its middle outwards. Where
+/// the count changes, families are born or end in pairs (a fold of the placed loop's
+/// energy), so every stretch of the range with a different set of families gets its own
+/// seeds.
 pub(super) fn seed_lengths(
     stiffness: &Stiffness,
     eta: u32,
     range: (f64, f64),
     circles: &[f64],
-) -> Vec<f64> {
+) -> Vec<Vec<f64>> {
     let (grid, _) = crate::certificate::sample_lengths(range.0, range.1);
     let counted: Vec<(f64, usize)> = grid
         .into_iter()
@@ -86,11 +89,14 @@ pub(super) fn seed_lengths(
         let j = (i..counted.len())
             .find(|&j| counted[j].1 != counted[i].1)
             .unwrap_or(counted.len());
-        out.push(counted[(i + j - 1) / 2].0);
+        let mid = (i + j - 1) / 2;
+        let mut order: Vec<usize> = (i..j).collect();
+        order.sort_by_key(|&k| (k.abs_diff(mid), k));
+        out.push(order.into_iter().map(|k| counted[k].0).collect());
         i = j;
     }
     if out.is_empty() {
-        out.push(0.5 * (range.0 + range.1));
+        out.push(vec![0.5 * (range.0 + range.1)]);
     }
     out
 }
@@ -239,4 +245,21 @@ fn open_dropped(eq: &rodloop_solver::Equilibrium, eta: u32, lbar: f64) -> bool {
         debug(|| format!("seed of eta {eta} at {lbar}: the loop does not close, dropped"));
     }
     ok
+}
+
+/// The state of an Euler start of `eta` periods with its origin moved by `shift`, relaxed
+/// and solved on `model` (the tracing resolution), if it has `eta` periods of `κ_g` and
+/// closes.
+pub(super) fn seed_state(
+    model: &SurfaceModel,
+    eta: u32,
+    lbar: f64,
+    shift: f64,
+) -> Option<Vec<f64>> {
+    let start = StartShape::Euler { l: eta }.shifted(lbar, shift).ok()?;
+    let kappa = start.gauss_values(model).ok()?;
+    let eq = solve(model, &kappa, &SolveOptions::default())
+        .map_err(|e| debug(|| format!("seed solve failed: {e}")))
+        .ok()?;
+    (periods_of(&eq).ok()? == eta as usize && open_dropped(&eq, eta, lbar)).then(|| eq.state())
 }
