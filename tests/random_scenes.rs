@@ -8,7 +8,7 @@
 //! stable one at sample lengths (a `solve` result whose loop does not close is no equilibrium
 //! and is not compared; it is printed).
 //!
-//! `RODLOOP_RANDOM_SCENES=N` checks `N` scenes (default 2) on `RODLOOP_RANDOM_SPAN` of `L̄`
+//! `RODLOOP_RANDOM_SCENES=N` checks `N` scenes (default 3) on `RODLOOP_RANDOM_SPAN` of `L̄`
 //! (default 0.3); `scripts/random_scenes.sh` runs more on longer ranges.
 
 mod common;
@@ -34,7 +34,7 @@ impl Lcg {
     }
 }
 
-/// A two-segment surface scene: `D1/D0` log-uniform in 0.01–0.7, the soft segment 0.1–0.9
+/// A two-segment surface scene: `D1/D0` in 0.01–0.7 (log scale), the soft segment 0.1–0.9
 /// of the loop at a random place, `γ` in 20–300, on `lo ≤ L̄ ≤ hi`.
 struct Scene {
     d1: f64,
@@ -46,11 +46,15 @@ struct Scene {
 }
 
 impl Scene {
-    fn random(g: &mut Lcg, span: f64) -> Self {
-        let d1 = (g.range(0.01f64.ln(), 0.7f64.ln())).exp();
-        let len = g.range(0.1, 0.9);
+    /// Scene `k` of `n`: each of `D1/D0`, the soft segment's length and `γ` is drawn from
+    /// its own `k`-th of `n` equal slices of its range (slices permuted differently for the
+    /// three, a Latin hypercube), so that a few scenes span the ranges.
+    fn random(g: &mut Lcg, span: f64, k: usize, n: usize) -> Self {
+        let slice = |g: &mut Lcg, j: usize| (j as f64 + g.next()) / n as f64;
+        let d1 = (0.01f64.ln() + slice(g, k) * (0.7f64.ln() - 0.01f64.ln())).exp();
+        let len = 0.1 + 0.8 * slice(g, n - 1 - k);
         let s0 = g.range(0.0, 1.0 - len);
-        let gamma = g.range(20.0, 300.0);
+        let gamma = 20.0 + 280.0 * slice(g, (k + n / 2) % n);
         let lo = g.range(1.05, 2.9 - span);
         Self {
             d1,
@@ -413,7 +417,7 @@ fn random_two_segment_scenes() {
     let n: usize = std::env::var("RODLOOP_RANDOM_SCENES")
         .ok()
         .and_then(|v| v.parse().ok())
-        .unwrap_or(2);
+        .unwrap_or(3);
     let span: f64 = std::env::var("RODLOOP_RANDOM_SPAN")
         .ok()
         .and_then(|v| v.parse().ok())
@@ -421,7 +425,7 @@ fn random_two_segment_scenes() {
     let mut g = Lcg(20_241_117);
     let mut bad = Vec::new();
     for k in 0..n {
-        let sc = Scene::random(&mut g, span);
+        let sc = Scene::random(&mut g, span, k, n);
         let dir = tmp(&format!("random-scene-{k}"));
         std::fs::create_dir_all(&dir).unwrap();
         let file = dir.join("scene.toml");
@@ -522,5 +526,28 @@ fn random_profile_sharp_transition_at_the_origin() {
     let out = dir.join("diagram");
     run_diagram(&file, &out, &[]);
     let bad = check_diagram(&out, &file, 1.0, 3.0, "sharp transition at the origin");
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
+}
+
+/// A nearly uniform rod (`D1/D0 = 0.95`): the placement of the soft segment is nearly
+/// neutral, and the families are those that leave the uniform circle at the critical
+/// placements.
+#[test]
+fn nearly_uniform_profile() {
+    let dir = tmp("nearly-uniform");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("scene.toml");
+    let sc = Scene {
+        d1: 0.95,
+        s0: 0.15,
+        s1: 0.52,
+        gamma: 80.0,
+        lo: 1.4,
+        hi: 1.7,
+    };
+    std::fs::write(&file, sc.toml()).unwrap();
+    let out = dir.join("diagram");
+    run_diagram(&file, &out, &[]);
+    let bad = check_diagram(&out, &file, sc.lo, sc.hi, "nearly uniform");
     assert!(bad.is_empty(), "{}", bad.join("\n"));
 }

@@ -13,11 +13,11 @@
 //!    placement where a family leaves the uniform circle of loops as `D1/D0` departs from 1
 //!    (the critical points of the placed loop's energy on the scene's profile,
 //!    [`crate::placements::uniform_placements`]), continued in `ln(D1/D0)` from 0 to the
-//!    scene's contrast by pseudo-arclength, and the Euler rotation curve `l = η` (Eqs. 4–8)
-//!    with each stiffness change at the phases `j/(8η)` (`j = 0…3`) of its `κ_g`, solved
-//!    directly; at the middle length of every stretch of the range over which the number of
-//!    these placements is the same (where no seed converges there, at the next of its
-//!    lengths outwards where one does). Where no seed converges anywhere, the states
+//!    scene's contrast by pseudo-arclength; where none of these converges, the Euler
+//!    rotation curve `l = η` (Eqs. 4–8) with the stiffness change `s0*` at the phases
+//!    `j/(8η)` (`j = 0…3`) of its `κ_g`, solved directly. The range is cut into stretches
+//!    over which the number of these placements is the same; each placement is seeded at
+//!    the length nearest its stretch's middle where its continuation converges. Where no seed converges anywhere, the states
 //!    `rodloop solve --branch` finds at the stretches' middles. A seed that lies on
 //!    a family already traced (itself, its reflection, its mirror image or both;
 //!    `images.rs`) is dropped.
@@ -137,29 +137,62 @@ pub fn compute_families(
         });
         (x, ts.elapsed().as_secs_f64())
     };
-    // Each stretch is seeded at its middle length, or where no seed converges there, at the
-    // next of its lengths (outwards from the middle) where one does.
+    // Each placement of a stretch is seeded at the length nearest the stretch's middle where
+    // its continuation from the uniform rod reaches the scene's contrast with `η` periods;
+    // at a length where none of the placements still open converges, the Euler starts are
+    // tried too (until one converges).
     'stretches: for stretch in &stretches {
+        let mut open: Option<Vec<usize>> = None;
+        let mut euler_found = false;
         for &l in stretch {
-            let jobs = seed_jobs(&opts.stiffness, eta, l);
-            seeds_tried += jobs.len();
-            let solved = run_parallel(
-                opts.worker_threads(),
-                jobs.clone(),
-                &mut |_| {},
-                &mut |_| {},
-                |(lbar, seed), _| solve_seed(lbar, seed),
-            );
-            let mut any = false;
-            for (&(lbar, seed), (seeded, secs)) in jobs.iter().zip(solved) {
-                any |= seeded.is_some();
-                if !tr.take(lbar, seed, seeded, secs, progress)? {
-                    break 'stretches;
+            let (uniform, euler) = seed_jobs(&opts.stiffness, eta, l);
+            let idx: Vec<usize> = open
+                .clone()
+                .unwrap_or_else(|| (0..uniform.len()).collect())
+                .into_iter()
+                .filter(|&k| k < uniform.len())
+                .collect();
+            let jobs: Vec<(f64, Seed)> = idx.iter().map(|&k| uniform[k]).collect();
+            let mut converged = Vec::new();
+            let mut groups = vec![(idx, jobs)];
+            if !euler_found {
+                groups.push((Vec::new(), euler));
+            }
+            for (gi, (idx, jobs)) in groups.into_iter().enumerate() {
+                if gi == 1 && !converged.is_empty() {
+                    break;
+                }
+                seeds_tried += jobs.len();
+                let solved = run_parallel(
+                    opts.worker_threads(),
+                    jobs.clone(),
+                    &mut |_| {},
+                    &mut |_| {},
+                    |(lbar, seed), _| solve_seed(lbar, seed),
+                );
+                for (j, (&(lbar, seed), (seeded, secs))) in jobs.iter().zip(solved).enumerate() {
+                    if seeded.is_some() {
+                        if gi == 0 {
+                            converged.push(idx[j]);
+                        } else {
+                            euler_found = true;
+                        }
+                    }
+                    if !tr.take(lbar, seed, seeded, secs, progress)? {
+                        break 'stretches;
+                    }
                 }
             }
-            if any {
+            let left: Vec<usize> = open
+                .take()
+                .unwrap_or_else(|| (0..uniform.len()).collect())
+                .into_iter()
+                .filter(|k| !converged.contains(k))
+                .collect();
+            if left.is_empty() {
                 break;
             }
+            open = Some(left);
         }
     }
     let seed_lengths: Vec<f64> = stretches

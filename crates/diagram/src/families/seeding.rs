@@ -32,27 +32,33 @@ pub(super) enum Seed {
     Found,
 }
 
-/// The seeds of branch `eta` at `l`, in the order they are followed: every placement of
+/// The seeds of branch `eta` at `l`: every placement of
 /// [`crate::placements::uniform_placements`] there (the critical points of the placed
-/// loop's energy and the mirror-symmetric placements) continued from the uniform rod, and
-/// the Euler start `l = η` with the stiffness change `s0*` at the phases `j/(8η)`,
-/// `j = 0…3`, of its `κ_g` ([`crate::certificate::feature_shifts`]; half a period, a shift
-/// by half a period is the reflection `κ_g → −κ_g`, and the profile's mirror symmetry
-/// carries them to `s1*`), solved directly: a family that folds away before the scene's
-/// contrast at this length, or reaches it with another dominant harmonic, may still have
-/// states of `η` periods there.
-pub(super) fn seed_jobs(stiffness: &Stiffness, eta: u32, l: f64) -> Vec<(f64, Seed)> {
+/// loop's energy and the mirror-symmetric placements) continued from the uniform rod; and,
+/// for where none of these converges (a family may fold away before the scene's contrast at
+/// this length, or reach it with another dominant harmonic), the Euler start `l = η` with
+/// the stiffness change `s0*` at the phases `j/(8η)`, `j = 0…3`, of its `κ_g`
+/// ([`crate::certificate::feature_shifts`]; half a period, a shift by half a period is the
+/// reflection `κ_g → −κ_g`, and the profile's mirror symmetry carries them to `s1*`),
+/// solved directly.
+pub(super) fn seed_jobs(
+    stiffness: &Stiffness,
+    eta: u32,
+    l: f64,
+) -> (Vec<(f64, Seed)>, Vec<(f64, Seed)>) {
     let shifts = crate::placements::uniform_placements(stiffness, eta, l)
         .map_err(|e| debug(|| format!("placements of eta {eta} at {l}: {e}")))
         .unwrap_or_default();
     debug(|| format!("eta {eta} at {l:.4}: placements {shifts:.4?}"));
-    let mut jobs: Vec<(f64, Seed)> = shifts
+    let uniform = shifts
         .into_iter()
         .map(|sh| (l, Seed::Uniform(sh)))
         .collect();
-    let features = crate::certificate::feature_shifts(stiffness, eta, &[0, 1, 2, 3], false);
-    jobs.extend(features.into_iter().map(|sh| (l, Seed::Shifted(sh))));
-    jobs
+    let euler = crate::certificate::feature_shifts(stiffness, eta, &[0, 1, 2, 3], false)
+        .into_iter()
+        .map(|sh| (l, Seed::Shifted(sh)))
+        .collect();
+    (uniform, euler)
 }
 
 /// The lengths at which branch `eta` is seeded, by stretch: on the certificate's sample
