@@ -54,7 +54,14 @@ pub(super) fn seed_jobs(
         .into_iter()
         .map(|sh| (l, Seed::Uniform(sh)))
         .collect();
-    let euler = crate::certificate::feature_shifts(stiffness, eta, &[0, 1, 2, 3], false)
+    let mut shifts = crate::certificate::feature_shifts(stiffness, eta, &[0, 1, 2, 3], false);
+    if shifts.is_empty() {
+        // A profile without named stiffness changes (a table): the phases at the origin.
+        shifts = (0..4)
+            .map(|j| f64::from(j) / (8.0 * f64::from(eta)))
+            .collect();
+    }
+    let euler = shifts
         .into_iter()
         .map(|sh| (l, Seed::Shifted(sh)))
         .collect();
