@@ -32,6 +32,9 @@ pub(super) enum Seed {
     Found,
 }
 
+/// A seed to solve: its length and how.
+pub(super) type Job = (f64, Seed);
+
 /// The seeds of branch `eta` at `l`: every placement of
 /// [`crate::placements::uniform_placements`] there (the critical points of the placed
 /// loop's energy and the mirror-symmetric placements) continued from the uniform rod; and,
@@ -41,11 +44,7 @@ pub(super) enum Seed {
 /// ([`crate::certificate::feature_shifts`]; half a period, a shift by half a period is the
 /// reflection `κ_g → −κ_g`, and the profile's mirror symmetry carries them to `s1*`),
 /// solved directly.
-pub(super) fn seed_jobs(
-    stiffness: &Stiffness,
-    eta: u32,
-    l: f64,
-) -> (Vec<(f64, Seed)>, Vec<(f64, Seed)>) {
+pub(super) fn seed_jobs(stiffness: &Stiffness, eta: u32, l: f64) -> (Vec<Job>, Vec<Job>) {
     let shifts = crate::placements::uniform_placements(stiffness, eta, l)
         .map_err(|e| debug(|| format!("placements of eta {eta} at {l}: {e}")))
         .unwrap_or_default();
