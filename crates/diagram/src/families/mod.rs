@@ -13,11 +13,13 @@
 //!    placement where a family leaves the uniform circle of loops as `D1/D0` departs from 1
 //!    (the critical points of the placed loop's energy on the scene's profile,
 //!    [`crate::placements::uniform_placements`]), continued in `ln(D1/D0)` from 0 to the
-//!    scene's contrast by pseudo-arclength; where none of these converges, the Euler
-//!    rotation curve `l = η` (Eqs. 4–8) with the stiffness change `s0*` at the phases
-//!    `j/(8η)` (`j = 0…3`) of its `κ_g`, solved directly. The range is cut into stretches
-//!    over which the number of these placements is the same; each placement is seeded at
-//!    the length nearest its stretch's middle where its continuation converges. Where no seed converges anywhere, the states
+//!    scene's contrast by pseudo-arclength; and the Euler rotation curve `l = η`
+//!    (Eqs. 4–8) with the stiffness change `s0*` at the phases `j/(8η)` (`j = 0…3`) of its
+//!    `κ_g`, solved directly. The range is cut into stretches over which the number of
+//!    these placements is the same; each placement is seeded at the length nearest its
+//!    stretch's middle where its continuation converges, the Euler starts at the middle,
+//!    at the stretch's two ends (where families are born in pairs or cut by the range) and
+//!    at any length where no open placement converges. Where no seed converges anywhere, the states
 //!    `rodloop solve --branch` finds at the stretches' middles. A seed that lies on
 //!    a family already traced (itself, its reflection, its mirror image or both;
 //!    `images.rs`) is dropped.
@@ -139,12 +141,12 @@ pub fn compute_families(
     };
     // Each placement of a stretch is seeded at the length nearest the stretch's middle where
     // its continuation from the uniform rod reaches the scene's contrast with `η` periods;
-    // at a length where none of the placements still open converges, the Euler starts are
-    // tried too (until one converges).
+    // the Euler starts at the middle, and at a length where none of the placements still
+    // open converges (until one converges).
     'stretches: for stretch in &stretches {
         let mut open: Option<Vec<usize>> = None;
         let mut euler_found = false;
-        for &l in stretch {
+        for (li, &l) in stretch.iter().enumerate() {
             let (uniform, euler) = seed_jobs(&opts.stiffness, eta, l);
             let idx: Vec<usize> = open
                 .clone()
@@ -159,7 +161,7 @@ pub fn compute_families(
                 groups.push((Vec::new(), euler));
             }
             for (gi, (idx, jobs)) in groups.into_iter().enumerate() {
-                if gi == 1 && !converged.is_empty() {
+                if gi == 1 && li > 0 && !converged.is_empty() {
                     break;
                 }
                 seeds_tried += jobs.len();
@@ -193,6 +195,28 @@ pub fn compute_families(
                 break;
             }
             open = Some(left);
+        }
+        // The stretch's ends (where families are born in pairs, or cut by the range): the
+        // Euler starts there.
+        let ends = [
+            stretch.iter().copied().reduce(f64::min),
+            stretch.iter().copied().reduce(f64::max),
+        ];
+        for l in ends.into_iter().flatten() {
+            let (_, euler) = seed_jobs(&opts.stiffness, eta, l);
+            seeds_tried += euler.len();
+            let solved = run_parallel(
+                opts.worker_threads(),
+                euler.clone(),
+                &mut |_| {},
+                &mut |_| {},
+                |(lbar, seed), _| solve_seed(lbar, seed),
+            );
+            for (&(lbar, seed), (seeded, secs)) in euler.iter().zip(solved) {
+                if !tr.take(lbar, seed, seeded, secs, progress)? {
+                    break 'stretches;
+                }
+            }
         }
     }
     let seed_lengths: Vec<f64> = stretches
