@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # More random two-segment scenes than CI checks (tests/random_scenes.rs): N scenes (default
 # 8) on a range of SPAN in L̄ (default 1.0). Each scene: closure, sphere, branch and energy of
-# every state file, label consistency, and `rodloop solve --branch` finding nothing below the
-# diagram's stable state at two lengths.
+# every state file, label consistency, nothing unexplained in the completeness certificate,
+# and `rodloop solve --branch` finding nothing below the diagram's stable state at two lengths.
 #
 #   scripts/random_scenes.sh [N] [SPAN]
 set -euo pipefail

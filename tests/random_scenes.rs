@@ -1,13 +1,14 @@
 //! Two-segment scenes a user might write, through the binary: randomly generated profiles
 //! (own generator, fixed seed) and the profile `d1 = 0.3, s0 = 0.2, s1 = 0.4, gamma = 100`.
 //! For each diagram: every state file closes, lies on the sphere, has the branch of its row
-//! (dominant harmonic of `κ_g`) and the energy of its row; labels agree with the traced
+//! (dominant harmonic of `κ_g`, or a family with states of that harmonic) and the energy of
+//! its row; the completeness certificate leaves nothing unexplained; labels agree with the traced
 //! energies (the lowest index-0 state is "stable", other index-0 states "metastable",
 //! index > 0 "unstable"); and `rodloop solve --branch B` finds no state below the diagram's
 //! stable one at sample lengths (a `solve` result whose loop does not close is no equilibrium
 //! and is not compared; it is printed).
 //!
-//! `RODLOOP_RANDOM_SCENES=N` checks `N` scenes (default 2) on `RODLOOP_RANDOM_SPAN` of `L̄`
+//! `RODLOOP_RANDOM_SCENES=N` checks `N` scenes (default 3) on `RODLOOP_RANDOM_SPAN` of `L̄`
 //! (default 0.3); `scripts/random_scenes.sh` runs more on longer ranges.
 
 mod common;
@@ -33,7 +34,7 @@ impl Lcg {
     }
 }
 
-/// A two-segment surface scene: `D1/D0` log-uniform in 0.01–0.7, the soft segment 0.1–0.9
+/// A two-segment surface scene: `D1/D0` in 0.01–0.7 (log scale), the soft segment 0.1–0.9
 /// of the loop at a random place, `γ` in 20–300, on `lo ≤ L̄ ≤ hi`.
 struct Scene {
     d1: f64,
@@ -45,11 +46,15 @@ struct Scene {
 }
 
 impl Scene {
-    fn random(g: &mut Lcg, span: f64) -> Self {
-        let d1 = (g.range(0.01f64.ln(), 0.7f64.ln())).exp();
-        let len = g.range(0.1, 0.9);
+    /// Scene `k` of `n`: each of `D1/D0`, the soft segment's length and `γ` is drawn from
+    /// its own `k`-th of `n` equal slices of its range (slices permuted differently for the
+    /// three, a Latin hypercube), so that a few scenes span the ranges.
+    fn random(g: &mut Lcg, span: f64, k: usize, n: usize) -> Self {
+        let slice = |g: &mut Lcg, j: usize| (j as f64 + g.next()) / n as f64;
+        let d1 = (0.01f64.ln() + slice(g, k) * (0.7f64.ln() - 0.01f64.ln())).exp();
+        let len = 0.1 + 0.8 * slice(g, n - 1 - k);
         let s0 = g.range(0.0, 1.0 - len);
-        let gamma = g.range(20.0, 300.0);
+        let gamma = 20.0 + 280.0 * slice(g, (k + n / 2) % n);
         let lo = g.range(1.05, 2.9 - span);
         Self {
             d1,
@@ -229,7 +234,21 @@ fn check_diagram(dir: &Path, scene_file: &Path, lo: f64, hi: f64, what: &str) ->
     let mut bad = Vec::new();
     let rows = rows(dir);
     assert!(!rows.is_empty(), "{what}: no rows");
-    // State files: closed, on the sphere, the row's branch and energy.
+    // The completeness certificate: nothing found below the traced states is left
+    // unexplained.
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let unexplained = summary["certificate"]["unexplained"]
+        .as_array()
+        .map_or(0, Vec::len);
+    if summary["certificate"].is_null() || unexplained > 0 {
+        bad.push(format!(
+            "{what}: the certificate leaves {unexplained} state(s) unexplained: {}",
+            summary["certificate"]["unexplained"]
+        ));
+    }
+    // State files: closed, on the sphere, the row's energy; their dominant harmonics.
+    let mut harmonics = Vec::with_capacity(rows.len());
     for r in &rows {
         let st = state(&dir.join(&r.file));
         let m = st.len();
@@ -258,11 +277,22 @@ fn check_diagram(dir: &Path, scene_file: &Path, lo: f64, hi: f64, what: &str) ->
             ));
         }
         let kg: Vec<f64> = st.iter().map(|p| p[5]).collect();
-        let eta = dominant_harmonic(&kg);
-        if eta != r.eta {
+        harmonics.push(dominant_harmonic(&kg));
+    }
+    // Branch identity: a state's dominant harmonic of `κ_g` is its row's `η`, or, where a
+    // soft segment bends the loop so that another harmonic dominates, the state lies on a
+    // family (one curve followed by continuation from its seed) that has states of `η`
+    // periods: its branch is the seed's, by continuation.
+    for (r, &h) in rows.iter().zip(&harmonics) {
+        let family_has_eta = rows
+            .iter()
+            .zip(&harmonics)
+            .any(|(o, &ho)| (o.branch, o.family) == (r.branch, r.family) && ho == r.eta);
+        if h != r.eta && !family_has_eta {
             bad.push(format!(
-                "{what}: {} (row of branch {}, η = {}) has {eta} periods of κ_g",
-                r.file, r.branch, r.eta
+                "{what}: {} (row of branch {}, η = {}) has {h} periods of κ_g, and no state of \
+                 its family has {}",
+                r.file, r.branch, r.eta, r.eta
             ));
         }
     }
@@ -387,7 +417,7 @@ fn random_two_segment_scenes() {
     let n: usize = std::env::var("RODLOOP_RANDOM_SCENES")
         .ok()
         .and_then(|v| v.parse().ok())
-        .unwrap_or(2);
+        .unwrap_or(3);
     let span: f64 = std::env::var("RODLOOP_RANDOM_SPAN")
         .ok()
         .and_then(|v| v.parse().ok())
@@ -395,7 +425,7 @@ fn random_two_segment_scenes() {
     let mut g = Lcg(20_241_117);
     let mut bad = Vec::new();
     for k in 0..n {
-        let sc = Scene::random(&mut g, span);
+        let sc = Scene::random(&mut g, span, k, n);
         let dir = tmp(&format!("random-scene-{k}"));
         std::fs::create_dir_all(&dir).unwrap();
         let file = dir.join("scene.toml");
@@ -473,5 +503,51 @@ fn state_files_hold_their_rows_at_strong_contrast() {
             ));
         }
     }
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
+}
+
+/// A profile drawn at random (`d1 = 0.054, s0 = 0.001, s1 = 0.502, gamma = 297`) on the
+/// default range `1 ≤ L̄ ≤ 3`: a contrast close to the strong one with a sharp transition
+/// at the loop's origin.
+#[test]
+fn random_profile_sharp_transition_at_the_origin() {
+    let dir = tmp("sharp-origin");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("scene.toml");
+    let sc = Scene {
+        d1: 0.054,
+        s0: 0.001,
+        s1: 0.502,
+        gamma: 297.0,
+        lo: 1.0,
+        hi: 3.0,
+    };
+    std::fs::write(&file, sc.toml()).unwrap();
+    let out = dir.join("diagram");
+    run_diagram(&file, &out, &[]);
+    let bad = check_diagram(&out, &file, 1.0, 3.0, "sharp transition at the origin");
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
+}
+
+/// A nearly uniform rod (`D1/D0 = 0.95`): the placement of the soft segment is nearly
+/// neutral, and the families are those that leave the uniform circle at the critical
+/// placements.
+#[test]
+fn nearly_uniform_profile() {
+    let dir = tmp("nearly-uniform");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("scene.toml");
+    let sc = Scene {
+        d1: 0.95,
+        s0: 0.15,
+        s1: 0.52,
+        gamma: 80.0,
+        lo: 1.4,
+        hi: 1.7,
+    };
+    std::fs::write(&file, sc.toml()).unwrap();
+    let out = dir.join("diagram");
+    run_diagram(&file, &out, &[]);
+    let bad = check_diagram(&out, &file, sc.lo, sc.hi, "nearly uniform");
     assert!(bad.is_empty(), "{}", bad.join("\n"));
 }

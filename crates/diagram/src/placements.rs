@@ -2,11 +2,16 @@
 //! (Sec. 4.3) placed at several offsets along it: where the soft segment sits on the loop
 //! selects the state, so the starts are the exact loop of `η` periods shifted by
 //! `k/8 · 1/(2η)` of the length (`κ_g²` has period `1/(2η)`).
+//!
+//! [`uniform_placements`] gives the placements at which the families of a two-segment rod
+//! leave the uniform rod's circle of loops as `D1/D0` departs from 1: the critical points of
+//! the energy of the uniform rod's exact loop laid on the scene's profile, as a function of
+//! its placement.
 
 use rodloop_solver::identify::identify_equilibrium;
 use rodloop_solver::{
     solve, Confinement, Equilibrium, Globalization, SolveOptions, SolverError, StartShape,
-    SurfaceModel,
+    Stiffness, SurfaceModel,
 };
 
 /// The shift of start `k` (eighths of `1/(2η)`).
@@ -40,4 +45,195 @@ pub(crate) fn classify(eq: &Equilibrium, eta: u32, tol: f64) -> (bool, usize, f6
         .unwrap_or(false);
     let idx = eq.model().index(&eq.state(), tol).unwrap_or(usize::MAX);
     (ok_eta, idx, eq.energy().total)
+}
+
+/// Samples per half period of `κ_g²` at which [`uniform_placements`] evaluates the energy
+/// (a resolution: the critical points are refined between samples by a parabola).
+const HALF_PERIOD_SAMPLES: usize = 512;
+
+/// The placements (origin shifts, fractions of the length in `[0, 1/(2η))`, as
+/// [`StartShape::shifted`] takes them) of the exact loop of branch `eta` of the uniform rod
+/// at `lbar` from which the families of the profile `stiffness` leave the uniform rod's
+/// circle of loops.
+///
+/// At `D1/D0 = 1` every placement of the exact loop is an equilibrium (the arclength shift
+/// is a symmetry). For `D1/D0 = 1 − ε` the circle breaks (Lyapunov–Schmidt reduction onto
+/// the shift) into the critical points of the energy of the placed loop to first order in
+/// `ε`, `f(φ) = ½ ∫ D(σ) κ(σ + φ)² dσ` (paper Eq. (2) with the profile of Eq. (51); on the
+/// sphere `κ² = κ_g² + 1/R²`, and the constant part does not depend on `φ`): its maxima and
+/// minima over the half period `1/(2η)` of `κ_g²` (a shift by `1/(2η)` is the reflection
+/// `κ_g → −κ_g`). They follow from the profile's features (for Eq. (51), the soft segment's
+/// centre at an extreme or a zero of `κ_g`, and any asymmetric placements its length
+/// selects) and from the branch's period count. Where `f` is constant to rounding (a soft
+/// segment of a whole number of half periods: first order selects nothing) only the
+/// mirror-symmetric placements remain.
+pub(crate) fn uniform_placements(
+    stiffness: &Stiffness,
+    eta: u32,
+    lbar: f64,
+) -> Result<Vec<f64>, SolverError> {
+    let profile = stiffness.validate()?;
+    let kg = StartShape::Exact { eta }.interpolant(lbar)?;
+    let half = HALF_PERIOD_SAMPLES;
+    let m = 2 * eta.max(1) as usize * half;
+    let at = |j: usize| j as f64 / m as f64;
+    let k2: Vec<f64> = (0..m).map(|j| kg.eval(at(j)).powi(2)).collect();
+    let d: Vec<f64> = (0..m).map(|j| profile.eval(at(j)).d).collect();
+    let f: Vec<f64> = (0..half)
+        .map(|k| (0..m).map(|j| d[j] * k2[(j + k) % m]).sum::<f64>() / m as f64)
+        .collect();
+    let mut out: Vec<f64> = critical_points(&f)
+        .into_iter()
+        .map(|x| x / m as f64)
+        .collect();
+    // The mirror-symmetric placements are critical at every order (the energy is even about
+    // them): the soft segment's centre `c` at the extreme of `κ_g` at the loop's origin
+    // (shift `−c`) and at the zero a quarter period on (`1/(4η) − c`). They are the only
+    // placements where a soft segment of a whole number of half periods makes `f` constant.
+    if let Stiffness::Tanh { s0, s1, .. } = stiffness {
+        let hp = 0.5 / f64::from(eta.max(1));
+        let c = 0.5 * (s0 + s1);
+        for sh in [-c, 0.5 * hp - c] {
+            let sh = sh.rem_euclid(hp);
+            let dist = |o: f64| {
+                let d = (o - sh).rem_euclid(hp);
+                d.min(hp - d)
+            };
+            if out.iter().all(|&o| dist(o) > 1e-6 * hp) {
+                out.push(sh);
+            }
+        }
+    }
+    out.sort_by(f64::total_cmp);
+    Ok(out)
+}
+
+/// The maxima and minima of the periodic samples `f` (positions in samples, refined by the
+/// parabola through each extreme and its neighbours); empty where `f` varies by no more
+/// than rounding.
+fn critical_points(f: &[f64]) -> Vec<f64> {
+    let n = f.len();
+    let (lo, hi) = f
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let noise = 1e-11 * lo.abs().max(hi.abs());
+    if n < 3 || hi - lo <= noise {
+        return Vec::new();
+    }
+    // Differences below rounding count as zero; a plateau's extreme is its last sample.
+    let sign = |d: f64| {
+        if d > noise {
+            1
+        } else if d < -noise {
+            -1
+        } else {
+            0
+        }
+    };
+    let mut out = Vec::new();
+    let mut last = (0..n)
+        .rev()
+        .map(|k| sign(f[k] - f[(k + n - 1) % n]))
+        .find(|&s| s != 0)
+        .unwrap_or(0);
+    for k in 0..n {
+        let next = sign(f[(k + 1) % n] - f[k]);
+        if next != 0 {
+            if next != last {
+                let (a, b, c) = (f[(k + n - 1) % n], f[k], f[(k + 1) % n]);
+                let den = a - 2.0 * b + c;
+                let off = if den.abs() > 0.0 {
+                    (0.5 * (a - c) / den).clamp(-0.5, 0.5)
+                } else {
+                    0.0
+                };
+                out.push((k as f64 + off).rem_euclid(n as f64));
+            }
+            last = next;
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `f = cos(2πk/n)` has one maximum (at 0) and one minimum (at n/2); a sampled
+    /// `cos(2π(k − 0.3)/n) + 0.5 cos(6π(k − 0.3)/n)` has its extremes where the derivative
+    /// vanishes, found to the parabola's accuracy.
+    #[test]
+    fn critical_points_of_periodic_samples() {
+        let n = 64;
+        let c: Vec<f64> = (0..n)
+            .map(|k| (2.0 * std::f64::consts::PI * k as f64 / n as f64).cos())
+            .collect();
+        let mut p = critical_points(&c);
+        p.sort_by(f64::total_cmp);
+        assert_eq!(p.len(), 2, "{p:?}");
+        assert!(p[0].abs() < 1e-12 && (p[1] - 32.0).abs() < 1e-12, "{p:?}");
+        let w = |x: f64| 2.0 * std::f64::consts::PI * (x - 0.3) / n as f64;
+        let g: Vec<f64> = (0..n)
+            .map(|k| w(k as f64).cos() + 0.5 * (3.0 * w(k as f64)).cos())
+            .collect();
+        let p = critical_points(&g);
+        // g' ∝ −sin w − 1.5 sin 3w = 0: sin w = 0 or 1 + 1.5 (3 − 4 sin² w) = 0
+        // (sin² w = 5.5/6, four roots), six extremes in all.
+        assert_eq!(p.len(), 6, "{p:?}");
+        for x in p {
+            let d = w(x).sin() + 1.5 * (3.0 * w(x)).sin();
+            assert!(d.abs() < 0.02, "derivative {d} at {x}");
+        }
+        assert!(critical_points(&vec![1.0; n]).is_empty());
+    }
+
+    /// The placements of a two-segment profile are critical points of the placed uniform
+    /// loop's energy, computed here independently by central differences of the energy of
+    /// the shifted start on a model with the scene's profile (the energy `E` of a start is
+    /// its `½ ∫ D κ²`); the mirror symmetry of the profile makes the placement with the soft
+    /// segment's centre at a zero or extreme of `κ_g` critical, so there are at least two.
+    #[test]
+    fn uniform_placements_are_critical_points_of_the_placed_energy() {
+        let st = Stiffness::Tanh {
+            d0: 1.0,
+            d1: 0.2,
+            s0: 0.3,
+            s1: 0.62,
+            gamma: 60.0,
+        };
+        let profile = st.validate().unwrap();
+        for (eta, lbar) in [(1u32, 1.4), (2, 1.7), (3, 2.6)] {
+            let ps = uniform_placements(&st, eta, lbar).unwrap();
+            assert!(ps.len() >= 2, "eta {eta}: {ps:?}");
+            // The symmetric placements are among the critical points found from `f`: no
+            // more than the critical points of `f` are returned for this (non-degenerate)
+            // profile, and the count of extremes of a periodic function is even.
+            assert_eq!(ps.len() % 2, 0, "eta {eta}: {ps:?}");
+            let kg = StartShape::Exact { eta }.interpolant(lbar).unwrap();
+            // f(φ) by the trapezoidal rule on 20000 points (independent of the samples).
+            let f = |phi: f64| {
+                let n = 20_000;
+                (0..n)
+                    .map(|j| {
+                        let s = j as f64 / n as f64;
+                        profile.eval(s).d * kg.eval(s + phi).powi(2)
+                    })
+                    .sum::<f64>()
+                    / n as f64
+            };
+            let h = 1e-4;
+            let scale = (f(0.0) - f(0.25 / f64::from(eta))).abs().max(1e-12);
+            for &p in &ps {
+                assert!((0.0..0.5 / f64::from(eta)).contains(&p), "{p}");
+                let d = (f(p + h) - f(p - h)) / (2.0 * h);
+                // Relative to the variation over a quarter period per unit shift.
+                assert!(
+                    d.abs() < 2e-3 * scale * f64::from(eta),
+                    "eta {eta} placement {p}: f' = {d:e} (scale {scale:e})"
+                );
+            }
+        }
+    }
 }

@@ -47,7 +47,10 @@ impl Tracing<'_> {
     ) -> Result<bool, DiagramError> {
         let (branch, eta) = (self.branch, self.eta);
         let what = match seed {
-            Seed::Shifted(shift) => format!("origin moved by {shift:.4}"),
+            Seed::Uniform(shift) => format!(
+                "the uniform rod's loop with its origin moved by {shift:.4}, continued in D1/D0"
+            ),
+            Seed::Shifted(shift) => format!("Euler curve, origin moved by {shift:.4}"),
             Seed::Solve { .. } => "as `rodloop solve` finds it".to_string(),
             Seed::Found => "found below the traced states by the completeness certificate".into(),
         };
@@ -125,17 +128,6 @@ impl Tracing<'_> {
             &mut self.steps,
         );
         Ok(true)
-    }
-
-    /// Whether a followed curve has a stable (index 0) state at `lbar`: the states on
-    /// either side of it on some curve both have index 0.
-    pub(super) fn stable_at(&self, lbar: f64) -> bool {
-        self.curves.iter().any(|c| {
-            c.points.windows(2).any(|w| {
-                let (lo, hi) = (w[0].value.min(w[1].value), w[0].value.max(w[1].value));
-                lo <= lbar && lbar <= hi && w[0].index == Some(0) && w[1].index == Some(0)
-            })
-        })
     }
 }
 
@@ -470,7 +462,23 @@ fn switch_all(
             // Onto a known family (or an image of one) from its first point, or soon after.
             let image_end = match matched {
                 Some(m) if !m.own => {
+                    // The run is not kept, but the branch points it located before it met
+                    // the known family are switched at too.
                     *steps += run.steps;
+                    let first = m.first.min(run.points.len());
+                    let met: Vec<f64> = run.points[..first]
+                        .iter()
+                        .filter(|p| p.source == PointSource::BranchPoint)
+                        .map(|p| p.value)
+                        .collect();
+                    pending.extend(
+                        run.branch_points()
+                            .filter(|b| {
+                                (b.value - bp.value).abs() > 1e-6
+                                    && met.iter().any(|v| (v - b.value).abs() < 1e-12)
+                            })
+                            .cloned(),
+                    );
                     continue;
                 }
                 Some(m) => Some(cut_at_image(images, &mut run.points, m)),

@@ -9,13 +9,20 @@
 //!
 //! [`compute_families`]:
 //!
-//! 1. **Seeds** (`seeding.rs`): at mild contrast the Euler rotation curve `l = η` (Eqs. 4–8)
-//!    placed with its phases `j/(8η)` (`j = 0…3`, half a period: a shift by half a period is
-//!    the loop's reflection `κ_g → −κ_g`) at the stiffness change `s0*`, relaxed and solved at
-//!    three lengths inside the branch's range; at strong contrast the states `rodloop solve
-//!    --branch` finds there and the shifted direct solves at the lengths its continuation in
-//!    `L̄` starts from. A seed that lies on a family already traced (itself, its reflection,
-//!    its mirror image or both; `images.rs`) is dropped.
+//! 1. **Seeds** (`seeding.rs`): the uniform rod's exact loop of `η` periods at every
+//!    placement where a family leaves the uniform circle of loops as `D1/D0` departs from 1
+//!    (the critical points of the placed loop's energy on the scene's profile,
+//!    [`crate::placements::uniform_placements`]), continued in `ln(D1/D0)` from 0 to the
+//!    scene's contrast by pseudo-arclength; and the Euler rotation curve `l = η`
+//!    (Eqs. 4–8) with the stiffness change `s0*` at the phases `j/(8η)` (`j = 0…3`) of its
+//!    `κ_g`, solved directly. The range is cut into stretches over which the number of
+//!    these placements is the same; each placement is seeded at the length nearest its
+//!    stretch's middle where its continuation converges, the Euler starts at the middle,
+//!    at the stretch's two ends (where families are born in pairs or cut by the range) and
+//!    at any length where no open placement converges. Where no seed converges anywhere, the states
+//!    `rodloop solve --branch` finds at the stretches' middles. A seed that lies on
+//!    a family already traced (itself, its reflection, its mirror image or both;
+//!    `images.rs`) is dropped.
 //! 2. **Following** (`following.rs`): each new seed is followed in `L̄` in both directions
 //!    *through* its folds ([`FoldPolicy::Follow`]) with simple branch points detected, until
 //!    the range ends, the approach to a great-circle end (then `ends.rs` takes over down to
@@ -49,7 +56,7 @@ mod sheets;
 use std::time::Instant;
 
 use rodloop_exact::branch_of_eta;
-use rodloop_solver::{Confinement, Param, ParamProblem, Stiffness, SurfaceModel};
+use rodloop_solver::{Confinement, Param, ParamProblem, SurfaceModel};
 
 use crate::ends::SWITCH_DISTANCE;
 use crate::march::{FoldPolicy, MarchPoint};
@@ -59,7 +66,7 @@ use crate::types::{BranchEnd, BranchTimings, TracedBranch};
 use crate::{DiagramError, DiagramOptions, Progress};
 use following::{EndContext, Tracing};
 use images::Images;
-use seeding::{robust_seed, seed_jobs, seed_state, Seed, NEARLY_UNIFORM, STRONG_BELOW};
+use seeding::{robust_seed, seed_jobs, seed_lengths, seed_state, uniform_seed, Seed};
 
 /// Most families (followed curves) per branch `η`.
 pub const MAX_FAMILIES: usize = 16;
@@ -100,20 +107,9 @@ pub fn compute_families(
     let branch = su.branch;
     progress(Progress::BranchStarted { branch, eta });
     let (lo, hi, mid, cells) = (su.lo, su.hi, su.mid, su.cells);
-    let (exist_lo, exist_hi) = su.exist;
     let circles = su.settings.circles.clone();
     let (problem, images, settings) = (&su.problem, &su.images, &su.settings);
 
-    let span = hi - lo;
-    let seed_lengths: Vec<f64> = [0.5, 0.25, 0.75]
-        .iter()
-        .map(|f| lo + f * span)
-        .filter(|l| {
-            circles
-                .iter()
-                .all(|m| (l - m).abs() > 2.0 * SWITCH_DISTANCE)
-        })
-        .collect();
     let end_ctx = su.end_context(opts);
     let mut tr = Tracing {
         ctx: &end_ctx,
@@ -128,61 +124,122 @@ pub fn compute_families(
         steps: 0,
         seed_note: Vec::new(),
     };
-    // Very soft segments, and nearly uniform rods (where Newton from Euler starts drifts
-    // along the nearly neutral placement of the soft segment), are seeded as `rodloop solve`
-    // finds the states.
-    let as_solve = matches!(&opts.stiffness, Stiffness::Tanh { d0, d1, .. }
-        if d1 / d0 < STRONG_BELOW || d1 / d0 > NEARLY_UNIFORM);
-    let jobs = seed_jobs(
-        &seed_lengths,
-        eta,
-        (exist_lo, exist_hi),
-        (lo, hi),
-        &circles,
-        as_solve,
-        &crate::certificate::feature_shifts(&opts.stiffness, eta, &[0, 1, 2, 3], false),
-    );
-    let seeds_tried = jobs.len();
-    // Every seed is solved before any is followed, on the crate's thread pool: the seeds are
-    // independent of each other and of the curves (which only decide whether a seed is
-    // new).
+    let stretches = seed_lengths(&opts.stiffness, eta, (lo, hi), &circles);
+    let mut seeds_tried = 0;
+    // Every seed of a length is solved before any is followed, on the crate's thread pool:
+    // the seeds are independent of each other and of the curves (which only decide whether
+    // a seed is new).
     let solve_seed = |lbar: f64, seed: Seed| {
         let ts = Instant::now();
         let x = problem.model_at(lbar).ok().and_then(|m| match seed {
             Seed::Solve { starts } => robust_seed(opts, &m, eta, lbar, starts),
+            Seed::Uniform(shift) => uniform_seed(&m, &opts.stiffness, eta, lbar, shift),
             Seed::Shifted(shift) => seed_state(&m, eta, lbar, shift),
             Seed::Found => None,
         });
         (x, ts.elapsed().as_secs_f64())
     };
-    let solved = run_parallel(
-        opts.worker_threads(),
-        jobs.clone(),
-        &mut |_| {},
-        &mut |_| {},
-        |(lbar, seed), _| solve_seed(lbar, seed),
-    );
-    let mut unsolved = Vec::new();
-    for (&(lbar, seed), (seeded, secs)) in jobs.iter().zip(solved) {
-        if seeded.is_none() && matches!(seed, Seed::Solve { .. }) {
-            unsolved.push(lbar);
+    // Each placement of a stretch is seeded at the length nearest the stretch's middle where
+    // its continuation from the uniform rod reaches the scene's contrast with `η` periods;
+    // the Euler starts at the middle, and at a length where none of the placements still
+    // open converges (until one converges).
+    'stretches: for stretch in &stretches {
+        let mut open: Option<Vec<usize>> = None;
+        let mut euler_found = false;
+        for (li, &l) in stretch.iter().enumerate() {
+            let (uniform, euler) = seed_jobs(&opts.stiffness, eta, l);
+            let idx: Vec<usize> = open
+                .clone()
+                .unwrap_or_else(|| (0..uniform.len()).collect())
+                .into_iter()
+                .filter(|&k| k < uniform.len())
+                .collect();
+            let jobs: Vec<(f64, Seed)> = idx.iter().map(|&k| uniform[k]).collect();
+            let mut converged = Vec::new();
+            let mut groups = vec![(idx, jobs)];
+            if !euler_found {
+                groups.push((Vec::new(), euler));
+            }
+            for (gi, (idx, jobs)) in groups.into_iter().enumerate() {
+                if gi == 1 && li > 0 && !converged.is_empty() {
+                    break;
+                }
+                seeds_tried += jobs.len();
+                let solved = run_parallel(
+                    opts.worker_threads(),
+                    jobs.clone(),
+                    &mut |_| {},
+                    &mut |_| {},
+                    |(lbar, seed), _| solve_seed(lbar, seed),
+                );
+                for (j, (&(lbar, seed), (seeded, secs))) in jobs.iter().zip(solved).enumerate() {
+                    if seeded.is_some() {
+                        if gi == 0 {
+                            converged.push(idx[j]);
+                        } else {
+                            euler_found = true;
+                        }
+                    }
+                    if !tr.take(lbar, seed, seeded, secs, progress)? {
+                        break 'stretches;
+                    }
+                }
+            }
+            let left: Vec<usize> = open
+                .take()
+                .unwrap_or_else(|| (0..uniform.len()).collect())
+                .into_iter()
+                .filter(|k| !converged.contains(k))
+                .collect();
+            if left.is_empty() {
+                break;
+            }
+            open = Some(left);
         }
-        if !tr.take(lbar, seed, seeded, secs, progress)? {
-            break;
+        // The stretch's ends (where families are born in pairs, or cut by the range): the
+        // Euler starts there.
+        let ends = [
+            stretch.iter().copied().reduce(f64::min),
+            stretch.iter().copied().reduce(f64::max),
+        ];
+        for l in ends.into_iter().flatten() {
+            let (_, euler) = seed_jobs(&opts.stiffness, eta, l);
+            seeds_tried += euler.len();
+            let solved = run_parallel(
+                opts.worker_threads(),
+                euler.clone(),
+                &mut |_| {},
+                &mut |_| {},
+                |(lbar, seed), _| solve_seed(lbar, seed),
+            );
+            for (&(lbar, seed), (seeded, secs)) in euler.iter().zip(solved) {
+                if !tr.take(lbar, seed, seeded, secs, progress)? {
+                    break 'stretches;
+                }
+            }
         }
     }
-    // Where seeds are `solve`'s (`as_solve`), its homotopies in D1/D0 where its starts
-    // failed, one length at a time, and only where no traced family of the branch is stable
-    // yet: they cost 0.3–1 s each and serve to find a state of the branch where none is known.
-    for lbar in unsolved {
-        if tr.stable_at(lbar) {
-            debug(|| format!("eta {eta} at {lbar:.3}: a stable state is traced, no homotopy"));
-            continue;
-        }
-        let seed = Seed::Solve { starts: false };
-        let (seeded, secs) = solve_seed(lbar, seed);
-        if !tr.take(lbar, seed, seeded, secs, progress)? {
-            break;
+    let seed_lengths: Vec<f64> = stretches
+        .iter()
+        .filter_map(|s| s.first().copied())
+        .collect();
+    // Where no family of the uniform rod reaches the scene's contrast at the seed lengths,
+    // the states `rodloop solve --branch` finds there: its direct and shifted starts, then
+    // its homotopies in D1/D0 where those fail.
+    if tr.curves.is_empty() {
+        for lbar in seed_lengths {
+            for starts in [true, false] {
+                let seed = Seed::Solve { starts };
+                seeds_tried += 1;
+                let (seeded, secs) = solve_seed(lbar, seed);
+                let found = seeded.is_some();
+                if !tr.take(lbar, seed, seeded, secs, progress)? {
+                    break;
+                }
+                if found {
+                    break;
+                }
+            }
         }
     }
     let Tracing {
@@ -197,8 +254,9 @@ pub fn compute_families(
             eta,
             lbar: mid,
             source: rodloop_solver::SolverError::InvalidInput(format!(
-                "none of the {seeds_tried} seeds (Euler starts, shifted, solved directly or by \
-                 homotopy) converged to a loop with {eta} period(s) of κ_g"
+                "none of the {seeds_tried} seeds (the uniform rod's loop continued in D1/D0 \
+                 at each placement, then `rodloop solve --branch`) converged to a loop with \
+                 {eta} period(s) of κ_g"
             )),
         });
     }
@@ -247,8 +305,6 @@ pub fn compute_families(
 /// images, the march settings.
 struct Setup {
     branch: u32,
-    /// Existence interval of the branch, `(η − 1, η + 1)` (`(0, 2)` for `η = 1`).
-    exist: (f64, f64),
     lo: f64,
     hi: f64,
     mid: f64,
@@ -296,7 +352,6 @@ impl Setup {
         settings.locate_tol = TRACE_LOCATE_TOL;
         Ok(Self {
             branch,
-            exist: (exist_lo, exist_hi),
             lo,
             hi,
             mid,
@@ -450,5 +505,67 @@ pub fn extend_families(
 fn debug(msg: impl FnOnce() -> String) {
     if std::env::var_os("RODLOOP_DEBUG_FAMILIES").is_some() {
         eprintln!("[families] {}", msg());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rodloop_solver::{StartShape, Stiffness};
+
+    /// A nearly uniform rod (`D1/D0 = 0.95`): every placement where a family leaves the
+    /// uniform circle is traced, with the energy first-order perturbation theory gives it:
+    /// `E R/(π D0) = L̄ ∫ D(σ) κ(σ + φ)² dσ` of the uniform rod's exact loop placed at `φ`
+    /// (`R = D0 = 1`, `κ² = κ_g² + 1`), computed here by the trapezoidal rule on the exact
+    /// loop, independently of the traced states. The error of first order is `O(ε²)`,
+    /// `ε = 0.05`: each traced energy lies within a tenth of the placements' energy spread.
+    #[test]
+    fn nearly_uniform_rod_traces_every_placement_at_its_first_order_energy() {
+        let st = Stiffness::Tanh {
+            d0: 1.0,
+            d1: 0.95,
+            s0: 0.15,
+            s1: 0.52,
+            gamma: 80.0,
+        };
+        let opts = DiagramOptions {
+            stiffness: st.clone(),
+            lbar_min: 1.4,
+            lbar_max: 1.7,
+            great_circles: false,
+            ..DiagramOptions::default()
+        };
+        let eta = 2;
+        let fam = compute_families(&opts, eta, &mut |_| {}).unwrap();
+        let profile = st.validate().unwrap();
+        for l in [1.45, 1.55, 1.65] {
+            let kg = StartShape::Exact { eta }.interpolant(l).unwrap();
+            let first_order = |phi: f64| {
+                let n = 20_000;
+                l * (0..n)
+                    .map(|j| {
+                        let s = j as f64 / n as f64;
+                        profile.eval(s).d * (kg.eval(s + phi).powi(2) + 1.0)
+                    })
+                    .sum::<f64>()
+                    / n as f64
+            };
+            let ps = crate::placements::uniform_placements(&st, eta, l).unwrap();
+            let predicted: Vec<f64> = ps.iter().map(|&p| first_order(p)).collect();
+            let spread = predicted.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+                - predicted.iter().copied().fold(f64::INFINITY, f64::min);
+            assert!(ps.len() >= 2 && spread > 1e-4, "{ps:?} {predicted:?}");
+            let traced: Vec<f64> = fam.sheets.iter().filter_map(|b| b.energy_at(l)).collect();
+            for (p, e) in ps.iter().zip(&predicted) {
+                let near = traced
+                    .iter()
+                    .map(|t| (t - e).abs())
+                    .fold(f64::INFINITY, f64::min);
+                assert!(
+                    near < 0.1 * spread,
+                    "L̄ = {l}, placement {p}: first order {e}, traced {traced:?} (spread {spread})"
+                );
+            }
+        }
     }
 }

@@ -1,7 +1,15 @@
-//! The seeds of a branch's families: Euler starts with the soft segment at several offsets,
-//! solved directly or as `rodloop solve --branch` does.
+//! The seeds of a branch's families: the uniform rod's exact loop at each placement from
+//! which a family leaves the uniform circle ([`crate::placements::uniform_placements`]),
+//! continued in `D1/D0` from 1 to the scene's contrast; `rodloop solve --branch` where none
+//! of these reaches the scene.
 
-use rodloop_solver::{solve, SolveOptions, StartShape, SurfaceModel};
+use rodloop_continuation::axis::{Axis, OnAxis};
+use rodloop_continuation::natural::{walk, NaturalSettings};
+use rodloop_continuation::target::{reach, ReachLimits};
+use rodloop_continuation::{Direction, PseudoArclength};
+use rodloop_solver::{
+    solve, solve_from_state, Param, ParamProblem, SolveOptions, StartShape, Stiffness, SurfaceModel,
+};
 
 use super::debug;
 use crate::ends::SWITCH_DISTANCE;
@@ -14,66 +22,194 @@ pub(super) enum Seed {
     /// The state `rodloop solve --branch` finds ([`robust_seed`]); without `starts`, only
     /// by its homotopies in `D1/D0` (its direct and shifted starts failed before).
     Solve { starts: bool },
-    /// The Euler start with its origin moved by the fraction given, solved directly
-    /// ([`seed_state`]).
+    /// The uniform rod's exact loop with its origin moved by the fraction given, continued
+    /// in `D1/D0` from 1 to the scene's contrast ([`uniform_seed`]).
+    Uniform(f64),
+    /// The Euler start `l = η` with its origin moved by the fraction given (a stiffness
+    /// change at a phase of its `κ_g`), solved directly ([`seed_state`]).
     Shifted(f64),
     /// A state found by the diagram's completeness certificate (`crate::certificate`).
     Found,
 }
 
-/// The seeds of branch `eta` (existence interval `exist`, traced on `range`), in the order
-/// they are followed.
-///
-/// For `0.05 ≤ D1/D0 ≤ 0.9`, the Euler start `l = η` placed by the profile's features
-/// (`anchored`: the shifts that put its phases `j/(8η)`, `j = 0…3`, at `s0*`,
-/// [`crate::certificate::feature_shifts`]) at each of `lengths`. At strong contrast and for nearly uniform rods
-/// (`as_solve`) the state `rodloop solve --branch` finds at each of `lengths` (its direct and shifted starts and its homotopies in `D1/D0`)
-/// and, where `solve` would follow a family in `L̄` from another length of the branch's
-/// existence interval (its last fallback; [`rodloop_solver::Fallbacks::lbar_path`]), the
-/// direct solves from the eight shifted starts it uses there, if that length lies in the
-/// range: the tracer follows those families in `L̄` itself. (The range end `L̄ = 1` of
-/// branch 2 is such a length: the family of `η = 1` that exists only on `1 ≤ L̄ < 1.052` at
-/// `D1/D0 = 0.001` is found there.)
-pub(super) fn seed_jobs(
-    lengths: &[f64],
-    eta: u32,
-    exist: (f64, f64),
-    range: (f64, f64),
-    circles: &[f64],
-    as_solve: bool,
-    anchored: &[f64],
-) -> Vec<(f64, Seed)> {
-    let e = f64::from(eta);
-    if !as_solve {
-        // The start's phases j/(8η), j = 0…3, at the soft segment's first end (the mirror
-        // symmetry of the profile carries these placements to its other end).
-        let shifts = if anchored.is_empty() {
-            (0..4).map(|j| j as f64 / (8.0 * e)).collect()
-        } else {
-            anchored.to_vec()
-        };
-        return lengths
-            .iter()
-            .flat_map(|&l| shifts.iter().map(move |&sh| (l, Seed::Shifted(sh))))
+/// A seed to solve: its length and how.
+pub(super) type Job = (f64, Seed);
+
+/// The seeds of branch `eta` at `l`: every placement of
+/// [`crate::placements::uniform_placements`] there (the critical points of the placed
+/// loop's energy and the mirror-symmetric placements) continued from the uniform rod; and,
+/// for where none of these converges (a family may fold away before the scene's contrast at
+/// this length, or reach it with another dominant harmonic), the Euler start `l = η` with
+/// the stiffness change `s0*` at the phases `j/(8η)`, `j = 0…3`, of its `κ_g`
+/// ([`crate::certificate::feature_shifts`]; half a period, a shift by half a period is the
+/// reflection `κ_g → −κ_g`, and the profile's mirror symmetry carries them to `s1*`),
+/// solved directly.
+pub(super) fn seed_jobs(stiffness: &Stiffness, eta: u32, l: f64) -> (Vec<Job>, Vec<Job>) {
+    let shifts = crate::placements::uniform_placements(stiffness, eta, l)
+        .map_err(|e| debug(|| format!("placements of eta {eta} at {l}: {e}")))
+        .unwrap_or_default();
+    debug(|| format!("eta {eta} at {l:.4}: placements {shifts:.4?}"));
+    let uniform = shifts
+        .into_iter()
+        .map(|sh| (l, Seed::Uniform(sh)))
+        .collect();
+    let mut shifts = crate::certificate::feature_shifts(stiffness, eta, &[0, 1, 2, 3], false);
+    if shifts.is_empty() {
+        // A profile without named stiffness changes (a table): the phases at the origin.
+        shifts = (0..4)
+            .map(|j| f64::from(j) / (8.0 * f64::from(eta)))
             .collect();
     }
-    let mut jobs: Vec<(f64, Seed)> = lengths
-        .iter()
-        .map(|&l| (l, Seed::Solve { starts: true }))
+    let euler = shifts
+        .into_iter()
+        .map(|sh| (l, Seed::Shifted(sh)))
         .collect();
-    let per = 1.0 / e;
-    for f in [0.5, 0.25, 0.75] {
-        let l = exist.0 + f * (exist.1 - exist.0);
-        let inside = l >= range.0 - 1e-12 && l <= range.1 + 1e-12;
-        let seeded = lengths.iter().any(|&s| (s - l).abs() < 1e-9);
-        let near_circle = circles
-            .iter()
-            .any(|m| (l - m).abs() <= 2.0 * SWITCH_DISTANCE);
-        if inside && !seeded && !near_circle {
-            jobs.extend((0..8).map(|j| (l, Seed::Shifted(j as f64 / 8.0 * per))));
-        }
+    (uniform, euler)
+}
+
+/// The lengths at which branch `eta` is seeded, by stretch: on the certificate's sample
+/// lengths of `range` (those at least `2 ×` [`SWITCH_DISTANCE`] from a great circle), the
+/// number of placements where families leave the uniform circle
+/// ([`crate::placements::uniform_placements`]) is counted; each run of consecutive lengths
+/// with the same count is a stretch, its lengths ordered from its middle outwards. Where
+/// the count changes, families are born or end in pairs (a fold of the placed loop's
+/// energy), so every stretch of the range with a different set of families gets its own
+/// seeds.
+pub(super) fn seed_lengths(
+    stiffness: &Stiffness,
+    eta: u32,
+    range: (f64, f64),
+    circles: &[f64],
+) -> Vec<Vec<f64>> {
+    let (grid, _) = crate::certificate::sample_lengths(range.0, range.1);
+    let counted: Vec<(f64, usize)> = grid
+        .into_iter()
+        .filter(|l| {
+            circles
+                .iter()
+                .all(|m| (l - m).abs() > 2.0 * SWITCH_DISTANCE)
+        })
+        .filter_map(|l| {
+            crate::placements::uniform_placements(stiffness, eta, l)
+                .ok()
+                .map(|p| (l, p.len()))
+        })
+        .collect();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < counted.len() {
+        let j = (i..counted.len())
+            .find(|&j| counted[j].1 != counted[i].1)
+            .unwrap_or(counted.len());
+        let mid = (i + j - 1) / 2;
+        let mut order: Vec<usize> = (i..j).collect();
+        order.sort_by_key(|&k| (k.abs_diff(mid), k));
+        out.push(order.into_iter().map(|k| counted[k].0).collect());
+        i = j;
     }
-    jobs
+    if out.is_empty() {
+        out.push(vec![0.5 * (range.0 + range.1)]);
+    }
+    out
+}
+
+/// First step off the uniform rod in `ln(D1/D0)` (and the continuation's first step).
+const FIRST_STEP: f64 = 0.05;
+
+/// The state of branch `eta` at `lbar` on `model` (the tracing model, the scene's profile)
+/// reached from the uniform rod's exact loop with its origin moved by `shift`: Newton at
+/// `D1/D0 = e^{∓0.05}` from the loop ([`walk`], halving the step where Newton fails), then
+/// pseudo-arclength continuation in `ln(D1/D0)` (the continuation crate's
+/// [`reach`] on a log [`Axis`], through folds) to the scene's contrast, corrected there by
+/// Newton. `None` where the family turns back before the scene's contrast (it does not exist
+/// there at this length), or the state has another count of periods or does not close.
+pub(super) fn uniform_seed(
+    model: &SurfaceModel,
+    stiffness: &Stiffness,
+    eta: u32,
+    lbar: f64,
+    shift: f64,
+) -> Option<Vec<f64>> {
+    let fail = |what: &str, e: String| {
+        debug(|| format!("uniform seed {eta} at {lbar:.4} shift {shift:.4}: {what}: {e}"));
+    };
+    let ratio = stiffness.param(Param::D1).ok()?;
+    let qt = ratio.ln();
+    let problem = ParamProblem::new(model.clone(), Param::D1).ok()?;
+    let kappa = StartShape::Exact { eta }
+        .shifted(lbar, shift)
+        .and_then(|st| st.gauss_values(model))
+        .map_err(|e| fail("start", e.to_string()))
+        .ok()?;
+    let newton = crate::states::newton_options();
+    let q1 = qt.signum() * qt.abs().min(FIRST_STEP);
+    // The walk's state: `(z, q)`; the start `(κ, 0)` holds the Gauss values only.
+    let first = walk(
+        (kappa, 0.0),
+        None,
+        q1,
+        |s: &(Vec<f64>, f64)| s.1,
+        &NaturalSettings {
+            max_halvings: 4,
+            ..NaturalSettings::default()
+        },
+        |cur, _, to, _| {
+            let m = problem.model_at(to.exp())?;
+            let eq = if cur.1 == 0.0 {
+                solve(&m, &cur.0, &newton)?
+            } else {
+                solve_from_state(m, cur.0.clone(), &newton)?
+            };
+            Ok::<_, rodloop_solver::SolverError>((eq.state(), to))
+        },
+    )
+    .map_err(|e| fail("first step", e.error.to_string()))
+    .ok()?;
+    let (mut z, q) = first.last;
+    if (qt - q).abs() > 1e-14 {
+        let settings = PseudoArclength::new()
+            .with_ds(FIRST_STEP)
+            .and_then(|s| s.with_ds_bounds(1e-7, 0.5))
+            .and_then(|s| {
+                s.with_direction(if qt < q {
+                    Direction::Backward
+                } else {
+                    Direction::Forward
+                })
+            })
+            .and_then(|s| s.with_max_steps(400))
+            .and_then(|s| s.with_detect_branch_points(false))
+            .ok()?;
+        let log = OnAxis {
+            problem: problem.clone(),
+            axis: Axis::Log,
+        };
+        let x0 = nalgebra::DVector::from_vec(z);
+        let r = reach(&log, &settings, &x0, q, qt, &ReachLimits::default(), || {
+            true
+        })
+        .map_err(|e| {
+            fail(
+                "continuation in D1/D0",
+                format!(
+                    "reached {:.4} (folds at {:?})",
+                    e.closest.exp(),
+                    e.folds.iter().map(|f| f.exp()).collect::<Vec<_>>()
+                ),
+            )
+        })
+        .ok()?;
+        z = r.x.as_slice().to_vec();
+    }
+    let eq = solve_from_state(model.clone(), z, &newton)
+        .map_err(|e| fail("Newton at the scene's contrast", e.to_string()))
+        .ok()?;
+    let periods = periods_of(&eq).ok()?;
+    if periods != eta as usize {
+        fail("periods", format!("{periods} periods of κ_g"));
+        return None;
+    }
+    open_dropped(&eq, eta, lbar).then(|| eq.state())
 }
 
 /// The state `rodloop solve --branch` finds for `eta` at `lbar` (`solve_robust` from the
@@ -123,18 +259,9 @@ fn open_dropped(eq: &rodloop_solver::Equilibrium, eta: u32, lbar: f64) -> bool {
     ok
 }
 
-/// Contrast `D1/D0` below which the seeds are those of `rodloop solve --branch` (direct
-/// solves from Euler starts rarely converge there).
-pub(super) const STRONG_BELOW: f64 = crate::STRONG_CONTRAST;
-
-/// Contrast `D1/D0` above which the seeds are those of `rodloop solve --branch` too: near
-/// `D1/D0 = 1` the placement of the soft segment is nearly neutral and direct solves from
-/// Euler starts drift along it (`solve` reaches these states by continuation in `D1/D0` from
-/// a clearer contrast).
-pub(super) const NEARLY_UNIFORM: f64 = 0.9;
-
 /// The state of an Euler start of `eta` periods with its origin moved by `shift`, relaxed
-/// and solved on `model` (the tracing resolution), if it has `eta` periods of `κ_g`.
+/// and solved on `model` (the tracing resolution), if it has `eta` periods of `κ_g` and
+/// closes.
 pub(super) fn seed_state(
     model: &SurfaceModel,
     eta: u32,
