@@ -7,12 +7,15 @@
 //!
 //! The search is a [`StateSearch`] ("the equilibria found at `L̄`"), so that any model (the
 //! surface model here, the enclosed model too) can be certified the same way; the surface
-//! model's search is [`SurfaceSearch`].
+//! model's search is [`SurfaceSearch`]. It runs in two stages: every start is solved without
+//! knowing the traced set (so `crate::compute` runs that stage on the threads the tracing
+//! leaves idle), then only the states that may lie below the traced set get their error
+//! estimate, verification, index and seed.
 
 use rodloop_exact::branch_of_eta;
 use rodloop_solver::{
-    solve, solve_robust_with, Accuracy, Confinement, Fallbacks, SolveOptions, StartShape,
-    Stiffness, SurfaceModel,
+    finish_with_accuracy, richardson, solve, verify_accurate, Accuracy, Confinement, Equilibrium,
+    SolveOptions, StartShape, Stiffness, Strategy, SurfaceModel,
 };
 use serde::Serialize;
 
@@ -43,17 +46,22 @@ pub struct Found {
     pub seed: Option<Vec<f64>>,
 }
 
-/// Finds equilibria at a given length: what the certificate runs at every sample length.
+/// Finds equilibria at a given length: what the certificate runs at every sample length, in
+/// two stages. The first ([`StateSearch::candidates_at`]) solves every start and needs
+/// nothing of the traced set, so it can run beside the tracing; the second
+/// ([`StateSearch::complete`]) is given the lowest traced energy at the candidate's length
+/// and estimates the error (and the index, and a seed) of only the candidates that may lie
+/// below it.
 pub trait StateSearch: Sync {
-    /// The equilibria found at `lbar`, given the lowest traced energy there (`lowest`): a
-    /// search may skip the error estimate of states clearly above it.
-    fn states_at(&self, lbar: f64, lowest: Option<f64>) -> Vec<Found>;
-}
-
-impl<F: Fn(f64, Option<f64>) -> Vec<Found> + Sync> StateSearch for F {
-    fn states_at(&self, lbar: f64, lowest: Option<f64>) -> Vec<Found> {
-        self(lbar, lowest)
-    }
+    /// A state a start converged to, before its error estimate.
+    type Candidate: Send;
+    /// The distinct states the starts at `lbar` converge to.
+    fn candidates_at(&self, lbar: f64) -> Vec<Self::Candidate>;
+    /// The length of a candidate.
+    fn length_of(&self, candidate: &Self::Candidate) -> f64;
+    /// The equilibrium found, given the lowest traced energy at its length (`lowest`); `None`
+    /// if it fails the checks of a reported state.
+    fn complete(&self, candidate: Self::Candidate, lowest: Option<f64>) -> Option<Found>;
 }
 
 /// A state found below the lowest traced one.
@@ -92,9 +100,10 @@ pub struct Certificate {
     pub families_seeded: usize,
     /// Those still below the traced set after seeding: the diagram may be incomplete there.
     pub unexplained: Vec<Finding>,
-    /// Wall time of the search, in seconds.
+    /// Time of the search, in seconds, summed over the threads that ran it (its first stage
+    /// runs beside the tracing).
     pub search_seconds: f64,
-    /// Wall time of the search and the seeded tracing, in seconds.
+    /// That and the wall time of the seeded tracing, in seconds.
     pub seconds: f64,
 }
 
@@ -154,22 +163,20 @@ pub fn is_below(found: &Found, lowest: Option<f64>) -> bool {
     lowest.is_none_or(|e| found.energy < e - margin(found))
 }
 
-/// Run `search` at every one of `lengths` (with the lowest traced energies `lowest`) on
-/// `threads` threads: all equilibria found, in the order of `lengths`.
-pub fn search_all(
-    search: &dyn StateSearch,
+/// Run the first stage of `search` ([`StateSearch::candidates_at`]) at every one of
+/// `lengths` on `threads` threads: the candidates, in the order of `lengths`.
+pub fn search_all<S: StateSearch>(
+    search: &S,
     lengths: &[f64],
-    lowest: &[Option<f64>],
     threads: usize,
-) -> Vec<Found> {
-    let jobs: Vec<(f64, Option<f64>)> = lengths
-        .iter()
-        .copied()
-        .zip(lowest.iter().copied())
-        .collect();
-    run_parallel(threads, jobs, &mut |_| {}, &mut |_| {}, |(l, low), _| {
-        search.states_at(l, low)
-    })
+) -> Vec<S::Candidate> {
+    run_parallel(
+        threads,
+        lengths.to_vec(),
+        &mut |_| {},
+        &mut |_| {},
+        |l, _| search.candidates_at(l),
+    )
     .into_iter()
     .flatten()
     .collect()
@@ -199,20 +206,34 @@ pub trait TracedSet {
     fn extend(&mut self, found: &[Found]) -> (usize, Vec<bool>);
 }
 
-/// The certificate of `traced` at `lengths` (spacing `spacing`): `search` at every length
-/// (on `threads` threads), the states below the traced set handed to
+/// The certificate of `traced` at `lengths` (spacing `spacing`) from the `candidates` of
+/// `search` there ([`search_all`], or the same jobs run beside the tracing; `search_seconds`:
+/// their time): the candidates that may lie below the traced set completed by
+/// [`StateSearch::complete`] (on `threads` threads), the states below it handed to
 /// [`TracedSet::extend`], and those still below afterwards reported as unexplained.
-pub fn certify(
-    search: &dyn StateSearch,
+pub fn certify<S: StateSearch>(
+    search: &S,
+    candidates: Vec<S::Candidate>,
+    search_seconds: f64,
     traced: &mut dyn TracedSet,
     lengths: &[f64],
     spacing: f64,
     threads: usize,
 ) -> Certificate {
-    let t0 = std::time::Instant::now();
-    let lowest: Vec<Option<f64>> = lengths.iter().map(|&l| traced.lowest(l)).collect();
-    let found = search_all(search, lengths, &lowest, threads);
-    let search_seconds = t0.elapsed().as_secs_f64();
+    let jobs: Vec<(S::Candidate, Option<f64>)> = candidates
+        .into_iter()
+        .map(|c| {
+            let low = traced.lowest(search.length_of(&c));
+            (c, low)
+        })
+        .collect();
+    let completed = run_parallel(threads, jobs, &mut |_| {}, &mut |_| {}, |(c, low), _| {
+        let t = std::time::Instant::now();
+        (search.complete(c, low), t.elapsed().as_secs_f64())
+    });
+    let search_seconds = search_seconds + completed.iter().map(|(_, t)| t).sum::<f64>();
+    let found: Vec<Found> = completed.into_iter().filter_map(|(f, _)| f).collect();
+    let seeding = std::time::Instant::now();
     let mut below: Vec<Found> = found
         .iter()
         .filter(|f| is_below(f, traced.lowest(f.lbar)))
@@ -248,7 +269,7 @@ pub fn certify(
         families_seeded,
         unexplained,
         search_seconds,
-        seconds: t0.elapsed().as_secs_f64(),
+        seconds: search_seconds + seeding.elapsed().as_secs_f64(),
     }
 }
 
@@ -307,21 +328,45 @@ impl TracedSet for SurfaceTraced<'_> {
 }
 
 /// The search of the surface model of a two-segment rod at one length: for every branch of
-/// the diagram that exists there, what `rodloop solve --branch` runs first (Newton from the
-/// Euler curve after relaxation; [`solve_robust_with`], fast accuracy; its shifted starts and
-/// its continuations in `D1/D0` and `L̄` are left out: the tracer follows families in `L̄`
-/// itself, and the shifted starts cost three times the rest at strong contrast), plus, at every other sample length
-/// (`feature_lengths`), solves (relaxation, then Newton) from the Euler curve placed by the
-/// profile's own features: each end of the soft segment (`s0*`, `s1*`) at the phases `0`
-/// and `1/2` of a half period of `κ_g` (`1/(2η)` of the length: an extremum of `κ_g²`
-/// and a point between two; a shift by half a period is the reflection `κ_g → −κ_g`).
-/// The feature starts cost three quarters of the search at every length; at every other
-/// length they keep the certificate's time within that of the tracing.
+/// the diagram that exists there, what `rodloop solve --branch` runs first (relaxation, then
+/// Newton from the Euler curve at the fast resolution; its shifted starts and its
+/// continuations in `D1/D0` and `L̄` are left out: the tracer follows families in `L̄`
+/// itself, and the shifted starts cost three times the rest at strong contrast), plus, at
+/// every other sample length (`feature_lengths`), the same solve from the Euler curve placed
+/// by the profile's own features: each end of the soft segment (`s0*`, `s1*`) at the phases
+/// `0` and `1/2` of a half period of `κ_g` (`1/(2η)` of the length: an extremum of `κ_g²`
+/// and a point between two; a shift by half a period is the reflection `κ_g → −κ_g`). The
+/// feature starts cost three quarters of the search at every length; at every other length
+/// they keep the certificate's time within that of the tracing.
+///
+/// Every state a start converges to on its branch and that closes is a candidate; starts
+/// that converge to the same state (same energy to `10⁻¹⁰` relative, the same branch and
+/// length) give one. A candidate's error estimate (its companion solve at half the cells, as
+/// `solve` makes it), the verification `solve` applies, its index and its seed are computed
+/// only if its energy lies less than [`MAYBE_BELOW`] (relative) above the lowest traced
+/// energy at its length; the others are counted, with no estimate.
 pub struct SurfaceSearch<'a> {
     opts: &'a DiagramOptions,
     etas: Vec<u32>,
     feature_lengths: Vec<f64>,
 }
+
+/// A state a start of [`SurfaceSearch`] converged to.
+pub struct SurfaceCandidate {
+    lbar: f64,
+    eta: u32,
+    start: StartShape,
+    equilibrium: Equilibrium,
+    how: String,
+}
+
+/// How far above the lowest traced energy (relative, at least `1` absolute in units of
+/// `π D0/R`) a candidate of [`SurfaceSearch`] is still estimated: more than ten times the
+/// largest relative error estimate of the fast resolution's energies measured (`2·10⁻⁶` on
+/// the paper's scenes, `7·10⁻⁵` on random two-segment scenes, the largest at `D1/D0 = 0.013`,
+/// `γ = 250`), so that no state whose estimate could put it below the traced set goes
+/// without one.
+pub const MAYBE_BELOW: f64 = 1e-3;
 
 impl<'a> SurfaceSearch<'a> {
     /// The search over the branches `opts` traces, with feature-placed starts at every other
@@ -340,33 +385,36 @@ impl<'a> SurfaceSearch<'a> {
         feature_shifts(stiffness, eta, &[0, 2], true)
     }
 
-    fn found(
-        &self,
-        lbar: f64,
-        eta: u32,
-        eq: &rodloop_solver::Equilibrium,
-        energy: f64,
-        error: f64,
-        how: String,
-    ) -> Option<Found> {
-        let periods = rodloop_solver::identify::identify_equilibrium(eq).ok()?.eta;
-        if periods != eta || !closes(eq) {
-            return None;
+    /// The starts of branch `eta` at `lbar`: the Euler curve as `solve` places it, then (at
+    /// the feature lengths) the feature-placed ones, each with how it is described.
+    fn starts(&self, lbar: f64, eta: u32) -> Vec<(StartShape, String)> {
+        let euler = StartShape::Euler { l: eta };
+        let mut out = vec![(
+            euler.clone(),
+            format!(
+                "rodloop solve --branch {}: {}",
+                branch_of_eta(eta),
+                Strategy::Direct.describe()
+            ),
+        )];
+        if self
+            .feature_lengths
+            .iter()
+            .any(|&l| (l - lbar).abs() < 1e-12)
+        {
+            for shift in Self::feature_shifts(&self.opts.stiffness, eta) {
+                if let Ok(start) = euler.shifted(lbar, shift) {
+                    out.push((
+                        start,
+                        format!(
+                            "Newton from the Euler curve l = {eta} with its origin moved by \
+                             {shift:.4} (a stiffness change at a phase of κ_g)"
+                        ),
+                    ));
+                }
+            }
         }
-        let index = eq
-            .model()
-            .index(&eq.state(), crate::states::INDEX_TOLERANCE)
-            .ok();
-        let seed = eq.resample(self.opts.trace_cells(eta)).ok();
-        Some(Found {
-            lbar,
-            eta,
-            energy,
-            error,
-            index,
-            how,
-            seed,
-        })
+        out
     }
 }
 
@@ -412,93 +460,103 @@ pub(crate) fn closes(eq: &rodloop_solver::Equilibrium) -> bool {
 }
 
 impl StateSearch for SurfaceSearch<'_> {
-    fn states_at(&self, lbar: f64, lowest: Option<f64>) -> Vec<Found> {
+    type Candidate = SurfaceCandidate;
+
+    fn candidates_at(&self, lbar: f64) -> Vec<SurfaceCandidate> {
         let opts = self.opts;
-        let mut out = Vec::new();
+        let mut out: Vec<SurfaceCandidate> = Vec::new();
         for &eta in &self.etas {
             let e = f64::from(eta);
             if !(lbar > (e - 1.0).max(0.0) && lbar < e + 1.0) {
                 continue;
             }
-            let start = StartShape::Euler { l: eta };
-            if let Ok((acc, strategy)) = solve_robust_with(
-                opts.radius,
-                lbar,
-                &opts.stiffness,
-                &start,
-                Accuracy::Fast,
-                Some(eta),
-                &SolveOptions::default(),
-                // The direct start only: its shifted starts cost three times the rest of
-                // the search at strong contrast (D1/D0 = 0.001) and are covered by the
-                // feature-placed starts below.
-                Fallbacks {
-                    starts: true,
-                    homotopy: false,
-                    lbar_path: false,
-                    budget: 0,
-                },
-            ) {
-                out.extend(self.found(
-                    lbar,
-                    eta,
-                    &acc.equilibrium,
-                    acc.energy.total,
-                    acc.energy_error,
-                    format!(
-                        "rodloop solve --branch {}: {}",
-                        branch_of_eta(eta),
-                        strategy.describe()
-                    ),
-                ));
-            }
             let cells = Accuracy::Fast.cells(eta as usize, &opts.stiffness);
             let Ok(model) = SurfaceModel::new(opts.radius, lbar, cells, &opts.stiffness) else {
                 continue;
             };
-            if !self
-                .feature_lengths
-                .iter()
-                .any(|&l| (l - lbar).abs() < 1e-12)
-            {
-                continue;
-            }
-            for shift in Self::feature_shifts(&opts.stiffness, eta) {
+            let first = out.len();
+            for (start, how) in self.starts(lbar, eta) {
                 let Some(eq) = start
-                    .shifted(lbar, shift)
-                    .and_then(|s| s.gauss_values(&model))
+                    .gauss_values(&model)
                     .and_then(|k| solve(&model, &k, &SolveOptions::default()))
                     .ok()
                 else {
                     continue;
                 };
+                let on_branch =
+                    rodloop_solver::identify::identify_equilibrium(&eq).is_ok_and(|p| p.eta == eta);
+                if !on_branch || !closes(&eq) {
+                    continue;
+                }
                 let en = eq.energy().total;
-                // Only a state that may lie below the traced set needs its error estimate
-                // (its half-resolution partner); the others are counted with none.
-                let maybe_below = lowest.is_none_or(|l| en < l + 1e-3 * l.abs().max(1.0));
-                let (energy, error) = if maybe_below {
-                    let Some(half) = crate::states::half_resolution(opts, &eq, cells / 2) else {
-                        continue;
-                    };
-                    let eh = half.energy().total;
-                    (en + (en - eh) / 15.0, (en - eh).abs() / 15.0)
-                } else {
-                    (en, 0.0)
+                let same = |c: &SurfaceCandidate| {
+                    let ec = c.equilibrium.energy().total;
+                    (ec - en).abs() <= 1e-10 * en.abs().max(1.0)
                 };
-                out.extend(self.found(
+                if out[first..].iter().any(same) {
+                    continue;
+                }
+                out.push(SurfaceCandidate {
                     lbar,
                     eta,
-                    &eq,
-                    energy,
-                    error,
-                    format!(
-                        "Newton from the Euler curve l = {eta} with its origin moved by \
-                         {shift:.4} (a stiffness change at a phase of κ_g)"
-                    ),
-                ));
+                    start,
+                    equilibrium: eq,
+                    how,
+                });
             }
         }
         out
+    }
+
+    fn length_of(&self, candidate: &SurfaceCandidate) -> f64 {
+        candidate.lbar
+    }
+
+    fn complete(&self, c: SurfaceCandidate, lowest: Option<f64>) -> Option<Found> {
+        let opts = self.opts;
+        let en = c.equilibrium.energy().total;
+        let maybe_below = lowest.is_none_or(|l| en < l + MAYBE_BELOW * l.abs().max(1.0));
+        if !maybe_below {
+            return Some(Found {
+                lbar: c.lbar,
+                eta: c.eta,
+                energy: en,
+                error: 0.0,
+                index: None,
+                how: c.how,
+                seed: None,
+            });
+        }
+        // Completed as `solve` completes its state: the companion solve for the error
+        // estimate, and the checks of every reported state.
+        let acc = finish_with_accuracy(
+            c.equilibrium,
+            opts.radius,
+            &opts.stiffness,
+            &c.start,
+            Accuracy::Fast,
+            &SolveOptions::default(),
+        )
+        .ok()?;
+        verify_accurate(&acc, Some(c.eta)).ok()?;
+        let eq = &acc.equilibrium;
+        // The energy extrapolated from the state and its companion (Richardson; the error
+        // estimate bounds its error too).
+        let energy = richardson(eq.energy().total, acc.companion.energy().total);
+        let index = eq
+            .model()
+            .index(&eq.state(), crate::states::INDEX_TOLERANCE)
+            .ok();
+        let seed = eq.resample(opts.trace_cells(c.eta)).ok();
+        Some(Found {
+            lbar: c.lbar,
+            eta: c.eta,
+            energy,
+            error: acc.energy_error,
+            index,
+            how: c.how,
+            seed,
+        })
     }
 }
 

@@ -5,6 +5,7 @@ use std::time::Instant;
 
 use rodloop_continuation::BoxError;
 
+use crate::certificate::StateSearch;
 use crate::diagram::{assemble, NumericDiagram};
 use crate::families::{compute_families, Families};
 use crate::parallel::run_parallel;
@@ -81,6 +82,21 @@ impl BranchHook for Resume<'_> {
             notes: Vec::new(),
         })
     }
+}
+
+/// A job of [`compute`]'s thread pool.
+enum Job {
+    /// Trace branch `η`.
+    Trace(u32),
+    /// The first stage of the certificate's search at a sample length.
+    Search(f64),
+}
+
+/// The result of a [`Job`]: the traced families, or the certificate's candidates and the
+/// seconds they took.
+enum Done {
+    Traced(Result<Families, DiagramError>),
+    Searched(Vec<crate::certificate::SurfaceCandidate>, f64),
 }
 
 /// Compute the whole numeric diagram: for every branch of [`DiagramOptions::etas`], the
@@ -177,16 +193,25 @@ pub fn compute(
         hook.finished(b, Origin::Resumed)
             .map_err(DiagramError::Hook)?;
     }
-    // Largest branches first, for the balance of the threads.
-    todo.sort_by_key(|&eta| std::cmp::Reverse(eta));
-    let mut hook_error = None;
+    // Largest branches first, for the balance of the threads; then, for a two-segment rod,
+    // the first stage of the completeness certificate's search at its sample lengths (it
+    // needs nothing of the traced set, so it fills the threads the tracing leaves idle).
     let uniform = opts.stiffness.is_uniform();
-    let traced = run_parallel(
+    todo.sort_by_key(|&eta| std::cmp::Reverse(eta));
+    let (lengths, spacing) = crate::certificate::sample_lengths(opts.lbar_min, opts.lbar_max);
+    let search = crate::certificate::SurfaceSearch::new(opts, &lengths);
+    let jobs: Vec<Job> = todo
+        .iter()
+        .map(|&eta| Job::Trace(eta))
+        .chain(lengths.iter().filter(|_| !uniform).map(|&l| Job::Search(l)))
+        .collect();
+    let mut hook_error = None;
+    let results = run_parallel(
         opts.worker_threads(),
-        todo.clone(),
+        jobs,
         progress,
-        &mut |r: &Result<Families, DiagramError>| {
-            if let Ok(f) = r {
+        &mut |r: &Done| {
+            if let Done::Traced(Ok(f)) = r {
                 for b in &f.sheets {
                     if hook_error.is_none() {
                         hook_error = hook.finished(b, Origin::Traced).err();
@@ -199,24 +224,43 @@ pub fn compute(
                 }
             }
         },
-        |eta, tx| {
-            let r = if uniform {
-                compute_branch(opts, eta, &mut |p| tx(p)).map(|b| Families {
-                    sheets: vec![b],
-                    notes: Vec::new(),
-                })
-            } else {
-                compute_families(opts, eta, &mut |p| tx(p))
-            };
-            if let Err(e) = &r {
-                tx(Progress::BranchFailed {
-                    eta,
-                    reason: e.to_string(),
-                });
+        |job, tx| match job {
+            Job::Search(l) => {
+                let t = Instant::now();
+                let c = search.candidates_at(l);
+                Done::Searched(c, t.elapsed().as_secs_f64())
             }
-            r
+            Job::Trace(eta) => {
+                let r = if uniform {
+                    compute_branch(opts, eta, &mut |p| tx(p)).map(|b| Families {
+                        sheets: vec![b],
+                        notes: Vec::new(),
+                    })
+                } else {
+                    compute_families(opts, eta, &mut |p| tx(p))
+                };
+                if let Err(e) = &r {
+                    tx(Progress::BranchFailed {
+                        eta,
+                        reason: e.to_string(),
+                    });
+                }
+                Done::Traced(r)
+            }
         },
     );
+    let mut traced = Vec::new();
+    let mut candidates = Vec::new();
+    let mut search_seconds = 0.0;
+    for r in results {
+        match r {
+            Done::Traced(t) => traced.push(t),
+            Done::Searched(c, secs) => {
+                candidates.extend(c);
+                search_seconds += secs;
+            }
+        }
+    }
     if let Some(e) = hook_error {
         return Err(DiagramError::Hook(e));
     }
@@ -245,15 +289,20 @@ pub fn compute(
     // sample lengths; families of states found below the traced ones are traced too.
     let mut failures = failures;
     let certificate = (!uniform).then(|| {
-        let (lo, hi) = (opts.lbar_min, opts.lbar_max);
-        let (lengths, spacing) = crate::certificate::sample_lengths(lo, hi);
-        let search = crate::certificate::SurfaceSearch::new(opts, &lengths);
         let mut set = crate::certificate::SurfaceTraced {
             opts,
             sheets: &mut have,
             notes: &mut failures,
         };
-        crate::certificate::certify(&search, &mut set, &lengths, spacing, opts.worker_threads())
+        crate::certificate::certify(
+            &search,
+            candidates,
+            search_seconds,
+            &mut set,
+            &lengths,
+            spacing,
+            opts.worker_threads(),
+        )
     });
     let tracing_seconds = start.elapsed().as_secs_f64();
     let mut d = assemble(opts, have, progress)?;

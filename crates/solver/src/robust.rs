@@ -23,7 +23,7 @@ use crate::seam::ParamProblem;
 use crate::solve::{solve_from_state, Equilibrium, Globalization, SolveOptions};
 use crate::start::StartShape;
 use crate::stiffness::Stiffness;
-use crate::verify::verify_accurate;
+use crate::verify::{verify_accurate, Verification};
 use crate::SolverError;
 
 /// How a robust solve reached its equilibrium.
@@ -201,6 +201,30 @@ pub fn solve_robust(
     )
 }
 
+/// [`solve_robust`] with the verification the state passed ([`verify_accurate`], which
+/// every state it returns passes; with `eta = None` for a uniform rod): a caller that reports
+/// the state as returned need not verify it again.
+pub fn solve_robust_verified(
+    radius: f64,
+    lbar: f64,
+    stiffness: &Stiffness,
+    start: &StartShape,
+    accuracy: Accuracy,
+    eta: Option<u32>,
+    opts: &SolveOptions,
+) -> Result<(AccurateEquilibrium, Strategy, Verification), SolverError> {
+    robust(
+        radius,
+        lbar,
+        stiffness,
+        start,
+        accuracy,
+        eta,
+        opts,
+        Fallbacks::default(),
+    )
+}
+
 /// [`solve_robust`] with a choice of the attempts ([`Fallbacks`]): the direct and shifted
 /// starts, the continuation fallbacks, and their budget. Used by the branch diagram of
 /// two-segment rods, which runs the starts and the homotopies in separate passes and follows
@@ -216,6 +240,24 @@ pub fn solve_robust_with(
     opts: &SolveOptions,
     fallbacks: Fallbacks,
 ) -> Result<(AccurateEquilibrium, Strategy), SolverError> {
+    robust(
+        radius, lbar, stiffness, start, accuracy, eta, opts, fallbacks,
+    )
+    .map(|(acc, strategy, _)| (acc, strategy))
+}
+
+/// [`solve_robust_with`], with the verification of the state returned.
+#[allow(clippy::too_many_arguments)]
+fn robust(
+    radius: f64,
+    lbar: f64,
+    stiffness: &Stiffness,
+    start: &StartShape,
+    accuracy: Accuracy,
+    eta: Option<u32>,
+    opts: &SolveOptions,
+    fallbacks: Fallbacks,
+) -> Result<(AccurateEquilibrium, Strategy, Verification), SolverError> {
     let periods = start.periods(lbar)?;
     let n = accuracy.cells(periods, stiffness);
     let finest = if accuracy == Accuracy::High { 2 * n } else { n };
@@ -242,7 +284,7 @@ pub fn solve_robust_with(
     };
     // A solve at the main resolution that is on the branch, completed by its companion and
     // verified.
-    let attempt = |start: &StartShape| -> Result<AccurateEquilibrium, String> {
+    let attempt = |start: &StartShape| -> Result<(AccurateEquilibrium, Verification), String> {
         let main = check(solve_cells(radius, lbar, n, stiffness, start, None, opts))?;
         let acc =
             finish_with_accuracy(main, radius, stiffness, start, accuracy, opts).map_err(|e| {
@@ -256,12 +298,12 @@ pub fn solve_robust_with(
         // passes the checks of every reported state.
         let main = solve_cells(radius, lbar, n, stiffness, start, None, opts)?;
         let acc = finish_with_accuracy(main, radius, stiffness, start, accuracy, opts)?;
-        verify_accurate(&acc, None)?;
-        return Ok((acc, Strategy::Direct));
+        let v = verify_accurate(&acc, None)?;
+        return Ok((acc, Strategy::Direct, v));
     }
     let reason = if fallbacks.starts {
         match attempt(start) {
-            Ok(acc) => return Ok((acc, Strategy::Direct)),
+            Ok((acc, v)) => return Ok((acc, Strategy::Direct, v)),
             Err(r) => r,
         }
     } else {
@@ -280,8 +322,8 @@ pub fn solve_robust_with(
             break;
         }
         let shifted = start.shifted(lbar, shift)?;
-        if let Ok(acc) = attempt(&shifted) {
-            return Ok((acc, Strategy::Shifted { shift, reason }));
+        if let Ok((acc, v)) = attempt(&shifted) {
+            return Ok((acc, Strategy::Shifted { shift, reason }, v));
         }
     }
     let mut tried = Vec::new();
@@ -310,13 +352,13 @@ pub fn solve_robust_with(
                 );
                 match outcome {
                     Ok(Some((main, steps))) => {
-                        let acc = match finish_with_accuracy(
+                        let (acc, v) = match finish_with_accuracy(
                             main, radius, stiffness, &shifted, accuracy, opts,
                         )
                         .map_err(|e| format!("the companion solve failed ({e})"))
                         .and_then(|acc| verified(acc, eta))
                         {
-                            Ok(acc) => acc,
+                            Ok(verified) => verified,
                             Err(e) => {
                                 tried.push((
                                     format!("continuation in D1/D0 from {from}"),
@@ -333,6 +375,7 @@ pub fn solve_robust_with(
                                 steps,
                                 reason,
                             },
+                            v,
                         ));
                     }
                     Ok(None) => {}
@@ -374,7 +417,7 @@ pub fn solve_robust_with(
                                 .map_err(|e| e.to_string())
                                 .and_then(|acc| verified(acc, Some(want)))
                         }) {
-                            Ok(acc) => {
+                            Ok((acc, v)) => {
                                 return Ok((
                                     acc,
                                     Strategy::ContinuationInLbar {
@@ -383,6 +426,7 @@ pub fn solve_robust_with(
                                         steps,
                                         reason,
                                     },
+                                    v,
                                 ));
                             }
                             Err(e) => tried.push((
@@ -409,10 +453,14 @@ pub fn solve_robust_with(
     )))
 }
 
-/// `acc` if it passes [`verify_accurate`] for the requested `eta`, else why not.
-fn verified(acc: AccurateEquilibrium, eta: Option<u32>) -> Result<AccurateEquilibrium, String> {
+/// `acc` and its verification if it passes [`verify_accurate`] for the requested `eta`, else
+/// why not.
+fn verified(
+    acc: AccurateEquilibrium,
+    eta: Option<u32>,
+) -> Result<(AccurateEquilibrium, Verification), String> {
     match verify_accurate(&acc, eta) {
-        Ok(_) => Ok(acc),
+        Ok(v) => Ok((acc, v)),
         Err(e) => Err(format!("gave a state that fails verification ({e})")),
     }
 }

@@ -1,6 +1,7 @@
 //! Integration tests of the numeric branch diagram (one test binary made of modules; the
 //! diagrams of the default scene are computed once and shared).
 
+mod certificate;
 mod common;
 mod default_scene;
 mod extremes;
