@@ -12,8 +12,9 @@
 //! ```
 //!
 //! energies `E R/(π D0)`. [`MaxwellProblem`] implements it as a
-//! [`rodloop_continuation::Problem`] in `p = ln θ` (for `d1`, three decades at even steps) or
-//! `p = θ` (other parameters), with the analytic derivatives
+//! [`rodloop_continuation::Problem`] in `p` on the parameter's axis ([`Param::axis`]: `ln θ`
+//! for `d1` and `gamma`, so that decades come at even steps; `θ` for `s0`, `s1`), with the
+//! analytic derivatives
 //!
 //! * `∂E/∂z = (w_a D_a κ_a, 0)·R/(πD0)` (the energy gradient; zero on the multipliers),
 //! * `∂E/∂L̄ = E/L̄` (every quadrature weight `w_a = h_c/2` is proportional to `L̄` at fixed
@@ -43,6 +44,7 @@
 use std::f64::consts::PI;
 
 use nalgebra::{DMatrix, DVector};
+use rodloop_continuation::axis::Axis;
 use rodloop_continuation::{DenseLu, Factorization, Problem};
 use rodloop_solver::{
     solve_from_state, Confinement, Equilibrium, Globalization, ModelFactor, Param, SolveOptions,
@@ -105,13 +107,14 @@ pub fn energy_dparam(model: &SurfaceModel, z: &[f64], p: Param) -> Result<f64, S
 }
 
 /// The augmented system of a Maxwell point (see the module docs) as a continuation problem
-/// in `p = ln θ` (`d1`) or `p = θ` (`gamma`, `s0`, `s1`).
+/// in `p = q(θ)` on the parameter's axis ([`Param::axis`]: `ln θ` for `d1` and `gamma`, `θ`
+/// for `s0` and `s1`).
 #[derive(Clone, Debug)]
 pub struct MaxwellProblem {
     a: SurfaceModel,
     b: SurfaceModel,
     param: Param,
-    log: bool,
+    axis: Axis,
 }
 
 impl MaxwellProblem {
@@ -132,7 +135,7 @@ impl MaxwellProblem {
             a,
             b,
             param,
-            log: param == Param::D1,
+            axis: param.axis(),
         })
     }
 
@@ -143,20 +146,12 @@ impl MaxwellProblem {
 
     /// `θ` of the continuation variable `p`.
     pub fn theta(&self, p: f64) -> f64 {
-        if self.log {
-            p.exp()
-        } else {
-            p
-        }
+        self.axis.value(p)
     }
 
-    /// The continuation variable `p` of `θ` (`ln θ` for `d1`).
+    /// The continuation variable `p` of `θ` (`ln θ` on a log axis).
     pub fn p_of(&self, theta: f64) -> f64 {
-        if self.log {
-            theta.ln()
-        } else {
-            theta
-        }
+        self.axis.coordinate(theta)
     }
 
     /// Sizes `(dim z_a, dim z_b)`.
@@ -345,11 +340,8 @@ impl Problem for MaxwellProblem {
         out.rows_mut(na, nb)
             .copy_from(&mb.kkt_dparam(zb, self.param)?);
         out[na + nb] = energy_dparam(&ma, za, self.param)? - energy_dparam(&mb, zb, self.param)?;
-        if self.log {
-            // d/d(ln θ) = θ d/dθ.
-            out *= self.theta(p);
-        }
-        Ok(out)
+        // d/dq = (dθ/dq) d/dθ (θ d/dθ on a log axis).
+        Ok(out * self.axis.derivative(p))
     }
 
     fn factorize(

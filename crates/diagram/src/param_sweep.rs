@@ -14,6 +14,7 @@
 //! Energies of the seeds and of the special points carry an error estimate from the same
 //! state at half the resolution, `|E_N − E_{N/2}|/15`.
 
+use rodloop_continuation::axis::Axis;
 use rodloop_continuation::{Direction, SpecialKind};
 use rodloop_exact::{branch_of_eta, eta_of_branch};
 use rodloop_solver::{
@@ -276,7 +277,7 @@ pub fn sweep_param(s: &SweepSettings) -> Result<ParamSweep, DiagramError> {
         let cont = Continued {
             model: model.clone(),
             // The parameter's own axis (Param::axis: d1 and gamma in their logarithm).
-            log: s.param.axis() == rodloop_continuation::axis::Axis::Log,
+            axis: s.param.axis(),
         };
         let problem = ParamProblem::new(cont.clone(), s.param)?;
         let shape = model.n_kappa();
@@ -495,24 +496,16 @@ pub fn sweep_param(s: &SweepSettings) -> Result<ParamSweep, DiagramError> {
 #[derive(Clone, Debug)]
 struct Continued {
     model: SurfaceModel,
-    log: bool,
+    axis: Axis,
 }
 
 impl Continued {
     fn theta(&self, p: f64) -> f64 {
-        if self.log {
-            p.exp()
-        } else {
-            p
-        }
+        self.axis.value(p)
     }
 
     fn p_of(&self, theta: f64) -> f64 {
-        if self.log {
-            theta.ln()
-        } else {
-            theta
-        }
+        self.axis.coordinate(theta)
     }
 
     /// A march with its parameter values as `θ` (the tangents of its special points are
@@ -563,16 +556,14 @@ impl Confinement for Continued {
     fn with_param(&self, p: Param, value: f64) -> Result<Self, SolverError> {
         Ok(Self {
             model: Confinement::with_param(&self.model, p, self.theta(value))?,
-            log: self.log,
+            axis: self.axis,
         })
     }
     fn dparam(&self, z: &[f64], p: Param) -> Result<nalgebra::DVector<f64>, SolverError> {
         let d = self.model.dparam(z, p)?;
-        Ok(if self.log {
-            d * Confinement::param(&self.model, p)?
-        } else {
-            d
-        })
+        // d/dq = (dθ/dq) d/dθ (θ d/dθ on a log axis).
+        let theta = Confinement::param(&self.model, p)?;
+        Ok(d * self.axis.derivative(self.p_of(theta)))
     }
     fn index(&self, z: &[f64], tolerance: f64) -> Result<usize, SolverError> {
         self.model.index(z, tolerance)
@@ -814,10 +805,10 @@ mod tests {
             .gauss_values(&model)
             .unwrap();
         z.extend_from_slice(&[0.3, -0.2, 0.1]);
-        for log in [true, false] {
+        for axis in [Axis::Log, Axis::Linear] {
             let c = Continued {
                 model: model.clone(),
-                log,
+                axis,
             };
             let p0 = Confinement::param(&c, Param::D1).unwrap();
             assert!((c.theta(p0) - 0.3).abs() < 1e-15);
@@ -830,7 +821,7 @@ mod tests {
             )
             .unwrap();
             let err = (&an - &fd).amax() / fd.amax();
-            assert!(err < 1e-7, "log = {log}: {err}");
+            assert!(err < 1e-7, "{axis:?}: {err}");
         }
     }
 
