@@ -28,15 +28,21 @@
 //! `κ_g R`, so that step sizes do not depend on the resolution. The scaling is applied to
 //! the model's own factorisation too ([`Confinement::factorize`], `O(N)`), not by forming a
 //! dense matrix.
+//!
+//! The scaled problem, its factorisation and the stability index at a scaled state are
+//! the child module `scaled`.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 use rodloop_continuation::{
-    BoxError, Continuation, Direction, Driven, Factorization, Flow, OnError, Problem,
-    PseudoArclength, SpecialKind, Stability, StopReason,
+    Continuation, Direction, Driven, Flow, OnError, Problem, PseudoArclength, SpecialKind,
+    StopReason,
 };
 use rodloop_solver::{Confinement, ParamProblem, SolverError};
 
 use crate::types::{IndexChange, PointSource};
+
+mod scaled;
+use scaled::{Index, Scaled};
 
 /// What [`march`] does at a fold (turning point) of the continued parameter.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -182,104 +188,6 @@ impl March {
         self.special
             .iter()
             .filter(|s| s.kind == SpecialKind::BranchPoint)
-    }
-}
-
-/// The continuation problem of a [`ParamProblem`] with the leading unknowns scaled.
-struct Scaled<'a, M> {
-    inner: &'a ParamProblem<M>,
-    k: usize,
-    s: f64,
-}
-
-impl<M> Scaled<'_, M> {
-    fn unscale(&self, xt: &DVector<f64>) -> DVector<f64> {
-        let mut x = xt.clone();
-        x.rows_mut(0, self.k).scale_mut(1.0 / self.s);
-        x
-    }
-
-    fn scale(&self, x: &[f64]) -> DVector<f64> {
-        let mut xt = DVector::from_column_slice(x);
-        xt.rows_mut(0, self.k).scale_mut(self.s);
-        xt
-    }
-}
-
-impl<M: Confinement> Problem for Scaled<'_, M> {
-    type Error = SolverError;
-
-    fn dim(&self) -> usize {
-        self.inner.dim()
-    }
-
-    fn residual(&self, x: &DVector<f64>, p: f64) -> Result<DVector<f64>, SolverError> {
-        self.inner.residual(&self.unscale(x), p)
-    }
-
-    fn jacobian(&self, x: &DVector<f64>, p: f64) -> Result<DMatrix<f64>, SolverError> {
-        let mut j = self.inner.jacobian(&self.unscale(x), p)?;
-        j.columns_mut(0, self.k).scale_mut(1.0 / self.s);
-        Ok(j)
-    }
-
-    fn dparam(&self, x: &DVector<f64>, p: f64) -> Result<DVector<f64>, SolverError> {
-        self.inner.dparam(&self.unscale(x), p)
-    }
-
-    fn factorize(
-        &self,
-        x: &DVector<f64>,
-        p: f64,
-    ) -> Result<Box<dyn Factorization + '_>, SolverError> {
-        Ok(Box::new(ScaledFactor {
-            inner: self.inner.factorize(&self.unscale(x), p)?,
-            k: self.k,
-            s: self.s,
-        }))
-    }
-}
-
-/// `J D` with `D = diag(1/s, …, 1/s, 1, …)` (`k` entries `1/s`), from a factorisation of `J`.
-struct ScaledFactor<'a> {
-    inner: Box<dyn Factorization + 'a>,
-    k: usize,
-    s: f64,
-}
-
-impl Factorization for ScaledFactor<'_> {
-    fn solve(&self, b: &DVector<f64>) -> Option<DVector<f64>> {
-        // (J D) y = b  ⇔  y = D⁻¹ J⁻¹ b.
-        let mut y = self.inner.solve(b)?;
-        y.rows_mut(0, self.k).scale_mut(self.s);
-        Some(y)
-    }
-
-    fn apply(&self, v: &DVector<f64>) -> DVector<f64> {
-        let mut w = v.clone();
-        w.rows_mut(0, self.k).scale_mut(1.0 / self.s);
-        self.inner.apply(&w)
-    }
-
-    fn det_sign(&self) -> f64 {
-        self.inner.det_sign()
-    }
-
-    fn log_abs_det(&self) -> f64 {
-        self.inner.log_abs_det() - self.k as f64 * self.s.ln()
-    }
-}
-
-/// The model's stability index at a scaled state.
-struct Index<'a, M> {
-    scaled: &'a Scaled<'a, M>,
-    tolerance: f64,
-}
-
-impl<M: Confinement> Stability for Index<'_, M> {
-    fn index(&self, x: &DVector<f64>, p: f64) -> Result<usize, BoxError> {
-        let model = self.scaled.inner.model_at(p)?;
-        Ok(model.index(self.scaled.unscale(x).as_slice(), self.tolerance)?)
     }
 }
 

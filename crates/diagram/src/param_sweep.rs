@@ -13,6 +13,10 @@
 //! energy at that parameter value), `metastable` (index 0, not the lowest) or `unstable`.
 //! Energies of the seeds and of the special points carry an error estimate from the same
 //! state at half the resolution, `|E_N − E_{N/2}|/15`.
+//!
+//! The file is over 600 lines because it is the whole `--param` diagram of one scene: seeding,
+//! marching each family both ways with branch switching, labelling and the log-axis model
+//! wrapper; the stepping itself is the continuation crate's (through [`march`]).
 
 use rodloop_continuation::axis::Axis;
 use rodloop_continuation::{Direction, SpecialKind};
