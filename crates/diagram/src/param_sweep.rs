@@ -22,8 +22,8 @@ use rodloop_continuation::axis::Axis;
 use rodloop_continuation::{Direction, SpecialKind};
 use rodloop_exact::{branch_of_eta, eta_of_branch};
 use rodloop_solver::{
-    solve_from_state, Accuracy, Confinement, Globalization, ModelFactor, Param, ParamProblem,
-    SolveOptions, SolverError, Stiffness, SurfaceModel,
+    solve_from_state, Accuracy, Confinement, Globalization, Param, ParamProblem, SolveOptions,
+    SolverError, Stiffness, SurfaceModel,
 };
 
 use crate::labels::Label;
@@ -494,16 +494,15 @@ pub fn sweep_param(s: &SweepSettings) -> Result<ParamSweep, DiagramError> {
     })
 }
 
-/// The surface model continued in `ln θ` for `d1` and `gamma` (the decades at even steps), in the
-/// parameter itself otherwise: the continuation variable `p` and `θ = e^p`,
-/// `∂F/∂p = θ ∂F/∂θ`.
+/// A model continued on an [`Axis`] of its parameter: in `p = ln θ` for `d1` and `gamma` (the
+/// decades at even steps, `∂F/∂p = θ ∂F/∂θ`), in the parameter itself otherwise.
 #[derive(Clone, Debug)]
-struct Continued {
-    model: SurfaceModel,
+struct Continued<M> {
+    model: M,
     axis: Axis,
 }
 
-impl Continued {
+impl<M> Continued<M> {
     fn theta(&self, p: f64) -> f64 {
         self.axis.value(p)
     }
@@ -534,8 +533,8 @@ impl Continued {
     }
 }
 
-impl Confinement for Continued {
-    type Factor = ModelFactor;
+impl<M: Confinement> Confinement for Continued<M> {
+    type Factor = M::Factor;
     fn dim(&self) -> usize {
         Confinement::dim(&self.model)
     }
@@ -548,7 +547,7 @@ impl Confinement for Continued {
     fn jacobian(&self, z: &[f64]) -> Result<nalgebra::DMatrix<f64>, SolverError> {
         self.model.jacobian(z)
     }
-    fn factorize(&self, z: &[f64], shift: f64) -> Result<ModelFactor, SolverError> {
+    fn factorize(&self, z: &[f64], shift: f64) -> Result<M::Factor, SolverError> {
         Confinement::factorize(&self.model, z, shift)
     }
     fn apply(&self, z: &[f64], dz: &[f64]) -> Result<nalgebra::DVector<f64>, SolverError> {
