@@ -14,7 +14,9 @@
 //!   [`Continuation::switch_branch`] follows the second branch at a branch point.
 //! * [`Continuation::start`] (and [`Continuation::start_switch`]) return a [`Stepper`]
 //!   that advances one accepted step per call, reporting each [`Step`]'s point,
-//!   special points and stop; `run` and `switch_branch` are loops over it.
+//!   special points and stop; `run` and `switch_branch` are loops over it, and
+//!   [`Stepper::drive`] is the loop a tracer runs with its own visitor of each step
+//!   ([`Flow`], [`OnError`], [`Driven`]).
 //! * [`newton`] solves at a fixed parameter; [`solve_at`] re-solves a computed branch
 //!   at an exact parameter value.
 //! * [`target::reach`] continues a solution until the parameter reaches a target value
@@ -74,6 +76,7 @@
 
 pub mod axis;
 mod branch;
+mod drive;
 mod error;
 mod factorization;
 mod linalg;
@@ -88,6 +91,7 @@ pub mod target;
 mod tracker;
 
 pub use branch::{Branch, Point, SpecialKind, SpecialPoint, StopReason};
+pub use drive::{Driven, Flow, OnError};
 pub use error::{BoxError, ContinuationError, RootError, SharedError};
 pub use factorization::{DenseLu, Factorization};
 pub use newton::{newton, solve_all_at, solve_at, NewtonReport};

@@ -11,6 +11,8 @@
 //! * [`walk`]: from a state to one target value of the parameter, with any state type
 //!   `S` and any step function (`(current, previous, to, halvings) → next`), so that
 //!   the caller keeps its predictors and fallbacks.
+//! * [`walk_steps`]: the same loop with a fixed step that every step tries first (and a
+//!   budget of halvings per step), for a coordinate in which equal steps are natural.
 //! * [`natural_branch`]: the same loop for a [`Problem`], with the secant predictor
 //!   through the last two points and Newton's method as corrector.
 //!
@@ -133,6 +135,98 @@ where
         prev,
         steps,
         halvings,
+    })
+}
+
+/// Settings of a [`walk_steps`]: every step tries the full step first.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepSettings {
+    /// The step (its sign is taken towards the target); the last step goes straight to the
+    /// target when the remaining distance is at most `|step|`.
+    pub step: f64,
+    /// A failed step is retried with half the step; a step that fails after this many
+    /// halvings ends the walk. The budget is per step: the next step starts from `step`.
+    pub max_halvings: usize,
+    /// Accepted steps allowed.
+    pub max_steps: usize,
+    /// The walk has arrived once `|target − p| ≤ arrive`.
+    pub arrive: f64,
+}
+
+/// Why a [`walk_steps`] did not reach its target.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Halted<S, E> {
+    /// A step failed after [`StepSettings::max_halvings`] halvings.
+    Stuck(Stuck<S, E>),
+    /// [`StepSettings::max_steps`] steps were accepted before the target.
+    OutOfSteps {
+        /// The last accepted state.
+        last: S,
+    },
+}
+
+/// Walks from `start` (with `prev`, the state accepted before it) to the parameter value
+/// `target` in steps of `settings.step`, as [`walk`] does but with a fresh step and a
+/// fresh budget of halvings at every step: for a coordinate in which equal steps are
+/// natural (a step in `ln a` is a fixed ratio of `a`), where [`walk`]'s shrinking step
+/// would lose that.
+///
+/// # Errors
+/// [`Halted`]: a step failed after its halvings, or the step budget is spent.
+pub fn walk_steps<S, E, P, F>(
+    start: S,
+    prev: Option<S>,
+    target: f64,
+    param: P,
+    settings: &StepSettings,
+    mut step: F,
+) -> Result<Walked<S>, Halted<S, E>>
+where
+    P: Fn(&S) -> f64,
+    F: FnMut(&S, Option<&S>, f64, usize) -> Result<S, E>,
+{
+    let mut cur = start;
+    let mut prev = prev;
+    let mut steps = 0;
+    let mut spent = 0;
+    while (target - param(&cur)).abs() > settings.arrive {
+        if steps >= settings.max_steps {
+            return Err(Halted::OutOfSteps { last: cur });
+        }
+        let p = param(&cur);
+        let mut h = settings.step.abs().copysign(target - p);
+        let mut halvings = 0;
+        let next = loop {
+            let to = if (target - p).abs() <= h.abs() {
+                target
+            } else {
+                p + h
+            };
+            match step(&cur, prev.as_ref(), to, halvings) {
+                Ok(next) => break next,
+                Err(error) if halvings >= settings.max_halvings => {
+                    return Err(Halted::Stuck(Stuck {
+                        last: cur,
+                        prev,
+                        error,
+                        steps,
+                    }))
+                }
+                Err(_) => {
+                    halvings += 1;
+                    spent += 1;
+                    h *= 0.5;
+                }
+            }
+        };
+        prev = Some(std::mem::replace(&mut cur, next));
+        steps += 1;
+    }
+    Ok(Walked {
+        last: cur,
+        prev,
+        steps,
+        halvings: spent,
     })
 }
 
@@ -329,6 +423,80 @@ mod tests {
         assert!(t.stuck.is_none());
         assert!(t.points.iter().all(|pt| pt.x[0].abs() < 1e-12));
         assert!((t.points.last().unwrap().p - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn walk_steps_starts_every_step_afresh() {
+        // Steps of 0.25 from 0 to 1; a "solver" that refuses every first attempt at
+        // 0.5 (so the second step is retried at 0.125 and the third at full length
+        // again). Fixed-ratio steps: each step starts from 0.25, not from the last
+        // halved length.
+        let s = StepSettings {
+            step: 0.25,
+            max_halvings: 3,
+            max_steps: 100,
+            arrive: 1e-15,
+        };
+        let mut calls = Vec::new();
+        let r = walk_steps(
+            0.0f64,
+            None,
+            1.0,
+            |x| *x,
+            &s,
+            |cur, _, to, h| {
+                calls.push((*cur, to, h));
+                if to == 0.5 && h == 0 {
+                    Err(to)
+                } else {
+                    Ok(to)
+                }
+            },
+        );
+        let w = r.unwrap();
+        assert_eq!(w.last, 1.0);
+        assert_eq!(w.halvings, 1);
+        let tos: Vec<f64> = calls.iter().map(|c| c.1).collect();
+        assert_eq!(tos, vec![0.25, 0.5, 0.375, 0.625, 0.875, 1.0]);
+        // The last step goes straight to the target: from 0.875 the remaining 0.125 is
+        // within one step.
+        assert_eq!(calls[5], (0.875, 1.0, 0));
+        // A step that fails after its halvings: stuck at the last state, with its error.
+        let e = walk_steps(
+            0.0f64,
+            None,
+            1.0,
+            |x| *x,
+            &s,
+            |_, _, to, _| {
+                if to > 0.26 {
+                    Err(to)
+                } else {
+                    Ok(to)
+                }
+            },
+        )
+        .unwrap_err();
+        match e {
+            Halted::Stuck(st) => {
+                assert_eq!(st.last, 0.25);
+                // Tries 0.5, 0.375, 0.3125, 0.28125 (3 halvings): the last error.
+                assert_eq!(st.error, 0.25 + 0.25 / 8.0);
+            }
+            other => panic!("{other:?}"),
+        }
+        // The step budget.
+        let tight = StepSettings { max_steps: 2, ..s };
+        let e = walk_steps(
+            0.0f64,
+            None,
+            1.0,
+            |x| *x,
+            &tight,
+            |_, _, to, _| Ok::<f64, ()>(to),
+        )
+        .unwrap_err();
+        assert_eq!(e, Halted::OutOfSteps { last: 0.5 });
     }
 
     #[test]

@@ -37,7 +37,7 @@
 
 use nalgebra::DVector;
 use rodloop_solver::stability::TangentReduction;
-use rodloop_solver::{solve, Equilibrium, Globalization, SolveOptions, SolverError, SurfaceModel};
+use rodloop_solver::{solve, Equilibrium, Globalization, SolveOptions, SolverError};
 use serde::{Deserialize, Serialize};
 
 use crate::refine::resolve;
@@ -148,7 +148,7 @@ fn circle_modes(
     vectors: bool,
 ) -> Result<Vec<Mode>, SolverError> {
     let mf = f64::from(m);
-    let model = SurfaceModel::new(opts.radius, mf, cells, &opts.stiffness)?;
+    let model = opts.model(mf, cells)?;
     let n = model.n_kappa();
     let zero = vec![0.0; n];
     let d = opts.stiffness.reference();
@@ -387,7 +387,7 @@ fn switch(
         note: String::new(),
     };
     let result = (|| -> Result<Equilibrium, SolverError> {
-        let model = SurfaceModel::new(opts.radius, mf, cells, &opts.stiffness)?;
+        let model = opts.model(mf, cells)?;
         let nk = model.n_kappa();
         let scale = mode.vector.amax() * opts.radius;
         let v = &mode.vector / scale;

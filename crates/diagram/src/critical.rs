@@ -449,7 +449,7 @@ pub(crate) fn collapses(
 /// `½∫D/R² ds` (`= m` for a uniform rod), evaluated by the model's quadrature.
 pub(crate) fn great_circle_energy(opts: &DiagramOptions, m: f64) -> f64 {
     let cells = 2048;
-    rodloop_solver::SurfaceModel::new(opts.radius, m, cells, &opts.stiffness)
+    opts.model(m, cells)
         .and_then(|model| model.energy_normalized(&vec![0.0; 2 * cells]))
         .map(|e| e.0)
         .unwrap_or(m)

@@ -1,4 +1,8 @@
 //! The assembled diagram: critical lengths, labels, great circles.
+//!
+//! The file is over 600 lines because it is the one result of the `L̄` diagram: its types
+//! (the diagram, its rows, its summary), [`assemble`] that fills them from the traced
+//! branches, and the end points and special points read from those branches.
 
 use std::time::Instant;
 

@@ -8,7 +8,8 @@
 //! step, from a predictor polynomial in `a` (in which the branch is regular), down to
 //! [`DiagramOptions::end_distance`] from `m` ([`approach_end`]).
 
-use rodloop_solver::{solve_from_state, Param, ParamProblem, SurfaceModel};
+use rodloop_continuation::natural::{walk_steps, Halted, StepSettings};
+use rodloop_solver::{solve_from_state, Param, ParamProblem, SolverError, SurfaceModel};
 
 use crate::states::newton_options;
 use crate::DiagramOptions;
@@ -93,6 +94,11 @@ pub(crate) struct Approach {
 /// Newton solves at `L̄ = m + side·a²`, `a` halved at every step, from `chain` (the last
 /// states, the nearest to `m` last) down to `target`; the predictor is the polynomial in
 /// `a` through the last (up to three) states. `side` is the side of `m` the branch lies on.
+///
+/// The steps are the continuation crate's natural-parameter walk in `ln a`
+/// ([`walk_steps`]): each step tries `ln ½` first, and a failed try is retried with half
+/// the step in `ln a` (the square root of the ratio in `a`), 7 times at most; at most
+/// [`APPROACH_STEPS`] steps.
 pub(crate) fn approach_end(
     problem: &ParamProblem<SurfaceModel>,
     chain: &[(Vec<f64>, f64)],
@@ -107,68 +113,70 @@ pub(crate) fn approach_end(
     };
     let a_of = |p: f64| (side * (p - m)).max(0.0).sqrt();
     let a_target = a_of(target);
+    let too_many = || Approach {
+        points: Vec::new(),
+        failure: Some("too many steps approaching the great circle".into()),
+    };
+    let Some(last) = chain.last().cloned() else {
+        return too_many();
+    };
+    // Arrived (to 1e-12 relative in `a`) before any step.
+    let arrive = (1.0 + 1e-12f64).ln();
+    let u_target = a_target.ln();
+    if a_of(last.1) <= a_target * (1.0 + 1e-12) {
+        return Approach {
+            points: Vec::new(),
+            failure: None,
+        };
+    }
     let mut hist: Vec<(Vec<f64>, f64)> = chain.to_vec();
     let mut out = Vec::new();
     let opts = newton_options();
-    let mut ratio: f64 = 0.5;
-    for _ in 0..200 {
-        let Some(&(_, p_last)) = hist.last() else {
-            break;
-        };
-        let a_last = a_of(p_last);
-        if a_last <= a_target * (1.0 + 1e-12) {
-            return Approach {
-                points: out,
-                failure: None,
-            };
-        }
-        let mut attempt = ratio;
-        let mut solved = None;
-        let mut last_err = String::new();
-        for _ in 0..8 {
-            let a_next = (a_last * attempt).max(a_target);
-            let p_next = if a_next <= a_target {
+    let settings = StepSettings {
+        step: std::f64::consts::LN_2,
+        max_halvings: 7,
+        max_steps: APPROACH_STEPS,
+        arrive,
+    };
+    let walked = walk_steps(
+        last,
+        None,
+        u_target,
+        |s: &(Vec<f64>, f64)| a_of(s.1).ln(),
+        &settings,
+        |_, _, u_next, _| {
+            let a_next = u_next.exp().max(a_target);
+            let p_next = if u_next <= u_target {
                 target
             } else {
                 m + side * a_next * a_next
             };
             let pred = predict(&hist, a_of, a_next);
-            match problem
+            let eq = problem
                 .model_at(p_next)
-                .and_then(|model| solve_from_state(model, pred, &opts))
-            {
-                Ok(eq) => {
-                    solved = Some((eq.state(), p_next));
-                    break;
-                }
-                Err(e) => {
-                    last_err = e.to_string();
-                    attempt = attempt.sqrt();
-                }
-            }
-        }
-        match solved {
-            Some(s) => {
-                hist.push(s.clone());
-                out.push(s);
-                ratio = (ratio * 0.8).max(0.5);
-            }
-            None => {
-                return Approach {
-                    points: out,
-                    failure: Some(format!(
-                        "Newton's method failed approaching the great circle at L̄ = {m} \
-                         ({last_err})"
-                    )),
-                }
-            }
-        }
-    }
+                .and_then(|model| solve_from_state(model, pred, &opts))?;
+            let s = (eq.state(), p_next);
+            hist.push(s.clone());
+            out.push(s.clone());
+            Ok::<_, SolverError>(s)
+        },
+    );
+    let failure = match walked {
+        Ok(_) => None,
+        Err(Halted::OutOfSteps { .. }) => too_many().failure,
+        Err(Halted::Stuck(stuck)) => Some(format!(
+            "Newton's method failed approaching the great circle at L̄ = {m} ({})",
+            stuck.error
+        )),
+    };
     Approach {
         points: out,
-        failure: Some("too many steps approaching the great circle".into()),
+        failure,
     }
 }
+
+/// Steps of [`approach_end`] at most.
+const APPROACH_STEPS: usize = 200;
 
 /// Polynomial extrapolation in `a` through the last (up to three) states of `hist`.
 fn predict(hist: &[(Vec<f64>, f64)], a_of: impl Fn(f64) -> f64, a: f64) -> Vec<f64> {

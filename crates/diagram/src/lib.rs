@@ -287,6 +287,16 @@ impl Default for DiagramOptions {
 }
 
 impl DiagramOptions {
+    /// The scene's model at length `lbar` with `cells` cells: the one place the surface
+    /// diagram chooses its confinement model.
+    pub fn model(
+        &self,
+        lbar: f64,
+        cells: usize,
+    ) -> Result<rodloop_solver::SurfaceModel, SolverError> {
+        rodloop_solver::SurfaceModel::new(self.radius, lbar, cells, &self.stiffness)
+    }
+
     /// The default scene at another accuracy level.
     pub fn with_accuracy(accuracy: Accuracy) -> Self {
         Self {

@@ -1,9 +1,10 @@
-//! The stepping loop: one [`Stepper`](rodloop_continuation::Stepper) from a solved state towards a limit of the continued
+//! A march: one [`Stepper`](rodloop_continuation::Stepper) from a solved state towards a limit of the continued
 //! parameter, for any confinement model ([`Confinement`]) and any named parameter
 //! ([`ParamProblem`]).
 //!
-//! [`march`] takes one pseudo-arclength step per [`Stepper::step`](rodloop_continuation::Stepper::step) and reacts to what each
-//! step reports:
+//! [`march`] lets the continuation crate's stepping loop
+//! ([`Stepper::drive`](rodloop_continuation::Stepper::drive)) take the pseudo-arclength
+//! steps and reacts to what each step reports:
 //!
 //! * **index changes** (located by the continuation's bisection on the stability index of
 //!   [`Confinement::index`]) become points of the march and [`IndexChange`]s;
@@ -27,15 +28,21 @@
 //! `κ_g R`, so that step sizes do not depend on the resolution. The scaling is applied to
 //! the model's own factorisation too ([`Confinement::factorize`], `O(N)`), not by forming a
 //! dense matrix.
+//!
+//! The scaled problem, its factorisation and the stability index at a scaled state are
+//! the child module `scaled`.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 use rodloop_continuation::{
-    BoxError, Continuation, Direction, Factorization, Problem, PseudoArclength, SpecialKind,
-    Stability, StopReason,
+    Continuation, Direction, Driven, Flow, OnError, Problem, PseudoArclength, SpecialKind,
+    StopReason,
 };
 use rodloop_solver::{Confinement, ParamProblem, SolverError};
 
 use crate::types::{IndexChange, PointSource};
+
+mod scaled;
+use scaled::{Index, Scaled};
 
 /// What [`march`] does at a fold (turning point) of the continued parameter.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -181,104 +188,6 @@ impl March {
         self.special
             .iter()
             .filter(|s| s.kind == SpecialKind::BranchPoint)
-    }
-}
-
-/// The continuation problem of a [`ParamProblem`] with the leading unknowns scaled.
-struct Scaled<'a, M> {
-    inner: &'a ParamProblem<M>,
-    k: usize,
-    s: f64,
-}
-
-impl<M> Scaled<'_, M> {
-    fn unscale(&self, xt: &DVector<f64>) -> DVector<f64> {
-        let mut x = xt.clone();
-        x.rows_mut(0, self.k).scale_mut(1.0 / self.s);
-        x
-    }
-
-    fn scale(&self, x: &[f64]) -> DVector<f64> {
-        let mut xt = DVector::from_column_slice(x);
-        xt.rows_mut(0, self.k).scale_mut(self.s);
-        xt
-    }
-}
-
-impl<M: Confinement> Problem for Scaled<'_, M> {
-    type Error = SolverError;
-
-    fn dim(&self) -> usize {
-        self.inner.dim()
-    }
-
-    fn residual(&self, x: &DVector<f64>, p: f64) -> Result<DVector<f64>, SolverError> {
-        self.inner.residual(&self.unscale(x), p)
-    }
-
-    fn jacobian(&self, x: &DVector<f64>, p: f64) -> Result<DMatrix<f64>, SolverError> {
-        let mut j = self.inner.jacobian(&self.unscale(x), p)?;
-        j.columns_mut(0, self.k).scale_mut(1.0 / self.s);
-        Ok(j)
-    }
-
-    fn dparam(&self, x: &DVector<f64>, p: f64) -> Result<DVector<f64>, SolverError> {
-        self.inner.dparam(&self.unscale(x), p)
-    }
-
-    fn factorize(
-        &self,
-        x: &DVector<f64>,
-        p: f64,
-    ) -> Result<Box<dyn Factorization + '_>, SolverError> {
-        Ok(Box::new(ScaledFactor {
-            inner: self.inner.factorize(&self.unscale(x), p)?,
-            k: self.k,
-            s: self.s,
-        }))
-    }
-}
-
-/// `J D` with `D = diag(1/s, …, 1/s, 1, …)` (`k` entries `1/s`), from a factorisation of `J`.
-struct ScaledFactor<'a> {
-    inner: Box<dyn Factorization + 'a>,
-    k: usize,
-    s: f64,
-}
-
-impl Factorization for ScaledFactor<'_> {
-    fn solve(&self, b: &DVector<f64>) -> Option<DVector<f64>> {
-        // (J D) y = b  ⇔  y = D⁻¹ J⁻¹ b.
-        let mut y = self.inner.solve(b)?;
-        y.rows_mut(0, self.k).scale_mut(self.s);
-        Some(y)
-    }
-
-    fn apply(&self, v: &DVector<f64>) -> DVector<f64> {
-        let mut w = v.clone();
-        w.rows_mut(0, self.k).scale_mut(1.0 / self.s);
-        self.inner.apply(&w)
-    }
-
-    fn det_sign(&self) -> f64 {
-        self.inner.det_sign()
-    }
-
-    fn log_abs_det(&self) -> f64 {
-        self.inner.log_abs_det() - self.k as f64 * self.s.ln()
-    }
-}
-
-/// The model's stability index at a scaled state.
-struct Index<'a, M> {
-    scaled: &'a Scaled<'a, M>,
-    tolerance: f64,
-}
-
-impl<M: Confinement> Stability for Index<'_, M> {
-    fn index(&self, x: &DVector<f64>, p: f64) -> Result<usize, BoxError> {
-        let model = self.scaled.inner.model_at(p)?;
-        Ok(model.index(self.scaled.unscale(x).as_slice(), self.tolerance)?)
     }
 }
 
@@ -518,7 +427,10 @@ pub fn march_switch_until<M: Confinement>(
     ))
 }
 
-/// The stepping loop of [`march`] and [`march_switch`].
+/// The visitor of [`march`] and [`march_switch`]: what each accepted step adds to the
+/// march, and when the march ends, over the continuation's own stepping loop
+/// ([`Stepper::drive`](rodloop_continuation::Stepper::drive), which retries a step that
+/// fails with an evaluation error with half the step size).
 #[allow(clippy::too_many_arguments)]
 fn run_loop<M: Confinement>(
     mut stepper: rodloop_continuation::Stepper<'_, '_, Scaled<'_, M>>,
@@ -532,28 +444,11 @@ fn run_loop<M: Confinement>(
 ) -> March {
     let unscaled = |x: &DVector<f64>| scaled.unscale(x).as_slice().to_vec();
     let mut last_value = p0;
-    let mut cause: Option<String> = None;
     let every = st.progress_every.max(1);
-    let stop =
-        loop {
-            let step = match stepper.step() {
-                Ok(step) => step,
-                Err(e) => {
-                    // The stepper stays at its last accepted point: retry with a smaller step.
-                    let ds = stepper.ds() * 0.5;
-                    cause = Some(e.to_string());
-                    if stepper.set_ds(ds).is_err() {
-                        break MarchStop::StepTooSmall {
-                            ds,
-                            value: last_value,
-                            cause,
-                        };
-                    }
-                    continue;
-                }
-            };
+    let driven =
+        stepper.drive(OnError::Halve, |stepper, step| {
             let Some(point) = step.point else {
-                break stop_of(step.stop, cause.take());
+                return Flow::Go;
             };
             let n = point.x.len();
             let turned = point.tangent[n] * side <= 0.0 || (point.p - last_value) * side <= 0.0;
@@ -566,7 +461,7 @@ fn run_loop<M: Confinement>(
                     value: f.p,
                     tangent: f.tangent.as_slice().to_vec(),
                 }));
-                break MarchStop::Fold { value: last_value };
+                return Flow::Stop(MarchStop::Fold { value: last_value });
             }
             for sp in &step.special {
                 match &sp.kind {
@@ -618,26 +513,42 @@ fn run_loop<M: Confinement>(
                 source: PointSource::Continuation,
             });
             last_value = point.p;
-            cause = None;
             if stepper.steps() % every == 0 {
                 progress(last_value, stepper.steps());
             }
             if step.stop.is_some() {
-                break stop_of(step.stop, None);
+                // The drive ends with the step's stop reason.
+                return Flow::Go;
             }
             if until(&out.points) {
-                break MarchStop::Known;
+                return Flow::Stop(MarchStop::Known);
             }
             let heading = point.tangent[n];
-            if let Some(&m) = st.circles.iter().find(|&&m| {
+            match st.circles.iter().find(|&&m| {
                 (point.p - m).abs() < st.circle_distance && heading * (m - point.p) > 0.0
             }) {
-                break MarchStop::NearCircle {
+                Some(&m) => Flow::Stop(MarchStop::NearCircle {
                     circle: m,
                     value: point.p,
-                };
+                }),
+                None => Flow::Go,
             }
-        };
+        });
+    let stop = match driven {
+        Driven::Visitor(stop) => stop,
+        Driven::Stopped { reason, cause } => stop_of(Some(reason), cause.map(|e| e.to_string())),
+        Driven::TooSmall { ds, cause } => MarchStop::StepTooSmall {
+            ds,
+            value: last_value,
+            cause: Some(cause.to_string()),
+        },
+        // Not with `OnError::Halve`; reported as a step that could not be taken.
+        Driven::Failed(e) => MarchStop::StepTooSmall {
+            ds: stepper.ds(),
+            value: last_value,
+            cause: Some(e.to_string()),
+        },
+    };
     out.steps = stepper.steps();
     out.stop = stop;
     progress(last_value, out.steps);

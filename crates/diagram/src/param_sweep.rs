@@ -13,12 +13,17 @@
 //! energy at that parameter value), `metastable` (index 0, not the lowest) or `unstable`.
 //! Energies of the seeds and of the special points carry an error estimate from the same
 //! state at half the resolution, `|E_N − E_{N/2}|/15`.
+//!
+//! The file is over 600 lines because it is the whole `--param` diagram of one scene: seeding,
+//! marching each family both ways with branch switching, labelling and the log-axis model
+//! wrapper; the stepping itself is the continuation crate's (through [`march`]).
 
+use rodloop_continuation::axis::Axis;
 use rodloop_continuation::{Direction, SpecialKind};
 use rodloop_exact::{branch_of_eta, eta_of_branch};
 use rodloop_solver::{
-    solve_from_state, Accuracy, Confinement, Globalization, ModelFactor, Param, ParamProblem,
-    SolveOptions, SolverError, Stiffness, SurfaceModel,
+    solve_from_state, Accuracy, Confinement, Globalization, Param, ParamProblem, SolveOptions,
+    SolverError, Stiffness, SurfaceModel,
 };
 
 use crate::labels::Label;
@@ -276,7 +281,7 @@ pub fn sweep_param(s: &SweepSettings) -> Result<ParamSweep, DiagramError> {
         let cont = Continued {
             model: model.clone(),
             // The parameter's own axis (Param::axis: d1 and gamma in their logarithm).
-            log: s.param.axis() == rodloop_continuation::axis::Axis::Log,
+            axis: s.param.axis(),
         };
         let problem = ParamProblem::new(cont.clone(), s.param)?;
         let shape = model.n_kappa();
@@ -489,30 +494,21 @@ pub fn sweep_param(s: &SweepSettings) -> Result<ParamSweep, DiagramError> {
     })
 }
 
-/// The surface model continued in `ln θ` for `d1` and `gamma` (the decades at even steps), in the
-/// parameter itself otherwise: the continuation variable `p` and `θ = e^p`,
-/// `∂F/∂p = θ ∂F/∂θ`.
+/// A model continued on an [`Axis`] of its parameter: in `p = ln θ` for `d1` and `gamma` (the
+/// decades at even steps, `∂F/∂p = θ ∂F/∂θ`), in the parameter itself otherwise.
 #[derive(Clone, Debug)]
-struct Continued {
-    model: SurfaceModel,
-    log: bool,
+struct Continued<M> {
+    model: M,
+    axis: Axis,
 }
 
-impl Continued {
+impl<M> Continued<M> {
     fn theta(&self, p: f64) -> f64 {
-        if self.log {
-            p.exp()
-        } else {
-            p
-        }
+        self.axis.value(p)
     }
 
     fn p_of(&self, theta: f64) -> f64 {
-        if self.log {
-            theta.ln()
-        } else {
-            theta
-        }
+        self.axis.coordinate(theta)
     }
 
     /// A march with its parameter values as `θ` (the tangents of its special points are
@@ -537,8 +533,8 @@ impl Continued {
     }
 }
 
-impl Confinement for Continued {
-    type Factor = ModelFactor;
+impl<M: Confinement> Confinement for Continued<M> {
+    type Factor = M::Factor;
     fn dim(&self) -> usize {
         Confinement::dim(&self.model)
     }
@@ -551,7 +547,7 @@ impl Confinement for Continued {
     fn jacobian(&self, z: &[f64]) -> Result<nalgebra::DMatrix<f64>, SolverError> {
         self.model.jacobian(z)
     }
-    fn factorize(&self, z: &[f64], shift: f64) -> Result<ModelFactor, SolverError> {
+    fn factorize(&self, z: &[f64], shift: f64) -> Result<M::Factor, SolverError> {
         Confinement::factorize(&self.model, z, shift)
     }
     fn apply(&self, z: &[f64], dz: &[f64]) -> Result<nalgebra::DVector<f64>, SolverError> {
@@ -563,16 +559,14 @@ impl Confinement for Continued {
     fn with_param(&self, p: Param, value: f64) -> Result<Self, SolverError> {
         Ok(Self {
             model: Confinement::with_param(&self.model, p, self.theta(value))?,
-            log: self.log,
+            axis: self.axis,
         })
     }
     fn dparam(&self, z: &[f64], p: Param) -> Result<nalgebra::DVector<f64>, SolverError> {
         let d = self.model.dparam(z, p)?;
-        Ok(if self.log {
-            d * Confinement::param(&self.model, p)?
-        } else {
-            d
-        })
+        // d/dq = (dθ/dq) d/dθ (θ d/dθ on a log axis).
+        let theta = Confinement::param(&self.model, p)?;
+        Ok(d * self.axis.derivative(self.p_of(theta)))
     }
     fn index(&self, z: &[f64], tolerance: f64) -> Result<usize, SolverError> {
         self.model.index(z, tolerance)
@@ -814,10 +808,10 @@ mod tests {
             .gauss_values(&model)
             .unwrap();
         z.extend_from_slice(&[0.3, -0.2, 0.1]);
-        for log in [true, false] {
+        for axis in [Axis::Log, Axis::Linear] {
             let c = Continued {
                 model: model.clone(),
-                log,
+                axis,
             };
             let p0 = Confinement::param(&c, Param::D1).unwrap();
             assert!((c.theta(p0) - 0.3).abs() < 1e-15);
@@ -830,7 +824,7 @@ mod tests {
             )
             .unwrap();
             let err = (&an - &fd).amax() / fd.amax();
-            assert!(err < 1e-7, "log = {log}: {err}");
+            assert!(err < 1e-7, "{axis:?}: {err}");
         }
     }
 

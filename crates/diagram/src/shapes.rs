@@ -1,10 +1,9 @@
 //! Point group and self-intersections of every traced state (the `point_group` and
 //! `self_intersections` columns of `branches.csv`), from the state's unknowns by
-//! [`rodloop_solver::SurfaceModel::shape`]: the positions are integrated from `κ_g`, no
+//! the surface model's `shape`: the positions are integrated from `κ_g`, no
 //! re-solve. The states of one branch are done by one worker of the crate's pool.
 
 use rodloop_exact::shape::ShapeTolerances;
-use rodloop_solver::SurfaceModel;
 use serde::Serialize;
 
 use crate::parallel::run_parallel;
@@ -54,7 +53,7 @@ pub(crate) fn state_shapes(
             b.points
                 .iter()
                 .map(|p| {
-                    SurfaceModel::new(opts.radius, p.value, b.cells, &opts.stiffness)
+                    opts.model(p.value, b.cells)
                         .and_then(|m| m.shape(&p.state, tol))
                         .map_err(|e| {
                             format!(

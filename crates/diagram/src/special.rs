@@ -13,7 +13,7 @@
 //! gave estimates up to 30 times below the difference to `--accuracy high`.)
 
 use rodloop_continuation::SpecialKind as ContKind;
-use rodloop_solver::{Confinement, Param, ParamProblem, SurfaceModel};
+use rodloop_solver::{Confinement, Param, ParamProblem};
 
 use crate::march::{march, FoldPolicy};
 use crate::refine::{reporting_cells, resolve};
@@ -125,8 +125,6 @@ fn scaled_distance(a: &[f64], b: &[f64], shape_fine: usize, scale_fine: f64) -> 
 }
 
 /// `E R/(π D0)` of the state `x` at `lbar`.
-fn energy_of(problem: &ParamProblem<SurfaceModel>, x: &[f64], lbar: f64) -> Option<f64> {
-    let model = problem.model_at(lbar).ok()?;
-    let (kappa, _, _) = model.split(x).ok()?;
-    model.energy_normalized(kappa).ok().map(|e| e.0)
+fn energy_of<M: Confinement>(problem: &ParamProblem<M>, x: &[f64], lbar: f64) -> Option<f64> {
+    problem.model_at(lbar).ok()?.energy(x).ok()
 }

@@ -45,6 +45,12 @@
 //! * Consequently the Viviani curve (cylinder of radius R/2 through the centre) is the
 //!   l = 1 curve at α = π/2, **not** at α = π/4 as stated in the paper; at α = π/4 the
 //!   cylinder radius is cos²(π/8) ≈ 0.854 R.
+//!
+//! # Size
+//!
+//! The file is one curve family of Sec. 3.1 (Eq. (4) and its special cases, the tennis ball
+//! and the hippopedes) with its geometry, lengths, energies and the quadrature they share;
+//! its tests are in `crates/exact/tests`.
 
 use serde::{Deserialize, Serialize};
 use std::f64::consts::{PI, TAU};

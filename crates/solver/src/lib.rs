@@ -7,6 +7,8 @@
 //! is `r = R n`. Position on the sphere and inextensibility therefore hold by construction,
 //! and closure of the loop is closure of the frame, a condition in SO(3).
 //!
+//! * [`surface`]: the folder of the surface model's files ([`frame`], [`model`], [`kkt`],
+//!   [`periodic`], [`stability`]), re-exported here.
 //! * [`frame`]: the Darboux-frame integrator (fourth-order Magnus) and the Rodrigues jet.
 //! * [`stiffness`]: `D(s)` profiles (uniform, Eq. (51), tables).
 //! * [`model`]: the discretised model ([`SurfaceModel`]): energy, closure, KKT residual,
@@ -33,22 +35,20 @@ pub mod accuracy;
 pub mod continuation;
 pub mod descend;
 pub mod enclosed;
-pub mod frame;
 pub mod identify;
-pub mod kkt;
 pub mod mesh;
-pub mod model;
 pub mod param;
-pub mod periodic;
 mod resample;
 pub mod robust;
 pub mod seam;
 pub mod shape;
 pub mod solve;
-pub mod stability;
 pub mod start;
 pub mod stiffness;
+pub mod surface;
 pub mod verify;
+
+pub use surface::{frame, kkt, model, periodic, stability};
 
 pub use accuracy::{
     finish_with_accuracy, richardson, richardson_error, solve_cells, solve_with_accuracy, Accuracy,

@@ -1,5 +1,10 @@
 //! Globalised Newton's method on the KKT system, and the equilibrium it returns with its
 //! energies, forces and profiles (Sec. 4.1, Eqs. (24)–(27), (38)–(42)).
+//!
+//! The file is over 600 lines because it holds one job end to end: the globalised Newton
+//! iteration (restoration, relaxation, line search) and the [`Equilibrium`] it returns with the
+//! derived quantities of Sec. 4.1 (energies, forces, profiles), which read the solver's
+//! multipliers and are defined by the same equations.
 
 use std::f64::consts::PI;
 

@@ -1,5 +1,9 @@
 //! Following the seeds of a branch through folds and branch points: the curves, their
 //! ends, and branch switching.
+//!
+//! The file is just over 600 lines: following a seed, finishing its ends at the great
+//! circles and switching at its branch points share the tracing context and the image tests
+//! of the families, and are one job.
 
 use std::time::Instant;
 

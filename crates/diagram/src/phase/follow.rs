@@ -1,7 +1,9 @@
 //! Pseudo-arclength continuation of a Maxwell point in the parameter, with the reasons a
 //! leg ends.
 
-use rodloop_continuation::{Continuation, Direction, PseudoArclength, SpecialKind, StopReason};
+use rodloop_continuation::{
+    Continuation, Direction, Driven, Flow, OnError, PseudoArclength, SpecialKind, StopReason,
+};
 
 use super::rows::branch_word;
 use super::{CurveEnd, Exchange, Tracked};
@@ -80,23 +82,9 @@ pub(super) fn follow(
     let mut points: Vec<Tracked> = Vec::new();
     let mut arm = start.arm;
     let mut prev = (x0.clone(), p0);
-    let last_p = |pts: &Vec<Tracked>| pts.last().map(|t| t.p).unwrap_or(p0);
-    loop {
-        let step = match stepper.step() {
-            Ok(st) => st,
-            Err(e) => {
-                let v = theta(last_p(&points));
-                return Ok(Leg {
-                    points,
-                    end: CurveEnd {
-                        value: v,
-                        kind: "failed".into(),
-                        reason: format!("the continuation failed after {name} = {v}: {e}"),
-                    },
-                });
-            }
-        };
-        // The first special point that ends the curve.
+    // The continuation crate's stepping loop; this visitor ends the curve at the first
+    // special point that ends it and records every accepted point.
+    let driven = stepper.drive(OnError::Fail, |_, step| {
         for sp in &step.special {
             let lbar = sp.x[sp.x.len() - 1];
             let end = match &sp.kind {
@@ -162,7 +150,7 @@ pub(super) fn follow(
                 _ => None,
             };
             if let Some(end) = end {
-                return Ok(Leg { points, end });
+                return Flow::Stop(end);
             }
         }
         if let Some(pt) = &step.point {
@@ -177,8 +165,17 @@ pub(super) fn follow(
             });
             prev = (pt.x.clone(), pt.p);
         }
-        if let Some(stop) = step.stop {
-            let v = theta(last_p(&points));
+        Flow::Go
+    });
+    let v = theta(points.last().map(|t| t.p).unwrap_or(p0));
+    let end = match driven {
+        Driven::Visitor(end) => end,
+        Driven::Failed(e) | Driven::TooSmall { cause: e, .. } => CurveEnd {
+            value: v,
+            kind: "failed".into(),
+            reason: format!("the continuation failed after {name} = {v}: {e}"),
+        },
+        Driven::Stopped { reason: stop, .. } => {
             let (kind, reason) = match stop {
                 StopReason::LeftRange { boundary } => {
                     if (boundary - p_end).abs() <= 1e-9 * p_end.abs().max(1.0) {
@@ -200,16 +197,14 @@ pub(super) fn follow(
                 StopReason::MaxSteps => ("failed", "the step budget (400) was used up".into()),
                 other => ("failed", format!("{other:?}")),
             };
-            return Ok(Leg {
-                points,
-                end: CurveEnd {
-                    value: v,
-                    kind: kind.into(),
-                    reason,
-                },
-            });
+            CurveEnd {
+                value: v,
+                kind: kind.into(),
+                reason,
+            }
         }
-    }
+    };
+    Ok(Leg { points, end })
 }
 
 pub(super) fn unstable_reason(ex: Exchange, idx: (usize, usize), theta: f64) -> String {

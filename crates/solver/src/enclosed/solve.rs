@@ -23,6 +23,7 @@
 use std::f64::consts::PI;
 
 use nalgebra::{DMatrix, DVector, Vector3};
+use rodloop_continuation::natural::NaturalSettings;
 
 use super::model::{phase_slope, EnclosedModel, Gauge};
 use crate::stiffness::Stiffness;
@@ -280,28 +281,28 @@ pub fn solve_by_pull_homotopy(
     opts: &EnclosedOptions,
 ) -> Result<EnclosedState, SolverError> {
     let top = 1.1 * (-lambda_min).max(0.0) + 1e-3;
-    let mut state = solve_enclosed(&model.clone().with_pull(top)?, z0, opts)?;
-    let mut pull = top;
-    let mut step = top / 8.0;
-    let mut halvings = 0;
-    while pull > 0.0 {
-        let next = (pull - step).max(0.0);
-        let m = model.clone().with_pull(next)?;
-        match solve_enclosed(&m, state.z.clone(), opts) {
-            Ok(s) => {
-                state = s;
-                pull = next;
-            }
-            Err(e) => {
-                halvings += 1;
-                if halvings > 12 {
-                    return Err(e);
-                }
-                step *= 0.5;
-            }
-        }
-    }
-    Ok(state)
+    let state = solve_enclosed(&model.clone().with_pull(top)?, z0, opts)?;
+    // The continuation crate's natural-parameter walk in the pull, from `top` to 0.
+    let settings = NaturalSettings {
+        max_step: top / 8.0,
+        max_halvings: 12,
+        arrive: 0.0,
+        snap: 0.0,
+    };
+    rodloop_continuation::natural::walk(
+        (state, top),
+        None,
+        0.0,
+        |s: &(EnclosedState, f64)| s.1,
+        &settings,
+        |(cur, _), _, next, _| {
+            let next = next.max(0.0);
+            let m = model.clone().with_pull(next)?;
+            Ok((solve_enclosed(&m, cur.z.clone(), opts)?, next))
+        },
+    )
+    .map(|w| w.last.0)
+    .map_err(|stuck| stuck.error)
 }
 
 /// The starting state built from a loop on the sphere: `κ1 = κ_g(σ)`, `κ2 = −1/R`, `r0 = R e3`

@@ -45,6 +45,12 @@
 //! The block `LDLᵀ` uses no pivoting across blocks; a block whose pivot ratio falls below
 //! `1e-13` is reported as [`SolverError::SingularJacobian`], and callers fall back to the
 //! dense matrix (which can only happen at isolated points of a branch).
+//!
+//! # Size
+//!
+//! The file is one job, the block factorisation: the cell blocks, the `LDLᵀ` sweep with its
+//! pivoting, the solves and the inertia count read the same block layout, documented once
+//! above; splitting them would spread that layout over several files.
 
 use nalgebra::{
     DMatrix, DVector, Matrix2, Matrix3, SMatrix, SVector, Vector2, Vector3, LU, U2, U8, U9,
