@@ -370,6 +370,7 @@ pub fn write_outputs(
         "great_circles": d.great_circles,
         "shape_tolerance": d.shape_tolerance,
         "states_dir": "states",
+        "unverified_states": d.unverified_states,
         "warnings": d.warnings.iter().chain(&state_warnings).collect::<Vec<_>>(),
         "timings": d.timings,
         "certificate": d.certificate,

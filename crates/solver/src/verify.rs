@@ -8,7 +8,9 @@
 //! * **closed**: the holonomy `H = X(L) X(0)ᵀ` of the frame is within
 //!   [`MAX_HOLONOMY_ANGLE`] of the identity, and the written polyline closes: the chord from
 //!   its last point back to its first is no longer than the arclength between them (a
-//!   chord of a closed smooth curve never is), up to [`POSITION_SLACK`]`·R`;
+//!   chord of a closed smooth curve never is), up to [`CHORD_SLACK`] of the arclength
+//!   (the written points between the mesh nodes are interpolated) and
+//!   [`POSITION_SLACK`]`·R`;
 //! * **on the sphere**: every written point has `||r| − R| ≤ `[`POSITION_SLACK`]`·R`;
 //! * **energy**: `E R/(π D0) = (R/π D0) ∮ ½ D κ² ds` recomputed from the written `s`, `κ`
 //!   and `D` columns by the periodic trapezoidal rule equals the reported energy within
@@ -48,6 +50,13 @@ pub const MAX_HOLONOMY_ANGLE: f64 = 1e-7;
 /// Slack (in units of `R`) of the position checks: the points are `R n` with `n` a row of a
 /// rotation matrix, exact to round-off.
 pub const POSITION_SLACK: f64 = 1e-9;
+
+/// Relative slack of the chord check: the written points are interpolated between the
+/// mesh nodes, so where the loop is nearly straight over its last written step the chord can
+/// exceed the arclength by the interpolation error (measured 1e-3 relative on a state of
+/// 80 cells sampled at 128 points, `D1/D0 = 0.1`, branch 2 at `L̄ = 1.312`). A loop that
+/// does not close misses by many steps (0.5–2 R against steps of 0.06 R).
+pub const CHORD_SLACK: f64 = 1e-2;
 
 /// Relative slack of the energy check (round-off of the sums).
 pub const ENERGY_RELATIVE_SLACK: f64 = 1e-9;
@@ -138,7 +147,7 @@ pub fn verify_state(
     }
     let closing_chord = (pos(&profile[n - 1]) - pos(&profile[0])).norm() / r;
     let closing_arc = (length + profile[0].s - profile[n - 1].s) / r;
-    if !(closing_arc > 0.0 && closing_chord <= closing_arc * (1.0 + 1e-12) + POSITION_SLACK) {
+    if !(closing_arc > 0.0 && closing_chord <= closing_arc * (1.0 + CHORD_SLACK) + POSITION_SLACK) {
         return fail(format!(
             "the written polyline does not close: its last point is {closing_chord:.3e} R from \
              the first, {closing_arc:.3e} R of arclength away"
