@@ -337,6 +337,7 @@ pub(crate) fn write_outputs(
         "cells": d.cells,
         "warnings": d.warnings.iter().chain(&state_warnings).collect::<Vec<_>>(),
         "states_dir": "states",
+        "unverified_states": state_files.iter().filter(|f| f.is_empty()).count(),
         "notes": d.notes,
         "timings": d.seconds,
         "units": crate::diagram::UNITS,

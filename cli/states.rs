@@ -229,7 +229,7 @@ fn enclosed_table(
             }
             Ok(table)
         }
-        PointShape::Missing => anyhow::bail!("its surface state could not be re-evaluated"),
+        PointShape::Missing => anyhow::bail!("no verified shape (the diagram's warnings say why)"),
     }
 }
 

@@ -249,6 +249,178 @@ pub fn verify_accurate(
     )
 }
 
+/// One written point of an enclosed state (dimensional: the model's `R` and `D`): what
+/// `config.csv` of an enclosed state holds, one row per node.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EnclosedPoint {
+    /// Arclength.
+    pub s: f64,
+    /// Position.
+    pub r: [f64; 3],
+    /// Curvature vector `(κ1, κ2)` in the material frame (node values: the linear
+    /// extrapolations of the two adjacent cells' Gauss values, averaged).
+    pub kappa: (f64, f64),
+    /// Bending stiffness.
+    pub d: f64,
+}
+
+/// The written points of an enclosed state ([`EnclosedPoint`], one per node).
+pub fn enclosed_profile(
+    st: &crate::enclosed::EnclosedState,
+) -> Result<Vec<EnclosedPoint>, SolverError> {
+    let m = &st.model;
+    Ok(st
+        .nodes()?
+        .into_iter()
+        .enumerate()
+        .map(|(j, (sigma, p))| EnclosedPoint {
+            s: sigma * m.length(),
+            r: [p[0], p[1], p[2]],
+            kappa: st.node_curvature(j),
+            d: m.stiffness().eval(sigma).d,
+        })
+        .collect())
+}
+
+/// What [`verify_enclosed`] measured.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct EnclosedVerification {
+    /// Rotation angle of the frame's holonomy `X_N` (radians).
+    pub holonomy_angle: f64,
+    /// `|r_N − r_0|/R`: the end of the rod from its start.
+    pub closing_gap: f64,
+    /// Largest `(|r| − R)/R` over the written points (≤ 0 inside the ball).
+    pub outside: f64,
+    /// Energy `E R/(π D0)` recomputed from the written points (periodic trapezoidal rule).
+    pub energy_from_profile: f64,
+    /// Allowed `|energy_from_profile − claimed energy|`.
+    pub energy_tolerance: f64,
+    /// Dominant harmonic of the written `κ1` (the branch as counted on the state).
+    pub eta: u32,
+}
+
+/// Verify an enclosed state (3-D model, Eqs. (2)–(6) with the wall `|r| ≤ R`) and the points
+/// written for it ([`enclosed_profile`]):
+///
+/// * **closed**: the frame comes back within [`MAX_HOLONOMY_ANGLE`] of the identity
+///   (tangents close) and the rod's end within [`MAX_HOLONOMY_ANGLE`]` R` of its start
+///   (positions close), from the model's own transforms;
+/// * **inside the ball**: every written point has `|r| ≤ R (1 + `[`POSITION_SLACK`]`)`;
+/// * **energy**: `(R/π D0) ∮ ½ D |κ|² ds` by the periodic trapezoidal rule on the written
+///   points equals the claim within `claim.energy_error + claim.profile_error`, the rule's
+///   own error (`|T_h − T_2h|`) and [`ENERGY_RELATIVE_SLACK`];
+/// * **branch**: the dominant harmonic of the written `κ1` equals `claim.eta` when given.
+///
+/// Errors: [`SolverError::Unverified`] naming the first check that fails.
+pub fn verify_enclosed(
+    st: &crate::enclosed::EnclosedState,
+    claim: &Claim,
+) -> Result<EnclosedVerification, SolverError> {
+    let fail = |m: String| Err(SolverError::Unverified(m));
+    let m = &st.model;
+    let (r, length) = (m.radius(), m.length());
+    let d0 = m.stiffness().kind().reference();
+    let x = m.transforms(&st.z)?;
+    let end = &x[m.cells()];
+    let rot = end.fixed_view::<3, 3>(0, 0);
+    let skew = nalgebra::Vector3::new(
+        rot[(2, 1)] - rot[(1, 2)],
+        rot[(0, 2)] - rot[(2, 0)],
+        rot[(1, 0)] - rot[(0, 1)],
+    );
+    let angle = (0.5 * skew.norm()).atan2(0.5 * (rot.trace() - 1.0));
+    let closing_gap = nalgebra::Vector3::new(end[(0, 3)], end[(1, 3)], end[(2, 3)]).norm() / r;
+    if angle.is_nan() || angle > MAX_HOLONOMY_ANGLE {
+        return fail(format!(
+            "the rod does not close: its frame comes back turned by {angle:.3e} rad (at most \
+             {MAX_HOLONOMY_ANGLE:e})"
+        ));
+    }
+    if closing_gap.is_nan() || closing_gap > MAX_HOLONOMY_ANGLE {
+        return fail(format!(
+            "the rod does not close: its end is {closing_gap:.3e} R from its start (at most \
+             {MAX_HOLONOMY_ANGLE:e} R)"
+        ));
+    }
+    let pts = enclosed_profile(st)?;
+    let n = pts.len();
+    if n < 8 {
+        return fail(format!(
+            "the profile has {n} points (at least 8 are needed)"
+        ));
+    }
+    if pts.iter().any(|p| {
+        ![p.s, p.r[0], p.r[1], p.r[2], p.kappa.0, p.kappa.1, p.d]
+            .iter()
+            .all(|v| v.is_finite())
+    }) {
+        return fail("the profile has a value that is not finite".into());
+    }
+    let outside = pts
+        .iter()
+        .map(|p| ((p.r[0] * p.r[0] + p.r[1] * p.r[1] + p.r[2] * p.r[2]).sqrt() - r) / r)
+        .fold(f64::NEG_INFINITY, f64::max);
+    if outside > POSITION_SLACK {
+        return fail(format!(
+            "a written point is {outside:.3e} R outside the ball"
+        ));
+    }
+    let density: Vec<f64> = pts
+        .iter()
+        .map(|p| 0.5 * p.d * (p.kappa.0 * p.kappa.0 + p.kappa.1 * p.kappa.1))
+        .collect();
+    let trapezoid = |step: usize| {
+        let idx: Vec<usize> = (0..n).step_by(step).collect();
+        let k = idx.len();
+        (0..k)
+            .map(|j| {
+                let (a, b) = (idx[j], idx[(j + 1) % k]);
+                let ds = if j + 1 < k {
+                    pts[b].s - pts[a].s
+                } else {
+                    length + pts[b].s - pts[a].s
+                };
+                0.5 * (density[a] + density[b]) * ds
+            })
+            .sum::<f64>()
+            * r
+            / (PI * d0)
+    };
+    let (fine, coarse) = (trapezoid(1), trapezoid(2));
+    let energy_tolerance = claim.energy_error.abs()
+        + claim.profile_error.abs()
+        + (fine - coarse).abs()
+        + ENERGY_RELATIVE_SLACK * claim.energy.abs().max(1.0);
+    let gap = (fine - claim.energy).abs();
+    if gap.is_nan() || gap > energy_tolerance {
+        return fail(format!(
+            "the energy recomputed from the written points, {fine:.10}, differs from the \
+             reported {:.10} by more than {energy_tolerance:.1e}",
+            claim.energy
+        ));
+    }
+    let s: Vec<f64> = pts.iter().map(|p| p.s).collect();
+    let k1: Vec<f64> = pts.iter().map(|p| p.kappa.0).collect();
+    let periods = identify_periods(&s, &k1, length)
+        .map_err(|e| SolverError::Unverified(format!("its branch cannot be identified ({e})")))?;
+    if let Some(want) = claim.eta {
+        if periods.eta != want {
+            return fail(format!(
+                "its curvature κ1 has {} periods, not the requested {want}",
+                periods.eta
+            ));
+        }
+    }
+    Ok(EnclosedVerification {
+        holonomy_angle: angle,
+        closing_gap,
+        outside,
+        energy_from_profile: fine,
+        energy_tolerance,
+        eta: periods.eta,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
