@@ -157,6 +157,7 @@ fn solve_checked(
             report.residual
         );
     }
+    rodloop_solver::verify_accurate(&res, Some(eta))?;
     let periods = identify_equilibrium(&res.equilibrium)?;
     if periods.eta != eta {
         bail!(
