@@ -91,7 +91,8 @@ pub struct Verification {
     pub energy_from_profile: f64,
     /// Allowed `|energy_from_profile − claimed energy|`.
     pub energy_tolerance: f64,
-    /// Number of periods of the written `κ_g`.
+    /// Number of periods of the written `κ_g` (0 where it has none and no branch was
+    /// requested).
     pub eta: u32,
 }
 
@@ -168,13 +169,18 @@ pub fn verify_state(
     }
     let s: Vec<f64> = profile.iter().map(|p| p.s).collect();
     let kg: Vec<f64> = profile.iter().map(|p| p.kappa_g).collect();
-    let periods = identify_periods(&s, &kg, length)
-        .map_err(|e| SolverError::Unverified(format!("its branch cannot be identified ({e})")))?;
+    // Without a requested branch, a `κ_g` without periods (a circle) counts 0.
+    let eta = match (identify_periods(&s, &kg, length), claim.eta) {
+        (Ok(p), _) => p.eta,
+        (Err(_), None) => 0,
+        (Err(e), Some(_)) => {
+            return fail(format!("its branch cannot be identified ({e})"));
+        }
+    };
     if let Some(want) = claim.eta {
-        if periods.eta != want {
+        if eta != want {
             return fail(format!(
-                "its geodesic curvature has {} periods, not the requested {want}",
-                periods.eta
+                "its geodesic curvature has {eta} periods, not the requested {want}"
             ));
         }
     }
@@ -185,7 +191,7 @@ pub fn verify_state(
         radius_deviation,
         energy_from_profile: fine,
         energy_tolerance,
-        eta: periods.eta,
+        eta,
     })
 }
 
@@ -295,7 +301,8 @@ pub struct EnclosedVerification {
     pub energy_from_profile: f64,
     /// Allowed `|energy_from_profile − claimed energy|`.
     pub energy_tolerance: f64,
-    /// Dominant harmonic of the written `κ1` (the branch as counted on the state).
+    /// Dominant harmonic of the written `κ1` (the branch as counted on the state; 0 where
+    /// `κ1` has no periods and no branch was requested).
     pub eta: u32,
 }
 
@@ -401,13 +408,18 @@ pub fn verify_enclosed(
     }
     let s: Vec<f64> = pts.iter().map(|p| p.s).collect();
     let k1: Vec<f64> = pts.iter().map(|p| p.kappa.0).collect();
-    let periods = identify_periods(&s, &k1, length)
-        .map_err(|e| SolverError::Unverified(format!("its branch cannot be identified ({e})")))?;
+    // Without a requested branch, a `κ1` without periods (the planar circle) counts 0.
+    let eta = match (identify_periods(&s, &k1, length), claim.eta) {
+        (Ok(p), _) => p.eta,
+        (Err(_), None) => 0,
+        (Err(e), Some(_)) => {
+            return fail(format!("its branch cannot be identified ({e})"));
+        }
+    };
     if let Some(want) = claim.eta {
-        if periods.eta != want {
+        if eta != want {
             return fail(format!(
-                "its curvature κ1 has {} periods, not the requested {want}",
-                periods.eta
+                "its curvature κ1 has {eta} periods, not the requested {want}"
             ));
         }
     }
@@ -417,7 +429,7 @@ pub fn verify_enclosed(
         outside,
         energy_from_profile: fine,
         energy_tolerance,
-        eta: periods.eta,
+        eta,
     })
 }
 
@@ -507,5 +519,43 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("turned by 3.14"), "{e}");
+    }
+
+    /// The free planar circle (exact in the 3-D model: constant curvature, `E R/(π D) =
+    /// 1/L̄`) passes [`verify_enclosed`]; a false energy, an opened rod and a circle moved
+    /// out of the ball are refused.
+    #[test]
+    fn enclosed_circle_passes_and_doctored_states_are_refused() {
+        let (lbar, cells) = (0.8, 32);
+        let (model, z) =
+            crate::enclosed::free_circle(1.0, lbar, cells, &Stiffness::uniform(1.0)).unwrap();
+        let st = crate::enclosed::EnclosedState {
+            model,
+            z,
+            iterations: 0,
+            residual: 0.0,
+        };
+        let claim = Claim {
+            energy: 1.0 / lbar,
+            energy_error: 1e-12,
+            profile_error: 0.0,
+            eta: None,
+        };
+        let v = verify_enclosed(&st, &claim).unwrap();
+        assert!(v.holonomy_angle < 1e-12 && v.closing_gap < 1e-12, "{v:?}");
+        assert!((v.outside + (1.0 - lbar)).abs() < 1e-12, "{v:?}");
+        let wrong = Claim {
+            energy: 1.0 / lbar * (1.0 + 1e-6),
+            ..claim
+        };
+        assert!(verify_enclosed(&st, &wrong).is_err());
+        let mut open = st.clone();
+        open.z[0] += 0.1;
+        let e = verify_enclosed(&open, &claim).unwrap_err().to_string();
+        assert!(e.contains("does not close"), "{e}");
+        let mut out = st.clone();
+        out.z[4 * cells + 2] += 0.5;
+        let e = verify_enclosed(&out, &claim).unwrap_err().to_string();
+        assert!(e.contains("outside the ball"), "{e}");
     }
 }
