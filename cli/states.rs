@@ -8,100 +8,8 @@ use rodloop_diagram::{DiagramOptions, NumericDiagram, TracedBranch};
 
 use crate::output::OutputRun;
 
-/// Points per state file (uniform in arclength); more when the tracing resolution has more
-/// cells, and doubled until the file holds the state ([`uniform_profile_holding`]).
-pub const STATE_POINTS: usize = 128;
-
-/// Most points per state file: a state whose energy the file does not reproduce at this
-/// many uniform samples is written with a warning.
-pub const MAX_STATE_POINTS: usize = 16_384;
-
-/// Relative agreement of the energy recomputed from a state file with the state's own
-/// energy, at least: the file holds the trigonometric interpolant of the state's mesh
-/// values, whose energy differs from the discrete one by the discretisation error (up to
-/// 4e-6 relative on the paper's `D1/D0 = 0.5` diagram, `rodloop diagram --scene
-/// data/scenes/inhomogeneous-d1-0.5.toml`); the tolerance is [`ESTIMATES`] times the row's
-/// error estimate where that is larger.
-pub const FILE_ENERGY_TOLERANCE: f64 = 1e-5;
-
-/// [`FILE_ENERGY_TOLERANCE`] for a row without an error estimate (its half-resolution
-/// partner failed): the discretisation error is not known there, and reaches 3e-5 relative
-/// on random two-segment scenes (`cargo test --release --test random_scenes`).
-pub const NO_ESTIMATE_TOLERANCE: f64 = 1e-4;
-
-/// Multiple of a row's error estimate within which its file's energy must lie.
-pub const ESTIMATES: f64 = 5.0;
-
-/// `E R/(π D0)` recomputed from samples uniform in arclength over the whole loop (what a
-/// state file holds): `½ Σ D κ² h` with `h = L/m`, the trapezoidal rule of Eq. (2) for a
-/// periodic integrand (spectrally accurate once the samples resolve the loop).
-pub fn energy_of_samples(
-    profile: &[rodloop_solver::ProfilePoint],
-    length: f64,
-    r: f64,
-    d0: f64,
-) -> f64 {
-    let h = length / profile.len().max(1) as f64;
-    let e: f64 = profile
-        .iter()
-        .map(|p| 0.5 * p.d * p.kappa * p.kappa * h)
-        .sum();
-    e * r / (std::f64::consts::PI * d0)
-}
-
-/// The profile of `eq` at `m ≥ min_points` points uniform in arclength, `m` doubled (up to
-/// [`MAX_STATE_POINTS`]) until the energy recomputed from the samples
-/// ([`energy_of_samples`]) agrees with the state's own within `tol` (relative, at least
-/// [`FILE_ENERGY_TOLERANCE`]): uniform samples of a graded mesh miss narrow features (a
-/// very soft segment bent sharply near `L̄ = 1`, a steep stiffness step). Returns the
-/// profile, the recomputed and the state's energy.
-pub fn uniform_profile_holding(
-    eq: &rodloop_solver::Equilibrium,
-    min_points: usize,
-    tol: f64,
-    r: f64,
-    d0: f64,
-) -> Result<(Vec<rodloop_solver::ProfilePoint>, f64, f64)> {
-    let own = eq.energy().total;
-    let tol = tol.max(FILE_ENERGY_TOLERANCE) * own.abs().max(1.0);
-    let model = eq.model();
-    let length = model.length();
-    // The points are chosen on `κ_g` alone (one interpolant, as `profile_uniform` builds it
-    // for each of its columns), then the whole profile is sampled once and checked.
-    let kg = rodloop_solver::periodic::TrigInterpolant::new(
-        &eq.profile().iter().map(|p| p.kappa_g).collect::<Vec<_>>(),
-    )?;
-    let map = model.mesh();
-    let energy_at = |m: usize| -> f64 {
-        let h = length / m as f64;
-        let e: f64 = (0..m)
-            .map(|j| {
-                let sigma = j as f64 / m as f64;
-                let k = kg.eval(map.u_of_sigma(sigma));
-                let d = model.stiffness().eval(sigma).per_arclength(length).0;
-                0.5 * d * (k * k + 1.0 / (r * r)) * h
-            })
-            .sum();
-        e * r / (std::f64::consts::PI * d0)
-    };
-    // Doubled until the samples give the state's energy, or give the same energy at twice
-    // as many points (the file then holds the loop; what is left is the state's own
-    // discretisation error, which the caller compares with its estimate).
-    let mut m = min_points.max(8);
-    let mut e_m = energy_at(m);
-    while m < MAX_STATE_POINTS && (e_m - own).abs() > tol {
-        let e_2m = energy_at(2 * m);
-        m *= 2;
-        let settled = (e_2m - e_m).abs() <= 1e-3 * tol;
-        e_m = e_2m;
-        if settled {
-            break;
-        }
-    }
-    let profile = eq.profile_uniform(m)?;
-    let e = energy_of_samples(&profile, length, r, d0);
-    Ok((profile, e, own))
-}
+/// Points per state file of an enclosed diagram's attached and exact states.
+pub use rodloop_diagram::STATE_POINTS;
 
 /// The file of traced state `k` of `b`, relative to the diagram directory:
 /// `states/branch-B-KKK.csv`, or `states/branch-B-family-F-sheet-S-KKK.csv` for a family of
@@ -117,81 +25,36 @@ pub fn file_name(b: &TracedBranch, k: usize) -> String {
     }
 }
 
-/// Write the state files into the run's `states/` directory (the traced states in parallel).
-/// Returns the file of every row of [`NumericDiagram::rows`], in that order (empty where a
-/// state could not be re-evaluated), and the warnings for those.
+/// Write the state files into the run's `states/` directory: the states as the diagram
+/// verified them ([`NumericDiagram::state_files`]). Returns the file of every row of
+/// [`NumericDiagram::rows`], in that order (empty where a state failed the verification,
+/// which the diagram's warnings name), and the warnings of files that could not be written.
 pub fn write_states(
     d: &NumericDiagram,
     opts: &DiagramOptions,
     run: &OutputRun,
 ) -> Result<(Vec<String>, Vec<String>)> {
     let dir = run.subdir("states")?;
-    let jobs: Vec<(&TracedBranch, usize)> = d
-        .branches
-        .iter()
-        .flat_map(|b| (0..b.points.len()).map(move |k| (b, k)))
-        .collect();
     let (r, d0) = (opts.radius, opts.stiffness.reference());
-    // Each file is checked: the energy recomputed from its samples must be the state's own
-    // (within [`ESTIMATES`] times the row's error estimate, or [`FILE_ENERGY_TOLERANCE`]), and the state's own the row's.
-    let one = |b: &TracedBranch, k: usize| -> Result<(String, Option<String>)> {
-        let eq = b.equilibrium_of(opts, k)?;
-        let p = &b.points[k];
-        let est = ESTIMATES * p.energy_error.unwrap_or(0.0) / p.energy.abs().max(1.0);
-        let m = STATE_POINTS.max(eq.model().cells());
-        let want = if p.energy_error.is_some() {
-            est
-        } else {
-            NO_ESTIMATE_TOLERANCE
-        };
-        let (profile, e_file, e_own) = uniform_profile_holding(&eq, m, want, r, d0)?;
-        let table = crate::solve::config_table_in(&profile, r, d0)?;
-        let name = file_name(b, k);
-        let file = name.trim_start_matches("states/");
-        crate::output::write_atomic(&dir, file, &table.to_bytes()?)?;
-        let scale = p.energy.abs().max(1.0);
-        let file_tol = if p.energy_error.is_some() {
-            est.max(FILE_ENERGY_TOLERANCE)
-        } else {
-            NO_ESTIMATE_TOLERANCE
-        } * scale;
-        let row_tol = (p.energy - p.energy_trace).abs() + 1e-9 * scale;
-        let problem = if (e_file - e_own).abs() > file_tol {
-            Some(format!(
-                "its file ({} points) gives E R/(π D0) = {e_file:.10} against the state's \
-                 {e_own:.10}",
-                profile.len()
-            ))
-        } else if (e_own - p.energy_trace).abs() > row_tol {
-            Some(format!(
-                "its re-solved state has E R/(π D0) = {e_own:.10} against {:.10} in its row",
-                p.energy_trace
-            ))
-        } else {
-            None
-        };
-        Ok((name, problem))
-    };
-    let results = parallel_map(&jobs, |&(b, k)| one(b, k).map_err(|e| format!("{e:#}")));
-    let mut names = Vec::with_capacity(jobs.len());
+    let mut names = Vec::new();
     let mut warnings = Vec::new();
-    for ((b, k), res) in jobs.iter().zip(results) {
-        match res {
-            Ok((n, problem)) => {
-                if let Some(why) = problem {
-                    warnings.push(format!(
-                        "STATE FILE DOES NOT HOLD ITS ROW: {n} (branch {}, family {}, L̄ = {}): {why}",
-                        b.branch, b.family, b.points[*k].value
-                    ));
-                }
-                names.push(n);
-            }
-            Err(e) => {
+    for (b, files) in d.branches.iter().zip(&d.state_files) {
+        for (k, f) in files.iter().enumerate() {
+            let Some(f) = f else {
                 names.push(String::new());
-                warnings.push(format!(
-                    "state {k} of branch {} (L̄ = {}) has no state file: {e}",
-                    b.branch, b.points[*k].value
-                ));
+                continue;
+            };
+            let name = file_name(b, k);
+            let file = name.trim_start_matches("states/");
+            let written = crate::solve::config_table_in(&f.profile, r, d0)
+                .and_then(|t| t.to_bytes())
+                .and_then(|bytes| crate::output::write_atomic(&dir, file, &bytes));
+            match written {
+                Ok(_) => names.push(name),
+                Err(e) => {
+                    names.push(String::new());
+                    warnings.push(format!("{name} could not be written: {e:#}"));
+                }
             }
         }
     }
@@ -366,7 +229,7 @@ fn enclosed_table(
             }
             Ok(table)
         }
-        PointShape::Missing => anyhow::bail!("its surface state could not be re-evaluated"),
+        PointShape::Missing => anyhow::bail!("no verified shape (the diagram's warnings say why)"),
     }
 }
 

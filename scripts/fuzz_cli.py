@@ -2,25 +2,32 @@
 """Fuzz the scene parser and the solver through the CLI, as a user would meet them.
 
 Mutates the shipped scene files (values, keys, types, truncation, junk) and argument sets,
-runs `rodloop solve ... --accuracy fast` on each with a time limit, and counts outcomes:
-success, clean error (non-zero exit with a one-line "error:" message), panic, abort (killed
-by a signal), over the time limit. Prints the counts and the first examples of anything but
-success/clean error. Every state a successful run writes is checked by
-scripts/state_check.py (closed, on the sphere, energy recomputed from config.csv, branch);
-a success whose files fail a check is counted under that problem instead.
+runs `rodloop solve ... --accuracy fast` on each (and, on a fraction DIAGRAMS of the runs,
+`rodloop diagram ... --accuracy fast` over a short length range) with a time limit, and
+counts outcomes: success, clean error (non-zero exit with a one-line "error:" message),
+panic, abort (killed by a signal), over the time limit. Prints the counts and the first
+examples of anything but success/clean error. Every state a successful run writes is
+checked by scripts/state_check.py: solve's config.csv by check_state (closed, on the sphere,
+energy recomputed from config.csv, branch), every file of a diagram's states/ by
+check_diagram (closed, on the sphere or inside the ball, energy recomputed from the file
+against its row of branches.csv); a success whose files fail a check is counted under that
+problem instead.
 
 Usage: scripts/fuzz_cli.py [N=10000] [BIN=target/release/rodloop] [SECONDS=20] [VALID=0.8]
+                          [DIAGRAMS=0.05]
 """
-import os, random, subprocess, sys, tempfile, collections, glob
+import os, random, shutil, subprocess, sys, tempfile, collections, glob
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from state_check import check_state  # noqa: E402
+from state_check import check_state, check_diagram  # noqa: E402
 
 N = int(sys.argv[1]) if len(sys.argv) > 1 else 10000
 BIN = sys.argv[2] if len(sys.argv) > 2 else "target/release/rodloop"
 LIMIT = float(sys.argv[3]) if len(sys.argv) > 3 else 20.0
 # Fraction of runs with a valid (branch, length) pair, so that mutated scenes reach the solver.
 VALID = float(sys.argv[4]) if len(sys.argv) > 4 else 0.8
+# Fraction of runs that draw a diagram instead of solving one state.
+DIAGRAMS = float(sys.argv[5]) if len(sys.argv) > 5 else 0.05
 rng = random.Random(20261123)
 scenes = [open(p).read() for p in sorted(glob.glob("data/scenes/*.toml"))]
 NUMS = ["0", "-1", "1e-300", "1e300", "nan", "inf", "-inf", "0.5", "1", "2", "1e9", "1e-9",
@@ -63,6 +70,14 @@ def args_for(scene_path, out):
         a[a.index("fast")] = rng.choice(["slow", "", "high"])
     return a
 
+def diagram_args(scene_path, out):
+    """A diagram over a short range (0.1 to 0.3 wide) inside 0.5 <= L̄ <= 3."""
+    lo = rng.uniform(0.5, 2.7)
+    hi = lo + rng.uniform(0.1, 0.3)
+    return [BIN, "diagram", "--scene", scene_path, "--lbar-min", f"{lo:.3f}",
+            "--lbar-max", f"{hi:.3f}", "--accuracy", "fast", "--out", out]
+
+
 counts = collections.Counter()
 examples = collections.defaultdict(list)
 with tempfile.TemporaryDirectory() as tmp:
@@ -70,11 +85,19 @@ with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "scene.toml")
         with open(path, "w") as f:
             f.write(mutate(rng.choice(scenes)))
-        cmd = args_for(path, os.path.join(tmp, "out"))
+        is_diagram = rng.random() < DIAGRAMS
+        out = os.path.join(tmp, "diagram" if is_diagram else "out")
+        shutil.rmtree(out, ignore_errors=True)
+        cmd = diagram_args(path, out) if is_diagram else args_for(path, out)
         try:
             p = subprocess.run(cmd, capture_output=True, text=True, timeout=LIMIT)
             err = p.stderr
-            if p.returncode == 0:
+            if p.returncode == 0 and is_diagram:
+                text = open(path).read()
+                enclosed = 'confinement = "enclosed"' in text.replace("'", '"')
+                probs = sorted({why for _, why in check_diagram(out, enclosed)[0]})
+                kind = "success" if not probs else "written state: " + ", ".join(probs)
+            elif p.returncode == 0:
                 text = open(path).read()
                 try:
                     branch = int(cmd[cmd.index("--branch") + 1])
@@ -99,7 +122,7 @@ with tempfile.TemporaryDirectory() as tmp:
             examples[kind].append((open(path).read(), cmd[3:], err[:300]))
         if (i + 1) % 1000 == 0:
             print(f"{i + 1} runs: {dict(counts)}", file=sys.stderr, flush=True)
-print(f"{N} runs (rodloop solve --accuracy fast, {LIMIT:.0f} s limit each, {VALID:.0%} with a valid branch and length):")
+print(f"{N} runs (rodloop solve --accuracy fast, {DIAGRAMS:.0%} of them rodloop diagram --accuracy fast instead, {LIMIT:.0f} s limit each, {VALID:.0%} with a valid branch and length):")
 for k in ["success", "clean error", "unclear error", "panic", "abort", "over time limit"]:
     print(f"  {k}: {counts[k]}")
 for k in sorted(c for c in counts if c.startswith("written state")):

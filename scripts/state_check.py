@@ -113,3 +113,91 @@ def check_state(out_dir, branch, enclosed=False):
     if contradiction:
         problems.append("branch contradiction")
     return problems
+
+
+def trapezoid_energies(rows, length):
+    """E R/(pi D0) of a loop table by the periodic trapezoidal rule on every point and on every
+    other point (T_h, T_2h), in the file's units of R and D0."""
+    s = [r["s"] for r in rows]
+    dens = [0.5 * r["D"] * r["kappa"] ** 2 for r in rows]
+
+    def trap(step):
+        idx = list(range(0, len(rows), step))
+        tot = 0.0
+        for j, a in enumerate(idx):
+            b = idx[(j + 1) % len(idx)]
+            ds = s[b] - s[a] if j + 1 < len(idx) else length + s[b] - s[a]
+            tot += 0.5 * (dens[a] + dens[b]) * ds
+        return tot / math.pi
+
+    return trap(1), trap(2)
+
+
+# Multiple of a row's error estimate within which its state file's energy must lie, and the
+# relative tolerance of a row without an estimate (rodloop_diagram::ESTIMATES and
+# NO_ESTIMATE_TOLERANCE: the file samples one resolution, the row is extrapolated).
+ESTIMATES = 5.0
+NO_ESTIMATE_TOLERANCE = 1e-4
+
+
+def check_diagram(out_dir, enclosed=False):
+    """Every state file of a diagram (branches.csv + states/) against its row. Returns a list
+    of (state_file or row description, problem) with problem one of "open loop", "off the
+    sphere", "energy mismatch" (the trapezoidal energy of the file differs from the row's by
+    more than ESTIMATES x its error estimate, or NO_ESTIMATE_TOLERANCE relative without one,
+    plus |T_h - T_2h| + 1e-9 max(1, |E|)), "unreadable"; and the number of rows checked.
+    Rows without a file are not checked (the diagram counts them in summary.json)."""
+    problems = []
+    try:
+        with open(os.path.join(out_dir, "branches.csv")) as f:
+            table = list(csv.DictReader(l for l in f if not l.startswith("#")))
+    except OSError:
+        return [("branches.csv", "unreadable")], 0
+    checked = 0
+    for row in table:
+        name = (row.get("state_file") or "").strip()
+        if not name:
+            continue
+        checked += 1
+        try:
+            pts = _rows(os.path.join(out_dir, name))
+            lbar, energy = float(row["lbar"]), float(row["energy"])
+        except (OSError, ValueError, KeyError):
+            problems.append((name, "unreadable"))
+            continue
+        if len(pts) < 8 or any(not math.isfinite(v) for p in pts for v in p.values()):
+            problems.append((name, "unreadable"))
+            continue
+        length = 2 * math.pi * lbar
+        pos = [(p["x"], p["y"], p["z"]) for p in pts]
+        chord = math.dist(pos[-1], pos[0])
+        arc = length + pts[0]["s"] - pts[-1]["s"]
+        # The points between mesh nodes are interpolated: 1 % of the last step
+        # (rodloop_solver::verify::CHORD_SLACK); an open loop misses by many steps.
+        if not (arc > 0 and chord <= arc * 1.01 + 1e-9):
+            problems.append((name, "open loop"))
+        for p in pos:
+            rad = math.sqrt(sum(c * c for c in p))
+            if (rad > 1 + 1e-9) if enclosed else (abs(rad - 1) > 1e-9):
+                problems.append((name, "off the sphere"))
+                break
+        fine, coarse = trapezoid_energies(pts, length)
+        est = (row.get("energy_error") or "").strip()
+        scale = max(1.0, abs(energy))
+        allowed = ESTIMATES * float(est) if est else NO_ESTIMATE_TOLERANCE * scale
+        if abs(fine - energy) > allowed + abs(fine - coarse) + 1e-9 * scale:
+            problems.append((name, "energy mismatch"))
+    return problems, checked
+
+
+if __name__ == "__main__":
+    import sys
+
+    bad = 0
+    for d in sys.argv[1:]:
+        probs, n = check_diagram(d)
+        print(f"{d}: {n} state files checked, {len(probs)} problems")
+        for name, why in probs[:20]:
+            print(f"  {name}: {why}")
+        bad += len(probs)
+    sys.exit(1 if bad else 0)

@@ -230,6 +230,8 @@ pub(crate) fn write_outputs(
     for w in &state_warnings {
         eprintln!("warning: {w}");
     }
+    let unverified = state_files.iter().filter(|f| f.is_empty()).count();
+    schema.put("unverified_states", &unverified)?;
     for (p, file) in schema.points.iter_mut().zip(state_files) {
         p.state_file = Some(file);
     }

@@ -83,6 +83,13 @@ pub struct NumericDiagram {
     pub timings: Timings,
     /// Completeness certificate (two-segment surface diagrams; `None` where not run).
     pub certificate: Option<crate::certificate::Certificate>,
+    /// Every traced state as its file holds it, verified against its row:
+    /// `state_files[i][k]` for `branches[i].points[k]` (`None`: the state failed the
+    /// verification and has no file; a warning says why).
+    #[serde(skip)]
+    pub state_files: Vec<Vec<Option<crate::StateFile>>>,
+    /// How many traced states failed the verification.
+    pub unverified_states: usize,
 }
 
 /// One row of the branch table (`branches.csv`).
@@ -441,6 +448,12 @@ pub fn assemble(
         }
     }
 
+    // Every state verified as its file holds it (rows re-estimated where refined
+    // resolutions contradict them), before the labels that compare the energies.
+    let threads = opts.worker_threads();
+    let (state_files, state_warnings) = crate::states::verify_all(opts, &mut branches, threads);
+    let unverified_states = state_warnings.len();
+    warnings.extend(state_warnings);
     // Labels.
     let t = Instant::now();
     let labels = labels::label_all(&branches, &critical);
@@ -487,6 +500,8 @@ pub fn assemble(
         warnings,
         timings,
         certificate: None,
+        state_files,
+        unverified_states,
     })
 }
 

@@ -217,6 +217,7 @@ pub fn surface_schema(
         out.set_certificate(c)?;
     }
     out.states_dir = Some("states".into());
+    out.put("unverified_states", &d.unverified_states)?;
     out.put("description", &d.scene)?;
     out.put("great_circles", &d.great_circles)?;
     out.put("shape_tolerance", &d.shape_tolerance)?;

@@ -48,6 +48,7 @@ fn solve_checked(
             report.residual
         ));
     }
+    rodloop_solver::verify_accurate(&res, Some(eta)).map_err(|e| chain(&e))?;
     let periods = identify_equilibrium(&res.equilibrium).map_err(|e| chain(&e))?;
     if periods.eta != eta {
         return Err(format!(

@@ -211,3 +211,280 @@ impl TracedBranch {
         solve_from_state(model, z, &newton_options())
     }
 }
+
+/// Points per state file (uniform in arclength), at least; more when the state's resolution
+/// has more cells, and doubled until the samples hold the state (see
+/// [`TracedBranch::verified_state`]).
+pub const STATE_POINTS: usize = 128;
+
+/// Most points per state file.
+pub const MAX_STATE_POINTS: usize = 16_384;
+
+/// Multiple of a row's error estimate within which the energy recomputed from its file must
+/// lie (the estimate is that of the Richardson-extrapolated energy, which the file's single
+/// resolution approaches like `h⁴`; see [`TracedBranch::verified_state`]).
+pub const ESTIMATES: f64 = 5.0;
+
+/// Relative tolerance of the file's energy for a row without an error estimate (its
+/// half-resolution partner failed, so its discretisation error is not known; measured up to
+/// 3e-5 relative on random two-segment scenes, `cargo test --release --test random_scenes`).
+pub const NO_ESTIMATE_TOLERANCE: f64 = 1e-4;
+
+/// Largest refinement of a state file's resolution over the tracing resolution
+/// ([`TracedBranch::verified_state`]): three doublings reduce an `O(h⁴)` error 4096-fold.
+pub const MAX_REFINEMENT: usize = 8;
+
+/// A traced state as its file holds it, verified against its row.
+#[derive(Clone, Debug)]
+pub struct StateFile {
+    /// The profile at points uniform in arclength (dimensional, the model's `R` and `D`).
+    pub profile: Vec<rodloop_solver::ProfilePoint>,
+    /// What was measured on it ([`rodloop_solver::verify_state`]).
+    pub verification: rodloop_solver::Verification,
+    /// Cells of the equilibrium the file samples (the tracing resolution, or a multiple of it
+    /// where that resolution's profile does not reproduce the row's energy).
+    pub cells: usize,
+    /// The row's energy and error estimate re-estimated from refined resolutions, where the
+    /// row's own disagreed with them beyond both estimates (see
+    /// [`TracedBranch::verified_state`]).
+    pub row: Option<(f64, f64)>,
+}
+
+impl StateFile {
+    /// Whether the dominant harmonic of the written `κ_g` differs from the branch's `η`
+    /// (the state is of its branch by continuation, see [`TracedBranch::verified_state`]).
+    pub fn counted_other_eta(&self, eta: u32) -> bool {
+        self.verification.eta != eta
+    }
+}
+
+/// `E R/(π D0)` of the trigonometric interpolant of `κ_g` of `eq` at `m` points uniform in
+/// arclength (what a state file of `m` points gives, without building its other columns).
+fn sampled_energy(
+    eq: &Equilibrium,
+    kg: &rodloop_solver::periodic::TrigInterpolant,
+    m: usize,
+    d0: f64,
+) -> f64 {
+    let model = eq.model();
+    let (r, length) = (model.radius(), model.length());
+    let map = model.mesh();
+    let h = length / m as f64;
+    let e: f64 = (0..m)
+        .map(|j| {
+            let sigma = j as f64 / m as f64;
+            let k = kg.eval(map.u_of_sigma(sigma));
+            let d = model.stiffness().eval(sigma).per_arclength(length).0;
+            0.5 * d * (k * k + 1.0 / (r * r)) * h
+        })
+        .sum();
+    e * r / (PI * d0)
+}
+
+/// The profile of `eq` at `m ≥ min_points` points uniform in arclength, `m` doubled (up to
+/// [`MAX_STATE_POINTS`]) until the energy of the samples settles (changes by less than a
+/// thousandth of `tol` on doubling) or lies within `tol` of `target`: uniform samples of a
+/// graded mesh miss narrow features (a very soft segment bent sharply, a steep stiffness
+/// step).
+fn uniform_profile(
+    eq: &Equilibrium,
+    min_points: usize,
+    target: f64,
+    tol: f64,
+    d0: f64,
+) -> Result<Vec<rodloop_solver::ProfilePoint>, SolverError> {
+    let kg = rodloop_solver::periodic::TrigInterpolant::new(
+        &eq.profile().iter().map(|p| p.kappa_g).collect::<Vec<_>>(),
+    )?;
+    let mut m = min_points.max(8);
+    let mut e_m = sampled_energy(eq, &kg, m, d0);
+    while m < MAX_STATE_POINTS && (e_m - target).abs() > tol {
+        let e_2m = sampled_energy(eq, &kg, 2 * m, d0);
+        m *= 2;
+        let settled = (e_2m - e_m).abs() <= 1e-3 * tol;
+        e_m = e_2m;
+        if settled {
+            break;
+        }
+    }
+    eq.profile_uniform(m)
+}
+
+impl TracedBranch {
+    /// Traced state `k` as its state file holds it, verified against its row
+    /// ([`rodloop_solver::verify_state`]): the loop closes (holonomy and written points),
+    /// lies on the sphere, and the energy
+    /// recomputed from the written samples (`½ ∮ D κ² ds`, Eq. (2)) equals the row's within
+    /// [`ESTIMATES`] times the row's error estimate (or [`NO_ESTIMATE_TOLERANCE`] without
+    /// one) plus the quadrature's own error.
+    ///
+    /// The row's energy is Richardson-extrapolated from the tracing resolution `N` and
+    /// `N/2`; a file samples one resolution, whose profile (`κ_g = 𝓜·n/D`, Eq. (41), at the
+    /// cell boundaries) carries that resolution's `O(h⁴)` discretisation error. Where that
+    /// error exceeds the row's estimate (a very soft segment: on `D1/D0 = 0.001`, branch 2
+    /// near `L̄ = 1`, the profile at the tracing resolution is 1e-3 relative off while the
+    /// estimate is 6e-6), the state is re-solved at `2N`, `4N`, … (Newton from its resampled
+    /// profile at the same `L̄`), up to [`MAX_REFINEMENT`]` N`, and the file samples the
+    /// finest state needed.
+    ///
+    /// The refined states also test the row: where the pair `(N, N/2)` is not yet in the
+    /// asymptotic range its estimate is too small (the same states: row 4.7e-5 above the
+    /// converged energy with an estimate of 5.9e-6). When the Richardson value of two
+    /// refined resolutions `(E_{2^j N}, E_{2^{j−1} N})`, whose differences decrease at least
+    /// fourfold per doubling (so that the refined states are the traced state converging,
+    /// not a neighbouring sheet), disagrees with the row beyond both estimates, the row is
+    /// re-estimated from that pair ([`StateFile::row`]).
+    ///
+    /// The branch of a traced state is its family's: the family is traced by continuation
+    /// from a seed whose periods were counted. The periods of the state's own `κ_g`
+    /// ([`rodloop_solver::Verification::eta`]) are counted too; near the great circles
+    /// (`L̄` at an integer, `κ_g` nearly constant) and on soft segments the dominant harmonic
+    /// can differ from the family's `η` ([`StateFile::counted_other_eta`]).
+    ///
+    /// Errors: [`SolverError::Unverified`] (with the last check that failed) when no
+    /// resolution up to the limit passes; the state's own errors when it cannot be
+    /// re-evaluated.
+    pub fn verified_state(
+        &self,
+        opts: &DiagramOptions,
+        k: usize,
+    ) -> Result<StateFile, SolverError> {
+        let mut eq = self.equilibrium_of(opts, k)?;
+        let p = &self.points[k];
+        let d0 = opts.stiffness.reference();
+        let scale = p.energy.abs().max(1.0);
+        let allowed = |e: Option<f64>| match e {
+            Some(e) => ESTIMATES * e,
+            None => NO_ESTIMATE_TOLERANCE * scale,
+        };
+        let mut row: Option<(f64, f64)> = None;
+        let mut claim = rodloop_solver::Claim {
+            energy: p.energy,
+            energy_error: allowed(p.energy_error),
+            profile_error: 0.0,
+            eta: None,
+        };
+        let traced = eq.model().cells();
+        // Discrete energies of the resolutions so far (tracing resolution first).
+        let mut energies = vec![eq.energy().total];
+        loop {
+            let cells = eq.model().cells();
+            if energies.len() >= 3 {
+                let n = energies.len();
+                let (e2, e1, e0) = (energies[n - 1], energies[n - 2], energies[n - 3]);
+                let converging = (e2 - e1).abs() <= 0.25 * (e1 - e0).abs();
+                let (rich, est) = (
+                    rodloop_solver::richardson(e2, e1),
+                    rodloop_solver::richardson_error(e2, e1) + 8.0 * f64::EPSILON * scale,
+                );
+                if converging && (rich - claim.energy).abs() > claim.energy_error + ESTIMATES * est
+                {
+                    row = Some((rich, est));
+                    claim.energy = rich;
+                    claim.energy_error = ESTIMATES * est;
+                }
+            }
+            let profile = uniform_profile(
+                &eq,
+                STATE_POINTS.max(cells),
+                claim.energy,
+                claim.energy_error,
+                d0,
+            )?;
+            match rodloop_solver::verify_state(&eq, &profile, &claim) {
+                Ok(verification) => {
+                    return Ok(StateFile {
+                        profile,
+                        verification,
+                        cells,
+                        row,
+                    })
+                }
+                Err(e) if 2 * cells > MAX_REFINEMENT * traced => return Err(e),
+                Err(why) => {
+                    let why = match why {
+                        SolverError::Unverified(m) => m,
+                        e => e.to_string(),
+                    };
+                    eq = refined(opts, &eq, 2 * cells).map_err(|e| {
+                        SolverError::Unverified(format!(
+                            "at the {cells} cells of its file {why}; at {} cells Newton finds no \
+                             equilibrium next to it at this L̄ (a state near a fold of the \
+                             coarser resolution that the finer one moves): {e}",
+                            2 * cells
+                        ))
+                    })?;
+                    energies.push(eq.energy().total);
+                }
+            }
+        }
+    }
+}
+
+/// `eq` re-solved with `cells` cells for its state file (resampled profile as start and
+/// phase reference): Newton to the tolerance a traced state is accepted with (`1e-8`, as in
+/// [`TracedBranch::equilibrium_of`]; on a very soft segment, `D1/D0 = 0.001`, the residual of
+/// the finer resolutions stalls at a few 1e-9 in round-off), with up to 60 steps.
+fn refined(
+    opts: &DiagramOptions,
+    eq: &Equilibrium,
+    cells: usize,
+) -> Result<Equilibrium, SolverError> {
+    let kappa = eq.resample(cells)?;
+    let model = model_with_phase(opts, eq.lbar(), cells, &kappa)?;
+    let newton = SolveOptions {
+        tolerance: 1e-8,
+        max_iterations: 60,
+        ..newton_options()
+    };
+    solve(&model, &kappa, &newton)
+}
+
+/// Every traced state of `branches` verified as its file holds it
+/// ([`TracedBranch::verified_state`], in parallel on `threads` threads): `files[i][k]` for
+/// `branches[i].points[k]` (`None` where the state fails, with a warning that says why).
+/// Rows re-estimated by the verification get the re-estimated energy and error (and
+/// `E_g` moved by the same amount: `E − E_g` depends on the length and stiffness only).
+pub(crate) fn verify_all(
+    opts: &DiagramOptions,
+    branches: &mut [TracedBranch],
+    threads: usize,
+) -> (Vec<Vec<Option<StateFile>>>, Vec<String>) {
+    let jobs: Vec<(usize, usize)> = branches
+        .iter()
+        .enumerate()
+        .flat_map(|(i, b)| (0..b.points.len()).map(move |k| (i, k)))
+        .collect();
+    let shared: &[TracedBranch] = branches;
+    let results = crate::parallel::run_parallel(
+        threads,
+        jobs.clone(),
+        &mut |_| {},
+        &mut |_| {},
+        |(i, k), _| shared[i].verified_state(opts, k),
+    );
+    let mut files: Vec<Vec<Option<StateFile>>> = branches
+        .iter()
+        .map(|b| vec![None; b.points.len()])
+        .collect();
+    let mut warnings = Vec::new();
+    for ((i, k), r) in jobs.into_iter().zip(results) {
+        let b = &mut branches[i];
+        match r {
+            Ok(f) => {
+                if let Some((e, err)) = f.row {
+                    let p = &mut b.points[k];
+                    p.energy_g += e - p.energy;
+                    p.energy = e;
+                    p.energy_error = Some(err);
+                }
+                files[i][k] = Some(f);
+            }
+            Err(e) => warnings.push(format!(
+                "UNVERIFIED STATE LEFT WITHOUT A FILE: branch {} family {} sheet {} at L̄ = {}: {e}",
+                b.branch, b.family, b.sheet, b.points[k].value
+            )),
+        }
+    }
+    (files, warnings)
+}

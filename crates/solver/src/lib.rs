@@ -68,7 +68,10 @@ pub use solve::{
 pub use stability::{Stability, StabilityOptions};
 pub use start::StartShape;
 pub use stiffness::{Stiffness, StiffnessProfile};
-pub use verify::{profile_energy, verify_accurate, verify_state, Claim, Verification};
+pub use verify::{
+    enclosed_profile, profile_energy, verify_accurate, verify_enclosed, verify_state, Claim,
+    EnclosedVerification, Verification,
+};
 
 /// Errors of the solver crate.
 #[derive(Debug, thiserror::Error)]

@@ -69,6 +69,7 @@ mod nonuniform_exchange;
 mod nonuniform_sheet;
 mod nonuniform_special;
 mod trace;
+mod verify;
 
 pub use nonuniform::nonuniform_cells;
 
@@ -345,7 +346,7 @@ pub fn enclosed_diagram_with(
 ) -> Result<EnclosedDiagram, DiagramError> {
     opts.validate()?;
     if !opts.stiffness.is_uniform() {
-        return nonuniform::nonuniform_diagram(opts, progress);
+        return nonuniform::nonuniform_diagram(opts, progress).map(verify::verified);
     }
     let t0 = Instant::now();
     let (lo, hi) = (opts.lbar_min, opts.lbar_max);
@@ -498,7 +499,7 @@ pub fn enclosed_diagram_with(
     )));
     label(&mut points, &critical, &mut warnings);
     timings.total = t0.elapsed().as_secs_f64();
-    Ok(EnclosedDiagram {
+    Ok(verify::verified(EnclosedDiagram {
         points,
         events,
         critical,
@@ -506,5 +507,5 @@ pub fn enclosed_diagram_with(
         notes: Vec::new(),
         cells,
         seconds: timings,
-    })
+    }))
 }

@@ -1,0 +1,183 @@
+//! Every state file a diagram writes holds the state of its row: for each kind of diagram
+//! (two-segment surface, uniform surface, enclosed), every file named in `branches.csv` is
+//! read back and checked here, independently of rodloop's code: the polyline closes (its
+//! closing chord is no longer than the arclength between its last and first points, up to
+//! 1 % of that step for the interpolated points), it lies on the unit sphere (surface) or
+//! inside the unit ball (enclosed), and the energy `(1/π) ∮ ½ D κ² ds` recomputed from the
+//! file by the periodic trapezoidal rule equals the row's `energy` within 5 times the row's
+//! `energy_error` (1e-4 relative where the row has none) plus the rule's own error
+//! `|T_h − T_2h|`. States that fail the diagram's own verification have no file and are
+//! counted in `summary.json` (`unverified_states`).
+
+mod common;
+
+use std::f64::consts::PI;
+use std::path::Path;
+
+use common::{fresh_dir, rodloop_ok};
+
+/// Multiple of a row's error estimate within which its file's energy must lie.
+const ESTIMATES: f64 = 5.0;
+/// Relative tolerance of a row without an error estimate.
+const NO_ESTIMATE: f64 = 1e-4;
+
+/// The columns `names` of a CSV file (comment lines `#` skipped), as numbers by row.
+fn columns(path: &Path, names: &[&str]) -> Vec<Vec<f64>> {
+    let mut rdr = csv::ReaderBuilder::new()
+        .comment(Some(b'#'))
+        .from_path(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let head = rdr.headers().unwrap().clone();
+    let idx: Vec<usize> = names
+        .iter()
+        .map(|n| {
+            head.iter()
+                .position(|h| h == *n)
+                .unwrap_or_else(|| panic!("no column {n}"))
+        })
+        .collect();
+    rdr.records()
+        .map(|r| {
+            let r = r.unwrap();
+            idx.iter().map(|&i| r[i].parse::<f64>().unwrap()).collect()
+        })
+        .collect()
+}
+
+/// Check every state file of the diagram in `dir` against its row (see the module docs);
+/// returns the problems found and the number of files checked.
+fn check_diagram(dir: &Path, enclosed: bool) -> (Vec<String>, usize) {
+    let mut rdr = csv::ReaderBuilder::new()
+        .comment(Some(b'#'))
+        .from_path(dir.join("branches.csv"))
+        .unwrap();
+    let head = rdr.headers().unwrap().clone();
+    let col = |n: &str| head.iter().position(|h| h == n).unwrap();
+    let (il, ie, ier, ifile) = (
+        col("lbar"),
+        col("energy"),
+        col("energy_error"),
+        col("state_file"),
+    );
+    let mut problems = Vec::new();
+    let mut checked = 0;
+    for row in rdr.records() {
+        let row = row.unwrap();
+        let file = row[ifile].trim();
+        if file.is_empty() {
+            continue;
+        }
+        checked += 1;
+        let lbar: f64 = row[il].parse().unwrap();
+        let energy: f64 = row[ie].parse().unwrap();
+        let estimate: Option<f64> = row[ier].trim().parse().ok();
+        let pts = columns(&dir.join(file), &["s", "x", "y", "z", "kappa", "D"]);
+        let n = pts.len();
+        assert!(n >= 8, "{file}: {n} points");
+        assert!(
+            pts.iter().flatten().all(|v| v.is_finite()),
+            "{file}: a value is not finite"
+        );
+        let length = 2.0 * PI * lbar;
+        let dist = |a: &[f64], b: &[f64]| {
+            ((a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2) + (a[3] - b[3]).powi(2)).sqrt()
+        };
+        let chord = dist(&pts[n - 1], &pts[0]);
+        let arc = length + pts[0][0] - pts[n - 1][0];
+        if !(arc > 0.0 && chord <= arc * 1.01 + 1e-9) {
+            problems.push(format!(
+                "{file}: open, chord {chord:.3e} over arc {arc:.3e}"
+            ));
+        }
+        let worst = pts
+            .iter()
+            .map(|p| (p[1] * p[1] + p[2] * p[2] + p[3] * p[3]).sqrt() - 1.0)
+            .map(|d| if enclosed { d } else { d.abs() })
+            .fold(f64::NEG_INFINITY, f64::max);
+        if worst > 1e-9 {
+            problems.push(format!(
+                "{file}: a point {worst:.3e} R off the sphere or ball"
+            ));
+        }
+        let trap = |step: usize| {
+            let idx: Vec<usize> = (0..n).step_by(step).collect();
+            let m = idx.len();
+            (0..m)
+                .map(|j| {
+                    let (a, b) = (&pts[idx[j]], &pts[idx[(j + 1) % m]]);
+                    let ds = if j + 1 < m {
+                        b[0] - a[0]
+                    } else {
+                        length + b[0] - a[0]
+                    };
+                    0.25 * (a[5] * a[4] * a[4] + b[5] * b[4] * b[4]) * ds
+                })
+                .sum::<f64>()
+                / PI
+        };
+        let (fine, coarse) = (trap(1), trap(2));
+        let scale = energy.abs().max(1.0);
+        let allowed = estimate.map_or(NO_ESTIMATE * scale, |e| ESTIMATES * e);
+        let tol = allowed + (fine - coarse).abs() + 1e-9 * scale;
+        if (fine - energy).abs() > tol {
+            problems.push(format!(
+                "{file} (L̄ = {lbar}): energy from the file {fine:.10} against {energy:.10} in \
+                 its row (tolerance {tol:.1e})"
+            ));
+        }
+    }
+    (problems, checked)
+}
+
+/// Run `diagram` with `args` into a fresh directory, check every state file, and require
+/// at least `min_files` files, no problem, and `unverified_states` equal to the rows
+/// without a file.
+fn diagram_files_hold_their_rows(name: &str, args: &[&str], enclosed: bool, min_files: usize) {
+    let out = fresh_dir("state-files", name);
+    let mut all = vec!["diagram", "--out", out.to_str().unwrap()];
+    all.extend_from_slice(args);
+    rodloop_ok(&all);
+    let (problems, checked) = check_diagram(&out, enclosed);
+    assert!(
+        problems.is_empty(),
+        "{name}: {} of {checked} state files do not hold their rows:\n{}",
+        problems.len(),
+        problems.join("\n")
+    );
+    assert!(checked >= min_files, "{name}: only {checked} state files");
+    let rows = columns(&out.join("branches.csv"), &["lbar"]).len();
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let unverified = summary["unverified_states"].as_u64().unwrap() as usize;
+    assert_eq!(unverified, rows - checked, "{name}: rows without a file");
+}
+
+fn scene(name: &str) -> String {
+    format!("{}/data/scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A very soft segment (D1/D0 = 0.001), branch 2 around L̄ = 1: the tracing resolution's
+/// profile is up to 1.6e-3 relative off the state's Richardson energy there, whose
+/// estimate is 6e-6.
+#[test]
+fn two_segment_diagram_files_hold_their_rows() {
+    let sc = scene("inhomogeneous-d1-0.001");
+    diagram_files_hold_their_rows(
+        "d1-0.001",
+        &["--scene", &sc, "--lbar-min", "0.98", "--lbar-max", "1.05"],
+        false,
+        20,
+    );
+}
+
+#[test]
+fn uniform_diagram_files_hold_their_rows() {
+    let sc = scene("homogeneous-surface");
+    diagram_files_hold_their_rows("uniform", &["--scene", &sc], false, 50);
+}
+
+#[test]
+fn enclosed_diagram_files_hold_their_rows() {
+    let sc = scene("homogeneous-enclosed");
+    diagram_files_hold_their_rows("enclosed", &["--scene", &sc], true, 50);
+}
