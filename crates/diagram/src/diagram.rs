@@ -451,9 +451,34 @@ pub fn assemble(
     // Every state verified as its file holds it (rows re-estimated where refined
     // resolutions contradict them), before the labels that compare the energies.
     let threads = opts.worker_threads();
-    let (state_files, state_warnings) = crate::states::verify_all(opts, &mut branches, threads);
+    // A state that fails is not reported: its row leaves the table (the warning says why),
+    // so every row of `branches.csv` has a verified file.
+    let (mut state_files, state_warnings) =
+        crate::states::verify_all(opts, &mut branches, threads);
     let unverified_states = state_warnings.len();
     warnings.extend(state_warnings);
+    for (b, files) in branches.iter_mut().zip(state_files.iter_mut()) {
+        let mut keep = files.iter().map(Option::is_some);
+        b.points.retain(|_| keep.next().unwrap_or(false));
+        files.retain(Option::is_some);
+    }
+    // Sheets left empty go, and the critical lengths' sheet indices follow the renumbering.
+    let mut next = 0;
+    let renumber: Vec<Option<usize>> = branches
+        .iter()
+        .map(|b| {
+            (!b.points.is_empty()).then(|| {
+                next += 1;
+                next - 1
+            })
+        })
+        .collect();
+    for c in &mut critical {
+        c.from_sheet = c.from_sheet.and_then(|i| renumber[i]);
+        c.to_sheet = c.to_sheet.and_then(|i| renumber[i]);
+    }
+    branches.retain(|b| !b.points.is_empty());
+    state_files.retain(|f| !f.is_empty());
     // Labels.
     let t = Instant::now();
     let labels = labels::label_all(&branches, &critical);
