@@ -645,4 +645,101 @@ mod tests {
             assert_eq!(attached, eta != 1, "eta {eta} at {lbar}");
         }
     }
+
+    /// The rotation angle about the tangent with which the rotation-minimising frame of a
+    /// state comes back after one loop (its holonomy, `−∮τ ds` mod 2π).
+    fn holonomy(s: &EnclosedState) -> f64 {
+        let p = s.model.transforms(&s.z).unwrap();
+        let x = &p[s.model.cells()];
+        (x[(2, 1)] - x[(1, 2)]).atan2(x[(1, 1)] + x[(2, 2)])
+    }
+
+    /// The two-segment rod of the paper's Sec. 5 (`D1/D0 = 0.5`) in the ball at `L̄ = 1.35`,
+    /// branch 2 (η = 1), `N = 96`. Two routes that share no start: the uniform rod's
+    /// loop continued in the stiffness ([`stiffness_homotopy_states`]), and a loop shrunk
+    /// into the ball (the two-segment surface loop at `L̄/0.9` on the sphere of radius
+    /// `0.9 R`, which has the same length and touches nothing) relaxed by Newton and the
+    /// descent from saddles. The lowest local minimum found is a bending-only equilibrium
+    /// whose frame does not return (a pure-bending rod carries no twisting moment, so the
+    /// holonomy is free), and no route finds a lower minimum.
+    #[test]
+    fn two_segment_figure_eight_minimum_needs_no_twisting_moment() {
+        let st = Stiffness::Tanh {
+            d0: 1.0,
+            d1: 0.5,
+            s0: 0.3,
+            s1: 0.8,
+            gamma: 200.0,
+        };
+        let (lbar, eta, cells) = (1.35, 1u32, 96usize);
+        let opts = EnclosedOptions::default();
+        let saddle = EnclosedSaddle::default();
+        let minimum = |b: BranchSolve| -> Option<BranchSolve> {
+            let (b, _) = descend_branch(b, &opts).ok()?;
+            let ok =
+                saddle.index(&b.quarter).ok()? == 0 && enclosed_periods(&b.fine).ok()?.eta == eta;
+            ok.then_some(b)
+        };
+        // Route 1: the stiffness path.
+        let path: Vec<BranchSolve> =
+            stiffness_homotopy_states(1.0, lbar, eta, &st, cells / 4, &opts)
+                .unwrap()
+                .into_iter()
+                .filter_map(|s| solve_levels(&s.model, s.z.clone(), None, &opts).ok())
+                .filter_map(minimum)
+                .collect();
+        let best = path
+            .iter()
+            .min_by(|a, b| a.energy.total_cmp(&b.energy))
+            .expect("an index-0 state of branch 2 from the stiffness path");
+        // A bending-only equilibrium: stationary, the frame turned about the tangent.
+        let (_, _, comp, stat) = best.fine.optimality().unwrap();
+        assert!(comp < 1e-8 && stat < 1e-8, "{comp:e} {stat:e}");
+        let alpha = holonomy(&best.fine);
+        assert!(alpha.abs() > 1e-2, "holonomy {alpha}");
+        // Route 2: the shrunk loop.
+        let a = 0.9;
+        let (res, _) = crate::solve_robust(
+            1.0,
+            lbar / a,
+            &st,
+            &crate::StartShape::Euler { l: eta },
+            crate::Accuracy::Default,
+            Some(eta),
+            &crate::SolveOptions::default(),
+        )
+        .unwrap();
+        let (m, z) = super::super::solve::start_from_curvature(
+            1.0,
+            lbar,
+            cells / 4,
+            &st,
+            |s| {
+                let k = res.equilibrium.sample_at(&[s]).unwrap()[0];
+                (k / a, -1.0 / a)
+            },
+            [0.0, 0.0, a],
+        )
+        .unwrap();
+        let gmin = m
+            .gaps(&z)
+            .unwrap()
+            .iter()
+            .cloned()
+            .fold(f64::INFINITY, f64::min);
+        assert!(gmin > 0.05, "the shrunk loop touches ({gmin})");
+        let shrunk = solve_enclosed(&m, z, &opts)
+            .ok()
+            .and_then(|s| solve_levels(&s.model, s.z.clone(), None, &opts).ok())
+            .and_then(minimum)
+            .expect("a local minimum from the shrunk loop");
+        println!(
+            "stiffness path {:.10} ± {:.1e} (holonomy {alpha:.4}), shrunk loop {:.10} ± {:.1e}",
+            best.energy, best.energy_error, shrunk.energy, shrunk.energy_error
+        );
+        assert!(
+            best.energy <= shrunk.energy + 3.0 * (best.energy_error + shrunk.energy_error),
+            "the shrunk loop relaxes below the lowest minimum found"
+        );
+    }
 }
