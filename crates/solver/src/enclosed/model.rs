@@ -18,7 +18,8 @@
 //!
 //! Positions and frames at the nodes `s_j` (cell boundaries) follow from the SE(3) Magnus
 //! chain `P_{c+1} = P_c exp(Θ_c)` ([`super::jet`]), `r_j = r0 + p_j`. Closure of position
-//! and frame, `C = (vee(skew(X_N)), p_N) = 0` (6 equations). The wall
+//! and frame, `C = (vee(skew(X_N)), p_N) = 0`, of which the rotation about the tangent
+//! (row [`TWIST_ROW`]) is free: its row reads `μ_twist = 0` (no twisting moment). The wall
 //! `g_j = R² − |r_j|² ≥ 0` is imposed at the `N` nodes; its multipliers `λ_j ≥ 0` are the
 //! nodal contact impulses (the force per unit length is `λ(s_j) ≈ 2Rλ_j/w_j`, `w_j` the
 //! node's share of the length; Sec. 3.2 with Eq. (38)'s sign: `λ > 0` pushes inward).
