@@ -4,8 +4,10 @@
 //! with `D1/D0 = 0.5` at `L̄ = 1.35` touches on a quarter of its length and reaches `0.63 R`
 //! inside, 2.5 % below the state next to the surface loop) is reached instead by continuation
 //! in the stiffness from the uniform rod's loop of the branch
-//! ([`stiffness_homotopy_states`]). At every sampled length of a branch that no family
-//! found here covers yet, that search runs on the `N/4` mesh of the traces; each state
+//! ([`stiffness_homotopy_states`]). At the sampled lengths of a branch that no family
+//! found here covers yet (at least [`SEED_SPACING`] apart, and only where the branch lies
+//! within [`RELEVANT`] of the lowest traced state), that search runs on the `N/4` mesh of
+//! the traces; each state
 //! found below the branch's traced states is cascaded to `N/2, N` and traced through the
 //! branch's sampled lengths as a new family.
 
@@ -19,6 +21,16 @@ use super::nonuniform_sheet::{step_options, SheetOut};
 use super::trace::{follow, Levels};
 use super::EnclosedDiagramOptions;
 use crate::parallel::run_parallel;
+
+/// Least distance in `L̄` between two lengths searched for one branch: a family found is
+/// traced through all the branch's sampled lengths, so the search needs to meet it once.
+const SEED_SPACING: f64 = 0.1;
+
+/// A branch is searched where its lowest traced state lies within this fraction of the
+/// lowest traced state of any branch: the states the stiffness path finds lie a few percent
+/// below the traced ones (2.5 % for the two-segment figure-eight at `L̄ = 1.35`), so a
+/// branch further above cannot become the lowest through them.
+const RELEVANT: f64 = 0.1;
 
 /// How far below the branch's lowest traced energy a state found must lie to seed a family:
 /// three times its error estimate plus `1e-6` relative (as the surface certificate's margin).
@@ -60,11 +72,28 @@ fn seed_branch(
         .max()
         .unwrap_or(0)
         + 1;
+    let mut at: Vec<f64> = Vec::new();
     for i in order {
         let x = grid[i];
-        if added.iter().any(|s| interp(s, x).is_some()) {
+        if added.iter().any(|s| interp(s, x).is_some())
+            || at.iter().any(|&y| (y - x).abs() < SEED_SPACING - 1e-9)
+        {
             continue;
         }
+        // Only where the branch can be lowest: its traced states within `RELEVANT` of the
+        // lowest traced state of any branch.
+        let (Some(eb), Some(ea)) = (
+            lowest_of_branch(outs, branch, x),
+            outs.iter()
+                .filter_map(|s| interp(s, x))
+                .min_by(f64::total_cmp),
+        ) else {
+            continue;
+        };
+        if eb > (1.0 + RELEVANT) * ea {
+            continue;
+        }
+        at.push(x);
         searched += 1;
         let Ok(found) =
             stiffness_homotopy_states(opts.radius, x, eta, &opts.stiffness, n / 4, &dopts)
