@@ -14,7 +14,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use rodloop_exact::{branch_of_eta, eta_of_branch, paper_branch_loop};
 use rodloop_scene::Scene;
-use rodloop_solver::enclosed::descent::{descend_branch, solve_branch_descended};
+use rodloop_solver::enclosed::descent::{descend_branch, solve_branch_lowest};
 use rodloop_solver::enclosed::{
     detached_intervals, enclosed_cells, enclosed_solve_cells, free_circle, solve_branch,
     solve_enclosed, solve_levels, start_from_shape, EnclosedOptions, EnclosedState, SavedShape,
@@ -155,6 +155,9 @@ pub fn solve_state_with(
         // (N/4) to resolve the transitions on the graded mesh.
         cells = cells.max(32 * (2 + eta as usize));
     }
+    // Set where the state reported is a lower local minimum than the one reached from the
+    // surface loop (continuation in the stiffness from the uniform rod's loop).
+    let mut lower_minimum = false;
     let (b, descent, given_up) = if keep_saddle {
         let b = solve_branch(r, lbar, stiffness, &source, cells, &opts)
             .with_context(|| format!("the enclosed loop of branch {branch} at lbar = {lbar}"))?;
@@ -171,12 +174,14 @@ pub fn solve_state_with(
             ladder.retain(|&n| n >= cells);
             ladder.dedup();
         }
-        solve_branch_descended(r, lbar, stiffness, &source, &ladder, &opts)
-            .with_context(|| format!("the enclosed loop of branch {branch} at lbar = {lbar}"))?
+        let (out, replaced) = solve_branch_lowest(r, lbar, eta, stiffness, &source, &ladder, &opts)
+            .with_context(|| format!("the enclosed loop of branch {branch} at lbar = {lbar}"))?;
+        lower_minimum = replaced;
+        out
     };
     let cells = b.fine.model.cells();
     let stability = b.coarsest().stability(1e-6)?;
-    let moved = descent.as_ref().is_some_and(|d| d.moved());
+    let moved = lower_minimum || descent.as_ref().is_some_and(|d| d.moved());
     let (energy, mut method) = if attached && !moved {
         (
             (e_surf, surface_error),
@@ -188,11 +193,13 @@ pub fn solve_state_with(
         (
             (b.energy, b.energy_error),
             format!(
-                "3-D enclosed model, N = {cells} cells (semismooth Newton from the surface loop{}, lambda_min = {lam_min:.6}); {}",
-                if b.homotopy {
-                    " by the pull homotopy"
+                "3-D enclosed model, N = {cells} cells (semismooth Newton from {}, lambda_min = {lam_min:.6}); {}",
+                if lower_minimum {
+                    "the uniform rod's loop continued in the stiffness"
+                } else if b.homotopy {
+                    "the surface loop by the pull homotopy"
                 } else {
-                    ""
+                    "the surface loop"
                 },
                 b.estimate_method()
             ),

@@ -66,6 +66,7 @@ mod critical;
 mod nonuniform;
 mod nonuniform_descent;
 mod nonuniform_exchange;
+mod nonuniform_seeds;
 mod nonuniform_sheet;
 mod nonuniform_special;
 mod trace;

@@ -46,6 +46,7 @@ use rodloop_solver::{solve_from_state, Accuracy, SolverError, SurfaceModel};
 
 use super::nonuniform_descent::descend_unstable;
 use super::nonuniform_exchange::{interp, locate_crossing, lowest_at, mean_stiffness, CIRCLE};
+use super::nonuniform_seeds::seed_from_stiffness_path;
 use super::nonuniform_sheet::{step_options, surface_at, surface_energy, SheetOut};
 use super::nonuniform_special::{branch_points, classify_stops};
 use super::trace::{follow, Levels};
@@ -508,7 +509,7 @@ pub(super) fn nonuniform_diagram(
     let ts = Instant::now();
     // Tasks: the surface families of each branch, then (once they are known) the sheets,
     // and the three stages after them (descent, branch points, exchanges).
-    progress(EnclosedProgress::Planned(etas.len() + 3));
+    progress(EnclosedProgress::Planned(etas.len() + 4));
     let fams = run_parallel(
         threads,
         etas.clone(),
@@ -574,6 +575,23 @@ pub(super) fn nonuniform_diagram(
     }
     traced.sort_by_key(|(i, _)| *i);
     let (mut idx, mut outs): (Vec<usize>, Vec<SheetOut>) = traced.into_iter().unzip();
+    // 2a. Lifted-off families the surface states do not lead to (the stiffness path).
+    let tseed = Instant::now();
+    let before = outs.len();
+    notes.extend(seed_from_stiffness_path(opts, &mut outs, threads));
+    // Each family found descends from no surface sheet: it is listed with the first sheet
+    // of its branch.
+    for k in before..outs.len() {
+        let b = outs[k].branch;
+        let root = (0..before)
+            .find(|&j| outs[j].branch == b)
+            .map_or(idx[0], |j| idx[j]);
+        idx.push(root);
+    }
+    timings.lifted_off += tseed.elapsed().as_secs_f64();
+    progress(EnclosedProgress::Done(
+        "lifted-off families from the stiffness path".into(),
+    ));
     // 2b. Lower states below unstable lowest ones (new families).
     let tdesc = Instant::now();
     let (w, parents) = descend_unstable(&mut outs, &idx, threads);

@@ -8,11 +8,17 @@
 //! through the wall; the semismooth Newton then stalled at `N = 64` on the lifted-off
 //! figure-eight near `L̄ = 1.38`, while the unscaled start converges in 3 iterations.) The
 //! gauge takes the start as its reference, as in [`super::start_from_surface`].
+//!
+//! Continuation in the stiffness at fixed `L̄` ([`continue_in_stiffness`]): from the uniform
+//! rod's states to a non-uniform rod's, along [`blended_stiffness`].
 
 use super::model::{phase_slope, rotation, translation, EnclosedModel, Gauge};
 use nalgebra::{DMatrix, DVector};
 
-use super::solve::{solve_enclosed, EnclosedOptions, EnclosedState};
+use super::solve::{
+    solve_enclosed, start_from_curvature, transfer_multipliers, EnclosedOptions, EnclosedState,
+};
+use crate::stiffness::Stiffness;
 use crate::SolverError;
 
 impl EnclosedState {
@@ -257,4 +263,160 @@ fn equality_multipliers<F: Fn(usize) -> f64>(
         z[np + k] = *v;
     }
     Ok(())
+}
+
+/// The stiffness `D_t(σ) = D_ref + t (D(σ) − D_ref)` between the uniform rod of the
+/// profile's reference stiffness `D_ref` ([`Stiffness::reference`], `t = 0`) and `target`
+/// (`t = 1`): the path of [`continue_in_stiffness`]. Eq. (51) keeps its form (`D1` moves
+/// from `D0` to its value); a table moves every value.
+pub fn blended_stiffness(target: &Stiffness, t: f64) -> Stiffness {
+    let r = target.reference();
+    match target {
+        Stiffness::Uniform { .. } => target.clone(),
+        Stiffness::Tanh {
+            d0,
+            d1,
+            s0,
+            s1,
+            gamma,
+        } => Stiffness::Tanh {
+            d0: *d0,
+            d1: d0 + t * (d1 - d0),
+            s0: *s0,
+            s1: *s1,
+            gamma: *gamma,
+        },
+        Stiffness::Table { s, d } => Stiffness::Table {
+            s: s.clone(),
+            d: d.iter().map(|v| r + t * (v - r)).collect(),
+        },
+    }
+}
+
+/// `state` carried to the stiffness `stiffness` on the same number of cells (the mesh may
+/// be graded differently): curvature interpolated ([`EnclosedState::curvature_at`]), the
+/// same start point, the multipliers carried over ([`transfer_multipliers`]).
+pub fn with_stiffness(
+    state: &EnclosedState,
+    stiffness: &Stiffness,
+) -> Result<(EnclosedModel, Vec<f64>), SolverError> {
+    let m = &state.model;
+    let r0 = m.start_point(&state.z);
+    let (model, mut z) = start_from_curvature(
+        m.radius(),
+        m.lbar(),
+        m.cells(),
+        stiffness,
+        |s| state.curvature_at(s),
+        [r0[0], r0[1], r0[2]],
+    )?;
+    transfer_multipliers(m, &state.z, &model, &mut z);
+    Ok((model, z))
+}
+
+/// The eigenvector of the lowest eigenvalue (of any sign) of the tangent Hessian of
+/// `state` ([`EnclosedState::tangent_hessian`], active wall multipliers above `1e-6` of the
+/// largest), in the primal unknowns, scaled to the state's `(∫|κ|² ds)^½` in the mass norm;
+/// with the eigenvalue. At a fold of a one-parameter family of equilibria that eigenvalue
+/// goes through zero and its eigenvector is the direction in which the state leaves.
+pub fn softest_direction(state: &EnclosedState) -> Result<(f64, Vec<f64>), SolverError> {
+    let m = &state.model;
+    let np = m.n_primal();
+    let (pw, s) = state.tangent_hessian(1e-6)?;
+    let eig = nalgebra::SymmetricEigen::new(pw);
+    let k = (0..eig.eigenvalues.len())
+        .min_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]))
+        .ok_or_else(|| SolverError::InvalidInput("empty Hessian".into()))?;
+    let norm = (0..4 * m.cells())
+        .map(|a| 0.5 * m.cell_length(a / 4) * state.z[a] * state.z[a])
+        .sum::<f64>()
+        .sqrt();
+    let u = eig.eigenvectors.column(k);
+    Ok((
+        eig.eigenvalues[k],
+        (0..np).map(|i| u[i] * s[i] * norm).collect(),
+    ))
+}
+
+/// Relative amplitudes of the steps along [`softest_direction`] that leave a fold of the
+/// stiffness path ([`continue_in_stiffness`]), tried in turn, both signs.
+const SNAP_AMPLITUDES: [f64; 4] = [0.05, 0.15, 0.3, 0.5];
+
+/// Natural-parameter continuation of an enclosed state of the uniform rod (or of any
+/// stiffness) to the stiffness `target` along [`blended_stiffness`], `t` from 0 to 1, at
+/// fixed `L̄` and mesh size: steps of `t` of at most `1/4`, halved on a failed Newton solve
+/// down to `1/512`, grown by half after a success. Where the steps fail at a fold of the
+/// path (the state ceases to exist as `t` grows), the loop snaps through as a quasi-static
+/// loading would: just past the fold, Newton from the last state displaced along its
+/// [`softest_direction`] (amplitudes [`SNAP_AMPLITUDES`], both signs), and the lowest
+/// state reached below the last one's energy carries the path on. The enclosed problem of
+/// a two-segment rod has lifted-off equilibria that no surface family of that rod leads to
+/// but that the uniform rod's loops lead to along this path.
+pub fn continue_in_stiffness(
+    start: &EnclosedState,
+    target: &Stiffness,
+    opts: &EnclosedOptions,
+) -> Result<EnclosedState, SolverError> {
+    const MAX_STEP: f64 = 0.25;
+    const MIN_STEP: f64 = 1.0 / 512.0;
+    /// Folds snapped through at most (each one lowers the energy).
+    const MAX_SNAPS: usize = 4;
+    let mut cur = start.clone();
+    let (mut t, mut h) = (0.0f64, MAX_STEP);
+    let mut snaps = 0;
+    while t < 1.0 {
+        let tn = (t + h).min(1.0);
+        let st = blended_stiffness(target, tn);
+        let step = with_stiffness(&cur, &st).and_then(|(m, z)| solve_enclosed(&m, z, opts));
+        match step {
+            Ok(s) => {
+                cur = s;
+                t = tn;
+                h = (1.5 * h).min(MAX_STEP);
+            }
+            Err(e) => {
+                h *= 0.5;
+                if h >= MIN_STEP {
+                    continue;
+                }
+                if snaps == MAX_SNAPS {
+                    return Err(e);
+                }
+                snaps += 1;
+                let tn = (t + 4.0 * MIN_STEP).min(1.0);
+                let st = blended_stiffness(target, tn);
+                let (_, v) = softest_direction(&cur)?;
+                let e0 = cur.energy();
+                let mut best: Option<EnclosedState> = None;
+                for amp in SNAP_AMPLITUDES {
+                    for sign in [1.0, -1.0] {
+                        let mut z = cur.z.clone();
+                        for (zi, vi) in z.iter_mut().zip(&v) {
+                            *zi += sign * amp * vi;
+                        }
+                        let moved = EnclosedState { z, ..cur.clone() };
+                        let Ok(s) = with_stiffness(&moved, &st)
+                            .and_then(|(m, z)| solve_enclosed(&m, z, opts))
+                        else {
+                            continue;
+                        };
+                        let es = s.energy();
+                        if es < e0 - 1e-6 * e0.abs()
+                            && best.as_ref().is_none_or(|b| es < b.energy())
+                        {
+                            best = Some(s);
+                        }
+                    }
+                    if best.is_some() {
+                        break;
+                    }
+                }
+                let Some(b) = best else { return Err(e) };
+                cur = b;
+                t = tn;
+                h = 4.0 * MIN_STEP;
+            }
+        }
+    }
+    Ok(cur)
 }

@@ -350,6 +350,271 @@ pub fn solve_branch_descended(
     }
 }
 
+/// Features of a periodic signal sampled at `n` equal steps of `σ ∈ [0, 1)`: the `σ` of
+/// its local extrema and of its sign changes (zeros), by parabolic and linear interpolation.
+fn signal_features(f: &[f64]) -> Vec<f64> {
+    let n = f.len();
+    let h = 1.0 / n as f64;
+    let scale = f.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+    if scale == 0.0 {
+        return Vec::new();
+    }
+    let mut out = Vec::new();
+    for i in 0..n {
+        let (a, b, c) = (f[(i + n - 1) % n], f[i], f[(i + 1) % n]);
+        // An extremum (strict on one side: plateaus of a sharp profile count once).
+        if ((b > a && b >= c) || (b < a && b <= c)) && (b - a).abs() + (b - c).abs() > 1e-9 * scale
+        {
+            let den = a - 2.0 * b + c;
+            let off = if den.abs() > 0.0 {
+                (0.5 * (a - c) / den).clamp(-0.5, 0.5)
+            } else {
+                0.0
+            };
+            out.push(((i as f64 + off) * h).rem_euclid(1.0));
+        }
+        if b != 0.0 && c != 0.0 && (b > 0.0) != (c > 0.0) {
+            out.push(((i as f64 + b / (b - c)) * h).rem_euclid(1.0));
+        }
+    }
+    out
+}
+
+/// Where the stiffness profile's features sit, `σ = s/L`: the extrema of `D` (the middles
+/// of the segments) and of `dD/dσ` (the transitions). Empty for a uniform rod.
+pub fn profile_features(stiffness: &crate::Stiffness) -> Result<Vec<f64>, SolverError> {
+    if stiffness.is_uniform() {
+        return Ok(Vec::new());
+    }
+    let prof = stiffness.validate()?;
+    const SAMPLES: usize = 4096;
+    let v: Vec<_> = (0..SAMPLES)
+        .map(|i| prof.eval(i as f64 / SAMPLES as f64))
+        .collect();
+    let d: Vec<f64> = v.iter().map(|p| p.d).collect();
+    let d1: Vec<f64> = v.iter().map(|p| p.d1).collect();
+    let mut out = signal_features(&d);
+    // Only the extrema of D' (its zeros are the extrema of D, already in).
+    let n = d1.len();
+    let top = d1.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+    out.extend(signal_features(&d1).into_iter().filter(|&s| {
+        let i = ((s * n as f64).round() as usize) % n;
+        d1[i].abs() > 1e-3 * top
+    }));
+    Ok(out)
+}
+
+/// Shifts `φ` of the arclength origin of the uniform rod's loop of branch `eta` at `lbar`
+/// (its curvature taken at `σ + φ`) that put a feature of the loop (an extremum or a zero of
+/// `κ_g`) on a feature of the stiffness profile ([`profile_features`]), modulo the loop's
+/// period `1/η`, in `[0, 1/η)`, without repeats (closer than `1e-3`). `[0]` for a uniform
+/// rod. The starts of [`stiffness_homotopy_states`]: where a loop's soft and stiff parts
+/// fall relative to its bends decides which state of the non-uniform rod it leads to.
+pub fn homotopy_shifts(
+    stiffness: &crate::Stiffness,
+    eta: u32,
+    lbar: f64,
+) -> Result<Vec<f64>, SolverError> {
+    let prof = profile_features(stiffness)?;
+    if prof.is_empty() {
+        return Ok(vec![0.0]);
+    }
+    let l = rodloop_exact::paper_branch_loop(eta, lbar)?;
+    const SAMPLES: usize = 1024;
+    let kg = (0..SAMPLES)
+        .map(|i| Ok(l.point(i as f64 / SAMPLES as f64 * l.length())?.kappa_g))
+        .collect::<Result<Vec<f64>, SolverError>>()?;
+    let period = 1.0 / f64::from(eta.max(1));
+    let mut shifts: Vec<f64> = Vec::new();
+    for &a in &signal_features(&kg) {
+        for &b in &prof {
+            let phi = (a - b).rem_euclid(period);
+            let near = |x: f64| {
+                let d = (x - phi).rem_euclid(period);
+                d.min(period - d) < 1e-3
+            };
+            if !shifts.iter().any(|&x| near(x)) {
+                shifts.push(phi);
+            }
+        }
+    }
+    shifts.sort_by(f64::total_cmp);
+    Ok(shifts)
+}
+
+/// Enclosed states of the non-uniform rod `stiffness` at `lbar` on `cells` cells reached by
+/// continuation in the stiffness ([`super::continuation::continue_in_stiffness`]) from the
+/// uniform rod's enclosed loop of branch `eta` (the exact surface loop, lifted off by the
+/// semismooth Newton where it needs a pulling wall), one per shift of [`homotopy_shifts`]:
+/// those of branch `eta` ([`enclosed_periods`]), lowest first, without repeats (energies
+/// within `1e-9` relative). Where the uniform rod's loop is attached, its continuation may
+/// still lift off along the path.
+pub fn stiffness_homotopy_states(
+    radius: f64,
+    lbar: f64,
+    eta: u32,
+    stiffness: &crate::Stiffness,
+    cells: usize,
+    opts: &EnclosedOptions,
+) -> Result<Vec<EnclosedState>, SolverError> {
+    let l = rodloop_exact::paper_branch_loop(eta, lbar)?;
+    let uniform = crate::Stiffness::Uniform {
+        d: stiffness.reference(),
+    };
+    let lmin = l.lambda_range().0;
+    let len = l.length();
+    let mut out: Vec<EnclosedState> = Vec::new();
+    for phi in homotopy_shifts(stiffness, eta, lbar)? {
+        let kg = |s: f64| {
+            l.point((s + phi).rem_euclid(1.0) * len)
+                .map_or(0.0, |p| p.kappa_g / radius)
+        };
+        let Ok((m, z0)) = super::solve::start_from_surface(radius, lbar, cells, &uniform, kg)
+        else {
+            continue;
+        };
+        let start = match solve_enclosed(&m, z0.clone(), opts) {
+            Ok(s) => s,
+            Err(_) if lmin < 0.0 => {
+                match super::solve::solve_by_pull_homotopy(&m, z0, lmin, opts) {
+                    Ok(s) => s,
+                    Err(_) => continue,
+                }
+            }
+            Err(_) => continue,
+        };
+        let Ok(s) = super::continuation::continue_in_stiffness(&start, stiffness, opts) else {
+            continue;
+        };
+        if enclosed_periods(&s).ok().map(|p| p.eta) != Some(eta) {
+            continue;
+        }
+        let e = s.energy();
+        if !e.is_finite() || out.iter().any(|o| (o.energy() - e).abs() <= 1e-9 * e.abs()) {
+            continue;
+        }
+        out.push(s);
+    }
+    out.sort_by(|a, b| a.energy().total_cmp(&b.energy()));
+    Ok(out)
+}
+
+/// A state found on a coarse mesh as a solve with `cells` cells and its levels: its
+/// curvature carried to `cells/4` and cascaded ([`solve_levels`]); where that does not
+/// converge (point contacts, whose contact nodes move between meshes), the cascade on the
+/// state's own mesh, its finest level carried to `cells` and its levels re-solved from
+/// there ([`solve_levels_from_fine`]), else that cascade as it is.
+fn carry_to_ladder(s: &EnclosedState, cells: usize, opts: &EnclosedOptions) -> Option<BranchSolve> {
+    let here = s.model.cells();
+    if here == cells / 4 {
+        return solve_levels(&s.model, s.z.clone(), None, opts).ok();
+    }
+    if let Ok(b) = resample_state(s, cells / 4).and_then(|(m, z)| solve_levels(&m, z, None, opts)) {
+        return Some(b);
+    }
+    let own = solve_levels(&s.model, s.z.clone(), None, opts).ok()?;
+    let watchdog = EnclosedOptions {
+        watchdog: opts.watchdog.max(2),
+        ..opts.clone()
+    };
+    let fine = resample_state(&own.fine, cells)
+        .and_then(|(m, z)| solve_enclosed(&m, z, &watchdog))
+        .and_then(|f| solve_levels_from_fine(f, opts));
+    Some(fine.unwrap_or(own))
+}
+
+/// What [`solve_branch_lowest`] returns: [`DescendedSolve`] and `true` where the state
+/// reported is not the one reached from the surface loop but a lower local minimum from
+/// [`stiffness_homotopy_states`].
+pub type LowestSolve = (DescendedSolve, bool);
+
+/// The lowest local minimum of branch `eta` that an enclosed `solve` finds at `lbar`:
+/// [`solve_branch_descended`] from the surface loop `source`, and for a non-uniform rod
+/// the states reached by continuation in the stiffness from the uniform rod's loop
+/// ([`stiffness_homotopy_states`], on `8(2 + η)` cells and carried to `N/4` of the first
+/// mesh of `ladder`), each cascaded to `N/2, N` ([`solve_levels`]) and descended where it is a saddle ([`descend_branch`]).
+/// Of the states of branch `eta`, an index-0 one goes before any with index > 0, and the
+/// lowest of those is returned. The semismooth Newton from the surface loop stops at the
+/// equilibrium next to it, which need not be the lowest minimum of the branch.
+pub fn solve_branch_lowest(
+    radius: f64,
+    lbar: f64,
+    eta: u32,
+    stiffness: &crate::Stiffness,
+    source: &SurfaceSource,
+    ladder: &[usize],
+    opts: &EnclosedOptions,
+) -> Result<LowestSolve, SolverError> {
+    let base = solve_branch_descended(radius, lbar, stiffness, source, ladder, opts);
+    if stiffness.is_uniform() {
+        return base.map(|b| (b, false));
+    }
+    let saddle = EnclosedSaddle {
+        opts: opts.clone(),
+        ..EnclosedSaddle::default()
+    };
+    let cells = ladder.first().copied().unwrap_or(0);
+    let rank = |b: &BranchSolve| -> Option<(usize, f64)> {
+        let index = saddle.index(b.coarsest()).ok()?;
+        let same = enclosed_periods(&b.fine).ok().map(|p| p.eta) == Some(eta);
+        same.then_some((usize::from(index > 0), b.energy))
+    };
+    let better = |x: (usize, f64), y: (usize, f64)| x.0 < y.0 || (x.0 == y.0 && x.1 < y.1);
+    let mut best: Option<(BranchSolve, Option<Descent<EnclosedState>>)> = None;
+    if cells >= 32 && cells % 4 == 0 {
+        // The path is followed on the coarsest mesh that resolves the profile (the `N/4`
+        // level of the diagram's default mesh, `8(2 + η)` cells), so that every accuracy
+        // follows the same path; its end is carried to this ladder's `N/4`.
+        let search = (8 * (2 + eta as usize)).min(cells / 4);
+        for s in stiffness_homotopy_states(radius, lbar, eta, stiffness, search, opts)
+            .unwrap_or_default()
+        {
+            let Some(b) = carry_to_ladder(&s, cells, opts) else {
+                continue;
+            };
+            let Ok((b, d)) = descend_branch(b, opts) else {
+                continue;
+            };
+            let Some(r) = rank(&b) else { continue };
+            if best
+                .as_ref()
+                .and_then(|(o, _)| rank(o))
+                .is_none_or(|o| better(r, o))
+            {
+                best = Some((b, d));
+            }
+        }
+    }
+    match (base, best) {
+        (Ok(base), Some((b, d))) => {
+            let replace = match (rank(&base.0), rank(&b)) {
+                (Some(x), Some(y)) => better(y, x),
+                (None, Some(_)) => true,
+                _ => false,
+            };
+            if !replace {
+                return Ok((base, false));
+            }
+            let mut notes = base.2;
+            notes.push(format!(
+                "the state reached from the surface loop (E R/(pi D0) = {:.10}) is not the lowest local minimum found: continuation in the stiffness from the uniform rod's loop reaches this one",
+                base.0.energy
+            ));
+            Ok(((b, d, notes), true))
+        }
+        (Ok(base), None) => Ok((base, false)),
+        (Err(_), Some((b, d))) => Ok((
+            (
+                b,
+                d,
+                vec!["the solve from the surface loop did not converge; the state comes from continuation in the stiffness from the uniform rod's loop".into()],
+            ),
+            true,
+        )),
+        (Err(e), None) => Err(e),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -379,5 +644,102 @@ mod tests {
             let attached = b.fine.contact(1e-9).unwrap().fraction >= 1.0;
             assert_eq!(attached, eta != 1, "eta {eta} at {lbar}");
         }
+    }
+
+    /// The rotation angle about the tangent with which the rotation-minimising frame of a
+    /// state comes back after one loop (its holonomy, `−∮τ ds` mod 2π).
+    fn holonomy(s: &EnclosedState) -> f64 {
+        let p = s.model.transforms(&s.z).unwrap();
+        let x = &p[s.model.cells()];
+        (x[(2, 1)] - x[(1, 2)]).atan2(x[(1, 1)] + x[(2, 2)])
+    }
+
+    /// The two-segment rod of the paper's Sec. 5 (`D1/D0 = 0.5`) in the ball at `L̄ = 1.35`,
+    /// branch 2 (η = 1), `N = 96`. Two routes that share no start: the uniform rod's
+    /// loop continued in the stiffness ([`stiffness_homotopy_states`]), and a loop shrunk
+    /// into the ball (the two-segment surface loop at `L̄/0.9` on the sphere of radius
+    /// `0.9 R`, which has the same length and touches nothing) relaxed by Newton and the
+    /// descent from saddles. The lowest local minimum found is a bending-only equilibrium
+    /// whose frame does not return (a pure-bending rod carries no twisting moment, so the
+    /// holonomy is free), and no route finds a lower minimum.
+    #[test]
+    fn two_segment_figure_eight_minimum_needs_no_twisting_moment() {
+        let st = Stiffness::Tanh {
+            d0: 1.0,
+            d1: 0.5,
+            s0: 0.3,
+            s1: 0.8,
+            gamma: 200.0,
+        };
+        let (lbar, eta, cells) = (1.35, 1u32, 96usize);
+        let opts = EnclosedOptions::default();
+        let saddle = EnclosedSaddle::default();
+        let minimum = |b: BranchSolve| -> Option<BranchSolve> {
+            let (b, _) = descend_branch(b, &opts).ok()?;
+            let ok =
+                saddle.index(&b.quarter).ok()? == 0 && enclosed_periods(&b.fine).ok()?.eta == eta;
+            ok.then_some(b)
+        };
+        // Route 1: the stiffness path.
+        let path: Vec<BranchSolve> =
+            stiffness_homotopy_states(1.0, lbar, eta, &st, cells / 4, &opts)
+                .unwrap()
+                .into_iter()
+                .filter_map(|s| solve_levels(&s.model, s.z.clone(), None, &opts).ok())
+                .filter_map(minimum)
+                .collect();
+        let best = path
+            .iter()
+            .min_by(|a, b| a.energy.total_cmp(&b.energy))
+            .expect("an index-0 state of branch 2 from the stiffness path");
+        // A bending-only equilibrium: stationary, the frame turned about the tangent.
+        let (_, _, comp, stat) = best.fine.optimality().unwrap();
+        assert!(comp < 1e-8 && stat < 1e-8, "{comp:e} {stat:e}");
+        let alpha = holonomy(&best.fine);
+        assert!(alpha.abs() > 1e-2, "holonomy {alpha}");
+        // Route 2: the shrunk loop.
+        let a = 0.9;
+        let (res, _) = crate::solve_robust(
+            1.0,
+            lbar / a,
+            &st,
+            &crate::StartShape::Euler { l: eta },
+            crate::Accuracy::Default,
+            Some(eta),
+            &crate::SolveOptions::default(),
+        )
+        .unwrap();
+        let (m, z) = super::super::solve::start_from_curvature(
+            1.0,
+            lbar,
+            cells / 4,
+            &st,
+            |s| {
+                let k = res.equilibrium.sample_at(&[s]).unwrap()[0];
+                (k / a, -1.0 / a)
+            },
+            [0.0, 0.0, a],
+        )
+        .unwrap();
+        let gmin = m
+            .gaps(&z)
+            .unwrap()
+            .iter()
+            .cloned()
+            .fold(f64::INFINITY, f64::min);
+        assert!(gmin > 0.05, "the shrunk loop touches ({gmin})");
+        let shrunk = solve_enclosed(&m, z, &opts)
+            .ok()
+            .and_then(|s| solve_levels(&s.model, s.z.clone(), None, &opts).ok())
+            .and_then(minimum)
+            .expect("a local minimum from the shrunk loop");
+        println!(
+            "stiffness path {:.10} ± {:.1e} (holonomy {alpha:.4}), shrunk loop {:.10} ± {:.1e}",
+            best.energy, best.energy_error, shrunk.energy, shrunk.energy_error
+        );
+        assert!(
+            best.energy <= shrunk.energy + 3.0 * (best.energy_error + shrunk.energy_error),
+            "the shrunk loop relaxes below the lowest minimum found"
+        );
     }
 }

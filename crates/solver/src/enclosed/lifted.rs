@@ -46,7 +46,7 @@
 
 use nalgebra::{Const, DVector, Matrix3, Matrix4, SMatrix, SVector, Vector3};
 
-use super::model::{tr4, translation, vee_skew3, EnclosedModel};
+use super::model::{tr4, translation, vee_skew3, EnclosedModel, TWIST_ROW};
 use crate::SolverError;
 
 const B: usize = 17;
@@ -424,8 +424,8 @@ impl EnclosedModel {
                 sigma * (radius * radius - r[j].norm_squared()) <= lam[j] + self.pull_impulse(j)
             })
             .collect();
-        let mu = &z[np..np + 6];
-        let kmu = Self::closure_functional(mu);
+        let mu = self.closure_multipliers(z);
+        let kmu = Self::closure_functional(&mu);
         let gauges = self.gauge_rows();
 
         let mut sys = Lifted {
@@ -546,7 +546,7 @@ impl EnclosedModel {
                     for l in 0..6 {
                         d[(M0 + k, X0 + l)] = tr4(&(basis[k] * basis[l] * pn), &kmu);
                     }
-                    for l in 0..6 {
+                    for l in (0..6).filter(|&l| l != TWIST_ROW) {
                         let mut e = [0.0; 6];
                         e[l] = 1.0;
                         let kl = Self::closure_functional(&e);
@@ -557,7 +557,7 @@ impl EnclosedModel {
                 // Closure rows: δF = −(vee skew(hat ω R_N), hat ω p_N + v).
                 for l in 0..6 {
                     let v = vee6(&(basis[l] * pn));
-                    for k in 0..6 {
+                    for k in (0..6).filter(|&k| k != TWIST_ROW) {
                         sys.brow[c][(gmu + k, X0 + l)] = -v[k];
                     }
                 }
@@ -581,6 +581,8 @@ impl EnclosedModel {
         for k in 0..6 {
             rhs.border[gmu + k] = -f[np + k];
         }
+        // The twist row is `μ_twist = 0` ([`TWIST_ROW`]).
+        sys.corner[(gmu + TWIST_ROW, gmu + TWIST_ROW)] = 1.0;
         for (kg, (_, idx)) in gauges.iter().enumerate() {
             rhs.border[gnu + kg] = -f[np + 6 + kg];
             if let Some(i) = idx {

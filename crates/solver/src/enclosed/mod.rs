@@ -5,8 +5,9 @@
 //! needs them: the curvature vector `(κ1, κ2)` in a rotation-minimising (Bishop) frame at
 //! the Gauss points — untwisted isotropic rod, `E = ½∫D(κ1² + κ2²) ds` — plus the start
 //! point; frame and position come from one fourth-order Magnus chain in SE(3)
-//! ([`jet`]), so inextensibility holds by construction and closure is "position and frame
-//! return" (6 equations). The wall is an inequality at the nodes with multipliers `λ ≥ 0`,
+//! ([`jet`]), so inextensibility holds by construction and closure is "position and
+//! tangent return" (5 of the 6 rows of the SE(3) closure; the frame may come back turned
+//! about the tangent, [`model::TWIST_ROW`]). The wall is an inequality at the nodes with multipliers `λ ≥ 0`,
 //! solved by semismooth Newton on `min(λ, σg) = 0` ([`solve`]).
 //!
 //! * [`jet`]: second-order jets and the SE(3) cell propagator.

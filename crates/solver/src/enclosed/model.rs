@@ -18,7 +18,8 @@
 //!
 //! Positions and frames at the nodes `s_j` (cell boundaries) follow from the SE(3) Magnus
 //! chain `P_{c+1} = P_c exp(Θ_c)` ([`super::jet`]), `r_j = r0 + p_j`. Closure of position
-//! and frame, `C = (vee(skew(X_N)), p_N) = 0` (6 equations). The wall
+//! and frame, `C = (vee(skew(X_N)), p_N) = 0`, of which the rotation about the tangent
+//! (row [`TWIST_ROW`]) is free: its row reads `μ_twist = 0` (no twisting moment). The wall
 //! `g_j = R² − |r_j|² ≥ 0` is imposed at the `N` nodes; its multipliers `λ_j ≥ 0` are the
 //! nodal contact impulses (the force per unit length is `λ(s_j) ≈ 2Rλ_j/w_j`, `w_j` the
 //! node's share of the length; Sec. 3.2 with Eq. (38)'s sign: `λ > 0` pushes inward).
@@ -52,6 +53,15 @@ use crate::SolverError;
 
 type M4 = Matrix4<f64>;
 type V3 = Vector3<f64>;
+
+/// The closure row of the rotation about the tangent `t(0)` (the first component of
+/// `vee(skew X_N)`). The rod has no twist energy (paper Sec. 2: pure bending, `M·t = 0`), so
+/// the rotation-minimising frame need not return about the tangent: a space curve's frame
+/// comes back turned by its holonomy (`−∮τ ds` mod 2π; zero on the sphere, Geppert's
+/// theorem, but not for a loop off the wall). Requiring it to return would be a constraint
+/// that carries a twisting moment. So this row of the KKT system is `μ_twist = 0` and the
+/// multiplier does not enter stationarity; closure is position (3) and tangent (2).
+pub const TWIST_ROW: usize = 0;
 
 /// The gauge conditions of an enclosed model (see the module docs).
 #[derive(Clone, Debug, PartialEq)]
@@ -370,13 +380,26 @@ impl EnclosedModel {
             .collect())
     }
 
-    /// Closure residual `(vee(skew X_N), p_N)`.
+    /// Closure residual `(vee(skew X_N), p_N)` with its twist component (about `t(0)`, the
+    /// first) reported as 0: the loop closes when position and tangent return; the
+    /// rotation-minimising frame may come back turned about the tangent (see
+    /// [`TWIST_ROW`]).
     pub fn closure(&self, z: &[f64]) -> Result<[f64; 6], SolverError> {
         let p = self.transforms(z)?;
         let pn = &p[self.cells];
         let v = vee_skew3(pn);
         let t = translation(pn);
-        Ok([v[0], v[1], v[2], t[0], t[1], t[2]])
+        Ok([0.0, v[1], v[2], t[0], t[1], t[2]])
+    }
+
+    /// The closure multipliers `μ` of `z` as they enter stationarity: the twist component
+    /// ([`TWIST_ROW`]) is 0.
+    pub(super) fn closure_multipliers(&self, z: &[f64]) -> [f64; 6] {
+        let np = self.n_primal();
+        let mut mu = [0.0; 6];
+        mu.copy_from_slice(&z[np..np + 6]);
+        mu[TWIST_ROW] = 0.0;
+        mu
     }
 
     /// Dimensional energy, two-point Gauss quadrature of Eq. (2).
@@ -530,9 +553,9 @@ impl EnclosedModel {
         let n = self.cells;
         let r0 = self.start_point(z);
         let lo = self.lambda_offset();
-        let mu = &z[self.n_primal()..self.n_primal() + 6];
+        let mu = self.closure_multipliers(z);
         let mut a = vec![M4::zeros(); n];
-        a[n - 1] = -Self::closure_functional(mu);
+        a[n - 1] = -Self::closure_functional(&mu);
         for c in (0..n - 1).rev() {
             let j = c + 1;
             let r = r0 + translation(&ch.prefix[j]);
@@ -592,6 +615,8 @@ impl EnclosedModel {
             f[np + k] = -v[k];
             f[np + 3 + k] = -t[k];
         }
+        // The twist row: its multiplier is 0 (no twisting moment), see [`TWIST_ROW`].
+        f[np + TWIST_ROW] = z[np + TWIST_ROW];
         // Gauges.
         let nu0 = np + 6;
         let gv = self.gauge_values(z);
@@ -712,13 +737,16 @@ impl EnclosedModel {
         // Closure columns/rows: ∂F_x/∂μ = −∇Cᵀ, F_μ = −C.
         for a in 0..nk {
             for k in 0..3 {
-                jac[(a, np + k)] = -jrot[(k, a)];
-                jac[(np + k, a)] = -jrot[(k, a)];
+                if k != TWIST_ROW {
+                    jac[(a, np + k)] = -jrot[(k, a)];
+                    jac[(np + k, a)] = -jrot[(k, a)];
+                }
                 let t = jp[(3 * (n - 1) + k, a)];
                 jac[(a, np + 3 + k)] = -t;
                 jac[(np + 3 + k, a)] = -t;
             }
         }
+        jac[(np + TWIST_ROW, np + TWIST_ROW)] = 1.0;
         // Gauges.
         let nu0 = np + 6;
         for (k, (row, idx)) in self.gauge_rows().into_iter().enumerate() {
