@@ -453,8 +453,7 @@ pub fn assemble(
     let threads = opts.worker_threads();
     // A state that fails is not reported: its row leaves the table (the warning says why),
     // so every row of `branches.csv` has a verified file.
-    let (mut state_files, state_warnings) =
-        crate::states::verify_all(opts, &mut branches, threads);
+    let (mut state_files, state_warnings) = crate::states::verify_all(opts, &mut branches, threads);
     let unverified_states = state_warnings.len();
     warnings.extend(state_warnings);
     for (b, files) in branches.iter_mut().zip(state_files.iter_mut()) {
