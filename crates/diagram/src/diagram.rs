@@ -448,6 +448,19 @@ pub fn assemble(
         }
     }
 
+    // A two-level estimate `|E_N − E_{N/2}|/15` passes through zero where the discretisation
+    // error changes sign along a sheet, although the error of `E_N` does not vanish there:
+    // each row's estimate is the largest of its own and its neighbours' on the sheet.
+    for b in &mut branches {
+        let own: Vec<Option<f64>> = b.points.iter().map(|p| p.energy_error).collect();
+        for (k, p) in b.points.iter_mut().enumerate() {
+            let around = own[k.saturating_sub(1)..(k + 2).min(own.len())]
+                .iter()
+                .flatten();
+            p.energy_error = p.energy_error.map(|e| around.fold(e, |m, &x| m.max(x)));
+        }
+    }
+
     // Every state verified as its file holds it (rows re-estimated where refined
     // resolutions contradict them), before the labels that compare the energies.
     let threads = opts.worker_threads();
