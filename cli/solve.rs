@@ -240,8 +240,11 @@ pub fn run(args: &Args) -> Result<()> {
     // The start (a --from file above all) carries no branch label: identify the branch of the
     // converged state from its own geodesic curvature and refuse a state of another branch,
     // however it was reached (see rodloop_solver::verify).
-    let periods =
-        identify_equilibrium(eq).context("cannot tell which branch the converged state is on")?;
+    let periods = identify_equilibrium(eq).context(
+        "cannot tell which branch the converged state is on; nothing was written (start from a \
+         state of the requested branch solved at a nearby length with --from, or from the Euler \
+         curve without --from)",
+    )?;
     if periods.eta != eta {
         bail!(
             "the converged state has {} of kappa_g, so it is branch {} (eta = {}), not the requested branch {branch} (eta = {eta}); nothing was written. {}",

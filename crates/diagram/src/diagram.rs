@@ -248,7 +248,7 @@ impl NumericDiagram {
                         lbar: p.value,
                         energy: p.energy,
                         energy_g: p.energy_g,
-                        energy_error: p.energy_error,
+                        energy_error: sheet_estimate(&b.points, k),
                         stability: l,
                         index: p.index,
                         lambda_min: p.lambda_min,
@@ -445,19 +445,6 @@ pub fn assemble(
                 w[1].lbar_cr,
                 w[1].from_branch
             ));
-        }
-    }
-
-    // A two-level estimate `|E_N − E_{N/2}|/15` passes through zero where the discretisation
-    // error changes sign along a sheet, although the error of `E_N` does not vanish there:
-    // each row's estimate is the largest of its own and its neighbours' on the sheet.
-    for b in &mut branches {
-        let own: Vec<Option<f64>> = b.points.iter().map(|p| p.energy_error).collect();
-        for (k, p) in b.points.iter_mut().enumerate() {
-            let around = own[k.saturating_sub(1)..(k + 2).min(own.len())]
-                .iter()
-                .flatten();
-            p.energy_error = p.energy_error.map(|e| around.fold(e, |m, &x| m.max(x)));
         }
     }
 
@@ -763,4 +750,17 @@ fn check_branch(b: &TracedBranch) -> Result<(), DiagramError> {
         }
     }
     Ok(())
+}
+
+/// The energy estimate of row `k` of a sheet: the largest of its own and its neighbours'. A
+/// two-level estimate `|E_N − E_{N/2}|/15` passes through zero where the discretisation
+/// error changes sign along a sheet, although the error of the row does not vanish there.
+fn sheet_estimate(points: &[crate::TracedPoint], k: usize) -> Option<f64> {
+    let own = points[k].energy_error?;
+    Some(
+        points[k.saturating_sub(1)..(k + 2).min(points.len())]
+            .iter()
+            .filter_map(|p| p.energy_error)
+            .fold(own, f64::max),
+    )
 }

@@ -73,6 +73,7 @@ pub mod phase;
 mod placements;
 pub mod refine;
 pub mod representative;
+pub mod sampling;
 mod seed;
 pub mod shapes;
 mod special;

@@ -309,8 +309,8 @@ pub struct EnclosedVerification {
 /// Verify an enclosed state (3-D model, Eqs. (2)–(6) with the wall `|r| ≤ R`) and the points
 /// written for it ([`enclosed_profile`]):
 ///
-/// * **closed**: the frame comes back within [`MAX_HOLONOMY_ANGLE`] of the identity
-///   (tangents close) and the rod's end within [`MAX_HOLONOMY_ANGLE`]` R` of its start
+/// * **closed**: the tangent comes back within [`MAX_HOLONOMY_ANGLE`] of its start (the
+///   frame may come back turned about it: no twisting moment) and the rod's end within [`MAX_HOLONOMY_ANGLE`]` R` of its start
 ///   (positions close), from the model's own transforms;
 /// * **inside the ball**: every written point has `|r| ≤ R (1 + `[`POSITION_SLACK`]`)`;
 /// * **energy**: `(R/π D0) ∮ ½ D |κ|² ds` by the periodic trapezoidal rule on the written
@@ -329,17 +329,16 @@ pub fn verify_enclosed(
     let d0 = m.stiffness().kind().reference();
     let x = m.transforms(&st.z)?;
     let end = &x[m.cells()];
-    let rot = end.fixed_view::<3, 3>(0, 0);
-    let skew = nalgebra::Vector3::new(
-        rot[(2, 1)] - rot[(1, 2)],
-        rot[(0, 2)] - rot[(2, 0)],
-        rot[(1, 0)] - rot[(0, 1)],
-    );
-    let angle = (0.5 * skew.norm()).atan2(0.5 * (rot.trace() - 1.0));
+    // The tangent is the frame's first column; the frame itself may come back
+    // turned about the tangent (no twisting moment, see `enclosed::model::TWIST_ROW`).
+    let tangent =
+        |p: &nalgebra::Matrix4<f64>| nalgebra::Vector3::new(p[(0, 0)], p[(1, 0)], p[(2, 0)]);
+    let (t0, t1) = (tangent(&x[0]), tangent(end));
+    let angle = t0.cross(&t1).norm().atan2(t0.dot(&t1));
     let closing_gap = nalgebra::Vector3::new(end[(0, 3)], end[(1, 3)], end[(2, 3)]).norm() / r;
     if angle.is_nan() || angle > MAX_HOLONOMY_ANGLE {
         return fail(format!(
-            "the rod does not close: its frame comes back turned by {angle:.3e} rad (at most \
+            "the rod does not close: its tangent comes back turned by {angle:.3e} rad (at most \
              {MAX_HOLONOMY_ANGLE:e})"
         ));
     }

@@ -72,7 +72,7 @@ mod nonuniform_special;
 mod trace;
 mod verify;
 
-pub use nonuniform::nonuniform_cells;
+pub use rodloop_solver::enclosed::nonuniform_cells;
 
 use critical::{detached_at, enclosed_crossing, exchange_doublings, label};
 use trace::{circle_point, grid, trace_branch, BranchOut, Levels};

@@ -41,8 +41,8 @@ use std::time::Instant;
 
 use rodloop_exact::branch_of_eta;
 use rodloop_exact::diagram::{Critical, CriticalKind};
-use rodloop_solver::enclosed::{enclosed_cells, solve_branch, EnclosedOptions, SurfaceSource};
-use rodloop_solver::{solve_from_state, Accuracy, SolverError, SurfaceModel};
+use rodloop_solver::enclosed::{nonuniform_cells, solve_branch, EnclosedOptions, SurfaceSource};
+use rodloop_solver::{solve_from_state, SolverError, SurfaceModel};
 
 use super::nonuniform_descent::descend_unstable;
 use super::nonuniform_exchange::{interp, locate_crossing, lowest_at, mean_stiffness, CIRCLE};
@@ -60,12 +60,6 @@ use crate::parallel::run_parallel;
 use crate::states::newton_options;
 use crate::types::TracedBranch;
 use crate::{DiagramError, DiagramOptions};
-
-/// Cells `N` of the lifted-off traces of a non-uniform rod's branch `eta` (levels `N/4,
-/// N/2, N`): `enclosed_cells` but at least `32(2+η)`, so that `N/4` resolves the profile.
-pub fn nonuniform_cells(accuracy: Accuracy, eta: u32) -> usize {
-    enclosed_cells(accuracy, eta).max(32 * (2 + eta as usize))
-}
 
 /// The surface diagram options matching `opts`.
 fn surface_options(opts: &EnclosedDiagramOptions) -> DiagramOptions {

@@ -15,12 +15,12 @@ use rodloop_exact::eta_of_branch;
 use rodloop_solver::enclosed::descent::stiffness_homotopy_states;
 use rodloop_solver::enclosed::solve_levels;
 
-use super::nonuniform::nonuniform_cells;
 use super::nonuniform_exchange::interp;
 use super::nonuniform_sheet::{step_options, SheetOut};
 use super::trace::{follow, Levels};
 use super::EnclosedDiagramOptions;
 use crate::parallel::run_parallel;
+use rodloop_solver::enclosed::nonuniform_cells;
 
 /// Least distance in `L̄` between two lengths searched for one branch: a family found is
 /// traced through all the branch's sampled lengths, so the search needs to meet it once.

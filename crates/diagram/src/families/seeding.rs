@@ -41,7 +41,7 @@ pub(super) type Job = (f64, Seed);
 /// for where none of these converges (a family may fold away before the scene's contrast at
 /// this length, or reach it with another dominant harmonic), the Euler start `l = η` with
 /// the stiffness change `s0*` at the phases `j/(8η)`, `j = 0…3`, of its `κ_g`
-/// ([`crate::certificate::feature_shifts`]; half a period, a shift by half a period is the
+/// ([`crate::sampling::feature_shifts`]; half a period, a shift by half a period is the
 /// reflection `κ_g → −κ_g`, and the profile's mirror symmetry carries them to `s1*`),
 /// solved directly.
 pub(super) fn seed_jobs(stiffness: &Stiffness, eta: u32, l: f64) -> (Vec<Job>, Vec<Job>) {
@@ -53,7 +53,7 @@ pub(super) fn seed_jobs(stiffness: &Stiffness, eta: u32, l: f64) -> (Vec<Job>, V
         .into_iter()
         .map(|sh| (l, Seed::Uniform(sh)))
         .collect();
-    let mut shifts = crate::certificate::feature_shifts(stiffness, eta, &[0, 1, 2, 3], false);
+    let mut shifts = crate::sampling::feature_shifts(stiffness, eta, &[0, 1, 2, 3], false);
     if shifts.is_empty() {
         // A profile without named stiffness changes (a table): the phases at the origin.
         shifts = (0..4)
@@ -81,7 +81,7 @@ pub(super) fn seed_lengths(
     range: (f64, f64),
     circles: &[f64],
 ) -> Vec<Vec<f64>> {
-    let (grid, _) = crate::certificate::sample_lengths(range.0, range.1);
+    let (grid, _) = crate::sampling::sample_lengths(range.0, range.1);
     let counted: Vec<(f64, usize)> = grid
         .into_iter()
         .filter(|l| {
@@ -249,10 +249,10 @@ pub(super) fn robust_seed(
         .map(|eq| eq.state())
 }
 
-/// `true` if `eq` closes ([`crate::certificate::closes`]); an open KKT point (half-turn
+/// `true` if `eq` closes ([`crate::sampling::closes`]); an open KKT point (half-turn
 /// holonomy) is no seed.
 fn open_dropped(eq: &rodloop_solver::Equilibrium, eta: u32, lbar: f64) -> bool {
-    let ok = crate::certificate::closes(eq);
+    let ok = crate::sampling::closes(eq);
     if !ok {
         debug(|| format!("seed of eta {eta} at {lbar}: the loop does not close, dropped"));
     }

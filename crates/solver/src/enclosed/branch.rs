@@ -403,6 +403,12 @@ pub fn enclosed_cells(accuracy: crate::Accuracy, eta: u32) -> usize {
     (c * (1 + eta as usize)).max(32)
 }
 
+/// Cells `N` of the lifted-off traces of a non-uniform rod's branch `eta` (levels `N/4,
+/// N/2, N`): [`enclosed_cells`] but at least `32(2+η)`, so that `N/4` resolves the profile.
+pub fn nonuniform_cells(accuracy: crate::Accuracy, eta: u32) -> usize {
+    enclosed_cells(accuracy, eta).max(32 * (2 + eta as usize))
+}
+
 /// Cells of a single enclosed `solve` for a branch with `eta` periods: `c (1 + η)` with
 /// `c = 16` (fast), `192` (default) or `256` (high). The Newton step is `O(N)`
 /// ([`super::lifted`]), so one state affords the mesh the `≤ 1e-8` target needs with an

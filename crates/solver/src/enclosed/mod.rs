@@ -37,8 +37,8 @@ pub mod solve;
 
 pub use branch::{
     detached_intervals, enclosed_cells, enclosed_solve_cells, four_level_estimate,
-    point_like_contact, solve_branch, solve_levels, three_level_estimate, BranchSolve,
-    SurfaceSource, LIFTED_OFF_MAX_ORDER, POINT_CONTACT_CELLS,
+    nonuniform_cells, point_like_contact, solve_branch, solve_levels, three_level_estimate,
+    BranchSolve, SurfaceSource, LIFTED_OFF_MAX_ORDER, POINT_CONTACT_CELLS,
 };
 pub use from_shape::{start_from_shape, SavedShape};
 pub use model::{EnclosedModel, Gauge};

@@ -779,7 +779,29 @@ impl EnclosedState {
             )
         };
         let (a1, a2) = ext(j % n, 0.0);
-        let (b1, b2) = ext((j + n - 1) % n, 1.0);
+        let (mut b1, mut b2) = ext((j + n - 1) % n, 1.0);
+        let (mut a1, mut a2) = (a1, a2);
+        // At the closing node the two cells' components are in frames that differ by a turn
+        // about the tangent (the frame need not return: no twisting moment, `TWIST_ROW`):
+        // express both in the frame of the node's own end before averaging.
+        if j % n == 0 {
+            if let Ok(x) = self.model.transforms(z) {
+                let col = |m: &nalgebra::Matrix4<f64>, c: usize| {
+                    nalgebra::Vector3::new(m[(0, c)], m[(1, c)], m[(2, c)])
+                };
+                let (d1s, d2s) = (col(&x[0], 1), col(&x[0], 2));
+                let (d1e, d2e) = (col(&x[n], 1), col(&x[n], 2));
+                if j == 0 {
+                    // The last cell's end components into the start frame.
+                    let v = d1e * b1 + d2e * b2;
+                    (b1, b2) = (v.dot(&d1s), v.dot(&d2s));
+                } else {
+                    // The first cell's start components into the end frame.
+                    let v = d1s * a1 + d2s * a2;
+                    (a1, a2) = (v.dot(&d1e), v.dot(&d2e));
+                }
+            }
+        }
         (0.5 * (a1 + b1), 0.5 * (a2 + b2))
     }
 }
