@@ -248,7 +248,7 @@ impl NumericDiagram {
                         lbar: p.value,
                         energy: p.energy,
                         energy_g: p.energy_g,
-                        energy_error: sheet_estimate(&b.points, k),
+                        energy_error: crate::states::sheet_estimate(&b.points, k),
                         stability: l,
                         index: p.index,
                         lambda_min: p.lambda_min,
@@ -750,17 +750,4 @@ fn check_branch(b: &TracedBranch) -> Result<(), DiagramError> {
         }
     }
     Ok(())
-}
-
-/// The energy estimate of row `k` of a sheet: the largest of its own and its neighbours'. A
-/// two-level estimate `|E_N − E_{N/2}|/15` passes through zero where the discretisation
-/// error changes sign along a sheet, although the error of the row does not vanish there.
-fn sheet_estimate(points: &[crate::TracedPoint], k: usize) -> Option<f64> {
-    let own = points[k].energy_error?;
-    Some(
-        points[k.saturating_sub(1)..(k + 2).min(points.len())]
-            .iter()
-            .filter_map(|p| p.energy_error)
-            .fold(own, f64::max),
-    )
 }

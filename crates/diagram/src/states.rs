@@ -360,7 +360,7 @@ impl TracedBranch {
         let mut row: Option<(f64, f64)> = None;
         let mut claim = rodloop_solver::Claim {
             energy: p.energy,
-            energy_error: allowed(p.energy_error),
+            energy_error: allowed(sheet_estimate(&self.points, k)),
             profile_error: 0.0,
             eta: None,
         };
@@ -487,4 +487,17 @@ pub(crate) fn verify_all(
         }
     }
     (files, warnings)
+}
+
+/// The energy estimate of row `k` of a sheet: the largest of its own and its neighbours'. A
+/// two-level estimate `|E_N − E_{N/2}|/15` passes through zero where the discretisation
+/// error changes sign along a sheet, although the error of the row does not vanish there.
+pub(crate) fn sheet_estimate(points: &[crate::TracedPoint], k: usize) -> Option<f64> {
+    let own = points[k].energy_error?;
+    Some(
+        points[k.saturating_sub(1)..(k + 2).min(points.len())]
+            .iter()
+            .filter_map(|p| p.energy_error)
+            .fold(own, f64::max),
+    )
 }
