@@ -88,6 +88,28 @@ fn se3_basis() -> [M4; 6] {
     out
 }
 
+/// The bracket `e m − m e` for a basis element `e` of [`se3_basis`] (at most one entry, ±1,
+/// in each row and each column): its products only pick and sign rows and columns of `m`,
+/// which gives the numbers of the full products (up to the sign of zero entries) without
+/// their multiplications.
+fn bracket(e: &M4, m: &M4) -> M4 {
+    let (mut em, mut me) = (M4::zeros(), M4::zeros());
+    for r in 0..4 {
+        for s in 0..4 {
+            let v = e[(r, s)];
+            if v != 0.0 {
+                debug_assert!(v.abs() == 1.0);
+                for j in 0..4 {
+                    // Row r of e m is v · (row s of m); column s of m e is v · (column r of m).
+                    em[(r, j)] = v * m[(s, j)];
+                    me[(j, s)] = v * m[(j, r)];
+                }
+            }
+        }
+    }
+    em - me
+}
+
 /// `vee` of an `se(3)` matrix: `(ω, v)`.
 fn vee6(m: &M4) -> [f64; 6] {
     let w = vee_skew3(m);
@@ -549,7 +571,7 @@ impl EnclosedModel {
                 }
                 if c >= 1 {
                     for k in 0..6 {
-                        let br = basis[k] * bm[i] - bm[i] * basis[k];
+                        let br = bracket(&basis[k], &bm[i]);
                         sys.low[c][(K0 + i, k)] = tr4(&br, &mc);
                     }
                 }
