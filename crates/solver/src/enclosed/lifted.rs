@@ -36,7 +36,9 @@
 //!
 //! Block LU from the first cell to the last (partial pivoting inside each 17×17 block, no
 //! pivoting across blocks), the border by its Schur complement, then one step of iterative
-//! refinement against the lifted system. `O(N)` work: about `6·10⁴` flops per cell. A
+//! refinement against the lifted system. Only the border columns in use (`10 + gauges`) are
+//! eliminated, and the system, its factors and the solve buffers live in a per-thread
+//! workspace kept across Newton steps. `O(N)` work: about `6·10⁴` flops per cell. A
 //! near-singular pivot block, or a refined residual above `1e-9 |rhs| + 1e-13 max|M| |x|` (the
 //! second term is the round-off floor near convergence, where the right-hand side is tiny), is
 //! reported as [`SolverError::SingularJacobian`] so that the caller can fall back to the dense
