@@ -112,6 +112,21 @@ fn bracket(e: &M4, m: &M4) -> M4 {
     em - me
 }
 
+/// `tr(a b c)` for `b` with a zero last row (a derivative of a cell propagator) and `a` with
+/// zeros in the first three entries of its last row: the numbers of `tr4(&(a * b), c)`
+/// (up to the sign of zeros) without the terms that vanish.
+fn tr_prod(a: &M4, b: &M4, c: &M4) -> f64 {
+    debug_assert!((0..4).all(|j| b[(3, j)] == 0.0) && (0..3).all(|j| a[(3, j)] == 0.0));
+    let mut s = 0.0;
+    for i in 0..3 {
+        for j in 0..4 {
+            let p = a[(i, 0)] * b[(0, j)] + a[(i, 1)] * b[(1, j)] + a[(i, 2)] * b[(2, j)];
+            s += p * c[(j, i)];
+        }
+    }
+    s
+}
+
 /// `vee` of an `se(3)` matrix: `(ω, v)`.
 fn vee6(m: &M4) -> [f64; 6] {
     let w = vee_skew3(m);
@@ -566,7 +581,7 @@ impl EnclosedModel {
                 d[(K0 + i, K0 + i)] += h * self.d_gauss_at(2 * c + i / 2);
                 for i2 in 0..4 {
                     d[(K0 + i, K0 + i2)] +=
-                        tr4(&(pc * jet_dd[i][i2]), &adj[c]) - tr4(&(pd[i] * jet_d[i2]), &adj[c]);
+                        tr_prod(pc, &jet_dd[i][i2], &adj[c]) - tr_prod(&pd[i], &jet_d[i2], &adj[c]);
                 }
                 for k in 0..6 {
                     d[(K0 + i, M0 + k)] = b[i][k];
