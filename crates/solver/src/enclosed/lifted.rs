@@ -36,7 +36,9 @@
 //!
 //! Block LU from the first cell to the last (partial pivoting inside each 17×17 block, no
 //! pivoting across blocks), the border by its Schur complement, then one step of iterative
-//! refinement against the lifted system. `O(N)` work: about `6·10⁴` flops per cell. A
+//! refinement against the lifted system. Only the border columns in use (`10 + gauges`) are
+//! eliminated, and the system, its factors and the solve buffers live in a per-thread
+//! workspace kept across Newton steps. `O(N)` work: about `6·10⁴` flops per cell. A
 //! near-singular pivot block, or a refined residual above `1e-9 |rhs| + 1e-13 max|M| |x|` (the
 //! second term is the round-off floor near convergence, where the right-hand side is tiny), is
 //! reported as [`SolverError::SingularJacobian`] so that the caller can fall back to the dense
@@ -88,6 +90,43 @@ fn se3_basis() -> [M4; 6] {
     out
 }
 
+/// The bracket `e m − m e` for a basis element `e` of [`se3_basis`] (at most one entry, ±1,
+/// in each row and each column): its products only pick and sign rows and columns of `m`,
+/// which gives the numbers of the full products (up to the sign of zero entries) without
+/// their multiplications.
+fn bracket(e: &M4, m: &M4) -> M4 {
+    let (mut em, mut me) = (M4::zeros(), M4::zeros());
+    for r in 0..4 {
+        for s in 0..4 {
+            let v = e[(r, s)];
+            if v != 0.0 {
+                debug_assert!(v.abs() == 1.0);
+                for j in 0..4 {
+                    // Row r of e m is v · (row s of m); column s of m e is v · (column r of m).
+                    em[(r, j)] = v * m[(s, j)];
+                    me[(j, s)] = v * m[(j, r)];
+                }
+            }
+        }
+    }
+    em - me
+}
+
+/// `tr(a b c)` for `b` with a zero last row (a derivative of a cell propagator) and `a` with
+/// zeros in the first three entries of its last row: the numbers of `tr4(&(a * b), c)`
+/// (up to the sign of zeros) without the terms that vanish.
+fn tr_prod(a: &M4, b: &M4, c: &M4) -> f64 {
+    debug_assert!((0..4).all(|j| b[(3, j)] == 0.0) && (0..3).all(|j| a[(3, j)] == 0.0));
+    let mut s = 0.0;
+    for i in 0..3 {
+        for j in 0..4 {
+            let p = a[(i, 0)] * b[(0, j)] + a[(i, 1)] * b[(1, j)] + a[(i, 2)] * b[(2, j)];
+            s += p * c[(j, i)];
+        }
+    }
+    s
+}
+
 /// `vee` of an `se(3)` matrix: `(ω, v)`.
 fn vee6(m: &M4) -> [f64; 6] {
     let w = vee_skew3(m);
@@ -118,8 +157,11 @@ type B6 = SMatrix<f64, B, 6>;
 /// through `−ξ_c` in its forward rows and through the bracket terms `low[c]` in its
 /// stationarity rows (columns `ξ_c` only), and to block `c + 1` through `−δm_{c+1}` in its
 /// backward rows (`U_c = −E_M`, `c ≤ N − 2`). Only `low` is stored.
+#[derive(Default)]
 struct Lifted {
     n: usize,
+    /// Border columns in use (`10 + gauges`); the rest are padding.
+    g: usize,
     diag: Vec<Blk>,
     /// Rows `K` of block `c`, columns `X` of block `c − 1` (`c ≥ 1`; index `c`).
     low: Vec<Low>,
@@ -131,13 +173,20 @@ struct Lifted {
 }
 
 /// Right-hand side or solution of the lifted system.
-#[derive(Clone)]
+#[derive(Clone, Default)]
 struct LVec {
     blocks: Vec<BVec>,
     border: GVec,
 }
 
 impl LVec {
+    /// `n` zero blocks and a zero border, reusing the allocation.
+    fn reset(&mut self, n: usize) {
+        self.blocks.clear();
+        self.blocks.resize(n, BVec::zeros());
+        self.border = GVec::zeros();
+    }
+
     fn norm(&self) -> f64 {
         (self.blocks.iter().map(|b| b.norm_squared()).sum::<f64>() + self.border.norm_squared())
             .sqrt()
@@ -145,6 +194,21 @@ impl LVec {
 }
 
 impl Lifted {
+    /// An all-zero system of `n` cells and `g` border columns, reusing the allocations.
+    fn reset(&mut self, n: usize, g: usize) {
+        self.n = n;
+        self.g = g;
+        self.diag.clear();
+        self.diag.resize(n, Blk::zeros());
+        self.low.clear();
+        self.low.resize(n, Low::zeros());
+        self.bcol.clear();
+        self.bcol.resize(n, BCol::zeros());
+        self.brow.clear();
+        self.brow.resize(n, BRow::zeros());
+        self.corner = GMat::zeros();
+    }
+
     /// `v −= L_c x` for the sub-diagonal block of row `c` (`x` the block `c − 1`).
     fn sub_lower(&self, c: usize, x: &BVec, v: &mut BVec) {
         let xi = x.fixed_rows::<6>(X0);
@@ -157,9 +221,11 @@ impl Lifted {
         }
     }
 
-    fn apply(&self, x: &LVec) -> LVec {
+    /// `out = M x`.
+    fn apply(&self, x: &LVec, out: &mut LVec) {
         let n = self.n;
-        let mut blocks = Vec::with_capacity(n);
+        let blocks = &mut out.blocks;
+        blocks.clear();
         let mut border = self.corner * x.border;
         for c in 0..n {
             let mut y = self.diag[c] * x.blocks[c] + self.bcol[c] * x.border;
@@ -177,7 +243,7 @@ impl Lifted {
             blocks.push(y);
             border += self.brow[c] * x.blocks[c];
         }
-        LVec { blocks, border }
+        out.border = border;
     }
 
     /// Largest entry of the tridiagonal blocks and the corner (the constant off-diagonal
@@ -192,15 +258,19 @@ impl Lifted {
 }
 
 /// Block LU factors of [`Lifted`].
+///
+/// Only the `g` border columns in use are eliminated: the padding columns of `C_c` are zero,
+/// so their eliminated columns are zero as well, and every product below skips them.
+#[derive(Default)]
 struct Factor {
     lu: Vec<nalgebra::LU<f64, Const<B>, Const<B>>>,
     /// `S_c⁻¹ U_c` (its six nonzero columns, the `δm` columns).
     yu: Vec<B6>,
-    /// `S_c⁻¹ C'_c` (border columns after elimination).
+    /// `S_c⁻¹ C'_c` (border columns after elimination; the padding columns stay zero).
     yc: Vec<BCol>,
     /// Border rows after elimination of the earlier blocks.
     rb: Vec<BRow>,
-    corner: nalgebra::LU<f64, Const<G>, Const<G>>,
+    corner: Option<nalgebra::LU<f64, Const<G>, Const<G>>>,
 }
 
 fn pivot_ok(lu: &nalgebra::LU<f64, Const<B>, Const<B>>) -> bool {
@@ -214,14 +284,33 @@ fn pivot_ok(lu: &nalgebra::LU<f64, Const<B>, Const<B>>) -> bool {
     hi > 0.0 && lo.is_finite() && lo > PIVOT_RATIO * hi
 }
 
+/// `Σ_k a[(i, k)] b[(k, j)]`, summed in the order of nalgebra's matrix product (so that
+/// restricting a product to its nonzero rows and columns gives the same numbers).
+#[inline(always)]
+fn dot_rc<const R: usize, const C: usize>(
+    a: &SMatrix<f64, R, B>,
+    i: usize,
+    b: &SMatrix<f64, B, C>,
+    j: usize,
+) -> f64 {
+    let mut acc = a[(i, 0)] * b[(0, j)];
+    for k in 1..B {
+        acc += a[(i, k)] * b[(k, j)];
+    }
+    acc
+}
+
 impl Factor {
-    fn new(sys: &Lifted) -> Result<Self, SolverError> {
+    /// Factor `sys` into `self`, reusing the allocations.
+    fn factor(&mut self, sys: &Lifted) -> Result<(), SolverError> {
         let n = sys.n;
+        let g = sys.g;
         let singular = || SolverError::SingularJacobian { iteration: 0 };
-        let mut lu = Vec::with_capacity(n);
-        let mut yu = Vec::with_capacity(n);
-        let mut yc = Vec::with_capacity(n);
-        let mut rb = Vec::with_capacity(n);
+        self.lu.clear();
+        self.yu.clear();
+        self.yc.clear();
+        self.rb.clear();
+        self.corner = None;
         let mut corner = sys.corner;
         let mut s = sys.diag[0];
         let mut cb = sys.bcol[0];
@@ -241,8 +330,16 @@ impl Factor {
             } else {
                 B6::zeros()
             };
-            let y: BCol = f.solve(&cb).ok_or(singular())?;
-            corner -= r * y;
+            let mut y: BCol = cb;
+            if !f.solve_mut(&mut y.columns_mut(0, g)) {
+                return Err(singular());
+            }
+            // corner −= R_c y (rows and columns past `g` are zero).
+            for j in 0..g {
+                for i in 0..g {
+                    corner[(i, j)] -= dot_rc(&r, i, &y, j);
+                }
+            }
             if c + 1 < n {
                 let low = &sys.low[c + 1];
                 // S_{c+1} = D_{c+1} − L_{c+1} S⁻¹U: only the δm columns change.
@@ -261,7 +358,7 @@ impl Factor {
                 cb = sys.bcol[c + 1];
                 let yx = y.fixed_rows::<6>(X0);
                 let ly = low * yx;
-                for j in 0..cb.ncols() {
+                for j in 0..g {
                     for i in 0..4 {
                         cb[(K0 + i, j)] -= ly[(i, j)];
                     }
@@ -271,61 +368,87 @@ impl Factor {
                 }
                 // R_{c+1} = B_{c+1} − R_c S⁻¹U: only the δm columns change.
                 let mut rn = sys.brow[c + 1];
-                let ru = r * u;
                 for j in 0..6 {
-                    for i in 0..rn.nrows() {
-                        rn[(i, M0 + j)] -= ru[(i, j)];
+                    for i in 0..g {
+                        rn[(i, M0 + j)] -= dot_rc(&r, i, &u, j);
                     }
                 }
-                rb.push(std::mem::replace(&mut r, rn));
+                self.rb.push(std::mem::replace(&mut r, rn));
             } else {
-                rb.push(r);
+                self.rb.push(r);
             }
-            lu.push(f);
-            yu.push(u);
-            yc.push(y);
+            self.lu.push(f);
+            self.yu.push(u);
+            self.yc.push(y);
         }
         let corner = corner.lu();
         if !corner.is_invertible() {
             return Err(singular());
         }
-        Ok(Self {
-            lu,
-            yu,
-            yc,
-            rb,
-            corner,
-        })
+        self.corner = Some(corner);
+        Ok(())
     }
 
-    fn solve(&self, sys: &Lifted, rhs: &LVec) -> Option<LVec> {
+    /// Solve `sys x = rhs` into `x` (`y` a work buffer); false if a pivot is zero.
+    fn solve(&self, sys: &Lifted, rhs: &LVec, y: &mut Vec<BVec>, x: &mut LVec) -> bool {
         let n = sys.n;
-        let mut y = Vec::with_capacity(n);
-        let mut g = rhs.border;
+        let g = sys.g;
+        let Some(corner) = &self.corner else {
+            return false;
+        };
+        y.clear();
+        let mut gb = rhs.border;
         let mut r = rhs.blocks[0];
         for c in 0..n {
-            let yc = self.lu[c].solve(&r)?;
-            g -= self.rb[c] * yc;
+            let Some(yc) = self.lu[c].solve(&r) else {
+                return false;
+            };
+            // gb −= R_c yc (rows past `g` are zero).
+            for i in 0..g {
+                let rb = &self.rb[c];
+                let mut acc = rb[(i, 0)] * yc[0];
+                for k in 1..B {
+                    acc += rb[(i, k)] * yc[k];
+                }
+                gb[i] -= acc;
+            }
             if c + 1 < n {
                 r = rhs.blocks[c + 1];
                 sys.sub_lower(c + 1, &yc, &mut r);
             }
             y.push(yc);
         }
-        let xg = self.corner.solve(&g)?;
-        let mut x = vec![BVec::zeros(); n];
+        let Some(xg) = corner.solve(&gb) else {
+            return false;
+        };
+        x.reset(n);
         for c in (0..n).rev() {
             let mut v = y[c] - self.yc[c] * xg;
             if c + 1 < n {
-                v -= self.yu[c] * x[c + 1].fixed_rows::<6>(M0);
+                v -= self.yu[c] * x.blocks[c + 1].fixed_rows::<6>(M0);
             }
-            x[c] = v;
+            x.blocks[c] = v;
         }
-        Some(LVec {
-            blocks: x,
-            border: xg,
-        })
+        x.border = xg;
+        true
     }
+}
+
+/// Buffers of one Newton step, kept across the steps of a thread (a step of a few hundred
+/// cells assembles and factors about 2 MB).
+#[derive(Default)]
+struct Workspace {
+    sys: Lifted,
+    rhs: LVec,
+    fac: Factor,
+    y: Vec<BVec>,
+    x: LVec,
+    dx: LVec,
+    ax: LVec,
+}
+
+thread_local! {
+    static WORKSPACE: std::cell::RefCell<Workspace> = std::cell::RefCell::new(Workspace::default());
 }
 
 impl EnclosedModel {
@@ -338,38 +461,44 @@ impl EnclosedModel {
         let ch = self.checked_chain(z)?;
         let adj = self.adjoints(&ch, z);
         let f = self.residual_with(&ch, &adj, z);
-        let (sys, rhs) = self.lifted_system(z, &ch, &adj, &f);
-        let fac = Factor::new(&sys)?;
-        let singular = || SolverError::SingularJacobian { iteration: 0 };
-        let mut x = fac.solve(&sys, &rhs).ok_or(singular())?;
-        // One step of iterative refinement against the lifted system.
-        let ax = sys.apply(&x);
-        let res = LVec {
-            blocks: rhs
-                .blocks
-                .iter()
-                .zip(&ax.blocks)
-                .map(|(a, b)| a - b)
-                .collect(),
-            border: rhs.border - ax.border,
-        };
-        let dx = fac.solve(&sys, &res).ok_or(singular())?;
-        for (a, b) in x.blocks.iter_mut().zip(&dx.blocks) {
-            *a += b;
-        }
-        x.border += dx.border;
-        let ax = sys.apply(&x);
-        let mut err = (ax.border - rhs.border).norm_squared();
-        for (a, b) in ax.blocks.iter().zip(&rhs.blocks) {
-            err += (a - b).norm_squared();
-        }
-        let big = sys.amax();
-        let scale = 1e-9 * rhs.norm() + 1e-13 * big * x.norm();
-        let ok = err.sqrt() <= scale.max(1e-300);
-        if !ok {
-            return Err(singular());
-        }
-        Ok((f, self.unlift(&x)))
+        WORKSPACE.with(|w| {
+            let mut w = w.borrow_mut();
+            let w = &mut *w;
+            self.lifted_system(z, &ch, &adj, &f, &mut w.sys, &mut w.rhs);
+            let (sys, rhs) = (&w.sys, &w.rhs);
+            w.fac.factor(sys)?;
+            let singular = || SolverError::SingularJacobian { iteration: 0 };
+            if !w.fac.solve(sys, rhs, &mut w.y, &mut w.x) {
+                return Err(singular());
+            }
+            // One step of iterative refinement against the lifted system.
+            sys.apply(&w.x, &mut w.ax);
+            for (a, b) in w.ax.blocks.iter_mut().zip(&rhs.blocks) {
+                *a = b - *a;
+            }
+            w.ax.border = rhs.border - w.ax.border;
+            if !w.fac.solve(sys, &w.ax, &mut w.y, &mut w.dx) {
+                return Err(singular());
+            }
+            let x = &mut w.x;
+            for (a, b) in x.blocks.iter_mut().zip(&w.dx.blocks) {
+                *a += b;
+            }
+            x.border += w.dx.border;
+            sys.apply(x, &mut w.ax);
+            let ax = &w.ax;
+            let mut err = (ax.border - rhs.border).norm_squared();
+            for (a, b) in ax.blocks.iter().zip(&rhs.blocks) {
+                err += (a - b).norm_squared();
+            }
+            let big = sys.amax();
+            let scale = 1e-9 * rhs.norm() + 1e-13 * big * x.norm();
+            let ok = err.sqrt() <= scale.max(1e-300);
+            if !ok {
+                return Err(singular());
+            }
+            Ok((f, self.unlift(x)))
+        })
     }
 
     /// The step in the model's unknowns from the lifted solution.
@@ -404,7 +533,9 @@ impl EnclosedModel {
         ch: &super::model::Chain,
         adj: &[M4],
         f: &DVector<f64>,
-    ) -> (Lifted, LVec) {
+        sys: &mut Lifted,
+        rhs: &mut LVec,
+    ) {
         let n = self.cells();
         let np = self.n_primal();
         let ng = self.n_gauge();
@@ -428,18 +559,8 @@ impl EnclosedModel {
         let kmu = Self::closure_functional(&mu);
         let gauges = self.gauge_rows();
 
-        let mut sys = Lifted {
-            n,
-            diag: vec![Blk::zeros(); n],
-            low: vec![Low::zeros(); n],
-            bcol: vec![BCol::zeros(); n],
-            brow: vec![BRow::zeros(); n],
-            corner: GMat::zeros(),
-        };
-        let mut rhs = LVec {
-            blocks: vec![BVec::zeros(); n],
-            border: GVec::zeros(),
-        };
+        sys.reset(n, g);
+        rhs.reset(n);
 
         for c in 0..n {
             let (jet_e, jet_d, jet_dd) = (&ch.e[c], &ch.d[c], &ch.dd[c]);
@@ -449,9 +570,9 @@ impl EnclosedModel {
             let mc = ch.prefix[c + 1] * adj[c];
             let h = 0.5 * self.cell_length(c);
             // b_ci and the spatial B_ci.
-            let bm: Vec<M4> = (0..4).map(|i| pc * jet_d[i] * einv * pinv).collect();
-            let b: Vec<[f64; 6]> = bm.iter().map(vee6).collect();
-            let pd: Vec<M4> = (0..4).map(|i| pc * jet_d[i] * einv).collect();
+            let bm: [M4; 4] = std::array::from_fn(|i| pc * jet_d[i] * einv * pinv);
+            let b: [[f64; 6]; 4] = std::array::from_fn(|i| vee6(&bm[i]));
+            let pd: [M4; 4] = std::array::from_fn(|i| pc * jet_d[i] * einv);
             let d = &mut sys.diag[c];
             // Stationarity rows.
             for i in 0..4 {
@@ -460,14 +581,14 @@ impl EnclosedModel {
                 d[(K0 + i, K0 + i)] += h * self.d_gauss_at(2 * c + i / 2);
                 for i2 in 0..4 {
                     d[(K0 + i, K0 + i2)] +=
-                        tr4(&(pc * jet_dd[i][i2]), &adj[c]) - tr4(&(pd[i] * jet_d[i2]), &adj[c]);
+                        tr_prod(pc, &jet_dd[i][i2], &adj[c]) - tr_prod(&pd[i], &jet_d[i2], &adj[c]);
                 }
                 for k in 0..6 {
                     d[(K0 + i, M0 + k)] = b[i][k];
                 }
                 if c >= 1 {
                     for k in 0..6 {
-                        let br = basis[k] * bm[i] - bm[i] * basis[k];
+                        let br = bracket(&basis[k], &bm[i]);
                         sys.low[c][(K0 + i, k)] = tr4(&br, &mc);
                     }
                 }
@@ -603,6 +724,5 @@ impl EnclosedModel {
         } else {
             sys.corner[(gl0, gl0)] = 1.0;
         }
-        (sys, rhs)
     }
 }
