@@ -199,11 +199,18 @@ pub fn verify_state(
 /// sphere of radius `radius`, reference stiffness `d0`) by the periodic trapezoidal rule on
 /// every point and on every other point: `(T_h, T_2h)`.
 pub fn profile_energy(profile: &[ProfilePoint], length: f64, radius: f64, d0: f64) -> (f64, f64) {
-    let n = profile.len();
+    let s: Vec<f64> = profile.iter().map(|p| p.s).collect();
     let density: Vec<f64> = profile
         .iter()
         .map(|p| 0.5 * p.d * p.kappa * p.kappa)
         .collect();
+    periodic_trapezoid(&s, &density, length, radius / (PI * d0))
+}
+
+/// The periodic trapezoidal rule of `density` sampled at arclengths `s` on a loop of
+/// `length`, scaled by `scale`, on every point and on every other point: `(T_h, T_2h)`.
+fn periodic_trapezoid(s: &[f64], density: &[f64], length: f64, scale: f64) -> (f64, f64) {
+    let n = s.len();
     let trapezoid = |step: usize| {
         let idx: Vec<usize> = (0..n).step_by(step).collect();
         let m = idx.len();
@@ -211,15 +218,14 @@ pub fn profile_energy(profile: &[ProfilePoint], length: f64, radius: f64, d0: f6
             .map(|j| {
                 let (a, b) = (idx[j], idx[(j + 1) % m]);
                 let ds = if j + 1 < m {
-                    profile[b].s - profile[a].s
+                    s[b] - s[a]
                 } else {
-                    length + profile[b].s - profile[a].s
+                    length + s[b] - s[a]
                 };
                 0.5 * (density[a] + density[b]) * ds
             })
             .sum::<f64>()
-            * radius
-            / (PI * d0)
+            * scale
     };
     (trapezoid(1), trapezoid(2))
 }
@@ -375,24 +381,8 @@ pub fn verify_enclosed(
         .iter()
         .map(|p| 0.5 * p.d * (p.kappa.0 * p.kappa.0 + p.kappa.1 * p.kappa.1))
         .collect();
-    let trapezoid = |step: usize| {
-        let idx: Vec<usize> = (0..n).step_by(step).collect();
-        let k = idx.len();
-        (0..k)
-            .map(|j| {
-                let (a, b) = (idx[j], idx[(j + 1) % k]);
-                let ds = if j + 1 < k {
-                    pts[b].s - pts[a].s
-                } else {
-                    length + pts[b].s - pts[a].s
-                };
-                0.5 * (density[a] + density[b]) * ds
-            })
-            .sum::<f64>()
-            * r
-            / (PI * d0)
-    };
-    let (fine, coarse) = (trapezoid(1), trapezoid(2));
+    let arc: Vec<f64> = pts.iter().map(|p| p.s).collect();
+    let (fine, coarse) = periodic_trapezoid(&arc, &density, length, r / (PI * d0));
     let energy_tolerance = claim.energy_error.abs()
         + claim.profile_error.abs()
         + (fine - coarse).abs()
