@@ -123,6 +123,26 @@ pub fn run(args: &Args) -> Result<()> {
         _ => None,
     };
     let finest_e = rungs.last().map(|r| r.energy).unwrap_or(f64::NAN);
+    // The finest state, verified as its file holds it against its row (energy and the
+    // estimate from the rung below): states/finest.csv.
+    let n = rungs.len();
+    let finest_estimate =
+        rodloop_solver::richardson_error(rungs[n - 1].energy, rungs[n - 2].energy);
+    let finest_file = prev.as_ref().context("no rung was solved").and_then(|eq| {
+        rodloop_diagram::reported::verify_reported(eq, finest_e, Some(finest_estimate))
+            .map_err(anyhow::Error::from)
+    });
+    let state_name = "states/finest.csv";
+    let (state_file, unverified) = match &finest_file {
+        Ok(_) => (state_name.to_string(), 0),
+        Err(e) => {
+            eprintln!(
+                "warning: UNVERIFIED STATE LEFT WITHOUT A FILE: the finest rung ({} cells): {e:#}",
+                rungs[n - 1].cells
+            );
+            (String::new(), 1)
+        }
+    };
     let reference = exact.unwrap_or(finest_e);
     let mut table = Table::new(
         "converge.csv",
@@ -136,6 +156,7 @@ pub fn run(args: &Args) -> Result<()> {
             "lambda_min",
             "lambda_max",
             "seconds",
+            "state_file",
         ],
     );
     outln!(
@@ -187,6 +208,11 @@ pub fn run(args: &Args) -> Result<()> {
             Cell::F(r.lambda.0),
             Cell::F(r.lambda.1),
             Cell::F(r.seconds),
+            Cell::S(if i + 1 == n {
+                state_file.clone()
+            } else {
+                String::new()
+            }),
         ])?;
         let show = |v: Option<f64>, w: usize| match v {
             Some(x) => format!("{x:>w$.1e}"),
@@ -227,6 +253,8 @@ pub fn run(args: &Args) -> Result<()> {
         "eta": eta,
         "exact_energy": exact,
         "rungs": rows,
+        "state_file": (!state_file.is_empty()).then_some(&state_file),
+        "unverified_states": unverified,
         "accuracy_cells": {"fast": fast, "default": default_cells, "high": [default_cells, 2 * default_cells]},
         "units": "energy E R/(pi D0); lambda in units of D0/R^3; seconds of wall time per solve",
     });
@@ -265,6 +293,10 @@ pub fn run(args: &Args) -> Result<()> {
         460.0,
     );
     let run = OutputRun::begin(&args.out)?;
+    if let Ok(f) = &finest_file {
+        let dir = run.subdir("states")?;
+        crate::states::write_state_file(&dir, state_name, f, scene.radius, stiffness.reference())?;
+    }
     run.write_table(&table)?;
     let figure_note = match fig {
         Ok(svg) => {

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
-use rodloop_diagram::phase::{trace_phase, PhaseDiagram, PhaseSettings, RowSource};
+use rodloop_diagram::phase::{trace_phase, PhaseDiagram, PhaseSettings, RowSource, RowStates};
 use rodloop_figures::raster::svg_to_png;
 use rodloop_solver::{Param, SolveOptions};
 
@@ -71,11 +71,19 @@ pub fn run(args: &Args) -> Result<()> {
         solve: SolveOptions::default(),
     };
     let run = OutputRun::begin(&args.out)?;
-    let diagram =
+    let mut diagram =
         trace_phase(&settings).with_context(|| format!("phase diagram of scene {}", scene.name))?;
+    // Rows whose states fail their verification are left out of every output.
+    let (unverified, mut state_warnings) = drop_unverified(&mut diagram);
+    let (state_files, write_warnings) =
+        write_row_states(&diagram, scene.radius, settings.stiffness.reference(), &run)?;
+    state_warnings.extend(write_warnings);
+    for w in &state_warnings {
+        eprintln!("warning: {w}");
+    }
     let seconds = t0.elapsed().as_secs_f64();
 
-    let table = phase_table(&diagram)?;
+    let table = phase_table(&diagram, &state_files)?;
     let svg = phase_svg(&diagram, &scene.name, (scene.lbar_min, scene.lbar_max));
     let png = svg_to_png(&svg, 1.0).context("rendering phase.png")?;
 
@@ -186,6 +194,9 @@ pub fn run(args: &Args) -> Result<()> {
             "exchange": [s.from, s.to], "value": s.value, "kind": s.kind,
         })).collect::<Vec<_>>(),
         "files": ["phase.csv", "phase.svg", "phase.png"],
+        "states_dir": "states",
+        "unverified_states": unverified,
+        "state_warnings": state_warnings,
         "units": "lbar = L/(2 pi R); energy E R/(pi D0); value: d1 = D1/D0, gamma, or s0, s1 as fractions of L",
     });
     check_finite("summary.json", &summary)?;
@@ -239,8 +250,73 @@ pub(crate) fn brief(text: &str) -> String {
     format!("{} … (full text in summary.json)", limit[..cut].trim_end())
 }
 
-/// `phase.csv`: one row per Maxwell point.
-fn phase_table(d: &PhaseDiagram) -> Result<Table> {
+/// Leave out the rows of `d` whose states failed their verification ([`RowStates`]):
+/// returns the number of states left out (both of each such row) and a warning for each row.
+fn drop_unverified(d: &mut PhaseDiagram) -> (usize, Vec<String>) {
+    let param = d.param;
+    let mut count = 0;
+    let mut warnings = Vec::new();
+    for c in &mut d.curves {
+        let ex = c.exchange;
+        c.rows.retain(|r| match &r.states {
+            RowStates::Unverified(why) => {
+                count += 2;
+                warnings.push(format!(
+                    "UNVERIFIED STATES LEFT OUT: exchange {} -> {} at {param} = {} (L̄_cr = {}): {why}",
+                    ex.from_branch, ex.to_branch, r.value, r.lbar_cr
+                ));
+                false
+            }
+            _ => true,
+        });
+    }
+    (count, warnings)
+}
+
+/// The state files of each row, by curve (see [`write_row_states`]).
+type RowFiles = Vec<Vec<[String; 2]>>;
+
+/// Write the two states of every row into the run's `states/` directory
+/// (`states/curve-C-row-RRR-branch-B.csv`, `RRR` counting the curve's rows of `phase.csv`,
+/// `B` the state's branch): the file names of each row in the order of its `from_branch` and
+/// `to_branch` (empty for the limit row, or where a file could not be written: warnings).
+fn write_row_states(
+    d: &PhaseDiagram,
+    r: f64,
+    d0: f64,
+    run: &OutputRun,
+) -> Result<(RowFiles, Vec<String>)> {
+    let dir = run.subdir("states")?;
+    let mut names = Vec::new();
+    let mut warnings = Vec::new();
+    for (k, c) in d.curves.iter().enumerate() {
+        let mut curve = Vec::new();
+        for (j, row) in c.rows.iter().enumerate() {
+            let mut pair = [String::new(), String::new()];
+            if let RowStates::Verified(files) = &row.states {
+                let branches = [c.exchange.from_branch, c.exchange.to_branch];
+                for ((slot, f), b) in pair.iter_mut().zip(files).zip(branches) {
+                    let name = format!("states/curve-{}-row-{j:03}-branch-{b}.csv", k + 1);
+                    match crate::states::write_state_file(&dir, &name, f, r, d0) {
+                        Ok(()) => *slot = name,
+                        Err(e) => warnings.push(format!("{name} could not be written: {e:#}")),
+                    }
+                }
+                // In the order of the row's own from_branch and to_branch.
+                if row.from_branch != c.exchange.from_branch {
+                    pair.swap(0, 1);
+                }
+            }
+            curve.push(pair);
+        }
+        names.push(curve);
+    }
+    Ok((names, warnings))
+}
+
+/// `phase.csv`: one row per Maxwell point, with the files of its two states (`files[c][r]`,
+/// [`write_row_states`]).
+fn phase_table(d: &PhaseDiagram, files: &[Vec<[String; 2]>]) -> Result<Table> {
     let mut t = Table::new(
         "phase.csv",
         &[
@@ -258,10 +334,14 @@ fn phase_table(d: &PhaseDiagram) -> Result<Table> {
             "index_from",
             "index_to",
             "slope",
+            "energy_error",
+            "state_file_from",
+            "state_file_to",
         ],
     );
     for (k, c) in d.curves.iter().enumerate() {
-        for r in &c.rows {
+        for (j, r) in c.rows.iter().enumerate() {
+            let [from, to] = files[k][j].clone();
             t.push(vec![
                 Cell::S(d.param.name().into()),
                 Cell::F(r.value),
@@ -277,6 +357,9 @@ fn phase_table(d: &PhaseDiagram) -> Result<Table> {
                 Cell::I(r.index.0 as i64),
                 Cell::I(r.index.1 as i64),
                 Cell::F(r.slope),
+                Cell::F(r.energy_error),
+                Cell::S(from),
+                Cell::S(to),
             ])?;
         }
     }

@@ -45,11 +45,7 @@ pub fn write_states(
                 continue;
             };
             let name = file_name(b, k);
-            let file = name.trim_start_matches("states/");
-            let written = crate::solve::config_table_in(&f.profile, r, d0)
-                .and_then(|t| t.to_bytes())
-                .and_then(|bytes| crate::output::write_atomic(&dir, file, &bytes));
-            match written {
+            match write_state_file(&dir, &name, f, r, d0) {
                 Ok(_) => names.push(name),
                 Err(e) => {
                     names.push(String::new());
@@ -59,6 +55,22 @@ pub fn write_states(
         }
     }
     Ok((names, warnings))
+}
+
+/// Write the verified state `f` as `name` (relative to the run's directory, `states/…`) into
+/// `dir` (the run's `states/` directory), in the columns of `solve`'s `config.csv` (units of
+/// the scene's `r` and `d0`): the one writer of every state file of a surface scene.
+pub fn write_state_file(
+    dir: &std::path::Path,
+    name: &str,
+    f: &rodloop_diagram::StateFile,
+    r: f64,
+    d0: f64,
+) -> Result<()> {
+    let file = name.trim_start_matches("states/");
+    let bytes = crate::solve::config_table_in(&f.profile, r, d0)?.to_bytes()?;
+    crate::output::write_atomic(dir, file, &bytes)?;
+    Ok(())
 }
 
 /// `f` over `items` on the available cores, results in the order of `items`.

@@ -1,12 +1,15 @@
-//! Every state file a diagram writes holds the state of its row: for each kind of diagram
-//! (two-segment surface, uniform surface, enclosed), every file named in `branches.csv` is
-//! read back and checked here, independently of rodloop's code: the polyline closes (its
+//! Every state file a command writes holds the state of its row: for each kind of diagram
+//! (two-segment surface, uniform surface, enclosed, `--param`), for `phase` (both states of
+//! each row of `phase.csv`) and for `converge` (the finest rung), every file named in the
+//! command's table is read back and checked here, independently of rodloop's code: the polyline closes (its
 //! closing chord is no longer than the arclength between its last and first points, up to
 //! 1 % of that step for the interpolated points), it lies on the unit sphere (surface) or
 //! inside the unit ball (enclosed), and the energy `(1/π) ∮ ½ D κ² ds` recomputed from the
 //! file by the periodic trapezoidal rule equals the row's `energy` within 5 times the row's
 //! `energy_error` (1e-4 relative where the row has none) plus the rule's own error
-//! `|T_h − T_2h|`. States that fail the diagram's own verification have no file and are
+//! `|T_h − T_2h|`; for the surface commands other than the diagrams in `L̄`, the dominant
+//! harmonic of the written `κ_g` (a DFT here) is also compared with the periods `η` of the
+//! state's branch. States that fail the command's own verification have no file and are
 //! counted in `summary.json` (`unverified_states`).
 
 mod common;
@@ -44,6 +47,74 @@ fn columns(path: &Path, names: &[&str]) -> Vec<Vec<f64>> {
         .collect()
 }
 
+/// The problems of state file `file` (relative to `dir`) of a loop of length `2π lbar`
+/// reported with `energy` and the error estimate `estimate` (see the module docs).
+fn check_file(
+    dir: &Path,
+    file: &str,
+    lbar: f64,
+    energy: f64,
+    estimate: Option<f64>,
+    enclosed: bool,
+) -> Vec<String> {
+    let mut problems = Vec::new();
+    let pts = columns(&dir.join(file), &["s", "x", "y", "z", "kappa", "D"]);
+    let n = pts.len();
+    assert!(n >= 8, "{file}: {n} points");
+    assert!(
+        pts.iter().flatten().all(|v| v.is_finite()),
+        "{file}: a value is not finite"
+    );
+    let length = 2.0 * PI * lbar;
+    let dist = |a: &[f64], b: &[f64]| {
+        ((a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2) + (a[3] - b[3]).powi(2)).sqrt()
+    };
+    let chord = dist(&pts[n - 1], &pts[0]);
+    let arc = length + pts[0][0] - pts[n - 1][0];
+    if !(arc > 0.0 && chord <= arc * 1.01 + 1e-9) {
+        problems.push(format!(
+            "{file}: open, chord {chord:.3e} over arc {arc:.3e}"
+        ));
+    }
+    let worst = pts
+        .iter()
+        .map(|p| (p[1] * p[1] + p[2] * p[2] + p[3] * p[3]).sqrt() - 1.0)
+        .map(|d| if enclosed { d } else { d.abs() })
+        .fold(f64::NEG_INFINITY, f64::max);
+    if worst > 1e-9 {
+        problems.push(format!(
+            "{file}: a point {worst:.3e} R off the sphere or ball"
+        ));
+    }
+    let trap = |step: usize| {
+        let idx: Vec<usize> = (0..n).step_by(step).collect();
+        let m = idx.len();
+        (0..m)
+            .map(|j| {
+                let (a, b) = (&pts[idx[j]], &pts[idx[(j + 1) % m]]);
+                let ds = if j + 1 < m {
+                    b[0] - a[0]
+                } else {
+                    length + b[0] - a[0]
+                };
+                0.25 * (a[5] * a[4] * a[4] + b[5] * b[4] * b[4]) * ds
+            })
+            .sum::<f64>()
+            / PI
+    };
+    let (fine, coarse) = (trap(1), trap(2));
+    let scale = energy.abs().max(1.0);
+    let allowed = estimate.map_or(NO_ESTIMATE * scale, |e| ESTIMATES * e);
+    let tol = allowed + (fine - coarse).abs() + 1e-9 * scale;
+    if (fine - energy).abs() > tol {
+        problems.push(format!(
+            "{file} (L̄ = {lbar}): energy from the file {fine:.10} against {energy:.10} in \
+             its row (tolerance {tol:.1e})"
+        ));
+    }
+    problems
+}
+
 /// Check every state file of the diagram in `dir` against its row (see the module docs);
 /// returns the problems found and the number of files checked.
 fn check_diagram(dir: &Path, enclosed: bool) -> (Vec<String>, usize) {
@@ -71,60 +142,7 @@ fn check_diagram(dir: &Path, enclosed: bool) -> (Vec<String>, usize) {
         let lbar: f64 = row[il].parse().unwrap();
         let energy: f64 = row[ie].parse().unwrap();
         let estimate: Option<f64> = row[ier].trim().parse().ok();
-        let pts = columns(&dir.join(file), &["s", "x", "y", "z", "kappa", "D"]);
-        let n = pts.len();
-        assert!(n >= 8, "{file}: {n} points");
-        assert!(
-            pts.iter().flatten().all(|v| v.is_finite()),
-            "{file}: a value is not finite"
-        );
-        let length = 2.0 * PI * lbar;
-        let dist = |a: &[f64], b: &[f64]| {
-            ((a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2) + (a[3] - b[3]).powi(2)).sqrt()
-        };
-        let chord = dist(&pts[n - 1], &pts[0]);
-        let arc = length + pts[0][0] - pts[n - 1][0];
-        if !(arc > 0.0 && chord <= arc * 1.01 + 1e-9) {
-            problems.push(format!(
-                "{file}: open, chord {chord:.3e} over arc {arc:.3e}"
-            ));
-        }
-        let worst = pts
-            .iter()
-            .map(|p| (p[1] * p[1] + p[2] * p[2] + p[3] * p[3]).sqrt() - 1.0)
-            .map(|d| if enclosed { d } else { d.abs() })
-            .fold(f64::NEG_INFINITY, f64::max);
-        if worst > 1e-9 {
-            problems.push(format!(
-                "{file}: a point {worst:.3e} R off the sphere or ball"
-            ));
-        }
-        let trap = |step: usize| {
-            let idx: Vec<usize> = (0..n).step_by(step).collect();
-            let m = idx.len();
-            (0..m)
-                .map(|j| {
-                    let (a, b) = (&pts[idx[j]], &pts[idx[(j + 1) % m]]);
-                    let ds = if j + 1 < m {
-                        b[0] - a[0]
-                    } else {
-                        length + b[0] - a[0]
-                    };
-                    0.25 * (a[5] * a[4] * a[4] + b[5] * b[4] * b[4]) * ds
-                })
-                .sum::<f64>()
-                / PI
-        };
-        let (fine, coarse) = (trap(1), trap(2));
-        let scale = energy.abs().max(1.0);
-        let allowed = estimate.map_or(NO_ESTIMATE * scale, |e| ESTIMATES * e);
-        let tol = allowed + (fine - coarse).abs() + 1e-9 * scale;
-        if (fine - energy).abs() > tol {
-            problems.push(format!(
-                "{file} (L̄ = {lbar}): energy from the file {fine:.10} against {energy:.10} in \
-                 its row (tolerance {tol:.1e})"
-            ));
-        }
+        problems.extend(check_file(dir, file, lbar, energy, estimate, enclosed));
     }
     (problems, checked)
 }
@@ -185,4 +203,211 @@ fn uniform_diagram_files_hold_their_rows() {
 fn enclosed_diagram_files_hold_their_rows() {
     let sc = scene("homogeneous-enclosed");
     diagram_files_hold_their_rows("enclosed", &["--scene", &sc], true, 50);
+}
+
+/// The periods `η` of a paper branch (1: η = 2, 2: η = 1, B ≥ 3: η = B).
+fn eta_of(branch: u32) -> usize {
+    match branch {
+        1 => 2,
+        2 => 1,
+        b => b as usize,
+    }
+}
+
+/// The dominant harmonic of the `kappa_g` column of a state file (samples uniform in
+/// arclength): the periods `η` of its geodesic curvature, counted here by a plain DFT.
+fn dominant_harmonic(dir: &Path, file: &str) -> usize {
+    let kg: Vec<f64> = columns(&dir.join(file), &["kappa_g"])
+        .into_iter()
+        .map(|r| r[0])
+        .collect();
+    let n = kg.len();
+    (1..n / 2)
+        .map(|k| {
+            let (c, s) = kg.iter().enumerate().fold((0.0, 0.0), |(c, s), (j, v)| {
+                let a = 2.0 * PI * (k * j) as f64 / n as f64;
+                (c + v * a.cos(), s + v * a.sin())
+            });
+            (k, c * c + s * s)
+        })
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap()
+        .0
+}
+
+fn summary(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+}
+
+/// `phase`: both states of every Maxwell-point row are in `states/` (the limit row, an
+/// extrapolation to the uniform rod, has none); each closes, lies on the sphere, has the
+/// row's energy within its estimate, and has as many periods of `κ_g` as its branch.
+#[test]
+fn phase_files_hold_their_rows() {
+    let out = fresh_dir("state-files", "phase");
+    rodloop_ok(&[
+        "phase",
+        "--scene",
+        &scene("inhomogeneous-d1-0.5"),
+        "--param",
+        "d1",
+        "--to",
+        "0.4",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let mut rdr = csv::Reader::from_path(out.join("phase.csv")).unwrap();
+    let head = rdr.headers().unwrap().clone();
+    let col = |n: &str| head.iter().position(|h| h == n).unwrap();
+    let mut problems = Vec::new();
+    let (mut checked, mut rows) = (0, 0);
+    for row in rdr.records() {
+        let row = row.unwrap();
+        let num = |n: &str| row[col(n)].parse::<f64>().unwrap();
+        let files = [
+            row[col("state_file_from")].trim(),
+            row[col("state_file_to")].trim(),
+        ];
+        if &row[col("source")] == "limit" {
+            assert!(
+                files.iter().all(|f| f.is_empty()),
+                "the limit row has files"
+            );
+            continue;
+        }
+        rows += 1;
+        let branches = [num("from_branch") as u32, num("to_branch") as u32];
+        for (file, branch) in files.into_iter().zip(branches) {
+            assert!(!file.is_empty(), "a row without its state files");
+            checked += 1;
+            problems.extend(check_file(
+                &out,
+                file,
+                num("lbar_cr"),
+                num("energy"),
+                Some(num("energy_error")),
+                false,
+            ));
+            let eta = dominant_harmonic(&out, file);
+            if eta != eta_of(branch) {
+                problems.push(format!(
+                    "{file}: κ_g has {eta} periods, branch {branch} has {}",
+                    eta_of(branch)
+                ));
+            }
+        }
+    }
+    assert!(
+        problems.is_empty(),
+        "{} of {checked} state files do not hold their rows:\n{}",
+        problems.len(),
+        problems.join("\n")
+    );
+    assert!(rows >= 10, "only {rows} rows");
+    assert!(summary(&out)["unverified_states"].as_u64().is_some());
+}
+
+/// `converge`: the finest rung's state is in `states/`, holds its row (energy within the
+/// rung's estimate), and has as many periods of `κ_g` as the branch; on a uniform and a
+/// two-segment rod.
+#[test]
+fn converge_finest_file_holds_its_row() {
+    for (name, sc, branch) in [
+        ("converge-uniform", scene("homogeneous-surface"), 2),
+        ("converge-d1-0.5", scene("inhomogeneous-d1-0.5"), 1),
+    ] {
+        let out = fresh_dir("state-files", name);
+        rodloop_ok(&[
+            "converge",
+            "--scene",
+            &sc,
+            "--lbar",
+            "1.3",
+            "--branch",
+            &branch.to_string(),
+            "--levels",
+            "4",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let mut rdr = csv::Reader::from_path(out.join("converge.csv")).unwrap();
+        let head = rdr.headers().unwrap().clone();
+        let col = |n: &str| head.iter().position(|h| h == n).unwrap();
+        let rows: Vec<csv::StringRecord> = rdr.records().map(|r| r.unwrap()).collect();
+        let (last, rest) = rows.split_last().unwrap();
+        assert!(rest.iter().all(|r| r[col("state_file")].is_empty()));
+        let file = last[col("state_file")].trim();
+        assert_eq!(file, "states/finest.csv", "{name}");
+        let problems = check_file(
+            &out,
+            file,
+            1.3,
+            last[col("energy")].parse().unwrap(),
+            Some(last[col("error_estimate")].parse().unwrap()),
+            false,
+        );
+        assert!(problems.is_empty(), "{name}: {}", problems.join("\n"));
+        assert_eq!(dominant_harmonic(&out, file), eta_of(branch), "{name}");
+        assert_eq!(
+            summary(&out)["unverified_states"].as_u64(),
+            Some(0),
+            "{name}"
+        );
+    }
+}
+
+/// `diagram --param`: every traced state is in `states/` and holds its row of
+/// `branches.csv` (energy within its estimate), with as many periods of `κ_g` as its
+/// branch; `unverified_states` counts the states left out.
+#[test]
+fn param_diagram_files_hold_their_rows() {
+    let out = fresh_dir("state-files", "param");
+    rodloop_ok(&[
+        "diagram",
+        "--scene",
+        &scene("inhomogeneous-d1-0.5"),
+        "--param",
+        "d1",
+        "--lbar",
+        "1.3",
+        "--to",
+        "0.01",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let (mut problems, checked) = check_diagram(&out, false);
+    let rows = columns(&out.join("branches.csv"), &["branch"]);
+    assert_eq!(rows.len(), checked, "rows without a file");
+    assert!(checked >= 20, "only {checked} state files");
+    let mut rdr = csv::Reader::from_path(out.join("branches.csv")).unwrap();
+    let head = rdr.headers().unwrap().clone();
+    let (ib, ifile) = (
+        head.iter().position(|h| h == "branch").unwrap(),
+        head.iter().position(|h| h == "state_file").unwrap(),
+    );
+    let iv = head.iter().position(|h| h == "value").unwrap();
+    let mut other = 0;
+    for row in rdr.records() {
+        let row = row.unwrap();
+        let branch: u32 = row[ib].parse().unwrap();
+        let eta = dominant_harmonic(&out, &row[ifile]);
+        let d1: f64 = row[iv].parse().unwrap();
+        if eta != eta_of(branch) {
+            other += 1;
+            // Below D1/D0 = 0.1 the harmonics of the soft segment can dominate (the stiff
+            // one is nearly a geodesic arc): measured 3 periods for branch 1 at d1 < 0.02.
+            if d1 >= 0.1 {
+                problems.push(format!(
+                    "{}: κ_g has {eta} periods, branch {branch} has {}",
+                    &row[ifile],
+                    eta_of(branch)
+                ));
+            }
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+    let s = summary(&out);
+    assert!(s["unverified_states"].as_u64().is_some());
+    // Those are counted in the summary.
+    assert_eq!(s["states_counted_other_eta"].as_u64(), Some(other));
 }

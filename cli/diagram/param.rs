@@ -5,7 +5,7 @@
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
-use rodloop_diagram::param_sweep::{sweep_param, ParamSweep, SweepSettings};
+use rodloop_diagram::param_sweep::{sweep_param, verify_sweep, ParamSweep, SweepSettings};
 use rodloop_diagram::Label;
 use rodloop_figures::plot::{LegendItem, Mark, Plot, Series, Shape};
 use rodloop_figures::raster::svg_to_png;
@@ -37,7 +37,7 @@ pub fn run(args: &Args, param: &str) -> Result<()> {
         bail!("--max-step, --min-step, --max-points and --newton-tol control the tracer of the diagram in L̄; --param uses its own continuation settings");
     }
     if args.shapes > 0 {
-        bail!("--shapes draws the atlas of the diagram in L̄; --param keeps no states to draw (solve one with `rodloop solve`)");
+        bail!("--shapes draws the atlas of the diagram in L̄; --param writes its states to states/ (draw one with `rodloop draw`)");
     }
     let scene = load_scene(args.scene.as_deref())?;
     let stiffness = stiffness_of(&scene.stiffness);
@@ -59,8 +59,31 @@ pub fn run(args: &Args, param: &str) -> Result<()> {
         solve: SolveOptions::default(),
     };
     let run = OutputRun::begin(&args.out)?;
-    let sweep = sweep_param(&settings)
+    let mut sweep = sweep_param(&settings)
         .with_context(|| format!("diagram of scene {} against {param}", scene.name))?;
+    // Every traced state verified as its file holds it; those that fail are left out.
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let checked = verify_sweep(&settings, &sweep, threads);
+    let (states, unverified, state_warnings) = keep_verified(&mut sweep, checked);
+    // States whose written κ_g has another dominant harmonic than their branch's η (a very
+    // soft segment: the branch is the family's, by continuation from its seed).
+    let other_eta: usize = sweep
+        .families
+        .iter()
+        .zip(&states)
+        .map(|(f, v)| {
+            v.iter()
+                .filter(|(_, file)| file.counted_other_eta(f.eta))
+                .count()
+        })
+        .sum();
+    let state_files = write_sweep_states(
+        &sweep,
+        &states,
+        scene.radius,
+        settings.stiffness.reference(),
+        &run,
+    )?;
     let seconds = t0.elapsed().as_secs_f64();
 
     let svg = figure(&sweep, &scene.name, args.width as f64, args.height as f64);
@@ -94,7 +117,7 @@ pub fn run(args: &Args, param: &str) -> Result<()> {
                 .unwrap_or_default()
         );
     }
-    for w in &sweep.warnings {
+    for w in sweep.warnings.iter().chain(&state_warnings) {
         eprintln!("warning: {w}");
     }
     outln!("time {seconds:.2} s");
@@ -120,12 +143,19 @@ pub fn run(args: &Args, param: &str) -> Result<()> {
         })).collect::<Vec<_>>(),
         "special_points": sweep.special,
         "warnings": sweep.warnings,
+        "states_dir": "states",
+        "unverified_states": unverified,
+        "states_counted_other_eta": other_eta,
+        "state_warnings": state_warnings,
         "time_seconds": seconds,
         "units": "energy E R/(pi D0); lbar = L/(2 pi R)",
         "files": ["branches.csv", "special_points.csv", "diagram.svg", "diagram.png", "summary.json"],
     });
     check_finite("summary.json", &summary)?;
-    run.write_bytes("branches.csv", &branches_csv(&sweep)?)?;
+    run.write_bytes(
+        "branches.csv",
+        &branches_csv(&sweep, &states, &state_files)?,
+    )?;
     run.write_table(&special_table(&sweep)?)?;
     run.write_bytes("diagram.svg", svg.as_bytes())?;
     run.write_bytes("diagram.png", &png)?;
@@ -135,9 +165,77 @@ pub fn run(args: &Args, param: &str) -> Result<()> {
     Ok(())
 }
 
+/// The error estimate of each kept state's energy and its verified file
+/// ([`rodloop_diagram::param_sweep::SweepState`]), by family and point.
+type Verified = Vec<Vec<(f64, rodloop_diagram::StateFile)>>;
+
+/// Keep the states of `sweep` that passed their verification (`checked[f][k]` for
+/// `sweep.families[f].points[k]`), drop the others (renumbering `arc`): the kept states'
+/// estimates and files, the number left out, and a warning for each.
+fn keep_verified(
+    sweep: &mut ParamSweep,
+    checked: Vec<Vec<rodloop_diagram::param_sweep::SweepState>>,
+) -> (Verified, usize, Vec<String>) {
+    let param = sweep.param;
+    let mut kept = Vec::new();
+    let mut count = 0;
+    let mut warnings = Vec::new();
+    for (f, results) in sweep.families.iter_mut().zip(checked) {
+        let mut files = Vec::new();
+        let mut points = Vec::new();
+        for (p, r) in std::mem::take(&mut f.points).into_iter().zip(results) {
+            match r {
+                Ok(v) => {
+                    files.push(v);
+                    points.push(p);
+                }
+                Err(why) => {
+                    count += 1;
+                    warnings.push(format!(
+                        "UNVERIFIED STATE LEFT OUT: branch {} family {} at {param} = {}: {why}",
+                        f.branch, f.family, p.value
+                    ));
+                }
+            }
+        }
+        for (i, p) in points.iter_mut().enumerate() {
+            p.arc = i;
+        }
+        f.points = points;
+        kept.push(files);
+    }
+    (kept, count, warnings)
+}
+
+/// Write every kept state into the run's `states/` directory
+/// (`states/branch-B-family-F-KKK.csv`, `KKK` its position along the family): the file of
+/// each point, by family (empty where a file could not be written; the error says which).
+fn write_sweep_states(
+    s: &ParamSweep,
+    states: &Verified,
+    r: f64,
+    d0: f64,
+    run: &OutputRun,
+) -> Result<Vec<Vec<String>>> {
+    let dir = run.subdir("states")?;
+    let mut names = Vec::new();
+    for (f, files) in s.families.iter().zip(states) {
+        let mut fam = Vec::new();
+        for (k, (_, file)) in files.iter().enumerate() {
+            let name = format!("states/branch-{}-family-{}-{k:03}.csv", f.branch, f.family);
+            crate::states::write_state_file(&dir, &name, file, r, d0)
+                .with_context(|| format!("writing {name}"))?;
+            fam.push(name);
+        }
+        names.push(fam);
+    }
+    Ok(names)
+}
+
 /// `branches.csv` by the schema's writer: one row per traced state, the continued parameter
-/// (`param`, `value`) and the fixed length (`lbar`) as the two axes of every point.
-fn branches_csv(s: &ParamSweep) -> Result<Vec<u8>> {
+/// (`param`, `value`) and the fixed length (`lbar`) as the two axes of every point, with
+/// the error estimate of its energy and its state file.
+fn branches_csv(s: &ParamSweep, states: &Verified, files: &[Vec<String>]) -> Result<Vec<u8>> {
     use rodloop_schema::{Axis, Cell as Value, Diagram, Point};
     let axes = vec![
         Axis {
@@ -160,21 +258,25 @@ fn branches_csv(s: &ParamSweep) -> Result<Vec<u8>> {
         "value",
         "lbar",
         "energy",
+        "energy_error",
         "index",
         "stability",
         "arc",
+        "state_file",
     ]
     .iter()
     .map(|c| c.to_string())
     .collect();
-    for f in &s.families {
-        for p in &f.points {
+    for ((f, verified), names) in s.families.iter().zip(states).zip(files) {
+        for ((p, (est, _)), name) in f.points.iter().zip(verified).zip(names) {
             d.points.push(Point {
                 branch: f.branch,
                 eta: f.eta,
                 family: Some(f.family as u32),
                 coords: vec![p.value, s.lbar],
                 energy: p.energy,
+                energy_error: Some(*est),
+                state_file: Some(name.clone()),
                 index: Some(p.index),
                 label: Some(p.label.as_str().into()),
                 extra: [

@@ -45,6 +45,7 @@
 //! | `march.rs` | [`march()`]: the stepping loop (one `Stepper`, any model and parameter) |
 //! | `ends.rs` | the approach to the great-circle ends |
 //! | `states.rs` | quantities of a traced state (Richardson partner, slope, index) |
+//! | `reported.rs` | a state of `phase`, `--param` or `converge` verified as its file holds it |
 //! | `trace.rs` | [`compute_branch`]: seed, march both ways, ends, states |
 //! | `compute.rs` | [`compute`] with its [`BranchHook`] (resume, save) |
 //! | `parallel.rs` | the thread pool |
@@ -72,6 +73,7 @@ pub mod param_sweep;
 pub mod phase;
 mod placements;
 pub mod refine;
+pub mod reported;
 pub mod representative;
 pub mod sampling;
 mod seed;

@@ -70,6 +70,9 @@ pub struct SweepPoint {
     pub label: Label,
     /// Position along the family (0 = the seed).
     pub arc: usize,
+    /// The KKT state (main resolution, at `value`), for [`verify_sweep`].
+    #[serde(skip)]
+    pub state: Vec<f64>,
 }
 
 /// A family: the states of one branch continued from one seed at the scene's value.
@@ -360,6 +363,7 @@ pub fn sweep_param(s: &SweepSettings) -> Result<ParamSweep, DiagramError> {
                     index: at_v.index(x0, INDEX_TOLERANCE)?,
                     label: Label::Unstable,
                     arc: 0,
+                    state: x0.clone(),
                 };
                 // Towards the target, and (seeds inside the range) back towards the scene.
                 let mut marches = Vec::new();
@@ -679,6 +683,7 @@ impl Ctx<'_> {
                 index,
                 label: Label::Unstable,
                 arc: points.len(),
+                state: p.x.clone(),
             });
         }
         let mut add = |kind: &str, x: &[f64], value: f64, index: Option<(usize, usize)>| {
@@ -785,6 +790,58 @@ fn label(families: &mut [SweepFamily]) {
             };
         }
     }
+}
+
+/// A traced state of a sweep as its file holds it: the error estimate of its energy
+/// (`|E_N − E_{N/2}|/15`, the same state at half the resolution) and the file, verified
+/// against its energy within [`crate::ESTIMATES`] times that estimate
+/// ([`crate::reported::verify_reported`]).
+pub type SweepState = Result<(f64, crate::StateFile), String>;
+
+/// Every traced state of `sweep` verified as its file holds it (see [`SweepState`]), in
+/// parallel on `threads` threads: `out[f][k]` for `sweep.families[f].points[k]` (`Err` with
+/// why where a state cannot be re-solved or fails a check).
+pub fn verify_sweep(s: &SweepSettings, sweep: &ParamSweep, threads: usize) -> Vec<Vec<SweepState>> {
+    let jobs: Vec<(usize, usize)> = sweep
+        .families
+        .iter()
+        .enumerate()
+        .flat_map(|(i, f)| (0..f.points.len()).map(move |k| (i, k)))
+        .collect();
+    let newton = SolveOptions {
+        globalization: Globalization::Newton,
+        ..s.solve.clone()
+    };
+    let results = crate::parallel::run_parallel(
+        threads.max(1),
+        jobs.clone(),
+        &mut |_| {},
+        &mut |_| {},
+        |(i, k), _| -> SweepState {
+            let f = &sweep.families[i];
+            let p = &f.points[k];
+            let model = SurfaceModel::new(s.radius, s.lbar, f.cells, &s.stiffness)
+                .and_then(|m| m.with_param(s.param, p.value))
+                .map_err(|e| e.to_string())?;
+            let eq = solve_from_state(model, p.state.clone(), &newton)
+                .map_err(|e| format!("the state cannot be re-solved: {e}"))?;
+            let est = crate::reported::half_resolution_estimate(&eq).map_err(|e| {
+                format!("no state at half the resolution for its error estimate: {e}")
+            })?;
+            let file = crate::reported::verify_reported(&eq, p.energy, Some(est))
+                .map_err(|e| e.to_string())?;
+            Ok((est, file))
+        },
+    );
+    let mut out: Vec<Vec<SweepState>> = sweep
+        .families
+        .iter()
+        .map(|f| Vec::with_capacity(f.points.len()))
+        .collect();
+    for ((i, _), r) in jobs.into_iter().zip(results) {
+        out[i].push(r);
+    }
+    out
 }
 
 #[cfg(test)]

@@ -235,7 +235,7 @@ pub const NO_ESTIMATE_TOLERANCE: f64 = 1e-4;
 pub const MAX_REFINEMENT: usize = 8;
 
 /// A traced state as its file holds it, verified against its row.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct StateFile {
     /// The profile at points uniform in arclength (dimensional, the model's `R` and `D`).
     pub profile: Vec<rodloop_solver::ProfilePoint>,
@@ -286,7 +286,7 @@ fn sampled_energy(
 /// thousandth of `tol` on doubling) or lies within `tol` of `target`: uniform samples of a
 /// graded mesh miss narrow features (a very soft segment bent sharply, a steep stiffness
 /// step).
-fn uniform_profile(
+pub(crate) fn uniform_profile(
     eq: &Equilibrium,
     min_points: usize,
     target: f64,

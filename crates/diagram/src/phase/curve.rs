@@ -455,6 +455,11 @@ fn limit_row(ladder: &[(f64, PhaseRow)], ex: Exchange) -> (PhaseRow, UniformChec
         .map(|(_, r)| r.error_estimate)
         .fold(0.0, f64::max);
     let est = disc + (lim - lim_large).abs();
+    let energy_disc = ladder
+        .iter()
+        .map(|(_, r)| r.energy_error)
+        .fold(0.0, f64::max);
+    let energy_error = energy_disc + (energy_lim - quad(large, |q| q.2)).abs();
     let last = &ladder[n - 1].1;
     let row = PhaseRow {
         value: 1.0,
@@ -467,6 +472,8 @@ fn limit_row(ladder: &[(f64, PhaseRow)], ex: Exchange) -> (PhaseRow, UniformChec
         arm: 0,
         slope: last.slope,
         source: RowSource::Limit,
+        energy_error,
+        states: super::RowStates::None,
     };
     let check = UniformCheck {
         lbar_cr: lim,

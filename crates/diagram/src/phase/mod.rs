@@ -109,6 +109,28 @@ pub struct PhaseRow {
     pub slope: f64,
     /// How the row was obtained.
     pub source: RowSource,
+    /// Estimated error of `energy` as the energy of each of the two states at its own length
+    /// (see [`RowStates`]; for the limit row, from the ladder).
+    pub energy_error: f64,
+    /// The two states, as their files hold them.
+    #[serde(skip)]
+    pub states: RowStates,
+}
+
+/// The two states of a row (those of the exchange's `from_branch` and `to_branch`), each
+/// verified as its file holds it ([`crate::reported::verify_reported`]) against the row's
+/// energy within [`crate::ESTIMATES`] times the row's `energy_error`. The states written are
+/// those of the finer resolution of the row's pair (the main one; the companion for `high`,
+/// at its own `L̄`, which differs from the row's by about its estimate).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum RowStates {
+    /// No states: the limit row (extrapolated to the uniform rod, not a computed state).
+    #[default]
+    None,
+    /// Both states passed: `[from_branch, to_branch]` of [`PhaseCurve::exchange`].
+    Verified(Vec<crate::StateFile>),
+    /// A state could not be re-solved or failed a check (why): the row is not reported.
+    Unverified(String),
 }
 
 /// Why (and where) a curve ends in one direction.

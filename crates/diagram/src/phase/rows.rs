@@ -4,10 +4,11 @@
 use nalgebra::DVector;
 use rodloop_continuation::newton;
 use rodloop_exact::eta_of_branch;
-use rodloop_solver::{Accuracy, Param, SolveOptions};
+use rodloop_solver::{solve_from_state, Accuracy, Globalization, Param, SolveOptions};
 
-use super::{Exchange, PhaseRow, PhaseSettings, RowSource, Tracked};
+use super::{Exchange, PhaseRow, PhaseSettings, RowSource, RowStates, Tracked};
 use crate::maxwell::MaxwellProblem;
+use crate::reported::{half_resolution_estimate, verify_reported};
 use crate::DiagramError;
 
 /// The resolution pair of an accuracy level: `Some(cells factor)` of the companion.
@@ -124,6 +125,13 @@ impl<'a> RowMaker<'a> {
             ),
             _ => (lbar, ea, rodloop_solver::richardson_error(lbar, lc)),
         };
+        // The written states: those of the finer resolution of the pair.
+        let (cp, y) = self.companion.as_ref().expect("set above");
+        let (energy_error, states) = if finer || self.accuracy == Accuracy::High {
+            verified_pair((cp, y), (pb, x), p, energy, self.opts)
+        } else {
+            verified_pair((pb, x), (cp, y), p, energy, self.opts)
+        };
         Ok(PhaseRow {
             value: pb.theta(p),
             lbar_cr,
@@ -135,7 +143,69 @@ impl<'a> RowMaker<'a> {
             arm: t.arm,
             slope,
             source,
+            energy_error,
+            states,
         })
+    }
+}
+
+/// The two states of the Maxwell point `written` at `p` (those of the exchange's
+/// `from_branch` and `to_branch`, at the finer resolution of the row's pair), each verified
+/// as its file holds it against the row's `energy` ([`verify_reported`]), and the error
+/// estimate of that energy as the energy of each state at its length: the largest over the
+/// two of `|energy − E_N| + |E_N − E_M|/15`, `E_N` the state's energy and `E_M` that of the
+/// same state at the pair's other, coarser resolution `M = N/2` (the Maxwell point `other`,
+/// re-solved by Newton at the written state's `L̄`, which differs from its own by about the
+/// estimate of `L̄_cr`; where that fails, the state resampled at half its resolution,
+/// [`half_resolution_estimate`]). For the Richardson-extrapolated rows of `high` the first
+/// term is the extrapolation's step. `(0, Unverified)` where a state cannot be re-solved or
+/// fails a check.
+fn verified_pair(
+    written: (&MaxwellProblem, &DVector<f64>),
+    other: (&MaxwellProblem, &DVector<f64>),
+    p: f64,
+    energy: f64,
+    opts: &SolveOptions,
+) -> (f64, RowStates) {
+    let newton = SolveOptions {
+        globalization: Globalization::Newton,
+        ..opts.clone()
+    };
+    let pair = written
+        .0
+        .equilibria(written.1, p, opts)
+        .map_err(|e| format!("the states cannot be re-solved: {e}"))
+        .and_then(|(a, b)| {
+            let coarse = other.0.equilibria(other.1, p, opts).ok();
+            let mut estimates = Vec::new();
+            for (k, eq) in [&a, &b].into_iter().enumerate() {
+                let here = coarse.as_ref().and_then(|c| {
+                    let o = if k == 0 { &c.0 } else { &c.1 };
+                    o.model()
+                        .with_lbar(eq.lbar())
+                        .and_then(|m| solve_from_state(m, o.state(), &newton))
+                        .ok()
+                });
+                let half = match here {
+                    Some(o) => {
+                        rodloop_solver::richardson_error(eq.energy().total, o.energy().total)
+                    }
+                    None => half_resolution_estimate(eq).map_err(|e| {
+                        format!("no state at another resolution for its error estimate: {e}")
+                    })?,
+                };
+                estimates.push((energy - eq.energy().total).abs() + half);
+            }
+            let error = estimates.iter().copied().fold(0.0, f64::max);
+            let mut files = Vec::new();
+            for (eq, est) in [&a, &b].into_iter().zip(estimates) {
+                files.push(verify_reported(eq, energy, Some(est)).map_err(|e| e.to_string())?);
+            }
+            Ok((error, files))
+        });
+    match pair {
+        Ok((error, files)) => (error, RowStates::Verified(files)),
+        Err(why) => (0.0, RowStates::Unverified(why)),
     }
 }
 
