@@ -1,13 +1,13 @@
 //! Every state file a command writes holds the state of its row: for each kind of diagram
 //! (two-segment surface, uniform surface, enclosed, `--param`), for `phase` (both states of
 //! each row of `phase.csv`) and for `converge` (the finest rung), every file named in the
-//! command's table is read back and checked here, independently of rodloop's code: the polyline closes (its
-//! closing chord is no longer than the arclength between its last and first points, up to
-//! 1 % of that step for the interpolated points), it lies on the unit sphere (surface) or
-//! inside the unit ball (enclosed), and the energy `(1/π) ∮ ½ D κ² ds` recomputed from the
-//! file by the periodic trapezoidal rule equals the row's `energy` within 5 times the row's
-//! `energy_error` (1e-4 relative where the row has none) plus the rule's own error
-//! `|T_h − T_2h|`; for the surface commands other than the diagrams in `L̄`, the dominant
+//! command's table is read back and checked here, independently of rodloop's code: the
+//! polyline closes (its closing chord is no longer than the arclength between its last and
+//! first points, up to 1 % of that step for the interpolated points), it lies on the unit
+//! sphere (surface) or inside the unit ball (enclosed), and the energy `(1/π) ∮ ½ D κ² ds`
+//! recomputed from the file by the periodic trapezoidal rule equals the row's `energy` within
+//! 5 times the row's `energy_error` (1e-4 relative where the row has none) plus the rule's
+//! own error `|T_h − T_2h|`; for the surface commands other than the diagrams in `L̄`, the dominant
 //! harmonic of the written `κ_g` (a DFT here) is also compared with the periods `η` of the
 //! state's branch. States that fail the command's own verification have no file and are
 //! counted in `summary.json` (`unverified_states`).
