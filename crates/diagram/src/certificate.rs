@@ -15,7 +15,7 @@
 use rodloop_exact::branch_of_eta;
 use rodloop_solver::{
     finish_with_accuracy, richardson, solve, verify_accurate, Accuracy, Confinement, Equilibrium,
-    SolveOptions, StartShape, Stiffness, Strategy, SurfaceModel,
+    SolveOptions, StartShape, Stiffness, Strategy,
 };
 use serde::Serialize;
 
@@ -417,7 +417,7 @@ impl StateSearch for SurfaceSearch<'_> {
                 continue;
             }
             let cells = Accuracy::Fast.cells(eta as usize, &opts.stiffness);
-            let Ok(model) = SurfaceModel::new(opts.radius, lbar, cells, &opts.stiffness) else {
+            let Ok(model) = opts.model(lbar, cells) else {
                 continue;
             };
             let first = out.len();

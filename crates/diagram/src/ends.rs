@@ -9,7 +9,7 @@
 //! [`DiagramOptions::end_distance`] from `m` ([`approach_end`]).
 
 use rodloop_continuation::natural::{walk_steps, Halted, StepSettings};
-use rodloop_solver::{solve_from_state, Param, ParamProblem, SolverError, SurfaceModel};
+use rodloop_solver::{Param, ParamProblem, SolverError, SurfaceSolve};
 
 use crate::states::newton_options;
 use crate::DiagramOptions;
@@ -99,8 +99,8 @@ pub(crate) struct Approach {
 /// ([`walk_steps`]): each step tries `ln ½` first, and a failed try is retried with half
 /// the step in `ln a` (the square root of the ratio in `a`), 7 times at most; at most
 /// [`APPROACH_STEPS`] steps.
-pub(crate) fn approach_end(
-    problem: &ParamProblem<SurfaceModel>,
+pub(crate) fn approach_end<M: SurfaceSolve>(
+    problem: &ParamProblem<M>,
     chain: &[(Vec<f64>, f64)],
     m: f64,
     target: f64,
@@ -154,7 +154,7 @@ pub(crate) fn approach_end(
             let pred = predict(&hist, a_of, a_next);
             let eq = problem
                 .model_at(p_next)
-                .and_then(|model| solve_from_state(model, pred, &opts))?;
+                .and_then(|model| model.solve_from_state(pred, &opts))?;
             let s = (eq.state(), p_next);
             hist.push(s.clone());
             out.push(s.clone());

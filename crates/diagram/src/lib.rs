@@ -292,15 +292,43 @@ impl Default for DiagramOptions {
     }
 }
 
+/// A model at `lbar` with `cells` cells and, for uniform stiffness, the phase condition of
+/// the reference `kappa` (Gauss values).
+pub(crate) fn model_with_phase(
+    opts: &DiagramOptions,
+    lbar: f64,
+    cells: usize,
+    kappa: &[f64],
+) -> Result<rodloop_solver::SurfaceModel, SolverError> {
+    let model = opts.model(lbar, cells)?;
+    if opts.stiffness.is_uniform() {
+        model.with_phase(rodloop_solver::Phase::from_gauss_values(kappa, cells)?)
+    } else {
+        Ok(model)
+    }
+}
+
+/// The scene's surface model (sphere radius, length `L̄`, cells, stiffness): the one
+/// place the surface diagram chooses its confinement model. Everything downstream works
+/// through the model seam ([`rodloop_solver::Confinement`], with the surface solvers of
+/// [`rodloop_solver::SurfaceSolve`]).
+pub(crate) fn surface_model(
+    radius: f64,
+    lbar: f64,
+    cells: usize,
+    stiffness: &Stiffness,
+) -> Result<rodloop_solver::SurfaceModel, SolverError> {
+    rodloop_solver::SurfaceModel::new(radius, lbar, cells, stiffness)
+}
+
 impl DiagramOptions {
-    /// The scene's model at length `lbar` with `cells` cells: the one place the surface
-    /// diagram chooses its confinement model.
+    /// The scene's model at length `lbar` with `cells` cells ([`surface_model`]).
     pub fn model(
         &self,
         lbar: f64,
         cells: usize,
     ) -> Result<rodloop_solver::SurfaceModel, SolverError> {
-        rodloop_solver::SurfaceModel::new(self.radius, lbar, cells, &self.stiffness)
+        surface_model(self.radius, lbar, cells, &self.stiffness)
     }
 
     /// The default scene at another accuracy level.

@@ -4,7 +4,7 @@
 //!
 //! A Maxwell point of branches `a` and `b` at the scene parameter `θ` is a length `L̄` at which
 //! both equilibria exist and have the same energy. With the two discretised KKT systems
-//! `F_a(z_a; L̄, θ) = 0`, `F_b(z_b; L̄, θ) = 0` ([`SurfaceModel::kkt_residual`]) the augmented
+//! `F_a(z_a; L̄, θ) = 0`, `F_b(z_b; L̄, θ) = 0` ([`Confinement::residual`]) the augmented
 //! system in `x = (z_a, z_b, L̄)` is
 //!
 //! ```text
@@ -23,7 +23,8 @@
 //!
 //! and a factorisation by bordering ([`Factorization`]): the Jacobian
 //! `[[J_a, 0, F_a,L̄], [0, J_b, F_b,L̄], [∇E_aᵀ, −∇E_bᵀ, E_a,L̄ − E_b,L̄]]` is solved with the
-//! two models' own `O(N)` block factorisations ([`ModelFactor`]) and one scalar Schur
+//! two models' own factorisations ([`Confinement::Factor`], `O(N)` blocks for the surface
+//! model) and one scalar Schur
 //! complement (Govaerts 2000, ch. 3).
 //!
 //! [`trace_phase`](crate::phase::trace_phase) seeds every exchange of the uniform rod that lies in the scene's range just
@@ -41,14 +42,11 @@
 //! resolution (`|L̄_N − L̄_{N/2}|/15`, the scheme converging like `h⁴`; `High`: `N` and `2N`,
 //! Richardson-extrapolated), like the rest of rodloop.
 
-use std::f64::consts::PI;
-
 use nalgebra::{DMatrix, DVector};
 use rodloop_continuation::axis::Axis;
 use rodloop_continuation::{DenseLu, Factorization, Problem};
 use rodloop_solver::{
-    solve_from_state, Confinement, Equilibrium, Globalization, ModelFactor, Param, SolveOptions,
-    SolverError, SurfaceModel,
+    Confinement, Equilibrium, Globalization, Param, SolveOptions, SolverError, SurfaceSolve,
 };
 
 /// Stability tolerance of the monitored indices (eigenvalues of the constrained Hessian
@@ -68,60 +66,49 @@ pub const SEED_OFFSET: f64 = 0.1;
 /// through the three largest.
 pub const LIMIT_OFFSETS: [f64; 4] = [1e-3, 2e-3, 4e-3, 8e-3];
 
-fn energy_scale(model: &SurfaceModel) -> f64 {
-    model.radius() / (PI * model.stiffness().kind().reference())
-}
-
 /// Energy `E R/(π D0)` of the KKT state `z` (Eq. (2), two-point Gauss quadrature).
-pub fn energy(model: &SurfaceModel, z: &[f64]) -> Result<f64, SolverError> {
-    Confinement::energy(model, z)
+pub fn energy<M: Confinement>(model: &M, z: &[f64]) -> Result<f64, SolverError> {
+    model.energy(z)
 }
 
-/// `∂E/∂z` of [`energy`]: `w_a D_a κ_a R/(πD0)` on the curvatures, zero on the multipliers.
-pub fn energy_gradient(model: &SurfaceModel, z: &[f64]) -> Result<DVector<f64>, SolverError> {
-    let (kappa, _, _) = model.split(z)?;
-    let g = model.energy_gradient(kappa)?;
-    let s = energy_scale(model);
-    let mut out = DVector::zeros(model.dim());
-    for (a, v) in g.iter().enumerate() {
-        out[a] = v * s;
-    }
-    Ok(out)
+/// `∂E/∂z` of [`energy`] ([`Confinement::energy_gradient`]): `w_a D_a κ_a R/(πD0)` on the
+/// curvatures, zero on the multipliers.
+pub fn energy_gradient<M: Confinement>(model: &M, z: &[f64]) -> Result<DVector<f64>, SolverError> {
+    model.energy_gradient(z)
 }
 
-/// `∂E/∂θ` of [`energy`] at fixed `z`: `E/L̄` for `lbar` (the weights scale with `L̄`), and
-/// `Σ_a ½ w_a (∂D/∂θ)(σ_a)(κ_a² + 1/R²) R/(πD0)` for a stiffness parameter.
-pub fn energy_dparam(model: &SurfaceModel, z: &[f64], p: Param) -> Result<f64, SolverError> {
-    if p == Param::Lbar {
-        return Ok(energy(model, z)? / model.lbar());
-    }
-    let (kappa, _, _) = model.split(z)?;
-    let kind = model.stiffness().kind();
-    let sigma = model.gauss_sigma();
-    let r2 = 1.0 / (model.radius() * model.radius());
-    let mut acc = 0.0;
-    for (a, (k, s)) in kappa.iter().zip(&sigma).enumerate() {
-        acc += 0.5 * model.cell_weight(a / 2) * kind.dparam(p, *s)? * (k * k + r2);
-    }
-    Ok(acc * energy_scale(model))
+/// `∂E/∂θ` of [`energy`] at fixed `z` ([`Confinement::energy_dparam`]): `E/L̄` for `lbar`
+/// (the weights scale with `L̄`), and `Σ_a ½ w_a (∂D/∂θ)(σ_a)(κ_a² + 1/R²) R/(πD0)` for a
+/// stiffness parameter.
+pub fn energy_dparam<M: Confinement>(model: &M, z: &[f64], p: Param) -> Result<f64, SolverError> {
+    model.energy_dparam(z, p)
+}
+
+/// Assemble `x = (z_a, z_b, L̄)`, the unknowns of a [`MaxwellProblem`].
+pub fn join(za: &[f64], zb: &[f64], lbar: f64) -> DVector<f64> {
+    let mut v = Vec::with_capacity(za.len() + zb.len() + 1);
+    v.extend_from_slice(za);
+    v.extend_from_slice(zb);
+    v.push(lbar);
+    DVector::from_vec(v)
 }
 
 /// The augmented system of a Maxwell point (see the module docs) as a continuation problem
 /// in `p = q(θ)` on the parameter's axis ([`Param::axis`]: `ln θ` for `d1` and `gamma`, `θ`
 /// for `s0` and `s1`).
 #[derive(Clone, Debug)]
-pub struct MaxwellProblem {
-    a: SurfaceModel,
-    b: SurfaceModel,
+pub struct MaxwellProblem<M> {
+    a: M,
+    b: M,
     param: Param,
     axis: Axis,
 }
 
-impl MaxwellProblem {
+impl<M: SurfaceSolve> MaxwellProblem<M> {
     /// The Maxwell point of the states of models `a` and `b` (their own resolutions, same
     /// stiffness profile), continued in `param`. Fails for `lbar` (the length is an unknown)
     /// and for a parameter the profile does not have.
-    pub fn new(a: SurfaceModel, b: SurfaceModel, param: Param) -> Result<Self, SolverError> {
+    pub fn new(a: M, b: M, param: Param) -> Result<Self, SolverError> {
         if param == Param::Lbar {
             return Err(SolverError::InvalidInput(
                 "a Maxwell point is continued in a stiffness parameter (d1, gamma, s0, s1); \
@@ -160,7 +147,7 @@ impl MaxwellProblem {
     }
 
     /// The models of the two branches (cells, mesh).
-    pub fn models(&self) -> (&SurfaceModel, &SurfaceModel) {
+    pub fn models(&self) -> (&M, &M) {
         (&self.a, &self.b)
     }
 
@@ -176,24 +163,12 @@ impl MaxwellProblem {
         Ok((&x[..na], &x[na..na + nb], x[na + nb]))
     }
 
-    /// Assemble `x = (z_a, z_b, L̄)`.
-    pub fn join(za: &[f64], zb: &[f64], lbar: f64) -> DVector<f64> {
-        let mut v = Vec::with_capacity(za.len() + zb.len() + 1);
-        v.extend_from_slice(za);
-        v.extend_from_slice(zb);
-        v.push(lbar);
-        DVector::from_vec(v)
-    }
-
     /// The two models at length `lbar` and continuation variable `p`.
-    pub fn models_at(
-        &self,
-        lbar: f64,
-        p: f64,
-    ) -> Result<(SurfaceModel, SurfaceModel), SolverError> {
+    pub fn models_at(&self, lbar: f64, p: f64) -> Result<(M, M), SolverError> {
         let theta = self.theta(p);
-        let at = |m: &SurfaceModel| -> Result<SurfaceModel, SolverError> {
-            m.with_lbar(lbar)?.with_param(self.param, theta)
+        let at = |m: &M| -> Result<M, SolverError> {
+            m.with_param(Param::Lbar, lbar)?
+                .with_param(self.param, theta)
         };
         Ok((at(&self.a)?, at(&self.b)?))
     }
@@ -221,9 +196,9 @@ impl MaxwellProblem {
     pub fn crossing_slope(&self, x: &DVector<f64>, p: f64) -> Result<(f64, f64, f64), SolverError> {
         let (za, zb, lbar) = self.split(x.as_slice())?;
         let (ma, mb) = self.models_at(lbar, p)?;
-        let slope_of = |m: &SurfaceModel, z: &[f64]| -> Result<(f64, f64), SolverError> {
+        let slope_of = |m: &M, z: &[f64]| -> Result<(f64, f64), SolverError> {
             let f = m.factorize(z, 0.0)?;
-            let dz = Factorization::solve(&f, &m.kkt_dlbar(z)?)
+            let dz = Factorization::solve(&f, &m.dparam(z, Param::Lbar)?)
                 .ok_or(SolverError::SingularJacobian { iteration: 0 })?;
             // dE/dL̄ = ∂E/∂L̄ − ∇E·J⁻¹F_L̄.
             let de = energy_dparam(m, z, Param::Lbar)? - energy_gradient(m, z)?.dot(&dz);
@@ -248,8 +223,8 @@ impl MaxwellProblem {
             ..opts.clone()
         };
         Ok((
-            solve_from_state(ma, za.to_vec(), &newton)?,
-            solve_from_state(mb, zb.to_vec(), &newton)?,
+            ma.solve_from_state(za.to_vec(), &newton)?,
+            mb.solve_from_state(zb.to_vec(), &newton)?,
         ))
     }
 
@@ -264,34 +239,29 @@ impl MaxwellProblem {
         cells_a: usize,
         cells_b: usize,
         opts: &SolveOptions,
-    ) -> Result<(MaxwellProblem, DVector<f64>), SolverError> {
+    ) -> Result<(MaxwellProblem<M>, DVector<f64>), SolverError> {
         let (ea, eb) = self.equilibria(x, p, opts)?;
         let lbar = self.split(x.as_slice())?.2;
-        let redo =
-            |eq: &Equilibrium, cells: usize| -> Result<(SurfaceModel, Vec<f64>), SolverError> {
-                let m = SurfaceModel::new(
-                    eq.model().radius(),
-                    lbar,
-                    cells,
-                    eq.model().stiffness().kind(),
-                )?;
-                if m.dim() != 2 * cells + 3 {
-                    return Err(SolverError::InvalidInput(
-                        "resampling a model with a phase condition".into(),
-                    ));
-                }
-                let mut z = eq.resample(cells)?;
-                z.extend_from_slice(&eq.multiplier());
-                Ok((m, z))
-            };
-        let (ma, za) = redo(&ea, cells_a)?;
-        let (mb, zb) = redo(&eb, cells_b)?;
+        let (at_a, at_b) = self.models_at(lbar, p)?;
+        let redo = |eq: &Equilibrium, at: &M, cells: usize| -> Result<(M, Vec<f64>), SolverError> {
+            let m = at.with_cells(cells)?;
+            if m.dim() != 2 * cells + 3 {
+                return Err(SolverError::InvalidInput(
+                    "resampling a model with a phase condition".into(),
+                ));
+            }
+            let mut z = eq.resample(cells)?;
+            z.extend_from_slice(&eq.multiplier());
+            Ok((m, z))
+        };
+        let (ma, za) = redo(&ea, &at_a, cells_a)?;
+        let (mb, zb) = redo(&eb, &at_b, cells_b)?;
         let problem = MaxwellProblem::new(ma, mb, self.param)?;
-        Ok((problem, MaxwellProblem::join(&za, &zb, lbar)))
+        Ok((problem, join(&za, &zb, lbar)))
     }
 }
 
-impl Problem for MaxwellProblem {
+impl<M: SurfaceSolve> Problem for MaxwellProblem<M> {
     type Error = SolverError;
 
     fn dim(&self) -> usize {
@@ -301,8 +271,8 @@ impl Problem for MaxwellProblem {
     fn residual(&self, x: &DVector<f64>, p: f64) -> Result<DVector<f64>, SolverError> {
         let (za, zb, lbar) = self.split(x.as_slice())?;
         let (ma, mb) = self.models_at(lbar, p)?;
-        let fa = ma.kkt_residual(za)?;
-        let fb = mb.kkt_residual(zb)?;
+        let fa = ma.residual(za)?;
+        let fb = mb.residual(zb)?;
         let mut out = DVector::zeros(self.dim());
         out.rows_mut(0, fa.len()).copy_from(&fa);
         out.rows_mut(fa.len(), fb.len()).copy_from(&fb);
@@ -316,12 +286,12 @@ impl Problem for MaxwellProblem {
         let (na, nb) = self.dims();
         let n = na + nb;
         let mut j = DMatrix::zeros(n + 1, n + 1);
-        j.view_mut((0, 0), (na, na))
-            .copy_from(&ma.kkt_jacobian(za)?);
-        j.view_mut((na, na), (nb, nb))
-            .copy_from(&mb.kkt_jacobian(zb)?);
-        j.view_mut((0, n), (na, 1)).copy_from(&ma.kkt_dlbar(za)?);
-        j.view_mut((na, n), (nb, 1)).copy_from(&mb.kkt_dlbar(zb)?);
+        j.view_mut((0, 0), (na, na)).copy_from(&ma.jacobian(za)?);
+        j.view_mut((na, na), (nb, nb)).copy_from(&mb.jacobian(zb)?);
+        j.view_mut((0, n), (na, 1))
+            .copy_from(&ma.dparam(za, Param::Lbar)?);
+        j.view_mut((na, n), (nb, 1))
+            .copy_from(&mb.dparam(zb, Param::Lbar)?);
         let ga = energy_gradient(&ma, za)?;
         let gb = energy_gradient(&mb, zb)?;
         j.view_mut((n, 0), (1, na)).copy_from(&ga.transpose());
@@ -335,10 +305,8 @@ impl Problem for MaxwellProblem {
         let (ma, mb) = self.models_at(lbar, p)?;
         let (na, nb) = self.dims();
         let mut out = DVector::zeros(na + nb + 1);
-        out.rows_mut(0, na)
-            .copy_from(&ma.kkt_dparam(za, self.param)?);
-        out.rows_mut(na, nb)
-            .copy_from(&mb.kkt_dparam(zb, self.param)?);
+        out.rows_mut(0, na).copy_from(&ma.dparam(za, self.param)?);
+        out.rows_mut(na, nb).copy_from(&mb.dparam(zb, self.param)?);
         out[na + nb] = energy_dparam(&ma, za, self.param)? - energy_dparam(&mb, zb, self.param)?;
         // d/dq = (dθ/dq) d/dθ (θ d/dθ on a log axis).
         Ok(out * self.axis.derivative(p))
@@ -364,9 +332,9 @@ impl Problem for MaxwellProblem {
 /// The augmented Jacobian `[[A, u], [cᵀ, d]]`, `A = diag(J_a, J_b)`, factorised by
 /// bordering: `A` by the two models' block factorisations, then the scalar Schur complement
 /// `s = d − cᵀA⁻¹u`; `det = det J_a · det J_b · s`.
-struct Bordered {
-    fa: ModelFactor,
-    fb: ModelFactor,
+struct Bordered<F> {
+    fa: F,
+    fb: F,
     na: usize,
     nb: usize,
     u: DVector<f64>,
@@ -377,16 +345,20 @@ struct Bordered {
     schur: f64,
 }
 
-impl Bordered {
-    fn new(pb: &MaxwellProblem, x: &DVector<f64>, p: f64) -> Result<Self, SolverError> {
+impl<F: Factorization> Bordered<F> {
+    fn new<M: SurfaceSolve<Factor = F>>(
+        pb: &MaxwellProblem<M>,
+        x: &DVector<f64>,
+        p: f64,
+    ) -> Result<Self, SolverError> {
         let (za, zb, lbar) = pb.split(x.as_slice())?;
         let (ma, mb) = pb.models_at(lbar, p)?;
         let (na, nb) = pb.dims();
         let fa = ma.factorize(za, 0.0)?;
         let fb = mb.factorize(zb, 0.0)?;
         let mut u = DVector::zeros(na + nb);
-        u.rows_mut(0, na).copy_from(&ma.kkt_dlbar(za)?);
-        u.rows_mut(na, nb).copy_from(&mb.kkt_dlbar(zb)?);
+        u.rows_mut(0, na).copy_from(&ma.dparam(za, Param::Lbar)?);
+        u.rows_mut(na, nb).copy_from(&mb.dparam(zb, Param::Lbar)?);
         let mut c = DVector::zeros(na + nb);
         c.rows_mut(0, na).copy_from(&energy_gradient(&ma, za)?);
         c.rows_mut(na, nb).copy_from(&(-energy_gradient(&mb, zb)?));
@@ -425,7 +397,7 @@ impl Bordered {
     }
 }
 
-impl Factorization for Bordered {
+impl<F: Factorization> Factorization for Bordered<F> {
     fn solve(&self, b: &DVector<f64>) -> Option<DVector<f64>> {
         let n = self.na + self.nb;
         if b.len() != n + 1 {

@@ -22,8 +22,8 @@ use rodloop_continuation::axis::Axis;
 use rodloop_continuation::{Direction, SpecialKind};
 use rodloop_exact::{branch_of_eta, eta_of_branch};
 use rodloop_solver::{
-    solve_from_state, Accuracy, Confinement, Globalization, Param, ParamProblem, SolveOptions,
-    SolverError, Stiffness, SurfaceModel,
+    Accuracy, Confinement, Globalization, Param, ParamProblem, SolveOptions, SolverError,
+    Stiffness, SurfaceSolve,
 };
 
 use crate::labels::Label;
@@ -210,8 +210,8 @@ fn check(s: &SweepSettings) -> Result<f64, DiagramError> {
 
 /// The distinct stable states of branch `eta` on `model` from shifted exact loops, lowest
 /// first.
-fn seeds(
-    model: &SurfaceModel,
+fn seeds<M: SurfaceSolve>(
+    model: &M,
     eta: u32,
     opts: &SolveOptions,
 ) -> (Vec<(f64, Vec<f64>)>, Vec<String>) {
@@ -239,8 +239,8 @@ fn seeds(
 
 /// Energy of state `x` of `model` at parameter `value` with the error estimate of the
 /// state at half the resolution (Newton from the resampled state).
-fn energy_with_estimate(
-    model: &SurfaceModel,
+fn energy_with_estimate<M: SurfaceSolve>(
+    model: &M,
     param: Param,
     x: &[f64],
     value: f64,
@@ -251,15 +251,19 @@ fn energy_with_estimate(
         ..opts.clone()
     };
     let m = model.with_param(param, value).map_err(|e| e.to_string())?;
-    let eq = solve_from_state(m, x.to_vec(), &newton).map_err(|e| e.to_string())?;
+    let eq = m
+        .solve_from_state(x.to_vec(), &newton)
+        .map_err(|e| e.to_string())?;
     let e = eq.energy().total;
     let nc = (model.cells() / 2).div_ceil(2) * 2;
-    let coarse = SurfaceModel::new(model.radius(), model.lbar(), nc, model.stiffness().kind())
+    let coarse = model
+        .with_cells(nc)
         .and_then(|m| m.with_param(param, value))
         .map_err(|e| e.to_string())?;
     let mut z = eq.resample(nc).map_err(|e| e.to_string())?;
     z.extend_from_slice(&eq.multiplier());
-    let ec = solve_from_state(coarse, z, &newton)
+    let ec = coarse
+        .solve_from_state(z, &newton)
         .map_err(|e| format!("companion at {nc} cells: {e}"))?
         .energy()
         .total;
@@ -280,7 +284,7 @@ pub fn sweep_param(s: &SweepSettings) -> Result<ParamSweep, DiagramError> {
     for branch in branches {
         let eta = eta_of_branch(branch);
         let cells = s.accuracy.cells(eta as usize, &s.stiffness);
-        let model = SurfaceModel::new(s.radius, s.lbar, cells, &s.stiffness)?;
+        let model = crate::surface_model(s.radius, s.lbar, cells, &s.stiffness)?;
         let cont = Continued {
             model: model.clone(),
             // The parameter's own axis (Param::axis: d1 and gamma in their logarithm).
@@ -581,6 +585,27 @@ impl<M: Confinement> Confinement for Continued<M> {
     fn residual_norm(&self, f: &nalgebra::DVector<f64>) -> f64 {
         Confinement::residual_norm(&self.model, f)
     }
+    fn radius(&self) -> f64 {
+        Confinement::radius(&self.model)
+    }
+    fn lbar(&self) -> f64 {
+        Confinement::lbar(&self.model)
+    }
+    fn cells(&self) -> usize {
+        Confinement::cells(&self.model)
+    }
+    fn stiffness(&self) -> &rodloop_solver::StiffnessProfile {
+        Confinement::stiffness(&self.model)
+    }
+    fn energy_gradient(&self, z: &[f64]) -> Result<nalgebra::DVector<f64>, SolverError> {
+        Confinement::energy_gradient(&self.model, z)
+    }
+    /// `dE/dq = (dθ/dq) ∂E/∂θ`, as [`Confinement::dparam`].
+    fn energy_dparam(&self, z: &[f64], p: Param) -> Result<f64, SolverError> {
+        let d = self.model.energy_dparam(z, p)?;
+        let theta = Confinement::param(&self.model, p)?;
+        Ok(d * self.axis.derivative(self.p_of(theta)))
+    }
 }
 
 /// Parameter values at which states are seeded: the scene's value first, then (for `d1`)
@@ -613,8 +638,8 @@ fn seed_values(param: Param, scene: f64, target: f64) -> Vec<f64> {
 /// the nearer end of each traced step that spans `v` (the steps of a march are short in
 /// arclength, so Newton from its end stays on the family) reaches the same energy (to
 /// [`SAME_STATE`]).
-fn traced(
-    model: &SurfaceModel,
+fn traced<M: SurfaceSolve>(
+    model: &M,
     param: Param,
     known: &[Vec<(f64, Vec<f64>)>],
     v: f64,
@@ -641,7 +666,8 @@ fn traced(
             } else {
                 b
             };
-            solve_from_state(at_v.clone(), start.1.clone(), &newton)
+            at_v.clone()
+                .solve_from_state(start.1.clone(), &newton)
                 .map(|eq| (eq.energy().total - e).abs() < SAME_STATE)
                 .unwrap_or(false)
         })
@@ -649,14 +675,14 @@ fn traced(
 }
 
 /// What the families of one branch share.
-struct Ctx<'a> {
+struct Ctx<'a, M> {
     s: &'a SweepSettings,
-    model: &'a SurfaceModel,
+    model: &'a M,
     branch: u32,
     cells: usize,
 }
 
-impl Ctx<'_> {
+impl<M: SurfaceSolve> Ctx<'_, M> {
     /// The family of a march (with its seed first, when it has one); its folds, branch
     /// points and index changes (energies re-solved with their estimates; one that cannot be
     /// re-solved is left out with a warning).
@@ -820,10 +846,11 @@ pub fn verify_sweep(s: &SweepSettings, sweep: &ParamSweep, threads: usize) -> Ve
         |(i, k), _| -> SweepState {
             let f = &sweep.families[i];
             let p = &f.points[k];
-            let model = SurfaceModel::new(s.radius, s.lbar, f.cells, &s.stiffness)
+            let model = crate::surface_model(s.radius, s.lbar, f.cells, &s.stiffness)
                 .and_then(|m| m.with_param(s.param, p.value))
                 .map_err(|e| e.to_string())?;
-            let eq = solve_from_state(model, p.state.clone(), &newton)
+            let eq = model
+                .solve_from_state(p.state.clone(), &newton)
                 .map_err(|e| format!("the state cannot be re-solved: {e}"))?;
             let est = crate::reported::half_resolution_estimate(&eq).map_err(|e| {
                 format!("no state at half the resolution for its error estimate: {e}")
@@ -859,7 +886,7 @@ mod tests {
             s1: 0.8,
             gamma: 12.0,
         };
-        let model = SurfaceModel::new(1.0, 1.4, 12, &st).unwrap();
+        let model = crate::surface_model(1.0, 1.4, 12, &st).unwrap();
         // A non-equilibrium state: the exact loop of two periods, arbitrary multipliers.
         let mut z = rodloop_solver::StartShape::Exact { eta: 2 }
             .gauss_values(&model)

@@ -10,8 +10,8 @@
 
 use rodloop_solver::identify::identify_equilibrium;
 use rodloop_solver::{
-    solve, Confinement, Equilibrium, Globalization, SolveOptions, SolverError, StartShape,
-    Stiffness, SurfaceModel,
+    Confinement, Equilibrium, Globalization, SolveOptions, SolverError, StartShape, Stiffness,
+    SurfaceSolve,
 };
 
 /// The shift of start `k` (eighths of `1/(2η)`).
@@ -21,8 +21,8 @@ pub(crate) fn shift_of(eta: u32, k: u32) -> f64 {
 
 /// Solve `model` from the exact loop of `eta` periods shifted by [`shift_of`]`(eta, k)`,
 /// with energy minimisation where the start is far ([`Globalization::Auto`]).
-pub(crate) fn solve_shifted(
-    model: &SurfaceModel,
+pub(crate) fn solve_shifted<M: SurfaceSolve>(
+    model: &M,
     eta: u32,
     k: u32,
     opts: &SolveOptions,
@@ -33,8 +33,8 @@ pub(crate) fn solve_shifted(
     };
     StartShape::Exact { eta }
         .shifted(model.lbar(), shift_of(eta, k))
-        .and_then(|st| st.gauss_values(model))
-        .and_then(|z| solve(model, &z, &auto))
+        .and_then(|st| model.start_values(&st))
+        .and_then(|z| model.solve(&z, &auto))
 }
 
 /// What a solve reached: whether it has `eta` periods, its stability index (tolerance

@@ -92,8 +92,8 @@ impl BranchRefiner {
     /// Extrapolated energy and slope at the current length.
     pub fn values(&self) -> Result<Refined, SolverError> {
         let (ef, ec) = (self.fine.energy().total, self.coarse.energy().total);
-        let sf = energy_slope(self.fine.model(), &self.fine.state())?;
-        let sc = energy_slope(self.coarse.model(), &self.coarse.state())?;
+        let sf = energy_slope(&self.fine)?;
+        let sc = energy_slope(&self.coarse)?;
         let energy = rodloop_solver::richardson(ef, ec);
         let slope = rodloop_solver::richardson(sf, sc);
         Ok(Refined { energy, slope })

@@ -1,8 +1,6 @@
 //! Seeding a branch from the Euler rotation curves.
 
-use rodloop_solver::{
-    solve, Equilibrium, Globalization, SolveOptions, SolverError, StartShape, SurfaceModel,
-};
+use rodloop_solver::{solve, Equilibrium, Globalization, SolveOptions, SolverError, StartShape};
 
 use crate::{DiagramError, DiagramOptions};
 
@@ -16,7 +14,7 @@ pub(crate) fn seed_at(
     lbar: f64,
 ) -> Result<(Equilibrium, String), DiagramError> {
     let seed_err = |source: SolverError| DiagramError::Seed { eta, lbar, source };
-    let model = SurfaceModel::new(opts.radius, lbar, cells, &opts.stiffness).map_err(seed_err)?;
+    let model = opts.model(lbar, cells).map_err(seed_err)?;
     let start = StartShape::Euler { l: eta }
         .gauss_values(&model)
         .map_err(seed_err)?;

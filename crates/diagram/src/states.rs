@@ -7,8 +7,8 @@
 use std::f64::consts::PI;
 
 use rodloop_solver::{
-    solve, solve_from_state, Confinement, Equilibrium, Globalization, Param, ParamProblem, Phase,
-    SolveOptions, SolverError, SurfaceModel,
+    solve, Confinement, Equilibrium, Globalization, Param, ParamProblem, SolveOptions, SolverError,
+    SurfaceSolve,
 };
 
 use crate::march::MarchPoint;
@@ -19,21 +19,7 @@ use crate::DiagramOptions;
 /// default, [`rodloop_solver::StabilityOptions`]).
 pub(crate) const INDEX_TOLERANCE: f64 = 1e-6;
 
-/// A model at `lbar` with `cells` cells and, for uniform stiffness, the phase condition of
-/// the reference `kappa` (Gauss values).
-pub(crate) fn model_with_phase(
-    opts: &DiagramOptions,
-    lbar: f64,
-    cells: usize,
-    kappa: &[f64],
-) -> Result<SurfaceModel, SolverError> {
-    let model = SurfaceModel::new(opts.radius, lbar, cells, &opts.stiffness)?;
-    if opts.stiffness.is_uniform() {
-        model.with_phase(Phase::from_gauss_values(kappa, cells)?)
-    } else {
-        Ok(model)
-    }
-}
+pub(crate) use crate::model_with_phase;
 
 /// Newton options for re-solving known states.
 pub(crate) fn newton_options() -> SolveOptions {
@@ -47,7 +33,8 @@ pub(crate) fn newton_options() -> SolveOptions {
 /// `dE/dL̄` along the branch at the KKT state `z` (normalised as `E R/(π D0)`):
 /// `dE/dL̄ = ∂E/∂L̄ + ∇E·κ̇ = E/L̄ + μ·(∂(−c)/∂L̄)`, because `∇E = ∇cᵀμ + ν∇φ`,
 /// `∇c κ̇ = −∂c/∂L̄` and `∇φ κ̇ = 0` (the phase condition does not depend on `L̄`).
-pub(crate) fn energy_slope(model: &SurfaceModel, z: &[f64]) -> Result<f64, SolverError> {
+pub(crate) fn energy_slope(eq: &Equilibrium) -> Result<f64, SolverError> {
+    let (model, z) = (eq.model(), &eq.state());
     let (kappa, mu, _) = model.split(z)?;
     let e = model.energy(kappa)?;
     let d = model.kkt_dlbar(z)?;
@@ -58,14 +45,14 @@ pub(crate) fn energy_slope(model: &SurfaceModel, z: &[f64]) -> Result<f64, Solve
 
 /// Quantities of a traced state: equilibrium at the tracing resolution (Newton check),
 /// Richardson partner at half the resolution, slope, forces, index.
-pub(crate) fn finish_point(
+pub(crate) fn finish_point<M: SurfaceSolve>(
     opts: &DiagramOptions,
-    problem: &ParamProblem<SurfaceModel>,
+    problem: &ParamProblem<M>,
     raw: &MarchPoint,
 ) -> Option<TracedPoint> {
     let eq = match problem
         .model_at(raw.value)
-        .and_then(|m| solve_from_state(m, raw.x.clone(), &newton_options()))
+        .and_then(|m| m.solve_from_state(raw.x.clone(), &newton_options()))
     {
         Ok(eq) => eq,
         Err(_) => return None,
@@ -73,7 +60,7 @@ pub(crate) fn finish_point(
     let z = eq.state();
     let en = eq.energy();
     let (lmin, lmax) = eq.lambda_range();
-    let slope = energy_slope(eq.model(), &z).unwrap_or(f64::NAN);
+    let slope = energy_slope(&eq).unwrap_or(f64::NAN);
     let amplitude = eq
         .kappa()
         .iter()
@@ -148,7 +135,7 @@ impl TracedBranch {
         opts: &DiagramOptions,
         lbar: f64,
         state: &[f64],
-    ) -> Result<SurfaceModel, SolverError> {
+    ) -> Result<impl SurfaceSolve, SolverError> {
         model_with_phase(opts, lbar, self.cells, &state[..2 * self.cells])
     }
 
@@ -187,7 +174,7 @@ impl TracedBranch {
             tolerance: 1e-8,
             ..newton_options()
         };
-        solve_from_state(model, p.state.clone(), &accept)
+        model.solve_from_state(p.state.clone(), &accept)
     }
 
     /// The equilibrium of this branch at `lbar` at the tracing resolution (Newton from the
@@ -208,7 +195,7 @@ impl TracedBranch {
             });
         }
         let model = self.model_for(opts, lbar, &z)?;
-        solve_from_state(model, z, &newton_options())
+        model.solve_from_state(z, &newton_options())
     }
 }
 

@@ -22,7 +22,7 @@
 use std::time::Instant;
 
 use rodloop_exact::branch_of_eta;
-use rodloop_solver::{Confinement, Param, ParamProblem, SurfaceModel};
+use rodloop_solver::{Confinement, Param, ParamProblem, SurfaceSolve};
 
 use crate::ends::{approach_end, end_specs, EndSpec, SWITCH_DISTANCE};
 use crate::march::{march, FoldPolicy, MarchPoint, MarchSettings, MarchStop};
@@ -220,19 +220,26 @@ pub fn compute_branch(
 }
 
 /// What both directions of a trace share.
-#[derive(Clone, Copy)]
-struct SideContext<'a> {
+struct SideContext<'a, M> {
     opts: &'a DiagramOptions,
-    problem: &'a ParamProblem<SurfaceModel>,
+    problem: &'a ParamProblem<M>,
     x0: &'a [f64],
     p0: f64,
     eta: u32,
 }
 
+// Copy for every model type (the context holds references only).
+impl<M> Clone for SideContext<'_, M> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<M> Copy for SideContext<'_, M> {}
+
 /// Trace from the seed towards one end (`side = −1`: decreasing `L̄`): the march, then the
 /// end approach, and the record of how the end came about.
-fn trace_side(
-    ctx: &SideContext<'_>,
+fn trace_side<M: SurfaceSolve>(
+    ctx: &SideContext<'_, M>,
     spec: EndSpec,
     side: f64,
     progress: &mut dyn FnMut(Progress),

@@ -60,7 +60,7 @@ pub use mesh::MeshMap;
 pub use model::{Phase, SurfaceModel};
 pub use param::Param;
 pub use robust::{solve_robust, solve_robust_verified, solve_robust_with, Fallbacks, Strategy};
-pub use seam::{Confinement, Inertia, ModelFactor, ParamProblem};
+pub use seam::{Confinement, Inertia, ModelFactor, ParamProblem, SurfaceSolve};
 pub use solve::{
     solve, solve_from_state, ConvergenceReport, EnergyReport, Equilibrium, Globalization,
     ProfilePoint, SolveOptions,

@@ -13,9 +13,12 @@ use rodloop_continuation::Factorization;
 use crate::kkt::KktFactor;
 use crate::model::SurfaceModel;
 use crate::param::Param;
+use crate::solve::{Equilibrium, SolveOptions};
+use crate::start::StartShape;
+use crate::stiffness::StiffnessProfile;
 use crate::SolverError;
 
-/// A confinement model (surface today; enclosed loops next). Implementations must keep
+/// A confinement model (the surface model and the enclosed one). Implementations must keep
 /// every method consistent with [`Confinement::residual`]: the Jacobian, the factorised
 /// Jacobian and the parameter derivatives are its exact derivatives (tests compare them
 /// with finite differences).
@@ -49,6 +52,48 @@ pub trait Confinement: Clone + Send + Sync {
     fn energy(&self, z: &[f64]) -> Result<f64, SolverError>;
     /// Resolution-independent norm of a residual (convergence tests).
     fn residual_norm(&self, f: &DVector<f64>) -> f64;
+    /// Radius `R` of the sphere (surface) or of the ball (enclosed).
+    fn radius(&self) -> f64;
+    /// Normalised length `L̄ = L/(2πR)` (the value of [`Param::Lbar`]).
+    fn lbar(&self) -> f64;
+    /// Number of cells of the discretisation.
+    fn cells(&self) -> usize;
+    /// The validated bending-stiffness profile `D(σ)` (uniform, or Eq. (51)).
+    fn stiffness(&self) -> &StiffnessProfile;
+    /// `∂E/∂z` of [`Confinement::energy`] (Eq. (2) by two-point Gauss quadrature,
+    /// normalised as `E R/(π D0)`): `w_a D_a κ_a` on the curvature unknowns, zero on the
+    /// others (the energy depends on the shape only through the curvatures).
+    fn energy_gradient(&self, z: &[f64]) -> Result<DVector<f64>, SolverError>;
+    /// `∂E/∂θ` of [`Confinement::energy`] at fixed `z`: `E/L̄` for [`Param::Lbar`] (every
+    /// quadrature weight is proportional to `L̄` at fixed `σ = s/L`), and
+    /// `Σ_a ½ w_a (∂D/∂θ)(σ_a) |κ_a|²` (normalised) for a stiffness parameter of Eq. (51).
+    fn energy_dparam(&self, z: &[f64], p: Param) -> Result<f64, SolverError>;
+}
+
+/// What the surface diagram asks of a model beyond [`Confinement`]: its own solvers, which
+/// return the surface state [`Equilibrium`] (geodesic curvature `κ_g` at the Gauss points of
+/// the cells, Appendix A), start shapes sampled at those points, and the same scene at
+/// another resolution. [`SurfaceModel`] implements it; an enclosed state carries 3-D
+/// positions and contacts and has a solver of its own
+/// ([`crate::enclosed::solve_enclosed`]).
+pub trait SurfaceSolve: Confinement {
+    /// The globalised solve ([`crate::solve::solve`]) from the Gauss values `start` of `κ_g`.
+    fn solve(&self, start: &[f64], opts: &SolveOptions) -> Result<Equilibrium, SolverError>;
+    /// Newton's method from a full KKT state `z0` ([`crate::solve_from_state`]).
+    fn solve_from_state(
+        self,
+        z0: Vec<f64>,
+        opts: &SolveOptions,
+    ) -> Result<Equilibrium, SolverError>;
+    /// The Gauss values of `κ_g` of a start shape ([`StartShape::gauss_values`]).
+    fn start_values(&self, start: &StartShape) -> Result<Vec<f64>, SolverError>;
+    /// `σ = s/L` of the Gauss points, one per curvature unknown.
+    fn gauss_sigma(&self) -> Vec<f64>;
+    /// Quadrature weight `h_c/2` of the Gauss points of cell `c`.
+    fn cell_weight(&self, c: usize) -> f64;
+    /// The same scene (radius, length, stiffness) with `cells` cells, the profile's default
+    /// mesh and no phase condition.
+    fn with_cells(&self, cells: usize) -> Result<Self, SolverError>;
 }
 
 /// The inertia a model's factorisation reports: the stability index at a shift comes
@@ -136,6 +181,80 @@ impl Confinement for SurfaceModel {
     }
     fn residual_norm(&self, f: &DVector<f64>) -> f64 {
         SurfaceModel::residual_norm(self, f)
+    }
+    fn radius(&self) -> f64 {
+        SurfaceModel::radius(self)
+    }
+    fn lbar(&self) -> f64 {
+        SurfaceModel::lbar(self)
+    }
+    fn cells(&self) -> usize {
+        SurfaceModel::cells(self)
+    }
+    fn stiffness(&self) -> &StiffnessProfile {
+        SurfaceModel::stiffness(self)
+    }
+    fn energy_gradient(&self, z: &[f64]) -> Result<DVector<f64>, SolverError> {
+        let (kappa, _, _) = self.split(z)?;
+        let g = SurfaceModel::energy_gradient(self, kappa)?;
+        let s = surface_energy_scale(self);
+        let mut out = DVector::zeros(SurfaceModel::dim(self));
+        for (a, v) in g.iter().enumerate() {
+            out[a] = v * s;
+        }
+        Ok(out)
+    }
+    /// For the surface model `|κ_a|² = κ_a² + 1/R²` (geodesic and normal curvature).
+    fn energy_dparam(&self, z: &[f64], p: Param) -> Result<f64, SolverError> {
+        if p == Param::Lbar {
+            return Ok(Confinement::energy(self, z)? / SurfaceModel::lbar(self));
+        }
+        let (kappa, _, _) = self.split(z)?;
+        let kind = SurfaceModel::stiffness(self).kind();
+        let sigma = SurfaceModel::gauss_sigma(self);
+        let r2 = 1.0 / (SurfaceModel::radius(self) * SurfaceModel::radius(self));
+        let mut acc = 0.0;
+        for (a, (k, s)) in kappa.iter().zip(&sigma).enumerate() {
+            acc +=
+                0.5 * SurfaceModel::cell_weight(self, a / 2) * kind.dparam(p, *s)? * (k * k + r2);
+        }
+        Ok(acc * surface_energy_scale(self))
+    }
+}
+
+/// `R/(π D0)`: the normalisation of the surface model's energy.
+fn surface_energy_scale(model: &SurfaceModel) -> f64 {
+    SurfaceModel::radius(model)
+        / (std::f64::consts::PI * SurfaceModel::stiffness(model).kind().reference())
+}
+
+impl SurfaceSolve for SurfaceModel {
+    fn solve(&self, start: &[f64], opts: &SolveOptions) -> Result<Equilibrium, SolverError> {
+        crate::solve::solve(self, start, opts)
+    }
+    fn solve_from_state(
+        self,
+        z0: Vec<f64>,
+        opts: &SolveOptions,
+    ) -> Result<Equilibrium, SolverError> {
+        crate::solve::solve_from_state(self, z0, opts)
+    }
+    fn start_values(&self, start: &StartShape) -> Result<Vec<f64>, SolverError> {
+        start.gauss_values(self)
+    }
+    fn gauss_sigma(&self) -> Vec<f64> {
+        SurfaceModel::gauss_sigma(self)
+    }
+    fn cell_weight(&self, c: usize) -> f64 {
+        SurfaceModel::cell_weight(self, c)
+    }
+    fn with_cells(&self, cells: usize) -> Result<Self, SolverError> {
+        SurfaceModel::new(
+            SurfaceModel::radius(self),
+            SurfaceModel::lbar(self),
+            cells,
+            SurfaceModel::stiffness(self).kind(),
+        )
     }
 }
 

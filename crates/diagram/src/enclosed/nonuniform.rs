@@ -42,7 +42,7 @@ use std::time::Instant;
 use rodloop_exact::branch_of_eta;
 use rodloop_exact::diagram::{Critical, CriticalKind};
 use rodloop_solver::enclosed::{nonuniform_cells, solve_branch, EnclosedOptions, SurfaceSource};
-use rodloop_solver::{solve_from_state, SolverError, SurfaceModel};
+use rodloop_solver::{solve_from_state, SolverError};
 
 use super::nonuniform_descent::descend_unstable;
 use super::nonuniform_exchange::{interp, locate_crossing, lowest_at, mean_stiffness, CIRCLE};
@@ -355,7 +355,7 @@ fn trace_sheet(
     let sopts = EnclosedOptions::default();
     let seed_at = |k: usize| -> Result<Levels, SolverError> {
         let p = &pts[k];
-        let m = SurfaceModel::new(opts.radius, p.value, sheet.cells, &opts.stiffness)?;
+        let m = crate::surface_model(opts.radius, p.value, sheet.cells, &opts.stiffness)?;
         let eq = solve_from_state(m, p.state.clone(), &newton_options())?;
         let b = solve_branch(
             opts.radius,

@@ -5,7 +5,7 @@
 
 use rodloop_continuation::natural::{self, NaturalSettings};
 use rodloop_solver::enclosed::EnclosedOptions;
-use rodloop_solver::{solve_from_state, Equilibrium, SolverError, SurfaceModel};
+use rodloop_solver::{solve_from_state, Equilibrium, SolverError};
 
 use super::trace::{Levels, TraceStop};
 use super::{EnclosedEvent, EnclosedPoint};
@@ -64,7 +64,7 @@ pub(super) fn surface_at(
         .iter()
         .min_by(|a, b| (a.value - x).abs().total_cmp(&(b.value - x).abs()))
         .ok_or_else(|| SolverError::InvalidInput("an empty sheet".into()))?;
-    let model = SurfaceModel::new(dopts.radius, x, sheet.cells, &dopts.stiffness)?;
+    let model = dopts.model(x, sheet.cells)?;
     let eq = solve_from_state(model, p.state.clone(), &newton_options())?;
     if cells == sheet.cells {
         return Ok(eq);

@@ -8,7 +8,7 @@
 use std::time::Instant;
 
 use rodloop_continuation::{Direction, SpecialKind};
-use rodloop_solver::{Confinement, ParamProblem, SurfaceModel};
+use rodloop_solver::{ParamProblem, SurfaceSolve};
 
 use super::images::{image_match, on_known, on_known_within, ImageMatch, Images};
 use super::seeding::Seed;
@@ -19,8 +19,8 @@ use crate::types::{BranchEnd, PointSource};
 use crate::{DiagramError, DiagramOptions, Progress};
 
 /// The followed curves of a branch and what following them needs.
-pub(super) struct Tracing<'a> {
-    pub(super) ctx: &'a EndContext<'a>,
+pub(super) struct Tracing<'a, M> {
+    pub(super) ctx: &'a EndContext<'a, M>,
     pub(super) settings: &'a crate::MarchSettings,
     pub(super) images: &'a Images,
     pub(super) branch: u32,
@@ -36,7 +36,7 @@ pub(super) struct Tracing<'a> {
     pub(super) seed_note: Vec<Option<String>>,
 }
 
-impl Tracing<'_> {
+impl<M: SurfaceSolve> Tracing<'_, M> {
     /// Follow the state `seeded` (solved at `lbar` as `seed` in `secs` seconds) unless it
     /// is missing or on a known curve, then switch at every new branch point (a later seed
     /// may lie on a family found by switching). `false` once the cap of followed curves is
@@ -136,9 +136,9 @@ impl Tracing<'_> {
 }
 
 /// What the ends of followed curves need.
-pub(super) struct EndContext<'a> {
+pub(super) struct EndContext<'a, M> {
     pub(super) opts: &'a DiagramOptions,
-    pub(super) problem: &'a ParamProblem<SurfaceModel>,
+    pub(super) problem: &'a ParamProblem<M>,
     pub(super) lo: f64,
     pub(super) hi: f64,
     /// Smallest continuation step ([`crate::MarchSettings::ds_min`]).
@@ -150,8 +150,8 @@ pub(super) struct EndContext<'a> {
 /// of the curve itself), cut back to the symmetric branch point where it turned into its
 /// own mirror image.
 #[allow(clippy::too_many_arguments)]
-fn follow_seed(
-    ctx: &EndContext<'_>,
+fn follow_seed<M: SurfaceSolve>(
+    ctx: &EndContext<'_, M>,
     settings: &crate::MarchSettings,
     images: &Images,
     curves: &[Curve],
@@ -244,8 +244,8 @@ fn follow_seed(
 
 /// The end of a followed direction: the approach to a great circle where the march stopped
 /// near one, else the record of why it stopped.
-fn finish_end(
-    ctx: &EndContext<'_>,
+fn finish_end<M: SurfaceSolve>(
+    ctx: &EndContext<'_, M>,
     stop: &MarchStop,
     points: &mut Vec<MarchPoint>,
     start: (&[f64], f64),
@@ -356,8 +356,8 @@ fn finish_end(
 /// Switch at every pending branch point not met before, following the new curves (whose
 /// branch points join the queue).
 #[allow(clippy::too_many_arguments)]
-fn switch_all(
-    ctx: &EndContext<'_>,
+fn switch_all<M: SurfaceSolve>(
+    ctx: &EndContext<'_, M>,
     settings: &crate::MarchSettings,
     images: &Images,
     curves: &mut Vec<Curve>,

@@ -1,7 +1,7 @@
 //! Symmetry images of a state of a two-segment rod and membership of a state in the
 //! followed curves.
 
-use rodloop_solver::{Stiffness, SurfaceModel};
+use rodloop_solver::{Stiffness, SurfaceSolve};
 
 use super::{Curve, SAME_STATE};
 use crate::march::MarchPoint;
@@ -19,8 +19,8 @@ pub(super) struct Images {
 }
 
 impl Images {
-    pub(super) fn new(model: &SurfaceModel, stiffness: &Stiffness) -> Self {
-        let shape = model.n_kappa();
+    pub(super) fn new<M: SurfaceSolve>(model: &M, stiffness: &Stiffness) -> Self {
+        let shape = model.dim() - model.n_constraints();
         Self {
             sigma: model.gauss_sigma(),
             axis: match stiffness {

@@ -56,7 +56,7 @@ mod sheets;
 use std::time::Instant;
 
 use rodloop_exact::branch_of_eta;
-use rodloop_solver::{Confinement, Param, ParamProblem, SurfaceModel};
+use rodloop_solver::{Confinement, Param, ParamProblem, SurfaceSolve};
 
 use crate::ends::SWITCH_DISTANCE;
 use crate::march::{FoldPolicy, MarchPoint};
@@ -103,7 +103,7 @@ pub fn compute_families(
 ) -> Result<Families, DiagramError> {
     opts.validate()?;
     let t0 = Instant::now();
-    let su = Setup::new(opts, eta)?;
+    let su = setup(opts, eta)?;
     let branch = su.branch;
     progress(Progress::BranchStarted { branch, eta });
     let (lo, hi, mid, cells) = (su.lo, su.hi, su.mid, su.cells);
@@ -303,66 +303,67 @@ pub fn compute_families(
 
 /// What tracing the families of one branch needs: its range, the model and its symmetry
 /// images, the march settings.
-struct Setup {
+struct Setup<M> {
     branch: u32,
     lo: f64,
     hi: f64,
     mid: f64,
     cells: usize,
-    problem: ParamProblem<SurfaceModel>,
+    problem: ParamProblem<M>,
     images: Images,
     settings: crate::MarchSettings,
 }
 
-impl Setup {
-    fn new(opts: &DiagramOptions, eta: u32) -> Result<Self, DiagramError> {
-        let branch = branch_of_eta(eta);
-        let e = f64::from(eta);
-        let (exist_lo, exist_hi) = (if eta == 1 { 0.0 } else { e - 1.0 }, e + 1.0);
-        if eta == 0 || !(exist_hi > opts.lbar_min && exist_lo < opts.lbar_max) {
-            return Err(DiagramError::BranchOutOfRange {
-                eta,
-                lo: exist_lo,
-                hi: exist_hi,
-                lbar_min: opts.lbar_min,
-                lbar_max: opts.lbar_max,
-            });
-        }
-        let lo = opts.lbar_min.max(exist_lo);
-        let hi = opts.lbar_max.min(exist_hi);
-        let circles: Vec<f64> = [e - 1.0, e + 1.0]
-            .into_iter()
-            .filter(|&m| m >= 1.0 && m >= opts.lbar_min - 1e-12 && m <= opts.lbar_max + 1e-12)
-            .collect();
-        let cells = opts.trace_cells(eta);
-        let mid = 0.5 * (lo + hi);
-        let model = SurfaceModel::new(opts.radius, mid, cells, &opts.stiffness)?;
-        let problem = ParamProblem::new(model.clone(), Param::Lbar)?;
-        let images = Images::new(&model, &opts.stiffness);
-        let shape = model.dim() - model.n_constraints();
-        let mut settings = march_settings(opts, hi, shape);
-        settings.folds = FoldPolicy::Follow;
-        settings.detect_branch_points = true;
-        settings.far_limit = Some(lo);
-        settings.max_steps = MAX_STEPS;
-        settings.circles = circles;
-        settings.circle_distance = SWITCH_DISTANCE;
-        // Folds and branch points are located again at the reporting resolution
-        // (`crate::special`): the tracer needs them only to its own width.
-        settings.locate_tol = TRACE_LOCATE_TOL;
-        Ok(Self {
-            branch,
-            lo,
-            hi,
-            mid,
-            cells,
-            problem,
-            images,
-            settings,
-        })
+/// The [`Setup`] of branch `eta` on the scene's model ([`DiagramOptions::model`]).
+fn setup(opts: &DiagramOptions, eta: u32) -> Result<Setup<impl SurfaceSolve>, DiagramError> {
+    let branch = branch_of_eta(eta);
+    let e = f64::from(eta);
+    let (exist_lo, exist_hi) = (if eta == 1 { 0.0 } else { e - 1.0 }, e + 1.0);
+    if eta == 0 || !(exist_hi > opts.lbar_min && exist_lo < opts.lbar_max) {
+        return Err(DiagramError::BranchOutOfRange {
+            eta,
+            lo: exist_lo,
+            hi: exist_hi,
+            lbar_min: opts.lbar_min,
+            lbar_max: opts.lbar_max,
+        });
     }
+    let lo = opts.lbar_min.max(exist_lo);
+    let hi = opts.lbar_max.min(exist_hi);
+    let circles: Vec<f64> = [e - 1.0, e + 1.0]
+        .into_iter()
+        .filter(|&m| m >= 1.0 && m >= opts.lbar_min - 1e-12 && m <= opts.lbar_max + 1e-12)
+        .collect();
+    let cells = opts.trace_cells(eta);
+    let mid = 0.5 * (lo + hi);
+    let model = opts.model(mid, cells)?;
+    let problem = ParamProblem::new(model.clone(), Param::Lbar)?;
+    let images = Images::new(&model, &opts.stiffness);
+    let shape = model.dim() - model.n_constraints();
+    let mut settings = march_settings(opts, hi, shape);
+    settings.folds = FoldPolicy::Follow;
+    settings.detect_branch_points = true;
+    settings.far_limit = Some(lo);
+    settings.max_steps = MAX_STEPS;
+    settings.circles = circles;
+    settings.circle_distance = SWITCH_DISTANCE;
+    // Folds and branch points are located again at the reporting resolution
+    // (`crate::special`): the tracer needs them only to its own width.
+    settings.locate_tol = TRACE_LOCATE_TOL;
+    Ok(Setup {
+        branch,
+        lo,
+        hi,
+        mid,
+        cells,
+        problem,
+        images,
+        settings,
+    })
+}
 
-    fn end_context<'a>(&'a self, opts: &'a DiagramOptions) -> EndContext<'a> {
+impl<M: SurfaceSolve> Setup<M> {
+    fn end_context<'a>(&'a self, opts: &'a DiagramOptions) -> EndContext<'a, M> {
         EndContext {
             opts,
             problem: &self.problem,
@@ -400,7 +401,7 @@ pub fn extend_families(
 ) -> Result<(Families, Vec<SeedOutcome>), DiagramError> {
     opts.validate()?;
     let t0 = Instant::now();
-    let su = Setup::new(opts, eta)?;
+    let su = setup(opts, eta)?;
     let end_ctx = su.end_context(opts);
     let known_curves: Vec<Curve> = known
         .iter()
@@ -441,7 +442,7 @@ pub fn extend_families(
             .problem
             .model_at(lbar)
             .ok()
-            .and_then(|m| rodloop_solver::solve(&m, kappa, &crate::states::newton_options()).ok())
+            .and_then(|m| m.solve(kappa, &crate::states::newton_options()).ok())
             .map(|eq| eq.state())
         else {
             outcomes.push(SeedOutcome::Unsolved);

@@ -7,9 +7,7 @@ use rodloop_continuation::axis::{Axis, OnAxis};
 use rodloop_continuation::natural::{walk, NaturalSettings};
 use rodloop_continuation::target::{reach, ReachLimits};
 use rodloop_continuation::{Direction, PseudoArclength};
-use rodloop_solver::{
-    solve, solve_from_state, Param, ParamProblem, SolveOptions, StartShape, Stiffness, SurfaceModel,
-};
+use rodloop_solver::{Param, ParamProblem, SolveOptions, StartShape, Stiffness, SurfaceSolve};
 
 use super::debug;
 use crate::ends::SWITCH_DISTANCE;
@@ -123,8 +121,8 @@ const FIRST_STEP: f64 = 0.05;
 /// [`reach`] on a log [`Axis`], through folds) to the scene's contrast, corrected there by
 /// Newton. `None` where the family turns back before the scene's contrast (it does not exist
 /// there at this length), or the state has another count of periods or does not close.
-pub(super) fn uniform_seed(
-    model: &SurfaceModel,
+pub(super) fn uniform_seed<M: SurfaceSolve>(
+    model: &M,
     stiffness: &Stiffness,
     eta: u32,
     lbar: f64,
@@ -138,7 +136,7 @@ pub(super) fn uniform_seed(
     let problem = ParamProblem::new(model.clone(), Param::D1).ok()?;
     let kappa = StartShape::Exact { eta }
         .shifted(lbar, shift)
-        .and_then(|st| st.gauss_values(model))
+        .and_then(|st| model.start_values(&st))
         .map_err(|e| fail("start", e.to_string()))
         .ok()?;
     let newton = crate::states::newton_options();
@@ -156,9 +154,9 @@ pub(super) fn uniform_seed(
         |cur, _, to, _| {
             let m = problem.model_at(to.exp())?;
             let eq = if cur.1 == 0.0 {
-                solve(&m, &cur.0, &newton)?
+                m.solve(&cur.0, &newton)?
             } else {
-                solve_from_state(m, cur.0.clone(), &newton)?
+                m.solve_from_state(cur.0.clone(), &newton)?
             };
             Ok::<_, rodloop_solver::SolverError>((eq.state(), to))
         },
@@ -201,7 +199,9 @@ pub(super) fn uniform_seed(
         .ok()?;
         z = r.x.as_slice().to_vec();
     }
-    let eq = solve_from_state(model.clone(), z, &newton)
+    let eq = model
+        .clone()
+        .solve_from_state(z, &newton)
         .map_err(|e| fail("Newton at the scene's contrast", e.to_string()))
         .ok()?;
     let periods = periods_of(&eq).ok()?;
@@ -217,9 +217,9 @@ pub(super) fn uniform_seed(
 /// `rodloop solve`'s continuation in `L̄` (the tracer follows those families itself,
 /// [`seed_jobs`]); with `starts`, its direct and shifted starts only, without, its
 /// homotopies in `D1/D0` only.
-pub(super) fn robust_seed(
+pub(super) fn robust_seed<M: SurfaceSolve>(
     opts: &DiagramOptions,
-    model: &SurfaceModel,
+    model: &M,
     eta: u32,
     lbar: f64,
     starts: bool,
@@ -243,7 +243,8 @@ pub(super) fn robust_seed(
     .ok()?;
     debug(|| format!("robust seed {eta} at {lbar}: {}", strategy.describe()));
     let kappa = acc.equilibrium.resample(model.cells()).ok()?;
-    solve(model, &kappa, &crate::states::newton_options())
+    model
+        .solve(&kappa, &crate::states::newton_options())
         .ok()
         .filter(|eq| open_dropped(eq, eta, lbar))
         .map(|eq| eq.state())
@@ -262,15 +263,16 @@ fn open_dropped(eq: &rodloop_solver::Equilibrium, eta: u32, lbar: f64) -> bool {
 /// The state of an Euler start of `eta` periods with its origin moved by `shift`, relaxed
 /// and solved on `model` (the tracing resolution), if it has `eta` periods of `κ_g` and
 /// closes.
-pub(super) fn seed_state(
-    model: &SurfaceModel,
+pub(super) fn seed_state<M: SurfaceSolve>(
+    model: &M,
     eta: u32,
     lbar: f64,
     shift: f64,
 ) -> Option<Vec<f64>> {
     let start = StartShape::Euler { l: eta }.shifted(lbar, shift).ok()?;
-    let kappa = start.gauss_values(model).ok()?;
-    let eq = solve(model, &kappa, &SolveOptions::default())
+    let kappa = model.start_values(&start).ok()?;
+    let eq = model
+        .solve(&kappa, &SolveOptions::default())
         .map_err(|e| debug(|| format!("seed solve failed: {e}")))
         .ok()?;
     (periods_of(&eq).ok()? == eta as usize && open_dropped(&eq, eta, lbar)).then(|| eq.state())

@@ -1,7 +1,7 @@
 //! Cutting the followed curves of a branch into sheets monotone in `L̄`, with the
 //! quantities of their states.
 
-use rodloop_solver::{Param, ParamProblem, SurfaceModel};
+use rodloop_solver::{Param, ParamProblem, SurfaceSolve};
 
 use super::images::Images;
 use super::{Curve, SAME_STATE};
@@ -18,9 +18,9 @@ use crate::DiagramOptions;
 /// are dropped, every asymmetric sheet gets multiplicity 2, and the families are numbered
 /// 1, 2, … in the order kept. `seed_note[c]` says how curve `c` was seeded (`None`: by
 /// branch switching).
-pub(super) fn make_sheets(
+pub(super) fn make_sheets<M: SurfaceSolve>(
     opts: &DiagramOptions,
-    problem: &ParamProblem<SurfaceModel>,
+    problem: &ParamProblem<M>,
     images: &Images,
     curves: &[Curve],
     seed_note: &[Option<String>],

@@ -3,7 +3,7 @@
 
 use super::*;
 use rodloop_continuation::{fd_dparam, fd_jacobian};
-use rodloop_solver::{StartShape, Stiffness};
+use rodloop_solver::{solve_from_state, StartShape, Stiffness};
 
 fn profile(d1: f64) -> Stiffness {
     Stiffness::Tanh {
@@ -17,11 +17,11 @@ fn profile(d1: f64) -> Stiffness {
 }
 
 /// A non-equilibrium state: exact loops sampled on the models, arbitrary multipliers.
-fn problem_and_state(param: Param) -> (MaxwellProblem, DVector<f64>, f64) {
+fn problem_and_state(param: Param) -> (MaxwellProblem<impl SurfaceSolve>, DVector<f64>, f64) {
     let st = profile(0.6);
     let lbar = 1.4;
-    let ma = SurfaceModel::new(1.0, lbar, 12, &st).unwrap();
-    let mb = SurfaceModel::new(1.0, lbar, 10, &st).unwrap();
+    let ma = crate::surface_model(1.0, lbar, 12, &st).unwrap();
+    let mb = crate::surface_model(1.0, lbar, 10, &st).unwrap();
     let mut za = StartShape::Exact { eta: 2 }.gauss_values(&ma).unwrap();
     za.extend_from_slice(&[0.3, -0.2, 0.1]);
     let mut zb = StartShape::Exact { eta: 1 }
@@ -32,7 +32,7 @@ fn problem_and_state(param: Param) -> (MaxwellProblem, DVector<f64>, f64) {
     zb.extend_from_slice(&[-0.1, 0.25, 0.05]);
     let pb = MaxwellProblem::new(ma, mb, param).unwrap();
     let p = pb.p_of(pb.models().0.param(param).unwrap());
-    (pb, MaxwellProblem::join(&za, &zb, lbar), p)
+    (pb, join(&za, &zb, lbar), p)
 }
 
 fn rel_err(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {
@@ -127,7 +127,7 @@ fn crossing_slope_is_the_derivative_of_the_energy_gap_along_the_equilibria() {
     let a = crate::phase::lowest_placement(1.0, 1.4, 2, 112, &st, &opts).unwrap();
     let b = crate::phase::lowest_placement(1.0, 1.4, 1, 84, &st, &opts).unwrap();
     let pb = MaxwellProblem::new(a.model().clone(), b.model().clone(), Param::D1).unwrap();
-    let x = MaxwellProblem::join(&a.state(), &b.state(), 1.4);
+    let x = join(&a.state(), &b.state(), 1.4);
     let (slope, _, _) = pb.crossing_slope(&x, pb.p_of(0.9)).unwrap();
     let h = 1e-4;
     let newton = SolveOptions {
@@ -149,9 +149,9 @@ fn crossing_slope_is_the_derivative_of_the_energy_gap_along_the_equilibria() {
 #[test]
 fn bad_input_is_refused() {
     let st = profile(0.6);
-    let m = SurfaceModel::new(1.0, 1.4, 12, &st).unwrap();
+    let m = crate::surface_model(1.0, 1.4, 12, &st).unwrap();
     assert!(MaxwellProblem::new(m.clone(), m.clone(), Param::Lbar).is_err());
-    let u = SurfaceModel::new(1.0, 1.4, 12, &Stiffness::uniform(1.0)).unwrap();
+    let u = crate::surface_model(1.0, 1.4, 12, &Stiffness::uniform(1.0)).unwrap();
     assert!(MaxwellProblem::new(u.clone(), u, Param::D1).is_err());
     let pb = MaxwellProblem::new(m.clone(), m, Param::D1).unwrap();
     assert!(pb.residual(&DVector::zeros(3), 0.0).is_err());

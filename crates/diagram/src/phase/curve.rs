@@ -2,7 +2,7 @@
 //! onto the lowest pair of states wherever the followed pair ends), and extrapolate its limit
 //! at the uniform rod.
 
-use rodloop_solver::Param;
+use rodloop_solver::{Confinement, Param, SurfaceSolve};
 
 use super::follow::follow;
 use super::rows::{add_at_rows, fixed, RowMaker};
@@ -11,7 +11,7 @@ use super::switch::{switch_pair, triple_point, SWITCH_STEP};
 use super::{
     CurveEnd, Exchange, PhaseCurve, PhaseRow, PhaseSettings, RowSource, Tracked, UniformCheck,
 };
-use crate::maxwell::{MaxwellProblem, LIMIT_OFFSETS};
+use crate::maxwell::{join, MaxwellProblem, LIMIT_OFFSETS};
 use crate::DiagramError;
 
 /// Most switches onto another pair of states along one curve.
@@ -28,7 +28,7 @@ const LOWER: f64 = 1e-8;
 
 /// The decades `10^k` strictly between `p0` and `p_end` for `d1` (continued in `ln d1`), in
 /// the order the curve meets them; none for the other parameters.
-fn checkpoints(problem: &MaxwellProblem, p0: f64, p_end: f64) -> Vec<f64> {
+fn checkpoints<M: SurfaceSolve>(problem: &MaxwellProblem<M>, p0: f64, p_end: f64) -> Vec<f64> {
     if problem.param() != Param::D1 {
         return Vec::new();
     }
@@ -61,9 +61,9 @@ struct Parts {
 
 impl Parts {
     /// A row of `t` (and `t` kept for the `--at` rows).
-    fn push(
+    fn push<M: SurfaceSolve>(
         &mut self,
-        maker: &mut RowMaker,
+        maker: &mut RowMaker<M>,
         t: &Tracked,
         source: RowSource,
         ex: Exchange,
@@ -80,10 +80,10 @@ impl Parts {
     /// decade on the way ([`checkpoints`]) to search for a lower pair of states at its length
     /// (a state of another family can become the lowest without any event on the followed
     /// pair); if one is found, the curve switches there.
-    fn sweep(
+    fn sweep<M: SurfaceSolve>(
         &mut self,
         s: &PhaseSettings,
-        maker: &mut RowMaker,
+        maker: &mut RowMaker<M>,
         start: &Tracked,
         p_end: f64,
         range: (f64, f64),
@@ -201,9 +201,9 @@ impl Parts {
     /// [`BACK_RANGE`]); where the two cross (a triple point, [`triple_point`]) the previous
     /// pair stops being the lowest, and its rows beyond are dropped; otherwise the back-traced
     /// rows fill the gap between `p_stop` and the switch. Returns a description.
-    fn connect(
+    fn connect<M: SurfaceSolve>(
         &mut self,
-        maker: &mut RowMaker,
+        maker: &mut RowMaker<M>,
         t: &Tracked,
         old: &[Tracked],
         leg_start: f64,
@@ -486,11 +486,11 @@ fn limit_row(ladder: &[(f64, PhaseRow)], ex: Exchange) -> (PhaseRow, UniformChec
 
 /// A curve in `gamma`, `s0` or `s1`: first bring the seed's Maxwell point to the scene's
 /// `d1`, then continue in the parameter.
-fn trace_other(
+fn trace_other<M: SurfaceSolve>(
     s: &PhaseSettings,
     scene_value: f64,
     ex: Exchange,
-    seed: &super::seed::Seed,
+    seed: &super::seed::Seed<M>,
     d1_scene: f64,
     mut parts: Parts,
 ) -> Result<PhaseCurve, DiagramError> {
@@ -523,7 +523,7 @@ fn trace_other(
     let (ma0, mb0) = d1_problem.models_at(1.0, p_scene)?;
     let problem = MaxwellProblem::new(ma0, mb0, s.param)?;
     let p0 = problem.p_of(scene_value);
-    let x0 = MaxwellProblem::join(za, zb, lbar);
+    let x0 = join(za, zb, lbar);
     let x0 = fixed(&problem, &x0, p0).map_err(|e| crit(ex, e))?;
     let t0 = Tracked {
         index: problem.indices(&x0, p0)?,
@@ -550,7 +550,7 @@ fn trace_other(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rodloop_solver::{Stiffness, SurfaceModel};
+    use rodloop_solver::Stiffness;
 
     #[test]
     fn checkpoints_are_the_decades_strictly_inside_in_travel_order() {
@@ -561,7 +561,7 @@ mod tests {
             s1: 0.8,
             gamma: 12.0,
         };
-        let m = SurfaceModel::new(1.0, 1.4, 12, &st).unwrap();
+        let m = crate::surface_model(1.0, 1.4, 12, &st).unwrap();
         let pb = MaxwellProblem::new(m.clone(), m.clone(), Param::D1).unwrap();
         let down = checkpoints(&pb, 0.9f64.ln(), 0.001f64.ln());
         let want = [0.1f64.ln(), 0.01f64.ln()];

@@ -9,6 +9,7 @@ use super::rows::branch_word;
 use super::{CurveEnd, Exchange, Tracked};
 use crate::maxwell::MaxwellProblem;
 use crate::DiagramError;
+use rodloop_solver::SurfaceSolve;
 
 /// A leg of continuation: its accepted points and how it ended.
 pub(super) struct Leg {
@@ -21,8 +22,8 @@ pub(super) struct Leg {
 /// next arm is the other crossing, with the roles of the branches swapped) and stops where a
 /// state loses stability, at a fold or branch point of one of the states, or where it leaves
 /// the range.
-pub(super) fn follow(
-    problem: &MaxwellProblem,
+pub(super) fn follow<M: SurfaceSolve>(
+    problem: &MaxwellProblem<M>,
     start: &Tracked,
     p_end: f64,
     (p_lo, p_hi): (f64, f64),

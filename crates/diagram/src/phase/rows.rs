@@ -4,7 +4,7 @@
 use nalgebra::DVector;
 use rodloop_continuation::newton;
 use rodloop_exact::eta_of_branch;
-use rodloop_solver::{solve_from_state, Accuracy, Globalization, Param, SolveOptions};
+use rodloop_solver::{solve_from_state, Accuracy, Globalization, Param, SolveOptions, SurfaceSolve};
 
 use super::{Exchange, PhaseRow, PhaseSettings, RowSource, RowStates, Tracked};
 use crate::maxwell::MaxwellProblem;
@@ -20,8 +20,8 @@ pub(super) fn companion_cells(accuracy: Accuracy, n: usize) -> usize {
 }
 
 /// Newton on the augmented system at fixed `p` from `x`.
-pub(super) fn fixed(
-    problem: &MaxwellProblem,
+pub(super) fn fixed<M: SurfaceSolve>(
+    problem: &MaxwellProblem<M>,
     x: &DVector<f64>,
     p: f64,
 ) -> Result<DVector<f64>, String> {
@@ -31,20 +31,20 @@ pub(super) fn fixed(
 }
 
 /// A Maxwell point at `p` with its companion, as a row.
-pub(super) struct RowMaker<'a> {
+pub(super) struct RowMaker<'a, M> {
     /// The Maxwell problem of the rows.
-    pub(super) main: &'a MaxwellProblem,
+    pub(super) main: &'a MaxwellProblem<M>,
     ex: Exchange,
     accuracy: Accuracy,
     opts: &'a SolveOptions,
     /// The companion problem and its last state (warm start).
-    companion: Option<(MaxwellProblem, DVector<f64>)>,
+    companion: Option<(MaxwellProblem<M>, DVector<f64>)>,
 }
 
-impl<'a> RowMaker<'a> {
+impl<'a, M: SurfaceSolve> RowMaker<'a, M> {
     /// Rows of the Maxwell points of `main` for exchange `ex`, at the accuracy and with the
     /// solver settings of `s`.
-    pub(super) fn new(main: &'a MaxwellProblem, ex: Exchange, s: &'a PhaseSettings) -> Self {
+    pub(super) fn new(main: &'a MaxwellProblem<M>, ex: Exchange, s: &'a PhaseSettings) -> Self {
         Self {
             main,
             ex,
@@ -160,9 +160,9 @@ impl<'a> RowMaker<'a> {
 /// [`half_resolution_estimate`]). For the Richardson-extrapolated rows of `high` the first
 /// term is the extrapolation's step. `(0, Unverified)` where a state cannot be re-solved or
 /// fails a check.
-fn verified_pair(
-    written: (&MaxwellProblem, &DVector<f64>),
-    other: (&MaxwellProblem, &DVector<f64>),
+fn verified_pair<M: SurfaceSolve>(
+    written: (&MaxwellProblem<M>, &DVector<f64>),
+    other: (&MaxwellProblem<M>, &DVector<f64>),
     p: f64,
     energy: f64,
     opts: &SolveOptions,
@@ -216,9 +216,9 @@ pub(super) fn branch_word(b: u32) -> String {
 /// Rows at the `--at` values inside the traced range of each arm of a curve (Newton on the
 /// augmented system at exactly that `θ`, from the nearest traced state of the arm); notes
 /// for the others.
-pub(super) fn add_at_rows(
+pub(super) fn add_at_rows<M: SurfaceSolve>(
     s: &PhaseSettings,
-    problem: &MaxwellProblem,
+    problem: &MaxwellProblem<M>,
     ex: Exchange,
     states: &[Tracked],
     rows: &mut Vec<PhaseRow>,

@@ -4,12 +4,12 @@
 use rodloop_exact::eta_of_branch;
 use rodloop_solver::{
     solve_from_state, Equilibrium, Globalization, Param, SolveOptions, SolverError, Stiffness,
-    SurfaceModel,
+    SurfaceSolve,
 };
 
 use super::rows::{branch_word, fixed};
 use super::{Exchange, PhaseSettings, Tracked};
-use crate::maxwell::{MaxwellProblem, INDEX_TOL, SEED_OFFSET};
+use crate::maxwell::{join, MaxwellProblem, INDEX_TOL, SEED_OFFSET};
 use crate::placements::{classify, shift_of, solve_shifted};
 use crate::DiagramError;
 
@@ -62,7 +62,7 @@ pub(crate) fn lowest_placement(
     stiffness: &Stiffness,
     opts: &SolveOptions,
 ) -> Result<Equilibrium, String> {
-    let model = SurfaceModel::new(radius, lbar, cells, stiffness).map_err(|e| e.to_string())?;
+    let model = crate::surface_model(radius, lbar, cells, stiffness).map_err(|e| e.to_string())?;
     let mut best: Option<(f64, Equilibrium)> = None;
     let mut tried = Vec::new();
     let mut agreed = 0;
@@ -166,9 +166,9 @@ pub fn maxwell_by_secant(
 /// The start of a curve: the Maxwell point of the lowest stable states of the exchange's two
 /// branches at `D1/D0 = 1 ∓` [`SEED_OFFSET`] (on the side of the uniform rod where the scene
 /// and the target lie), on the problem continued in `d1`.
-pub(super) struct Seed {
+pub(super) struct Seed<M> {
     /// The augmented system in `d1` (the models of the two branches).
-    pub(super) problem: MaxwellProblem,
+    pub(super) problem: MaxwellProblem<M>,
     /// The polished Maxwell point.
     pub(super) start: Tracked,
     /// `D1/D0` of the seed.
@@ -180,7 +180,7 @@ pub(super) fn seed_exchange(
     s: &PhaseSettings,
     ex: Exchange,
     below: bool,
-) -> Result<Seed, DiagramError> {
+) -> Result<Seed<impl SurfaceSolve>, DiagramError> {
     let crit = |reason: String| DiagramError::Critical {
         from_branch: ex.from_branch,
         to_branch: ex.to_branch,
@@ -210,7 +210,7 @@ pub(super) fn seed_exchange(
             branch_word(ex.from_branch)
         )));
     }
-    let x = MaxwellProblem::join(&ma.state(), &mb.state(), ma.lbar());
+    let x = join(&ma.state(), &mb.state(), ma.lbar());
     let problem = MaxwellProblem::new(ma.model().clone(), mb.model().clone(), Param::D1)?;
     let p = problem.p_of(theta);
     let x = fixed(&problem, &x, p).map_err(|e| crit(format!("seed polish: {e}")))?;

@@ -15,12 +15,12 @@
 
 use nalgebra::DVector;
 use rodloop_exact::eta_of_branch;
-use rodloop_solver::{solve, Equilibrium, Globalization, SolveOptions, SurfaceModel};
+use rodloop_solver::{Equilibrium, Globalization, SolveOptions, SurfaceSolve};
 
 use super::rows::fixed;
 use super::seed::maxwell_by_secant;
 use super::{Exchange, Tracked};
-use crate::maxwell::{MaxwellProblem, INDEX_TOL};
+use crate::maxwell::{join, MaxwellProblem, INDEX_TOL};
 use crate::placements::{classify, shift_of, solve_shifted};
 
 /// Size of the push along the softest mode relative to the state, in the metric
@@ -36,8 +36,8 @@ type Candidate = (f64, Equilibrium, String);
 
 /// Lowest stable state of branch `eta` on `model` (its length and parameter) near the state
 /// `z_last` of the curve (see the module docs).
-fn lowest_state(
-    model: &SurfaceModel,
+fn lowest_state<M: SurfaceSolve>(
+    model: &M,
     z_last: &[f64],
     eta: u32,
     opts: &SolveOptions,
@@ -46,7 +46,7 @@ fn lowest_state(
         globalization: Globalization::Minimize,
         ..opts.clone()
     };
-    let n = model.n_kappa();
+    let n = model.dim() - model.n_constraints();
     let mut best: Option<Candidate> = None;
     let mut tried = Vec::new();
     let mut consider = |res: Result<Equilibrium, String>, how: String| match res {
@@ -65,7 +65,9 @@ fn lowest_state(
         Err(e) => tried.push(format!("{how}: {e}")),
     };
     // From the last state, then pushed along its softest mode.
-    let relaxed = solve(model, &z_last[..n], &minimize).map_err(|e| e.to_string());
+    let relaxed = model
+        .solve(&z_last[..n], &minimize)
+        .map_err(|e| e.to_string());
     if let Ok(eq) = &relaxed {
         if let Ok((_, modes)) = eq.constrained_modes() {
             if let Some(v) = modes.first() {
@@ -84,7 +86,7 @@ fn lowest_state(
                         .map(|(k, d)| k + sign * PUSH * norm * d)
                         .collect();
                     consider(
-                        solve(model, &start, &minimize).map_err(|e| e.to_string()),
+                        model.solve(&start, &minimize).map_err(|e| e.to_string()),
                         format!("last state pushed {sign:+} along its softest mode"),
                     );
                 }
@@ -111,8 +113,8 @@ fn lowest_state(
 /// The Maxwell point of the lowest pair of states at `p` near the last point `last` of a
 /// curve (see the module docs), with a description of the two states for people and their
 /// energies at the length of `last`.
-pub(super) fn switch_pair(
-    problem: &MaxwellProblem,
+pub(super) fn switch_pair<M: SurfaceSolve>(
+    problem: &MaxwellProblem<M>,
     ex: Exchange,
     last: &Tracked,
     p: f64,
@@ -126,7 +128,7 @@ pub(super) fn switch_pair(
     let (ea, a, how_a) = lowest_state(&ma, za, eta_a, opts)?;
     let (eb, b, how_b) = lowest_state(&mb, zb, eta_b, opts)?;
     let (a, b, _slope) = maxwell_by_secant(&a, &b, opts).map_err(|e| e.to_string())?;
-    let x = MaxwellProblem::join(&a.state(), &b.state(), a.lbar());
+    let x = join(&a.state(), &b.state(), a.lbar());
     let x = fixed(problem, &x, p)?;
     let index = problem.indices(&x, p).map_err(|e| e.to_string())?;
     let why = format!(
@@ -170,8 +172,8 @@ fn interpolate(curve: &[&Tracked], p: f64) -> Option<(f64, usize)> {
 /// energy at the same length, and beyond it the new pair is the lower one. Located by the
 /// secant method on `L̄_new(p) − L̄_old(p)`, both Maxwell points solved by Newton on the
 /// augmented system at each trial `p`. `None` when the curves do not cross.
-pub(super) fn triple_point(
-    problem: &MaxwellProblem,
+pub(super) fn triple_point<M: SurfaceSolve>(
+    problem: &MaxwellProblem<M>,
     old: &[Tracked],
     new: &[Tracked],
 ) -> Option<(Tracked, Tracked)> {

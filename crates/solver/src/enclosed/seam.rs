@@ -28,6 +28,7 @@ use super::model::EnclosedModel;
 use super::solve::EnclosedState;
 use crate::param::Param;
 use crate::seam::{Confinement, Inertia};
+use crate::stiffness::StiffnessProfile;
 use crate::SolverError;
 
 /// A factorised enclosed KKT Jacobian (dense LU), with the stability index of its state
@@ -171,10 +172,74 @@ impl Confinement for EnclosedModel {
     fn residual_norm(&self, f: &DVector<f64>) -> f64 {
         EnclosedModel::residual_norm(self, f)
     }
+    fn radius(&self) -> f64 {
+        EnclosedModel::radius(self)
+    }
+    fn lbar(&self) -> f64 {
+        EnclosedModel::lbar(self)
+    }
+    fn cells(&self) -> usize {
+        EnclosedModel::cells(self)
+    }
+    fn stiffness(&self) -> &StiffnessProfile {
+        EnclosedModel::stiffness(self)
+    }
+    /// `w_c D_g κ` on the two curvature components of every Gauss point `g` (the first
+    /// `4N` unknowns), zero on the start point and the multipliers.
+    fn energy_gradient(&self, z: &[f64]) -> Result<DVector<f64>, SolverError> {
+        let scale = energy_scale(self);
+        check_len(self, z)?;
+        let mut out = DVector::zeros(EnclosedModel::dim(self));
+        for c in 0..EnclosedModel::cells(self) {
+            let w = 0.5 * self.cell_length(c);
+            for i in 0..4 {
+                let a = 4 * c + i;
+                out[a] = w * self.d_gauss_at(2 * c + i / 2) * z[a] * scale;
+            }
+        }
+        Ok(out)
+    }
+    /// `|κ_g|² = κ₁² + κ₂²` (the full curvature: no normal part imposed by a surface).
+    fn energy_dparam(&self, z: &[f64], p: Param) -> Result<f64, SolverError> {
+        if p == Param::Lbar {
+            return Ok(EnclosedModel::energy(self, z)? / EnclosedModel::lbar(self));
+        }
+        check_len(self, z)?;
+        let kind = EnclosedModel::stiffness(self).kind();
+        let mut acc = 0.0;
+        for c in 0..EnclosedModel::cells(self) {
+            let w = 0.5 * self.cell_length(c);
+            for j in 0..2 {
+                let g = 2 * c + j;
+                let (k1, k2) = (z[2 * g], z[2 * g + 1]);
+                acc += 0.5 * w * kind.dparam(p, self.gauss_sigma(g))? * (k1 * k1 + k2 * k2);
+            }
+        }
+        Ok(acc * energy_scale(self))
+    }
+}
+
+/// `R/(π D0)`: the normalisation of [`EnclosedModel::energy`].
+fn energy_scale(model: &EnclosedModel) -> f64 {
+    EnclosedModel::radius(model) / (std::f64::consts::PI * model.stiffness().kind().reference())
+}
+
+/// `z` has the model's dimension.
+fn check_len(model: &EnclosedModel, z: &[f64]) -> Result<(), SolverError> {
+    let n = EnclosedModel::dim(model);
+    if z.len() == n {
+        Ok(())
+    } else {
+        Err(SolverError::WrongLength {
+            expected: n,
+            found: z.len(),
+        })
+    }
 }
 
 #[cfg(test)]
 mod tests {
+    use super::super::model::Gauge;
     use super::*;
     use crate::enclosed::{solve_branch, EnclosedOptions, SurfaceSource};
     use crate::{ParamProblem, Stiffness};
@@ -304,5 +369,60 @@ mod tests {
         let b = DVector::from_fn(j.nrows(), |i, _| (i as f64).sin());
         let x = f.solve(&b).unwrap();
         assert!((&j * &x - &b).amax() < 1e-8 * b.amax() * j.amax().max(1.0));
+    }
+
+    #[test]
+    fn energy_derivatives_match_finite_differences() {
+        // A non-equilibrium state of a two-segment rod (arbitrary curvatures, start point
+        // and multipliers): the energy depends on the curvature unknowns only.
+        let st = Stiffness::Tanh {
+            d0: 1.0,
+            d1: 0.4,
+            s0: 0.3,
+            s1: 0.8,
+            gamma: 12.0,
+        };
+        let cells = 10;
+        let gauge = Gauge {
+            reference: (0..4 * cells).map(|a| (0.7 * a as f64).sin()).collect(),
+            slope: None,
+            pin: None,
+        };
+        let model = EnclosedModel::new(1.0, 1.3, cells, &st, gauge).unwrap();
+        let z: Vec<f64> = (0..Confinement::dim(&model))
+            .map(|a| 1.5 * (1.3 * a as f64 + 0.4).sin())
+            .collect();
+        let g = Confinement::energy_gradient(&model, &z).unwrap();
+        let fd = rodloop_continuation::fd_jacobian(
+            |v: &DVector<f64>| -> Result<DVector<f64>, SolverError> {
+                Ok(DVector::from_element(
+                    1,
+                    Confinement::energy(&model, v.as_slice())?,
+                ))
+            },
+            &DVector::from_column_slice(&z),
+        )
+        .unwrap();
+        let err = (0..z.len())
+            .map(|a| (g[a] - fd[(0, a)]).abs())
+            .fold(0.0, f64::max);
+        assert!(err < 1e-8 * g.amax(), "∂E/∂z: {err}");
+        assert!(g.rows(4 * cells, z.len() - 4 * cells).amax() == 0.0);
+        for p in [Param::Lbar, Param::D1, Param::Gamma, Param::S0, Param::S1] {
+            let v = Confinement::param(&model, p).unwrap();
+            let an = Confinement::energy_dparam(&model, &z, p).unwrap();
+            let fd = rodloop_continuation::fd_dparam(
+                |q| -> Result<DVector<f64>, SolverError> {
+                    let m = Confinement::with_param(&model, p, q)?;
+                    Ok(DVector::from_element(1, Confinement::energy(&m, &z)?))
+                },
+                v,
+            )
+            .unwrap()[0];
+            assert!(
+                (an - fd).abs() <= 1e-7 * fd.abs().max(1e-3),
+                "∂E/∂{p}: analytic {an}, finite differences {fd}"
+            );
+        }
     }
 }
