@@ -19,7 +19,8 @@
 //!    step and a predictor polynomial in `a`, down to [`DiagramOptions::end_distance`]
 //!    (default `5·10⁻⁵`) from the great circle. Every traced state carries its energy
 //!    (Richardson-extrapolated with a solve at half the tracing resolution, with an error
-//!    estimate), `dE/dL̄`, contact-force extremes and stability index.
+//!    estimate from the three-level ladder `N/2, N, 2N` and its observed order,
+//!    `estimate.rs`), `dE/dL̄`, contact-force extremes and stability index.
 //! 2. **Critical lengths** ([`critical`]): where the lowest branch changes between traced
 //!    samples, `E_a(L̄) = E_b(L̄)` is solved by Newton's method in `L̄` (analytic slopes
 //!    `dE/dL̄`, bracket safeguard), every evaluation *re-solving* both equilibria at the
@@ -46,6 +47,7 @@
 //! | `ends.rs` | the approach to the great-circle ends |
 //! | `states.rs` | quantities of a traced state (Richardson partner, slope, index) |
 //! | `reported.rs` | a state of `phase`, `--param` or `converge` verified as its file holds it |
+//! | `estimate.rs` | the error estimate of a traced energy (three-level ladder) |
 //! | `trace.rs` | [`compute_branch`]: seed, march both ways, ends, states |
 //! | `compute.rs` | [`compute`] with its [`BranchHook`] (resume, save) |
 //! | `parallel.rs` | the thread pool |
@@ -64,6 +66,7 @@ mod diagram;
 pub mod enclosed;
 mod ends;
 pub mod engine;
+mod estimate;
 pub mod families;
 mod labels;
 pub mod march;

@@ -44,7 +44,8 @@ pub(crate) fn energy_slope(eq: &Equilibrium) -> Result<f64, SolverError> {
 }
 
 /// Quantities of a traced state: equilibrium at the tracing resolution (Newton check),
-/// Richardson partner at half the resolution, slope, forces, index.
+/// Richardson partner at half the resolution, the error estimate from the ladder with twice
+/// the resolution ([`crate::estimate::ladder_error`]), slope, forces, index.
 pub(crate) fn finish_point<M: SurfaceSolve>(
     opts: &DiagramOptions,
     problem: &ParamProblem<M>,
@@ -80,10 +81,12 @@ pub(crate) fn finish_point<M: SurfaceSolve>(
             let eh = h.energy();
             let (hmin, hmax) = h.lambda_range();
             let rich = rodloop_solver::richardson;
+            // The third rung of the estimate's ladder (`crate::estimate`).
+            let finer = half_resolution(opts, &eq, 2 * cells).map(|d| d.energy().total);
             (
                 rich(en.total, eh.total),
                 rich(en.geodesic, eh.geodesic),
-                Some(rodloop_solver::richardson_error(en.total, eh.total)),
+                Some(crate::estimate::ladder_error(en.total, eh.total, finer)),
                 rich(lmin, hmin),
                 rich(lmax, hmax),
             )

@@ -113,8 +113,9 @@ pub struct TracedPoint {
     pub energy: f64,
     /// Geodesic part `E_g R/(π D0)` (extrapolated like `energy`).
     pub energy_g: f64,
-    /// Estimated error of `energy`: `|E_N − E_{N/2}|/15`, the error estimate of `E_N` (a
-    /// conservative bound for the extrapolated value); `None` if the `N/2` solve failed.
+    /// Estimated error of `energy`: at least `|E_N − E_{N/2}|/15` (the error estimate of
+    /// `E_N`), and the bound of the three-level ladder `N/2, N, 2N` with its observed order
+    /// (`crate::estimate`); `None` if the `N/2` solve failed.
     pub energy_error: Option<f64>,
     /// Energy at the tracing resolution itself.
     pub energy_trace: f64,
