@@ -350,7 +350,9 @@ mod tests {
             for cells in [40, 80, 160] {
                 for (k, m) in maps.iter().enumerate() {
                     let kept = m.bounds(cells + round * (RECENT_MESHES + k)).unwrap();
-                    let fresh = m.compute_bounds(cells + round * (RECENT_MESHES + k)).unwrap();
+                    let fresh = m
+                        .compute_bounds(cells + round * (RECENT_MESHES + k))
+                        .unwrap();
                     assert_eq!(kept, fresh, "map {k}, {cells} cells, round {round}");
                     let again = m.bounds(cells + round * (RECENT_MESHES + k)).unwrap();
                     assert_eq!(again, fresh);
