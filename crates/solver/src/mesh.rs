@@ -68,7 +68,8 @@ impl MeshMap {
         matches!(self, MeshMap::Uniform)
     }
 
-    /// Unnormalised `∫₀^σ ρ`.
+    /// Unnormalised `∫₀^σ ρ` (the code evaluates it in batches, [`MeshMap::integral_with`]).
+    #[cfg(test)]
     fn integral(&self, sigma: f64) -> f64 {
         self.integral_with(sigma, &self.images())
     }
