@@ -79,8 +79,16 @@ pub(crate) fn uniform_placements(
     let at = |j: usize| j as f64 / m as f64;
     let k2: Vec<f64> = (0..m).map(|j| kg.eval(at(j)).powi(2)).collect();
     let d: Vec<f64> = (0..m).map(|j| profile.eval(at(j)).d).collect();
+    // f_k = Σ_j d_j κ²_{(j+k) mod m} / m, summed in the order of j (the wrap of the
+    // index split off rather than taken modulo m in the inner loop).
     let f: Vec<f64> = (0..half)
-        .map(|k| (0..m).map(|j| d[j] * k2[(j + k) % m]).sum::<f64>() / m as f64)
+        .map(|k| {
+            let dot = |acc: f64, d: &[f64], k2: &[f64]| {
+                d.iter().zip(k2).fold(acc, |acc, (a, b)| acc + a * b)
+            };
+            let head = dot(0.0, &d[..m - k], &k2[k..]);
+            dot(head, &d[m - k..], &k2[..k]) / m as f64
+        })
         .collect();
     let mut out: Vec<f64> = critical_points(&f)
         .into_iter()

@@ -1,7 +1,8 @@
 //! Benchmarks at the default resolution (branch η = 2 at L̄ = 1.2, `Accuracy::Default`):
 //! one equilibrium solve from an Euler-curve start (start construction included), one
 //! stability evaluation of the converged equilibrium, and one `O(N)` factorisation of the
-//! Newton matrix with one solve (the core of a Newton step) at a two-segment rod's equilibrium.
+//! Newton matrix with one solve (the core of a Newton step) at a two-segment rod's equilibrium,
+//! and the construction of a two-segment rod's model on its graded mesh.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::DVector;
@@ -38,6 +39,11 @@ fn benches(c: &mut Criterion) {
     };
     let cells = Accuracy::Default.cells(2, &st);
     let model = SurfaceModel::new(1.0, 1.2, cells, &st).unwrap();
+    // A model of the graded mesh at the resolution of one already built (what every
+    // continuation step, re-solve and verification of a two-segment diagram builds).
+    c.bench_function(&format!("surface_model_new_d1_0.5_lbar1.2_N{cells}"), |b| {
+        b.iter(|| SurfaceModel::new(1.0, 1.2, cells, &st).unwrap())
+    });
     let k0 = start.gauss_values(&model).unwrap();
     let eq = solve(&model, &k0, &opts).unwrap();
     let (model, z) = (eq.model(), eq.state());

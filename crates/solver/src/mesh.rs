@@ -68,21 +68,45 @@ impl MeshMap {
         matches!(self, MeshMap::Uniform)
     }
 
-    /// Unnormalised `∫₀^σ ρ`.
+    /// Unnormalised `∫₀^σ ρ` (the code evaluates it in batches, [`MeshMap::integral_with`]).
+    #[cfg(test)]
     fn integral(&self, sigma: f64) -> f64 {
+        self.integral_with(sigma, &self.images())
+    }
+
+    /// The periodic images of the bumps with their `gd` at `σ = 0`: `(σ_k + j, gd(−β(σ_k + j)))`
+    /// (constants of [`MeshMap::integral`], computed once per batch of evaluations).
+    fn images(&self) -> Vec<(f64, f64)> {
         match self {
-            MeshMap::Uniform => sigma,
+            MeshMap::Uniform => Vec::new(),
             MeshMap::Graded {
                 centers,
                 sharpness: b,
+                ..
+            } => centers
+                .iter()
+                .flat_map(|&ck| {
+                    (-2..=2).map(move |j| {
+                        let shift = ck + j as f64;
+                        (shift, gd(b * (-shift)))
+                    })
+                })
+                .collect(),
+        }
+    }
+
+    /// [`MeshMap::integral`] with the constants of [`MeshMap::images`].
+    fn integral_with(&self, sigma: f64, images: &[(f64, f64)]) -> f64 {
+        match self {
+            MeshMap::Uniform => sigma,
+            MeshMap::Graded {
+                sharpness: b,
                 amplitude: a,
+                ..
             } => {
                 let mut acc = sigma;
-                for &ck in centers {
-                    for j in -2..=2 {
-                        let shift = ck + j as f64;
-                        acc += a / b * (gd(b * (sigma - shift)) - gd(b * (-shift)));
-                    }
+                for &(shift, at_zero) in images {
+                    acc += a / b * (gd(b * (sigma - shift)) - at_zero);
                 }
                 acc
             }
@@ -114,9 +138,27 @@ impl MeshMap {
         if self.is_uniform() {
             return sigma;
         }
+        let images = self.images();
+        let z = self.integral_with(1.0, &images);
+        self.u_with(sigma, z, &images)
+    }
+
+    /// [`MeshMap::u_of_sigma`] at every one of `sigmas` (the map's constants computed once).
+    pub fn u_of_sigmas(&self, sigmas: impl IntoIterator<Item = f64>) -> Vec<f64> {
+        if self.is_uniform() {
+            return sigmas.into_iter().collect();
+        }
+        let images = self.images();
+        let z = self.integral_with(1.0, &images);
+        sigmas
+            .into_iter()
+            .map(|s| self.u_with(s, z, &images))
+            .collect()
+    }
+
+    fn u_with(&self, sigma: f64, z: f64, images: &[(f64, f64)]) -> f64 {
         let k = sigma.floor();
-        let z = self.integral(1.0);
-        k + self.integral(sigma - k) / z
+        k + self.integral_with(sigma - k, images) / z
     }
 
     /// `σ(u)`, the inverse of [`MeshMap::u_of_sigma`].
@@ -130,15 +172,20 @@ impl MeshMap {
         if self.is_uniform() {
             return u;
         }
+        self.sigma_of_u_with(u, guess, &self.images())
+    }
+
+    /// [`MeshMap::sigma_of_u_near`] with the constants of [`MeshMap::images`].
+    fn sigma_of_u_with(&self, u: f64, guess: Option<f64>, images: &[(f64, f64)]) -> f64 {
         let k = u.floor();
         if u == k {
             return u;
         }
-        let total = self.integral(1.0);
+        let total = self.integral_with(1.0, images);
         let target = (u - k) * total;
         let (mut lo, mut hi) = (0.0, 1.0);
         let mut s = guess.filter(|g| *g > 0.0 && *g < 1.0).unwrap_or(u - k);
-        let mut f = self.integral(s) - target;
+        let mut f = self.integral_with(s, images) - target;
         // Newton's method, safeguarded: a step that leaves the bracket or does not halve
         // |f| is replaced by bisection.
         for _ in 0..200 {
@@ -154,10 +201,10 @@ impl MeshMap {
             if !(next > lo && next < hi) {
                 next = 0.5 * (lo + hi);
             }
-            let mut fn_ = self.integral(next) - target;
+            let mut fn_ = self.integral_with(next, images) - target;
             if fn_.abs() > 0.5 * f.abs() {
                 next = 0.5 * (lo + hi);
-                fn_ = self.integral(next) - target;
+                fn_ = self.integral_with(next, images) - target;
             }
             let done = (next - s).abs() <= 2.0 * f64::EPSILON * next.abs().max(1e-3);
             s = next;
@@ -170,8 +217,41 @@ impl MeshMap {
     }
 
     /// Cell boundaries `σ_0 = 0 < σ_1 < … < σ_N = 1` of an `N`-cell mesh.
+    ///
+    /// The boundaries depend on the map and `N` only, and every model of a scene at a
+    /// resolution (each continuation step, re-solve and verification) asks for the same
+    /// ones: the last few are kept per thread and handed back as computed.
     pub fn bounds(&self, cells: usize) -> Result<Vec<f64>, SolverError> {
-        let total = self.integral(1.0);
+        if self.is_uniform() {
+            return self.compute_bounds(cells);
+        }
+        thread_local! {
+            static RECENT: std::cell::RefCell<Vec<(MeshMap, usize, Vec<f64>)>> =
+                const { std::cell::RefCell::new(Vec::new()) };
+        }
+        let hit = RECENT.with(|r| {
+            r.borrow()
+                .iter()
+                .find(|(m, n, _)| *n == cells && m == self)
+                .map(|(_, _, b)| b.clone())
+        });
+        if let Some(b) = hit {
+            return Ok(b);
+        }
+        let b = self.compute_bounds(cells)?;
+        RECENT.with(|r| {
+            let mut r = r.borrow_mut();
+            if r.len() >= RECENT_MESHES {
+                r.remove(0);
+            }
+            r.push((self.clone(), cells, b.clone()));
+        });
+        Ok(b)
+    }
+
+    fn compute_bounds(&self, cells: usize) -> Result<Vec<f64>, SolverError> {
+        let images = self.images();
+        let total = self.integral_with(1.0, &images);
         let mut b = Vec::with_capacity(cells + 1);
         let mut prev = 0.0f64;
         for i in 0..=cells {
@@ -179,10 +259,12 @@ impl MeshMap {
                 1.0
             } else if i == 0 {
                 0.0
+            } else if self.is_uniform() {
+                self.sigma_of_u_near(i as f64 / cells as f64, None)
             } else {
                 // Guess: one grid step of u at the local density.
                 let guess = prev + total / (cells as f64 * self.density(prev));
-                self.sigma_of_u_near(i as f64 / cells as f64, Some(guess))
+                self.sigma_of_u_with(i as f64 / cells as f64, Some(guess), &images)
             };
             b.push(v);
             prev = v;
@@ -195,6 +277,10 @@ impl MeshMap {
         Ok(b)
     }
 }
+
+/// Meshes [`MeshMap::bounds`] keeps per thread (a diagram uses one map at a few resolutions:
+/// tracing, half, and the refinements of its state files, for a few branches).
+const RECENT_MESHES: usize = 16;
 
 #[cfg(test)]
 mod tests {
@@ -246,5 +332,40 @@ mod tests {
         // (tails of the bumps aside): A = γ/40 = 5.
         assert!((ratio - 6.0).abs() < 0.2, "ratio {ratio}");
         assert!(MeshMap::Uniform.bounds(8).unwrap()[3] == 3.0 / 8.0);
+    }
+
+    /// The boundaries kept per thread are those of the map and resolution asked for: with
+    /// two maps and three resolutions asked in turn (more than are kept), every answer equals
+    /// a fresh computation bit for bit, and the batched `u(σ)` equals the pointwise one.
+    #[test]
+    fn kept_bounds_are_those_of_the_map_and_resolution_asked() {
+        let other = MeshMap::for_profile(&Stiffness::Tanh {
+            d0: 1.0,
+            d1: 0.1,
+            s0: 0.2,
+            s1: 0.7,
+            gamma: 120.0,
+        });
+        let maps = [graded(), other];
+        for round in 0..2 {
+            for cells in [40, 80, 160] {
+                for (k, m) in maps.iter().enumerate() {
+                    let kept = m.bounds(cells + round * (RECENT_MESHES + k)).unwrap();
+                    let fresh = m
+                        .compute_bounds(cells + round * (RECENT_MESHES + k))
+                        .unwrap();
+                    assert_eq!(kept, fresh, "map {k}, {cells} cells, round {round}");
+                    let again = m.bounds(cells + round * (RECENT_MESHES + k)).unwrap();
+                    assert_eq!(again, fresh);
+                }
+            }
+        }
+        let m = graded();
+        let sigmas: Vec<f64> = (0..37).map(|j| j as f64 / 37.0 + 0.003).collect();
+        let batched = m.u_of_sigmas(sigmas.iter().copied());
+        for (s, u) in sigmas.iter().zip(batched) {
+            assert_eq!(u, m.u_of_sigma(*s));
+        }
+        assert_ne!(maps[0].bounds(40).unwrap(), maps[1].bounds(40).unwrap());
     }
 }

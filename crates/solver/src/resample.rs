@@ -50,10 +50,11 @@ impl Equilibrium {
             .iter()
             .map(|&f| column(f))
             .collect::<Result<Vec<_>, _>>()?;
+        let us = map.u_of_sigmas((0..m).map(|j| j as f64 / m as f64));
         Ok((0..m)
             .map(|j| {
                 let sigma = j as f64 / m as f64;
-                let u = map.u_of_sigma(sigma);
+                let u = us[j];
                 let v: Vec<f64> = interp.iter().map(|t| t.eval(u)).collect();
                 let norm = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
                 let back = if norm > 0.0 { r / norm } else { 1.0 };

@@ -49,10 +49,16 @@ impl TrigInterpolant {
         let mut b = vec![0.0; k_max];
         for k in 1..=k_max {
             let (mut sa, mut sb) = (0.0, 0.0);
-            for (j, y) in samples.iter().enumerate() {
-                let (s, c) = table[(k * j) % m];
+            // `at` runs through (k j) mod m without a division per sample.
+            let mut at = 0;
+            for y in samples {
+                let (s, c) = table[at];
                 sa += y * c;
                 sb += y * s;
+                at += k;
+                if at >= m {
+                    at -= m;
+                }
             }
             a[k - 1] = 2.0 * sa / m as f64;
             b[k - 1] = 2.0 * sb / m as f64;
