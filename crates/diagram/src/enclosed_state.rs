@@ -59,6 +59,19 @@ where
     DiagramError::Passed(Box::new(e))
 }
 
+/// Cells `N` of the finest level of a solve of branch `eta`. Uniform rods: the fine mesh of
+/// the O(N) step. Two-segment rods keep the diagram's mesh (observed order 1.0–1.4 there; the
+/// cascade started at N/4 = 96 cells from the surface loop of branch 3 at lbar = 2.2 does not
+/// converge), at least `32 (2 + η)`: sharp profiles (Eq. (51), gamma = 200) need the coarsest
+/// level of the cascade (N/4) to resolve the transitions on the graded mesh.
+fn solve_cells(stiffness: &Stiffness, accuracy: Accuracy, eta: u32) -> usize {
+    if stiffness.is_uniform() {
+        enclosed_solve_cells(accuracy, eta)
+    } else {
+        enclosed_cells(accuracy, eta).max(32 * (2 + eta as usize))
+    }
+}
+
 /// Solve branch `branch` of an enclosed scene (ball radius `r`, the rod's `stiffness`, its
 /// reference value `D0`) at `lbar`, descending from a saddle to the local minimum of the
 /// branch below it ([`solve_state_with`]).
@@ -158,19 +171,7 @@ pub fn solve_state_with(
     // An attached loop's energy is the surface one; the 3-D re-solve is a check, at the
     // fast resolution.
     let acc = if attached { Accuracy::Fast } else { accuracy };
-    // Uniform rods: the fine mesh of the O(N) step. Two-segment rods keep the diagram's mesh
-    // (observed order 1.0–1.4 there; the cascade started at N/4 = 96 cells from the surface
-    // loop of branch 3 at lbar = 2.2 does not converge).
-    let mut cells = if stiffness.is_uniform() {
-        enclosed_solve_cells(acc, eta)
-    } else {
-        enclosed_cells(acc, eta)
-    };
-    if !stiffness.is_uniform() {
-        // Sharp profiles (Eq. (51), gamma = 200) need the coarsest level of the cascade
-        // (N/4) to resolve the transitions on the graded mesh.
-        cells = cells.max(32 * (2 + eta as usize));
-    }
+    let cells = solve_cells(stiffness, acc, eta);
     let what = || format!("the enclosed loop of branch {branch} at lbar = {lbar}");
     // Set where the state reported is a lower local minimum than the one reached from the
     // surface loop (continuation in the stiffness from the uniform rod's loop).
@@ -254,14 +255,7 @@ pub fn solve_from_shape(
     keep_saddle: bool,
 ) -> Result<EnclosedResult, DiagramError> {
     let eta = branch.filter(|&b| b > 0).map_or(2, eta_of_branch);
-    let mut cells = if stiffness.is_uniform() {
-        enclosed_solve_cells(accuracy, eta)
-    } else {
-        enclosed_cells(accuracy, eta)
-    };
-    if !stiffness.is_uniform() {
-        cells = cells.max(32 * (2 + eta as usize));
-    }
+    let cells = solve_cells(stiffness, accuracy, eta);
     let (model, z0) = start_from_shape(r, lbar, cells / 4, stiffness, shape).map_err(passed)?;
     let opts = EnclosedOptions::default();
     let b = solve_levels(&model, z0, None, &opts)
