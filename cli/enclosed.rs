@@ -1,53 +1,27 @@
 //! `rodloop solve` and `rodloop compare --scene enclosed` for enclosed scenes (`|r| ≤ R`,
 //! paper Sec. 3.2).
 //!
-//! A branch's enclosed state starts from its surface loop. Where that loop has `λ ≥ 0`
-//! everywhere it satisfies every enclosed KKT condition (the wall may push, the loop
-//! touches, stationarity is the surface equations), so it is the enclosed equilibrium: the
-//! energy reported is the surface one (exact layer for uniform rods) and the 3-D enclosed
-//! model re-solves it as a check. Where `λ < 0` somewhere, the 3-D model's semismooth
-//! Newton finds the lift-off.
+//! The numerics are [`rodloop_diagram::enclosed_state`] (one state and its certificate) and
+//! [`rodloop_diagram::detached`] (the lift-off scan of `compare`); this file reads the
+//! arguments and a saved shape, and prints and writes the results.
 
 use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
-use rodloop_exact::{branch_of_eta, eta_of_branch, paper_branch_loop};
+use rodloop_diagram::detached::{detachments, BranchDetachment};
+use rodloop_diagram::enclosed_state::{self, EnclosedResult, TOUCH};
+use rodloop_exact::{branch_of_eta, eta_of_branch};
 use rodloop_scene::Scene;
-use rodloop_solver::enclosed::descent::{descend_branch, solve_branch_lowest};
-use rodloop_solver::enclosed::{
-    detached_intervals, enclosed_cells, enclosed_solve_cells, free_circle, solve_branch,
-    solve_enclosed, solve_levels, start_from_shape, EnclosedOptions, EnclosedState, SavedShape,
-    SurfaceSource,
-};
-use rodloop_solver::{solve_robust, Accuracy, SolveOptions, StartShape, Stiffness};
+use rodloop_solver::enclosed::{EnclosedState, SavedShape};
+use rodloop_solver::{Accuracy, Stiffness};
 
 use crate::output::{checked_json, Cell, OutputRun, Table};
 
 const UNITS: &str = "lengths (s, x, y, z, gap = R - |r|) in units of R; kappa in 1/R; energy E R/(pi D0); lambda R^3/D0 (force per unit length); D/D0; eigenvalues mass-normalised in units of D0/R^3";
 
-/// Tolerance on the gap (units of `R`) for "touching".
-const TOUCH: f64 = 1e-9;
-
-/// One enclosed state with everything `solve` reports.
-pub struct EnclosedResult {
-    /// The 3-D state reported (config.csv).
-    pub state: EnclosedState,
-    /// Energy `E R/(π D0)` and its error estimate.
-    pub energy: (f64, f64),
-    /// Surface loop energy and `λ_min` (None for branch 0).
-    pub surface: Option<(f64, f64)>,
-    /// Stability index and lowest eigenvalues (on the coarsest level of the cascade, `N/8`
-    /// or `N/4`; dense, `O(N³)`).
-    pub stability: (usize, Vec<f64>),
-    /// How the energy was obtained.
-    pub method: String,
-    /// The 3-D model's own energy (and estimate).
-    pub model_energy: (f64, f64),
-}
-
-/// Solve branch `branch` of an enclosed scene at `lbar`, descending from a saddle to the
-/// local minimum of the branch below it ([`solve_state_with`]).
+/// Solve branch `branch` of an enclosed scene at `lbar`
+/// ([`rodloop_diagram::enclosed_state::solve_state`] in the scene's ball and stiffness).
 pub fn solve_state(
     scene: &Scene,
     stiffness: &Stiffness,
@@ -55,174 +29,13 @@ pub fn solve_state(
     branch: u32,
     accuracy: Accuracy,
 ) -> Result<EnclosedResult> {
-    solve_state_with(scene, stiffness, lbar, branch, accuracy, false)
-}
-
-/// [`solve_state`]; `keep_saddle`: return the state Newton converges to even where it is a
-/// saddle.
-pub fn solve_state_with(
-    scene: &Scene,
-    stiffness: &Stiffness,
-    lbar: f64,
-    branch: u32,
-    accuracy: Accuracy,
-    keep_saddle: bool,
-) -> Result<EnclosedResult> {
-    let r = scene.radius;
-    let opts = EnclosedOptions::default();
-    if branch == 0 {
-        if lbar > 1.0 {
-            bail!("branch 0 (the planar circle) fits in the ball only for lbar <= 1; got lbar = {lbar}");
-        }
-        // The uniform circle is exact at any resolution: the 3-D check runs at the fast one.
-        let cells = enclosed_cells(
-            if stiffness.is_uniform() {
-                Accuracy::Fast
-            } else {
-                accuracy
-            },
-            1,
-        );
-        let (model, z0) = free_circle(r, lbar, cells, stiffness)?;
-        let state = solve_enclosed(&model, z0, &opts).context("the free circle")?;
-        let (cm, cz) = free_circle(r, lbar, cells / 2, stiffness)?;
-        let comp = solve_enclosed(&cm, cz, &opts)?;
-        let e = state.energy();
-        let est = rodloop_solver::richardson_error(e, comp.energy());
-        let stability = comp.stability(1e-6)?;
-        let exact = if stiffness.is_uniform() {
-            Some(1.0 / lbar)
-        } else {
-            None
-        };
-        return Ok(EnclosedResult {
-            energy: (exact.unwrap_or(e), if exact.is_some() { 0.0 } else { est }),
-            surface: None,
-            stability,
-            method: if exact.is_some() {
-                "planar circle: E R/(pi D) = 1/lbar exactly; 3-D model solved as a check".into()
-            } else {
-                "planar circle, 3-D model".into()
-            },
-            model_energy: (e, est),
-            state,
-        });
-    }
-    let eta = eta_of_branch(branch);
-    let e = f64::from(eta);
-    if !(lbar > e - 1.0 && lbar < e + 1.0) {
-        bail!(
-            "branch {branch} (eta = {eta}) exists only for {} < lbar < {}; got lbar = {lbar}",
-            e - 1.0,
-            e + 1.0
-        );
-    }
-    let d0 = scene.stiffness.reference();
-    let (source, surface_error) = if stiffness.is_uniform() {
-        let l = paper_branch_loop(eta, lbar)
-            .with_context(|| format!("the exact surface loop of branch {branch}"))?;
-        (SurfaceSource::Exact(l), 0.0)
-    } else {
-        let (res, _) = solve_robust(
-            r,
-            lbar,
-            stiffness,
-            &StartShape::Euler { l: eta },
-            accuracy,
-            Some(eta),
-            &SolveOptions::default(),
-        )
-        .with_context(|| format!("the surface loop of branch {branch}"))?;
-        let err = res.energy_error;
-        (SurfaceSource::Numeric(Box::new(res.equilibrium)), err)
-    };
-    let e_surf = source.energy()?;
-    let lam_min = source.lambda_min(r, d0);
-    let attached = lam_min >= 0.0;
-    // An attached loop's energy is the surface one; the 3-D re-solve is a check, at the
-    // fast resolution.
-    let acc = if attached { Accuracy::Fast } else { accuracy };
-    // Uniform rods: the fine mesh of the O(N) step. Two-segment rods keep the diagram's mesh
-    // (observed order 1.0–1.4 there; the cascade started at N/4 = 96 cells from the surface
-    // loop of branch 3 at lbar = 2.2 does not converge).
-    let mut cells = if stiffness.is_uniform() {
-        enclosed_solve_cells(acc, eta)
-    } else {
-        enclosed_cells(acc, eta)
-    };
-    if !stiffness.is_uniform() {
-        // Sharp profiles (Eq. (51), gamma = 200) need the coarsest level of the cascade
-        // (N/4) to resolve the transitions on the graded mesh.
-        cells = cells.max(32 * (2 + eta as usize));
-    }
-    // Set where the state reported is a lower local minimum than the one reached from the
-    // surface loop (continuation in the stiffness from the uniform rod's loop).
-    let mut lower_minimum = false;
-    let (b, descent, given_up) = if keep_saddle {
-        let b = solve_branch(r, lbar, stiffness, &source, cells, &opts)
-            .with_context(|| format!("the enclosed loop of branch {branch} at lbar = {lbar}"))?;
-        (b, None, Vec::new())
-    } else {
-        // Two-segment rods: where the mesh of this accuracy does not end at a local minimum,
-        // the meshes of the finer levels (and twice the finest) are tried.
-        let mut ladder = vec![cells];
-        if !stiffness.is_uniform() {
-            for a in [Accuracy::Default, Accuracy::High] {
-                ladder.push(enclosed_cells(a, eta).max(32 * (2 + eta as usize)));
-            }
-            ladder.push(2 * ladder[ladder.len() - 1]);
-            ladder.retain(|&n| n >= cells);
-            ladder.dedup();
-        }
-        let (out, replaced) = solve_branch_lowest(r, lbar, eta, stiffness, &source, &ladder, &opts)
-            .with_context(|| format!("the enclosed loop of branch {branch} at lbar = {lbar}"))?;
-        lower_minimum = replaced;
-        out
-    };
-    let cells = b.fine.model.cells();
-    let stability = b.coarsest().stability(1e-6)?;
-    let moved = lower_minimum || descent.as_ref().is_some_and(|d| d.moved());
-    let (energy, mut method) = if attached && !moved {
-        (
-            (e_surf, surface_error),
-            format!(
-                "surface loop (lambda_min = {lam_min:.6} >= 0: it satisfies the enclosed KKT conditions); 3-D model re-solved at N = {cells} as a check"
-            ),
-        )
-    } else {
-        (
-            (b.energy, b.energy_error),
-            format!(
-                "3-D enclosed model, N = {cells} cells (semismooth Newton from {}, lambda_min = {lam_min:.6}); {}",
-                if lower_minimum {
-                    "the uniform rod's loop continued in the stiffness"
-                } else if b.homotopy {
-                    "the surface loop by the pull homotopy"
-                } else {
-                    "the surface loop"
-                },
-                b.estimate_method()
-            ),
-        )
-    };
-    for why in &given_up {
-        method.push_str(&format!("; {why}"));
-    }
-    if let Some(d) = descent.filter(|d| d.start().index > 0) {
-        method.push_str(&format!(
-            "; {} (descent at N/4 = {} cells, energies at N)",
-            d.describe(),
-            b.quarter.model.cells()
-        ));
-    }
-    Ok(EnclosedResult {
-        model_energy: (b.energy, b.energy_error),
-        state: b.fine,
-        energy,
-        surface: Some((e_surf, lam_min)),
-        stability,
-        method,
-    })
+    Ok(enclosed_state::solve_state(
+        scene.radius,
+        stiffness,
+        lbar,
+        branch,
+        accuracy,
+    )?)
 }
 
 /// A saved enclosed `config.csv` (columns `s, x, y, z, kappa_1, kappa_2`, in units of `R`)
@@ -311,58 +124,6 @@ fn read_shape(path: &Path, radius: f64) -> Result<SavedShape> {
     Ok(shape)
 }
 
-/// Solve from a saved enclosed shape at `lbar`: the shape's curvature vectors, aligned by
-/// [`start_from_shape`], start the cascade at `N/4` (`N = 32(1 + η)` with the branch's `η`
-/// when given, else `η = 2`).
-fn solve_from_shape(
-    scene: &Scene,
-    stiffness: &Stiffness,
-    lbar: f64,
-    shape: &SavedShape,
-    branch: Option<u32>,
-    accuracy: Accuracy,
-    keep_saddle: bool,
-) -> Result<EnclosedResult> {
-    let eta = branch.filter(|&b| b > 0).map_or(2, eta_of_branch);
-    let mut cells = if stiffness.is_uniform() {
-        enclosed_solve_cells(accuracy, eta)
-    } else {
-        enclosed_cells(accuracy, eta)
-    };
-    if !stiffness.is_uniform() {
-        cells = cells.max(32 * (2 + eta as usize));
-    }
-    let (model, z0) = start_from_shape(scene.radius, lbar, cells / 4, stiffness, shape)?;
-    let opts = EnclosedOptions::default();
-    let b =
-        solve_levels(&model, z0, None, &opts).context("the enclosed loop from the saved shape")?;
-    let (b, descent) = if keep_saddle {
-        (b, None)
-    } else {
-        descend_branch(b, &opts).context("descending from the saddle Newton converged to")?
-    };
-    let stability = b.coarsest().stability(1e-6)?;
-    let mut method = format!(
-        "3-D enclosed model, N = {cells} cells (semismooth Newton from the saved shape); {}",
-        b.estimate_method()
-    );
-    if let Some(d) = descent.filter(|d| d.start().index > 0) {
-        method.push_str(&format!(
-            "; {} (descent at N/4 = {} cells, energies at N)",
-            d.describe(),
-            b.quarter.model.cells()
-        ));
-    }
-    Ok(EnclosedResult {
-        model_energy: (b.energy, b.energy_error),
-        energy: (b.energy, b.energy_error),
-        surface: None,
-        stability,
-        method,
-        state: b.fine,
-    })
-}
-
 /// `config.csv` of an enclosed state: one row per node.
 pub(crate) fn config_table(st: &EnclosedState, scene: &Scene) -> Result<Table> {
     config_table_in(st, scene.radius, scene.stiffness.reference())
@@ -415,8 +176,8 @@ pub fn run_solve(args: &crate::args::SolveArgs, scene: &Scene) -> Result<()> {
     };
     let run = OutputRun::begin(&args.out)?;
     let res = match (&shape, branch) {
-        (Some(sh), _) => solve_from_shape(
-            scene,
+        (Some(sh), _) => enclosed_state::solve_from_shape(
+            scene.radius,
             &stiffness,
             args.lbar,
             sh,
@@ -424,9 +185,14 @@ pub fn run_solve(args: &crate::args::SolveArgs, scene: &Scene) -> Result<()> {
             accuracy,
             args.keep_saddle,
         )?,
-        (None, Some(b)) => {
-            solve_state_with(scene, &stiffness, args.lbar, b, accuracy, args.keep_saddle)?
-        }
+        (None, Some(b)) => enclosed_state::solve_state_with(
+            scene.radius,
+            &stiffness,
+            args.lbar,
+            b,
+            accuracy,
+            args.keep_saddle,
+        )?,
         (None, None) => unreachable!("a branch or --from is required above"),
     };
     let st = &res.state;
@@ -559,30 +325,23 @@ pub fn run_compare(scene_arg: &str, out: &Path) -> Result<()> {
         ],
     );
     let mut json_rows = Vec::new();
-    for branch in 1..=3u32 {
-        let eta = eta_of_branch(branch);
-        let intervals = detached_intervals(eta, lo, hi)?;
-        if intervals.is_empty() {
+    for BranchDetachment {
+        branch,
+        eta,
+        stretches,
+    } in detachments(scene.radius, &stiffness, lo, hi)?
+    {
+        if stretches.is_empty() {
             outln!("branch {branch} (eta = {eta}): attached (lambda >= 0) for all of its lengths in [{lo}, {hi}]");
         }
-        for (a, b) in intervals {
-            let mut best_gap = (0.0f64, a);
-            let mut best_drop = (0.0f64, a, 0.0);
-            let n = 12;
-            for k in 0..=n {
-                let l = a + (b - a) * (0.02 + 0.96 * k as f64 / n as f64);
-                let res = solve_state(&scene, &stiffness, l, branch, Accuracy::Fast)?;
-                let c = res.state.contact(TOUCH)?;
-                if c.max_gap.0 > best_gap.0 {
-                    best_gap = (c.max_gap.0, l);
-                }
-                let drop = res.surface.map(|s| s.0).unwrap_or(0.0) - res.energy.0;
-                if drop > best_drop.0 {
-                    best_drop = (drop, l, res.energy.1);
-                }
-            }
-            // Where is this branch the lowest surface branch (stable)?
-            let stable = stable_stretch(eta, a, b)?;
+        for st in stretches {
+            let (a, b, best_gap, best_drop, stable) = (
+                st.lift_off,
+                st.landing,
+                st.max_gap,
+                st.max_energy_drop,
+                st.stable,
+            );
             outln!(
                 "branch {branch} (eta = {eta}): detached for {a:.12} < lbar < {b:.12}; largest gap {:.4e} R at lbar ~ {:.3}; largest energy drop below the surface loop {:.4e} ± {:.1e} at lbar ~ {:.3}; {}",
                 best_gap.0,
@@ -628,57 +387,6 @@ pub fn run_compare(scene_arg: &str, out: &Path) -> Result<()> {
     run.commit()?;
     outln!("wrote compare.csv and summary.json to {}", out.display());
     Ok(())
-}
-
-/// The sub-interval of `(a, b)` where branch `eta` is the lowest of the paper's homogeneous
-/// surface branches (exact energies; bisection on energy crossings to 1e-12).
-fn stable_stretch(eta: u32, a: f64, b: f64) -> Result<Option<(f64, f64)>> {
-    let lowest = |l: f64| -> Result<bool> {
-        let mine = paper_branch_loop(eta, l)?.energy()?;
-        for other in 1..=5u32 {
-            if other == eta {
-                continue;
-            }
-            let o = f64::from(other);
-            if l > o - 1.0 && l < o + 1.0 && paper_branch_loop(other, l)?.energy()? < mine {
-                return Ok(false);
-            }
-        }
-        Ok(true)
-    };
-    let n = 200;
-    let grid: Vec<f64> = (0..=n)
-        .map(|i| a + (b - a) * (i as f64 + 0.5) / (n as f64 + 1.0))
-        .collect();
-    let flags: Vec<bool> = grid.iter().map(|&l| lowest(l)).collect::<Result<_>>()?;
-    let first = flags.iter().position(|&f| f);
-    let last = flags.iter().rposition(|&f| f);
-    let (Some(i), Some(j)) = (first, last) else {
-        return Ok(None);
-    };
-    let refine = |x0: f64, x1: f64, want_true_at_x1: bool| -> Result<f64> {
-        let (mut p, mut q) = (x0, x1);
-        while q - p > 1e-12 {
-            let m = 0.5 * (p + q);
-            if lowest(m)? == want_true_at_x1 {
-                q = m;
-            } else {
-                p = m;
-            }
-        }
-        Ok(0.5 * (p + q))
-    };
-    let s = if i == 0 {
-        a
-    } else {
-        refine(grid[i - 1], grid[i], true)?
-    };
-    let t = if j == n {
-        b
-    } else {
-        refine(grid[j], grid[j + 1], false)?
-    };
-    Ok(Some((s, t)))
 }
 
 const DEFAULT_ENCLOSED: &str = "name = \"homogeneous-enclosed\"\nradius = 1.0\nconfinement = \"enclosed\"\nlbar_min = 1.0\nlbar_max = 3.0\n[stiffness]\nkind = \"uniform\"\nd = 1.0\n";

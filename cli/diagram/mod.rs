@@ -32,6 +32,22 @@ fn draw_figures(args: &Args, run: &OutputRun) -> Result<()> {
     Ok(())
 }
 
+/// `k²` of every exact loop of `d` against `L̄`, with Eq. (B.4) (paper Fig. 11; SVG).
+pub fn k2_figure(d: &Diagram, width: f64, height: f64) -> Result<String> {
+    let k2: Vec<rodloop_figures::k2::K2Point> = d
+        .points
+        .iter()
+        .map(|p| rodloop_figures::k2::K2Point {
+            branch: p.branch,
+            eta: p.eta,
+            p: p.p,
+            lbar: p.lbar,
+            k2: p.k * p.k,
+        })
+        .collect();
+    Ok(rodloop_figures::k2::k2_figure(&k2, width, height)?)
+}
+
 /// The exact diagram's counterpart of a numeric critical length: the same kind between the
 /// same branches, within 0.05 in `L̄`, the nearest one.
 pub fn exact_match<'a>(
@@ -174,19 +190,7 @@ pub fn run(args: &Args) -> Result<()> {
     crate::output::write_diagram(&run, &mut schema)?;
     let d = &out.diagram;
     // Fig. 11: k² against L̄ with Eq. (B.4).
-    let k2: Vec<rodloop_figures::k2::K2Point> = d
-        .points
-        .iter()
-        .map(|p| rodloop_figures::k2::K2Point {
-            branch: p.branch,
-            eta: p.eta,
-            p: p.p,
-            lbar: p.lbar,
-            k2: p.k * p.k,
-        })
-        .collect();
-    let k2_svg =
-        rodloop_figures::k2::k2_figure(&k2, f64::from(args.width), f64::from(args.height))?;
+    let k2_svg = k2_figure(d, f64::from(args.width), f64::from(args.height))?;
     run.write_bytes("diagram_k2.svg", k2_svg.as_bytes())?;
     run.write_bytes(
         "diagram_k2.png",

@@ -27,17 +27,9 @@ use rodloop_scene::Scene;
 use rodloop_solver::Accuracy;
 
 use super::args::{middle, Args, ATLAS_SHAPES, FIG_H, FIG_W, PANEL};
-use super::tables::{sci, STYLE};
+use super::page::{Entry, Page};
+use super::tables::sci;
 use crate::output::{checked_json, OutputRun};
-
-/// A representative state of one branch.
-struct EnclosedEntry {
-    branch: u32,
-    eta: u32,
-    lbar: f64,
-    why: String,
-    outcome: Result<Solved, String>,
-}
 
 /// A solved state with its pictures.
 struct Solved {
@@ -131,6 +123,24 @@ fn profile_figure(data: &LoopData, branch: u32, lifted: bool) -> Result<String> 
             .render(&mut svg, w, 0.0, w, h, "gap");
     }
     Ok(svg.finish())
+}
+
+impl super::page::Solved for Solved {
+    fn seconds(&self) -> f64 {
+        self.seconds
+    }
+
+    fn note(&self) -> Result<serde_json::Value> {
+        checked_json!({
+            "energy": self.energy.0, "energy_error": self.energy.1,
+            "surface_energy": self.surface.map(|x| x.0),
+            "surface_lambda_min": self.surface.map(|x| x.1), "index": self.index,
+            "state": self.label, "contact_fraction": self.contact_fraction,
+            "max_gap": self.max_gap, "lambda_min": self.lambda_min,
+            "point_group": self.point_group, "colour": self.color, "method": self.method,
+            "seconds": self.seconds,
+        })
+    }
 }
 
 fn solve_one(
@@ -268,10 +278,10 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     let solved = crate::states::parallel_map(&plan, |(b, eta, lbar, _, low)| {
         solve_one(scene, accuracy, *b, *eta, *lbar, *low).map_err(|e| format!("{e:#}"))
     });
-    let states: Vec<EnclosedEntry> = plan
+    let states: Vec<Entry<Solved>> = plan
         .into_iter()
         .zip(solved)
-        .map(|((branch, eta, lbar, why, _), outcome)| EnclosedEntry {
+        .map(|((branch, eta, lbar, why, _), outcome)| Entry {
             branch,
             eta,
             lbar,
@@ -283,42 +293,44 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
 
     // 5. The page.
     let t = Instant::now();
-    let version = env!("CARGO_PKG_VERSION");
-    let mut figs = super::tables::Figures::default();
-    let mut h = String::with_capacity(1 << 20);
-    let _ = write!(
-        h,
-        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>rodloop report: {name}</title>\n<style>\n{STYLE}\n</style>\n</head>\n<body>\n<h1>rodloop report: scene {name}</h1>\n<p class=\"lead\">Homogeneous loops enclosed in the ball |r| ≤ R (paper Sec. 3.2): a loop may leave the wall where the wall would have to pull. Enclosed branch diagram for {lo} ≤ L̄ ≤ {hi} at accuracy <b>{acc}</b>: {nstates} states on {nbranches} branches, {ncrit} critical lengths, {nev}. Elastic rod loops in a sphere after Wang, Li &amp; Yi, J. Mech. Phys. Solids (2024); equation and figure numbers refer to that paper.</p>\n<nav><a href=\"#diagram\">Diagram</a><a href=\"#critical\">Critical lengths</a><a href=\"#atlas\">Atlas</a><a href=\"#states\">States</a><a href=\"#settings\">Settings</a><a href=\"#timings\">Timings</a></nav>\n",
-        name = esc(&scene.name),
-        lo = opts.lbar_min,
-        hi = opts.lbar_max,
-        acc = format!("{accuracy:?}").to_lowercase(),
-        nstates = d.points.len(),
-        nbranches = branches.len(),
-        ncrit = d.critical.len(),
-        nev = crate::output::plural(d.events.len() as u64, "special point"),
+    let mut page = Page::begin(
+        &scene.name,
+        &format!(
+            "Homogeneous loops enclosed in the ball |r| ≤ R (paper Sec. 3.2): a loop may leave the wall where the wall would have to pull. Enclosed branch diagram for {lo} ≤ L̄ ≤ {hi} at accuracy <b>{acc}</b>: {nstates} states on {nbranches} branches, {ncrit} critical lengths, {nev}.",
+            lo = opts.lbar_min,
+            hi = opts.lbar_max,
+            acc = format!("{accuracy:?}").to_lowercase(),
+            nstates = d.points.len(),
+            nbranches = branches.len(),
+            ncrit = d.critical.len(),
+            nev = crate::output::plural(d.events.len() as u64, "special point"),
+        ),
+        &[
+            ("diagram", "Diagram"),
+            ("critical", "Critical lengths"),
+            ("atlas", "Atlas"),
+            ("states", "States"),
+            ("settings", "Settings"),
+            ("timings", "Timings"),
+        ],
     );
-    for w in &d.warnings {
-        let _ = writeln!(h, "<p class=\"note\">warning: {}</p>", esc(w));
-    }
-    for n in &d.notes {
-        let _ = writeln!(h, "<p class=\"note\">note: {}</p>", esc(n));
-    }
-    h.push_str("<section id=\"diagram\">\n<h2>1. Energy against length</h2>\n");
-    h.push_str(&figs.fig(
+    page.notes("warning", &d.warnings);
+    page.notes("note", &d.notes);
+    page.h
+        .push_str("<section id=\"diagram\">\n<h2>1. Energy against length</h2>\n");
+    page.fig(
         &fig_energy,
         "bending energy of the enclosed loops against normalised length",
         "Bending energy E R/(πD₀) of every sampled state against L̄ = L/(2πR) (the enclosed counterpart of Fig. 3a). One colour per branch; solid: stable (lowest energy, Hessian index 0 on the tangent space of the active constraints), dashed: metastable, dotted: unstable. The light band marks states that have lifted off the wall (somewhere R − |r| &gt; 0); elsewhere the loop is the surface loop of the exact layer. Diamonds: exchanges E<sub>a</sub> = E<sub>b</sub>; open squares: collapses onto an m-fold great circle; circles: lift-off and landing (λ<sub>min</sub> = 0, Eq. (38)), detachment (the last contact force vanishes) and branch points (the index of a lifted-off sheet changes).",
         "fig-energy",
-    ));
-    h.push_str("</section>\n");
+    );
+    page.h.push_str("</section>\n");
 
-    h.push_str("<section id=\"critical\">\n<h2>2. Critical lengths and lift-off</h2>\n<p>Where the lowest branch changes. An exchange between two attached states is the surface one (exact layer); where one of the two has lifted off, E<sub>a</sub> = E<sub>b</sub> is solved again on re-solved 3-D states, with the error estimate of L̄<sub>cr</sub> itself. The same numbers are in <code>critical.csv</code>; the surface value is the surface diagram's.</p>\n");
-    h.push_str("<table id=\"critical-table\"><thead><tr><th>i</th><th>L̄<sub>cr</sub></th><th>kind</th><th>from → to</th><th>E R/(πD₀)</th><th>error estimate of L̄<sub>cr</sub></th><th>surface L̄<sub>cr</sub></th><th>enclosed − surface</th><th>method</th></tr></thead><tbody>\n");
+    page.h.push_str("<section id=\"critical\">\n<h2>2. Critical lengths and lift-off</h2>\n<p>Where the lowest branch changes. An exchange between two attached states is the surface one (exact layer); where one of the two has lifted off, E<sub>a</sub> = E<sub>b</sub> is solved again on re-solved 3-D states, with the error estimate of L̄<sub>cr</sub> itself. The same numbers are in <code>critical.csv</code>; the surface value is the surface diagram's.</p>\n");
+    page.h.push_str("<table id=\"critical-table\"><thead><tr><th>i</th><th>L̄<sub>cr</sub></th><th>kind</th><th>from → to</th><th>E R/(πD₀)</th><th>error estimate of L̄<sub>cr</sub></th><th>surface L̄<sub>cr</sub></th><th>enclosed − surface</th><th>method</th></tr></thead><tbody>\n");
     for e in &d.critical {
         let c = &e.critical;
-        let _ = writeln!(
-            h,
+        let _ = writeln!(page.h,
             "<tr><td>{}</td><td class=\"num\">{:.12}</td><td>{}</td><td>{} → {}</td><td class=\"num\">{:.10}</td><td class=\"num\">{}</td><td class=\"num\">{:.12}</td><td class=\"num\">{}</td><td>{}</td></tr>",
             c.index,
             c.lbar_cr,
@@ -332,14 +344,14 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
             esc(&e.method)
         );
     }
-    h.push_str("</tbody></table>\n");
+    page.h.push_str("</tbody></table>\n");
     if d.events.is_empty() {
-        h.push_str("<p>No branch lifts off or lands inside the range.</p>\n");
+        page.h
+            .push_str("<p>No branch lifts off or lands inside the range.</p>\n");
     } else {
-        h.push_str("<p>Special points (<code>special_points.csv</code>). Lift-off and landing: where λ<sub>min</sub> of a branch's surface loop crosses zero, i.e. k²(L̄) = 1/2 (Eq. (38)) for a uniform rod, bisected on the exact layer (located on re-solved surface states for a two-segment rod). Detachment: where the last contact force of a lifted-off branch vanishes and the loop leaves the wall (below it the loop is free). Branch point: where the Hessian index of a lifted-off sheet changes, at the interpolated root of the crossing eigenvalue.</p>\n<table id=\"events-table\"><thead><tr><th>event</th><th>branch</th><th>L̄</th><th>error estimate</th><th>E R/(πD₀)</th><th>index below</th><th>index above</th></tr></thead><tbody>\n");
+        page.h.push_str("<p>Special points (<code>special_points.csv</code>). Lift-off and landing: where λ<sub>min</sub> of a branch's surface loop crosses zero, i.e. k²(L̄) = 1/2 (Eq. (38)) for a uniform rod, bisected on the exact layer (located on re-solved surface states for a two-segment rod). Detachment: where the last contact force of a lifted-off branch vanishes and the loop leaves the wall (below it the loop is free). Branch point: where the Hessian index of a lifted-off sheet changes, at the interpolated root of the crossing eigenvalue.</p>\n<table id=\"events-table\"><thead><tr><th>event</th><th>branch</th><th>L̄</th><th>error estimate</th><th>E R/(πD₀)</th><th>index below</th><th>index above</th></tr></thead><tbody>\n");
         for e in &d.events {
-            let _ = writeln!(
-                h,
+            let _ = writeln!(page.h,
                 "<tr><td>{}</td><td>{}</td><td class=\"num\">{:.12}</td><td class=\"num\">{}</td><td class=\"num\">{:.10}</td><td>{}</td><td>{}</td></tr>",
                 e.kind.as_str(),
                 e.branch,
@@ -350,78 +362,76 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
                 e.index_after
             );
         }
-        h.push_str("</tbody></table>\n");
+        page.h.push_str("</tbody></table>\n");
     }
     if lifted.is_empty() {
-        h.push_str("<p id=\"lifted-off\">The lowest state of a paper branch lies on the wall at every sampled length: the Sec. 3.2 hypothesis (stable loops with L̄ ≥ 1 stay on the surface) holds in this range.</p>\n");
+        page.h.push_str("<p id=\"lifted-off\">The lowest state of a paper branch lies on the wall at every sampled length: the Sec. 3.2 hypothesis (stable loops with L̄ ≥ 1 stay on the surface) holds in this range.</p>\n");
     } else {
-        h.push_str("<p id=\"lifted-off\">The lowest state has <b>lifted off the wall</b> for ");
+        page.h
+            .push_str("<p id=\"lifted-off\">The lowest state has <b>lifted off the wall</b> for ");
         let parts: Vec<String> = lifted
             .iter()
             .map(|(a, b)| format!("<span class=\"num\">{a:.9} &lt; L̄ &lt; {b:.9}</span>"))
             .collect();
-        h.push_str(&parts.join(", "));
-        h.push_str(" (ends: the critical lengths and events above, with their error estimates): the Sec. 3.2 hypothesis fails there.</p>\n");
+        page.h.push_str(&parts.join(", "));
+        page.h.push_str(" (ends: the critical lengths and events above, with their error estimates): the Sec. 3.2 hypothesis fails there.</p>\n");
     }
-    h.push_str("</section>\n");
+    page.h.push_str("</section>\n");
 
-    h.push_str("<section id=\"atlas\">\n<h2>3. Branch atlas</h2>\n");
+    page.h
+        .push_str("<section id=\"atlas\">\n<h2>3. Branch atlas</h2>\n");
     match &atlas {
         Ok((svg, _, failed)) => {
-            h.push_str(&figs.fig(
+            page.fig(
                 svg,
                 "branch atlas: shapes along every branch",
                 &format!("{ATLAS_SHAPES} states per branch spread over its sampled range, each solved again as <code>rodloop solve</code> solves it and saved in <code>states/</code> (enclosed <code>config.csv</code> columns, with <code>gap</code>); parts off the wall in amber. Labels: L̄, the diagram's stability label and E R/(πD₀). <code>rodloop diagram --shapes K</code> draws this atlas with K columns."),
                 "fig-atlas",
-            ));
+            );
             for f in failed {
-                let _ = writeln!(h, "<p class=\"note\">atlas: not solved: {}</p>", esc(f));
+                let _ = writeln!(
+                    page.h,
+                    "<p class=\"note\">atlas: not solved: {}</p>",
+                    esc(f)
+                );
             }
         }
         Err(e) => {
-            let _ = writeln!(h, "<p class=\"note\">no atlas: {}</p>", esc(e));
+            let _ = writeln!(page.h, "<p class=\"note\">no atlas: {}</p>", esc(e));
         }
     }
-    h.push_str("</section>\n");
+    page.h.push_str("</section>\n");
 
-    h.push_str("<section id=\"states\">\n<h2>4. One state of each branch</h2>\n<p>Each branch solved at one length as <code>rodloop solve</code> solves it: the exact surface loop where its λ ≥ 0 (then it is the enclosed equilibrium; the 3-D model re-solves it as a check), else the 3-D enclosed model from it (energy error from the cascade's last three or four levels, as its method says). A loop that has lifted off is coloured by its gap (R − |r|)/R, one on the wall by its contact force λR³/D₀; nearer strands are darker and thicker; red circles: self-contacts in 3-D.</p>\n");
-    h.push_str("<table id=\"states-table\"><thead><tr><th>branch</th><th>η</th><th>L̄</th><th>chosen as</th><th>E R/(πD₀)</th><th>error</th><th>surface E</th><th>surface λ<sub>min</sub>R³/D₀</th><th>index</th><th>state</th><th>on the wall</th><th>max gap / R</th><th>point group</th><th>method</th></tr></thead><tbody>\n");
-    for st in &states {
-        match &st.outcome {
-            Ok(s) => {
-                let (se, sl) = s
-                    .surface
-                    .map(|(e, l)| (format!("{e:.10}"), format!("{l:.6}")))
-                    .unwrap_or_else(|| ("–".into(), "–".into()));
-                let _ = writeln!(
-                    h,
-                    "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"num\">{:.10}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td>{}</td><td>{}</td><td class=\"num\">{:.1} %</td><td class=\"num\">{}</td><td>{}</td><td>{}</td></tr>",
-                    st.branch,
-                    st.eta,
-                    st.lbar,
-                    esc(&st.why),
-                    s.energy.0,
-                    sci(s.energy.1),
-                    se,
-                    sl,
-                    s.index,
-                    s.label,
-                    100.0 * s.contact_fraction,
-                    sci(s.max_gap),
-                    s.point_group.as_deref().map(esc).unwrap_or_else(|| "–".into()),
-                    esc(&s.method)
-                );
-            }
-            Err(e) => {
-                super::tables::not_solved_row(&mut h, (st.branch, st.eta, st.lbar), &st.why, e, 10);
-            }
-        }
-    }
-    h.push_str("</tbody></table>\n");
+    page.h.push_str("<section id=\"states\">\n<h2>4. One state of each branch</h2>\n<p>Each branch solved at one length as <code>rodloop solve</code> solves it: the exact surface loop where its λ ≥ 0 (then it is the enclosed equilibrium; the 3-D model re-solves it as a check), else the 3-D enclosed model from it (energy error from the cascade's last three or four levels, as its method says). A loop that has lifted off is coloured by its gap (R − |r|)/R, one on the wall by its contact force λR³/D₀; nearer strands are darker and thicker; red circles: self-contacts in 3-D.</p>\n");
+    page.h.push_str("<table id=\"states-table\"><thead><tr><th>branch</th><th>η</th><th>L̄</th><th>chosen as</th><th>E R/(πD₀)</th><th>error</th><th>surface E</th><th>surface λ<sub>min</sub>R³/D₀</th><th>index</th><th>state</th><th>on the wall</th><th>max gap / R</th><th>point group</th><th>method</th></tr></thead><tbody>\n");
+    page.state_rows(&states, 10, |st, s| {
+        let (se, sl) = s
+            .surface
+            .map(|(e, l)| (format!("{e:.10}"), format!("{l:.6}")))
+            .unwrap_or_else(|| ("–".into(), "–".into()));
+        format!(
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"num\">{:.10}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td>{}</td><td>{}</td><td class=\"num\">{:.1} %</td><td class=\"num\">{}</td><td>{}</td><td>{}</td></tr>",
+            st.branch,
+            st.eta,
+            st.lbar,
+            esc(&st.why),
+            s.energy.0,
+            sci(s.energy.1),
+            se,
+            sl,
+            s.index,
+            s.label,
+            100.0 * s.contact_fraction,
+            sci(s.max_gap),
+            s.point_group.as_deref().map(esc).unwrap_or_else(|| "–".into()),
+            esc(&s.method)
+        )
+    });
+    page.h.push_str("</tbody></table>\n");
     for st in &states {
         if let Ok(s) = &st.outcome {
-            let _ = writeln!(h, "<div class=\"state\" id=\"state-{}\">", st.branch);
-            h.push_str(&figs.fig(
+            let _ = writeln!(page.h, "<div class=\"state\" id=\"state-{}\">", st.branch);
+            page.fig(
                 &s.picture,
                 &format!("loop of branch {} at length {}", st.branch, st.lbar),
                 &format!(
@@ -441,8 +451,8 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
                     sci(s.max_gap)
                 ),
                 &format!("fig-loop-{}", st.branch),
-            ));
-            h.push_str(&figs.fig(
+            );
+            page.fig(
                 &s.profile,
                 &format!("contact force and gap along the loop of branch {}", st.branch),
                 &format!(
@@ -453,107 +463,62 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
                     s.lambda_min
                 ),
                 &format!("fig-force-{}", st.branch),
-            ));
-            h.push_str("</div>\n");
+            );
+            page.h.push_str("</div>\n");
         }
     }
-    h.push_str("</section>\n");
+    page.h.push_str("</section>\n");
 
     let t_page = t.elapsed().as_secs_f64();
     let total = t_start.elapsed().as_secs_f64();
-    super::tables::settings_section(
-        &mut h,
-        &run,
-        &super::tables::Settings {
-            number: 5,
-            scene_name: &scene.name,
-            scene_file: args.scene.as_deref(),
-            extra: vec![
-                ("confinement", "enclosed, |r| ≤ R".into()),
-                ("sphere radius R", scene.radius.to_string()),
-                (
-                    "length range",
-                    format!(
-                        "{} ≤ L̄ ≤ {}, sampled every {}",
-                        opts.lbar_min, opts.lbar_max, opts.step
-                    ),
+    let settings = super::tables::Settings {
+        number: 5,
+        scene_name: &scene.name,
+        scene_file: args.scene.as_deref(),
+        extra: vec![
+            ("confinement", "enclosed, |r| ≤ R".into()),
+            ("sphere radius R", scene.radius.to_string()),
+            (
+                "length range",
+                format!(
+                    "{} ≤ L̄ ≤ {}, sampled every {}",
+                    opts.lbar_min, opts.lbar_max, opts.step
                 ),
-                (
-                    "cells of the lifted-off traces",
-                    d.cells
-                        .iter()
-                        .map(|(b, n)| format!("branch {b}: N = {n}"))
-                        .collect::<Vec<_>>()
-                        .join(", "),
-                ),
-            ],
-            accuracy: (accuracy, args.accuracy.is_some()),
-            units: "lengths and gaps in R, L̄ = L/(2πR), energies E R/(πD₀), contact force λR³/D₀",
-            scene_text: scene_text.as_deref(),
-        },
-    );
+            ),
+            (
+                "cells of the lifted-off traces",
+                d.cells
+                    .iter()
+                    .map(|(b, n)| format!("branch {b}: N = {n}"))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            ),
+        ],
+        accuracy: (accuracy, args.accuracy.is_some()),
+        units: "lengths and gaps in R, L̄ = L/(2πR), energies E R/(πD₀), contact force λR³/D₀",
+        scene_text: scene_text.as_deref(),
+    };
     let stages = [
         ("enclosed diagram (with writing the CSV files)", t_diagram),
         ("diagram figure", t_figures),
         ("branch atlas (states re-solved)", t_atlas),
     ];
-    let state_rows: Vec<(u32, f64, f64)> = states
-        .iter()
-        .filter_map(|st| {
-            st.outcome
-                .as_ref()
-                .ok()
-                .map(|s| (st.branch, st.lbar, s.seconds))
-        })
-        .collect();
-    super::tables::finish_page(
-        &run,
-        &mut h,
-        6,
-        &stages,
-        (states.len(), t_states, &state_rows),
-        t_page,
-        total,
-    )?;
-
-    let state_notes = states
-        .iter()
-        .map(|st| match &st.outcome {
-            Ok(s) => checked_json!({
-                "branch": st.branch, "eta": st.eta, "lbar": st.lbar, "energy": s.energy.0,
-                "energy_error": s.energy.1, "surface_energy": s.surface.map(|x| x.0),
-                "surface_lambda_min": s.surface.map(|x| x.1), "index": s.index,
-                "state": s.label, "contact_fraction": s.contact_fraction, "max_gap": s.max_gap,
-                "lambda_min": s.lambda_min, "point_group": s.point_group, "colour": s.color,
-                "method": s.method, "seconds": s.seconds,
-            }),
-            Err(e) => {
-                checked_json!({"branch": st.branch, "eta": st.eta, "lbar": st.lbar, "error": e})
-            }
-        })
-        .collect::<Result<Vec<_>>>()?;
-    let files = crate::states::files_in(run.stage_dir())?;
-    let report = checked_json!({
-        "file": "report.html",
-        "bytes": h.len(),
-        "figures": figs.count,
-        "states": state_notes,
+    let times = [
+        ("diagram", t_diagram),
+        ("diagram_figures", t_figures),
+        ("atlas", t_atlas),
+    ];
+    let fields = checked_json!({
         "lowest_lifted_off": lifted,
         "atlas_rows": atlas.as_ref().ok().map(|(_, note, _)| note.rows.iter().map(|(b, _, c)| serde_json::json!({"branch": b, "lbar": c.iter().map(|x| x.0).collect::<Vec<_>>(), "state_files": c.iter().map(|x| x.1.clone()).collect::<Vec<_>>()})).collect::<Vec<_>>()),
-        "states_dir": "states",
-        "files": files,
-        "version": version,
-        "seconds": serde_json::json!({
-            "diagram": t_diagram, "diagram_figures": t_figures, "atlas": t_atlas,
-            "states": t_states, "page": t_page, "total": total,
-        }),
     })?;
-    let failed = states.iter().filter(|s| s.outcome.is_err()).count();
-    super::tables::commit_report(run, report, failed, states.len())?;
+    let (bytes, figures, failed) = page.finish(
+        run, &settings, &stages, &times, &states, t_states, t_page, total, fields,
+    )?;
     outln!(
         "wrote report.html ({} KB, {} figures: enclosed diagram, branch atlas, {} with their force and gap plots), branches.csv, critical.csv, special_points.csv, diagram.svg/.png, summary.json, states/ to {} in {:.2} s",
-        h.len().div_ceil(1024),
-        figs.count,
+        bytes.div_ceil(1024),
+        figures,
         crate::output::plural((states.len() - failed) as u64, "loop picture"),
         args.out.display(),
         t_start.elapsed().as_secs_f64()

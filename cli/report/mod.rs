@@ -4,9 +4,10 @@
 //! comparison with the paper's printed values, `k²` against `L̄` with Eq. (B.4) (Fig. 11,
 //! homogeneous scenes), the branch atlas (Figs. 2, 9, 10; [`crate::atlas`]), a picture and the
 //! contact force `λ(s)` of the stable state of every branch at one length, the shape of the
-//! first against its Euler curve (Fig. 5), the run's settings and its timings. The tables and
-//! the style sheet are in `tables.rs`, the arguments and page sizes in `args.rs`, the page of an
-//! enclosed scene in `enclosed.rs`.
+//! first against its Euler curve (Fig. 5), the run's settings and its timings. The page builder
+//! both kinds of scene share is `page.rs`, the representative states of this page `states.rs`,
+//! the tables and the style sheet `tables.rs`, the arguments and page sizes `args.rs`, the page
+//! of an enclosed scene `enclosed.rs`.
 //!
 //! The page needs no network and no file beside it: every figure is an inline `<svg>`, the
 //! style sheet is inline, there is no script and no external font (the figures name
@@ -21,278 +22,21 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use rodloop_diagram::{DiagramOptions, DiagramRow, Label, NumericDiagram};
-use rodloop_figures::color::branch_color;
-use rodloop_figures::data::LoopData;
+use rodloop_diagram::DiagramOptions;
 use rodloop_figures::diagram::{energy_figure, energy_split_figure, lambda_figure, DiagramData};
-use rodloop_figures::loops::{loop_picture, point_group, LoopPictureOptions};
-use rodloop_figures::plot::{Plot, Series};
-use rodloop_figures::svg::{esc, Svg};
-use rodloop_scene::Scene;
-use rodloop_solver::Accuracy;
+use rodloop_figures::svg::esc;
 
 use crate::output::{checked_json, OutputRun};
 mod args;
 mod enclosed;
+mod page;
+mod states;
 mod tables;
 
 pub use args::Args;
-use args::{middle, ATLAS_SHAPES, FIG_H, FIG_W, PANEL};
-use tables::{compare_html, critical_html, sci, STYLE};
-
-/// Size of the force plot beside each loop picture, pixels.
-const FORCE_W: f64 = 360.0;
-/// Height of the force plot beside each loop picture, pixels.
-const FORCE_H: f64 = 300.0;
-
-/// The representative state of one branch: where it was taken and what came out.
-struct StateEntry {
-    branch: u32,
-    eta: u32,
-    lbar: f64,
-    /// Why this length: "middle of its first stable range …" or "middle of its traced range …".
-    why: String,
-    outcome: Result<SolvedState, String>,
-}
-
-/// A solved representative state with its picture.
-struct SolvedState {
-    energy: f64,
-    energy_error: f64,
-    index: usize,
-    label: &'static str,
-    lambda_range: (f64, f64),
-    lambda_error: f64,
-    cells: usize,
-    /// Where the solve started.
-    start: String,
-    point_group: Option<String>,
-    self_contacts: usize,
-    /// The loop picture (SVG).
-    picture: String,
-    /// `λ(s)` along the loop (SVG).
-    force: String,
-    /// `x, y, z, κ, τ, κ_g` along the loop with the aligned Euler curve (Fig. 5; SVG) and the
-    /// largest distance between the two curves.
-    shape: Option<(String, f64)>,
-    seconds: f64,
-}
-
-/// The widest stretch of lengths over which the diagram labels branch `branch` stable: the
-/// stable rows of every branch in increasing `L̄`, split where another branch's stable row
-/// comes between (a non-uniform rod's branch has several families, so the rows of the branch
-/// alone interleave); the lengths of the first and last row of the widest run.
-fn widest_stable_stretch(rows: &[DiagramRow], branch: u32) -> Option<(f64, f64)> {
-    let mut stable: Vec<&DiagramRow> = rows
-        .iter()
-        .filter(|r| r.stability == Label::Stable)
-        .collect();
-    stable.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
-    stable
-        .chunk_by(|a, b| (a.branch == branch) == (b.branch == branch))
-        .filter(|run| run[0].branch == branch)
-        .map(|run| (run[0].lbar, run[run.len() - 1].lbar))
-        .max_by(|a, b| (a.1 - a.0).total_cmp(&(b.1 - b.0)))
-}
-
-/// Solve branch `eta` at `lbar` from the Euler curve `l = η` (as `rodloop solve` does) or,
-/// when that fails, from the diagram's own state of the branch there (re-solved at the tracing
-/// resolution and passed on as points, as `solve --from` takes them); then draw it.
-fn solve_state(
-    scene: &Scene,
-    accuracy: Accuracy,
-    opts: &DiagramOptions,
-    d: &NumericDiagram,
-    branch: u32,
-    eta: u32,
-    lbar: f64,
-) -> Result<SolvedState> {
-    let t0 = Instant::now();
-    let (res, start) =
-        rodloop_diagram::representative::solve_on_branch(d, opts, accuracy, eta, lbar)?;
-    let eq = &res.equilibrium;
-    let index = eq.stability()?.index;
-    let label = if index > 0 {
-        "unstable"
-    } else if d.lowest_at(lbar).contains(&branch) {
-        "stable"
-    } else {
-        "metastable"
-    };
-    let profile = eq.profile();
-    let table = crate::solve::config_table(&profile, scene)?;
-    let source = format!("branch {branch} at L̄ = {lbar}");
-    let data = LoopData::parse(&source, &table.to_bytes()?)?;
-    let pic = loop_picture(
-        &data,
-        &LoopPictureOptions {
-            // Uniform rods: the contact force; otherwise the stiffness (where the soft segment is).
-            color: Some(
-                if scene.stiffness.is_uniform() {
-                    "lambda"
-                } else {
-                    "D"
-                }
-                .into(),
-            ),
-            tol: 1e-3,
-            panel: PANEL,
-            title: format!("Branch {branch} (η = {eta}) at L̄ = {lbar}: {label}"),
-            // The contact force's extremes between the nodes, as the states table gives them.
-            extremes: scene.stiffness.is_uniform().then(|| {
-                let unit = scene.radius.powi(3) / scene.stiffness.reference();
-                (res.lambda_range.0 * unit, res.lambda_range.1 * unit)
-            }),
-        },
-    )?;
-    let force = force_figure(&data, branch)?;
-    let shape = crate::draw::euler_overlay(eta, lbar).and_then(|(o, label)| {
-        let a = rodloop_figures::overlay::align(&data, &o).ok()?;
-        let svg = rodloop_figures::profiles::profiles_figure_overlay(
-            &data,
-            Some((&a.data, &label)),
-            480.0,
-            240.0,
-            &format!("Branch {branch} (η = {eta}) at L̄ = {lbar}: shape along the loop (Fig. 5)"),
-        )
-        .ok()?;
-        Some((svg, a.max_distance))
-    });
-    let lam_unit = scene.radius.powi(3) / scene.stiffness.reference();
-    Ok(SolvedState {
-        energy: res.energy.total,
-        energy_error: res.energy_error,
-        index,
-        label,
-        lambda_range: (res.lambda_range.0 * lam_unit, res.lambda_range.1 * lam_unit),
-        lambda_error: res.lambda_error * lam_unit,
-        cells: profile.len(),
-        start,
-        point_group: point_group(&data, crate::draw::POINT_GROUP_TOL).map(|g| g.0),
-        self_contacts: pic.contacts.len(),
-        picture: pic.svg,
-        force,
-        shape,
-        seconds: t0.elapsed().as_secs_f64(),
-    })
-}
-
-/// One representative state per traced branch: the middle of its first stable range in the
-/// diagram, or of its traced range when it is never the lowest. The solves run in parallel.
-fn representative_states(
-    scene: &Scene,
-    accuracy: Accuracy,
-    opts: &DiagramOptions,
-    d: &NumericDiagram,
-) -> Vec<StateEntry> {
-    let rows = d.rows();
-    // One entry per branch (a non-uniform rod's branch is traced as several families and
-    // sheets): its traced range is the union of theirs.
-    let mut spans: std::collections::BTreeMap<u32, (u32, f64, f64)> = Default::default();
-    for b in &d.branches {
-        let (a, c) = b.span();
-        let e = spans
-            .entry(b.branch)
-            .or_insert((b.eta, f64::INFINITY, f64::NEG_INFINITY));
-        e.1 = e.1.min(a);
-        e.2 = e.2.max(c);
-    }
-    let mut plan: Vec<(u32, u32, f64, String)> = spans
-        .into_iter()
-        .map(|(branch, (eta, lo, hi))| match widest_stable_stretch(&rows, branch) {
-            Some((a, c)) if c > a => (
-                branch,
-                eta,
-                middle(a, c),
-                format!("middle of its widest stable stretch (traced states at {a:.4} ≤ L̄ ≤ {c:.4})"),
-            ),
-            Some((a, _)) => (
-                branch,
-                eta,
-                a,
-                format!("the one length where the diagram finds it the lowest branch (L̄ = {a:.4})"),
-            ),
-            None => (
-                branch,
-                eta,
-                middle(lo, hi),
-                format!("middle of its traced range {lo:.4} ≤ L̄ ≤ {hi:.4} (never the lowest branch there)"),
-            ),
-        })
-        .collect();
-    plan.sort_by_key(|p| p.0);
-    let threads = std::thread::available_parallelism()
-        .map_or(1, |n| n.get())
-        .min(plan.len().max(1));
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let mut results: Vec<Option<Result<SolvedState, String>>> =
-        (0..plan.len()).map(|_| None).collect();
-    let slots = std::sync::Mutex::new(&mut results);
-    std::thread::scope(|scope| {
-        for _ in 0..threads {
-            scope.spawn(|| loop {
-                let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                let Some((branch, eta, lbar, _)) = plan.get(k) else {
-                    break;
-                };
-                let r = solve_state(scene, accuracy, opts, d, *branch, *eta, *lbar)
-                    .map_err(|e| format!("{e:#}"));
-                if let Ok(mut s) = slots.lock() {
-                    s[k] = Some(r);
-                }
-            });
-        }
-    });
-    plan.into_iter()
-        .zip(results)
-        .map(|((branch, eta, lbar, why), r)| StateEntry {
-            branch,
-            eta,
-            lbar,
-            why,
-            outcome: r.unwrap_or_else(|| Err("the solve thread did not report".into())),
-        })
-        .collect()
-}
-
-/// The contact force `λR³/D0` against `s/L` along one state (the paper's Fig. 6), from the
-/// `lambda` column of its loop table, closed at `s/L = 1`.
-fn force_figure(data: &LoopData, branch: u32) -> Result<String> {
-    let length = data.length();
-    let s = data.s();
-    let lam = data
-        .column("lambda")
-        .context("the loop table has no lambda column")?;
-    let mut points: Vec<(f64, f64)> = s.iter().zip(lam).map(|(&a, &b)| (a / length, b)).collect();
-    if let (Some(&s0), Some(&l0)) = (s.first(), lam.first()) {
-        points.push((s0 / length + 1.0, l0));
-    }
-    let clip = rodloop_figures::plot::robust_range(
-        lam,
-        Some(&rodloop_figures::plot::arclength_weights(s, length)),
-    );
-    let mut plot = Plot {
-        title: "Contact force along the loop".into(),
-        xlabel: "s/L (s = 0 as marked on the loop)".into(),
-        ylabel: "λR³/D₀".into(),
-        series: vec![Series {
-            color: branch_color(branch).to_string(),
-            width: 2.0,
-            dash: String::new(),
-            points,
-        }],
-        hlines: vec![0.0],
-        ..Default::default()
-    };
-    if let Some(shown) = clip {
-        let (x0, x1) = plot.x_range();
-        plot.range = Some((x0, x1, shown.0, shown.1));
-        plot.note = rodloop_figures::plot::clipped_note("λ", lam, shown);
-    }
-    let mut svg = Svg::new(FORCE_W, FORCE_H);
-    plot.render(&mut svg, 0.0, 0.0, FORCE_W, FORCE_H, "force");
-    Ok(svg.finish())
-}
+use args::{ATLAS_SHAPES, FIG_H, FIG_W};
+use page::Page;
+use tables::{compare_html, critical_html, sci};
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
@@ -356,64 +100,57 @@ pub fn run(args: &Args) -> Result<()> {
     let compare = crate::compare::compare_rows(uniform.then_some(&d))?;
     // Fig. 11 from the exact layer (homogeneous scenes).
     let fig_k2 = match &exact {
-        Some(e) => {
-            let pts: Vec<rodloop_figures::k2::K2Point> = e
-                .points
-                .iter()
-                .map(|p| rodloop_figures::k2::K2Point {
-                    branch: p.branch,
-                    eta: p.eta,
-                    p: p.p,
-                    lbar: p.lbar,
-                    k2: p.k * p.k,
-                })
-                .collect();
-            Some(rodloop_figures::k2::k2_figure(&pts, FIG_W, 480.0)?)
-        }
+        Some(e) => Some(crate::diagram::k2_figure(e, FIG_W, 480.0)?),
         None => None,
     };
     let t_exact = t.elapsed().as_secs_f64();
 
     // 4. One state per branch, its picture and its contact force.
     let t = Instant::now();
-    let states = representative_states(&scene, accuracy, &opts, &d);
+    let states = states::representative_states(&scene, accuracy, &opts, &d);
     let t_states = t.elapsed().as_secs_f64();
 
     // 5. The page.
     let t = Instant::now();
-    let version = env!("CARGO_PKG_VERSION");
-    let mut figs = tables::Figures::default();
-    let mut h = String::with_capacity(1 << 20);
-    let _ = write!(
-        h,
-        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n<title>rodloop report: {name}</title>\n<style>\n{STYLE}\n</style>\n</head>\n<body>\n<h1>rodloop report: scene {name}</h1>\n<p class=\"lead\">{desc}. Numeric branch diagram for {lo} ≤ L̄ ≤ {hi} at accuracy <b>{acc}</b>: {nstates} traced states on {nbranches}, {ncrit} critical lengths. Elastic rod loops in a sphere after Wang, Li &amp; Yi, J. Mech. Phys. Solids (2024); equation and figure numbers refer to that paper.</p>\n<nav><a href=\"#diagram\">Diagram</a><a href=\"#critical\">Critical lengths</a><a href=\"#atlas\">Atlas</a><a href=\"#states\">States</a><a href=\"#paper\">Paper values</a><a href=\"#settings\">Settings</a><a href=\"#timings\">Timings</a></nav>\n",
-        name = esc(&scene.name),
-        desc = esc(&d.scene),
-        lo = opts.lbar_min,
-        hi = opts.lbar_max,
-        acc = format!("{accuracy:?}").to_lowercase(),
-        nstates = d.rows().len(),
-        nbranches = crate::diagram::surface::branch_count(&d.branches),
-        ncrit = d.critical.len(),
+    let mut page = Page::begin(
+        &scene.name,
+        &format!(
+            "{desc}. Numeric branch diagram for {lo} ≤ L̄ ≤ {hi} at accuracy <b>{acc}</b>: {nstates} traced states on {nbranches}, {ncrit} critical lengths.",
+            desc = esc(&d.scene),
+            lo = opts.lbar_min,
+            hi = opts.lbar_max,
+            acc = format!("{accuracy:?}").to_lowercase(),
+            nstates = d.rows().len(),
+            nbranches = crate::diagram::surface::branch_count(&d.branches),
+            ncrit = d.critical.len(),
+        ),
+        &[
+            ("diagram", "Diagram"),
+            ("critical", "Critical lengths"),
+            ("atlas", "Atlas"),
+            ("states", "States"),
+            ("paper", "Paper values"),
+            ("settings", "Settings"),
+            ("timings", "Timings"),
+        ],
     );
-    for w in &d.warnings {
-        let _ = writeln!(h, "<p class=\"note\">warning: {}</p>", esc(w));
-    }
+    page.notes("warning", &d.warnings);
 
-    h.push_str("<section id=\"diagram\">\n<h2>1. Energy against length</h2>\n");
-    h.push_str(&figs.fig(
+    page.h
+        .push_str("<section id=\"diagram\">\n<h2>1. Energy against length</h2>\n");
+    page.fig(
         &fig_energy,
         "bending energy against normalised length",
         "Bending energy E R/(πD₀) of every traced state against L̄ = L/(2πR) (paper Fig. 3a). One colour per branch; solid: stable (lowest energy), dashed: metastable (a local minimum with higher energy), dotted: unstable (Hessian index &gt; 0). Diamonds: crossings E<sub>a</sub> = E<sub>b</sub>; open squares: collapses onto an m-fold great circle.",
         "fig-energy",
-    ));
-    h.push_str(&figs.fig(
+    );
+    page.fig(
         &fig_split,
         "geodesic and normal energy split",
         "The energy split E = E<sub>g</sub> + E<sub>n</sub> into its geodesic-curvature and normal-curvature parts (paper Fig. 3b).",
         "fig-split",
-    ));
-    h.push_str(&figs.fig(
+    );
+    page.fig(
         &fig_lambda,
         "contact force extremes against length",
         &if uniform {
@@ -422,25 +159,26 @@ pub fn run(args: &Args) -> Result<()> {
             "Largest and smallest contact force λR³/D₀ of every state (paper Fig. 7). The great-circle buckling loads of Eqs. (33)–(34) hold for a uniform rod only and are not marked. Where a few states have sharp force peaks at the stiffness steps, the axis shows the bulk of the values and the note under it gives the full range.".to_string()
         },
         "fig-lambda",
-    ));
+    );
     if let Some(k2) = &fig_k2 {
-        h.push_str(&figs.fig(
+        page.fig(
             k2,
             "elliptic modulus against length",
             "k² of the exact loops of every branch against L̄ (paper Fig. 11), with the small-k² formula Eq. (B.4) dashed, evaluated with each branch's (η, p). The numeric model has no k; this figure is the exact layer's.",
             "fig-k2",
-        ));
+        );
     } else {
-        h.push_str("<p class=\"note\" id=\"no-k2\">No k² figure (paper Fig. 11): the elliptic modulus k belongs to the closed-form loops of a uniform rod (Eq. (35)); this scene's stiffness is not uniform, so its loops have no k and Eq. (B.4) does not apply.</p>\n");
+        page.h.push_str("<p class=\"note\" id=\"no-k2\">No k² figure (paper Fig. 11): the elliptic modulus k belongs to the closed-form loops of a uniform rod (Eq. (35)); this scene's stiffness is not uniform, so its loops have no k and Eq. (B.4) does not apply.</p>\n");
     }
-    h.push_str("</section>\n");
+    page.h.push_str("</section>\n");
 
-    h.push_str("<section id=\"critical\">\n<h2>2. Critical lengths</h2>\n<p>Where the globally stable branch changes: crossings solve E<sub>a</sub>(L̄) = E<sub>b</sub>(L̄) on re-solved, Richardson-extrapolated equilibria; collapses are the lengths L̄ = m where the lowest branch ends on the m-fold great circle. Branch 0 is the planar circle below L̄ = 1. The error estimate is that of L̄<sub>cr</sub> itself.");
+    page.h.push_str("<section id=\"critical\">\n<h2>2. Critical lengths</h2>\n<p>Where the globally stable branch changes: crossings solve E<sub>a</sub>(L̄) = E<sub>b</sub>(L̄) on re-solved, Richardson-extrapolated equilibria; collapses are the lengths L̄ = m where the lowest branch ends on the m-fold great circle. Branch 0 is the planar circle below L̄ = 1. The error estimate is that of L̄<sub>cr</sub> itself.");
     if exact.is_some() {
-        h.push_str(" For this homogeneous scene the exact layer (closed-form elliptic-function loops, error ≈ 1e−14) gives the exact values.");
+        page.h.push_str(" For this homogeneous scene the exact layer (closed-form elliptic-function loops, error ≈ 1e−14) gives the exact values.");
     }
-    h.push_str(" The same numbers are in <code>critical.csv</code>.</p>\n");
-    h.push_str(&critical_html(&d, exact.as_ref()));
+    page.h
+        .push_str(" The same numbers are in <code>critical.csv</code>.</p>\n");
+    page.h.push_str(&critical_html(&d, exact.as_ref()));
     if let Some(gc) = &d.great_circles {
         let loads: Vec<_> = gc
             .loads
@@ -448,10 +186,9 @@ pub fn run(args: &Args) -> Result<()> {
             .filter_map(|l| Some((l, l.lambda_formula?, l.equation.as_ref()?)))
             .collect();
         if !loads.is_empty() {
-            h.push_str("<p>Buckling loads of the m-fold great circles, found numerically where the constrained Hessian becomes singular, against Eqs. (33)–(34):</p>\n<table id=\"buckling-table\"><thead><tr><th>m</th><th>mode (periods of κ<sub>g</sub>)</th><th>numeric λR³/D₀</th><th>error estimate</th><th>formula</th><th>value</th></tr></thead><tbody>\n");
+            page.h.push_str("<p>Buckling loads of the m-fold great circles, found numerically where the constrained Hessian becomes singular, against Eqs. (33)–(34):</p>\n<table id=\"buckling-table\"><thead><tr><th>m</th><th>mode (periods of κ<sub>g</sub>)</th><th>numeric λR³/D₀</th><th>error estimate</th><th>formula</th><th>value</th></tr></thead><tbody>\n");
             for (l, f, eq) in loads {
-                let _ = writeln!(
-                    h,
+                let _ = writeln!(page.h,
                     "<tr><td>{}</td><td>{}</td><td class=\"num\">{:.10}</td><td class=\"num\">{}</td><td>Eq. ({})</td><td class=\"num\">{:.10}</td></tr>",
                     l.m,
                     l.mode_periods,
@@ -461,56 +198,49 @@ pub fn run(args: &Args) -> Result<()> {
                     f
                 );
             }
-            h.push_str("</tbody></table>\n");
+            page.h.push_str("</tbody></table>\n");
         }
     }
-    h.push_str("</section>\n");
+    page.h.push_str("</section>\n");
 
-    h.push_str("<section id=\"atlas\">\n<h2>3. Branch atlas</h2>\n");
+    page.h
+        .push_str("<section id=\"atlas\">\n<h2>3. Branch atlas</h2>\n");
     match &fig_atlas {
-        Ok(svg) => h.push_str(&figs.fig(
+        Ok(svg) => page.fig(
             svg,
             "branch atlas: shapes along every branch",
             &format!("The traced states along every branch (one row per branch, or per family of a non-uniform rod), {ATLAS_SHAPES} per row spread evenly over its traced range (paper Figs. 2, 9, 10), each labelled with L̄, its stability and E R/(πD₀). Every traced state is in <code>states/</code> (column <code>state_file</code> of <code>branches.csv</code>); <code>rodloop diagram --shapes K</code> draws this atlas with K columns."),
             "fig-atlas",
-        )),
+        ),
         Err(e) => {
-            let _ = writeln!(h, "<p class=\"note\">no atlas: {}</p>", esc(e));
+            let _ = writeln!(page.h, "<p class=\"note\">no atlas: {}</p>", esc(e));
         }
     }
-    h.push_str("</section>\n");
+    page.h.push_str("</section>\n");
 
-    h.push_str("<section id=\"states\">\n<h2>4. The stable state of each branch</h2>\n<p>Each branch solved at one length (the middle of the widest stretch where the diagram finds it the lowest branch), from the Euler rotation curve with l = η at the report's accuracy, as <code>rodloop solve</code> does; the converged state's branch is checked from the periods of its κ<sub>g</sub>. Each picture shows the loop on the sphere from an oblique view and along the three axes, coloured by the contact force λR³/D₀ (uniform rods) or by the stiffness D/D₀ (other profiles); nearer strands are darker and thicker. Red circles: self-contacts in 3-D.</p>\n");
-    h.push_str("<table id=\"states-table\"><thead><tr><th>branch</th><th>η</th><th>L̄</th><th>chosen as</th><th>solved from</th><th>E R/(πD₀)</th><th>error</th><th>index</th><th>state</th><th>λR³/D₀ range</th><th>point group</th><th>self-contacts</th><th>cells</th></tr></thead><tbody>\n");
-    for st in &states {
-        match &st.outcome {
-            Ok(s) => {
-                let _ = writeln!(
-                    h,
-                    "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"num\">{:.10}</td><td class=\"num\">{}</td><td>{}</td><td>{}</td><td class=\"num\">[{:.6}, {:.6}] ± {}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-                    st.branch,
-                    st.eta,
-                    st.lbar,
-                    esc(&st.why),
-                    esc(&s.start),
-                    s.energy,
-                    sci(s.energy_error),
-                    s.index,
-                    s.label,
-                    s.lambda_range.0,
-                    s.lambda_range.1,
-                    sci(s.lambda_error),
-                    s.point_group.as_deref().map(esc).unwrap_or_else(|| "–".into()),
-                    s.self_contacts,
-                    s.cells
-                );
-            }
-            Err(e) => {
-                tables::not_solved_row(&mut h, (st.branch, st.eta, st.lbar), &st.why, e, 9);
-            }
-        }
-    }
-    h.push_str("</tbody></table>\n");
+    page.h.push_str("<section id=\"states\">\n<h2>4. The stable state of each branch</h2>\n<p>Each branch solved at one length (the middle of the widest stretch where the diagram finds it the lowest branch), from the Euler rotation curve with l = η at the report's accuracy, as <code>rodloop solve</code> does; the converged state's branch is checked from the periods of its κ<sub>g</sub>. Each picture shows the loop on the sphere from an oblique view and along the three axes, coloured by the contact force λR³/D₀ (uniform rods) or by the stiffness D/D₀ (other profiles); nearer strands are darker and thicker. Red circles: self-contacts in 3-D.</p>\n");
+    page.h.push_str("<table id=\"states-table\"><thead><tr><th>branch</th><th>η</th><th>L̄</th><th>chosen as</th><th>solved from</th><th>E R/(πD₀)</th><th>error</th><th>index</th><th>state</th><th>λR³/D₀ range</th><th>point group</th><th>self-contacts</th><th>cells</th></tr></thead><tbody>\n");
+    page.state_rows(&states, 9, |st, s| {
+        format!(
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"num\">{:.10}</td><td class=\"num\">{}</td><td>{}</td><td>{}</td><td class=\"num\">[{:.6}, {:.6}] ± {}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            st.branch,
+            st.eta,
+            st.lbar,
+            esc(&st.why),
+            esc(&s.start),
+            s.energy,
+            sci(s.energy_error),
+            s.index,
+            s.label,
+            s.lambda_range.0,
+            s.lambda_range.1,
+            sci(s.lambda_error),
+            s.point_group.as_deref().map(esc).unwrap_or_else(|| "–".into()),
+            s.self_contacts,
+            s.cells
+        )
+    });
+    page.h.push_str("</tbody></table>\n");
     // Fig. 5 for the first solved state: its shape against the Euler curve.
     if let Some((st, (svg, dist))) = states.iter().find_map(|st| {
         st.outcome
@@ -519,7 +249,7 @@ pub fn run(args: &Args) -> Result<()> {
             .and_then(|s| s.shape.as_ref())
             .map(|x| (st, x))
     }) {
-        h.push_str(&figs.fig(
+        page.fig(
             svg,
             &format!("shape of branch {} against its Euler curve", st.branch),
             &format!(
@@ -527,12 +257,12 @@ pub fn run(args: &Args) -> Result<()> {
                 st.branch, st.lbar, dist
             ),
             "fig-shape",
-        ));
+        );
     }
     for st in &states {
         if let Ok(s) = &st.outcome {
-            let _ = writeln!(h, "<div class=\"state\" id=\"state-{}\">", st.branch);
-            h.push_str(&figs.fig(
+            let _ = writeln!(page.h, "<div class=\"state\" id=\"state-{}\">", st.branch);
+            page.fig(
                 &s.picture,
                 &format!("loop of branch {} at length {}", st.branch, st.lbar),
                 &format!(
@@ -550,8 +280,8 @@ pub fn run(args: &Args) -> Result<()> {
                     crate::output::plural(s.self_contacts as u64, "self-contact"),
                 ),
                 &format!("fig-loop-{}", st.branch),
-            ));
-            h.push_str(&figs.fig(
+            );
+            page.fig(
                 &s.force,
                 &format!("contact force along the loop of branch {}", st.branch),
                 &format!(
@@ -563,42 +293,39 @@ pub fn run(args: &Args) -> Result<()> {
                     sci(s.lambda_error)
                 ),
                 &format!("fig-force-{}", st.branch),
-            ));
-            h.push_str("</div>\n");
+            );
+            page.h.push_str("</div>\n");
         }
     }
-    h.push_str("</section>\n");
+    page.h.push_str("</section>\n");
 
-    h.push_str("<section id=\"paper\">\n<h2>5. Comparison with the paper's printed values</h2>\n<p>Values printed in the paper (<code>data/reference/paper_values.csv</code>, with their sources), next to rodloop's. “Agrees” means within half a unit of the last printed digit (exact statements: within 1e−6).");
+    page.h.push_str("<section id=\"paper\">\n<h2>5. Comparison with the paper's printed values</h2>\n<p>Values printed in the paper (<code>data/reference/paper_values.csv</code>, with their sources), next to rodloop's. “Agrees” means within half a unit of the last printed digit (exact statements: within 1e−6).");
     if !uniform {
-        h.push_str(" The paper's values are for homogeneous loops; this scene's stiffness is not uniform, so only the exact (homogeneous) layer is compared.");
+        page.h.push_str(" The paper's values are for homogeneous loops; this scene's stiffness is not uniform, so only the exact (homogeneous) layer is compared.");
     }
-    h.push_str(" Winding numbers and symmetries are compared on the exact layer only.</p>\n");
-    h.push_str(&compare_html(&compare, uniform));
-    h.push_str("</section>\n");
+    page.h
+        .push_str(" Winding numbers and symmetries are compared on the exact layer only.</p>\n");
+    page.h.push_str(&compare_html(&compare, uniform));
+    page.h.push_str("</section>\n");
 
     let t_page = t.elapsed().as_secs_f64();
     let total = t_start.elapsed().as_secs_f64();
-    tables::settings_section(
-        &mut h,
-        &run,
-        &tables::Settings {
-            number: 6,
-            scene_name: &scene.name,
-            scene_file: args.scene.as_deref(),
-            extra: vec![
-                ("description", esc(&d.scene)),
-                ("sphere radius R", scene.radius.to_string()),
-                (
-                    "length range",
-                    format!("{} ≤ L̄ ≤ {}", opts.lbar_min, opts.lbar_max),
-                ),
-            ],
-            accuracy: (accuracy, args.accuracy.is_some()),
-            units: "lengths in R, L̄ = L/(2πR), energies E R/(πD₀), contact force λR³/D₀ (D₀ = D for a uniform rod)",
-            scene_text: scene_text.as_deref(),
-        },
-    );
+    let settings = tables::Settings {
+        number: 6,
+        scene_name: &scene.name,
+        scene_file: args.scene.as_deref(),
+        extra: vec![
+            ("description", esc(&d.scene)),
+            ("sphere radius R", scene.radius.to_string()),
+            (
+                "length range",
+                format!("{} ≤ L̄ ≤ {}", opts.lbar_min, opts.lbar_max),
+            ),
+        ],
+        accuracy: (accuracy, args.accuracy.is_some()),
+        units: "lengths in R, L̄ = L/(2πR), energies E R/(πD₀), contact force λR³/D₀ (D₀ = D for a uniform rod)",
+        scene_text: scene_text.as_deref(),
+    };
     let stages = [
         ("diagram: tracing the branches", d.timings.tracing),
         ("diagram: critical lengths", d.timings.critical),
@@ -608,69 +335,23 @@ pub fn run(args: &Args) -> Result<()> {
         ("branch atlas", t_atlas),
         ("exact layer and paper comparison", t_exact),
     ];
-    let state_rows: Vec<(u32, f64, f64)> = states
-        .iter()
-        .filter_map(|st| {
-            st.outcome
-                .as_ref()
-                .ok()
-                .map(|s| (st.branch, st.lbar, s.seconds))
-        })
-        .collect();
-    tables::finish_page(
-        &run,
-        &mut h,
-        7,
-        &stages,
-        (states.len(), t_states, &state_rows),
-        t_page,
-        total,
-    )?;
-
-    let state_notes = states
-        .iter()
-        .map(|st| match &st.outcome {
-            Ok(s) => checked_json!({
-                "branch": st.branch, "eta": st.eta, "lbar": st.lbar, "energy": s.energy,
-                "energy_error": s.energy_error, "index": s.index, "state": s.label,
-                "lambda_min": s.lambda_range.0, "lambda_max": s.lambda_range.1,
-                "point_group": s.point_group, "self_contacts": s.self_contacts, "start": s.start,
-                "seconds": s.seconds,
-            }),
-            Err(e) => {
-                checked_json!({"branch": st.branch, "eta": st.eta, "lbar": st.lbar, "error": e})
-            }
-        })
-        .collect::<Result<Vec<_>>>()?;
-    // The tracer's branches/*.json stay in the staging directory (removed at commit).
-    let mut files = crate::states::files_in(run.stage_dir())?;
-    files.retain(|f| !f.starts_with("branches/"));
-    let report = checked_json!({
-        "file": "report.html",
-        "states_dir": "states",
-        "files": files,
-        "bytes": h.len(),
-        "figures": figs.count,
-        "states": state_notes,
+    let times = [
+        ("diagram", t_diagram),
+        ("diagram_figures", t_diagram_figures),
+        ("atlas", t_atlas),
+        ("exact_and_paper", t_exact),
+    ];
+    let fields = checked_json!({
         "paper_disagreements_exact": compare.iter().filter(|r| r.agrees_exact == Some(false)).count(),
         "paper_disagreements_numeric": compare.iter().filter(|r| r.agrees_numeric == Some(false)).count(),
-        "version": version,
-        "seconds": serde_json::json!({
-            "diagram": t_diagram,
-            "diagram_figures": t_diagram_figures,
-            "atlas": t_atlas,
-            "exact_and_paper": t_exact,
-            "states": t_states,
-            "page": t_page,
-            "total": total,
-        }),
     })?;
-    let failed = states.iter().filter(|s| s.outcome.is_err()).count();
-    tables::commit_report(run, report, failed, states.len())?;
+    let (bytes, figures, failed) = page.finish(
+        run, &settings, &stages, &times, &states, t_states, t_page, total, fields,
+    )?;
     outln!(
         "wrote report.html ({} KB, {} figures: diagram, energy split, lambda extremes, {}branch atlas, shape against the Euler curve, {} with their force plots), branches.csv, critical.csv, special_points.csv, diagram.svg, summary.json, states/ to {} in {:.2} s",
-        h.len().div_ceil(1024),
-        figs.count,
+        bytes.div_ceil(1024),
+        figures,
         if fig_k2.is_some() { "k² (Fig. 11), " } else { "" },
         crate::output::plural((states.len() - failed) as u64, "loop picture"),
         args.out.display(),

@@ -53,6 +53,8 @@
 //! | `parallel.rs` | the thread pool |
 //! | `engine.rs` | the [`Engine`] interface of every diagram model and its result in the schema |
 //! | `refine.rs`, `critical.rs`, `labels.rs`, `buckling.rs`, `diagram.rs` | the assembly |
+//! | `enclosed_state.rs` | one enclosed state solved with its certificate (energy, estimate, index, method) |
+//! | `detached.rs` | where the enclosed loops of a homogeneous rod leave the wall, scanned |
 //!
 //! Energies are `E R/(π D0)`, forces `λR³/D0` (with `R`, `D0` of the scene), as in the paper.
 
@@ -62,8 +64,10 @@ pub mod buckling;
 pub mod certificate;
 mod compute;
 pub mod critical;
+pub mod detached;
 mod diagram;
 pub mod enclosed;
+pub mod enclosed_state;
 mod ends;
 pub mod engine;
 mod estimate;
@@ -185,6 +189,21 @@ pub enum DiagramError {
     /// An error of the solver outside the cases above.
     #[error("solver: {0}")]
     Solver(#[from] SolverError),
+    /// A state asked for outside the range of lengths where its branch exists.
+    #[error("{0}")]
+    OutOfRange(String),
+    /// An error of a lower layer with what was being computed when it happened.
+    #[error("{what}")]
+    Context {
+        /// What was being computed.
+        what: String,
+        /// The lower layer's error.
+        #[source]
+        source: BoxError,
+    },
+    /// An error of a lower layer passed on as it is.
+    #[error(transparent)]
+    Passed(BoxError),
 }
 
 /// What to compute: the scene, the range of lengths and the accuracy level.

@@ -15,6 +15,7 @@ pub mod color;
 pub mod convergence;
 pub mod data;
 pub mod diagram;
+mod diagram_data;
 pub mod geometry;
 pub mod k2;
 pub mod loops;

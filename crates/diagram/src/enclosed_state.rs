@@ -1,0 +1,289 @@
+//! One enclosed state (`|r| ≤ R`, paper Sec. 3.2) solved as `rodloop solve` reports it, with
+//! its certificate: the energy and its error estimate, the surface loop it starts from, the
+//! stability index and how the energy was obtained.
+//!
+//! A branch's enclosed state starts from its surface loop. Where that loop has `λ ≥ 0`
+//! everywhere it satisfies every enclosed KKT condition (the wall may push, the loop
+//! touches, stationarity is the surface equations), so it is the enclosed equilibrium: the
+//! energy reported is the surface one (exact layer for uniform rods) and the 3-D enclosed
+//! model re-solves it as a check. Where `λ < 0` somewhere, the 3-D model's semismooth
+//! Newton finds the lift-off.
+
+use rodloop_exact::{eta_of_branch, paper_branch_loop};
+use rodloop_solver::enclosed::descent::{descend_branch, solve_branch_lowest};
+use rodloop_solver::enclosed::{
+    enclosed_cells, enclosed_solve_cells, free_circle, solve_branch, solve_enclosed, solve_levels,
+    start_from_shape, EnclosedOptions, EnclosedState, SavedShape, SurfaceSource,
+};
+use rodloop_solver::{solve_robust, Accuracy, SolveOptions, StartShape, Stiffness};
+
+use crate::DiagramError;
+
+/// Tolerance on the gap (units of `R`) for "touching".
+pub const TOUCH: f64 = 1e-9;
+
+/// One enclosed state with everything `solve` reports.
+pub struct EnclosedResult {
+    /// The 3-D state reported (config.csv).
+    pub state: EnclosedState,
+    /// Energy `E R/(π D0)` and its error estimate.
+    pub energy: (f64, f64),
+    /// Surface loop energy and `λ_min` (None for branch 0).
+    pub surface: Option<(f64, f64)>,
+    /// Stability index and lowest eigenvalues (on the coarsest level of the cascade, `N/8`
+    /// or `N/4`; dense, `O(N³)`).
+    pub stability: (usize, Vec<f64>),
+    /// How the energy was obtained.
+    pub method: String,
+    /// The 3-D model's own energy (and estimate).
+    pub model_energy: (f64, f64),
+}
+
+/// An error of a lower layer with what was being computed when it happened.
+pub(crate) fn context<E>(what: impl Into<String>) -> impl FnOnce(E) -> DiagramError
+where
+    E: std::error::Error + Send + Sync + 'static,
+{
+    let what = what.into();
+    move |e| DiagramError::Context {
+        what,
+        source: Box::new(e),
+    }
+}
+
+/// An error of a lower layer passed on as it is.
+pub(crate) fn passed<E>(e: E) -> DiagramError
+where
+    E: std::error::Error + Send + Sync + 'static,
+{
+    DiagramError::Passed(Box::new(e))
+}
+
+/// Cells `N` of the finest level of a solve of branch `eta`. Uniform rods: the fine mesh of
+/// the O(N) step. Two-segment rods keep the diagram's mesh (observed order 1.0–1.4 there; the
+/// cascade started at N/4 = 96 cells from the surface loop of branch 3 at lbar = 2.2 does not
+/// converge), at least `32 (2 + η)`: sharp profiles (Eq. (51), gamma = 200) need the coarsest
+/// level of the cascade (N/4) to resolve the transitions on the graded mesh.
+fn solve_cells(stiffness: &Stiffness, accuracy: Accuracy, eta: u32) -> usize {
+    if stiffness.is_uniform() {
+        enclosed_solve_cells(accuracy, eta)
+    } else {
+        enclosed_cells(accuracy, eta).max(32 * (2 + eta as usize))
+    }
+}
+
+/// Solve branch `branch` of an enclosed scene (ball radius `r`, the rod's `stiffness`, its
+/// reference value `D0`) at `lbar`, descending from a saddle to the local minimum of the
+/// branch below it ([`solve_state_with`]).
+pub fn solve_state(
+    r: f64,
+    stiffness: &Stiffness,
+    lbar: f64,
+    branch: u32,
+    accuracy: Accuracy,
+) -> Result<EnclosedResult, DiagramError> {
+    solve_state_with(r, stiffness, lbar, branch, accuracy, false)
+}
+
+/// [`solve_state`]; `keep_saddle`: return the state Newton converges to even where it is a
+/// saddle.
+pub fn solve_state_with(
+    r: f64,
+    stiffness: &Stiffness,
+    lbar: f64,
+    branch: u32,
+    accuracy: Accuracy,
+    keep_saddle: bool,
+) -> Result<EnclosedResult, DiagramError> {
+    let opts = EnclosedOptions::default();
+    if branch == 0 {
+        if lbar > 1.0 {
+            return Err(DiagramError::OutOfRange(format!(
+                "branch 0 (the planar circle) fits in the ball only for lbar <= 1; got lbar = {lbar}"
+            )));
+        }
+        // The uniform circle is exact at any resolution: the 3-D check runs at the fast one.
+        let cells = enclosed_cells(
+            if stiffness.is_uniform() {
+                Accuracy::Fast
+            } else {
+                accuracy
+            },
+            1,
+        );
+        let (model, z0) = free_circle(r, lbar, cells, stiffness).map_err(passed)?;
+        let state = solve_enclosed(&model, z0, &opts).map_err(context("the free circle"))?;
+        let (cm, cz) = free_circle(r, lbar, cells / 2, stiffness).map_err(passed)?;
+        let comp = solve_enclosed(&cm, cz, &opts).map_err(passed)?;
+        let e = state.energy();
+        let est = rodloop_solver::richardson_error(e, comp.energy());
+        let stability = comp.stability(1e-6).map_err(passed)?;
+        let exact = if stiffness.is_uniform() {
+            Some(1.0 / lbar)
+        } else {
+            None
+        };
+        return Ok(EnclosedResult {
+            energy: (exact.unwrap_or(e), if exact.is_some() { 0.0 } else { est }),
+            surface: None,
+            stability,
+            method: if exact.is_some() {
+                "planar circle: E R/(pi D) = 1/lbar exactly; 3-D model solved as a check".into()
+            } else {
+                "planar circle, 3-D model".into()
+            },
+            model_energy: (e, est),
+            state,
+        });
+    }
+    let eta = eta_of_branch(branch);
+    let e = f64::from(eta);
+    if !(lbar > e - 1.0 && lbar < e + 1.0) {
+        return Err(DiagramError::OutOfRange(format!(
+            "branch {branch} (eta = {eta}) exists only for {} < lbar < {}; got lbar = {lbar}",
+            e - 1.0,
+            e + 1.0
+        )));
+    }
+    let d0 = stiffness.reference();
+    let (source, surface_error) = if stiffness.is_uniform() {
+        let l = paper_branch_loop(eta, lbar).map_err(context(format!(
+            "the exact surface loop of branch {branch}"
+        )))?;
+        (SurfaceSource::Exact(l), 0.0)
+    } else {
+        let (res, _) = solve_robust(
+            r,
+            lbar,
+            stiffness,
+            &StartShape::Euler { l: eta },
+            accuracy,
+            Some(eta),
+            &SolveOptions::default(),
+        )
+        .map_err(context(format!("the surface loop of branch {branch}")))?;
+        let err = res.energy_error;
+        (SurfaceSource::Numeric(Box::new(res.equilibrium)), err)
+    };
+    let e_surf = source.energy().map_err(passed)?;
+    let lam_min = source.lambda_min(r, d0);
+    let attached = lam_min >= 0.0;
+    // An attached loop's energy is the surface one; the 3-D re-solve is a check, at the
+    // fast resolution.
+    let acc = if attached { Accuracy::Fast } else { accuracy };
+    let cells = solve_cells(stiffness, acc, eta);
+    let what = || format!("the enclosed loop of branch {branch} at lbar = {lbar}");
+    // Set where the state reported is a lower local minimum than the one reached from the
+    // surface loop (continuation in the stiffness from the uniform rod's loop).
+    let mut lower_minimum = false;
+    let (b, descent, given_up) = if keep_saddle {
+        let b = solve_branch(r, lbar, stiffness, &source, cells, &opts).map_err(context(what()))?;
+        (b, None, Vec::new())
+    } else {
+        // Two-segment rods: where the mesh of this accuracy does not end at a local minimum,
+        // the meshes of the finer levels (and twice the finest) are tried.
+        let mut ladder = vec![cells];
+        if !stiffness.is_uniform() {
+            for a in [Accuracy::Default, Accuracy::High] {
+                ladder.push(enclosed_cells(a, eta).max(32 * (2 + eta as usize)));
+            }
+            ladder.push(2 * ladder[ladder.len() - 1]);
+            ladder.retain(|&n| n >= cells);
+            ladder.dedup();
+        }
+        let (out, replaced) = solve_branch_lowest(r, lbar, eta, stiffness, &source, &ladder, &opts)
+            .map_err(context(what()))?;
+        lower_minimum = replaced;
+        out
+    };
+    let cells = b.fine.model.cells();
+    let stability = b.coarsest().stability(1e-6).map_err(passed)?;
+    let moved = lower_minimum || descent.as_ref().is_some_and(|d| d.moved());
+    let (energy, mut method) = if attached && !moved {
+        (
+            (e_surf, surface_error),
+            format!(
+                "surface loop (lambda_min = {lam_min:.6} >= 0: it satisfies the enclosed KKT conditions); 3-D model re-solved at N = {cells} as a check"
+            ),
+        )
+    } else {
+        (
+            (b.energy, b.energy_error),
+            format!(
+                "3-D enclosed model, N = {cells} cells (semismooth Newton from {}, lambda_min = {lam_min:.6}); {}",
+                if lower_minimum {
+                    "the uniform rod's loop continued in the stiffness"
+                } else if b.homotopy {
+                    "the surface loop by the pull homotopy"
+                } else {
+                    "the surface loop"
+                },
+                b.estimate_method()
+            ),
+        )
+    };
+    for why in &given_up {
+        method.push_str(&format!("; {why}"));
+    }
+    if let Some(d) = descent.filter(|d| d.start().index > 0) {
+        method.push_str(&format!(
+            "; {} (descent at N/4 = {} cells, energies at N)",
+            d.describe(),
+            b.quarter.model.cells()
+        ));
+    }
+    Ok(EnclosedResult {
+        model_energy: (b.energy, b.energy_error),
+        state: b.fine,
+        energy,
+        surface: Some((e_surf, lam_min)),
+        stability,
+        method,
+    })
+}
+
+/// Solve from a saved enclosed shape at `lbar`: the shape's curvature vectors, aligned by
+/// [`start_from_shape`], start the cascade at `N/4` (`N = 32(1 + η)` with the branch's `η`
+/// when given, else `η = 2`).
+pub fn solve_from_shape(
+    r: f64,
+    stiffness: &Stiffness,
+    lbar: f64,
+    shape: &SavedShape,
+    branch: Option<u32>,
+    accuracy: Accuracy,
+    keep_saddle: bool,
+) -> Result<EnclosedResult, DiagramError> {
+    let eta = branch.filter(|&b| b > 0).map_or(2, eta_of_branch);
+    let cells = solve_cells(stiffness, accuracy, eta);
+    let (model, z0) = start_from_shape(r, lbar, cells / 4, stiffness, shape).map_err(passed)?;
+    let opts = EnclosedOptions::default();
+    let b = solve_levels(&model, z0, None, &opts)
+        .map_err(context("the enclosed loop from the saved shape"))?;
+    let (b, descent) = if keep_saddle {
+        (b, None)
+    } else {
+        descend_branch(b, &opts)
+            .map_err(context("descending from the saddle Newton converged to"))?
+    };
+    let stability = b.coarsest().stability(1e-6).map_err(passed)?;
+    let mut method = format!(
+        "3-D enclosed model, N = {cells} cells (semismooth Newton from the saved shape); {}",
+        b.estimate_method()
+    );
+    if let Some(d) = descent.filter(|d| d.start().index > 0) {
+        method.push_str(&format!(
+            "; {} (descent at N/4 = {} cells, energies at N)",
+            d.describe(),
+            b.quarter.model.cells()
+        ));
+    }
+    Ok(EnclosedResult {
+        model_energy: (b.energy, b.energy_error),
+        energy: (b.energy, b.energy_error),
+        surface: None,
+        stability,
+        method,
+        state: b.fine,
+    })
+}
