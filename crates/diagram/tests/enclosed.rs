@@ -65,7 +65,7 @@ fn every_state_is_first_order_optimal() {
 }
 
 #[test]
-#[ignore = "with closure of position and tangent only (no twisting moment), the branch-2 trace stops at lbar = 1.132 going down (near-singular KKT matrix, residual 1.7e-5; a bifurcation to loops with nonzero holonomy is not ruled out)"]
+#[ignore = "6 of branch 2's lifted-off states on 1.25..1.5 fail the file check: the energy recomputed from the written nodes is up to 8e-4 relative off the row (the nodes under-resolve the point contacts; the file needs points inside the cells)"]
 fn the_uniform_diagram_runs_without_warnings() {
     let d = diagram();
     assert!(d.warnings.is_empty(), "{:?}", d.warnings);

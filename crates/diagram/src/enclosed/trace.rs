@@ -344,9 +344,10 @@ pub(super) struct TraceStop {
 
 /// Follow a lifted-off state `first` (at `xs[mid]`) through the sample lengths `xs` both
 /// ways, one natural-parameter [`walk`] per sample length ([`step`] corrects each step),
-/// halving a failed step up to 6 times (5 with `extend`); a trace that still fails stops
-/// there with a warning naming `what`. With `extend`, a walk that gets stuck is retried
-/// once as a jump past the target and back (over a singular point such as a pitchfork of
+/// halving a failed step up to 6 times (5 with `extend`); a walk that gets stuck is retried
+/// once as a plain step of every level straight to the target; a trace that still fails
+/// stops there with a warning naming `what`. With `extend`, a walk that gets stuck is also
+/// retried as a jump past the target and back (over a singular point such as a pitchfork of
 /// the lifted-off branch), and a trace that stops keeps the last state it reached. A stop
 /// is recorded in `stops`. Returns the states in increasing `L̄`.
 pub(super) fn follow(
@@ -391,6 +392,15 @@ pub(super) fn follow(
                 Err(stuck) => stuck,
             };
             let cur = stuck.last;
+            // A level that left the traced state for a nearby one (on the uniform
+            // figure-eight below L̄ ≈ 1.2, the finest level slips from the planar saddle to a
+            // non-planar state of its mesh, holonomy ~0.1 rad at N = 64, whose discrete
+            // branch ends in a fold a little further on) stalls the halved steps; a plain
+            // step of every level straight to the target lands back on the traced state.
+            if let Ok(at) = cur.step_to(x, sopts) {
+                out.push(at);
+                continue;
+            }
             if extend {
                 let over = x + (x - cur.lbar);
                 if let Ok(at) = cur.step_to(over, sopts).and_then(|j| j.step_to(x, sopts)) {

@@ -702,8 +702,12 @@ impl EnclosedState {
         Ok((self.index(tol)?, vals))
     }
 
-    /// The curvature vector `(κ1, κ2)` at `σ`, interpolated (periodic four-point Lagrange
-    /// through the nearest Gauss points, error `O(h⁴)`): a start for another resolution.
+    /// The curvature vector `(κ1, κ2)` at `σ`, interpolated (four-point Lagrange through the
+    /// nearest Gauss points, error `O(h⁴)`): a start for another resolution. Across the
+    /// closing node the components are continued with the holonomy: the frame comes back
+    /// turned by `α` about the tangent ([`super::model::TWIST_ROW`]), so a smooth loop has
+    /// `κ(σ + 1) = R(−α) κ(σ)` in components, and values of the other lap are turned into
+    /// the frame continued from this one before they enter the stencil.
     pub fn curvature_at(&self, sigma: f64) -> (f64, f64) {
         let m = &self.model;
         let ng = 2 * m.cells();
@@ -712,24 +716,42 @@ impl EnclosedState {
         // First Gauss point at or after s (periodically).
         let k = sig.iter().position(|&x| x >= s).unwrap_or(ng);
         let z = &self.z;
+        // The end frame's normals in the start frame (the identity): (cos α, sin α) and
+        // (−sin α, cos α).
+        let (ca, sa) = match m.transforms(z) {
+            Ok(p) => {
+                let x = &p[m.cells()];
+                let a = (x[(2, 1)] - x[(1, 2)]).atan2(x[(1, 1)] + x[(2, 2)]);
+                (a.cos(), a.sin())
+            }
+            Err(_) => (1.0, 0.0),
+        };
         let mut out = (0.0, 0.0);
-        let idx: Vec<(usize, f64)> = (0..4)
+        let idx: Vec<(usize, f64, isize)> = (0..4)
             .map(|q| {
                 let raw = k as isize + q as isize - 2;
-                let wraps = raw.div_euclid(ng as isize) as f64;
+                let wraps = raw.div_euclid(ng as isize);
                 let g = raw.rem_euclid(ng as isize) as usize;
-                (g, sig[g] + wraps)
+                (g, sig[g] + wraps as f64, wraps)
             })
             .collect();
-        for (q, &(g, xq)) in idx.iter().enumerate() {
+        for (q, &(g, xq, wraps)) in idx.iter().enumerate() {
             let mut l = 1.0;
-            for (p, &(_, xp)) in idx.iter().enumerate() {
+            for (p, &(_, xp, _)) in idx.iter().enumerate() {
                 if p != q {
                     l *= (s - xp) / (xq - xp);
                 }
             }
-            out.0 += l * z[2 * g];
-            out.1 += l * z[2 * g + 1];
+            let (k1, k2) = (z[2 * g], z[2 * g + 1]);
+            // One lap back: end-frame components into the frame continued backwards from
+            // the start, R(α) κ; one lap on: R(−α) κ.
+            let (k1, k2) = match wraps {
+                w if w < 0 => (ca * k1 - sa * k2, sa * k1 + ca * k2),
+                w if w > 0 => (ca * k1 + sa * k2, -sa * k1 + ca * k2),
+                _ => (k1, k2),
+            };
+            out.0 += l * k1;
+            out.1 += l * k2;
         }
         out
     }
