@@ -24,12 +24,15 @@
 //! * **Exchanges** of the lowest branch come from the enclosed energies themselves (the
 //!   enclosed lowest branch need not change where the surface one does): where the lowest
 //!   sampled state changes from a sheet of one branch to a sheet of another and both
-//!   sheets cover the bracket, `E_a = E_b` is solved by the secant method on re-solved
-//!   states (3-D model at `N/4, N/2, N`; surface states where attached), then from the line
-//!   fitted to `E_a − E_b` at the secant root and `2e-3` on either side (the lifted-off
-//!   energies carry discretisation noise where contact ends cross nodes, and the curves
-//!   meet at a small angle). Error: `(δE_a + δE_b)/|d(E_a − E_b)/dL̄|` plus the line's
-//!   misfit over the same slope. The surface value of the same exchange is solved on the same two sheets for
+//!   sheets cover the bracket, `E_a = E_b` is located by the exchange locator
+//!   ([`rodloop_continuation::exchange::locate`]) on re-solved states (3-D model at
+//!   `N/4, N/2, N`; surface states where attached): a hunt from the root of the
+//!   interpolated difference to a sign change, then Brent's method to `1e-10` (the
+//!   lifted-off energies carry discretisation noise where contact ends cross nodes, and the
+//!   curves meet at a small angle). Error: `(δE_a + δE_b + m)/|d(E_a − E_b)/dL̄|` plus the
+//!   final bracket, with the slope and the noise misfit `m` from the chord over `±2e-3`
+//!   around the root. The surface value of the same exchange is located on the same two
+//!   sheets for
 //!   comparison. Where the lowest branch ends at the `m`-fold great circle and another
 //!   begins there (the traces do not overlap), the exchange is a collapse at `L̄ = m`, with
 //!   the distance of the last traced states from `m` as its estimate. A change between
@@ -99,6 +102,7 @@ where
         Err(RootError::NoBracket { .. }) => Err(SolverError::InvalidInput(format!(
             "no sign change of lambda_min in [{a}, {b}] at this resolution"
         ))),
+        Err(other) => Err(SolverError::InvalidInput(other.to_string())),
     }
 }
 
