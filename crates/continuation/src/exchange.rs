@@ -108,11 +108,15 @@ pub struct ExchangeSettings {
     pub baseline: f64,
     /// Evaluations allowed in the hunt and in Brent's method each.
     pub max_evaluations: usize,
+    /// Add the chord's misfit to the estimate (off where the pair's own error estimate
+    /// already covers all noise, e.g. closed-form energies with rounding only: the misfit
+    /// then adds nothing but the curvature term).
+    pub misfit: bool,
 }
 
 impl Default for ExchangeSettings {
     /// `xtol = 1e-12`, `probe = −1e-3`, `max_step = 0.05`, `baseline = 1e-6`, 60
-    /// evaluations.
+    /// evaluations, with the misfit.
     fn default() -> Self {
         Self {
             xtol: 1e-12,
@@ -120,6 +124,7 @@ impl Default for ExchangeSettings {
             max_step: 0.05,
             baseline: 1e-6,
             max_evaluations: 60,
+            misfit: true,
         }
     }
 }
@@ -133,11 +138,12 @@ pub struct Exchange {
     pub error: f64,
     /// The energies at `x_cr`.
     pub energies: Energies,
-    /// `|d(E_a − E_b)/dx|` used by the estimate.
+    /// `d(E_a − E_b)/dx` at `x_cr` (analytic or the chord) used by the estimate.
     pub slope: f64,
     /// The pair's error estimate of `E_a − E_b` at `x_cr`.
     pub gap_error: f64,
-    /// The chord's middle-point misfit (0 with an analytic slope).
+    /// The chord's middle-point misfit (0 with an analytic slope or without
+    /// [`ExchangeSettings::misfit`]).
     pub misfit: f64,
     /// Width of Brent's final bracket.
     pub width: f64,
@@ -274,10 +280,12 @@ pub fn locate<P: EnergyPair>(
             let h = settings.baseline;
             let gm = memo.at(x - h).map_err(f)?.gap();
             let gp = memo.at(x + h).map_err(f)?.gap();
-            (
-                (gp - gm) / (2.0 * h),
-                (energies.gap() - 0.5 * (gm + gp)).abs(),
-            )
+            let misfit = if settings.misfit {
+                (energies.gap() - 0.5 * (gm + gp)).abs()
+            } else {
+                0.0
+            };
+            ((gp - gm) / (2.0 * h), misfit)
         }
         None => {
             let (ga, gb) = (memo.at(lo).map_err(f)?.gap(), memo.at(hi).map_err(f)?.gap());
@@ -297,7 +305,7 @@ pub fn locate<P: EnergyPair>(
         x,
         error,
         energies,
-        slope: slope.abs(),
+        slope,
         gap_error,
         misfit,
         width,
@@ -344,7 +352,9 @@ pub fn lowest(states: &[Ranked]) -> Vec<usize> {
     let preferred: Vec<usize> = states
         .iter()
         .enumerate()
-        .filter(|(_, s)| s.preferred && s.energy - s.error.abs() <= least.energy + least.error.abs())
+        .filter(|(_, s)| {
+            s.preferred && s.energy - s.error.abs() <= least.energy + least.error.abs()
+        })
         .map(|(i, _)| i)
         .collect();
     if preferred.is_empty() {
@@ -417,6 +427,24 @@ mod tests {
         }
     }
 
+    /// The pair with its branches swapped.
+    struct Swapped(Curves);
+
+    impl EnergyPair for Swapped {
+        type Error = Infallible;
+        fn energies(&mut self, x: f64) -> Result<Energies, Infallible> {
+            let e = self.0.energies(x)?;
+            Ok(Energies {
+                a: e.b,
+                b: e.a,
+                slope: e.slope.map(|s| -s),
+            })
+        }
+        fn error(&mut self, x: f64) -> Result<f64, Infallible> {
+            self.0.error(x)
+        }
+    }
+
     fn curves(noise: f64, analytic: bool) -> Curves {
         Curves {
             noise,
@@ -438,13 +466,31 @@ mod tests {
                 let mut c = curves(0.0, analytic);
                 let r = locate(&mut c, start, &ExchangeSettings::default()).unwrap();
                 assert!((r.x - ROOT).abs() < 1e-12, "{start:?}: {}", r.x - ROOT);
-                assert!((r.x - ROOT).abs() <= r.error, "{} > {}", r.x - ROOT, r.error);
+                assert!(
+                    (r.x - ROOT).abs() <= r.error,
+                    "{} > {}",
+                    r.x - ROOT,
+                    r.error
+                );
                 assert!(r.error < 1e-11, "{}", r.error);
                 // The slope e^x + 1 at the root (analytic, or a chord of half-width 1e-6).
                 assert!((r.slope - (ROOT.exp() + 1.0)).abs() < 1e-8, "{}", r.slope);
+                // The slope keeps its sign: E_b − E_a has the opposite one.
+                let mut swapped = Swapped(curves(0.0, analytic));
+                let q = locate(&mut swapped, start, &ExchangeSettings::default()).unwrap();
+                assert!(
+                    (q.slope + r.slope).abs() < 1e-8,
+                    "{} vs {}",
+                    q.slope,
+                    r.slope
+                );
                 // Brent's interpolation converges superlinearly: far fewer calls than the
                 // ~40 halvings of bisection.
-                assert!(c.calls < 16, "{start:?}, analytic {analytic}: {} calls", c.calls);
+                assert!(
+                    c.calls < 16,
+                    "{start:?}, analytic {analytic}: {} calls",
+                    c.calls
+                );
             }
         }
     }
@@ -469,11 +515,19 @@ mod tests {
                     };
                     let r = locate(&mut curves(noise, analytic), start, &settings).unwrap();
                     let err = (r.x - ROOT).abs();
-                    assert!(err <= r.error, "noise {noise}: error {err:e} > estimate {:e}", r.error);
+                    assert!(
+                        err <= r.error,
+                        "noise {noise}: error {err:e} > estimate {:e}",
+                        r.error
+                    );
                     let bound = 2.0 * noise / s;
                     // Chord misfit adds up to 2δ/|s| plus the curvature term e^x h²/2.
                     let loose = 3.0 * bound + 1e-6 * ROOT.exp() / s + 1e-11;
-                    assert!(r.error <= loose, "noise {noise}: estimate {:e} > {loose:e}", r.error);
+                    assert!(
+                        r.error <= loose,
+                        "noise {noise}: estimate {:e} > {loose:e}",
+                        r.error
+                    );
                 }
             }
         }
@@ -529,13 +583,22 @@ mod tests {
     fn ties_within_the_estimates_go_to_the_preferred_states() {
         use Standing::{Metastable as M, Stable as S};
         // Energies 1.0 ± 1e-6 and 1.0000015 ± 1e-6 overlap: the preferred higher one wins.
-        let tied = [state(1.0, 1e-6, 0, false), state(1.000_001_5, 1e-6, 0, true)];
+        let tied = [
+            state(1.0, 1e-6, 0, false),
+            state(1.000_001_5, 1e-6, 0, true),
+        ];
         assert_eq!(label(&tied), vec![M, S]);
         // Apart by more than the estimates: the least energy wins against the preference.
-        let apart = [state(1.0, 1e-7, 0, false), state(1.000_001_5, 1e-7, 0, true)];
+        let apart = [
+            state(1.0, 1e-7, 0, false),
+            state(1.000_001_5, 1e-7, 0, true),
+        ];
         assert_eq!(label(&apart), vec![S, M]);
         // A tie with no preferred state: the least energy alone.
-        let plain = [state(1.0, 1e-6, 0, false), state(1.000_000_5, 1e-6, 0, false)];
+        let plain = [
+            state(1.0, 1e-6, 0, false),
+            state(1.000_000_5, 1e-6, 0, false),
+        ];
         assert_eq!(label(&plain), vec![S, M]);
         // Two preferred tied states (at a critical length): both stable.
         let both = [state(1.0, 1e-6, 0, true), state(1.000_000_5, 1e-6, 0, true)];

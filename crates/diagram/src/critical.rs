@@ -348,7 +348,7 @@ pub(crate) fn locate_crossing(
         to_eta: bb.eta,
         energy: 0.5 * (ex.energies.a + ex.energies.b),
         error_estimate: ex.error,
-        slope_difference: ex.slope,
+        slope_difference: ex.slope.abs(),
         iterations: ex.evaluations,
         from_sheet: Some(cand.a),
         to_sheet: Some(cand.b),

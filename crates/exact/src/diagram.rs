@@ -9,12 +9,12 @@
 //! * a **crossing** `E_a(L̄) = E_b(L̄)` of two branches that both exist around it is located
 //!   by the exchange locator ([`rodloop_continuation::exchange::locate`]: Brent's method in
 //!   `L̄` on the grid bracket, every evaluation re-solving both closures to full precision;
-//!   error from the final bracket, the energies' uncertainties and the noise of a chord of
-//!   half-width `10⁻⁶` over its slope);
+//!   error from the final bracket and the energies' uncertainties over the slope of a chord
+//!   of half-width `10⁻⁶`);
 //! * a **collapse** is an integer `L̄ = m`, where the lowest branch ends on the `m`-fold great
 //!   circle (energy `E R/(πD) = m`) and another one begins.
 
-use rodloop_continuation::exchange::{self, Energies, EnergyPair, ExchangeSettings, Start};
+use rodloop_continuation::exchange::{self, Energies, EnergyPair, ExchangeSettings, Ranked, Start};
 use rodloop_continuation::{Continuation, Direction, PseudoArclength, StopReason};
 
 use crate::homogeneous::{closure, paper_branch_loop, ExactLoop, Family};
@@ -422,16 +422,21 @@ pub fn compute(settings: &DiagramSettings) -> Result<Diagram, ExactError> {
             }
         }
     }
-    // Lowest branch at each grid length.
+    // Lowest branch at each grid length ([`exchange::lowest`]: the energies are exact to
+    // rounding, so no estimate and no preference; the least energy).
     for &l in &grid {
-        let mut best: Option<usize> = None;
-        for (i, pt) in points.iter().enumerate() {
-            if pt.lbar == l && best.is_none_or(|b| pt.energy < points[b].energy) {
-                best = Some(i);
-            }
-        }
-        if let Some(b) = best {
-            points[b].lowest = true;
+        let at: Vec<usize> = (0..points.len()).filter(|&i| points[i].lbar == l).collect();
+        let ranked: Vec<Ranked> = at
+            .iter()
+            .map(|&i| Ranked {
+                energy: points[i].energy,
+                error: 0.0,
+                index: 0,
+                preferred: false,
+            })
+            .collect();
+        for k in exchange::lowest(&ranked) {
+            points[at[k]].lowest = true;
         }
     }
 
@@ -518,6 +523,8 @@ pub fn compute(settings: &DiagramSettings) -> Result<Diagram, ExactError> {
             xtol: 1e-16 * l1.abs(),
             baseline: 1e-6,
             max_evaluations: 200,
+            // The energies carry rounding only, which `energy_uncertainty` covers.
+            misfit: false,
             ..ExchangeSettings::default()
         };
         let ex = exchange::locate(&mut pair, Start::Bracket(l0, l1), &settings)

@@ -2,16 +2,15 @@
 //! locator [`rodloop_continuation::exchange::locate`] on `E_a = E_b` with re-solved
 //! states), and the lowest-branch labels (see the parent module's docs).
 
+use rodloop_continuation::exchange::{self, Energies, EnergyPair, ExchangeSettings, Ranked, Start};
 use rodloop_solver::enclosed::{
     four_level_estimate, point_like_contact, solve_enclosed, three_level_estimate, EnclosedOptions,
     EnclosedState, LIFTED_OFF_MAX_ORDER,
 };
-use rodloop_continuation::exchange::{self, Energies, EnergyPair, ExchangeSettings, Start};
 use rodloop_solver::{Accuracy, SolverError};
 
 use super::trace::{exact, Levels};
 use super::{EnclosedCritical, EnclosedPoint};
-use crate::labels::Label;
 
 /// Is the surface loop of `eta` at `lbar` lifted off (`λ_min < 0`)?
 pub(super) fn detached_at(eta: u32, lbar: f64) -> Result<bool, SolverError> {
@@ -83,7 +82,9 @@ where
     fn error(&mut self, x: f64) -> Result<f64, SolverError> {
         match self.errors.iter().rev().find(|(y, _)| *y == x) {
             Some(&(_, e)) => Ok(e),
-            None => self.energies(x).map(|_| self.errors.last().map_or(0.0, |e| e.1)),
+            None => self
+                .energies(x)
+                .map(|_| self.errors.last().map_or(0.0, |e| e.1)),
         }
     }
 }
@@ -250,12 +251,7 @@ pub(super) fn enclosed_crossing(
     };
     let mut pair = EnclosedPair::new(|k, x| ladder_energy(etas[k], x, &mut fine[k]));
     let ex = locate_from(&mut pair, xc, &settings)?;
-    Ok((
-        ex.x,
-        ex.error,
-        0.5 * (ex.energies.a + ex.energies.b),
-        cells,
-    ))
+    Ok((ex.x, ex.error, 0.5 * (ex.energies.a + ex.energies.b), cells))
 }
 
 /// The lowest branch at `lbar`: the branch the last critical length at or below `lbar`
@@ -271,41 +267,69 @@ pub(super) fn lowest_branch(critical: &[EnclosedCritical], lbar: f64) -> Option<
 
 /// Energy of `branch` at `lbar` interpolated linearly between its samples.
 pub(super) fn interpolated(points: &[EnclosedPoint], branch: u32, lbar: f64) -> Option<f64> {
+    interpolated_state(points, branch, lbar).map(|(e, _)| e)
+}
+
+/// Energy of `branch` at `lbar` interpolated linearly between its samples, and whether it
+/// has index 0 there (both neighbouring samples have, or the sample at `lbar` has).
+fn interpolated_state(points: &[EnclosedPoint], branch: u32, lbar: f64) -> Option<(f64, bool)> {
     let pts: Vec<&EnclosedPoint> = points.iter().filter(|p| p.branch == branch).collect();
     let k = pts.partition_point(|p| p.lbar < lbar);
     if k == 0 || k == pts.len() {
         return pts
             .iter()
             .find(|p| (p.lbar - lbar).abs() < 1e-12)
-            .map(|p| p.energy);
+            .map(|p| (p.energy, p.index == 0));
     }
     let (a, b) = (pts[k - 1], pts[k]);
     let t = (lbar - a.lbar) / (b.lbar - a.lbar);
-    Some(a.energy + t * (b.energy - a.energy))
+    Some((
+        a.energy + t * (b.energy - a.energy),
+        a.index == 0 && b.index == 0,
+    ))
 }
 
-/// Lowest flags and labels; a warning where a sampled state lies below the lowest branch
-/// by more than the errors (an exchange the list does not have).
+/// Allowance for the error of an energy interpolated linearly between samples (`~E''h²/8`),
+/// split between the two energies the labeller compares: another branch must lie below
+/// the lowest branch the critical lengths name by more than `10⁻³` before the labels follow
+/// the sampled energies instead.
+const INTERPOLATION_ALLOWANCE: f64 = 5e-4;
+
+/// Lowest flags and labels by the labeller ([`rodloop_continuation::exchange`]): at each
+/// sampled state, it and the other branches interpolated to its length, each with its
+/// error estimate plus [`INTERPOLATION_ALLOWANCE`], the branch the critical lengths name as
+/// lowest preferred in ties; `lowest` is the lowest of them at any index. A warning where a
+/// sampled state lies below the lowest branch by more than the errors (an exchange the
+/// list does not have).
 pub(super) fn label(
     points: &mut [EnclosedPoint],
     critical: &[EnclosedCritical],
     warnings: &mut Vec<String>,
 ) {
     let snapshot = points.to_vec();
+    let mut branches: Vec<u32> = snapshot.iter().map(|p| p.branch).collect();
+    branches.sort_unstable();
+    branches.dedup();
     for p in points.iter_mut() {
-        let lowest = match lowest_branch(critical, p.lbar) {
-            Some(b) => b == p.branch,
-            None => snapshot
-                .iter()
-                .filter(|q| q.branch != p.branch)
-                .all(|q| interpolated(&snapshot, q.branch, p.lbar).is_none_or(|e| p.energy <= e)),
-        };
-        p.lowest = lowest;
-        p.label = match (p.index, lowest) {
-            (0, true) => Label::Stable,
-            (0, false) => Label::Metastable,
-            _ => Label::Unstable,
-        };
+        let named = lowest_branch(critical, p.lbar);
+        let mut states = vec![Ranked {
+            energy: p.energy,
+            error: p.energy_error + INTERPOLATION_ALLOWANCE,
+            index: p.index,
+            preferred: named == Some(p.branch),
+        }];
+        for &b in branches.iter().filter(|&&b| b != p.branch) {
+            if let Some((energy, index0)) = interpolated_state(&snapshot, b, p.lbar) {
+                states.push(Ranked {
+                    energy,
+                    error: INTERPOLATION_ALLOWANCE,
+                    index: usize::from(!index0),
+                    preferred: named == Some(b),
+                });
+            }
+        }
+        p.lowest = exchange::lowest(&states).contains(&0);
+        p.label = exchange::label(&states)[0].into();
     }
     for p in points.iter() {
         // Linear interpolation between samples errs by ~E''h²/8; skip the neighbourhood
