@@ -140,4 +140,24 @@ pub enum RootError<E> {
         /// `f(b)`.
         fb: f64,
     },
+    /// A hunt for a sign change ([`exchange::locate`](crate::exchange::locate)) stepped
+    /// out of its window.
+    #[error("the hunt for a sign change left [{lo}, {hi}] at x = {x}")]
+    LeftWindow {
+        /// The point outside the window.
+        x: f64,
+        /// Window's left end.
+        lo: f64,
+        /// Window's right end.
+        hi: f64,
+    },
+    /// [`exchange::locate`](crate::exchange::locate) met a flat or non-finite slope, or
+    /// found no sign change within its budget.
+    #[error("{what} (at x = {x})")]
+    Degenerate {
+        /// Where.
+        x: f64,
+        /// What happened.
+        what: &'static str,
+    },
 }

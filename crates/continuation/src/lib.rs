@@ -25,7 +25,9 @@
 //!   and corrector, and [`natural::natural_branch`] for a [`Problem`].
 //! * [`axis`] continues a problem in `ln θ` instead of `θ` ([`axis::OnAxis`]).
 //! * [`roots`] holds the one-dimensional root finders (secant, Illinois, Brent) used
-//!   to locate special points and exchanges of stability.
+//!   to locate special points and exchanges of stability; [`exchange`] locates the
+//!   crossing of two branches' energies with an error estimate and labels the states at
+//!   one parameter value (stable, metastable, unstable).
 //!
 //! Linear algebra: every solve with the Jacobian goes through
 //! [`Problem::factorize`], which returns a [`Factorization`] of `J = ∂F/∂x` — by
@@ -78,6 +80,7 @@ pub mod axis;
 mod branch;
 mod drive;
 mod error;
+pub mod exchange;
 mod factorization;
 mod linalg;
 pub mod natural;

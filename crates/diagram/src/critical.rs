@@ -4,11 +4,14 @@
 //!   lowest energy (cubic Hermite interpolation of each branch's energies and slopes) is
 //!   found; where it changes between two neighbouring lengths and both branches exist on
 //!   the whole interval, the two branches cross there.
-//! * **Crossings** are then located on re-solved equilibria ([`crate::refine`]): Newton's
-//!   method on `f(L̄) = E_a(L̄) − E_b(L̄)` with `f' = dE_a/dL̄ − dE_b/dL̄` (both analytic,
-//!   Richardson-extrapolated), every evaluation re-solving both branches at the two reporting
-//!   resolutions. The error estimate is `(δE_a + δE_b)/|f'| + |last Newton step|`, with
-//!   `δE` the discretisation error estimate of each extrapolated energy.
+//! * **Crossings** are then located on re-solved equilibria ([`crate::refine`]) by the
+//!   exchange locator ([`rodloop_continuation::exchange::locate`]) on
+//!   `f(L̄) = E_a(L̄) − E_b(L̄)`: Newton steps with `f' = dE_a/dL̄ − dE_b/dL̄` (both analytic,
+//!   Richardson-extrapolated) from the root of the interpolated difference until the sign
+//!   changes, then Brent's method on that bracket, every evaluation re-solving both
+//!   branches at the two reporting resolutions. The error estimate is
+//!   `(δE_a + δE_b)/|f'| + final bracket`, with `δE` the discretisation error estimate of
+//!   each extrapolated energy.
 //! * **Collapses**: at an integer `m` in the range where the lowest branch just below ends on
 //!   the m-fold great circle, or the lowest branch just above starts from it. The m-fold great
 //!   circle `κ ≡ 0` closes exactly at `L̄ = m` in the discrete model too (its holonomy is the
@@ -17,6 +20,8 @@
 //!   extrapolate (linearly in `L̄`, from the last traced state and its slope) to it.
 
 use serde::{Deserialize, Serialize};
+
+use rodloop_continuation::exchange::{self, Energies, EnergyPair, ExchangeSettings, Start};
 
 use crate::refine::BranchRefiner;
 use crate::types::TracedBranch;
@@ -49,7 +54,7 @@ pub struct CriticalLength {
     pub error_estimate: f64,
     /// Crossings: `|dE_a/dL̄ − dE_b/dL̄|` at the root; collapses: 0.
     pub slope_difference: f64,
-    /// Crossings: Newton iterations in `L̄`; collapses: 0.
+    /// Crossings: evaluations of both energies by the exchange locator; collapses: 0.
     pub iterations: usize,
     /// How the number was obtained and checked (human-readable).
     pub note: String,
@@ -254,6 +259,50 @@ pub(crate) fn touch(a: &TracedBranch, b: &TracedBranch, l0: f64, l1: f64) -> boo
     found
 }
 
+/// Two traced branches followed at the reporting resolutions, for the exchange locator.
+struct RefinedPair<'a> {
+    opts: &'a DiagramOptions,
+    eta: [u32; 2],
+    refiners: [BranchRefiner; 2],
+    /// The length both refiners are at.
+    at: f64,
+    /// The energies' error estimates at the root.
+    errors: [f64; 2],
+}
+
+impl RefinedPair<'_> {
+    fn move_to(&mut self, x: f64) -> Result<(), rodloop_solver::SolverError> {
+        if x != self.at {
+            for r in &mut self.refiners {
+                r.move_to(x)?;
+            }
+            self.at = x;
+        }
+        Ok(())
+    }
+}
+
+impl EnergyPair for RefinedPair<'_> {
+    type Error = rodloop_solver::SolverError;
+    fn energies(&mut self, x: f64) -> Result<Energies, Self::Error> {
+        self.move_to(x)?;
+        let va = self.refiners[0].values()?;
+        let vb = self.refiners[1].values()?;
+        Ok(Energies {
+            a: va.energy,
+            b: vb.energy,
+            slope: Some(va.slope - vb.slope),
+        })
+    }
+    fn error(&mut self, x: f64) -> Result<f64, Self::Error> {
+        self.move_to(x)?;
+        for k in 0..2 {
+            self.errors[k] = self.refiners[k].error_estimate(self.opts, self.eta[k]);
+        }
+        Ok(self.errors[0] + self.errors[1])
+    }
+}
+
 /// Locate a crossing on re-solved equilibria (see the module docs).
 pub(crate) fn locate_crossing(
     opts: &DiagramOptions,
@@ -268,64 +317,45 @@ pub(crate) fn locate_crossing(
         reason,
     };
     let width = cand.hi - cand.lo;
-    let mut x = cand.guess;
-    let mut ra = BranchRefiner::new(opts, ba, x).map_err(|e| fail(x, e.to_string()))?;
-    let mut rb = BranchRefiner::new(opts, bb, x).map_err(|e| fail(x, e.to_string()))?;
-    let mut iterations = 0;
-    let mut last_step = f64::INFINITY;
-    let (mut va, mut vb);
-    loop {
-        va = ra.values().map_err(|e| fail(x, e.to_string()))?;
-        vb = rb.values().map_err(|e| fail(x, e.to_string()))?;
-        let f = va.energy - vb.energy;
-        let fp = va.slope - vb.slope;
-        if !(f.is_finite() && fp.is_finite() && fp != 0.0) {
-            return Err(fail(
-                x,
-                format!("degenerate energy difference (f = {f}, f' = {fp})"),
-            ));
-        }
-        let step = (-f / fp).clamp(-width, width);
-        // Converged at the tolerance, or at the noise floor (the step stops shrinking).
-        let converged = step.abs() <= 1e-13 * x.abs().max(1.0)
-            || (iterations >= 2 && step.abs() > 0.25 * last_step && step.abs() < 1e-9)
-            || iterations >= 30;
-        if converged {
-            last_step = last_step.min(step.abs()).max(f64::EPSILON * x.abs());
-            break;
-        }
-        x += step;
-        if !(x > cand.lo - 2.0 * width && x < cand.hi + 2.0 * width) {
-            return Err(fail(x, "Newton's method left the bracket".into()));
-        }
-        last_step = step.abs();
-        iterations += 1;
-        ra.move_to(x).map_err(|e| fail(x, e.to_string()))?;
-        rb.move_to(x).map_err(|e| fail(x, e.to_string()))?;
-    }
-    let slope_difference = (va.slope - vb.slope).abs();
-    let (err_a, err_b) = (
-        ra.error_estimate(opts, ba.eta),
-        rb.error_estimate(opts, bb.eta),
-    );
-    let error_estimate = (err_a + err_b) / slope_difference + last_step + 4.0 * f64::EPSILON * x;
+    let x0 = cand.guess;
+    let ra = BranchRefiner::new(opts, ba, x0).map_err(|e| fail(x0, e.to_string()))?;
+    let rb = BranchRefiner::new(opts, bb, x0).map_err(|e| fail(x0, e.to_string()))?;
+    let mut pair = RefinedPair {
+        opts,
+        eta: [ba.eta, bb.eta],
+        refiners: [ra, rb],
+        at: x0,
+        errors: [0.0; 2],
+    };
+    let settings = ExchangeSettings {
+        xtol: 1e-13 * x0.abs().max(1.0),
+        max_step: width,
+        max_evaluations: 30,
+        ..ExchangeSettings::default()
+    };
+    let window = (cand.lo - 2.0 * width, cand.hi + 2.0 * width);
+    let ex = exchange::locate(&mut pair, Start::Guess { x: x0, window }, &settings)
+        .map_err(|e| fail(x0, e.to_string()))?;
+    let [err_a, err_b] = pair.errors;
+    let [ra, rb] = &pair.refiners;
     Ok(CriticalLength {
         index: 0,
-        lbar_cr: x,
+        lbar_cr: ex.x,
         kind: CriticalKind::Crossing,
         from_branch: ba.branch,
         to_branch: bb.branch,
         from_eta: ba.eta,
         to_eta: bb.eta,
-        energy: 0.5 * (va.energy + vb.energy),
-        error_estimate,
-        slope_difference,
-        iterations,
+        energy: 0.5 * (ex.energies.a + ex.energies.b),
+        error_estimate: ex.error,
+        slope_difference: ex.slope.abs(),
+        iterations: ex.evaluations,
         from_sheet: Some(cand.a),
         to_sheet: Some(cand.b),
         note: format!(
-            "E_{} = E_{} solved by Newton in L̄ on equilibria re-solved with {} and {} / {} and \
-             {} cells, Richardson-extrapolated; energy error estimates {:.1e}, {:.1e}",
+            "E_{} = E_{} located by Newton steps to a bracket and Brent's method in L̄ on \
+             equilibria re-solved with {} and {} / {} and {} cells, Richardson-extrapolated; \
+             energy error estimates {:.1e}, {:.1e}",
             ba.branch,
             bb.branch,
             ra.fine().model().cells(),

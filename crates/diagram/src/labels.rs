@@ -1,5 +1,6 @@
 //! Stability labels of computed states.
 
+use rodloop_continuation::exchange::{self, Ranked, Standing};
 use serde::{Deserialize, Serialize};
 
 use crate::critical::{lowest_interpolated, CriticalKind, CriticalLength};
@@ -24,6 +25,16 @@ impl Label {
             Label::Stable => "stable",
             Label::Metastable => "metastable",
             Label::Unstable => "unstable",
+        }
+    }
+}
+
+impl From<Standing> for Label {
+    fn from(s: Standing) -> Self {
+        match s {
+            Standing::Stable => Label::Stable,
+            Standing::Metastable => Label::Metastable,
+            Standing::Unstable => Label::Unstable,
         }
     }
 }
@@ -110,10 +121,11 @@ pub(crate) fn lowest_etas(
 }
 
 /// Relative margin by which another index-0 sheet must lie below the sheet the critical
-/// lengths name before the label follows the energies instead: the Hermite interpolation of
-/// traced energies between samples (their spacing is at most a few `10⁻²` in `L̄`) is
-/// accurate to far better than this, and within it of a located crossing the critical
-/// length decides.
+/// lengths name before the label follows the energies instead (each interpolated energy is
+/// given half of it as its error estimate in the labeller's tie rule,
+/// [`rodloop_continuation::exchange`]): the Hermite interpolation of traced energies between
+/// samples (their spacing is at most a few `10⁻²` in `L̄`) is accurate to far better than
+/// this, and within it of a located crossing the critical length decides.
 const LABEL_MARGIN: f64 = 1e-7;
 
 /// Whether sheet `b` has stability index 0 at `lbar`: at a traced state, that state's
@@ -137,10 +149,12 @@ fn index0_at(b: &TracedBranch, lbar: f64) -> Option<bool> {
 /// of stability index 0 among the traced sheets (GUIDE §1: stable = global minimum among
 /// the equilibria at that length, metastable = another local minimum).
 ///
-/// Where the sheets the critical lengths name as lowest ([`lowest_sheets`]) have index 0
-/// there and no other index-0 sheet lies below them by more than [`LABEL_MARGIN`]
-/// (relative), those (so labels agree with the located critical lengths, not with the
-/// interpolated samples). Otherwise the index-0 sheet of lowest interpolated energy: the
+/// The labeller [`rodloop_continuation::exchange::label`] on the sheets covering `lbar`,
+/// those the critical lengths name as lowest ([`lowest_sheets`]) preferred in ties: where
+/// they have index 0 there and no other index-0 sheet lies below them by more than
+/// [`LABEL_MARGIN`] (relative), those (so labels agree with the located critical lengths,
+/// not with the interpolated samples). Otherwise the index-0 sheet of lowest interpolated
+/// energy: the
 /// critical lengths are exchanges between branches, and the lowest family within one branch
 /// can change without one (two families of branch 1 at `D1/D0 = 0.001` near `L̄ = 2.85`),
 /// or the lowest state can be a saddle (then a lower minimum was not traced, and the lowest
@@ -161,25 +175,33 @@ pub(crate) fn stable_sheets(
     {
         return Vec::new();
     }
-    let minima: Vec<(usize, f64)> = branches
+    // Every sheet covering `lbar` as the labeller sees it: index 0 where the sheet has
+    // index 0 there, the interpolated energy with half the margin as its error, preferred
+    // where the critical lengths name it.
+    let sheets: Vec<(usize, Ranked)> = branches
         .iter()
         .enumerate()
-        .filter(|(_, b)| index0_at(b, lbar) == Some(true))
-        .filter_map(|(i, b)| b.energy_at(lbar).map(|e| (i, e)))
+        .filter_map(|(i, b)| {
+            let index0 = index0_at(b, lbar)?;
+            let energy = b.energy_at(lbar)?;
+            Some((
+                i,
+                Ranked {
+                    energy,
+                    error: 0.5 * LABEL_MARGIN * energy.abs().max(1.0),
+                    index: usize::from(!index0),
+                    preferred: by_critical.contains(&i),
+                },
+            ))
+        })
         .collect();
-    let Some(&(best, e_min)) = minima.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
-        return Vec::new();
-    };
-    let margin = LABEL_MARGIN * e_min.abs().max(1.0);
-    let named: Vec<usize> = by_critical
+    let ranked: Vec<Ranked> = sheets.iter().map(|(_, r)| *r).collect();
+    exchange::label(&ranked)
         .into_iter()
-        .filter(|i| minima.iter().any(|&(j, e)| j == *i && e <= e_min + margin))
-        .collect();
-    if named.is_empty() {
-        vec![best]
-    } else {
-        named
-    }
+        .zip(&sheets)
+        .filter(|(l, _)| *l == Standing::Stable)
+        .map(|(_, (i, _))| *i)
+        .collect()
 }
 
 /// Labels of every traced state of every sheet: index > 0 "unstable"; index 0 "stable"

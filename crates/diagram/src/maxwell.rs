@@ -30,7 +30,7 @@
 //! [`trace_phase`](crate::phase::trace_phase) seeds every exchange of the uniform rod that lies in the scene's range just
 //! below `D1/D0 = 1` (at `1 − 10⁻³`, where the arclength-shift symmetry of the uniform rod is
 //! broken: the lowest placement of the soft segment is chosen among shifted exact loops),
-//! solves `E_a = E_b` there by the secant method on re-solved equilibria, and continues the
+//! solves `E_a = E_b` there by the exchange locator on re-solved equilibria, and continues the
 //! Maxwell point in the parameter down to the lower end of the requested range and up
 //! towards `D1/D0 = 1`, where the limit is extrapolated and compared with the uniform rod.
 //! Along the way the stability index of both states is monitored: a curve ends where one of

@@ -10,7 +10,8 @@
 //! the scene's value to the target, through folds ([`FoldPolicy::Follow`]), with branch
 //! points and index changes located. Every state carries its Hessian index (the same routine
 //! and tolerance as the `L̄` diagrams) and a label: `stable` (index 0 and the lowest traced
-//! energy at that parameter value), `metastable` (index 0, not the lowest) or `unstable`.
+//! index-0 energy at that parameter value), `metastable` (index 0, not the lowest) or
+//! `unstable`.
 //! Energies of the seeds and of the special points carry an error estimate from the same
 //! state at half the resolution, `|E_N − E_{N/2}|/15`.
 //!
@@ -31,6 +32,7 @@ use crate::march::{march, march_switch, FoldPolicy, March, MarchSettings, MarchS
 use crate::placements::{classify, shift_of, solve_shifted};
 use crate::states::INDEX_TOLERANCE;
 use crate::DiagramError;
+use rodloop_continuation::exchange::{self, Ranked};
 
 /// Two seeds whose energies differ by less than this are the same state (or mirror
 /// images, which have the same energy).
@@ -776,44 +778,64 @@ impl<M: SurfaceSolve> Ctx<'_, M> {
     }
 }
 
-/// Labels: index > 0 unstable; index 0 stable where no traced state (any family, any
-/// sheet, linearly interpolated between consecutive points) lies lower at the same value,
-/// metastable otherwise.
+/// Tolerance of the sweep's energy comparisons: each state's energy is given half of it as
+/// its error estimate in the labeller's tie rule.
+const SWEEP_TIE: f64 = 1e-9;
+
+/// Labels by the labeller ([`rodloop_continuation::exchange::label`]): at each traced
+/// state, it and every traced segment (any family, any sheet, linearly interpolated between
+/// consecutive points, index 0 where both ends have it) covering its value; the state
+/// itself is preferred in ties (within [`SWEEP_TIE`]). Index > 0 unstable; index 0 stable
+/// where no index-0 state lies lower, metastable otherwise.
 fn label(families: &mut [SweepFamily]) {
-    let segments: Vec<((f64, f64), (f64, f64))> = families
+    // ((value, energy, index 0) at both ends) of every segment.
+    type End = (f64, f64, bool);
+    let segments: Vec<(End, End)> = families
         .iter()
         .flat_map(|f| {
             f.points
                 .windows(2)
-                .map(|w| ((w[0].value, w[0].energy), (w[1].value, w[1].energy)))
+                .map(|w| {
+                    (
+                        (w[0].value, w[0].energy, w[0].index == 0),
+                        (w[1].value, w[1].energy, w[1].index == 0),
+                    )
+                })
                 .collect::<Vec<_>>()
         })
         .collect();
-    let lowest_at = |v: f64| -> f64 {
+    let others = |v: f64| -> Vec<Ranked> {
         segments
             .iter()
-            .filter_map(|&((a, ea), (b, eb))| {
+            .filter_map(|&((a, ea, ia), (b, eb, ib))| {
                 let (lo, hi) = (a.min(b), a.max(b));
                 if v < lo || v > hi {
                     return None;
                 }
-                Some(if hi > lo {
+                let energy = if hi > lo {
                     ea + (v - a) / (b - a) * (eb - ea)
                 } else {
                     ea.min(eb)
+                };
+                Some(Ranked {
+                    energy,
+                    error: 0.5 * SWEEP_TIE,
+                    index: usize::from(!(ia && ib)),
+                    preferred: false,
                 })
             })
-            .fold(f64::INFINITY, f64::min)
+            .collect()
     };
     for f in families.iter_mut() {
         for p in &mut f.points {
-            p.label = if p.index > 0 {
-                Label::Unstable
-            } else if p.energy <= lowest_at(p.value) + 1e-9 {
-                Label::Stable
-            } else {
-                Label::Metastable
-            };
+            let mut states = vec![Ranked {
+                energy: p.energy,
+                error: 0.5 * SWEEP_TIE,
+                index: p.index,
+                preferred: true,
+            }];
+            states.extend(others(p.value));
+            p.label = exchange::label(&states)[0].into();
         }
     }
 }

@@ -6,11 +6,15 @@
 //! samples each branch on a common grid by re-solving the closure there, finds where the
 //! lowest-energy branch changes, and locates every such exchange exactly:
 //!
-//! * a **crossing** `E_a(L̄) = E_b(L̄)` of two branches that both exist around it is solved by
-//!   Brent's method in `L̄`, every evaluation re-solving both closures to full precision;
+//! * a **crossing** `E_a(L̄) = E_b(L̄)` of two branches that both exist around it is located
+//!   by the exchange locator ([`rodloop_continuation::exchange::locate`]: Brent's method in
+//!   `L̄` on the grid bracket, every evaluation re-solving both closures to full precision;
+//!   error from the final bracket and the energies' uncertainties over the slope of a chord
+//!   of half-width `10⁻⁶`);
 //! * a **collapse** is an integer `L̄ = m`, where the lowest branch ends on the `m`-fold great
 //!   circle (energy `E R/(πD) = m`) and another one begins.
 
+use rodloop_continuation::exchange::{self, Energies, EnergyPair, ExchangeSettings, Ranked, Start};
 use rodloop_continuation::{Continuation, Direction, PseudoArclength, StopReason};
 
 use crate::homogeneous::{closure, paper_branch_loop, ExactLoop, Family};
@@ -341,6 +345,40 @@ fn guess_m(tr: &TracedBranch, lbar: f64) -> f64 {
     best.1
 }
 
+/// Two branches of the exact diagram for the exchange locator: each energy re-solved from the
+/// traced `(L̄, m)` points; the error of `E_a − E_b` is the sum of [`energy_uncertainty`].
+struct ExactPair<'a> {
+    a: u32,
+    b: u32,
+    tra: &'a TracedBranch,
+    trb: &'a TracedBranch,
+}
+
+impl ExactPair<'_> {
+    fn loops(&self, x: f64) -> Result<[(f64, ExactLoop); 2], ExactError> {
+        Ok([
+            energy_at(self.a, x, guess_m(self.tra, x))?,
+            energy_at(self.b, x, guess_m(self.trb, x))?,
+        ])
+    }
+}
+
+impl EnergyPair for ExactPair<'_> {
+    type Error = ExactError;
+    fn energies(&mut self, x: f64) -> Result<Energies, ExactError> {
+        let [(ea, _), (eb, _)] = self.loops(x)?;
+        Ok(Energies {
+            a: ea,
+            b: eb,
+            slope: None,
+        })
+    }
+    fn error(&mut self, x: f64) -> Result<f64, ExactError> {
+        let [(ea, la), (eb, lb)] = self.loops(x)?;
+        Ok(energy_uncertainty(&la, ea)? + energy_uncertainty(&lb, eb)?)
+    }
+}
+
 /// Compute the exact diagram.
 pub fn compute(settings: &DiagramSettings) -> Result<Diagram, ExactError> {
     let DiagramSettings {
@@ -384,16 +422,21 @@ pub fn compute(settings: &DiagramSettings) -> Result<Diagram, ExactError> {
             }
         }
     }
-    // Lowest branch at each grid length.
+    // Lowest branch at each grid length ([`exchange::lowest`]: the energies are exact to
+    // rounding, so no estimate and no preference; the least energy).
     for &l in &grid {
-        let mut best: Option<usize> = None;
-        for (i, pt) in points.iter().enumerate() {
-            if pt.lbar == l && best.is_none_or(|b| pt.energy < points[b].energy) {
-                best = Some(i);
-            }
-        }
-        if let Some(b) = best {
-            points[b].lowest = true;
+        let at: Vec<usize> = (0..points.len()).filter(|&i| points[i].lbar == l).collect();
+        let ranked: Vec<Ranked> = at
+            .iter()
+            .map(|&i| Ranked {
+                energy: points[i].energy,
+                error: 0.0,
+                index: 0,
+                preferred: false,
+            })
+            .collect();
+        for k in exchange::lowest(&ranked) {
+            points[at[k]].lowest = true;
         }
     }
 
@@ -475,18 +518,18 @@ pub fn compute(settings: &DiagramSettings) -> Result<Diagram, ExactError> {
         }
         let tra = traced.iter().find(|t| t.eta == a).expect("traced");
         let trb = traced.iter().find(|t| t.eta == b).expect("traced");
-        let diff = |l: f64| -> Result<f64, ExactError> {
-            Ok(energy_at(a, l, guess_m(tra, l))?.0 - energy_at(b, l, guess_m(trb, l))?.0)
+        let mut pair = ExactPair { a, b, tra, trb };
+        let settings = ExchangeSettings {
+            xtol: 1e-16 * l1.abs(),
+            baseline: 1e-6,
+            max_evaluations: 200,
+            // The energies carry rounding only, which `energy_uncertainty` covers.
+            misfit: false,
+            ..ExchangeSettings::default()
         };
-        let x = roots::brent(diff, l0, l1, 1e-16, 200)?;
-        // Error estimate: the residual energy difference at the root divided by the difference
-        // of slopes, plus the root finder's final bracket (a few ulps).
-        let h = 1e-6;
-        let slope = (diff(x + h)? - diff(x - h)?) / (2.0 * h);
-        let (ea, la) = energy_at(a, x, guess_m(tra, x))?;
-        let (eb, lb) = energy_at(b, x, guess_m(trb, x))?;
-        let energy_err = energy_uncertainty(&la, ea)? + energy_uncertainty(&lb, eb)?;
-        let error_estimate = (diff(x)?.abs() + energy_err) / slope.abs() + 4.0 * f64::EPSILON * x;
+        let ex = exchange::locate(&mut pair, Start::Bracket(l0, l1), &settings)
+            .map_err(roots::root_error)?;
+        let (x, error_estimate, ea) = (ex.x, ex.error, ex.energies.a);
         critical.push(Critical {
             index: 0,
             lbar_cr: x,

@@ -13,14 +13,22 @@ where
     F: FnMut(f64) -> Result<f64, ExactError>,
 {
     use rodloop_continuation::roots::{self, RootStop};
-    use rodloop_continuation::RootError;
     match roots::brent(f, a, b, xtol, max_iter) {
         Ok(r) if r.stop == RootStop::MaxIterations => {
             Err(ExactError::RootNotConverged { x: r.x, fx: r.fx })
         }
         Ok(r) => Ok(r.x),
-        Err(RootError::Function(e)) => Err(e),
-        Err(RootError::NoBracket { a, b, fa, fb }) => Err(ExactError::NoBracket { a, b, fa, fb }),
+        Err(e) => Err(root_error(e)),
+    }
+}
+
+/// The exact layer's error for a root finder's error.
+pub(crate) fn root_error(e: rodloop_continuation::RootError<ExactError>) -> ExactError {
+    use rodloop_continuation::RootError;
+    match e {
+        RootError::Function(e) => e,
+        RootError::NoBracket { a, b, fa, fb } => ExactError::NoBracket { a, b, fa, fb },
+        other => ExactError::InvalidParameter(other.to_string()),
     }
 }
 

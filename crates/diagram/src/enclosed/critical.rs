@@ -1,7 +1,8 @@
-//! The critical lengths of the enclosed diagram where a branch has lifted off (secant on
-//! `E_a = E_b` with re-solved states), and the lowest-branch labels (see the parent
-//! module's docs).
+//! The critical lengths of the enclosed diagram where a branch has lifted off (the exchange
+//! locator [`rodloop_continuation::exchange::locate`] on `E_a = E_b` with re-solved
+//! states), and the lowest-branch labels (see the parent module's docs).
 
+use rodloop_continuation::exchange::{self, Energies, EnergyPair, ExchangeSettings, Ranked, Start};
 use rodloop_solver::enclosed::{
     four_level_estimate, point_like_contact, solve_enclosed, three_level_estimate, EnclosedOptions,
     EnclosedState, LIFTED_OFF_MAX_ORDER,
@@ -10,7 +11,6 @@ use rodloop_solver::{Accuracy, SolverError};
 
 use super::trace::{exact, Levels};
 use super::{EnclosedCritical, EnclosedPoint};
-use crate::labels::Label;
 
 /// Is the surface loop of `eta` at `lbar` lifted off (`λ_min < 0`)?
 pub(super) fn detached_at(eta: u32, lbar: f64) -> Result<bool, SolverError> {
@@ -43,35 +43,67 @@ pub(super) fn branch_energy(
     Ok(out)
 }
 
-/// Secant iteration on `f(x) = 0` from `xa` and `xb` until the step is below `1e-12`;
-/// returns `(x, f', last step, f's error, mean energy)`.
-pub(super) fn secant<F>(
-    mut f: F,
-    xa: f64,
-    xb: f64,
-) -> Result<(f64, f64, f64, f64, f64), SolverError>
+/// Two branches of the enclosed diagram for the exchange locator: `energy(k, x)` is branch
+/// `k`'s energy at `x` with its error estimate; the error of `E_a − E_b` at a point is the
+/// sum of the two estimates there.
+pub(super) struct EnclosedPair<F> {
+    energy: F,
+    /// `(x, error of E_a − E_b)` of every evaluation.
+    errors: Vec<(f64, f64)>,
+}
+
+impl<F> EnclosedPair<F>
 where
-    F: FnMut(f64) -> Result<(f64, f64, f64), SolverError>,
+    F: FnMut(usize, f64) -> Result<(f64, f64), SolverError>,
 {
-    use rodloop_continuation::roots::{self, RootStop, SecantSettings};
-    let r = roots::secant(
-        |x| f(x).map(|(v, err, e)| (v, (err, e))),
-        xa,
-        xb,
-        &SecantSettings::default(),
-    )
-    .map_err(|e| match e {
+    pub(super) fn new(energy: F) -> Self {
+        Self {
+            energy,
+            errors: Vec::new(),
+        }
+    }
+}
+
+impl<F> EnergyPair for EnclosedPair<F>
+where
+    F: FnMut(usize, f64) -> Result<(f64, f64), SolverError>,
+{
+    type Error = SolverError;
+    fn energies(&mut self, x: f64) -> Result<Energies, SolverError> {
+        let (ea, da) = (self.energy)(0, x)?;
+        let (eb, db) = (self.energy)(1, x)?;
+        self.errors.push((x, da + db));
+        Ok(Energies {
+            a: ea,
+            b: eb,
+            slope: None,
+        })
+    }
+    fn error(&mut self, x: f64) -> Result<f64, SolverError> {
+        match self.errors.iter().rev().find(|(y, _)| *y == x) {
+            Some(&(_, e)) => Ok(e),
+            None => self
+                .energies(x)
+                .map(|_| self.errors.last().map_or(0.0, |e| e.1)),
+        }
+    }
+}
+
+/// [`exchange::locate`] from the guess `x0` (first step `probe`, a window of `±0.25`), with
+/// the locator's errors as the solver's.
+pub(super) fn locate_from<F>(
+    pair: &mut EnclosedPair<F>,
+    x0: f64,
+    settings: &ExchangeSettings,
+) -> Result<exchange::Exchange, SolverError>
+where
+    F: FnMut(usize, f64) -> Result<(f64, f64), SolverError>,
+{
+    let window = (x0 - 0.25, x0 + 0.25);
+    exchange::locate(pair, Start::Guess { x: x0, window }, settings).map_err(|e| match e {
         rodloop_continuation::RootError::Function(e) => e,
         other => SolverError::InvalidInput(other.to_string()),
-    })?;
-    let (err, e) = r.payload;
-    match r.stop {
-        RootStop::Step => Ok((r.x, r.step_slope, r.width, err, e)),
-        RootStop::Residual | RootStop::FlatSlope => Ok((r.x, r.slope, r.width, err, e)),
-        RootStop::MaxIterations => Err(SolverError::InvalidInput(
-            "the secant iteration did not converge in 30 steps".into(),
-        )),
-    }
+    })
 }
 
 /// A lifted-off state of one branch at one length on a ladder of meshes `N, 2N, …` (the
@@ -179,10 +211,11 @@ fn ladder_energy(eta: u32, lbar: f64, lad: &mut Option<Ladder>) -> Result<(f64, 
     Ok(out)
 }
 
-/// Solve `E_a = E_b` near `x0` (see the module docs): a secant iteration with the
-/// lifted-off states at the trace's levels `N/4, N/2, N`, then, from its root, the same on
-/// the ladder of [`Ladder::from_levels`] with `doublings` more levels (first step with the
-/// coarse slope; error from the ladder's last four levels). Returns `(L̄_cr, error, energy,
+/// Solve `E_a = E_b` near `x0` (see the module docs) with the exchange locator: first with
+/// the lifted-off states at the trace's levels `N/4, N/2, N` (hunting from `x0`, first step
+/// `−10⁻³`), then, from that root, on the ladder of [`Ladder::from_levels`] with `doublings`
+/// more levels (first step `−10⁻⁵`; slope and noise from a chord of half-width `10⁻⁵`; the
+/// energies' errors from the ladder's last four levels). Returns `(L̄_cr, error, energy,
 /// cells of the final levels)`.
 pub(super) fn enclosed_crossing(
     eta_a: u32,
@@ -191,12 +224,15 @@ pub(super) fn enclosed_crossing(
     tracks: &mut [Option<Levels>; 2],
     doublings: usize,
 ) -> Result<(f64, f64, f64, Vec<usize>), SolverError> {
-    let f = |x: f64, tr: &mut [Option<Levels>; 2]| -> Result<(f64, f64, f64), SolverError> {
-        let (ea, da) = branch_energy(eta_a, x, &mut tr[0])?;
-        let (eb, db) = branch_energy(eta_b, x, &mut tr[1])?;
-        Ok((ea - eb, da + db, 0.5 * (ea + eb)))
+    let etas = [eta_a, eta_b];
+    let coarse = ExchangeSettings {
+        baseline: 0.0,
+        ..ExchangeSettings::default()
     };
-    let (xc, slope, _, _, _) = secant(|x| f(x, tracks), x0, x0 - 1e-3)?;
+    let xc = {
+        let mut pair = EnclosedPair::new(|k, x| branch_energy(etas[k], x, &mut tracks[k]));
+        locate_from(&mut pair, x0, &coarse)?.x
+    };
     let mut fine: [Option<Ladder>; 2] = [None, None];
     let mut cells = Vec::new();
     for k in 0..2 {
@@ -208,19 +244,14 @@ pub(super) fn enclosed_crossing(
             fine[k] = Some(lad);
         }
     }
-    let g = |x: f64, lad: &mut [Option<Ladder>; 2]| -> Result<(f64, f64, f64), SolverError> {
-        let (ea, da) = ladder_energy(eta_a, x, &mut lad[0])?;
-        let (eb, db) = ladder_energy(eta_b, x, &mut lad[1])?;
-        Ok((ea - eb, da + db, 0.5 * (ea + eb)))
+    let settings = ExchangeSettings {
+        probe: -1e-5,
+        baseline: 1e-5,
+        ..ExchangeSettings::default()
     };
-    let (fc, _, _) = g(xc, &mut fine)?;
-    let x1 = if fc == 0.0 {
-        xc - 1e-9
-    } else {
-        xc - fc / slope
-    };
-    let (x, slope, step, err, e) = secant(|x| g(x, &mut fine), xc, x1)?;
-    Ok((x, err / slope.abs().max(1e-300) + step, e, cells))
+    let mut pair = EnclosedPair::new(|k, x| ladder_energy(etas[k], x, &mut fine[k]));
+    let ex = locate_from(&mut pair, xc, &settings)?;
+    Ok((ex.x, ex.error, 0.5 * (ex.energies.a + ex.energies.b), cells))
 }
 
 /// The lowest branch at `lbar`: the branch the last critical length at or below `lbar`
@@ -236,41 +267,69 @@ pub(super) fn lowest_branch(critical: &[EnclosedCritical], lbar: f64) -> Option<
 
 /// Energy of `branch` at `lbar` interpolated linearly between its samples.
 pub(super) fn interpolated(points: &[EnclosedPoint], branch: u32, lbar: f64) -> Option<f64> {
+    interpolated_state(points, branch, lbar).map(|(e, _)| e)
+}
+
+/// Energy of `branch` at `lbar` interpolated linearly between its samples, and whether it
+/// has index 0 there (both neighbouring samples have, or the sample at `lbar` has).
+fn interpolated_state(points: &[EnclosedPoint], branch: u32, lbar: f64) -> Option<(f64, bool)> {
     let pts: Vec<&EnclosedPoint> = points.iter().filter(|p| p.branch == branch).collect();
     let k = pts.partition_point(|p| p.lbar < lbar);
     if k == 0 || k == pts.len() {
         return pts
             .iter()
             .find(|p| (p.lbar - lbar).abs() < 1e-12)
-            .map(|p| p.energy);
+            .map(|p| (p.energy, p.index == 0));
     }
     let (a, b) = (pts[k - 1], pts[k]);
     let t = (lbar - a.lbar) / (b.lbar - a.lbar);
-    Some(a.energy + t * (b.energy - a.energy))
+    Some((
+        a.energy + t * (b.energy - a.energy),
+        a.index == 0 && b.index == 0,
+    ))
 }
 
-/// Lowest flags and labels; a warning where a sampled state lies below the lowest branch
-/// by more than the errors (an exchange the list does not have).
+/// Allowance for the error of an energy interpolated linearly between samples (`~E''h²/8`),
+/// split between the two energies the labeller compares: another branch must lie below
+/// the lowest branch the critical lengths name by more than `10⁻³` before the labels follow
+/// the sampled energies instead.
+const INTERPOLATION_ALLOWANCE: f64 = 5e-4;
+
+/// Lowest flags and labels by the labeller ([`rodloop_continuation::exchange`]): at each
+/// sampled state, it and the other branches interpolated to its length, each with its
+/// error estimate plus [`INTERPOLATION_ALLOWANCE`], the branch the critical lengths name as
+/// lowest preferred in ties; `lowest` is the lowest of them at any index. A warning where a
+/// sampled state lies below the lowest branch by more than the errors (an exchange the
+/// list does not have).
 pub(super) fn label(
     points: &mut [EnclosedPoint],
     critical: &[EnclosedCritical],
     warnings: &mut Vec<String>,
 ) {
     let snapshot = points.to_vec();
+    let mut branches: Vec<u32> = snapshot.iter().map(|p| p.branch).collect();
+    branches.sort_unstable();
+    branches.dedup();
     for p in points.iter_mut() {
-        let lowest = match lowest_branch(critical, p.lbar) {
-            Some(b) => b == p.branch,
-            None => snapshot
-                .iter()
-                .filter(|q| q.branch != p.branch)
-                .all(|q| interpolated(&snapshot, q.branch, p.lbar).is_none_or(|e| p.energy <= e)),
-        };
-        p.lowest = lowest;
-        p.label = match (p.index, lowest) {
-            (0, true) => Label::Stable,
-            (0, false) => Label::Metastable,
-            _ => Label::Unstable,
-        };
+        let named = lowest_branch(critical, p.lbar);
+        let mut states = vec![Ranked {
+            energy: p.energy,
+            error: p.energy_error + INTERPOLATION_ALLOWANCE,
+            index: p.index,
+            preferred: named == Some(p.branch),
+        }];
+        for &b in branches.iter().filter(|&&b| b != p.branch) {
+            if let Some((energy, index0)) = interpolated_state(&snapshot, b, p.lbar) {
+                states.push(Ranked {
+                    energy,
+                    error: INTERPOLATION_ALLOWANCE,
+                    index: usize::from(!index0),
+                    preferred: named == Some(b),
+                });
+            }
+        }
+        p.lowest = exchange::lowest(&states).contains(&0);
+        p.label = exchange::label(&states)[0].into();
     }
     for p in points.iter() {
         // Linear interpolation between samples errs by ~E''h²/8; skip the neighbourhood

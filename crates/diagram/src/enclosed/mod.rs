@@ -33,10 +33,12 @@
 //!   by the scale invariance of the free discrete loop.
 //! * **Exchanges** come from the exact layer's list (the surface diagram): an exchange
 //!   between two attached states is the surface one, exactly. Where a branch of an exchange
-//!   has lifted off, `E_a(L̄) = E_b(L̄)` is solved again by the secant method on re-solved
-//!   states (3-D model at `N/4, N/2, N` to locate it, then at `N/2, N, 2N` from there;
-//!   warm-started from the trace), with the error
-//!   estimate `(δE_a + δE_b)/|d(E_a − E_b)/dL̄| +` the last secant step. The enclosed
+//!   has lifted off, `E_a(L̄) = E_b(L̄)` is located again by the exchange locator
+//!   ([`rodloop_continuation::exchange::locate`]: a hunt for the sign change from the
+//!   surface value, then Brent's method) on re-solved states (3-D model at `N/4, N/2, N`
+//!   to locate it, then on a ladder of finer meshes from there; warm-started from the
+//!   trace), with the error estimate `(δE_a + δE_b + m)/|d(E_a − E_b)/dL̄| +` the final
+//!   bracket (`m` the noise misfit of the chord over `±10⁻⁵` that gives the slope). The enclosed
 //!   energy never exceeds the surface one, and below `L̄ = 1` the circle is the lowest
 //!   closed curve of its length, so no exchange outside that list appears; the sampled
 //!   energies are checked for one anyway (a warning if found).
@@ -487,7 +489,7 @@ pub fn enclosed_diagram_with(
             },
             surface_lbar_cr: c.lbar_cr,
             method: format!(
-                "secant on E_a = E_b with the lifted-off state re-solved (3-D model at N = {}; error from these levels (the smaller observed order, the larger of the last two differences' estimates) and the last secant step)",
+                "the exchange locator on E_a = E_b with the lifted-off state re-solved (3-D model at N = {}; error from these levels (the smaller observed order, the larger of the last two differences' estimates), the noise of the slope's chord over +-1e-5 and the final bracket)",
                 cells.join(", ")
             ),
         });

@@ -24,12 +24,15 @@
 //! * **Exchanges** of the lowest branch come from the enclosed energies themselves (the
 //!   enclosed lowest branch need not change where the surface one does): where the lowest
 //!   sampled state changes from a sheet of one branch to a sheet of another and both
-//!   sheets cover the bracket, `E_a = E_b` is solved by the secant method on re-solved
-//!   states (3-D model at `N/4, N/2, N`; surface states where attached), then from the line
-//!   fitted to `E_a − E_b` at the secant root and `2e-3` on either side (the lifted-off
-//!   energies carry discretisation noise where contact ends cross nodes, and the curves
-//!   meet at a small angle). Error: `(δE_a + δE_b)/|d(E_a − E_b)/dL̄|` plus the line's
-//!   misfit over the same slope. The surface value of the same exchange is solved on the same two sheets for
+//!   sheets cover the bracket, `E_a = E_b` is located by the exchange locator
+//!   ([`rodloop_continuation::exchange::locate`]) on re-solved states (3-D model at
+//!   `N/4, N/2, N`; surface states where attached): a hunt from the root of the
+//!   interpolated difference to a sign change, then Brent's method to `1e-10` (the
+//!   lifted-off energies carry discretisation noise where contact ends cross nodes, and the
+//!   curves meet at a small angle). Error: `(δE_a + δE_b + m)/|d(E_a − E_b)/dL̄|` plus the
+//!   final bracket, with the slope and the noise misfit `m` from the chord over `±2e-3`
+//!   around the root. The surface value of the same exchange is located on the same two
+//!   sheets for
 //!   comparison. Where the lowest branch ends at the `m`-fold great circle and another
 //!   begins there (the traces do not overlap), the exchange is a collapse at `L̄ = m`, with
 //!   the distance of the last traced states from `m` as its estimate. A change between
@@ -39,6 +42,7 @@
 
 use std::time::Instant;
 
+use rodloop_continuation::exchange::{self, Ranked};
 use rodloop_exact::branch_of_eta;
 use rodloop_exact::diagram::{Critical, CriticalKind};
 use rodloop_solver::enclosed::{nonuniform_cells, solve_branch, EnclosedOptions, SurfaceSource};
@@ -99,7 +103,62 @@ where
         Err(RootError::NoBracket { .. }) => Err(SolverError::InvalidInput(format!(
             "no sign change of lambda_min in [{a}, {b}] at this resolution"
         ))),
+        Err(other) => Err(SolverError::InvalidInput(other.to_string())),
     }
+}
+
+/// The labeller's view ([`rodloop_continuation::exchange`]) of the sampled state `p` of
+/// sheet `k` and of the other sheets at its length (energies interpolated linearly, with
+/// their error plus `5·10⁻⁴` for the interpolation; index 0 where both neighbouring samples
+/// have it): `p` first. Inside the bracket of a located crossing the sheet its critical
+/// length names as lowest on `p`'s side is preferred in ties; elsewhere the least energy
+/// decides.
+fn ranked_at(
+    outs: &[SheetOut],
+    brackets: &[(f64, f64, usize, usize)],
+    critical: &[EnclosedCritical],
+    k: usize,
+    p: &EnclosedPoint,
+) -> Vec<Ranked> {
+    const ALLOWANCE: f64 = 5e-4;
+    let mut named: Option<usize> = None;
+    for &(x0, x1, a, b) in brackets {
+        if p.lbar > x0 && p.lbar < x1 {
+            let c = critical
+                .iter()
+                .find(|c| c.critical.lbar_cr >= x0 - 0.05 && c.critical.lbar_cr <= x1 + 0.05)
+                .map_or(0.5 * (x0 + x1), |c| c.critical.lbar_cr);
+            named = Some(if p.lbar < c { a } else { b });
+        }
+    }
+    let mut states = vec![Ranked {
+        energy: p.energy,
+        error: p.energy_error + ALLOWANCE,
+        index: p.index,
+        preferred: named == Some(k),
+    }];
+    for (j, s) in outs.iter().enumerate().filter(|(j, _)| *j != k) {
+        let Some(energy) = interp(s, p.lbar) else {
+            continue;
+        };
+        let q = &s.points;
+        let i = q.partition_point(|u| u.lbar < p.lbar);
+        let index0 = match q.iter().find(|u| (u.lbar - p.lbar).abs() < 1e-12) {
+            Some(u) => u.index == 0,
+            None => [i.checked_sub(1), Some(i)]
+                .into_iter()
+                .flatten()
+                .filter_map(|i| q.get(i))
+                .all(|u| u.index == 0),
+        };
+        states.push(Ranked {
+            energy,
+            error: ALLOWANCE,
+            index: usize::from(!index0),
+            preferred: named == Some(j),
+        });
+    }
+    states
 }
 
 /// Locate the event between traced states at `a` and `b` of `sheet` (see the module docs).
@@ -749,24 +808,9 @@ pub(super) fn nonuniform_diagram(
     for (k, s) in outs.iter().enumerate() {
         for p in &s.points {
             let mut p = p.clone();
-            let mut lowest = lowest_at(&outs, p.lbar) == Some(k);
-            for &(x0, x1, a, b) in &brackets {
-                if p.lbar > x0 && p.lbar < x1 && (k == a || k == b) {
-                    let c = critical
-                        .iter()
-                        .find(|c| {
-                            c.critical.lbar_cr >= x0 - 0.05 && c.critical.lbar_cr <= x1 + 0.05
-                        })
-                        .map_or(0.5 * (x0 + x1), |c| c.critical.lbar_cr);
-                    lowest = (k == a) == (p.lbar < c);
-                }
-            }
-            p.lowest = lowest;
-            p.label = match (p.index, lowest) {
-                (0, true) => Label::Stable,
-                (0, false) => Label::Metastable,
-                _ => Label::Unstable,
-            };
+            let states = ranked_at(&outs, &brackets, &critical, k, &p);
+            p.lowest = exchange::lowest(&states).contains(&0);
+            p.label = exchange::label(&states)[0].into();
             points.push(p);
         }
         events.extend(s.events.iter().cloned());

@@ -1,10 +1,13 @@
 //! Exchanges of the lowest branch in the enclosed diagram of a non-uniform rod (see
-//! `nonuniform.rs`): the lowest sheet at a length, `E_a = E_b` solved on re-solved states
-//! (secant, then a fitted line), and the energy of the `m`-fold great circle.
+//! `nonuniform.rs`): the lowest sheet at a length, `E_a = E_b` located on re-solved states
+//! (the exchange locator, [`rodloop_continuation::exchange::locate`]), and the energy of
+//! the `m`-fold great circle.
 
 use rodloop_solver::SolverError;
 
-use super::critical::secant;
+use rodloop_continuation::exchange::ExchangeSettings;
+
+use super::critical::{locate_from, EnclosedPair};
 use super::nonuniform_sheet::{surface_energy, walk, SheetOut};
 use super::trace::Levels;
 use super::{EnclosedDiagramOptions, PointSource};
@@ -92,44 +95,42 @@ pub(super) fn locate_crossing(
     };
     let mut tracks = [nearest_levels(sheets[0]), nearest_levels(sheets[1])];
     let lifted = tracks.iter().any(|t| t.is_some());
-    let f = |x: f64, tr: &mut [Option<Levels>; 2]| -> Result<(f64, f64, f64), SolverError> {
-        let (ea, da) = sheet_energy(dopts, surfaces[0], x, &mut tr[0])?;
-        let (eb, db) = sheet_energy(dopts, surfaces[1], x, &mut tr[1])?;
-        Ok((ea - eb, da + db, 0.5 * (ea + eb)))
-    };
     let h = 1e-3f64.min(0.25 * (x1 - x0).abs().max(1e-5));
-    // The surface value on the same two sheets.
+    // The surface value on the same two sheets (and the result where both are attached).
+    let surface = ExchangeSettings {
+        probe: -h,
+        baseline: 1e-5,
+        ..ExchangeSettings::default()
+    };
     let mut none: [Option<Levels>; 2] = [None, None];
-    let (xs, _, _, _, _) = secant_loose(|x| f(x, &mut none), xg, xg - h)?;
+    let on_surface = {
+        let mut pair = EnclosedPair::new(|k, x| sheet_energy(dopts, surfaces[k], x, &mut none[k]));
+        locate_from(&mut pair, xg, &surface)?
+    };
+    let xs = on_surface.x;
     if !lifted {
-        let (x, slope, step, err, e) = secant(|x| f(x, &mut none), xs, xs - 1e-6)?;
         return Ok((
-            x,
-            err / slope.abs().max(1e-300) + step,
-            e,
             xs,
-            "surface states (both attached: lambda_min > 0); secant on E_a = E_b, error from the N and 2N surface energies and the last secant step".into(),
+            on_surface.error,
+            0.5 * (on_surface.energies.a + on_surface.energies.b),
+            xs,
+            "surface states (both attached: lambda_min > 0); the exchange locator on E_a = E_b (hunt from the interpolated root, Brent), error from the N and 2N surface energies, the chord's noise over +-1e-5 and the final bracket".into(),
         ));
     }
-    let (xsec, _, _, _, _) = secant_loose(|x| f(x, &mut tracks), xg, xg - h)?;
-    // The energies carry discretisation noise (contact ends crossing nodes) and the two
-    // curves meet at a small angle, so the root is taken from the straight line fitted to
-    // `E_a − E_b` at `x_s − d, x_s, x_s + d` (`d = 2e-3`) around the secant's root `x_s`.
-    let d = 2e-3;
-    let mut fs = [(0.0, 0.0, 0.0); 3];
-    for (k, x) in [xsec - d, xsec, xsec + d].into_iter().enumerate() {
-        fs[k] = f(x, &mut tracks)?;
-    }
-    let slope = (fs[2].0 - fs[0].0) / (2.0 * d);
-    let mean = (fs[0].0 + fs[1].0 + fs[2].0) / 3.0;
-    let x = xsec - mean / slope;
-    let err = fs.iter().map(|v| v.1).fold(0.0, f64::max);
-    // The line's misfit at the middle point (curvature and noise of E_a − E_b).
-    let misfit = (fs[1].0 - 0.5 * (fs[0].0 + fs[2].0)).abs();
-    // Plus the distance beyond the fitted points where the root is extrapolated.
-    let step = misfit / slope.abs().max(1e-300) + ((x - xsec).abs() - d).max(0.0);
-    // The mean energy at the root, from its values at the three points.
-    let e = fs[1].2 + (x - xsec) * (fs[2].2 - fs[0].2) / (2.0 * d);
+    // The energies of lifted-off states carry discretisation noise (contact ends crossing
+    // nodes) and the two curves meet at a small angle: the slope and the noise misfit come
+    // from the chord over `x ± 2e-3`, and the root is refined to `1e-10` only.
+    let lifted_settings = ExchangeSettings {
+        xtol: 1e-10,
+        probe: -h,
+        baseline: 2e-3,
+        ..ExchangeSettings::default()
+    };
+    let ex = {
+        let mut pair =
+            EnclosedPair::new(|k, x| sheet_energy(dopts, surfaces[k], x, &mut tracks[k]));
+        locate_from(&mut pair, xg, &lifted_settings)?
+    };
     let cells = tracks
         .iter()
         .flatten()
@@ -137,46 +138,17 @@ pub(super) fn locate_crossing(
         .max()
         .unwrap_or(0);
     Ok((
-        x,
-        err / slope.abs().max(1e-300) + step,
-        e,
+        ex.x,
+        ex.error,
+        0.5 * (ex.energies.a + ex.energies.b),
         xs,
         format!(
-            "secant on E_a = E_b with the lifted-off state(s) re-solved (3-D model at N = {}, {}, {}), then the root of the line fitted at the secant root and 2e-3 on either side; error: the three levels' energy estimates over the slope plus the line's misfit over the slope; surface value on the same sheets",
+            "the exchange locator on E_a = E_b with the lifted-off state(s) re-solved (3-D model at N = {}, {}, {}; hunt from the interpolated root, Brent to 1e-10); error: the three levels' energy estimates plus the misfit of the chord over +-2e-3, over its slope, plus the final bracket; surface value on the same sheets",
             cells / 4,
             cells / 2,
             cells
         ),
     ))
-}
-
-/// Secant iteration on `f(x) = 0` from `xa`, `xb` until the step is below `1e-10` or 12
-/// steps are taken (the energies of lifted-off states carry discretisation noise where
-/// contact ends cross nodes, so the last step, which enters the error, may stay above the
-/// tolerance); returns `(x, f', last step, f's error, mean energy)`.
-fn secant_loose<F>(mut f: F, xa: f64, xb: f64) -> Result<(f64, f64, f64, f64, f64), SolverError>
-where
-    F: FnMut(f64) -> Result<(f64, f64, f64), SolverError>,
-{
-    use rodloop_continuation::roots::{self, SecantSettings};
-    let settings = SecantSettings {
-        xtol: 1e-10,
-        max_iter: 12,
-        ..SecantSettings::default()
-    };
-    if (xb - xa).abs() < settings.xtol {
-        let (fa, _, _) = f(xa)?;
-        let (fb, err, e) = f(xb)?;
-        return Ok((xb, (fb - fa) / (xb - xa), (xb - xa).abs(), err, e));
-    }
-    let r = roots::secant(|x| f(x).map(|(v, err, e)| (v, (err, e))), xa, xb, &settings).map_err(
-        |e| match e {
-            rodloop_continuation::RootError::Function(e) => e,
-            other => SolverError::InvalidInput(other.to_string()),
-        },
-    )?;
-    let (err, e) = r.payload;
-    Ok((r.x, r.slope, r.width, err, e))
 }
 
 /// Distance from a great circle `L̄ = m` within which a change of the lowest sheet is

@@ -16,7 +16,7 @@ use crate::DiagramError;
 use curve::trace_exchange;
 #[cfg(test)]
 pub(crate) use seed::lowest_placement;
-pub use seed::{maxwell_by_secant, uniform_exchanges};
+pub use seed::{maxwell_point, uniform_exchanges};
 
 /// An exchange of the lowest branch of the uniform rod (a crossing `E_a = E_b`, from the
 /// exact layer), the start of a curve.
@@ -57,12 +57,12 @@ pub struct PhaseSettings {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum RowSource {
-    /// The Maxwell point by the secant method on re-solved equilibria (the curve's start).
+    /// The Maxwell point by the exchange locator on re-solved equilibria (the curve's start).
     Seed,
     /// An accepted point of the pseudo-arclength continuation.
     Continuation,
     /// The Maxwell point of a new pair of states, found just beyond the end of the previous
-    /// pair (fold, loss of stability, branch point) by the secant method on re-solved
+    /// pair (fold, loss of stability, branch point) by the exchange locator on re-solved
     /// equilibria ([`switch`](self) module docs).
     Switch,
     /// Newton's method on the augmented system at an exact parameter value (`--at`, and the
@@ -370,7 +370,7 @@ mod tests {
     }
 
     #[test]
-    fn at_rows_agree_with_an_independent_secant_solve() {
+    fn at_rows_agree_with_an_independent_maxwell_point_solve() {
         let theta = 0.7;
         let d = trace_phase(&settings(0.9, 0.65, vec![theta])).unwrap();
         for c in &d.curves {
@@ -380,7 +380,7 @@ mod tests {
                 .find(|r| r.source == RowSource::Fixed && r.value == theta)
                 .expect("an --at row");
             // Independent: the lowest stable states at θ from shifted exact loops, then the
-            // secant method on re-solved equilibria.
+            // exchange locator on re-solved equilibria (not the augmented system).
             let st = scene(theta);
             let (ea, eb) = (
                 eta_of_branch(c.exchange.from_branch),
@@ -389,11 +389,11 @@ mod tests {
             let opts = SolveOptions::default();
             let a = lowest_placement(1.0, row.lbar_cr, ea, c.cells.0, &st, &opts).unwrap();
             let b = lowest_placement(1.0, row.lbar_cr, eb, c.cells.1, &st, &opts).unwrap();
-            let (ma, _, slope) = maxwell_by_secant(&a, &b, &opts).unwrap();
+            let (ma, _, slope) = maxwell_point(&a, &b, &opts).unwrap();
             assert!(slope > 0.0);
             assert!(
                 (ma.lbar() - row.lbar_cr).abs() < 1e-9,
-                "--at row {} vs secant {}",
+                "--at row {} vs Maxwell point {}",
                 row.lbar_cr,
                 ma.lbar()
             );

@@ -1,6 +1,7 @@
 //! Seeds of the phase curves: the exchanges of the uniform rod, the lowest placement of
-//! the soft segment, and the Maxwell point of two equilibria by the secant method.
+//! the soft segment, and the Maxwell point of two equilibria by the exchange locator.
 
+use rodloop_continuation::exchange::{self, Energies, EnergyPair, ExchangeSettings, Start};
 use rodloop_exact::eta_of_branch;
 use rodloop_solver::{
     solve_from_state, Equilibrium, Globalization, Param, SolveOptions, SolverError, Stiffness,
@@ -116,51 +117,74 @@ pub(super) fn energy_gap(
     Ok((ea.energy().total - eb.energy().total, ea, eb))
 }
 
-/// The Maxwell point `E_a(L̄) = E_b(L̄)` of two equilibria (same stiffness) by the secant
-/// method on re-solved equilibria, starting at their common length and `lbar + 1e-3`;
-/// returns the two equilibria at the critical length and `d(E_a − E_b)/dL̄` there.
-pub fn maxwell_by_secant(
+/// Noise of the energy of a re-solved equilibrium (the KKT tolerance of its Newton
+/// solve): the error estimate of each energy in [`maxwell_point`].
+const RESOLVE_NOISE: f64 = 1e-11;
+
+/// Two equilibria followed in `L̄` for the exchange locator: each evaluation re-solves both
+/// by Newton from the pair solved last.
+struct GapPair<'a> {
+    start: (&'a Equilibrium, &'a Equilibrium),
+    last: Option<(Equilibrium, Equilibrium)>,
+    opts: &'a SolveOptions,
+}
+
+impl EnergyPair for GapPair<'_> {
+    type Error = SolverError;
+    fn energies(&mut self, lbar: f64) -> Result<Energies, SolverError> {
+        let (_, ea, eb) = match &self.last {
+            None => energy_gap(self.start.0, self.start.1, lbar, self.opts)?,
+            Some((pa, pb)) => energy_gap(pa, pb, lbar, self.opts)?,
+        };
+        let out = Energies {
+            a: ea.energy().total,
+            b: eb.energy().total,
+            slope: None,
+        };
+        self.last = Some((ea, eb));
+        Ok(out)
+    }
+    fn error(&mut self, _lbar: f64) -> Result<f64, SolverError> {
+        Ok(2.0 * RESOLVE_NOISE)
+    }
+}
+
+/// The Maxwell point `E_a(L̄) = E_b(L̄)` of two equilibria (same stiffness) by the exchange
+/// locator ([`rodloop_continuation::exchange::locate`]) on re-solved equilibria, hunting
+/// from their common length (first step `+10⁻³`, steps clamped to 0.05, within `±0.5`);
+/// returns the two equilibria at the critical length and `d(E_a − E_b)/dL̄` there (the
+/// chord over `±10⁻⁵`). The energies carry noise of about [`RESOLVE_NOISE`], so `L̄` is
+/// refined to `10⁻¹¹` only; the augmented Newton polishes.
+pub fn maxwell_point(
     a: &Equilibrium,
     b: &Equilibrium,
     opts: &SolveOptions,
 ) -> Result<(Equilibrium, Equilibrium, f64), SolverError> {
-    use rodloop_continuation::roots::{self, RootStop, SecantSettings};
-    // Each solve starts from the pair solved last; the pair at the root is the last one
-    // solved.
-    let mut last: Option<(Equilibrium, Equilibrium)> = None;
-    let gap = |l: f64| -> Result<(f64, ()), SolverError> {
-        let (f, ea, eb) = match &last {
-            None => energy_gap(a, b, l, opts)?,
-            Some((pa, pb)) => energy_gap(pa, pb, l, opts)?,
-        };
-        last = Some((ea, eb));
-        Ok((f, ()))
+    let mut pair = GapPair {
+        start: (a, b),
+        last: None,
+        opts,
     };
-    // The energies of re-solved states carry noise of about 1e-11 (the KKT tolerance):
-    // stop at |E_a − E_b| < 1e-10 (L̄ to ~1e-11 for slopes of order 1); the augmented
-    // Newton polishes. Steps are clamped to 0.05.
-    let settings = SecantSettings {
-        xtol: 1e-13,
-        ftol: 1e-10,
+    let settings = ExchangeSettings {
+        xtol: 1e-11,
+        probe: 1e-3,
         max_step: 0.05,
-        max_iter: 30,
+        baseline: 1e-5,
+        max_evaluations: 30,
+        misfit: true,
     };
-    let r = roots::secant(gap, a.lbar(), a.lbar() + 1e-3, &settings).map_err(|e| match e {
+    let x0 = a.lbar();
+    let start = Start::Guess {
+        x: x0,
+        window: (x0 - 0.5, x0 + 0.5),
+    };
+    let ex = exchange::locate(&mut pair, start, &settings).map_err(|e| match e {
         rodloop_continuation::RootError::Function(e) => e,
-        other => SolverError::InvalidInput(other.to_string()),
+        other => SolverError::InvalidInput(format!("E_a = E_b: {other}")),
     })?;
-    let slope = match r.stop {
-        RootStop::Residual => r.slope,
-        RootStop::Step => r.step_slope,
-        RootStop::FlatSlope | RootStop::MaxIterations => {
-            return Err(SolverError::InvalidInput(format!(
-                "the secant method for E_a = E_b did not converge (last L̄ = {}, gap {:.3e})",
-                r.x, r.fx
-            )))
-        }
-    };
-    let (ea, eb) = last.expect("the secant evaluates twice before it stops");
-    Ok((ea, eb, slope))
+    let (pa, pb) = pair.last.expect("the locator evaluates before it stops");
+    let (_, ea, eb) = energy_gap(&pa, &pb, ex.x, opts)?;
+    Ok((ea, eb, ex.slope))
 }
 
 /// The start of a curve: the Maxwell point of the lowest stable states of the exchange's two
@@ -200,7 +224,7 @@ pub(super) fn seed_exchange(
     };
     let (sa, sb) = (state(ex.from_branch)?, state(ex.to_branch)?);
     let (ma, mb, slope) =
-        maxwell_by_secant(&sa, &sb, &s.solve).map_err(|e| crit(format!("seed: {e}")))?;
+        maxwell_point(&sa, &sb, &s.solve).map_err(|e| crit(format!("seed: {e}")))?;
     // E_from − E_to increases through L̄_cr when `from` is the lower one below it.
     if slope.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Err(crit(format!(

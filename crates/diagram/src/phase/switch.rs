@@ -10,15 +10,15 @@
 //! branch shifted by eighths of `1/(2η)` along the rod (as for the seeds,
 //! [`super::lowest_placement`]); every start is solved on the curve's own models (mesh and
 //! resolution), and the lowest index-0 state with the branch's `η` is kept. The Maxwell
-//! point of the new pair is then found by the secant method on re-solved equilibria
-//! ([`super::maxwell_by_secant`]) and polished by Newton on the augmented system.
+//! point of the new pair is then found by the exchange locator on re-solved equilibria
+//! ([`super::maxwell_point`]) and polished by Newton on the augmented system.
 
 use nalgebra::DVector;
 use rodloop_exact::eta_of_branch;
 use rodloop_solver::{Equilibrium, Globalization, SolveOptions, SurfaceSolve};
 
 use super::rows::fixed;
-use super::seed::maxwell_by_secant;
+use super::seed::maxwell_point;
 use super::{Exchange, Tracked};
 use crate::maxwell::{join, MaxwellProblem, INDEX_TOL};
 use crate::placements::{classify, shift_of, solve_shifted};
@@ -127,7 +127,7 @@ pub(super) fn switch_pair<M: SurfaceSolve>(
     let (eta_a, eta_b) = (eta_of_branch(ex.from_branch), eta_of_branch(ex.to_branch));
     let (ea, a, how_a) = lowest_state(&ma, za, eta_a, opts)?;
     let (eb, b, how_b) = lowest_state(&mb, zb, eta_b, opts)?;
-    let (a, b, _slope) = maxwell_by_secant(&a, &b, opts).map_err(|e| e.to_string())?;
+    let (a, b, _slope) = maxwell_point(&a, &b, opts).map_err(|e| e.to_string())?;
     let x = join(&a.state(), &b.state(), a.lbar());
     let x = fixed(problem, &x, p)?;
     let index = problem.indices(&x, p).map_err(|e| e.to_string())?;
