@@ -3,7 +3,7 @@
 //! [`surface_energy`]), and its lifted-off states walked to a length ([`walk`]). The
 //! diagram's route, its exchanges, special points and descents all build on these.
 
-use rodloop_continuation::natural::{self, NaturalSettings};
+use rodloop_continuation::natural::{self, Halted, StepSettings};
 use rodloop_solver::enclosed::EnclosedOptions;
 use rodloop_solver::{solve_from_state, Equilibrium, SolverError};
 
@@ -108,28 +108,38 @@ pub(super) fn step_options() -> EnclosedOptions {
     }
 }
 
-/// Step `t` to `x` in steps of at most `0.01`, halving a failed step up to 6 times; after
-/// the first step, each step starts from the secant predictor through the last two states
-/// (the plain warm start where that fails).
+/// Step `t` to `x` in steps of `0.01`, halving a failed step up to 6 times; after the first
+/// step, each step starts from the secant predictor through the last two states (the plain
+/// warm start where that fails).
 pub(super) fn walk(t: &Levels, x: f64) -> Result<Levels, SolverError> {
     walk_with(t, x, &step_options())
 }
 
-/// [`walk`] with the Newton options `opts`: a natural-parameter [`natural::walk`] with
-/// steps of at most `0.01`, 6 halvings and arrival to `1e-15`.
+/// Length of the steps of [`walk`] in `L̄`.
+const WALK_STEP: f64 = 0.01;
+
+/// [`walk`] with the Newton options `opts`: a natural-parameter [`natural::walk_steps`] in
+/// steps of [`WALK_STEP`], each step halved up to 6 times where it fails and the next step
+/// tried at full length again (a step that had to be halved once does not shrink every later
+/// one: with the step kept at its halved length, a walk of `0.6` in `L̄` took about 1200
+/// steps instead of 60), arrival to `1e-15`.
 pub(super) fn walk_with(t: &Levels, x: f64, opts: &EnclosedOptions) -> Result<Levels, SolverError> {
-    const SETTINGS: NaturalSettings = NaturalSettings {
-        max_step: 0.01,
-        max_halvings: 6,
+    const HALVINGS: usize = 6;
+    // Every step is at least `WALK_STEP / 2^HALVINGS` long, so this bounds a walk that
+    // reaches its target.
+    let max_steps = ((x - t.lbar).abs() / WALK_STEP).ceil() as usize * (1 << HALVINGS) + 1;
+    let settings = StepSettings {
+        step: WALK_STEP,
+        max_halvings: HALVINGS,
+        max_steps,
         arrive: 1e-15,
-        snap: 0.0,
     };
-    natural::walk(
+    natural::walk_steps(
         t.clone(),
         None,
         x,
         |l: &Levels| l.lbar,
-        &SETTINGS,
+        &settings,
         |cur, prev, to, _| {
             let predicted = match prev {
                 Some(p) => cur.step_predicted(p, to, opts),
@@ -139,5 +149,11 @@ pub(super) fn walk_with(t: &Levels, x: f64, opts: &EnclosedOptions) -> Result<Le
         },
     )
     .map(|w| w.last)
-    .map_err(|s| s.error)
+    .map_err(|h| match h {
+        Halted::Stuck(s) => s.error,
+        Halted::OutOfSteps { last } => SolverError::InvalidInput(format!(
+            "the walk to lbar = {x} ran out of steps at lbar = {}",
+            last.lbar
+        )),
+    })
 }

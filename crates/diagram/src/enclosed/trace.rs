@@ -14,6 +14,7 @@ use rodloop_solver::enclosed::{
 };
 use rodloop_solver::{Accuracy, SolverError, Stiffness};
 
+use super::nonuniform_sheet::step_options;
 use super::{
     EnclosedDiagramOptions, EnclosedEvent, EnclosedPoint, EventKind, PointShape, PointSource, TOUCH,
 };
@@ -328,7 +329,8 @@ pub(super) fn trace_detached(
     };
     let what = format!("branch {} (eta = {eta})", branch_of_eta(eta));
     let mut stops = Vec::new();
-    let traced = follow(first, xs, mid, &what, &sopts, false, &mut stops);
+    // The steps with the tracer's Newton budget (a step that stalls is halved early).
+    let traced = follow(first, xs, mid, &what, &step_options(), false, &mut stops);
     warnings.extend(stops.into_iter().map(|s| s.text));
     Ok(traced)
 }

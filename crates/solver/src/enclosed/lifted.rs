@@ -260,10 +260,14 @@ impl Lifted {
 /// Block LU factors of [`Lifted`].
 ///
 /// Only the `g` border columns in use are eliminated: the padding columns of `C_c` are zero,
-/// so their eliminated columns are zero as well, and every product below skips them.
+/// so their eliminated columns are zero as well, and every product below skips them. The
+/// factors are written in place into buffers kept across Newton steps ([`block_lu`]).
 #[derive(Default)]
 struct Factor {
-    lu: Vec<nalgebra::LU<f64, Const<B>, Const<B>>>,
+    /// The LU factors of the pivot blocks `S_c` (unit lower and upper triangle in one block).
+    lu: Vec<Blk>,
+    /// Their row interchanges ([`block_lu`]).
+    perm: Vec<[usize; B]>,
     /// `S_c⁻¹ U_c` (its six nonzero columns, the `δm` columns).
     yu: Vec<B6>,
     /// `S_c⁻¹ C'_c` (border columns after elimination; the padding columns stay zero).
@@ -273,11 +277,87 @@ struct Factor {
     corner: Option<nalgebra::LU<f64, Const<G>, Const<G>>>,
 }
 
-fn pivot_ok(lu: &nalgebra::LU<f64, Const<B>, Const<B>>) -> bool {
-    let u = lu.u();
+/// LU factorisation with partial pivoting of a pivot block, in place: the unit lower
+/// triangle below the diagonal, the upper triangle on and above it, and in `perm[i]` the
+/// row interchanged with row `i` at step `i`. The operations are those of
+/// `nalgebra::LU::new` in the same order (same numbers), without its generic views: the
+/// blocks are small and their factorisation is the inner loop of every Newton step.
+fn block_lu(a: &mut Blk, perm: &mut [usize; B]) {
+    let m = a.as_mut_slice();
+    for i in 0..B {
+        // Pivot: the first entry of largest modulus in column i at or below the diagonal.
+        let col = i * B;
+        let (mut piv, mut best) = (i, m[col + i].abs());
+        for r in i + 1..B {
+            let v = m[col + r].abs();
+            if v > best {
+                best = v;
+                piv = r;
+            }
+        }
+        perm[i] = i;
+        let diag = m[col + piv];
+        if diag == 0.0 {
+            continue;
+        }
+        if piv != i {
+            perm[i] = piv;
+            for k in 0..B {
+                m.swap(k * B + i, k * B + piv);
+            }
+        }
+        let inv = 1.0 / diag;
+        for r in i + 1..B {
+            m[col + r] *= inv;
+        }
+        for k in i + 1..B {
+            let ck = k * B;
+            let f = m[ck + i];
+            for r in i + 1..B {
+                m[ck + r] += -f * m[col + r];
+            }
+        }
+    }
+}
+
+/// Solve `S x = b` in place for the first `ncols` columns of `b` (column-major, `B` rows
+/// each) with the factors of [`block_lu`]: the interchanges, then the unit lower and the
+/// upper triangle, as `nalgebra::LU::solve_mut`. False where a diagonal entry of the
+/// upper triangle is zero.
+fn block_solve(a: &Blk, perm: &[usize; B], b: &mut [f64], ncols: usize) -> bool {
+    let m = a.as_slice();
+    for j in 0..ncols {
+        let x = &mut b[j * B..(j + 1) * B];
+        for i in 0..B {
+            x.swap(i, perm[i]);
+        }
+        for i in 0..B - 1 {
+            let c = x[i];
+            let col = &m[i * B..(i + 1) * B];
+            for r in i + 1..B {
+                x[r] += -c * col[r];
+            }
+        }
+        for i in (0..B).rev() {
+            let d = m[i * B + i];
+            if d == 0.0 {
+                return false;
+            }
+            let c = x[i] / d;
+            x[i] = c;
+            let col = &m[i * B..(i + 1) * B];
+            for r in 0..i {
+                x[r] += -c * col[r];
+            }
+        }
+    }
+    true
+}
+
+fn pivot_ok(lu: &Blk) -> bool {
     let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
     for i in 0..B {
-        let v = u[(i, i)].abs();
+        let v = lu[(i, i)].abs();
         lo = lo.min(v);
         hi = hi.max(v);
     }
@@ -306,44 +386,51 @@ impl Factor {
         let n = sys.n;
         let g = sys.g;
         let singular = || SolverError::SingularJacobian { iteration: 0 };
-        self.lu.clear();
-        self.yu.clear();
-        self.yc.clear();
-        self.rb.clear();
         self.corner = None;
+        self.lu.resize(n, Blk::zeros());
+        self.perm.resize(n, [0; B]);
+        self.yu.resize(n, B6::zeros());
+        self.yc.resize(n, BCol::zeros());
+        self.rb.resize(n, BRow::zeros());
         let mut corner = sys.corner;
-        let mut s = sys.diag[0];
-        let mut cb = sys.bcol[0];
-        let mut r = sys.brow[0];
+        self.lu[0] = sys.diag[0];
+        self.yc[0] = sys.bcol[0];
+        self.rb[0] = sys.brow[0];
         let mut em = B6::zeros();
         for k in 0..6 {
             em[(M0 + k, k)] = -1.0;
         }
         for c in 0..n {
-            let f = s.lu();
-            if !pivot_ok(&f) {
+            block_lu(&mut self.lu[c], &mut self.perm[c]);
+            let (f, perm) = (&self.lu[c], &self.perm[c]);
+            if !pivot_ok(f) {
                 return Err(singular());
             }
             // S⁻¹U with U = −E_M: six columns.
-            let u: B6 = if c + 1 < n {
-                f.solve(&em).ok_or(singular())?
+            let u = &mut self.yu[c];
+            if c + 1 < n {
+                *u = em;
+                if !block_solve(f, perm, u.as_mut_slice(), 6) {
+                    return Err(singular());
+                }
             } else {
-                B6::zeros()
-            };
-            let mut y: BCol = cb;
-            if !f.solve_mut(&mut y.columns_mut(0, g)) {
+                *u = B6::zeros();
+            }
+            let y = &mut self.yc[c];
+            if !block_solve(f, perm, y.as_mut_slice(), g) {
                 return Err(singular());
             }
+            let (y, u, r) = (&self.yc[c], &self.yu[c], &self.rb[c]);
             // corner −= R_c y (rows and columns past `g` are zero).
             for j in 0..g {
                 for i in 0..g {
-                    corner[(i, j)] -= dot_rc(&r, i, &y, j);
+                    corner[(i, j)] -= dot_rc(r, i, y, j);
                 }
             }
             if c + 1 < n {
                 let low = &sys.low[c + 1];
                 // S_{c+1} = D_{c+1} − L_{c+1} S⁻¹U: only the δm columns change.
-                s = sys.diag[c + 1];
+                let mut s = sys.diag[c + 1];
                 let ux = u.fixed_rows::<6>(X0);
                 let lk = low * ux;
                 for j in 0..6 {
@@ -355,7 +442,7 @@ impl Factor {
                     }
                 }
                 // C'_{c+1} = C_{c+1} − L_{c+1} y.
-                cb = sys.bcol[c + 1];
+                let mut cb = sys.bcol[c + 1];
                 let yx = y.fixed_rows::<6>(X0);
                 let ly = low * yx;
                 for j in 0..g {
@@ -370,16 +457,13 @@ impl Factor {
                 let mut rn = sys.brow[c + 1];
                 for j in 0..6 {
                     for i in 0..g {
-                        rn[(i, M0 + j)] -= dot_rc(&r, i, &u, j);
+                        rn[(i, M0 + j)] -= dot_rc(r, i, u, j);
                     }
                 }
-                self.rb.push(std::mem::replace(&mut r, rn));
-            } else {
-                self.rb.push(r);
+                self.lu[c + 1] = s;
+                self.yc[c + 1] = cb;
+                self.rb[c + 1] = rn;
             }
-            self.lu.push(f);
-            self.yu.push(u);
-            self.yc.push(y);
         }
         let corner = corner.lu();
         if !corner.is_invertible() {
@@ -400,9 +484,10 @@ impl Factor {
         let mut gb = rhs.border;
         let mut r = rhs.blocks[0];
         for c in 0..n {
-            let Some(yc) = self.lu[c].solve(&r) else {
+            let mut yc = r;
+            if !block_solve(&self.lu[c], &self.perm[c], yc.as_mut_slice(), 1) {
                 return false;
-            };
+            }
             // gb −= R_c yc (rows past `g` are zero).
             for i in 0..g {
                 let rb = &self.rb[c];
@@ -724,5 +809,74 @@ impl EnclosedModel {
         } else {
             sys.corner[(gl0, gl0)] = 1.0;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Pseudo-random entries in `[-1, 1)`.
+    fn filler(seed: u64) -> impl FnMut() -> f64 {
+        let mut s = seed;
+        move || {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        }
+    }
+
+    /// [`block_lu`] and [`block_solve`] give nalgebra's LU factors and solutions to the last
+    /// bit (same operations in the same order), on random blocks, on blocks shaped like the
+    /// lifted system's (identity rows, a zero first pivot that forces interchanges), and they
+    /// report a zero pivot.
+    #[test]
+    fn block_lu_matches_nalgebra_bitwise() {
+        let mut next = filler(7);
+        for trial in 0..30 {
+            let mut a = Blk::from_fn(|_, _| next());
+            if trial % 3 == 1 {
+                // Rows like the forward/backward recursions: identity plus a few couplings.
+                for i in X0..L0 {
+                    for j in 0..B {
+                        a[(i, j)] = if i == j { 1.0 } else { 0.0 };
+                    }
+                    a[(i, K0 + i % 4)] = next();
+                }
+                a[(0, 0)] = 0.0;
+            }
+            let mut rhs = BCol::from_fn(|_, _| next());
+            let reference = a.lu();
+            let mut lu = a;
+            let mut perm = [0; B];
+            block_lu(&mut lu, &mut perm);
+            let (l, u) = (reference.l(), reference.u());
+            for i in 0..B {
+                for j in 0..B {
+                    let want = if i > j { l[(i, j)] } else { u[(i, j)] };
+                    assert_eq!(
+                        lu[(i, j)].to_bits(),
+                        want.to_bits(),
+                        "trial {trial} ({i}, {j})"
+                    );
+                }
+            }
+            let want = reference.solve(&rhs).expect("invertible");
+            assert!(block_solve(&lu, &perm, rhs.as_mut_slice(), G));
+            for (x, w) in rhs.iter().zip(want.iter()) {
+                assert_eq!(x.to_bits(), w.to_bits(), "trial {trial}");
+            }
+        }
+        // A singular block: a zero column.
+        let mut a = Blk::from_fn(|_, _| next());
+        for i in 0..B {
+            a[(i, 5)] = 0.0;
+        }
+        let mut perm = [0; B];
+        block_lu(&mut a, &mut perm);
+        assert!(!pivot_ok(&a));
+        let mut b = BVec::from_fn(|_, _| next());
+        assert!(!block_solve(&a, &perm, b.as_mut_slice(), 1));
     }
 }
