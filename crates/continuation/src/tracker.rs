@@ -386,9 +386,10 @@ impl<'a, P: Problem + ?Sized> Continuation<'a, P> {
                 }
             };
             let (fa, fb) = (scaled(&ea), scaled(&eb));
-            if let Some((e, acc)) =
+            if let Some((mut e, acc)) =
                 self.locate_root(ev, seg, &ea, fa, &eb, fb, |e| Ok(scaled(e)))?
             {
+                e.t = interpolated_tangent(seg, e.sigma);
                 out.push(self.special_point(ev, seg, e, SpecialKind::BranchPoint, acc));
             }
         }
@@ -584,5 +585,28 @@ impl<'a, P: Problem + ?Sized> Continuation<'a, P> {
             ilo = ih;
         }
         Ok(out)
+    }
+}
+
+/// Tangent of the traced branch at arclength `sigma` within the segment: the linear
+/// interpolant of the unit tangents at the segment's ends, normalised (error `O(h²)` for a
+/// smooth branch). A located branch point reports this tangent instead of the kernel
+/// vector of `A = [∂F/∂x ∂F/∂p]` there: at a branch point the kernel of `A` is two-
+/// dimensional, so the kernel vector computed at a point within `locate_tol` of it is
+/// any direction of that plane (the corrector's residual decides), often that of the
+/// other branch. Branch switching ([`Continuation::secondary_tangent`]) needs the
+/// current branch's direction to tell the two branches apart.
+fn interpolated_tangent(seg: &Segment<'_>, sigma: f64) -> DVector<f64> {
+    let w = if seg.h > 0.0 {
+        (sigma / seg.h).clamp(0.0, 1.0)
+    } else {
+        0.5
+    };
+    let t = &seg.a.t * (1.0 - w) + &seg.b.t * w;
+    let norm = t.norm();
+    if norm > 0.0 && norm.is_finite() {
+        t / norm
+    } else {
+        seg.a.t.clone()
     }
 }
