@@ -15,7 +15,7 @@
 
 use rodloop_solver::{
     solve, solve_from_state, Claim, Equilibrium, Globalization, Phase, SolveOptions, SolverError,
-    SurfaceModel,
+    SurfaceSolve,
 };
 
 use crate::states::{newton_options, uniform_profile};
@@ -28,7 +28,7 @@ pub fn resolved(eq: &Equilibrium, cells: usize) -> Result<Equilibrium, SolverErr
     let m = eq.model();
     let kappa = eq.resample(cells)?;
     let kind = m.stiffness().kind();
-    let mut model = SurfaceModel::new(m.radius(), m.lbar(), cells, kind)?;
+    let mut model = m.with_cells(cells)?;
     if kind.is_uniform() {
         model = model.with_phase(Phase::from_gauss_values(&kappa, cells)?)?;
     }
@@ -65,7 +65,7 @@ fn half_resolution(eq: &Equilibrium) -> Result<f64, SolverError> {
     let coarse = if m.stiffness().kind().is_uniform() {
         resolved(eq, nc)?
     } else {
-        let model = SurfaceModel::new(m.radius(), m.lbar(), nc, m.stiffness().kind())?;
+        let model = m.with_cells(nc)?;
         let mut z = eq.resample(nc)?;
         z.extend_from_slice(&eq.multiplier());
         let newton = SolveOptions {
