@@ -4,7 +4,9 @@
 use nalgebra::DVector;
 use rodloop_continuation::newton;
 use rodloop_exact::eta_of_branch;
-use rodloop_solver::{solve_from_state, Accuracy, Globalization, Param, SolveOptions, SurfaceSolve};
+use rodloop_solver::{
+    solve_from_state, Accuracy, Globalization, Param, SolveOptions, SurfaceSolve,
+};
 
 use super::{Exchange, PhaseRow, PhaseSettings, RowSource, RowStates, Tracked};
 use crate::maxwell::MaxwellProblem;
