@@ -51,8 +51,9 @@ use rodloop_solver::{solve_from_state, SolverError};
 use super::nonuniform_descent::descend_unstable;
 use super::nonuniform_exchange::{interp, locate_crossing, lowest_at, mean_stiffness, CIRCLE};
 use super::nonuniform_seeds::seed_from_stiffness_path;
-use super::nonuniform_sheet::{step_options, surface_at, surface_energy, SheetOut};
+use super::nonuniform_sheet::{surface_at, surface_energy, SheetOut};
 use super::nonuniform_special::{branch_points, classify_stops};
+use super::trace::step_options;
 use super::trace::{follow, Levels};
 use super::{
     EnclosedCritical, EnclosedDiagram, EnclosedDiagramOptions, EnclosedEvent, EnclosedPoint,

@@ -16,7 +16,8 @@ use rodloop_solver::enclosed::descent::descend;
 use rodloop_solver::enclosed::{solve_levels, EnclosedOptions};
 
 use super::nonuniform_exchange::{interp, lowest_at};
-use super::nonuniform_sheet::{step_options, SheetOut};
+use super::nonuniform_sheet::SheetOut;
+use super::trace::step_options;
 use super::trace::{follow, Levels, TraceStop};
 use super::PointSource;
 use crate::parallel::run_parallel;

@@ -16,7 +16,8 @@ use rodloop_solver::enclosed::descent::stiffness_homotopy_states;
 use rodloop_solver::enclosed::solve_levels;
 
 use super::nonuniform_exchange::interp;
-use super::nonuniform_sheet::{step_options, SheetOut};
+use super::nonuniform_sheet::SheetOut;
+use super::trace::step_options;
 use super::trace::{follow, Levels};
 use super::EnclosedDiagramOptions;
 use crate::parallel::run_parallel;

@@ -7,7 +7,7 @@ use rodloop_continuation::natural::{self, Halted, StepSettings};
 use rodloop_solver::enclosed::EnclosedOptions;
 use rodloop_solver::{solve_from_state, Equilibrium, SolverError};
 
-use super::trace::{Levels, TraceStop};
+use super::trace::{step_options, Levels, TraceStop};
 use super::{EnclosedEvent, EnclosedPoint};
 use crate::states::{half_resolution, newton_options};
 use crate::types::TracedBranch;
@@ -93,19 +93,6 @@ pub(super) fn surface_energy(
     })?;
     let (a, b) = (e1.energy().total, e2.energy().total);
     Ok((b, rodloop_solver::richardson_error(b, a)))
-}
-
-/// Newton options of the continuation steps: a step that needs more than 30 iterations is
-/// halved instead (most steps take 2–6; with 12, steps that were converging slowly, at
-/// residuals 1e-8, stopped the traces; the default 80 makes a failing step 2.7× dearer), and
-/// one that has not halved its residual in 6 iterations is given up (it is shedding the old
-/// contact set node by node; a shorter step does better).
-pub(super) fn step_options() -> EnclosedOptions {
-    EnclosedOptions {
-        max_iterations: 30,
-        stall_window: 6,
-        ..EnclosedOptions::default()
-    }
 }
 
 /// Step `t` to `x` in steps of `0.01`, halving a failed step up to 6 times; after the first
