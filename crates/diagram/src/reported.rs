@@ -21,9 +21,12 @@ use rodloop_solver::{
 use crate::states::{newton_options, uniform_profile};
 use crate::{StateFile, ESTIMATES, MAX_REFINEMENT, NO_ESTIMATE_TOLERANCE, STATE_POINTS};
 
-/// `eq` re-solved with `cells` cells at its own length and stiffness (resampled profile as
-/// start; the phase condition of the resampled profile for uniform stiffness), Newton to
-/// `1e-8` with up to 60 steps (as the refinements of the diagrams' state files).
+/// `eq` re-solved with `cells` cells at its own length and stiffness for a state file, by the
+/// diagrams ([`crate::TracedBranch::verified_state`]) and by `phase`, `converge` and
+/// `--param` alike: the resampled profile as start (and, for uniform stiffness, as phase
+/// reference), Newton to the tolerance a traced state is accepted with (`1e-8`, as in
+/// [`crate::TracedBranch::equilibrium_of`]; on a very soft segment, `D1/D0 = 0.001`, the
+/// residual of the finer resolutions stalls at a few 1e-9 in round-off), with up to 60 steps.
 pub fn resolved(eq: &Equilibrium, cells: usize) -> Result<Equilibrium, SolverError> {
     let m = eq.model();
     let kappa = eq.resample(cells)?;

@@ -397,7 +397,7 @@ impl TracedBranch {
                         SolverError::Unverified(m) => m,
                         e => e.to_string(),
                     };
-                    eq = refined(opts, &eq, 2 * cells).map_err(|e| {
+                    eq = crate::reported::resolved(&eq, 2 * cells).map_err(|e| {
                         SolverError::Unverified(format!(
                             "at the {cells} cells of its file {why}; at {} cells Newton finds no \
                              equilibrium next to it at this L̄ (a state near a fold of the \
@@ -410,25 +410,6 @@ impl TracedBranch {
             }
         }
     }
-}
-
-/// `eq` re-solved with `cells` cells for its state file (resampled profile as start and
-/// phase reference): Newton to the tolerance a traced state is accepted with (`1e-8`, as in
-/// [`TracedBranch::equilibrium_of`]; on a very soft segment, `D1/D0 = 0.001`, the residual of
-/// the finer resolutions stalls at a few 1e-9 in round-off), with up to 60 steps.
-fn refined(
-    opts: &DiagramOptions,
-    eq: &Equilibrium,
-    cells: usize,
-) -> Result<Equilibrium, SolverError> {
-    let kappa = eq.resample(cells)?;
-    let model = model_with_phase(opts, eq.lbar(), cells, &kappa)?;
-    let newton = SolveOptions {
-        tolerance: 1e-8,
-        max_iterations: 60,
-        ..newton_options()
-    };
-    solve(&model, &kappa, &newton)
 }
 
 /// Every traced state of `branches` verified as its file holds it
