@@ -395,6 +395,9 @@ fn switch_all<M: SurfaceSolve>(
             continue;
         }
         let bp_symmetric = images.symmetric(&bp.x);
+        // The curve followed forward from the branch point, where one was kept: a curve
+        // followed backward too is the other half of the same family, joined to it.
+        let mut forward: Option<usize> = None;
         for dir in [Direction::Forward, Direction::Backward] {
             if curves.len() >= MAX_FAMILIES {
                 notes.push(format!(
@@ -513,15 +516,41 @@ fn switch_all<M: SurfaceSolve>(
                 Some(c) => c.end,
                 None => finish_end(ctx, &run.stop, &mut pts, (&bp.x, bp.value)),
             };
-            curves.push(Curve {
+            let half = Curve {
                 points: pts,
                 start_end: bp_end,
                 finish_end: end,
-            });
+            };
+            match (dir, forward) {
+                (Direction::Backward, Some(f)) => {
+                    let joined = join_halves(half, curves.remove(f));
+                    curves.push(joined);
+                }
+                _ => {
+                    if dir == Direction::Forward {
+                        forward = Some(curves.len());
+                    }
+                    curves.push(half);
+                }
+            }
             if mirror_pair {
                 break;
             }
         }
+    }
+}
+
+/// The two halves of one family followed from a branch point in opposite directions
+/// (each starting at the branch point) as one curve in arclength order through it: the
+/// backward half reversed, the branch point, the forward half. A family through a branch
+/// point is one curve in the diagram whichever side of it the tracer reached it from.
+fn join_halves(backward: Curve, forward: Curve) -> Curve {
+    let mut points: Vec<MarchPoint> = backward.points.into_iter().rev().collect();
+    points.extend(forward.points.into_iter().skip(1));
+    Curve {
+        points,
+        start_end: backward.finish_end,
+        finish_end: forward.finish_end,
     }
 }
 

@@ -34,7 +34,9 @@
 //! 3. **Switching** (`following.rs`): at every branch point not met before, the second
 //!    branch is followed in both directions ([`march_switch`](crate::march::march_switch))
 //!    unless its first point lies on a known family; a switch that runs onto an image of a
-//!    known family is dropped.
+//!    known family is dropped. The two halves followed from one branch point are one
+//!    family, joined in arclength order through the branch point (a mirror-symmetric family
+//!    crossing an asymmetric one at its pitchfork is reached there and runs on both sides).
 //! 4. **Sheets** (`sheets.rs`): every followed curve is cut at its turning points into sheets
 //!    monotone in `L̄` (one [`TracedBranch`] each, with its family, position along the family
 //!    and direction); sheets that repeat a kept one (the mirror half of an asymmetric curve

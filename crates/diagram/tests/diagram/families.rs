@@ -454,7 +454,7 @@ fn paper_rod_sheets_are_not_images_of_each_other() {
         lbar_max: 3.0,
         ..DiagramOptions::default()
     };
-    let fam = rodloop_diagram::families::compute_families(&opts, 2, &mut |_| {}).expect("branch 1");
+    let fam = branch1_families();
     let cells = opts.trace_cells(2);
     let newton = SolveOptions {
         globalization: Globalization::Newton,
@@ -511,4 +511,67 @@ fn paper_rod_sheets_are_not_images_of_each_other() {
         }
     }
     assert!(compared >= 1, "no overlapping sheets compared");
+}
+
+/// The families of branch 1 (`η = 2`) of the paper's rod on `1 ≤ L̄ ≤ 3`.
+fn branch1_families() -> &'static rodloop_diagram::families::Families {
+    static F: OnceLock<rodloop_diagram::families::Families> = OnceLock::new();
+    F.get_or_init(|| {
+        let opts = DiagramOptions {
+            stiffness: paper_rod(),
+            lbar_min: 1.0,
+            lbar_max: 3.0,
+            ..DiagramOptions::default()
+        };
+        rodloop_diagram::families::compute_families(&opts, 2, &mut |_| {}).expect("branch 1")
+    })
+}
+
+/// A family that passes through a branch point is one family. On the paper's rod the
+/// mirror-symmetric family of branch 1 that runs from the 1-fold to the 3-fold great circle
+/// crosses the asymmetric one at a pitchfork near `L̄ = 1.81` and is reached there by
+/// branch switching, which follows it both ways from the branch point. No two families may
+/// then meet end to end: no mirror-symmetric sheet ends (in `L̄`) at a branch point whose
+/// state is the start of a mirror-symmetric sheet of another family on the other side of
+/// it; and some mirror-symmetric sheet passes through a located branch point.
+#[test]
+fn a_family_through_a_branch_point_is_one_family() {
+    use rodloop_diagram::{PointSource, TracedBranch};
+    let fam = branch1_families();
+    let symmetric: Vec<&TracedBranch> = fam.sheets.iter().filter(|b| b.multiplicity == 1).collect();
+    let rms = |a: &[f64], b: &[f64]| {
+        (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / a.len() as f64).sqrt()
+    };
+    for a in &symmetric {
+        let BranchEnd::BranchPoint { value } = a.high_end else {
+            continue;
+        };
+        let end = a.points.last().expect("states");
+        for b in &symmetric {
+            if b.family == a.family {
+                continue;
+            }
+            let BranchEnd::BranchPoint { value: v } = b.low_end else {
+                continue;
+            };
+            let start = b.points.first().expect("states");
+            assert!(
+                (v - value).abs() > 1e-9 || rms(&end.state, &start.state) > 1e-8,
+                "family {} (up to L̄ = {value}) and family {} (from L̄ = {v}) are the two \
+                 halves of one family through the branch point",
+                a.family,
+                b.family
+            );
+        }
+    }
+    let through = symmetric.iter().any(|b| {
+        let n = b.points.len();
+        b.points[1..n - 1]
+            .iter()
+            .any(|p| p.source == PointSource::BranchPoint)
+    });
+    assert!(
+        through,
+        "no mirror-symmetric sheet passes through a branch point"
+    );
 }
