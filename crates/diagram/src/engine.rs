@@ -206,8 +206,9 @@ pub fn surface_schema(
                 error_estimate: p.error_estimate,
                 branch: p.branch,
                 family: p.family,
-                index_before: p.index_before,
-                index_after: p.index_after,
+                index_before: Some(p.index_before),
+                index_after: Some(p.index_after),
+                extra: BTreeMap::new(),
             })
             .collect(),
     );
@@ -337,8 +338,9 @@ impl Engine for EnclosedEngine {
                     error_estimate: Some(e.error_estimate),
                     branch: e.branch,
                     family: e.family,
-                    index_before: e.index_before,
-                    index_after: e.index_after,
+                    index_before: Some(e.index_before),
+                    index_after: Some(e.index_after),
+                    extra: BTreeMap::new(),
                 })
                 .collect(),
         );
