@@ -94,41 +94,100 @@ pub fn verify_reported(
     energy: f64,
     energy_error: Option<f64>,
 ) -> Result<StateFile, SolverError> {
+    verify_refining(eq, energy, energy_error, Ladder::Keep)
+}
+
+/// What the refinement ladder of [`verify_refining`] may do with the reported energy.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Ladder {
+    /// The claim stays the reported energy and estimate (`phase`, `--param`, `converge`).
+    Keep,
+    /// The claim is re-estimated from two refined resolutions when they converge and
+    /// disagree with it (the traced states of the `L̄` diagrams: [`StateFile::row`]).
+    ReEstimate,
+}
+
+/// The one verification loop of every reported state: `eq` (`N` cells) checked as its file
+/// holds it against `energy` within [`ESTIMATES`] times `energy_error` (or
+/// [`NO_ESTIMATE_TOLERANCE`] times `max(|energy|, 1)` without one); where the check fails,
+/// re-solved at `2N`, `4N`, … ([`resolved`]) up to [`MAX_REFINEMENT`]` N`, the file sampling
+/// the finest state needed.
+///
+/// With [`Ladder::ReEstimate`], from the third resolution on: when the differences of the
+/// ladder `(E_{2^{j−2} N}, E_{2^{j−1} N}, E_{2^j N})` decrease at least fourfold (the refined
+/// states are this state converging, not a neighbouring sheet) and the Richardson value of
+/// the last two disagrees with the claim beyond both estimates, the claim becomes that
+/// value with its estimate ([`StateFile::row`]).
+pub(crate) fn verify_refining(
+    eq: &Equilibrium,
+    energy: f64,
+    energy_error: Option<f64>,
+    ladder: Ladder,
+) -> Result<StateFile, SolverError> {
     let d0 = eq.model().stiffness().kind().reference();
-    let allowed = match energy_error {
-        Some(e) => ESTIMATES * e,
-        None => NO_ESTIMATE_TOLERANCE * energy.abs().max(1.0),
-    };
-    let claim = Claim {
+    let scale = energy.abs().max(1.0);
+    let mut claim = Claim {
         energy,
-        energy_error: allowed,
+        energy_error: match energy_error {
+            Some(e) => ESTIMATES * e,
+            None => NO_ESTIMATE_TOLERANCE * scale,
+        },
         profile_error: 0.0,
         eta: None,
     };
+    let mut row: Option<(f64, f64)> = None;
     let first = eq.model().cells();
     let mut refined: Option<Equilibrium> = None;
+    // Discrete energies of the resolutions so far (the state's own first).
+    let mut energies = vec![eq.energy().total];
     loop {
         let at = refined.as_ref().unwrap_or(eq);
         let cells = at.model().cells();
-        let profile = uniform_profile(at, STATE_POINTS.max(cells), energy, allowed, d0)?;
+        if ladder == Ladder::ReEstimate && energies.len() >= 3 {
+            let n = energies.len();
+            let (e2, e1, e0) = (energies[n - 1], energies[n - 2], energies[n - 3]);
+            let converging = (e2 - e1).abs() <= 0.25 * (e1 - e0).abs();
+            let (rich, est) = (
+                rodloop_solver::richardson(e2, e1),
+                rodloop_solver::richardson_error(e2, e1) + 8.0 * f64::EPSILON * scale,
+            );
+            if converging && (rich - claim.energy).abs() > claim.energy_error + ESTIMATES * est {
+                row = Some((rich, est));
+                claim.energy = rich;
+                claim.energy_error = ESTIMATES * est;
+            }
+        }
+        let profile = uniform_profile(
+            at,
+            STATE_POINTS.max(cells),
+            claim.energy,
+            claim.energy_error,
+            d0,
+        )?;
         match rodloop_solver::verify_state(at, &profile, &claim) {
             Ok(verification) => {
                 return Ok(StateFile {
                     profile,
                     verification,
                     cells,
-                    row: None,
+                    row,
                 })
             }
             Err(e) if 2 * cells > MAX_REFINEMENT * first => return Err(e),
             Err(why) => {
+                let why = match why {
+                    SolverError::Unverified(m) => m,
+                    e => e.to_string(),
+                };
                 let next = resolved(at, 2 * cells).map_err(|e| {
                     SolverError::Unverified(format!(
                         "at the {cells} cells of its file {why}; at {} cells Newton finds no \
-                         equilibrium next to it: {e}",
+                         equilibrium next to it at this L̄ (a state near a fold of the \
+                         coarser resolution that the finer one moves): {e}",
                         2 * cells
                     ))
                 })?;
+                energies.push(next.energy().total);
                 refined = Some(next);
             }
         }

@@ -340,75 +340,14 @@ impl TracedBranch {
         opts: &DiagramOptions,
         k: usize,
     ) -> Result<StateFile, SolverError> {
-        let mut eq = self.equilibrium_of(opts, k)?;
+        let eq = self.equilibrium_of(opts, k)?;
         let p = &self.points[k];
-        let d0 = opts.stiffness.reference();
-        let scale = p.energy.abs().max(1.0);
-        let allowed = |e: Option<f64>| match e {
-            Some(e) => ESTIMATES * e,
-            None => NO_ESTIMATE_TOLERANCE * scale,
-        };
-        let mut row: Option<(f64, f64)> = None;
-        let mut claim = rodloop_solver::Claim {
-            energy: p.energy,
-            energy_error: allowed(sheet_estimate(&self.points, k)),
-            profile_error: 0.0,
-            eta: None,
-        };
-        let traced = eq.model().cells();
-        // Discrete energies of the resolutions so far (tracing resolution first).
-        let mut energies = vec![eq.energy().total];
-        loop {
-            let cells = eq.model().cells();
-            if energies.len() >= 3 {
-                let n = energies.len();
-                let (e2, e1, e0) = (energies[n - 1], energies[n - 2], energies[n - 3]);
-                let converging = (e2 - e1).abs() <= 0.25 * (e1 - e0).abs();
-                let (rich, est) = (
-                    rodloop_solver::richardson(e2, e1),
-                    rodloop_solver::richardson_error(e2, e1) + 8.0 * f64::EPSILON * scale,
-                );
-                if converging && (rich - claim.energy).abs() > claim.energy_error + ESTIMATES * est
-                {
-                    row = Some((rich, est));
-                    claim.energy = rich;
-                    claim.energy_error = ESTIMATES * est;
-                }
-            }
-            let profile = uniform_profile(
-                &eq,
-                STATE_POINTS.max(cells),
-                claim.energy,
-                claim.energy_error,
-                d0,
-            )?;
-            match rodloop_solver::verify_state(&eq, &profile, &claim) {
-                Ok(verification) => {
-                    return Ok(StateFile {
-                        profile,
-                        verification,
-                        cells,
-                        row,
-                    })
-                }
-                Err(e) if 2 * cells > MAX_REFINEMENT * traced => return Err(e),
-                Err(why) => {
-                    let why = match why {
-                        SolverError::Unverified(m) => m,
-                        e => e.to_string(),
-                    };
-                    eq = crate::reported::resolved(&eq, 2 * cells).map_err(|e| {
-                        SolverError::Unverified(format!(
-                            "at the {cells} cells of its file {why}; at {} cells Newton finds no \
-                             equilibrium next to it at this L̄ (a state near a fold of the \
-                             coarser resolution that the finer one moves): {e}",
-                            2 * cells
-                        ))
-                    })?;
-                    energies.push(eq.energy().total);
-                }
-            }
-        }
+        crate::reported::verify_refining(
+            &eq,
+            p.energy,
+            sheet_estimate(&self.points, k),
+            crate::reported::Ladder::ReEstimate,
+        )
     }
 }
 
