@@ -1,6 +1,10 @@
 //! One interface for every diagram engine, and the one translation of each engine's result
 //! into the result schema ([`rodloop_schema::Diagram`]).
 //!
+//! The file is one job, the translation of each engine's result into the schema: the three
+//! engines and their `schema` methods share `columns`, `critical_of` and the axis of `L̄`,
+//! and are read side by side, so they stay together.
+//!
 //! Every engine runs the same pipeline, in these steps:
 //!
 //! 1. **seed**: starting states of every branch from the scene's own features (surface: the
