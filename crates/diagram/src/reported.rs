@@ -78,6 +78,7 @@ pub fn verify_reported(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ESTIMATES;
     use rodloop_solver::{solve_cells, StartShape, Stiffness};
 
     fn two_segment() -> Stiffness {
