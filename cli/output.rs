@@ -120,6 +120,13 @@ pub fn write_diagram(run: &OutputRun, d: &mut rodloop_schema::Diagram) -> Result
     Ok(())
 }
 
+/// Stage the `summary.json` of a run in the result schema whose tables are its own (`phase`,
+/// `diagram --param`): [`rodloop_schema::Diagram::summary_json`] with this run's id.
+pub fn write_summary(run: &OutputRun, d: &mut rodloop_schema::Diagram) -> Result<()> {
+    d.run_id = Some(run.run_id().to_string());
+    run.write_bytes("summary.json", &d.summary_json()?)
+}
+
 /// Check that a typed value holds no non-finite float anywhere (fields, vectors, options),
 /// before it is turned into JSON; `what` names it in the error.
 pub fn check_finite<T: serde::Serialize + ?Sized>(what: &str, value: &T) -> Result<()> {

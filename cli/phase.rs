@@ -10,7 +10,7 @@ use rodloop_figures::raster::svg_to_png;
 use rodloop_solver::{Param, SolveOptions};
 
 use crate::args::{accuracy_of, load_scene, stiffness_of};
-use crate::output::{check_finite, strip_nulls, Cell, OutputRun, Table};
+use crate::output::{Cell, OutputRun, Table};
 use crate::phase_figure::{phase_svg, stopped_short};
 
 /// Arguments of `rodloop phase`.
@@ -168,42 +168,30 @@ pub fn run(args: &Args) -> Result<()> {
     outln!("time {seconds:.2} s");
     let short = stopped_short(&diagram);
 
-    let summary = serde_json::json!({
-        "command": "phase",
-        "scene": scene.name,
-        "param": diagram.param,
-        "scene_value": diagram.scene_value,
-        "target": diagram.target,
-        "accuracy": accuracy,
-        "at": args.at,
-        "curves": diagram.curves.iter().map(|c| serde_json::json!({
-            "exchange": c.exchange,
-            "rows": c.rows.len(),
-            "steps": c.steps,
-            "cells": c.cells,
-            "ends": c.ends,
-            "uniform": c.uniform,
-            "turns": c.turns,
-            "switches": c.switches,
-            "checks": c.checks,
-            "notes": c.notes,
-        })).collect::<Vec<_>>(),
-        "time_seconds": seconds,
-        "complete": short.is_empty(),
-        "stopped_short": short.iter().map(|s| serde_json::json!({
-            "exchange": [s.from, s.to], "value": s.value, "kind": s.kind,
-        })).collect::<Vec<_>>(),
-        "files": ["phase.csv", "phase.svg", "phase.png"],
-        "states_dir": "states",
-        "unverified_states": unverified,
-        "state_warnings": state_warnings,
-        "units": "lbar = L/(2 pi R); energy E R/(pi D0); value: d1 = D1/D0, gamma, or s0, s1 as fractions of L",
-    });
-    check_finite("summary.json", &summary)?;
+    let mut summary = phase_summary(&diagram, &scene.name, &format!("{accuracy:?}"))?;
+    summary.put("command", "phase")?;
+    summary.put("at", &args.at)?;
+    summary.put("time_seconds", &seconds)?;
+    summary.put("complete", &short.is_empty())?;
+    summary.put(
+        "stopped_short",
+        &short
+            .iter()
+            .map(|s| StoppedShort {
+                exchange: [s.from, s.to],
+                value: s.value,
+                kind: &s.kind,
+            })
+            .collect::<Vec<_>>(),
+    )?;
+    summary.put("files", &["phase.csv", "phase.svg", "phase.png"])?;
+    summary.states_dir = Some("states".into());
+    summary.put("unverified_states", &unverified)?;
+    summary.put("state_warnings", &state_warnings)?;
     run.write_table(&table)?;
     run.write_bytes("phase.svg", svg.as_bytes())?;
     run.write_bytes("phase.png", &png)?;
-    run.write_json("summary.json", &strip_nulls(summary))?;
+    crate::output::write_summary(&run, &mut summary)?;
     run.commit()?;
     outln!("wrote {}", args.out.display());
     if !short.is_empty() {
@@ -228,6 +216,90 @@ pub fn run(args: &Args) -> Result<()> {
     }
     Ok(())
 }
+
+/// A curve that stopped short of `--to`, in `summary.json`.
+#[derive(serde::Serialize)]
+struct StoppedShort<'a> {
+    exchange: [u32; 2],
+    value: f64,
+    kind: &'a str,
+}
+
+/// A curve of `summary.json`: its exchange, how it was traced and why it ends.
+#[derive(serde::Serialize)]
+struct CurveSummary<'a> {
+    exchange: &'a rodloop_diagram::phase::Exchange,
+    rows: usize,
+    steps: usize,
+    cells: (usize, usize),
+    ends: &'a [rodloop_diagram::phase::CurveEnd],
+    uniform: &'a Option<rodloop_diagram::phase::UniformCheck>,
+    turns: &'a [String],
+    switches: &'a [String],
+    checks: &'a [f64],
+    notes: &'a [String],
+}
+
+/// The phase diagram in the result schema (written by its one writer): every row of
+/// `phase.csv` is a critical length of the schema (`index` its row, from 1; the parameter
+/// value, the row's source, curve, arm, indices, slope and energy error beside it), the
+/// curves and the parameter's range are the engine's own keys; the caller adds the run's.
+fn phase_summary(d: &PhaseDiagram, scene: &str, accuracy: &str) -> Result<rodloop_schema::Diagram> {
+    let mut s = rodloop_schema::Diagram::new("numeric", scene, Vec::new(), PHASE_UNITS);
+    s.accuracy = Some(accuracy.to_lowercase());
+    for (k, c) in d.curves.iter().enumerate() {
+        for r in &c.rows {
+            let extra = serde_json::json!({
+                "param": d.param.name(),
+                "value": r.value,
+                "source": r.source.name(),
+                "curve": k + 1,
+                "arm": r.arm,
+                "index_from": r.index.0,
+                "index_to": r.index.1,
+                "slope": r.slope,
+                "energy_error": r.energy_error,
+            });
+            crate::output::check_finite("phase row", &[r.value, r.slope, r.energy_error])?;
+            s.critical.push(rodloop_schema::Critical {
+                index: s.critical.len() + 1,
+                lbar_cr: r.lbar_cr,
+                kind: "crossing".into(),
+                from_branch: r.from_branch,
+                to_branch: r.to_branch,
+                energy: r.energy,
+                error_estimate: r.error_estimate,
+                extra: serde_json::from_value(extra)?,
+            });
+        }
+    }
+    s.put("param", &d.param)?;
+    s.put("scene_value", &d.scene_value)?;
+    s.put("target", &d.target)?;
+    s.put(
+        "curves",
+        &d.curves
+            .iter()
+            .map(|c| CurveSummary {
+                exchange: &c.exchange,
+                rows: c.rows.len(),
+                steps: c.steps,
+                cells: c.cells,
+                ends: &c.ends,
+                uniform: &c.uniform,
+                turns: &c.turns,
+                switches: &c.switches,
+                checks: &c.checks,
+                notes: &c.notes,
+            })
+            .collect::<Vec<_>>(),
+    )?;
+    Ok(s)
+}
+
+/// `units` of the phase summary.
+const PHASE_UNITS: &str =
+    "lbar = L/(2 pi R); energy E R/(pi D0); value: d1 = D1/D0, gamma, or s0, s1 as fractions of L";
 
 /// Longest message line: a longer explanation is cut at its first clause (the whole text is in
 /// `summary.json`).

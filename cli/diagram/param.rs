@@ -14,7 +14,7 @@ use rodloop_solver::{Param, SolveOptions};
 
 use super::args::{Args, Model};
 use crate::args::{accuracy_of, load_scene, stiffness_of};
-use crate::output::{check_finite, strip_nulls, Cell, OutputRun, Table};
+use crate::output::{Cell, OutputRun, Table};
 
 /// Run `diagram --param`.
 pub fn run(args: &Args, param: &str) -> Result<()> {
@@ -122,44 +122,50 @@ pub fn run(args: &Args, param: &str) -> Result<()> {
     }
     outln!("time {seconds:.2} s");
 
-    let summary = serde_json::json!({
-        "command": "diagram --param",
-        "scene": scene.name,
-        "param": param,
-        "scene_value": sweep.scene_value,
-        "target": sweep.target,
-        "lbar": lbar,
-        "families": sweep.families.iter().map(|f| serde_json::json!({
-            "branch": f.branch,
-            "eta": f.eta,
-            "family": f.family,
-            "cells": f.cells,
-            "seed_value": f.seed_energy.map(|e| e.0),
-            "seed_energy": f.seed_energy.map(|e| e.1),
-            "seed_energy_error": f.seed_energy.map(|e| e.2),
-            "notes": f.notes,
-            "states": f.points.len(),
-            "end": f.end,
-        })).collect::<Vec<_>>(),
-        "special_points": sweep.special,
-        "warnings": sweep.warnings,
-        "states_dir": "states",
-        "unverified_states": unverified,
-        "states_counted_other_eta": other_eta,
-        "state_warnings": state_warnings,
-        "time_seconds": seconds,
-        "units": "energy E R/(pi D0); lbar = L/(2 pi R)",
-        "files": ["branches.csv", "special_points.csv", "diagram.svg", "diagram.png", "summary.json"],
-    });
-    check_finite("summary.json", &summary)?;
-    run.write_bytes(
-        "branches.csv",
-        &branches_csv(&sweep, &states, &state_files)?,
+    let mut d = sweep_schema(&sweep, &scene.name, &states, &state_files)?;
+    d.put("command", "diagram --param")?;
+    d.put("param", &param)?;
+    d.put("scene_value", &sweep.scene_value)?;
+    d.put("target", &sweep.target)?;
+    d.put("lbar", &lbar)?;
+    d.put(
+        "families",
+        &sweep
+            .families
+            .iter()
+            .map(|f| FamilySummary {
+                branch: f.branch,
+                eta: f.eta,
+                family: f.family,
+                cells: f.cells,
+                seed_value: f.seed_energy.map(|e| e.0),
+                seed_energy: f.seed_energy.map(|e| e.1),
+                seed_energy_error: f.seed_energy.map(|e| e.2),
+                notes: &f.notes,
+                states: f.points.len(),
+                end: &f.end,
+            })
+            .collect::<Vec<_>>(),
     )?;
+    d.put("unverified_states", &unverified)?;
+    d.put("states_counted_other_eta", &other_eta)?;
+    d.put("state_warnings", &state_warnings)?;
+    d.put("time_seconds", &seconds)?;
+    d.put(
+        "files",
+        &[
+            "branches.csv",
+            "special_points.csv",
+            "diagram.svg",
+            "diagram.png",
+            "summary.json",
+        ],
+    )?;
+    run.write_bytes("branches.csv", &d.branches_csv()?)?;
     run.write_table(&special_table(&sweep)?)?;
     run.write_bytes("diagram.svg", svg.as_bytes())?;
     run.write_bytes("diagram.png", &png)?;
-    run.write_json("summary.json", &strip_nulls(summary))?;
+    crate::output::write_summary(&run, &mut d)?;
     run.commit()?;
     outln!("wrote {}", args.out.display());
     Ok(())
@@ -232,11 +238,34 @@ fn write_sweep_states(
     Ok(names)
 }
 
-/// `branches.csv` by the schema's writer: one row per traced state, the continued parameter
-/// (`param`, `value`) and the fixed length (`lbar`) as the two axes of every point, with
-/// the error estimate of its energy and its state file.
-fn branches_csv(s: &ParamSweep, states: &Verified, files: &[Vec<String>]) -> Result<Vec<u8>> {
-    use rodloop_schema::{Axis, Cell as Value, Diagram, Point};
+/// A family of `summary.json`: how it was seeded, traced and where it ends.
+#[derive(serde::Serialize)]
+struct FamilySummary<'a> {
+    branch: u32,
+    eta: u32,
+    family: usize,
+    cells: usize,
+    seed_value: Option<f64>,
+    seed_energy: Option<f64>,
+    seed_energy_error: Option<f64>,
+    notes: &'a [String],
+    states: usize,
+    end: &'a str,
+}
+
+/// The sweep in the result schema, for its one writer: one point per traced state, the
+/// continued parameter (`param`, `value`) and the fixed length (`lbar`) as the two axes of
+/// every point, with the error estimate of its energy and its state file (`branches.csv`);
+/// the special points at the fixed length with the parameter's `value` and the
+/// `energy_error` beside them (indices only where an index change was located), the
+/// sweep's warnings and state folder. The caller adds the run's own keys.
+fn sweep_schema(
+    s: &ParamSweep,
+    scene: &str,
+    states: &Verified,
+    files: &[Vec<String>],
+) -> Result<rodloop_schema::Diagram> {
+    use rodloop_schema::{Axis, Cell as Value, Diagram, Point, SpecialPoint};
     let axes = vec![
         Axis {
             name: "value".into(),
@@ -249,7 +278,12 @@ fn branches_csv(s: &ParamSweep, states: &Verified, files: &[Vec<String>]) -> Res
             max: s.lbar,
         },
     ];
-    let mut d = Diagram::new("numeric", "", axes, "");
+    let mut d = Diagram::new(
+        "numeric",
+        scene,
+        axes,
+        "energy E R/(pi D0); lbar = L/(2 pi R)",
+    );
     d.columns = [
         "branch",
         "eta",
@@ -289,7 +323,37 @@ fn branches_csv(s: &ParamSweep, states: &Verified, files: &[Vec<String>]) -> Res
             });
         }
     }
-    Ok(d.branches_csv()?)
+    for p in &s.special {
+        // Checked on their typed form: JSON has no NaN (it would become `null`).
+        crate::output::check_finite("special point", &[p.value, p.energy_error])?;
+    }
+    d.special = Some(
+        s.special
+            .iter()
+            .map(|p| SpecialPoint {
+                kind: p.kind.clone(),
+                lbar: s.lbar,
+                energy: p.energy,
+                error_estimate: None,
+                branch: p.branch,
+                family: p.family as u32,
+                index_before: p.index.map(|i| i.0),
+                index_after: p.index.map(|i| i.1),
+                extra: [
+                    ("value".to_string(), serde_json::json!(p.value)),
+                    (
+                        "energy_error".to_string(),
+                        serde_json::json!(p.energy_error),
+                    ),
+                ]
+                .into_iter()
+                .collect(),
+            })
+            .collect(),
+    );
+    d.warnings = Some(s.warnings.clone());
+    d.states_dir = Some("states".into());
+    Ok(d)
 }
 
 fn special_table(s: &ParamSweep) -> Result<Table> {

@@ -2,6 +2,9 @@
 //! ([`locate`]), which of several states at one parameter value is the lowest
 //! ([`lowest`]) and which is the stable one ([`label`]).
 //!
+//! Over a third of the file is its unit tests (synthetic energy curves with known crossings);
+//! the code is the three routines named above.
+//!
 //! Like the rest of the crate it knows nothing about the model: a pair of branches is an
 //! [`EnergyPair`] (the two energies at a parameter value `x`, optionally the analytic slope
 //! of their difference, and an error estimate of that difference), and a state is a

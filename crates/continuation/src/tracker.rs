@@ -1,5 +1,8 @@
 //! The pseudo-arclength continuation driver: stepping, step control, detection and
 //! location of special points.
+//!
+//! It is one file because stepping, step control and the location of special points all work on
+//! the same predictor–corrector segments (Hermite interpolation between nodes, `SegEval`).
 
 use nalgebra::DVector;
 

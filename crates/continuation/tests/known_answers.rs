@@ -1,4 +1,7 @@
 //! Continuation tests against analytically known answers.
+//!
+//! One file of integration tests sharing the closure-defined test problem (`Fns`) and its
+//! finite-difference checks; each test is a problem with an answer known in closed form.
 
 use std::convert::Infallible;
 

@@ -1,6 +1,10 @@
 //! One interface for every diagram engine, and the one translation of each engine's result
 //! into the result schema ([`rodloop_schema::Diagram`]).
 //!
+//! The file is one job, the translation of each engine's result into the schema: the three
+//! engines and their `schema` methods share `columns`, `critical_of` and the axis of `L̄`,
+//! and are read side by side, so they stay together.
+//!
 //! Every engine runs the same pipeline, in these steps:
 //!
 //! 1. **seed**: starting states of every branch from the scene's own features (surface: the
@@ -206,8 +210,9 @@ pub fn surface_schema(
                 error_estimate: p.error_estimate,
                 branch: p.branch,
                 family: p.family,
-                index_before: p.index_before,
-                index_after: p.index_after,
+                index_before: Some(p.index_before),
+                index_after: Some(p.index_after),
+                extra: BTreeMap::new(),
             })
             .collect(),
     );
@@ -337,8 +342,9 @@ impl Engine for EnclosedEngine {
                     error_estimate: Some(e.error_estimate),
                     branch: e.branch,
                     family: e.family,
-                    index_before: e.index_before,
-                    index_after: e.index_after,
+                    index_before: Some(e.index_before),
+                    index_after: Some(e.index_after),
+                    extra: BTreeMap::new(),
                 })
                 .collect(),
         );

@@ -13,7 +13,8 @@
 //! [`ladder_error`] adds the state at `2N`. With the differences `d₁ = E_N − E_{N/2}`,
 //! `d₂ = E_{2N} − E_N` and the observed ratio `ρ = |d₁/d₂|` (16 for the scheme's fourth
 //! order; the observed order is `log₂ ρ`), a geometric error sequence has the error
-//! `|d₂|/(ρ − 1)` at `2N`. The ratio is taken as at most 16 (a ladder never converges
+//! `|d₂|/(ρ − 1)` at `2N` (the solver's [`rodloop_solver::accuracy::ladder_estimate`], the
+//! same routine as the enclosed model's three-level estimate). The ratio is taken as at most 16 (a ladder never converges
 //! faster than the scheme's order; a faster observed ratio is a cancellation, not
 //! convergence) and, where it is below 2 (no sign of convergence), the error of `E_{2N}` is
 //! taken as `|d₁| + |d₂|`; it enters with a safety factor of 2 (an error sequence is
@@ -27,6 +28,8 @@
 //! the tolerance a state file at `N` cells is held to). The test below checks the estimate
 //! against independent re-solves at 16 `N` on rows of a paper scene and of a random one.
 
+use rodloop_solver::accuracy::{ladder_estimate, LadderRule, SlowLadder, ORDER};
+
 /// Error estimate of the Richardson value `R_N` of `fine` (`E_N`) and `coarse` (`E_{N/2}`),
 /// from the ladder with `finer` (`E_{2N}`, when its solve succeeded; see the module docs).
 /// Without `finer` it is the two-level `|E_N − E_{N/2}|/15`.
@@ -36,23 +39,18 @@ pub(crate) fn ladder_error(fine: f64, coarse: f64, finer: Option<f64>) -> f64 {
         return two_level;
     };
     let rounding = 8.0 * f64::EPSILON * fine.abs().max(1.0);
-    let (d1, d2) = (fine - coarse, finer - fine);
-    let ratio = if d2.abs() > rounding {
-        (d1 / d2).abs().min(SCHEME_RATIO)
-    } else {
-        SCHEME_RATIO
-    };
-    let finer_error = if ratio >= 2.0 {
-        d2.abs() / (ratio - 1.0)
-    } else {
-        d1.abs() + d2.abs()
-    };
+    // The error of `E_{2N}` from the observed ratio of the ladder `N/2, N, 2N`.
+    let (finer_error, _) = ladder_estimate(
+        [coarse, fine, finer],
+        LadderRule {
+            max_order: f64::from(ORDER),
+            negligible: rounding,
+            slow: SlowLadder::SumOfDifferences,
+        },
+    );
     let rich = rodloop_solver::richardson(fine, coarse);
     two_level.max((rich - finer).abs() + 2.0 * finer_error) + rounding
 }
-
-/// `2^p` for the scheme's order `p` ([`rodloop_solver::accuracy::ORDER`]).
-const SCHEME_RATIO: f64 = (1u32 << rodloop_solver::accuracy::ORDER) as f64;
 
 #[cfg(test)]
 mod tests {

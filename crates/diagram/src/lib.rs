@@ -4,6 +4,10 @@
 //! stability, a stability label for every computed state, and the buckling of the m-fold
 //! great circles with branch switching from them.
 //!
+//! As the crate root it holds the pipeline's description, the module table, the one error type
+//! and the options every stage reads (`DiagramOptions`, `TraceControls` and their validation);
+//! the stages are in the modules.
+//!
 //! # Pipeline
 //!
 //! 1. **Tracing** ([`compute_branch`], [`trace`]): branch `η` (number of periods of the

@@ -3,45 +3,23 @@
 //! the same checks and the same file as the states of the `L̄` diagrams
 //! ([`crate::StateFile`], [`rodloop_solver::verify_state`]). The loop closes (holonomy and
 //! written points), lies on the sphere, and the energy recomputed from the written samples
-//! (`½ ∮ D κ² ds`, Eq. (2)) equals the reported energy within [`ESTIMATES`] times its error
-//! estimate (or [`NO_ESTIMATE_TOLERANCE`] without one) plus the quadrature's own error; the
-//! periods `η` of the written `κ_g` are counted ([`rodloop_solver::Verification::eta`]).
+//! (`½ ∮ D κ² ds`, Eq. (2)) equals the reported energy within [`crate::ESTIMATES`] times
+//! its error estimate (or [`crate::NO_ESTIMATE_TOLERANCE`] without one) plus the
+//! quadrature's own error; the periods `η` of the written `κ_g` are counted
+//! ([`rodloop_solver::Verification::eta`]).
 //!
 //! The written profile (`κ_g = 𝓜·n/D` at the cell boundaries, Eq. (41)) carries the
 //! resolution's own `O(h⁴)` error; where it exceeds the allowed gap the state is re-solved at
 //! `2N`, `4N`, … (Newton from its resampled profile at the same `L̄` and stiffness), up to
-//! [`MAX_REFINEMENT`]` N`, and the file samples the finest state needed, as for the states
-//! of the `L̄` diagrams.
+//! [`crate::MAX_REFINEMENT`]` N`, and the file samples the finest state needed: the one
+//! refinement loop of the states of the `L̄` diagrams, without their re-estimate.
 
 use rodloop_solver::{
-    solve, solve_from_state, Claim, Equilibrium, Globalization, Phase, SolveOptions, SolverError,
-    SurfaceSolve,
+    solve_from_state, Equilibrium, Globalization, SolveOptions, SolverError, SurfaceSolve,
 };
 
-use crate::states::{newton_options, uniform_profile};
-use crate::{StateFile, ESTIMATES, MAX_REFINEMENT, NO_ESTIMATE_TOLERANCE, STATE_POINTS};
-
-/// `eq` re-solved with `cells` cells at its own length and stiffness for a state file, by the
-/// diagrams ([`crate::TracedBranch::verified_state`]) and by `phase`, `converge` and
-/// `--param` alike: the resampled profile as start (and, for uniform stiffness, as phase
-/// reference), Newton to the tolerance a traced state is accepted with (`1e-8`, as in
-/// [`crate::TracedBranch::equilibrium_of`]; on a very soft segment, `D1/D0 = 0.001`, the
-/// residual of the finer resolutions stalls at a few 1e-9 in round-off), with up to 60 steps.
-pub fn resolved(eq: &Equilibrium, cells: usize) -> Result<Equilibrium, SolverError> {
-    let m = eq.model();
-    let kappa = eq.resample(cells)?;
-    let kind = m.stiffness().kind();
-    let mut model = m.with_cells(cells)?;
-    if kind.is_uniform() {
-        model = model.with_phase(Phase::from_gauss_values(&kappa, cells)?)?;
-    }
-    let newton = SolveOptions {
-        tolerance: 1e-8,
-        max_iterations: 60,
-        ..newton_options()
-    };
-    solve(&model, &kappa, &newton)
-}
+use crate::states::{newton_options, resolved, verify_refining, Ladder};
+use crate::StateFile;
 
 /// The error estimate `|E_N − E_{N/2}|/15` of the energy of `eq` (`N` cells), from the same
 /// state at half the resolution (an even number of cells) at its length and stiffness:
@@ -94,50 +72,13 @@ pub fn verify_reported(
     energy: f64,
     energy_error: Option<f64>,
 ) -> Result<StateFile, SolverError> {
-    let d0 = eq.model().stiffness().kind().reference();
-    let allowed = match energy_error {
-        Some(e) => ESTIMATES * e,
-        None => NO_ESTIMATE_TOLERANCE * energy.abs().max(1.0),
-    };
-    let claim = Claim {
-        energy,
-        energy_error: allowed,
-        profile_error: 0.0,
-        eta: None,
-    };
-    let first = eq.model().cells();
-    let mut refined: Option<Equilibrium> = None;
-    loop {
-        let at = refined.as_ref().unwrap_or(eq);
-        let cells = at.model().cells();
-        let profile = uniform_profile(at, STATE_POINTS.max(cells), energy, allowed, d0)?;
-        match rodloop_solver::verify_state(at, &profile, &claim) {
-            Ok(verification) => {
-                return Ok(StateFile {
-                    profile,
-                    verification,
-                    cells,
-                    row: None,
-                })
-            }
-            Err(e) if 2 * cells > MAX_REFINEMENT * first => return Err(e),
-            Err(why) => {
-                let next = resolved(at, 2 * cells).map_err(|e| {
-                    SolverError::Unverified(format!(
-                        "at the {cells} cells of its file {why}; at {} cells Newton finds no \
-                         equilibrium next to it: {e}",
-                        2 * cells
-                    ))
-                })?;
-                refined = Some(next);
-            }
-        }
-    }
+    verify_refining(eq, energy, energy_error, Ladder::Keep)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ESTIMATES;
     use rodloop_solver::{solve_cells, StartShape, Stiffness};
 
     fn two_segment() -> Stiffness {

@@ -7,8 +7,8 @@
 use std::f64::consts::PI;
 
 use rodloop_solver::{
-    solve, Confinement, Equilibrium, Globalization, Param, ParamProblem, SolveOptions, SolverError,
-    SurfaceSolve,
+    solve, Claim, Confinement, Equilibrium, Globalization, Param, ParamProblem, Phase,
+    SolveOptions, SolverError, SurfaceSolve,
 };
 
 use crate::march::MarchPoint;
@@ -340,76 +340,135 @@ impl TracedBranch {
         opts: &DiagramOptions,
         k: usize,
     ) -> Result<StateFile, SolverError> {
-        let mut eq = self.equilibrium_of(opts, k)?;
+        let eq = self.equilibrium_of(opts, k)?;
         let p = &self.points[k];
-        let d0 = opts.stiffness.reference();
-        let scale = p.energy.abs().max(1.0);
-        let allowed = |e: Option<f64>| match e {
+        verify_refining(
+            &eq,
+            p.energy,
+            sheet_estimate(&self.points, k),
+            Ladder::ReEstimate,
+        )
+    }
+}
+
+/// What the refinement ladder of [`verify_refining`] may do with the reported energy.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Ladder {
+    /// The claim stays the reported energy and estimate (`phase`, `--param`, `converge`).
+    Keep,
+    /// The claim is re-estimated from two refined resolutions when they converge and
+    /// disagree with it (the traced states of the `L̄` diagrams: [`StateFile::row`]).
+    ReEstimate,
+}
+
+/// The one verification loop of every state written to a file (the diagrams' traced states
+/// through [`TracedBranch::verified_state`], and the states `phase`, `--param` and `converge`
+/// report): `eq` (`N` cells) checked as its file holds it against `energy` within [`ESTIMATES`] times `energy_error` (or
+/// [`NO_ESTIMATE_TOLERANCE`] times `max(|energy|, 1)` without one); where the check fails,
+/// re-solved at `2N`, `4N`, … ([`resolved`]) up to [`MAX_REFINEMENT`]` N`, the file sampling
+/// the finest state needed.
+///
+/// With [`Ladder::ReEstimate`], from the third resolution on: when the differences of the
+/// ladder `(E_{2^{j−2} N}, E_{2^{j−1} N}, E_{2^j N})` decrease at least fourfold (the refined
+/// states are this state converging, not a neighbouring sheet) and the Richardson value of
+/// the last two disagrees with the claim beyond both estimates, the claim becomes that
+/// value with its estimate ([`StateFile::row`]).
+pub(crate) fn verify_refining(
+    eq: &Equilibrium,
+    energy: f64,
+    energy_error: Option<f64>,
+    ladder: Ladder,
+) -> Result<StateFile, SolverError> {
+    let d0 = eq.model().stiffness().kind().reference();
+    let scale = energy.abs().max(1.0);
+    let mut claim = Claim {
+        energy,
+        energy_error: match energy_error {
             Some(e) => ESTIMATES * e,
             None => NO_ESTIMATE_TOLERANCE * scale,
-        };
-        let mut row: Option<(f64, f64)> = None;
-        let mut claim = rodloop_solver::Claim {
-            energy: p.energy,
-            energy_error: allowed(sheet_estimate(&self.points, k)),
-            profile_error: 0.0,
-            eta: None,
-        };
-        let traced = eq.model().cells();
-        // Discrete energies of the resolutions so far (tracing resolution first).
-        let mut energies = vec![eq.energy().total];
-        loop {
-            let cells = eq.model().cells();
-            if energies.len() >= 3 {
-                let n = energies.len();
-                let (e2, e1, e0) = (energies[n - 1], energies[n - 2], energies[n - 3]);
-                let converging = (e2 - e1).abs() <= 0.25 * (e1 - e0).abs();
-                let (rich, est) = (
-                    rodloop_solver::richardson(e2, e1),
-                    rodloop_solver::richardson_error(e2, e1) + 8.0 * f64::EPSILON * scale,
-                );
-                if converging && (rich - claim.energy).abs() > claim.energy_error + ESTIMATES * est
-                {
-                    row = Some((rich, est));
-                    claim.energy = rich;
-                    claim.energy_error = ESTIMATES * est;
-                }
+        },
+        profile_error: 0.0,
+        eta: None,
+    };
+    let mut row: Option<(f64, f64)> = None;
+    let first = eq.model().cells();
+    let mut refined: Option<Equilibrium> = None;
+    // Discrete energies of the resolutions so far (the state's own first).
+    let mut energies = vec![eq.energy().total];
+    loop {
+        let at = refined.as_ref().unwrap_or(eq);
+        let cells = at.model().cells();
+        if ladder == Ladder::ReEstimate && energies.len() >= 3 {
+            let n = energies.len();
+            let (e2, e1, e0) = (energies[n - 1], energies[n - 2], energies[n - 3]);
+            let converging = (e2 - e1).abs() <= 0.25 * (e1 - e0).abs();
+            let (rich, est) = (
+                rodloop_solver::richardson(e2, e1),
+                rodloop_solver::richardson_error(e2, e1) + 8.0 * f64::EPSILON * scale,
+            );
+            if converging && (rich - claim.energy).abs() > claim.energy_error + ESTIMATES * est {
+                row = Some((rich, est));
+                claim.energy = rich;
+                claim.energy_error = ESTIMATES * est;
             }
-            let profile = uniform_profile(
-                &eq,
-                STATE_POINTS.max(cells),
-                claim.energy,
-                claim.energy_error,
-                d0,
-            )?;
-            match rodloop_solver::verify_state(&eq, &profile, &claim) {
-                Ok(verification) => {
-                    return Ok(StateFile {
-                        profile,
-                        verification,
-                        cells,
-                        row,
-                    })
-                }
-                Err(e) if 2 * cells > MAX_REFINEMENT * traced => return Err(e),
-                Err(why) => {
-                    let why = match why {
-                        SolverError::Unverified(m) => m,
-                        e => e.to_string(),
-                    };
-                    eq = crate::reported::resolved(&eq, 2 * cells).map_err(|e| {
-                        SolverError::Unverified(format!(
-                            "at the {cells} cells of its file {why}; at {} cells Newton finds no \
-                             equilibrium next to it at this L̄ (a state near a fold of the \
-                             coarser resolution that the finer one moves): {e}",
-                            2 * cells
-                        ))
-                    })?;
-                    energies.push(eq.energy().total);
-                }
+        }
+        let profile = uniform_profile(
+            at,
+            STATE_POINTS.max(cells),
+            claim.energy,
+            claim.energy_error,
+            d0,
+        )?;
+        match rodloop_solver::verify_state(at, &profile, &claim) {
+            Ok(verification) => {
+                return Ok(StateFile {
+                    profile,
+                    verification,
+                    cells,
+                    row,
+                })
+            }
+            Err(e) if 2 * cells > MAX_REFINEMENT * first => return Err(e),
+            Err(why) => {
+                let why = match why {
+                    SolverError::Unverified(m) => m,
+                    e => e.to_string(),
+                };
+                let next = resolved(at, 2 * cells).map_err(|e| {
+                    SolverError::Unverified(format!(
+                        "at the {cells} cells of its file {why}; at {} cells Newton finds no \
+                         equilibrium next to it at this L̄ (a state near a fold of the \
+                         coarser resolution that the finer one moves): {e}",
+                        2 * cells
+                    ))
+                })?;
+                energies.push(next.energy().total);
+                refined = Some(next);
             }
         }
     }
+}
+
+/// `eq` re-solved with `cells` cells at its own length and stiffness for a state file, by the
+/// diagrams ([`TracedBranch::verified_state`]) and by `phase`, `converge` and
+/// `--param` alike: the resampled profile as start (and, for uniform stiffness, as phase
+/// reference), Newton to the tolerance a traced state is accepted with (`1e-8`, as in
+/// [`crate::TracedBranch::equilibrium_of`]; on a very soft segment, `D1/D0 = 0.001`, the
+/// residual of the finer resolutions stalls at a few 1e-9 in round-off), with up to 60 steps.
+pub(crate) fn resolved(eq: &Equilibrium, cells: usize) -> Result<Equilibrium, SolverError> {
+    let m = eq.model();
+    let kappa = eq.resample(cells)?;
+    let kind = m.stiffness().kind();
+    let mut model = m.with_cells(cells)?;
+    if kind.is_uniform() {
+        model = model.with_phase(Phase::from_gauss_values(&kappa, cells)?)?;
+    }
+    let newton = SolveOptions {
+        tolerance: 1e-8,
+        max_iterations: 60,
+        ..newton_options()
+    };
+    solve(&model, &kappa, &newton)
 }
 
 /// Every traced state of `branches` verified as its file holds it

@@ -1,5 +1,9 @@
 //! Euler rotation curves on the unit sphere (Wang, Li & Yi, JMPS 2024, Section 3.1).
 //!
+//! It is one file because every quantity of the curve (position, derivatives, curvature,
+//! torsion, lengths, energies, the inverse `α(L̄)`) reads the one Fourier form of Eq. (4)
+//! derived below.
+//!
 //! The curves of Eq. (4) approximate the constrained rod loops on a sphere.  Units are
 //! R = 1 (sphere radius) and D = 1 (bending stiffness); lengths are reported either as
 //! L (in units of R) or as the normalised length L̄ = L/(2πR).  Energies are reported in

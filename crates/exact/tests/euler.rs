@@ -1,5 +1,8 @@
 //! Independent checks of the Euler rotation curves, Eqs. (4)–(8) of Wang, Li & Yi (2024).
 //!
+//! One file of independent checks of one module (`euler.rs`), sharing the reference routes
+//! (quadratures, finite differences) defined once at the top.
+//!
 //! The reference values here come from separate routes (literal formulas, fixed-grid
 //! quadratures, Gauss–Legendre, finite differences, closed-form asymptotics), never from
 //! numbers printed by the module itself.

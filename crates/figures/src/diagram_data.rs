@@ -1,9 +1,12 @@
-//! A diagram directory's tables read for drawing: `branches.csv`, `critical.csv` and
-//! `special_points.csv` of either model into [`DiagramData`], with the energy made relative
+//! A diagram directory read for drawing: the result schema's reader
+//! ([`rodloop_schema::Diagram::read`]: `summary.json` and the typed columns of `branches.csv`)
+//! of any model into [`DiagramData`], with the energy made relative
 //! to the stable state on request ([`DiagramData::relative_to_stable`]). The figures drawn
 //! from it are in [`crate::diagram`].
 
 use std::path::Path;
+
+use rodloop_schema::{Cell, Diagram, Point, SchemaError};
 
 use crate::FigureError;
 
@@ -52,7 +55,7 @@ pub struct DiagramPoint {
     pub shift: f64,
 }
 
-/// A special point of `special_points.csv` (fold, branch point, crossing, collapse).
+/// A special point of the diagram (fold, branch point, lift-off, landing, detachment).
 #[derive(Clone, Debug)]
 pub struct SpecialMark {
     /// `fold`, `branch_point`, `lift-off`, `landing` or `detachment` (enclosed diagrams).
@@ -76,11 +79,11 @@ pub struct CriticalPoint {
     pub index: usize,
 }
 
-/// A diagram read back from its CSV files.
+/// A diagram read back through the result schema.
 #[derive(Clone, Debug)]
 pub struct DiagramData {
-    /// `exact` (a `lowest` column), `numeric` (a `stability` column) or `enclosed` (a
-    /// `label` and an `attached` column).
+    /// `model` of `summary.json`: `exact` (labelled by its `lowest` column), `numeric` (a
+    /// `stability` column) or `enclosed` (a `label` and an `attached` column).
     pub model: String,
     /// Columns the file lacks that some figures need (`energy_g`, `lambda_max`: the enclosed
     /// diagram has neither); their values are NaN and those figures are refused.
@@ -89,7 +92,7 @@ pub struct DiagramData {
     pub points: Vec<DiagramPoint>,
     /// Critical lengths.
     pub critical: Vec<CriticalPoint>,
-    /// Folds and branch points of `special_points.csv` (empty without the file).
+    /// Folds, branch points and wall events of the diagram (empty when its model locates none).
     pub special: Vec<SpecialMark>,
     /// Whether the great-circle buckling loads of Eqs. (33)–(34) apply (a uniform rod): the
     /// contact-force figure marks them only then. [`DiagramData::read`] sets it for the exact
@@ -102,221 +105,199 @@ pub struct DiagramData {
     pub relative: bool,
 }
 
-/// Read a CSV as named text columns.
-fn read_text(path: &Path) -> Result<(Vec<String>, Vec<Vec<String>>), FigureError> {
-    let src = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|source| FigureError::Io {
-        path: src.clone(),
-        source,
-    })?;
-    let mut rdr = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_reader(&bytes[..]);
-    let e = |e: csv::Error| FigureError::Csv {
-        path: src.clone(),
-        message: e.to_string(),
-    };
-    let names: Vec<String> = rdr
-        .headers()
-        .map_err(e)?
-        .iter()
-        .map(str::to_string)
-        .collect();
-    let mut rows = Vec::new();
-    for r in rdr.records() {
-        rows.push(r.map_err(e)?.iter().map(str::to_string).collect());
+/// A column of `branches.csv` that a figure needs, absent: the error names the file and the
+/// columns that are there.
+fn missing(path: &str, column: &str, d: &Diagram) -> FigureError {
+    FigureError::MissingColumn {
+        path: path.into(),
+        column: column.into(),
+        found: d.columns.join(", "),
     }
-    Ok((names, rows))
 }
 
-fn num_col(
-    names: &[String],
-    rows: &[Vec<String>],
-    col: &str,
-    src: &str,
-) -> Result<Vec<f64>, FigureError> {
-    let i = names
-        .iter()
-        .position(|n| n == col)
-        .ok_or_else(|| FigureError::MissingColumn {
-            path: src.into(),
-            column: col.into(),
-            found: names.join(", "),
-        })?;
-    rows.iter()
-        .enumerate()
-        .map(|(r, row)| {
-            let cell = row.get(i).map(String::as_str).unwrap_or("");
-            match cell.parse::<f64>() {
-                Ok(v) if v.is_finite() => Ok(v),
-                _ => Err(FigureError::NotFinite {
-                    path: src.into(),
-                    row: r + 2,
-                    column: col.into(),
-                    value: cell.into(),
-                }),
-            }
-        })
-        .collect()
+/// A number of a point's column (`None`: an empty cell).
+fn number(p: &Point, column: &str) -> Option<f64> {
+    match p.extra.get(column) {
+        Some(Cell::F(v)) => Some(*v),
+        Some(Cell::I(v)) => Some(*v as f64),
+        _ => None,
+    }
 }
 
 impl DiagramData {
-    /// Read `branches.csv` and `critical.csv` from a diagram directory.
+    /// Read a diagram directory through the result schema ([`Diagram::read`]: `summary.json`
+    /// and `branches.csv`, every column typed by [`rodloop_schema::COLUMNS`]); the critical
+    /// lengths and special points are those of `summary.json`.
     pub fn read(dir: &Path) -> Result<Self, FigureError> {
-        let bpath = dir.join("branches.csv");
-        let src = bpath.display().to_string();
-        let (names, rows) = read_text(&bpath)?;
-        if rows.is_empty() {
+        let summary = dir.join("summary.json");
+        let d = match Diagram::read(dir) {
+            Ok(d) => d,
+            Err(SchemaError::Io { source, .. })
+                if source.kind() == std::io::ErrorKind::NotFound && !summary.exists() =>
+            {
+                return Err(FigureError::Diagram(format!(
+                    "{} is not a diagram directory: it has no summary.json (rodloop diagram writes it beside branches.csv)",
+                    dir.display()
+                )))
+            }
+            Err(e) => return Err(e.into()),
+        };
+        Self::from_schema(&d, &dir.join("branches.csv").display().to_string())
+    }
+
+    /// The figures' view of a diagram in the schema; `path` names its `branches.csv` in
+    /// errors.
+    pub fn from_schema(d: &Diagram, path: &str) -> Result<Self, FigureError> {
+        let model = d.model.as_str();
+        if !["exact", "numeric", "enclosed"].contains(&model) {
+            return Err(FigureError::Diagram(format!(
+                "{path}: a diagram of model `{model}` (summary.json); the diagram figures draw the exact, numeric and enclosed models"
+            )));
+        }
+        // A diagram in L̄: one axis, `lbar` (a diagram against a parameter draws its own figure).
+        let lbar = match &d.axes[..] {
+            [a] if a.name == "lbar" => 0,
+            axes => {
+                return Err(FigureError::Diagram(format!(
+                    "{path}: a diagram over {} (summary.json); the diagram figures draw diagrams in lbar only",
+                    axes.iter().map(|a| a.name.as_str()).collect::<Vec<_>>().join(", ")
+                )))
+            }
+        };
+        if d.points.is_empty() {
             return Err(FigureError::TooFewRows {
-                path: src,
+                path: path.into(),
                 needed: 1,
                 found: 0,
             });
         }
-        let col = |c: &str| num_col(&names, &rows, c, &src);
-        let enclosed = names.iter().any(|n| n == "attached") && names.iter().any(|n| n == "label");
-        let mut missing = Vec::new();
-        // The enclosed diagram has no energy split and no largest contact force.
-        let mut col_or_nan = |c: &str| -> Result<Vec<f64>, FigureError> {
-            if enclosed && !names.iter().any(|n| n == c) {
-                missing.push(c.to_string());
-                Ok(vec![f64::NAN; rows.len()])
+        let enclosed = model == "enclosed";
+        let has = |c: &str| d.columns.iter().any(|n| n == c);
+        // The columns every figure needs; the enclosed diagram has no energy split and no
+        // largest contact force (those figures are refused).
+        let label = match model {
+            "numeric" => Some("stability"),
+            "enclosed" => Some("label"),
+            _ => None,
+        };
+        let needed = ["branch", "eta", "lbar", "energy", "lambda_min"]
+            .into_iter()
+            .chain(label)
+            .chain(if enclosed { None } else { Some("energy_g") })
+            .chain(if enclosed { None } else { Some("lambda_max") })
+            .chain(if enclosed { Some("attached") } else { None })
+            .chain(if label.is_none() {
+                Some("lowest")
             } else {
-                col(c)
+                None
+            });
+        for c in needed {
+            if !has(c) {
+                return Err(missing(path, c, d));
             }
-        };
-        let (energy_g, lmax) = (col_or_nan("energy_g")?, col_or_nan("lambda_max")?);
-        let (branch, eta, lbar, energy, lmin) = (
-            col("branch")?,
-            col("eta")?,
-            col("lbar")?,
-            col("energy")?,
-            col("lambda_min")?,
-        );
-        let attached = if enclosed {
-            Some(col("attached")?)
-        } else {
-            None
-        };
-        let (model, stability): (String, Vec<Stability>) = if let Some(i) = names
-            .iter()
-            .position(|n| n == "stability" || (enclosed && n == "label"))
-        {
-            let mut v = Vec::new();
-            for (r, row) in rows.iter().enumerate() {
-                v.push(match row.get(i).map(String::as_str) {
-                        Some("stable") => Stability::Stable,
-                        Some("metastable") => Stability::Metastable,
-                        Some("unstable") => Stability::Unstable,
-                        other => {
-                            return Err(FigureError::Invalid(format!(
-                                "{src}: row {}: stability (label) must be stable, metastable or unstable (got {:?})",
-                                r + 2,
-                                other.unwrap_or("")
-                            )))
-                        }
-                    });
-            }
-            (if enclosed { "enclosed" } else { "numeric" }.into(), v)
-        } else {
-            let lowest = col("lowest")?;
-            (
-                "exact".into(),
-                lowest
-                    .iter()
-                    .map(|&l| {
-                        if l != 0.0 {
-                            Stability::Stable
-                        } else {
-                            Stability::Higher
-                        }
-                    })
-                    .collect(),
-            )
-        };
-        let opt_col = |c: &str| -> Result<Option<Vec<f64>>, FigureError> {
-            if names.iter().any(|n| n == c) {
-                col(c).map(Some)
-            } else {
-                Ok(None)
-            }
-        };
-        let family = opt_col("family")?;
-        let arc = opt_col("arc")?;
-        let points = (0..rows.len())
-            .map(|k| DiagramPoint {
-                family: family.as_ref().map_or(0, |f| f[k] as u32),
-                arc: arc.as_ref().map(|a| a[k] as u64),
-                attached: attached.as_ref().map(|a| a[k] != 0.0),
+        }
+        let missing_cols: Vec<String> = ["energy_g", "lambda_max"]
+            .into_iter()
+            .filter(|c| !has(c))
+            .map(str::to_string)
+            .collect();
+        let mut points = Vec::with_capacity(d.points.len());
+        for (r, p) in d.points.iter().enumerate() {
+            let row = r + 2;
+            let empty = |column: &str| FigureError::NotFinite {
+                path: path.into(),
+                row,
+                column: column.into(),
+                value: String::new(),
+            };
+            // Columns the reader types as numbers: an empty cell is refused for a column a
+            // figure needs, and stands for NaN in one the file lacks.
+            let value = |c: &str| -> Result<f64, FigureError> {
+                if !has(c) {
+                    return Ok(f64::NAN);
+                }
+                number(p, c).ok_or_else(|| empty(c))
+            };
+            let stability = match label {
+                Some(col) => match p.label.as_deref() {
+                    Some("stable") => Stability::Stable,
+                    Some("metastable") => Stability::Metastable,
+                    Some("unstable") => Stability::Unstable,
+                    other => {
+                        return Err(FigureError::Diagram(format!(
+                            "{path}: row {row}: column `{col}` must be stable, metastable or unstable (got {:?})",
+                            other.unwrap_or("")
+                        )))
+                    }
+                },
+                None => {
+                    if value("lowest")? != 0.0 {
+                        Stability::Stable
+                    } else {
+                        Stability::Higher
+                    }
+                }
+            };
+            let arc = match p.extra.get("arc") {
+                Some(Cell::I(v)) => {
+                    Some(u64::try_from(*v).map_err(|_| FigureError::NotFinite {
+                        path: path.into(),
+                        row,
+                        column: "arc".into(),
+                        value: v.to_string(),
+                    })?)
+                }
+                Some(Cell::Empty) => return Err(empty("arc")),
+                _ => None,
+            };
+            points.push(DiagramPoint {
+                branch: p.branch,
+                eta: p.eta,
+                lbar: p.coords[lbar],
+                energy: p.energy,
+                energy_g: value("energy_g")?,
+                lambda_min: value("lambda_min")?,
+                lambda_max: value("lambda_max")?,
+                stability,
+                family: p.family.unwrap_or(0),
+                arc,
+                attached: if enclosed {
+                    Some(value("attached")? != 0.0)
+                } else {
+                    None
+                },
                 shift: 0.0,
-                branch: branch[k] as u32,
-                eta: eta[k] as u32,
-                lbar: lbar[k],
-                energy: energy[k],
-                energy_g: energy_g[k],
-                lambda_min: lmin[k],
-                lambda_max: lmax[k],
-                stability: stability[k],
+            });
+        }
+        let critical = d
+            .critical
+            .iter()
+            .map(|c| CriticalPoint {
+                lbar_cr: c.lbar_cr,
+                kind: c.kind.clone(),
+                energy: c.energy,
+                index: c.index,
             })
             .collect();
-        let cpath = dir.join("critical.csv");
-        let mut critical = Vec::new();
-        if cpath.exists() {
-            let csrc = cpath.display().to_string();
-            let (cn, cr) = read_text(&cpath)?;
-            let lb = num_col(&cn, &cr, "lbar_cr", &csrc)?;
-            let en = num_col(&cn, &cr, "energy", &csrc)?;
-            let ix = num_col(&cn, &cr, "index", &csrc)?;
-            let ki =
-                cn.iter()
-                    .position(|n| n == "kind")
-                    .ok_or_else(|| FigureError::MissingColumn {
-                        path: csrc.clone(),
-                        column: "kind".into(),
-                        found: cn.join(", "),
-                    })?;
-            for (k, row) in cr.iter().enumerate() {
-                critical.push(CriticalPoint {
-                    lbar_cr: lb[k],
-                    energy: en[k],
-                    index: ix[k] as usize,
-                    kind: row.get(ki).cloned().unwrap_or_default(),
-                });
-            }
-        }
-        let spath = dir.join("special_points.csv");
-        let mut special = Vec::new();
-        if spath.exists() {
-            let ssrc = spath.display().to_string();
-            let (sn, sr) = read_text(&spath)?;
-            let lb = num_col(&sn, &sr, "lbar", &ssrc)?;
-            let en = num_col(&sn, &sr, "energy", &ssrc)?;
-            let ki =
-                sn.iter()
-                    .position(|n| n == "kind")
-                    .ok_or_else(|| FigureError::MissingColumn {
-                        path: ssrc.clone(),
-                        column: "kind".into(),
-                        found: sn.join(", "),
-                    })?;
-            for (k, row) in sr.iter().enumerate() {
-                let kind = row.get(ki).cloned().unwrap_or_default();
-                if ["fold", "branch_point", "lift-off", "landing", "detachment"]
-                    .contains(&kind.as_str())
-                {
-                    special.push(SpecialMark {
-                        kind,
-                        lbar: lb[k],
-                        energy: en[k],
-                    });
-                }
-            }
-        }
+        let special = d
+            .special
+            .iter()
+            .flatten()
+            .filter(|s| {
+                ["fold", "branch_point", "lift-off", "landing", "detachment"]
+                    .contains(&s.kind.as_str())
+            })
+            .map(|s| SpecialMark {
+                kind: s.kind.clone(),
+                lbar: s.lbar,
+                energy: s.energy,
+            })
+            .collect();
         let buckling_loads = model == "exact"
-            || (model == "numeric" && family.as_ref().is_none_or(|f| f.iter().all(|&x| x == 0.0)));
+            || (model == "numeric" && points.iter().all(|p: &DiagramPoint| p.family == 0));
         Ok(DiagramData {
-            model,
-            missing,
+            model: model.into(),
+            missing: missing_cols,
             points,
             critical,
             special,

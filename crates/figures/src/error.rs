@@ -54,6 +54,14 @@ pub enum FigureError {
     /// A figure was asked for with an impossible size or setting.
     #[error("invalid figure setting: {0}")]
     Invalid(String),
+    /// A diagram directory the diagram figures cannot draw (no `summary.json`, a diagram
+    /// against a parameter, a model or label they do not know); the message names the file.
+    #[error("{0}")]
+    Diagram(String),
+    /// A diagram directory could not be read through the result schema (the message names
+    /// the file and, where it applies, the row and column).
+    #[error(transparent)]
+    Schema(#[from] rodloop_schema::SchemaError),
     /// The SVG could not be rasterised.
     #[error("cannot rasterise the SVG: {0}")]
     Raster(String),

@@ -1,7 +1,9 @@
 //! Known-answer tests of the figures crate: projections, self-contacts, colour bar, PNG and
 //! SVG validity, bad input.
 
+use std::collections::BTreeMap;
 use std::f64::consts::{PI, TAU};
+use std::path::{Path, PathBuf};
 
 use nalgebra::Vector3;
 use rodloop_exact::{all_loops, Family};
@@ -13,6 +15,7 @@ use rodloop_figures::loops::{loop_picture, point_group, LoopPictureOptions};
 use rodloop_figures::raster::{png_size, svg_to_png};
 use rodloop_figures::view::View;
 use rodloop_figures::FigureError;
+use rodloop_schema::{Axis, Cell, Critical, Diagram, Point};
 
 /// The paper's branch loop (wave family, q = −(η + 1)) with `eta` periods at `lbar`, as a table.
 fn exact_loop(eta: u32, lbar: f64, n: usize) -> LoopData {
@@ -227,30 +230,75 @@ fn bad_tables_give_precise_errors() {
     assert!(matches!(e, FigureError::TooFewRows { found: 2, .. }), "{e}");
 }
 
-#[test]
-fn diagram_legend_lists_only_what_is_drawn() {
-    let dir = std::env::temp_dir().join(format!("rodloop-fig-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let mut b = String::from(
-        "branch,eta,lbar,energy,energy_g,energy_error,stability,index,lambda_min,lambda_max\n",
+/// A numeric diagram of one branch in the result schema: stable below `L̄ = 1.35`,
+/// metastable above, one collapse at `L̄ = 1`.
+fn numeric_diagram() -> Diagram {
+    let mut d = Diagram::new(
+        "numeric",
+        "test",
+        vec![Axis {
+            name: "lbar".into(),
+            min: 1.0,
+            max: 1.9,
+        }],
+        "u",
     );
+    d.columns = [
+        "branch",
+        "eta",
+        "lbar",
+        "energy",
+        "energy_g",
+        "energy_error",
+        "stability",
+        "index",
+        "lambda_min",
+        "lambda_max",
+    ]
+    .iter()
+    .map(|c| c.to_string())
+    .collect();
     for k in 0..=9 {
         let l = 1.0 + 0.1 * k as f64;
-        let st = if k < 4 { "stable" } else { "metastable" };
-        b += &format!(
-            "1,2,{l},{},{},1e-9,{st},0,{},{}\n",
-            1.0 + l,
-            l - 1.0,
-            4.0 - l,
-            4.0 + l
-        );
+        d.points.push(Point {
+            branch: 1,
+            eta: 2,
+            coords: vec![l],
+            energy: 1.0 + l,
+            energy_error: Some(1e-9),
+            index: Some(0),
+            label: Some(if k < 4 { "stable" } else { "metastable" }.into()),
+            extra: BTreeMap::from([
+                ("energy_g".into(), Cell::F(l - 1.0)),
+                ("lambda_min".into(), Cell::F(4.0 - l)),
+                ("lambda_max".into(), Cell::F(4.0 + l)),
+            ]),
+            ..Point::default()
+        });
     }
-    std::fs::write(dir.join("branches.csv"), b).unwrap();
-    std::fs::write(
-        dir.join("critical.csv"),
-        "index,lbar_cr,kind,from_branch,to_branch,energy,error_estimate\n1,1,collapse,0,1,1,0\n",
-    )
-    .unwrap();
+    d.critical.push(Critical {
+        index: 1,
+        lbar_cr: 1.0,
+        kind: "collapse".into(),
+        from_branch: 0,
+        to_branch: 1,
+        energy: 1.0,
+        error_estimate: 0.0,
+        extra: BTreeMap::new(),
+    });
+    d
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("rodloop-fig-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn diagram_legend_lists_only_what_is_drawn() {
+    let dir = scratch("legend");
+    numeric_diagram().write(&dir).unwrap();
     let d = DiagramData::read(&dir).unwrap();
     assert_eq!(d.model, "numeric");
     let svg = energy_figure(&d, 900.0, 600.0).unwrap();
@@ -263,6 +311,79 @@ fn diagram_legend_lists_only_what_is_drawn() {
     let lam = lambda_figure(&d, 900.0, 600.0).unwrap();
     assert!(lam.contains("Eq. (33)") && !lam.contains("Eq. (34)"));
     assert!(energy_figure(&d, 10.0, 600.0).is_err());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A diagram directory is read through the schema: without `summary.json`, with a column
+/// the schema does not know, with a cell that is not a number, without a column a figure
+/// needs, or a diagram against a parameter, the error is one line naming the file and the
+/// column or row at fault.
+#[test]
+fn diagram_directories_that_cannot_be_drawn_say_why() {
+    let err = |dir: &Path| {
+        let e = DiagramData::read(dir).unwrap_err().to_string();
+        assert_eq!(e.lines().count(), 1, "{e}");
+        e
+    };
+    // Only the tables: not a diagram directory.
+    let dir = scratch("no-summary");
+    numeric_diagram().write(&dir).unwrap();
+    std::fs::remove_file(dir.join("summary.json")).unwrap();
+    let e = err(&dir);
+    assert!(
+        e.contains("not a diagram directory") && e.contains("summary.json"),
+        "{e}"
+    );
+    // A column the schema does not know.
+    numeric_diagram().write(&dir).unwrap();
+    let csv = std::fs::read_to_string(dir.join("branches.csv")).unwrap();
+    std::fs::write(
+        dir.join("branches.csv"),
+        csv.replacen("energy_g", "energy_x", 1),
+    )
+    .unwrap();
+    let e = err(&dir);
+    assert!(e.contains("branches.csv") && e.contains("energy_x"), "{e}");
+    // A cell that is not a number (row 4 of the file: the third state).
+    let mut lines: Vec<String> = csv.lines().map(str::to_string).collect();
+    let mut cells: Vec<&str> = lines[3].split(',').collect();
+    cells[5] = "NaN";
+    lines[3] = cells.join(",");
+    std::fs::write(dir.join("branches.csv"), lines.join("\n") + "\n").unwrap();
+    let e = err(&dir);
+    assert!(
+        e.contains("branches.csv") && e.contains("row 4") && e.contains("energy_error"),
+        "{e}"
+    );
+    // Without the largest contact force a numeric diagram's figures cannot be drawn.
+    let mut d = numeric_diagram();
+    d.columns.retain(|c| c != "lambda_max");
+    for p in &mut d.points {
+        p.extra.remove("lambda_max");
+    }
+    d.write(&dir).unwrap();
+    let e = err(&dir);
+    assert!(
+        e.contains("branches.csv") && e.contains("no column `lambda_max`"),
+        "{e}"
+    );
+    // A diagram against a parameter (two axes) is not drawn as a diagram in L̄.
+    let mut d = numeric_diagram();
+    d.axes.insert(
+        0,
+        Axis {
+            name: "value".into(),
+            min: 0.1,
+            max: 0.5,
+        },
+    );
+    d.columns.push("value".into());
+    for p in &mut d.points {
+        p.coords.insert(0, 0.3);
+    }
+    d.write(&dir).unwrap();
+    let e = err(&dir);
+    assert!(e.contains("value, lbar") && e.contains("lbar only"), "{e}");
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -1,5 +1,8 @@
 //! Scene files: what a `rodloop` run models.
 //!
+//! The crate is this one file: reading a scene (the TOML keys, their validation and the error
+//! type) is one job, and the format described here is its reference.
+//!
 //! A scene is a small TOML file naming the sphere, the confinement, the bending-stiffness
 //! profile and the accuracy. Every key is optional except where noted; unknown keys are an
 //! error, reported with the line and column, so that a misspelt key never silently falls back

@@ -225,10 +225,17 @@ pub struct SpecialPoint {
     pub branch: u32,
     /// Family within the branch.
     pub family: u32,
-    /// Stability index on one side.
-    pub index_before: usize,
+    /// Stability index on one side (`None`: not located, a fold or branch point of a
+    /// diagram against a parameter).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub index_before: Option<usize>,
     /// Stability index on the other side.
-    pub index_after: usize,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub index_after: Option<usize>,
+    /// What the engine adds (a diagram against a parameter: the parameter's `value` there
+    /// and the `energy_error`), kept in `summary.json`.
+    #[serde(flatten)]
+    pub extra: BTreeMap<String, serde_json::Value>,
 }
 
 /// A diagram of any model.

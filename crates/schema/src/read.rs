@@ -117,7 +117,14 @@ fn read_points(path: &Path, axes: &[Axis]) -> Result<(Vec<String>, Vec<Point>), 
         .collect();
     let specs = columns
         .iter()
-        .map(|c| column(c).ok_or_else(|| SchemaError::UnknownColumn(c.clone())))
+        .map(|c| {
+            column(c).ok_or_else(|| SchemaError::Parse {
+                path: src.clone(),
+                message: format!(
+                    "unknown column `{c}` (every column of branches.csv is named in rodloop_schema::COLUMNS)"
+                ),
+            })
+        })
         .collect::<Result<Vec<_>, _>>()?;
     let mut points = Vec::new();
     for (r, rec) in rdr.records().enumerate() {
@@ -132,7 +139,16 @@ fn read_points(path: &Path, axes: &[Axis]) -> Result<(Vec<String>, Vec<Point>), 
         for (s, cell) in specs.iter().zip(rec.iter()) {
             let bad = || SchemaError::Parse {
                 path: src.clone(),
-                message: format!("row {}: column {}: cannot read {cell:?}", r + 2, s.name),
+                message: format!(
+                    "row {}: column `{}` holds {cell:?}, not {}",
+                    r + 2,
+                    s.name,
+                    match s.field {
+                        Field::Coord | Field::Energy | Field::EnergyError | Field::Number =>
+                            "a finite number",
+                        _ => "an integer in the column's range",
+                    }
+                ),
             };
             let float = || -> Result<Option<f64>, SchemaError> {
                 if cell.is_empty() {

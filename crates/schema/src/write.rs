@@ -201,8 +201,8 @@ impl Diagram {
                 num("energy", p.energy)?,
                 p.branch.to_string(),
                 p.family.to_string(),
-                p.index_before.to_string(),
-                p.index_after.to_string(),
+                p.index_before.map_or(String::new(), |i| i.to_string()),
+                p.index_after.map_or(String::new(), |i| i.to_string()),
                 p.error_estimate
                     .map_or(Ok(String::new()), |v| num("error_estimate", v))?,
             ])
@@ -282,13 +282,19 @@ impl Diagram {
         if let Some(s) = self.special_csv()? {
             out.push(("special_points.csv".into(), s));
         }
+        out.push(("summary.json".into(), self.summary_json()?));
+        Ok(out)
+    }
+
+    /// `summary.json` as written ([`Diagram::summary`], pretty-printed, a final newline): for
+    /// a run whose tables are its own (`phase.csv`) and whose summary is the schema's.
+    pub fn summary_json(&self) -> Result<Vec<u8>, SchemaError> {
         let text =
             serde_json::to_string_pretty(&self.summary()?).map_err(|e| SchemaError::Parse {
                 path: "summary.json".into(),
                 message: e.to_string(),
             })?;
-        out.push(("summary.json".into(), format!("{text}\n").into_bytes()));
-        Ok(out)
+        Ok(format!("{text}\n").into_bytes())
     }
 
     /// Write [`Diagram::files`] into `dir` (which must exist).

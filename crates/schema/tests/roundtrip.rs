@@ -109,8 +109,9 @@ fn sample() -> Diagram {
             error_estimate: None,
             branch: 2,
             family: 1,
-            index_before: 0,
-            index_after: 1,
+            index_before: Some(0),
+            index_after: Some(1),
+            extra: BTreeMap::new(),
         },
         SpecialPoint {
             kind: "lift-off".into(),
@@ -119,8 +120,9 @@ fn sample() -> Diagram {
             error_estimate: Some(1e-9),
             branch: 1,
             family: 0,
-            index_before: 1,
-            index_after: 1,
+            index_before: None,
+            index_after: None,
+            extra: BTreeMap::from([("value".into(), serde_json::json!(0.25))]),
         },
     ]);
     d.set_certificate(&serde_json::json!({"checks": 3, "below": false}))
@@ -201,6 +203,10 @@ fn summary_has_no_null() {
     let s = d.summary().unwrap();
     assert!(s["special_points"][0].get("error_estimate").is_none());
     assert_eq!(s["special_points"][1]["error_estimate"], 1e-9);
+    // Indices that were not located are absent; what the engine adds is kept.
+    assert_eq!(s["special_points"][0]["index_after"], 1);
+    assert!(s["special_points"][1].get("index_before").is_none());
+    assert_eq!(s["special_points"][1]["value"], 0.25);
     assert_eq!(s["schema_version"], rodloop_schema::VERSION);
 }
 

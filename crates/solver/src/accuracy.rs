@@ -124,6 +124,79 @@ pub fn richardson_error(fine: f64, coarse: f64) -> f64 {
     (fine - coarse).abs() / 15.0
 }
 
+/// How [`ladder_estimate`] treats a ladder that shows no convergence (an observed order
+/// below 1: the last difference is more than half the one before).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SlowLadder {
+    /// The order is taken as 1: the error of the finest level is its last difference.
+    FirstOrder,
+    /// The error of the finest level is the sum of both differences (the surface diagram's
+    /// ladder, `rodloop_diagram`'s `estimate` module).
+    SumOfDifferences,
+}
+
+/// The rule of [`ladder_estimate`]: the largest order trusted, the size below which the
+/// last difference counts as converged, and what a ladder without convergence gets.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LadderRule {
+    /// Cap of the observed order (the scheme's [`ORDER`], or less where the convergence is
+    /// irregular: the enclosed model's lifted-off states).
+    pub max_order: f64,
+    /// A last difference at most this large is converged: the order is taken as
+    /// `max_order` (0: only an exact tie; the surface ladder passes its round-off level).
+    pub negligible: f64,
+    /// An observed order below 1.
+    pub slow: SlowLadder,
+}
+
+/// Error estimate of the finest of three levels `E_{4h}, E_{2h}, E_h` (e.g. `N/4, N/2, N`
+/// cells, or `N/2, N, 2N`) from their observed order: with the differences
+/// `d₁ = |E_{2h} − E_{4h}|`, `d₂ = |E_h − E_{2h}|`, the order `p = log₂(d₁/d₂)` capped at
+/// `rule.max_order` (and `max_order` where `d₂ ≤ rule.negligible`), the error of `E_h` is
+/// `d₂/(2^p − 1)`, the tail of a geometric sequence (exact on `E + C h^p`). An order below 1
+/// (no sign of convergence) follows `rule.slow`. Returns `(estimate, p)` (`p = 0` for
+/// [`SlowLadder::SumOfDifferences`]).
+///
+/// The enclosed model's levels ([`three_level_estimate`]) and the surface diagram's ladder
+/// around a traced row both use it.
+pub fn ladder_estimate(levels: [f64; 3], rule: LadderRule) -> (f64, f64) {
+    let (d1, d2) = ((levels[1] - levels[0]).abs(), (levels[2] - levels[1]).abs());
+    let order = if d2 > rule.negligible {
+        (d1 / d2).log2().min(rule.max_order)
+    } else {
+        rule.max_order
+    };
+    let order = if order >= 1.0 {
+        order
+    } else {
+        match rule.slow {
+            SlowLadder::FirstOrder => 1.0,
+            SlowLadder::SumOfDifferences => return (d1 + d2, 0.0),
+        }
+    };
+    (d2 / (2f64.powf(order) - 1.0), order)
+}
+
+/// Error estimate of the finest of three energies at `N/4, N/2, N` cells:
+/// [`ladder_estimate`] with the order clamped to `[1, max_order]`. Use `max_order = 4` for a
+/// fully attached enclosed state (fourth order, measured against the exact layer) and
+/// [`crate::enclosed::LIFTED_OFF_MAX_ORDER`] for a lifted-off one. Returns `(estimate, p)`.
+pub fn three_level_estimate(
+    e_quarter: f64,
+    e_half: f64,
+    e_full: f64,
+    max_order: f64,
+) -> (f64, f64) {
+    ladder_estimate(
+        [e_quarter, e_half, e_full],
+        LadderRule {
+            max_order,
+            negligible: 0.0,
+            slow: SlowLadder::FirstOrder,
+        },
+    )
+}
+
 /// Result of [`solve_with_accuracy`].
 #[derive(Clone, Debug)]
 pub struct AccurateEquilibrium {

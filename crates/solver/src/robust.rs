@@ -3,6 +3,9 @@
 //! stiffness ratio `D1/D0` from a mild contrast where the direct solve is easy (a homotopy,
 //! Allgower & Georg 2003, ch. 1), and say what was done.
 //!
+//! It is one file because the fallbacks are tried in one order by one routine and share its
+//! budget, its record of what was tried and the branch check along each path.
+//!
 //! The branch is identified from the periods of `κ_g` ([`crate::identify`]) at the mild
 //! contrast and again at the end of the path: every returned state passes
 //! [`crate::verify::verify_state`] for the requested branch, and a state whose count changed

@@ -1,6 +1,9 @@
 //! Jacobi elliptic functions `sn`, `cn`, `dn` and the amplitude `am`,
 //! parameterised by the modulus `k` (not by `m = k²`).
 //!
+//! It is one file because the descending Landen transformation, its double-double quarter
+//! period and the argument reduction share the `Landen` state; a tenth of it is unit tests.
+//!
 //! # Algorithm
 //!
 //! For `0 < k < 1` the values are computed with the descending Landen

@@ -1,6 +1,9 @@
 //! The enclosed diagram of a non-uniform rod (two-segment stiffness, Eq. (51); paper Sec. 3.2
 //! with the rods of Sec. 5).
 //!
+//! It is one file because the route below is one pipeline whose steps consume each other's
+//! records (surface sheets, events, lifted-off sheets, exchanges).
+//!
 //! # Route
 //!
 //! * **Surface families first.** [`compute_families`] traces every family of each branch on

@@ -1,6 +1,9 @@
 //! Sampling of the enclosed diagram's branches: attached samples from the exact layer (index
 //! from the 3-D model), lift-off/landing events, lifted-off parts traced by natural-parameter
 //! steps at three resolutions (see the parent module's docs).
+//!
+//! It is one file because the attached samples, the events and the lifted-off traces share the
+//! resolution levels and step options defined here.
 
 #![allow(clippy::needless_range_loop)]
 

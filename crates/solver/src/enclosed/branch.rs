@@ -8,6 +8,7 @@ use super::solve::{
     solve_by_pull_homotopy, solve_enclosed, start_from_curvature, start_from_surface,
     transfer_multipliers, EnclosedOptions, EnclosedState,
 };
+pub use crate::accuracy::three_level_estimate;
 use crate::solve::Equilibrium;
 use crate::stiffness::Stiffness;
 use crate::SolverError;
@@ -363,26 +364,6 @@ pub fn four_level_estimate(e: [f64; 4], max_order: f64) -> (f64, f64) {
         .clamp(1.0, max_order);
     let q = 2f64.powf(order);
     ((d[2] / (q - 1.0)).max(d[1] / ((q - 1.0) * q)), order)
-}
-
-/// Error estimate of the finest of three energies at `N/4, N/2, N` cells:
-/// `|E_N − E_{N/2}|/(2^p − 1)` with the order `p = log2(|E_{N/2} − E_{N/4}|/|E_N − E_{N/2}|)`
-/// observed over the three levels, clamped to `[1, max_order]`. Use `max_order = 4` for a
-/// fully attached state (fourth order, measured against the exact layer) and
-/// [`LIFTED_OFF_MAX_ORDER`] for a lifted-off one. Returns `(estimate, p)`.
-pub fn three_level_estimate(
-    e_quarter: f64,
-    e_half: f64,
-    e_full: f64,
-    max_order: f64,
-) -> (f64, f64) {
-    let (d1, d2) = ((e_half - e_quarter).abs(), (e_full - e_half).abs());
-    let order = if d2 > 0.0 && d1 > 0.0 {
-        (d1 / d2).log2().clamp(1.0, max_order)
-    } else {
-        max_order
-    };
-    (d2 / (2f64.powf(order) - 1.0), order)
 }
 
 /// Largest order trusted by [`three_level_estimate`] on a lifted-off state. The contact

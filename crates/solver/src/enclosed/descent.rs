@@ -4,6 +4,10 @@
 //! the equilibrium that the unstable direction leads to (the enclosed diagram uses it
 //! where its lowest traced state is unstable, so that a lower state must exist).
 //!
+//! It is one file because every route to the lowest state of an enclosed branch (descent from a
+//! saddle, homotopy starts in the stiffness) ends in `solve_branch_lowest`, which compares them
+//! with one period count.
+//!
 //! [`EnclosedSaddle`] is the enclosed model's side of the one descent routine
 //! ([`crate::descend::descend`]): the same unstable directions and Newton solves, with the
 //! branch of a state read from the periods of its curvature ([`enclosed_periods`]).

@@ -1,6 +1,9 @@
 //! The semismooth Newton step of the enclosed model in `O(N)`: a block-tridiagonal
 //! ("lifted") form of the Jacobian of [`EnclosedModel`], with a small dense border.
 //!
+//! It is one file because the lifted form, its block factorisation and the border solve share
+//! the two chains and the block layout described below.
+//!
 //! # Why the dense matrix is not needed
 //!
 //! The Bishop-frame chain `P_{c+1} = P_c E_c(κ_c)` makes every node depend on every earlier

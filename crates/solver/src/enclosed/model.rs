@@ -1,6 +1,10 @@
 //! The discretised enclosed loop ([`EnclosedModel`]): energy, closure, wall constraints and
 //! the semismooth KKT system with its exact Jacobian.
 //!
+//! It is one file because the energy, the closure, the wall constraints and the exact Jacobian
+//! all index the one layout of unknowns described below; split, that layout would be spread
+//! over several files.
+//!
 //! # Unknowns
 //!
 //! `N` cells (the mesh of [`crate::MeshMap::for_profile`]); in every cell the curvature
