@@ -180,8 +180,9 @@ impl EnclosedState {
         let lam = self.multipliers();
         let mut f = [0.0; 3];
         for (j, r) in pos.iter().enumerate() {
+            let grad = m.wall().gradient(r);
             for k in 0..3 {
-                f[k] += 2.0 * lam[j] * r[k];
+                f[k] -= lam[j] * grad[k];
             }
         }
         let r = m.radius();
