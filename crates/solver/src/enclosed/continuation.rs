@@ -40,8 +40,7 @@ impl EnclosedState {
             ));
         }
         let pin = m.gauge().pin;
-        let model = EnclosedModel::new(
-            m.radius(),
+        let model = m.rebuilt(
             lbar,
             n,
             &stiffness,
@@ -130,8 +129,7 @@ impl EnclosedState {
         } else {
             None
         };
-        let model = EnclosedModel::new(
-            m.radius(),
+        let model = m.rebuilt(
             lbar,
             n,
             &m.stiffness().kind().clone(),

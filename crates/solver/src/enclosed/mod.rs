@@ -45,7 +45,7 @@ pub use branch::{
 pub use from_shape::{start_from_shape, SavedShape};
 pub use model::{EnclosedModel, Gauge};
 pub use seam::EnclosedFactor;
-pub use wall::{SphereWall, Wall};
 pub use solve::{
     free_circle, solve_enclosed, start_from_surface, Contact, EnclosedOptions, EnclosedState,
 };
+pub use wall::{SphereWall, Wall};

@@ -20,7 +20,8 @@
 //! chain `P_{c+1} = P_c exp(Θ_c)` ([`super::jet`]), `r_j = r0 + p_j`. Closure of position
 //! and frame, `C = (vee(skew(X_N)), p_N) = 0`, of which the rotation about the tangent
 //! (row [`TWIST_ROW`]) is free: its row reads `μ_twist = 0` (no twisting moment). The wall
-//! `g_j = R² − |r_j|² ≥ 0` is imposed at the `N` nodes; its multipliers `λ_j ≥ 0` are the
+//! `g_j = R² − |r_j|² ≥ 0` (the sphere's gap; the model reads `g`, `∇g` and `∇²g` from its
+//! [`Wall`]) is imposed at the `N` nodes; its multipliers `λ_j ≥ 0` are the
 //! nodal contact impulses (the force per unit length is `λ(s_j) ≈ 2Rλ_j/w_j`, `w_j` the
 //! node's share of the length; Sec. 3.2 with Eq. (38)'s sign: `λ > 0` pushes inward).
 //! Energy, Eq. (2) with two-point Gauss quadrature, `E = Σ_c (h_c/2) Σ_g ½ D_g |κ_g|²`.
@@ -180,6 +181,18 @@ impl EnclosedModel {
             .map(|g| m.stiffness.eval(m.gauss_sigma(g)).d)
             .collect();
         Ok(m)
+    }
+
+    /// A model of the same wall with another length, mesh, stiffness or gauge ([`Self::new`]
+    /// then [`Self::with_wall`]).
+    pub fn rebuilt(
+        &self,
+        lbar: f64,
+        cells: usize,
+        stiffness: &Stiffness,
+        gauge: Gauge,
+    ) -> Result<Self, SolverError> {
+        Self::new(self.radius, lbar, cells, stiffness, gauge)?.with_wall(self.wall.clone())
     }
 
     /// Normalised arclength `σ = s/L` of Gauss point `g` (`0..2N`).

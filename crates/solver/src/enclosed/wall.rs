@@ -80,9 +80,7 @@ pub trait Wall: Debug + Send + Sync {
         dw_xi
             .fixed_view_mut::<3, 3>(0, 0)
             .copy_from(&(hg * hp - hp * hhp));
-        dw_xi
-            .fixed_view_mut::<3, 3>(0, 3)
-            .copy_from(&(hp * h - hg));
+        dw_xi.fixed_view_mut::<3, 3>(0, 3).copy_from(&(hp * h - hg));
         dw_xi.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-hhp));
         dw_xi.fixed_view_mut::<3, 3>(3, 3).copy_from(&h);
         dw_r0.fixed_view_mut::<3, 3>(0, 0).copy_from(&(hp * h));
@@ -249,7 +247,11 @@ mod tests {
                 let mut e = V3::zeros();
                 e[k] = h;
                 let fd = (w.gap(&(r + e)) - w.gap(&(r - e))) / (2.0 * h);
-                assert!((fd - g[k]).abs() <= 1e-8 * radius, "∂g/∂r{k}: {fd} vs {}", g[k]);
+                assert!(
+                    (fd - g[k]).abs() <= 1e-8 * radius,
+                    "∂g/∂r{k}: {fd} vs {}",
+                    g[k]
+                );
                 let fd2 = (w.gradient(&(r + e)) - w.gradient(&(r - e))) / (2.0 * h);
                 for l in 0..3 {
                     assert!((fd2[l] - hess[(l, k)]).abs() <= 1e-8, "∂²g/∂r{l}∂r{k}");
@@ -274,8 +276,16 @@ mod tests {
             let close = |x: f64, y: f64| (x - y).abs() <= 1e-13 * (1.0 + x.abs());
             assert!((a.gradient - b.gradient).norm() <= 1e-14 * radius);
             assert!(a.w.iter().zip(&b.w).all(|(x, y)| close(*x, *y)));
-            assert!(a.dw_xi.iter().zip(b.dw_xi.iter()).all(|(x, y)| close(*x, *y)));
-            assert!(a.dw_r0.iter().zip(b.dw_r0.iter()).all(|(x, y)| close(*x, *y)));
+            assert!(a
+                .dw_xi
+                .iter()
+                .zip(b.dw_xi.iter())
+                .all(|(x, y)| close(*x, *y)));
+            assert!(a
+                .dw_r0
+                .iter()
+                .zip(b.dw_r0.iter())
+                .all(|(x, y)| close(*x, *y)));
             assert!(a
                 .dgrad_xi
                 .iter()
