@@ -370,7 +370,7 @@ pub fn verify_enclosed(
     }
     let outside = pts
         .iter()
-        .map(|p| ((p.r[0] * p.r[0] + p.r[1] * p.r[1] + p.r[2] * p.r[2]).sqrt() - r) / r)
+        .map(|p| -m.wall().clearance(&nalgebra::Vector3::from(p.r)) / r)
         .fold(f64::NEG_INFINITY, f64::max);
     if outside > POSITION_SLACK {
         return fail(format!(

@@ -40,8 +40,7 @@ impl EnclosedState {
             ));
         }
         let pin = m.gauge().pin;
-        let model = EnclosedModel::new(
-            m.radius(),
+        let model = m.rebuilt(
             lbar,
             n,
             &stiffness,
@@ -130,8 +129,7 @@ impl EnclosedState {
         } else {
             None
         };
-        let model = EnclosedModel::new(
-            m.radius(),
+        let model = m.rebuilt(
             lbar,
             n,
             &m.stiffness().kind().clone(),
@@ -180,8 +178,9 @@ impl EnclosedState {
         let lam = self.multipliers();
         let mut f = [0.0; 3];
         for (j, r) in pos.iter().enumerate() {
+            let grad = m.wall().gradient(r);
             for k in 0..3 {
-                f[k] += 2.0 * lam[j] * r[k];
+                f[k] -= lam[j] * grad[k];
             }
         }
         let r = m.radius();

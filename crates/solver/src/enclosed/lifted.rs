@@ -637,11 +637,9 @@ impl EnclosedModel {
         let r: Vec<V3> = p.iter().map(|pj| r0 + pj).collect();
         let lam = &z[lo..lo + n];
         let sigma = self.wall_scale();
-        let radius = self.radius();
+        let wall = self.wall();
         let active: Vec<bool> = (0..n)
-            .map(|j| {
-                sigma * (radius * radius - r[j].norm_squared()) <= lam[j] + self.pull_impulse(j)
-            })
+            .map(|j| sigma * wall.gap(&r[j]) <= lam[j] + self.pull_impulse(j))
             .collect();
         let mu = self.closure_multipliers(z);
         let kmu = Self::closure_functional(&mu);
@@ -699,54 +697,39 @@ impl EnclosedModel {
             }
             if c + 1 < n {
                 let j = c + 1;
-                let (pj, rj, lj) = (p[j], r[j], lam[j]);
-                let u = {
-                    let w = pj.cross(&rj);
-                    [w[0], w[1], w[2], rj[0], rj[1], rj[2]]
-                };
-                // ∂u/∂ξ (6×6) and ∂u/∂r0 (6×3).
-                let hr0 = hat3(&r0);
-                let hp = hat3(&pj);
-                let mut du_xi = SMatrix::<f64, 6, 6>::zeros();
-                let mut du_r0 = SMatrix::<f64, 6, 3>::zeros();
-                du_xi.fixed_view_mut::<3, 3>(0, 0).copy_from(&(hr0 * hp));
-                du_xi.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-hr0));
-                du_xi.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-hp));
-                du_xi
-                    .fixed_view_mut::<3, 3>(3, 3)
-                    .copy_from(&M3::identity());
-                du_r0.fixed_view_mut::<3, 3>(0, 0).copy_from(&hp);
-                du_r0
-                    .fixed_view_mut::<3, 3>(3, 0)
-                    .copy_from(&M3::identity());
+                let lj = lam[j];
+                // The wall at node j: `∇g` paired with se(3), `w = −2u` on the sphere, and
+                // its derivatives in ξ and r0.
+                let wp = wall.node_pairing(&r0, &p[j]);
+                let (u, gj) = (wp.w, wp.gradient);
                 for k in 0..6 {
-                    d[(M0 + k, L0)] = -2.0 * u[k];
+                    d[(M0 + k, L0)] = u[k];
                     for l in 0..6 {
-                        d[(M0 + k, X0 + l)] = -2.0 * lj * du_xi[(k, l)];
+                        d[(M0 + k, X0 + l)] = lj * wp.dw_xi[(k, l)];
                     }
                     for l in 0..3 {
-                        sys.bcol[c][(M0 + k, gr0 + l)] = -2.0 * lj * du_r0[(k, l)];
+                        sys.bcol[c][(M0 + k, gr0 + l)] = lj * wp.dw_r0[(k, l)];
                     }
                 }
                 // Wall row of node j.
                 rhs.blocks[c][L0] = -f[lo + j];
                 if active[j] {
                     for k in 0..6 {
-                        d[(L0, X0 + k)] = -2.0 * sigma * u[k];
+                        d[(L0, X0 + k)] = sigma * u[k];
                     }
                     for l in 0..3 {
-                        sys.bcol[c][(L0, gr0 + l)] = -2.0 * sigma * rj[l];
+                        sys.bcol[c][(L0, gr0 + l)] = sigma * gj[l];
                     }
                 } else {
                     d[(L0, L0)] = 1.0;
                 }
-                // r0 stationarity: Σ_j 2δλ_j r_j + 2λ_j (δr0 + δp_j), δp_j = −hat(p_j)ω + v.
+                // r0 stationarity: −Σ_j δλ_j ∇g_j + λ_j ∇²g_j (δr0 + δp_j), δp_j = −hat(p_j)ω + v.
                 for k in 0..3 {
-                    sys.brow[c][(gr0 + k, L0)] = 2.0 * rj[k];
+                    sys.brow[c][(gr0 + k, L0)] = -gj[k];
                     for l in 0..3 {
-                        sys.brow[c][(gr0 + k, X0 + l)] = -2.0 * lj * hp[(k, l)];
+                        sys.brow[c][(gr0 + k, X0 + l)] = -lj * wp.dgrad_xi[(k, l)];
+                        sys.brow[c][(gr0 + k, X0 + 3 + l)] += -lj * wp.dgrad_xi[(k, 3 + l)];
                     }
-                    sys.brow[c][(gr0 + k, X0 + 3 + k)] = 2.0 * lj;
                 }
             } else {
                 // δm_{N−1} = −hat(ξ_N)P_N K(μ) − P_N K(δμ), paired with se(3).
@@ -781,10 +764,16 @@ impl EnclosedModel {
             }
         }
         // Corner: r0 stationarity, closure (none), gauges, wall row of node 0.
-        let lam_sum: f64 = lam.iter().sum();
+        let mut hess_sum = M3::zeros();
+        for j in (0..n).filter(|&j| lam[j] != 0.0) {
+            hess_sum -= wall.hessian(&r[j]) * lam[j];
+        }
+        let g0 = wall.gradient(&r0);
         for k in 0..3 {
-            sys.corner[(gr0 + k, gr0 + k)] = 2.0 * lam_sum;
-            sys.corner[(gr0 + k, gl0)] = 2.0 * r0[k];
+            for l in 0..3 {
+                sys.corner[(gr0 + k, gr0 + l)] += hess_sum[(k, l)];
+            }
+            sys.corner[(gr0 + k, gl0)] = -g0[k];
             rhs.border[gr0 + k] = -f[4 * n + k];
         }
         for k in 0..6 {
@@ -807,7 +796,7 @@ impl EnclosedModel {
         }
         if active[0] {
             for l in 0..3 {
-                sys.corner[(gl0, gr0 + l)] = -2.0 * sigma * r0[l];
+                sys.corner[(gl0, gr0 + l)] = sigma * g0[l];
             }
         } else {
             sys.corner[(gl0, gl0)] = 1.0;

@@ -12,6 +12,7 @@
 //!
 //! * [`jet`]: second-order jets and the SE(3) cell propagator.
 //! * [`model`]: [`EnclosedModel`] (energy, closure, wall, KKT residual and exact Jacobian).
+//! * [`wall`]: the confining wall `g(r) ≥ 0` with its derivatives ([`SphereWall`]).
 //! * [`lifted`]: the Newton step in `O(N)` from a block-tridiagonal form of that Jacobian.
 //! * [`solve`](mod@solve): semismooth Newton, starts (surface loop, free circle), contact
 //!   summary, the spectrum on the active constraints' tangent space.
@@ -34,6 +35,7 @@ pub mod lifted;
 pub mod model;
 pub mod seam;
 pub mod solve;
+pub mod wall;
 
 pub use branch::{
     detached_intervals, enclosed_cells, enclosed_solve_cells, four_level_estimate,
@@ -46,3 +48,4 @@ pub use seam::EnclosedFactor;
 pub use solve::{
     free_circle, solve_enclosed, start_from_surface, Contact, EnclosedOptions, EnclosedState,
 };
+pub use wall::{SphereWall, Wall};

@@ -24,7 +24,8 @@
 //! chain `P_{c+1} = P_c exp(Θ_c)` ([`super::jet`]), `r_j = r0 + p_j`. Closure of position
 //! and frame, `C = (vee(skew(X_N)), p_N) = 0`, of which the rotation about the tangent
 //! (row [`TWIST_ROW`]) is free: its row reads `μ_twist = 0` (no twisting moment). The wall
-//! `g_j = R² − |r_j|² ≥ 0` is imposed at the `N` nodes; its multipliers `λ_j ≥ 0` are the
+//! `g_j = R² − |r_j|² ≥ 0` (the sphere's gap; the model reads `g`, `∇g` and `∇²g` from its
+//! [`Wall`]) is imposed at the `N` nodes; its multipliers `λ_j ≥ 0` are the
 //! nodal contact impulses (the force per unit length is `λ(s_j) ≈ 2Rλ_j/w_j`, `w_j` the
 //! node's share of the length; Sec. 3.2 with Eq. (38)'s sign: `λ > 0` pushes inward).
 //! Energy, Eq. (2) with two-point Gauss quadrature, `E = Σ_c (h_c/2) Σ_g ½ D_g |κ_g|²`.
@@ -45,10 +46,12 @@
 #![allow(clippy::needless_range_loop)] // index arithmetic over cells, nodes and unknowns
 
 use std::f64::consts::PI;
+use std::sync::Arc;
 
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix4, Vector3};
 
 use super::jet::{cell_exp, cell_grad, cell_jet};
+use super::wall::{SphereWall, Wall};
 use crate::mesh::MeshMap;
 use crate::model::GAUSS_OFFSETS;
 use crate::periodic::TrigInterpolant;
@@ -82,6 +85,7 @@ pub struct Gauge {
 #[derive(Clone, Debug)]
 pub struct EnclosedModel {
     radius: f64,
+    wall: Arc<dyn Wall>,
     lbar: f64,
     cells: usize,
     stiffness: StiffnessProfile,
@@ -167,6 +171,7 @@ impl EnclosedModel {
         let bounds = map.bounds(cells)?;
         let mut m = Self {
             radius,
+            wall: Arc::new(SphereWall { radius }),
             lbar,
             cells,
             stiffness: profile,
@@ -180,6 +185,18 @@ impl EnclosedModel {
             .map(|g| m.stiffness.eval(m.gauss_sigma(g)).d)
             .collect();
         Ok(m)
+    }
+
+    /// A model of the same wall with another length, mesh, stiffness or gauge ([`Self::new`]
+    /// then [`Self::with_wall`]).
+    pub fn rebuilt(
+        &self,
+        lbar: f64,
+        cells: usize,
+        stiffness: &Stiffness,
+        gauge: Gauge,
+    ) -> Result<Self, SolverError> {
+        Self::new(self.radius, lbar, cells, stiffness, gauge)?.with_wall(self.wall.clone())
     }
 
     /// Normalised arclength `σ = s/L` of Gauss point `g` (`0..2N`).
@@ -203,9 +220,22 @@ impl EnclosedModel {
         self.cells
     }
 
-    /// Sphere radius.
+    /// Sphere radius (the wall's length scale, [`Wall::radius`]).
     pub fn radius(&self) -> f64 {
         self.radius
+    }
+
+    /// The confining wall (a [`SphereWall`] of [`Self::radius`] from [`Self::new`]).
+    pub fn wall(&self) -> &Arc<dyn Wall> {
+        &self.wall
+    }
+
+    /// The same model inside `wall` (its length scale becomes [`Self::radius`]).
+    pub fn with_wall(mut self, wall: Arc<dyn Wall>) -> Result<Self, SolverError> {
+        crate::model::check_loop_inputs(wall.radius(), self.lbar, self.cells, 8)?;
+        self.radius = wall.radius();
+        self.wall = wall;
+        Ok(self)
     }
 
     /// `L̄`.
@@ -358,12 +388,12 @@ impl EnclosedModel {
             .collect())
     }
 
-    /// Gaps `R − |r_j|` at the nodes.
+    /// Gaps `R − |r_j|` at the nodes (the wall's clearance, [`Wall::clearance`]).
     pub fn gaps(&self, z: &[f64]) -> Result<Vec<f64>, SolverError> {
         Ok(self
             .positions(z)?
             .iter()
-            .map(|r| self.radius - r.norm())
+            .map(|r| self.wall.clearance(r))
             .collect())
     }
 
@@ -377,10 +407,7 @@ impl EnclosedModel {
             .positions(z)?
             .iter()
             .enumerate()
-            .map(|(j, r)| {
-                sigma * (self.radius * self.radius - r.norm_squared())
-                    <= z[lo + j] + self.pull_impulse(j)
-            })
+            .map(|(j, r)| sigma * self.wall.gap(r) <= z[lo + j] + self.pull_impulse(j))
             .collect())
     }
 
@@ -565,8 +592,9 @@ impl EnclosedModel {
             let r = r0 + translation(&ch.prefix[j]);
             let lam = z[lo + j];
             let mut t = ch.e[j] * a[j];
+            let grad = self.wall.gradient(&r);
             for k in 0..3 {
-                t[(3, k)] += 2.0 * lam * r[k];
+                t[(3, k)] -= lam * grad[k];
             }
             a[c] = t;
         }
@@ -604,8 +632,8 @@ impl EnclosedModel {
         for j in 0..n {
             let r = r0 + translation(&ch.prefix[j]);
             let lam = z[lo + j];
-            fr += r * (2.0 * lam);
-            let g = self.radius * self.radius - r.norm_squared();
+            fr -= self.wall.gradient(&r) * lam;
+            let g = self.wall.gap(&r);
             f[lo + j] = (lam + self.pull_impulse(j)).min(sigma * g);
         }
         for k in 0..3 {
@@ -703,23 +731,37 @@ impl EnclosedModel {
                 }
             }
         }
-        // Gauss–Newton-like term Σ_j 2λ_j ∂p_j·∂p_j (nodes 1..N−1) and the κ–r0 block.
+        // The wall's curvature term −Σ_j λ_j ∂p_jᵀ ∇²g_j ∂p_j (nodes 1..N−1; the sphere's
+        // `2λ_j ∂p_j·∂p_j`), the κ–r0 block and the r0–r0 block `−Σ_j λ_j ∇²g_j`. Vanishing
+        // Hessian entries are skipped (the sphere's is diagonal).
         let mut scaled = DMatrix::<f64>::zeros(3 * (n - 1), nk);
         let mut kr = DMatrix::<f64>::zeros(nk, 3);
-        let mut lam_sum = 0.0;
+        let mut hess_sum = Matrix3::<f64>::zeros();
         for j in 0..n {
             let lam = z[lo + j];
-            lam_sum += lam;
-            if j == 0 || lam == 0.0 {
+            if lam == 0.0 {
+                continue;
+            }
+            let h = self.wall.hessian(&pos[j]);
+            hess_sum -= h * lam;
+            if j == 0 {
                 continue;
             }
             for k in 0..3 {
-                let row = jp.row(3 * (j - 1) + k);
-                scaled
-                    .row_mut(3 * (j - 1) + k)
-                    .copy_from(&(row * (2.0 * lam)));
+                let out = 3 * (j - 1) + k;
+                let mut first = true;
+                for l in (0..3).filter(|&l| h[(k, l)] != 0.0) {
+                    let row = jp.row(3 * (j - 1) + l) * (-lam * h[(k, l)]);
+                    if first {
+                        scaled.row_mut(out).copy_from(&row);
+                    } else {
+                        let mut dst = scaled.row_mut(out);
+                        dst += &row;
+                    }
+                    first = false;
+                }
                 for a in 0..nk {
-                    kr[(a, k)] += 2.0 * lam * row[a];
+                    kr[(a, k)] += scaled[(out, a)];
                 }
             }
         }
@@ -736,7 +778,9 @@ impl EnclosedModel {
             }
         }
         for k in 0..3 {
-            jac[(nk + k, nk + k)] += 2.0 * lam_sum;
+            for l in 0..3 {
+                jac[(nk + k, nk + l)] += hess_sum[(k, l)];
+            }
         }
         // Closure columns/rows: ∂F_x/∂μ = −∇Cᵀ, F_μ = −C.
         for a in 0..nk {
@@ -773,20 +817,21 @@ impl EnclosedModel {
         for j in 0..n {
             let r = pos[j];
             let lam = z[lo + j];
-            let g = self.radius * self.radius - r.norm_squared();
-            // ∇g_j: κ part −2 r·∂p_j (j ≥ 1), r0 part −2r.
+            let g = self.wall.gap(&r);
+            // ∇g_j: κ part ∇g·∂p_j (j ≥ 1), r0 part ∇g (the sphere's −2r).
+            let gr = self.wall.gradient(&r);
             let mut grad = vec![0.0; np];
             if j >= 1 {
                 for a in 0..nk {
                     let mut s = 0.0;
                     for k in 0..3 {
-                        s += r[k] * jp[(3 * (j - 1) + k, a)];
+                        s += gr[k] * jp[(3 * (j - 1) + k, a)];
                     }
-                    grad[a] = -2.0 * s;
+                    grad[a] = s;
                 }
             }
             for k in 0..3 {
-                grad[nk + k] = -2.0 * r[k];
+                grad[nk + k] = gr[k];
             }
             for a in 0..np {
                 jac[(a, lo + j)] = -grad[a];

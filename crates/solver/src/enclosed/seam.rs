@@ -148,14 +148,8 @@ impl Confinement for EnclosedModel {
             Param::Lbar => (value, self.stiffness().kind().clone()),
             _ => (self.lbar(), self.stiffness().kind().with_param(p, value)?),
         };
-        EnclosedModel::new(
-            self.radius(),
-            lbar,
-            self.cells(),
-            &stiffness,
-            self.gauge().clone(),
-        )?
-        .with_pull(self.pull())
+        self.rebuilt(lbar, self.cells(), &stiffness, self.gauge().clone())?
+            .with_pull(self.pull())
     }
     /// Central difference of the residual in the parameter (see the module docs).
     fn dparam(&self, z: &[f64], p: Param) -> Result<DVector<f64>, SolverError> {

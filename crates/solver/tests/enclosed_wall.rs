@@ -1,0 +1,136 @@
+//! The enclosed model inside a wall other than the sphere: the KKT Jacobian and the lifted
+//! Newton step read `g`, `∇g` and `∇²g` from the model's [`Wall`] only. A quadric wall
+//! `g = R² − rᵀAr` with a full symmetric `A` (`∇g = −2Ar`, `∇²g = −2A`, off-diagonal
+//! Hessian entries) checks the general terms the sphere's `−2I` leaves out.
+
+use std::sync::Arc;
+
+use nalgebra::{Matrix3, Vector3};
+use rodloop_exact::paper_branch_loop;
+use rodloop_solver::enclosed::{start_from_surface, EnclosedModel, Wall};
+use rodloop_solver::Stiffness;
+
+/// `g = R² − rᵀAr` (`A` symmetric positive definite).
+#[derive(Debug)]
+struct Quadric {
+    radius: f64,
+    a: Matrix3<f64>,
+}
+
+impl Wall for Quadric {
+    fn radius(&self) -> f64 {
+        self.radius
+    }
+    fn gap(&self, r: &Vector3<f64>) -> f64 {
+        self.radius * self.radius - r.dot(&(self.a * r))
+    }
+    fn gradient(&self, r: &Vector3<f64>) -> Vector3<f64> {
+        self.a * r * -2.0
+    }
+    fn hessian(&self, _r: &Vector3<f64>) -> Matrix3<f64> {
+        self.a * -2.0
+    }
+    fn clearance(&self, r: &Vector3<f64>) -> f64 {
+        self.gap(r) / self.gradient(r).norm().max(self.radius)
+    }
+}
+
+fn quadric() -> Arc<dyn Wall> {
+    Arc::new(Quadric {
+        radius: 1.0,
+        a: Matrix3::new(1.10, 0.07, -0.04, 0.07, 0.92, 0.05, -0.04, 0.05, 1.01),
+    })
+}
+
+/// A perturbed state of branch 1 at `L̄ = 1.5` inside the quadric, with mixed contact rows.
+fn state(cells: usize, stiff: &Stiffness) -> (EnclosedModel, Vec<f64>) {
+    let l = paper_branch_loop(1, 1.5).unwrap();
+    let (m, mut z) = start_from_surface(1.0, 1.5, cells, stiff, |s| {
+        l.point(s * l.length()).unwrap().kappa_g
+    })
+    .unwrap();
+    let m = m.with_wall(quadric()).unwrap();
+    for (i, v) in z.iter_mut().enumerate() {
+        *v += 0.01 * ((i as f64 * 1.7).sin());
+    }
+    let lo = m.lambda_offset();
+    for j in 0..m.cells() {
+        z[lo + j] = if j % 3 == 0 {
+            -0.05
+        } else {
+            0.3 + 0.01 * j as f64
+        };
+    }
+    (m, z)
+}
+
+fn stiffnesses() -> [Stiffness; 2] {
+    [
+        Stiffness::uniform(1.0),
+        Stiffness::Tanh {
+            d0: 1.0,
+            d1: 0.5,
+            s0: 0.3,
+            s1: 0.8,
+            gamma: 10.0,
+        },
+    ]
+}
+
+/// The semismooth Jacobian inside the quadric against central differences of the residual.
+#[test]
+fn jacobian_inside_a_quadric_matches_finite_differences() {
+    for stiff in stiffnesses() {
+        let (m, z) = state(10, &stiff);
+        let active = m.wall_active(&z).unwrap();
+        assert!(active.iter().any(|&a| a) && active.iter().any(|&a| !a));
+        let ev = m.evaluate(&z).unwrap();
+        let eps = 1e-6;
+        let mut worst: f64 = 0.0;
+        for k in 0..m.dim() {
+            let mut zp = z.clone();
+            let mut zm = z.clone();
+            zp[k] += eps;
+            zm[k] -= eps;
+            let fd = (m.residual(&zp).unwrap() - m.residual(&zm).unwrap()) / (2.0 * eps);
+            for i in 0..m.dim() {
+                let scale = 1.0 + ev.jacobian[(i, k)].abs();
+                worst = worst.max((fd[i] - ev.jacobian[(i, k)]).abs() / scale);
+            }
+        }
+        assert!(worst < 1e-6, "{stiff:?}: worst FD mismatch {worst:e}");
+    }
+}
+
+/// The lifted `O(N)` step inside the quadric (the general node pairing of
+/// `Wall::node_pairing`) is the dense semismooth Newton step.
+#[test]
+fn lifted_step_inside_a_quadric_equals_dense_step() {
+    for (stiff, cells) in stiffnesses().into_iter().zip([12, 20]) {
+        let (m, z) = state(cells, &stiff);
+        let ev = m.evaluate(&z).unwrap();
+        let dense = ev.jacobian.clone().lu().solve(&(-&ev.residual)).unwrap();
+        let (f, step) = m.newton_step(&z).unwrap();
+        assert!((&f - &ev.residual).amax() < 1e-13 * (1.0 + f.amax()));
+        let err = (&step - &dense).amax() / dense.amax();
+        assert!(err < 1e-9, "cells {cells}: lifted vs dense step {err:e}");
+    }
+}
+
+/// The quadric changes the residual (the wall rows and the wall force read it), and a model
+/// rebuilt at another length keeps the wall.
+#[test]
+fn the_wall_enters_the_residual_and_survives_a_rebuild() {
+    let stiff = Stiffness::uniform(1.0);
+    let (m, z) = state(12, &stiff);
+    let sphere = EnclosedModel::new(1.0, 1.5, 12, &stiff, m.gauge().clone()).unwrap();
+    let diff = (m.residual(&z).unwrap() - sphere.residual(&z).unwrap()).amax();
+    assert!(
+        diff > 1e-3,
+        "the quadric's residual equals the sphere's ({diff:e})"
+    );
+    let again = m.rebuilt(1.6, 12, &stiff, m.gauge().clone()).unwrap();
+    let r = Vector3::new(0.3, -0.2, 0.9);
+    assert_eq!(again.wall().gap(&r), m.wall().gap(&r));
+    assert_ne!(again.wall().gap(&r), sphere.wall().gap(&r));
+}
