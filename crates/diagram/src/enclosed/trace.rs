@@ -413,7 +413,7 @@ pub(super) fn follow(
                         out.push(at);
                         continue;
                     }
-                    Err(last) => cur = last,
+                    Err(last) => cur = *last,
                 }
                 if (cur.lbar - out.last().expect("seed").lbar).abs() > 1e-12 {
                     out.push(cur.clone());
@@ -461,7 +461,7 @@ fn creep(
     x: f64,
     settings: &NaturalSettings,
     sopts: &EnclosedOptions,
-) -> Result<Levels, Levels> {
+) -> Result<Levels, Box<Levels>> {
     for _ in 0..CREEPS {
         let first = settings.max_halvings as i32 + 1;
         let short = (first..first + CREEP_HALVINGS).find_map(|k| {
@@ -469,7 +469,7 @@ fn creep(
             step(&cur, prev.as_ref(), to, settings.max_halvings, sopts).ok()
         });
         let Some(next) = short else {
-            return Err(cur);
+            return Err(Box::new(cur));
         };
         let resumed = walk(
             next.clone(),
@@ -487,7 +487,7 @@ fn creep(
             }
         }
     }
-    Err(cur)
+    Err(Box::new(cur))
 }
 
 /// One step of [`follow`] from `cur` to `to`: from the secant predictor through `prev`
