@@ -114,7 +114,8 @@ where
 /// The labeller's view ([`rodloop_continuation::exchange`]) of the sampled state `p` of
 /// sheet `k` and of the other sheets at its length (energies interpolated linearly, with
 /// their error plus `5·10⁻⁴` for the interpolation; index 0 where both neighbouring samples
-/// have it): `p` first. Inside the bracket of a located crossing the sheet its critical
+/// have it; within `CIRCLE` of a great circle, the end state of a sheet that ends there):
+/// `p` first. Inside the bracket of a located crossing the sheet its critical
 /// length names as lowest on `p`'s side is preferred in ties; elsewhere the least energy
 /// decides.
 fn ranked_at(
@@ -141,9 +142,28 @@ fn ranked_at(
         index: p.index,
         preferred: named == Some(k),
     }];
+    // Next to a great circle `L̄ = m`, where sheets begin or end, a sheet that ends within
+    // `CIRCLE` of `p` competes with its end state.
+    let at_circle = (p.lbar - p.lbar.round()).abs() < CIRCLE;
     for (j, s) in outs.iter().enumerate().filter(|(j, _)| *j != k) {
-        let Some(energy) = interp(s, p.lbar) else {
-            continue;
+        let end = || {
+            [s.points.first(), s.points.last()]
+                .into_iter()
+                .flatten()
+                .find(|u| at_circle && (u.lbar - p.lbar).abs() < CIRCLE)
+        };
+        let energy = match (interp(s, p.lbar), end()) {
+            (Some(e), _) => e,
+            (None, Some(u)) => {
+                states.push(Ranked {
+                    energy: u.energy,
+                    error: u.energy_error + ALLOWANCE,
+                    index: u.index,
+                    preferred: named == Some(j),
+                });
+                continue;
+            }
+            (None, None) => continue,
         };
         let q = &s.points;
         let i = q.partition_point(|u| u.lbar < p.lbar);

@@ -15,7 +15,7 @@
 use rodloop_solver::enclosed::descent::descend;
 use rodloop_solver::enclosed::{solve_levels, EnclosedOptions};
 
-use super::nonuniform_exchange::{interp, lowest_at};
+use super::nonuniform_exchange::{interp, lowest_near_circle};
 use super::nonuniform_sheet::SheetOut;
 use super::trace::step_options;
 use super::trace::{follow, Levels, TraceStop};
@@ -39,7 +39,9 @@ fn unstable_lowest(outs: &[SheetOut]) -> Vec<(usize, Vec<f64>)> {
             .points
             .iter()
             .filter(|p| {
-                p.index > 0 && p.source == PointSource::Model && lowest_at(outs, p.lbar) == Some(k)
+                p.index > 0
+                    && p.source == PointSource::Model
+                    && lowest_near_circle(outs, p.lbar) == Some(k)
             })
             .map(|p| p.lbar)
             .collect();

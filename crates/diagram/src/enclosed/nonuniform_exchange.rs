@@ -44,6 +44,29 @@ pub(super) fn lowest_at(sheets: &[SheetOut], lbar: f64) -> Option<usize> {
         .map(|(i, _)| i)
 }
 
+/// [`lowest_at`], where within [`CIRCLE`] of a great circle `L̄ = m` a sheet that begins or
+/// ends within `CIRCLE` of `lbar` competes with its end state (the sheets of branch
+/// `η = m + 1` begin `5·10⁻⁵` after the circle, so at `L̄ = m` itself only the sheets of the
+/// other branches are sampled).
+pub(super) fn lowest_near_circle(sheets: &[SheetOut], lbar: f64) -> Option<usize> {
+    let at_circle = (lbar - lbar.round()).abs() < CIRCLE;
+    sheets
+        .iter()
+        .enumerate()
+        .filter_map(|(i, s)| {
+            let end = || {
+                [s.points.first(), s.points.last()]
+                    .into_iter()
+                    .flatten()
+                    .find(|u| at_circle && (u.lbar - lbar).abs() < CIRCLE)
+                    .map(|u| u.energy)
+            };
+            interp(s, lbar).or_else(end).map(|e| (i, e))
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(i, _)| i)
+}
+
 /// Energy of sheet `s` at `x`: the 3-D model stepped from `track` where the sheet has
 /// lifted off near `x`, the surface state otherwise.
 pub(super) fn sheet_energy(

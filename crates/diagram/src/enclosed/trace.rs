@@ -395,7 +395,7 @@ pub(super) fn follow(
                 }
                 Err(stuck) => stuck,
             };
-            let cur = stuck.last;
+            let mut cur = stuck.last;
             // A level that left the traced state for a nearby one (on the uniform
             // figure-eight below L̄ ≈ 1.2, the finest level slips from the planar saddle to a
             // non-planar state of its mesh, holonomy ~0.1 rad at N = 64, whose discrete
@@ -410,6 +410,13 @@ pub(super) fn follow(
                 if let Ok(at) = cur.step_to(over, sopts).and_then(|j| j.step_to(x, sopts)) {
                     out.push(at);
                     continue;
+                }
+                match creep(cur, stuck.prev, x, &settings, sopts) {
+                    Ok(at) => {
+                        out.push(at);
+                        continue;
+                    }
+                    Err(last) => cur = *last,
                 }
                 if (cur.lbar - out.last().expect("seed").lbar).abs() > 1e-12 {
                     out.push(cur.clone());
@@ -435,6 +442,55 @@ pub(super) fn follow(
     down.reverse();
     down.extend(up);
     down
+}
+
+/// Restarts of a stuck walk in [`creep`].
+const CREEPS: usize = 3;
+
+/// Halvings beyond the walk's that [`creep`] tries for its short step.
+const CREEP_HALVINGS: i32 = 7;
+
+/// A stuck walk of [`follow`] resumed: a step of `2^-(k+1)` of the remaining way to `x`
+/// (`k` the walk's halvings, up to [`CREEP_HALVINGS`] more), then the walk again from the
+/// state reached, with the secant predictor through the last two states and the full step
+/// and halving budget, at most [`CREEPS`] times. A natural-parameter walk keeps the step it
+/// halved to, and its first step from a seed has no predictor: on the two-segment
+/// figure-eight lifted `0.55 R` off the wall at `L̄ = 1.42`, the plain step fails down to
+/// `ΔL̄ = 2.5·10⁻³` and succeeds at `1.25·10⁻³`, after which the predicted steps reach
+/// `L̄ = 1.34` in one walk. Returns the state at `x`, or the last state reached.
+fn creep(
+    mut cur: Levels,
+    mut prev: Option<Levels>,
+    x: f64,
+    settings: &NaturalSettings,
+    sopts: &EnclosedOptions,
+) -> Result<Levels, Box<Levels>> {
+    for _ in 0..CREEPS {
+        let first = settings.max_halvings as i32 + 1;
+        let short = (first..first + CREEP_HALVINGS).find_map(|k| {
+            let to = cur.lbar + (x - cur.lbar) * 0.5f64.powi(k);
+            step(&cur, prev.as_ref(), to, settings.max_halvings, sopts).ok()
+        });
+        let Some(next) = short else {
+            return Err(Box::new(cur));
+        };
+        let resumed = walk(
+            next.clone(),
+            Some(cur),
+            x,
+            |l: &Levels| l.lbar,
+            settings,
+            |c, p, to, h| step(c, p, to, h, sopts),
+        );
+        match resumed {
+            Ok(w) => return Ok(w.last),
+            Err(stuck) => {
+                cur = stuck.last;
+                prev = stuck.prev;
+            }
+        }
+    }
+    Err(Box::new(cur))
 }
 
 /// One step of [`follow`] from `cur` to `to`: from the secant predictor through `prev`
