@@ -433,9 +433,8 @@ pub fn verify_enclosed(
     }) {
         return fail("the profile has a value that is not finite".into());
     }
-    let excess = |p: &EnclosedPoint| {
-        ((p.r[0] * p.r[0] + p.r[1] * p.r[1] + p.r[2] * p.r[2]).sqrt() - r) / r
-    };
+    let excess =
+        |p: &EnclosedPoint| ((p.r[0] * p.r[0] + p.r[1] * p.r[1] + p.r[2] * p.r[2]).sqrt() - r) / r;
     let outside = pts
         .iter()
         .filter(|p| p.node)
@@ -652,7 +651,11 @@ mod tests {
         assert_eq!(pts.len(), 3 * st.model.cells());
         assert!(pts.windows(2).all(|w| w[1].s > w[0].s));
         let weighted = weighted_energy(&pts, 1.0, 1.0);
-        assert!((weighted - b.energy).abs() < 1e-12 * b.energy, "{weighted} {}", b.energy);
+        assert!(
+            (weighted - b.energy).abs() < 1e-12 * b.energy,
+            "{weighted} {}",
+            b.energy
+        );
         let nodes: Vec<_> = pts.iter().filter(|p| p.node).collect();
         let s: Vec<f64> = nodes.iter().map(|p| p.s).collect();
         let dens: Vec<f64> = nodes
@@ -664,7 +667,11 @@ mod tests {
             "weighted {weighted:.12} trapezoid-of-nodes {trap:.12} energy {:.12} +- {:.2e}",
             b.energy, b.energy_error
         );
-        assert!((trap - b.energy).abs() > b.energy_error, "{trap} {}", b.energy);
+        assert!(
+            (trap - b.energy).abs() > b.energy_error,
+            "{trap} {}",
+            b.energy
+        );
         let claim = Claim {
             energy: b.energy,
             energy_error: b.energy_error,
