@@ -140,7 +140,8 @@ pub fn verify_written(
             let tolerance = claim.energy_error
                 + (fine - coarse).abs()
                 + rodloop_solver::verify::ENERGY_RELATIVE_SLACK * claim.energy.abs().max(1.0);
-            if !((fine - claim.energy).abs() <= tolerance) {
+            let gap = (fine - claim.energy).abs();
+            if gap.is_nan() || gap > tolerance {
                 return Err(DiagramError::Passed(Box::new(
                     rodloop_solver::SolverError::Unverified(format!(
                         "the energy recomputed from the written points of the exact surface \
