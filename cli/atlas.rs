@@ -338,7 +338,8 @@ pub fn enclosed_rows(
     let solved = crate::states::parallel_map(&jobs, |&(branch, j, p)| {
         let one = || -> Result<(LoopData, String)> {
             let res = crate::enclosed::solve_state(scene, &stiffness, p.lbar, branch, accuracy)?;
-            let table = crate::enclosed::config_table(&res.state, scene)?;
+            let table =
+                crate::states::result_table(&res, scene.radius, scene.stiffness.reference())?;
             let bytes = table.to_bytes()?;
             let name = format!("states/branch-{branch}-{:02}.csv", j + 1);
             if let Some(dir) = states {

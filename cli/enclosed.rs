@@ -13,7 +13,7 @@ use rodloop_diagram::detached::{detachments, BranchDetachment};
 use rodloop_diagram::enclosed_state::{self, EnclosedResult, TOUCH};
 use rodloop_exact::{branch_of_eta, eta_of_branch};
 use rodloop_scene::Scene;
-use rodloop_solver::enclosed::{EnclosedState, SavedShape};
+use rodloop_solver::enclosed::SavedShape;
 use rodloop_solver::{Accuracy, Stiffness};
 
 use crate::output::{checked_json, Cell, OutputRun, Table};
@@ -124,40 +124,6 @@ fn read_shape(path: &Path, radius: f64) -> Result<SavedShape> {
     Ok(shape)
 }
 
-/// `config.csv` of an enclosed state: one row per node.
-pub(crate) fn config_table(st: &EnclosedState, scene: &Scene) -> Result<Table> {
-    config_table_in(st, scene.radius, scene.stiffness.reference())
-}
-
-/// [`config_table`] for a ball of radius `r` and reference stiffness `d0`.
-pub(crate) fn config_table_in(st: &EnclosedState, r: f64, d0: f64) -> Result<Table> {
-    let m = &st.model;
-    let lam = m.contact_force(&st.z);
-    let mut table = Table::new(
-        "config.csv",
-        &[
-            "s", "x", "y", "z", "gap", "kappa", "kappa_1", "kappa_2", "lambda", "D",
-        ],
-    );
-    for (j, (sigma, p)) in st.nodes()?.into_iter().enumerate() {
-        let (k1, k2) = st.node_curvature(j);
-        let d = m.stiffness().eval(sigma).d;
-        table.push(vec![
-            Cell::F(sigma * m.length() / r),
-            Cell::F(p[0] / r),
-            Cell::F(p[1] / r),
-            Cell::F(p[2] / r),
-            Cell::F((r - p.norm()) / r),
-            Cell::F((k1 * k1 + k2 * k2).sqrt() * r),
-            Cell::F(k1 * r),
-            Cell::F(k2 * r),
-            Cell::F(lam[j] * r * r * r / d0),
-            Cell::F(d / d0),
-        ])?;
-    }
-    Ok(table)
-}
-
 /// `rodloop solve` for an enclosed scene.
 pub fn run_solve(args: &crate::args::SolveArgs, scene: &Scene) -> Result<()> {
     let t0 = Instant::now();
@@ -198,8 +164,12 @@ pub fn run_solve(args: &crate::args::SolveArgs, scene: &Scene) -> Result<()> {
     let st = &res.state;
     let contact = st.contact(TOUCH)?;
     let (opt_lmin, opt_gmin, opt_comp, opt_stat) = st.optimality()?;
-    let table = config_table(st, scene)?;
     let eta = branch.map(|b| if b == 0 { 0 } else { eta_of_branch(b) });
+    // The state as its file holds it: at the solve's resolution (the surface loop where it is
+    // attached), verified before anything is written.
+    let table = crate::states::result_table(&res, scene.radius, scene.stiffness.reference())?;
+    let check = enclosed_state::verify_written(&res, eta.filter(|&e| e > 0))
+        .context("the state failed its verification; nothing was written")?;
     // Point group and self-intersections, from the table as `rodloop draw` reads it.
     let loop_data = rodloop_figures::data::LoopData::parse("config.csv", &table.to_bytes()?)?;
     let shape = rodloop_figures::loops::shape(&loop_data, Default::default());
@@ -237,6 +207,10 @@ pub fn run_solve(args: &crate::args::SolveArgs, scene: &Scene) -> Result<()> {
         "iterations": st.iterations,
         "residual": st.residual,
         "method": res.method,
+        "verification": serde_json::json!({
+            "energy_from_file": check.energy_from_file,
+            "energy_tolerance": check.energy_tolerance,
+        }),
         "units": UNITS,
     })?;
     if let Some(sh) = &shape {

@@ -144,19 +144,25 @@ pub fn enclosed_file_name(p: &rodloop_diagram::enclosed::EnclosedPoint, k: usize
     }
 }
 
-/// The enclosed `config.csv` table (columns of `solve` on an enclosed scene, units of `R`
-/// and `D0`) of a loop on the sphere of radius `r` given as `(s, x, y, z, κ_g, λ, D)` rows
-/// in the model's units: the surface loop is the enclosed state where it is attached, with
-/// curvature vector `(κ1, κ2) = (κ_g, −1/R)` in the Darboux frame (rotation-minimising on
-/// the sphere, as in the 3-D model's start from a surface loop).
-fn sphere_table(rows: &[[f64; 7]], r: f64, d0: f64) -> Result<crate::output::Table> {
+/// The columns of an enclosed state file: every row a point of the loop in increasing `s`;
+/// `node` is 1 at a node of the 3-D model (or at every sample of a surface loop) and 0 at a
+/// Gauss point; `weight` is the point's quadrature weight in units of `R`, so that
+/// `E R/(π D0) = (1/π) Σ weight · ½ D κ²` is the reported state's energy by the rule that
+/// computed it (two-point Gauss per cell for the 3-D model, the periodic trapezoid for the
+/// uniform samples of a surface loop).
+pub const ENCLOSED_COLUMNS: [&str; 12] = [
+    "s", "x", "y", "z", "gap", "kappa", "kappa_1", "kappa_2", "lambda", "D", "node", "weight",
+];
+
+/// The enclosed `config.csv` table ([`ENCLOSED_COLUMNS`], units of `R` and `D0`) of a loop
+/// on the sphere of radius `r` given as `(s, x, y, z, κ_g, λ, D)` rows in the model's units,
+/// uniform in arclength over the length `length`: the surface loop is the enclosed state
+/// where it is attached, with curvature vector `(κ1, κ2) = (κ_g, −1/R)` in the Darboux frame
+/// (rotation-minimising on the sphere, as in the 3-D model's start from a surface loop).
+fn sphere_table(rows: &[[f64; 7]], length: f64, r: f64, d0: f64) -> Result<crate::output::Table> {
     use crate::output::{Cell, Table};
-    let mut table = Table::new(
-        "config.csv",
-        &[
-            "s", "x", "y", "z", "gap", "kappa", "kappa_1", "kappa_2", "lambda", "D",
-        ],
-    );
+    let mut table = Table::new("config.csv", &ENCLOSED_COLUMNS);
+    let weight = length / rows.len() as f64;
     for &[s, x, y, z, kg, lam, d] in rows {
         let rad = (x * x + y * y + z * z).sqrt();
         table.push(vec![
@@ -170,9 +176,71 @@ fn sphere_table(rows: &[[f64; 7]], r: f64, d0: f64) -> Result<crate::output::Tab
             Cell::F(-1.0),
             Cell::F(lam * r * r * r / d0),
             Cell::F(d / d0),
+            Cell::I(1),
+            Cell::F(weight / r),
         ])?;
     }
     Ok(table)
+}
+
+/// The enclosed `config.csv` table of a 3-D state ([`ENCLOSED_COLUMNS`], units of `R` and
+/// `D0`, ball radius `r`): every node and the two Gauss points of each cell
+/// ([`rodloop_solver::enclosed_profile`]). The contact force `λ` is nodal (the wall is
+/// imposed at the nodes); a Gauss row holds it interpolated linearly between its cell's
+/// nodes.
+pub fn model_table(
+    st: &rodloop_solver::enclosed::EnclosedState,
+    r: f64,
+    d0: f64,
+) -> Result<crate::output::Table> {
+    use crate::output::{Cell, Table};
+    let m = &st.model;
+    let lam = m.contact_force(&st.z);
+    let n = m.cells();
+    let bounds = m.bounds();
+    let mut table = Table::new("config.csv", &ENCLOSED_COLUMNS);
+    for (k, p) in rodloop_solver::enclosed_profile(st)?.iter().enumerate() {
+        let c = k / 3;
+        let lambda = if p.node {
+            lam[c]
+        } else {
+            let t = (p.s / m.length() - bounds[c]) / (bounds[c + 1] - bounds[c]);
+            lam[c] + t * (lam[(c + 1) % n] - lam[c])
+        };
+        let (k1, k2) = p.kappa;
+        let rad = (p.r[0] * p.r[0] + p.r[1] * p.r[1] + p.r[2] * p.r[2]).sqrt();
+        table.push(vec![
+            Cell::F(p.s / r),
+            Cell::F(p.r[0] / r),
+            Cell::F(p.r[1] / r),
+            Cell::F(p.r[2] / r),
+            Cell::F((r - rad) / r),
+            Cell::F((k1 * k1 + k2 * k2).sqrt() * r),
+            Cell::F(k1 * r),
+            Cell::F(k2 * r),
+            Cell::F(lambda * r * r * r / d0),
+            Cell::F(p.d / d0),
+            Cell::I(i64::from(p.node)),
+            Cell::F(p.weight / r),
+        ])?;
+    }
+    Ok(table)
+}
+
+/// The enclosed `config.csv` table of a solve's result: the surface loop where the energy
+/// reported is its (attached), else the 3-D state.
+pub fn result_table(
+    res: &rodloop_diagram::enclosed_state::EnclosedResult,
+    r: f64,
+    d0: f64,
+) -> Result<crate::output::Table> {
+    match &res.attached_loop {
+        Some((source, points)) => {
+            let rows = rodloop_diagram::enclosed_state::attached_rows(source, *points, r, d0)?;
+            sphere_table(&rows, res.state.model.length(), r, d0)
+        }
+        None => model_table(&res.state, r, d0),
+    }
 }
 
 /// The table of one enclosed diagram point's loop (see [`sphere_table`] for attached ones).
@@ -184,7 +252,7 @@ fn enclosed_table(
     use rodloop_diagram::enclosed::PointShape;
     use std::f64::consts::PI;
     match &p.shape {
-        PointShape::Model(st) => crate::enclosed::config_table_in(st, r, d0),
+        PointShape::Model(st) => model_table(st, r, d0),
         PointShape::Surface(eq) => {
             let m = STATE_POINTS.max(eq.model().cells());
             let rows: Vec<[f64; 7]> = eq
@@ -192,38 +260,20 @@ fn enclosed_table(
                 .iter()
                 .map(|q| [q.s, q.x, q.y, q.z, q.kappa_g, q.lambda, q.d])
                 .collect();
-            sphere_table(&rows, r, d0)
+            sphere_table(&rows, eq.model().length(), r, d0)
         }
         PointShape::Exact(l) => {
-            // The exact loop lives on the unit sphere, in units of `R` and `D`.
-            let len = l.length();
-            let rows = (0..STATE_POINTS)
-                .map(|i| {
-                    let q = l.point(len * i as f64 / STATE_POINTS as f64)?;
-                    Ok([
-                        q.s * r,
-                        q.x * r,
-                        q.y * r,
-                        q.z * r,
-                        q.kappa_g / r,
-                        q.lambda * d0 / (r * r * r),
-                        d0,
-                    ])
-                })
-                .collect::<Result<Vec<_>>>()?;
-            sphere_table(&rows, r, d0)
+            let source = rodloop_solver::enclosed::SurfaceSource::Exact(*l);
+            let rows =
+                rodloop_diagram::enclosed_state::attached_rows(&source, STATE_POINTS, r, d0)?;
+            sphere_table(&rows, l.length() * r, r, d0)
         }
         PointShape::Circle => {
             // Radius `ρ = R L̄` about the centre, in the plane y = 0; curvature vector
             // (0, −1/ρ) in the frame whose tangent starts along x (the model's start).
             use crate::output::{Cell, Table};
             let rho = p.lbar;
-            let mut table = Table::new(
-                "config.csv",
-                &[
-                    "s", "x", "y", "z", "gap", "kappa", "kappa_1", "kappa_2", "lambda", "D",
-                ],
-            );
+            let mut table = Table::new("config.csv", &ENCLOSED_COLUMNS);
             for i in 0..STATE_POINTS {
                 let a = 2.0 * PI * i as f64 / STATE_POINTS as f64;
                 table.push(vec![
@@ -237,6 +287,8 @@ fn enclosed_table(
                     Cell::F(-1.0 / rho),
                     Cell::F(0.0),
                     Cell::F(1.0),
+                    Cell::I(1),
+                    Cell::F(2.0 * PI * rho / STATE_POINTS as f64),
                 ])?;
             }
             Ok(table)

@@ -64,15 +64,86 @@ fn solve_lifted_off_state() {
     assert!(f > 0.0 && f < 1.0);
     assert!(s["max_gap"].as_f64().unwrap() > 1e-3);
     assert!(s["optimality_lambda_min"].as_f64().unwrap() >= -1e-10);
+    // The largest gap over the nodes (where the contact summary is taken) is the reported one.
     let csv = std::fs::read_to_string(dir.join("config.csv")).unwrap();
-    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
-    let gi = header.iter().position(|h| *h == "gap").expect("gap column");
-    let gmax = csv
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').nth(gi).unwrap().parse::<f64>().unwrap())
+    let gmax = column(&csv, "gap")
+        .iter()
+        .zip(column(&csv, "node"))
+        .filter(|(_, n)| *n == "1")
+        .map(|(g, _)| g.parse::<f64>().unwrap())
         .fold(f64::MIN, f64::max);
     assert!((gmax - s["max_gap"].as_f64().unwrap()).abs() < 1e-12);
+}
+
+/// The numbers of column `name` of a CSV text.
+fn numbers(text: &str, name: &str) -> Vec<f64> {
+    column(text, name)
+        .iter()
+        .map(|v| v.parse().unwrap())
+        .collect()
+}
+
+/// The energy of a lifted-off state (the figure-eight at L̄ = 1.4, 3-D model) recomputed
+/// from its `config.csv` alone, `(1/π) Σ weight · ½ D κ²`, equals the reported energy within
+/// its estimate; `node` marks every third row (a node, then the cell's two Gauss points).
+/// The periodic trapezoid over the nodes alone misses it by more than the estimate: the
+/// nodes' curvatures are extrapolated from the Gauss points, a second discretisation.
+#[test]
+fn enclosed_file_energy_is_recomputed_by_its_weights() {
+    let dir = out("enclosed-file-energy");
+    let o = rodloop(&[
+        "solve",
+        "--scene",
+        &scene(),
+        "--lbar",
+        "1.4",
+        "--branch",
+        "2",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let (e, de) = (
+        s["energy"].as_f64().unwrap(),
+        s["error_estimate"].as_f64().unwrap(),
+    );
+    assert!(s["attached"] == false && de > 0.0, "{s}");
+    let csv = std::fs::read_to_string(dir.join("config.csv")).unwrap();
+    let (w, d, k, node, sc) = (
+        numbers(&csv, "weight"),
+        numbers(&csv, "D"),
+        numbers(&csv, "kappa"),
+        numbers(&csv, "node"),
+        numbers(&csv, "s"),
+    );
+    assert_eq!(node.len() % 3, 0);
+    for (i, n) in node.iter().enumerate() {
+        assert_eq!(*n, if i % 3 == 0 { 1.0 } else { 0.0 }, "row {i}");
+    }
+    let density = |i: usize| 0.5 * d[i] * k[i] * k[i];
+    let weighted: f64 = (0..w.len()).map(|i| w[i] * density(i)).sum::<f64>() / std::f64::consts::PI;
+    assert!(
+        (weighted - e).abs() <= de + 1e-12 * e,
+        "weighted {weighted} against {e} ± {de}"
+    );
+    // The Gauss weights of a uniform mesh are half the node spacing each.
+    let length = 2.0 * std::f64::consts::PI * 1.4;
+    assert!(((w.iter().sum::<f64>()) - length).abs() < 1e-12 * length);
+    let nodes: Vec<usize> = (0..node.len()).filter(|&i| node[i] == 1.0).collect();
+    let trapezoid: f64 = (0..nodes.len())
+        .map(|j| {
+            let (a, b) = (nodes[j], nodes[(j + 1) % nodes.len()]);
+            let ds = (sc[b] - sc[a]).rem_euclid(length);
+            0.5 * (density(a) + density(b)) * ds
+        })
+        .sum::<f64>()
+        / std::f64::consts::PI;
+    assert!(
+        (trapezoid - e).abs() > 10.0 * de,
+        "node trapezoid {trapezoid} against {e} ± {de}"
+    );
 }
 
 /// An attached state (branch 1 at L̄ = 1.2, λ > 0): the exact energy, gap 0.
@@ -362,7 +433,7 @@ fn column<'a>(text: &'a str, name: &str) -> Vec<&'a str> {
 /// to their row's energy within the two error estimates, and the free circle's file is the
 /// circle of radius `L̄ R`.
 #[test]
-#[ignore = "the uniform figure-eight at lbar = 1.2 (point contacts) re-solved from its file differs from its row by 2.0e-6, 1.06 times the two estimates: the point-contact estimate (order 1) is short there with the twist-free closure"]
+#[ignore = "every file exists, closes and lies in the ball (nodes; Gauss points within 1e-4 R), the circle file is the circle; left: the uniform figure-eight at lbar = 1.2 (point contacts) re-solved with --from its file gives 2.7452871416 +- 1.5e-7 against the row 2.7452851793 +- 1.7e-6, a gap of 1.96e-6 = 1.06 times the two estimates: the point-contact estimate (order 1) is short there"]
 fn enclosed_diagram_writes_states() {
     let dir = out("enclosed-diagram-states");
     let sc = scene();
@@ -423,9 +494,12 @@ fn enclosed_diagram_writes_states() {
             })
             .collect();
         assert!(pts.len() >= 32, "{f}");
-        for p in &pts {
+        // Nodes inside the ball (the model's wall); Gauss points (node = 0) may lie beyond it
+        // by the discretisation only, far less than 1e-4 R.
+        for (p, n) in pts.iter().zip(column(&text, "node")) {
             let r = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
-            assert!(r <= 1.0 + 1e-9, "{f}: |r| = {r}");
+            let slack = if n == "1" { 1e-9 } else { 1e-4 };
+            assert!(r <= 1.0 + slack, "{f}: |r| = {r}");
         }
         // Closed: the chord back to the first point is no longer than the longest step.
         let d = |a: &[f64; 3], b: &[f64; 3]| {

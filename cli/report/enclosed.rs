@@ -154,7 +154,7 @@ fn solve_one(
     let t0 = Instant::now();
     let stiffness = crate::args::stiffness_of(&scene.stiffness);
     let res = crate::enclosed::solve_state(scene, &stiffness, lbar, branch, accuracy)?;
-    let table = crate::enclosed::config_table(&res.state, scene)?;
+    let table = crate::states::result_table(&res, scene.radius, scene.stiffness.reference())?;
     let data = LoopData::parse(
         &format!("branch {branch} at L̄ = {lbar}"),
         &table.to_bytes()?,

@@ -37,6 +37,126 @@ pub struct EnclosedResult {
     pub method: String,
     /// The 3-D model's own energy (and estimate).
     pub model_energy: (f64, f64),
+    /// Where the energy reported is the surface loop's (attached): that loop and the number
+    /// of points its state file samples (uniform in arclength, at least three per cell of the
+    /// solve's own resolution). `None`: the file holds [`EnclosedResult::state`].
+    pub attached_loop: Option<(SurfaceSource, usize)>,
+}
+
+/// What [`verify_written`] measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WrittenCheck {
+    /// `E R/(π D0)` recomputed from the points the file holds, by their quadrature weights.
+    pub energy_from_file: f64,
+    /// Allowed `|energy_from_file − energy|`.
+    pub energy_tolerance: f64,
+}
+
+/// The points of the state file of an attached result: `points` samples of the surface loop,
+/// uniform in arclength, as `(s, x, y, z, κ_g, λ, D)` in the model's units (ball radius
+/// `r`, reference stiffness `d0`); the periodic trapezoid weight of each is `L/points`.
+pub fn attached_rows(
+    source: &SurfaceSource,
+    points: usize,
+    r: f64,
+    d0: f64,
+) -> Result<Vec<[f64; 7]>, DiagramError> {
+    match source {
+        SurfaceSource::Exact(l) => {
+            // The exact loop lives on the unit sphere, in units of `R` and `D`.
+            let len = l.length();
+            (0..points)
+                .map(|i| {
+                    let q = l.point(len * i as f64 / points as f64).map_err(passed)?;
+                    Ok([
+                        q.s * r,
+                        q.x * r,
+                        q.y * r,
+                        q.z * r,
+                        q.kappa_g / r,
+                        q.lambda * d0 / (r * r * r),
+                        d0,
+                    ])
+                })
+                .collect()
+        }
+        SurfaceSource::Numeric(eq) => Ok(eq
+            .profile_uniform(points)
+            .map_err(passed)?
+            .iter()
+            .map(|q| [q.s, q.x, q.y, q.z, q.kappa_g, q.lambda, q.d])
+            .collect()),
+    }
+}
+
+/// Verify `res` as its state file holds it, against its reported energy and `ESTIMATES` times
+/// its error estimate (the energy is that of the finest level, or the surface loop's):
+/// a 3-D state by [`rodloop_solver::verify_enclosed`] (closed, nodes inside the ball, Gauss
+/// points within their cells' reach, energy by the file's quadrature weights, branch `eta`);
+/// a numerical surface loop by [`rodloop_solver::verify_state`] on its written samples; an
+/// exact surface loop by the periodic trapezoid on its samples, within that rule's own error
+/// `|T_h − T_2h|` (the loop is exact, its estimate 0).
+pub fn verify_written(
+    res: &EnclosedResult,
+    eta: Option<u32>,
+) -> Result<WrittenCheck, DiagramError> {
+    use rodloop_solver::{verify_enclosed, verify_state, Claim};
+    let claim = Claim {
+        energy: res.energy.0,
+        energy_error: crate::ESTIMATES * res.energy.1,
+        profile_error: 0.0,
+        eta,
+    };
+    match &res.attached_loop {
+        None => {
+            let v = verify_enclosed(&res.state, &claim).map_err(passed)?;
+            Ok(WrittenCheck {
+                energy_from_file: v.energy_from_profile,
+                energy_tolerance: v.energy_tolerance,
+            })
+        }
+        Some((SurfaceSource::Numeric(eq), points)) => {
+            let profile = eq.profile_uniform(*points).map_err(passed)?;
+            let v = verify_state(eq, &profile, &claim).map_err(passed)?;
+            Ok(WrittenCheck {
+                energy_from_file: v.energy_from_profile,
+                energy_tolerance: v.energy_tolerance,
+            })
+        }
+        Some((source @ SurfaceSource::Exact(_), points)) => {
+            let m = &res.state.model;
+            let (r, d0) = (m.radius(), m.stiffness().kind().reference());
+            let rows = attached_rows(source, *points, r, d0)?;
+            let ds = m.length() / *points as f64;
+            let sum = |step: usize| {
+                rows.iter()
+                    .step_by(step)
+                    .map(|q| 0.5 * q[6] * (q[4] * q[4] + 1.0 / (r * r)) * ds * step as f64)
+                    .sum::<f64>()
+                    * r
+                    / (std::f64::consts::PI * d0)
+            };
+            let (fine, coarse) = (sum(1), sum(2));
+            let tolerance = claim.energy_error
+                + (fine - coarse).abs()
+                + rodloop_solver::verify::ENERGY_RELATIVE_SLACK * claim.energy.abs().max(1.0);
+            let gap = (fine - claim.energy).abs();
+            if gap.is_nan() || gap > tolerance {
+                return Err(DiagramError::Passed(Box::new(
+                    rodloop_solver::SolverError::Unverified(format!(
+                        "the energy recomputed from the written points of the exact surface \
+                         loop, {fine:.10}, differs from the reported {:.10} by more than \
+                         {tolerance:.1e}",
+                        claim.energy
+                    )),
+                )));
+            }
+            Ok(WrittenCheck {
+                energy_from_file: fine,
+                energy_tolerance: tolerance,
+            })
+        }
+    }
 }
 
 /// An error of a lower layer with what was being computed when it happened.
@@ -134,6 +254,7 @@ pub fn solve_state_with(
             },
             model_energy: (e, est),
             state,
+            attached_loop: None,
         });
     }
     let eta = eta_of_branch(branch);
@@ -222,6 +343,14 @@ pub fn solve_state_with(
             ),
         )
     };
+    let attached_loop = (attached && !moved).then(|| {
+        let points = crate::STATE_POINTS.max(3 * solve_cells(stiffness, accuracy, eta));
+        let points = match &source {
+            SurfaceSource::Numeric(eq) => points.max(eq.model().cells()),
+            SurfaceSource::Exact(_) => points,
+        };
+        (source.clone(), points)
+    });
     for why in &given_up {
         method.push_str(&format!("; {why}"));
     }
@@ -239,6 +368,7 @@ pub fn solve_state_with(
         surface: Some((e_surf, lam_min)),
         stability,
         method,
+        attached_loop,
     })
 }
 
@@ -285,5 +415,6 @@ pub fn solve_from_shape(
         stability,
         method,
         state: b.fine,
+        attached_loop: None,
     })
 }

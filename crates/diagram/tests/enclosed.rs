@@ -65,7 +65,6 @@ fn every_state_is_first_order_optimal() {
 }
 
 #[test]
-#[ignore = "6 of branch 2's lifted-off states on 1.25..1.5 fail the file check: the energy recomputed from the written nodes is up to 8e-4 relative off the row (the nodes under-resolve the point contacts; the file needs points inside the cells)"]
 fn the_uniform_diagram_runs_without_warnings() {
     let d = diagram();
     assert!(d.warnings.is_empty(), "{:?}", d.warnings);
