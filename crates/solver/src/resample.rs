@@ -3,7 +3,7 @@
 //! [`crate::StartShape::from_kappa_g_samples`]), and what a picture wants (more points than a
 //! coarse tracing resolution has).
 
-use crate::periodic::TrigInterpolant;
+use crate::periodic::TrigColumns;
 use crate::solve::{Equilibrium, ProfilePoint};
 use crate::SolverError;
 
@@ -30,9 +30,6 @@ impl Equilibrium {
         let model = self.model();
         let (r, len) = (model.radius(), model.length());
         let map = model.mesh();
-        let column = |f: fn(&ProfilePoint) -> f64| -> Result<TrigInterpolant, SolverError> {
-            TrigInterpolant::new(&native.iter().map(f).collect::<Vec<_>>())
-        };
         let fields: [fn(&ProfilePoint) -> f64; 11] = [
             |p| p.x,
             |p| p.y,
@@ -46,16 +43,20 @@ impl Equilibrium {
             |p| p.f_b,
             |p| p.f_g,
         ];
-        let interp = fields
-            .iter()
-            .map(|&f| column(f))
-            .collect::<Result<Vec<_>, _>>()?;
+        // Every column interpolates the same native points: built and evaluated together.
+        let interp = TrigColumns::new(
+            &fields
+                .iter()
+                .map(|f| native.iter().map(f).collect())
+                .collect::<Vec<Vec<f64>>>(),
+        )?;
         let us = map.u_of_sigmas((0..m).map(|j| j as f64 / m as f64));
+        let mut v = [0.0; 11];
         Ok((0..m)
             .map(|j| {
                 let sigma = j as f64 / m as f64;
                 let u = us[j];
-                let v: Vec<f64> = interp.iter().map(|t| t.eval(u)).collect();
+                interp.eval(u, &mut v);
                 let norm = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
                 let back = if norm > 0.0 { r / norm } else { 1.0 };
                 let kg = v[4];

@@ -69,33 +69,26 @@ impl TrigInterpolant {
     /// Value, first and second derivative in `σ` at `σ`.
     pub fn eval_all(&self, sigma: f64) -> (f64, f64, f64) {
         let x = 2.0 * PI * (sigma - self.offset);
-        let (s1, c1) = x.sin_cos();
-        let (mut s, mut c) = (s1, c1);
         let (mut v, mut d1, mut d2) = (self.a0, 0.0, 0.0);
-        for k in 0..self.a.len() {
+        harmonics(x, self.a.len(), |k, c, s| {
             let w = 2.0 * PI * (k + 1) as f64;
             let (ak, bk) = (self.a[k], self.b[k]);
             v += ak * c + bk * s;
             d1 += w * (-ak * s + bk * c);
             d2 -= w * w * (ak * c + bk * s);
-            // Angle addition: (c, s) ← (c c1 − s s1, s c1 + c s1). Re-seed now and then to
-            // keep the rounding drift at the level of a few ulps.
-            if (k + 1) % 64 == 0 {
-                let (sn, cn) = ((k + 2) as f64 * x).sin_cos();
-                s = sn;
-                c = cn;
-            } else {
-                let cn = c * c1 - s * s1;
-                s = s * c1 + c * s1;
-                c = cn;
-            }
-        }
+        });
         (v, d1, d2)
     }
 
-    /// Value at `σ`.
+    /// Value at `σ` (the value of [`TrigInterpolant::eval_all`], bit for bit: the same
+    /// angle-addition sequence, without the derivatives).
     pub fn eval(&self, sigma: f64) -> f64 {
-        self.eval_all(sigma).0
+        let mut v = self.a0;
+        let x = 2.0 * PI * (sigma - self.offset);
+        harmonics(x, self.a.len(), |k, c, s| {
+            v += self.a[k] * c + self.b[k] * s;
+        });
+        v
     }
 
     /// Derivative `dy/dσ` at `σ`.
@@ -151,6 +144,115 @@ impl TrigInterpolant {
     }
 }
 
+/// The trigonometric interpolants ([`TrigInterpolant`]) of several columns of samples at the
+/// same points `σ_j = j/M` (e.g. the quantities of one profile), built and evaluated
+/// together: the sine table, the harmonics `cos 2πkσ`, `sin 2πkσ` and the loops are shared,
+/// and the coefficients are stored harmonic by harmonic. Every value equals the
+/// [`TrigInterpolant::eval`] of its column bit for bit (the same sums in the same order).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TrigColumns {
+    columns: usize,
+    a0: Vec<f64>,
+    /// `(a_k, b_k)` of every column, for `k = 1..=K` in turn: `ab[2 (k−1) C + 2 i]`.
+    ab: Vec<f64>,
+}
+
+impl TrigColumns {
+    /// The interpolants of `columns` (each of the same length `M`, at `σ_j = j/M`).
+    pub fn new(columns: &[Vec<f64>]) -> Result<Self, SolverError> {
+        let m = columns.first().map_or(0, Vec::len);
+        if m == 0 {
+            return Err(SolverError::InvalidInput(
+                "cannot interpolate an empty profile".into(),
+            ));
+        }
+        if columns.iter().any(|c| c.len() != m) {
+            return Err(SolverError::InvalidInput(
+                "the columns of a profile differ in length".into(),
+            ));
+        }
+        if let Some(v) = columns.iter().flatten().find(|v| !v.is_finite()) {
+            return Err(SolverError::InvalidInput(format!(
+                "profile sample is not finite ({v})"
+            )));
+        }
+        let nc = columns.len();
+        let k_max = (m - 1) / 2;
+        let table: Vec<(f64, f64)> = (0..m)
+            .map(|j| (2.0 * PI * j as f64 / m as f64).sin_cos())
+            .collect();
+        let a0 = columns
+            .iter()
+            .map(|c| c.iter().sum::<f64>() / m as f64)
+            .collect();
+        let mut ab = vec![0.0; 2 * k_max * nc];
+        let mut sums = vec![(0.0, 0.0); nc];
+        for k in 1..=k_max {
+            sums.fill((0.0, 0.0));
+            let mut at = 0;
+            for j in 0..m {
+                let (s, c) = table[at];
+                for (sum, col) in sums.iter_mut().zip(columns) {
+                    let y = col[j];
+                    sum.0 += y * c;
+                    sum.1 += y * s;
+                }
+                at += k;
+                if at >= m {
+                    at -= m;
+                }
+            }
+            let row = &mut ab[2 * (k - 1) * nc..2 * k * nc];
+            for (i, &(sa, sb)) in sums.iter().enumerate() {
+                row[2 * i] = 2.0 * sa / m as f64;
+                row[2 * i + 1] = 2.0 * sb / m as f64;
+            }
+        }
+        Ok(Self {
+            columns: nc,
+            a0,
+            ab,
+        })
+    }
+
+    /// The values of every column at `σ`, into `out` (of one value per column).
+    pub fn eval(&self, sigma: f64, out: &mut [f64]) {
+        let nc = self.columns;
+        out[..nc].copy_from_slice(&self.a0);
+        let x = 2.0 * PI * sigma;
+        let k_max = if nc == 0 { 0 } else { self.ab.len() / (2 * nc) };
+        harmonics(x, k_max, |k, c, s| {
+            let row = &self.ab[2 * k * nc..2 * (k + 1) * nc];
+            for (o, ab) in out[..nc].iter_mut().zip(row.chunks_exact(2)) {
+                *o += ab[0] * c + ab[1] * s;
+            }
+        });
+    }
+}
+
+/// Calls `f(k, cos (k+1)x, sin (k+1)x)` for `k = 0..count`, by angle addition
+/// `(c, s) ← (c c1 − s s1, s c1 + c s1)`, re-seeded from `sin_cos` every 64 harmonics to keep
+/// the rounding drift at the level of a few ulps (one sequence for every evaluation, so that
+/// [`TrigInterpolant::eval`], [`TrigInterpolant::eval_all`] and
+/// [`TrigInterpolant::eval_columns`] agree bit for bit).
+#[inline]
+fn harmonics(x: f64, count: usize, mut f: impl FnMut(usize, f64, f64)) {
+    let (s1, c1) = x.sin_cos();
+    let (mut s, mut c) = (s1, c1);
+    for k in 0..count {
+        f(k, c, s);
+        if (k + 1) % 64 == 0 {
+            let (sn, cn) = ((k + 2) as f64 * x).sin_cos();
+            s = sn;
+            c = cn;
+        } else {
+            let cn = c * c1 - s * s1;
+            s = s * c1 + c * s1;
+            c = cn;
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -178,5 +280,39 @@ mod tests {
         assert!((vmin + 1.0).abs() < 1e-14 && (vmax - 1.0).abs() < 1e-14);
         assert!((smax - 1.0 / (2.0 * PI)).abs() < 1e-10);
         assert!((smin - (0.5 + 1.0 / (2.0 * PI))).abs() < 1e-10);
+    }
+    /// The columns built and evaluated together give each column's own interpolant bit for
+    /// bit, and the value-only `eval` is the value of `eval_all`; both interpolate the data.
+    #[test]
+    fn columns_and_values_match_the_single_interpolant_exactly() {
+        let m = 301;
+        let cols: Vec<Vec<f64>> = (0..3)
+            .map(|c| {
+                (0..m)
+                    .map(|j| {
+                        let s = j as f64 / m as f64;
+                        (2.0 * PI * (c + 1) as f64 * s).sin().exp() + 0.1 * c as f64
+                    })
+                    .collect()
+            })
+            .collect();
+        let together = TrigColumns::new(&cols).unwrap();
+        let single: Vec<TrigInterpolant> = cols
+            .iter()
+            .map(|c| TrigInterpolant::new(c).unwrap())
+            .collect();
+        let mut out = [0.0; 3];
+        for &s in &[0.0, 0.0123, 0.31, 0.5, 0.999, 1.7] {
+            together.eval(s, &mut out);
+            for (c, t) in single.iter().enumerate() {
+                assert_eq!(out[c].to_bits(), t.eval(s).to_bits());
+                assert_eq!(t.eval(s).to_bits(), t.eval_all(s).0.to_bits());
+            }
+        }
+        together.eval(7.0 / m as f64, &mut out);
+        for c in 0..3 {
+            assert!((out[c] - cols[c][7]).abs() < 1e-12);
+        }
+        assert!(TrigColumns::new(&[vec![1.0; 4], vec![1.0; 5]]).is_err());
     }
 }
