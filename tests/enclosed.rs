@@ -362,7 +362,6 @@ fn column<'a>(text: &'a str, name: &str) -> Vec<&'a str> {
 /// to their row's energy within the two error estimates, and the free circle's file is the
 /// circle of radius `L̄ R`.
 #[test]
-#[ignore = "the uniform figure-eight at lbar = 1.2 (point contacts) re-solved from its file differs from its row by 2.0e-6, 1.06 times the two estimates: the point-contact estimate (order 1) is short there with the twist-free closure"]
 fn enclosed_diagram_writes_states() {
     let dir = out("enclosed-diagram-states");
     let sc = scene();
