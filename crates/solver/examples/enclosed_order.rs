@@ -29,8 +29,15 @@ fn main() {
             &SurfaceSource::Exact(l),
             n,
             &EnclosedOptions::default(),
-        )
-        .expect("enclosed solve");
+        );
+        let b = match b {
+            Ok(b) => b,
+            Err(e) => {
+                eprintln!("N = {n}: {e}");
+                n *= 2;
+                continue;
+            }
+        };
         let dt = t.elapsed().as_secs_f64();
         let c = b.fine.contact(1e-9).expect("contact");
         rows.push((
@@ -41,12 +48,13 @@ fn main() {
             dt,
             c.fraction,
             b.fine.iterations,
+            b.centred_energy,
         ));
         n *= 2;
     }
     let e_ref = rows.last().map(|r| r.1).unwrap_or(f64::NAN);
     println!("lbar = {lbar}, surface E = {:.12}", l.energy().unwrap());
-    println!("N\tE_N\t|E_N - E_ref|/E\torder\testimate/E\tp_obs\tcontact\titer\ttime_s");
+    println!("N\tE_N\t|E_N - E_ref|/E\torder\testimate/E\tp_obs\tcontact\titer\ttime_s\tE_centred\testimate_centred/E");
     for (k, r) in rows.iter().enumerate() {
         let err = (r.1 - e_ref).abs() / e_ref;
         let order = if k + 2 < rows.len() {
@@ -56,8 +64,11 @@ fn main() {
         } else {
             "-".into()
         };
+        let centred =
+            r.7.map(|(e, de)| format!("{e:.13}\t{:.2e}", de / e_ref))
+                .unwrap_or_else(|| "-\t-".into());
         println!(
-            "{}\t{:.13}\t{:.2e}\t{}\t{:.2e}\t{:.2}\t{:.4}\t{}\t{:.3}",
+            "{}\t{:.13}\t{:.2e}\t{}\t{:.2e}\t{:.2}\t{:.4}\t{}\t{:.3}\t{centred}",
             r.0,
             r.1,
             err,

@@ -246,13 +246,16 @@ fn figure_eight_lifts_off_with_lower_energy() {
     assert!(lmin >= -1e-8 && gmin >= -1e-8 && comp <= 1e-8 && stat <= 1e-7);
 }
 
-/// Point-like contact: at L̄ = 1.2 the enclosed figure-eight touches the wall at
-/// two points only (runs of at most 4 cells). The energy converges irregularly there
-/// (errors against N = 1024 of 7.2e-7, 3.9e-7, 3.2e-9 relative at N = 64, 128, 256; the
-/// three-level rule at N = 128 gave 1.3e-7, 3× short), so the estimate takes order 1 over
-/// four levels: it must bound the error against N = 1024 at N = 256 and 512.
+/// Point-like contact: at L̄ = 1.2 the enclosed figure-eight touches the wall near its
+/// two lobe tips only (runs of at most 4 cells), at two points 0.007 L apart at each. On
+/// the uniform mesh the energy converges irregularly there (errors of 1.1e-6, 3.9e-7,
+/// 3.7e-9 relative at N = 64, 128, 256). With a node at every contact point
+/// ([`rodloop_solver::enclosed::centre`]) the same ladder converges at fourth order, and
+/// the node-centred N = 1024 ladder is the reference: every reported estimate from N = 64
+/// to 512 bounds the error against it (the order-1 rule alone was 1.17× short at N = 128).
 #[test]
 fn point_contact_estimate_bounds_the_error() {
+    use rodloop_solver::enclosed::centre::centre_levels;
     let b256 = branch(1, 1.2, 256);
     let c = b256.fine.contact(1e-9).unwrap();
     assert_eq!(c.intervals, 2, "{c:?}");
@@ -261,14 +264,33 @@ fn point_contact_estimate_bounds_the_error() {
     let b512 = branch(1, 1.2, 512);
     let b1024 = branch(1, 1.2, 1024);
     assert!(b1024.point_contact);
-    for b in [&b256, &b512] {
-        let err = (b.energy - b1024.energy).abs();
+    let (e_ref, de_ref) = b1024.centred_energy.expect("contacts on nodes at N = 1024");
+    assert!(de_ref < 1e-10 * e_ref, "{de_ref:e}");
+    for b in [branch(1, 1.2, 64), branch(1, 1.2, 128), b256, b512.clone()] {
+        let err = (b.energy - e_ref).abs() + de_ref;
         assert!(
             b.energy_error >= err,
             "N = {}: {:e} vs {err:e}",
             b.fine.model.cells(),
             b.energy_error
         );
+    }
+    // The node-centred ladder N = 64 … 512 converges at fourth order, to the reference.
+    let levels = [
+        b512.eighth.as_ref().unwrap(),
+        &b512.quarter,
+        &b512.coarse,
+        &b512.fine,
+    ];
+    let centred = centre_levels(&levels, &EnclosedOptions::default()).expect("centred");
+    let e: Vec<f64> = centred.iter().map(|s| s.energy()).collect();
+    for k in 0..2 {
+        let order = ((e[k + 1] - e[k]) / (e[k + 2] - e[k + 1])).log2();
+        assert!((order - 4.0).abs() < 0.3, "order {order} from {e:?}");
+    }
+    assert!((e[3] - e_ref).abs() < 1e-9 * e_ref, "{} vs {e_ref}", e[3]);
+    for s in &centred {
+        assert_optimal(s);
     }
     // Extended contact is not point-like (L̄ = 1.4: two arcs over 40% of the length).
     assert!(!branch(1, 1.4, 256).point_contact);

@@ -23,9 +23,11 @@
 //!   minimum.
 //! * [`continuation`]: natural-parameter steps in `L̄` (the enclosed diagram's tracer).
 //! * [`seam`]: the model behind [`crate::Confinement`] (continuation through the seam).
+//! * [`centre`]: point contacts moved onto nodes (the origin shifted to a contact point).
 //! * [`branch`]: a paper branch in an enclosed scene with the two-resolution error estimate.
 
 pub mod branch;
+pub mod centre;
 pub mod continuation;
 pub mod descent;
 pub mod from_shape;

@@ -199,6 +199,34 @@ impl EnclosedModel {
         Self::new(self.radius, lbar, cells, stiffness, gauge)?.with_wall(self.wall.clone())
     }
 
+    /// [`Self::new`] on given cell boundaries `bounds` in `σ` (`0 = σ_0 < … < σ_N = 1`)
+    /// instead of the stiffness profile's mesh map: nodes placed at the ends of point
+    /// contacts ([`super::centre`]).
+    pub fn with_bounds(
+        radius: f64,
+        lbar: f64,
+        bounds: Vec<f64>,
+        stiffness: &Stiffness,
+        gauge: Gauge,
+    ) -> Result<Self, SolverError> {
+        let cells = bounds.len().saturating_sub(1);
+        let ordered = bounds.first() == Some(&0.0)
+            && bounds.last() == Some(&1.0)
+            && bounds.windows(2).all(|w| w[1] > w[0]);
+        if !ordered {
+            return Err(SolverError::InvalidInput(
+                "cell boundaries must increase from 0 to 1".into(),
+            ));
+        }
+        let mut m = Self::new(radius, lbar, cells, stiffness, gauge)?;
+        m.uniform_mesh = false;
+        m.bounds = bounds;
+        m.d_gauss = (0..2 * cells)
+            .map(|g| m.stiffness.eval(m.gauss_sigma(g)).d)
+            .collect();
+        Ok(m)
+    }
+
     /// Normalised arclength `σ = s/L` of Gauss point `g` (`0..2N`).
     pub fn gauss_sigma(&self, g: usize) -> f64 {
         let c = g / 2;
