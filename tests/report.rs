@@ -657,9 +657,18 @@ fn enclosed_states_are_in_the_ball_and_agree_with_the_exact_surface_loops() {
     for e in std::fs::read_dir(dir.join("states")).unwrap() {
         let (h, rows) = read_csv(&e.unwrap().path());
         let (x, y, z, g) = (col(&h, "x"), col(&h, "y"), col(&h, "z"), col(&h, "gap"));
+        let (node, w, k) = (col(&h, "node"), col(&h, "weight"), col(&h, "kappa"));
         for r in &rows {
             let norm = (num(&r[x]).powi(2) + num(&r[y]).powi(2) + num(&r[z]).powi(2)).sqrt();
-            assert!(norm <= 1.0 + 1e-9 && (norm - (1.0 - num(&r[g]))).abs() < 1e-9);
+            // Nodes in the ball; a Gauss point (node 0, weight h/2) at most its cell
+            // curve's bulge κ h²/12 beyond the chord between two nodes inside it.
+            let hh = 2.0 * num(&r[w]);
+            let reach = if num(&r[node]) == 1.0 {
+                0.0
+            } else {
+                1.5 * num(&r[k]).abs() * hh * hh / 12.0
+            };
+            assert!(norm <= 1.0 + 1e-9 + reach && (norm - (1.0 - num(&r[g]))).abs() < 1e-9);
         }
         files += 1;
     }

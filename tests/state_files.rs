@@ -76,10 +76,32 @@ fn check_file(
             "{file}: open, chord {chord:.3e} over arc {arc:.3e}"
         ));
     }
+    // Enclosed files hold nodes (`node` 1) and the two Gauss points of each cell (`node` 0,
+    // `weight` h/2). The wall holds the nodes; the chord between two nodes lies in the
+    // (convex) ball, so a Gauss point lies at most its cell curve's bulge κ u (h − u) / 2 =
+    // κ h²/12 beyond it (u = h/2 ∓ h/√12), counted here with a margin of 1.5 on κ.
+    let marks = if enclosed {
+        columns(&dir.join(file), &["node", "weight"])
+    } else {
+        vec![vec![1.0, 0.0]; n]
+    };
     let worst = pts
         .iter()
-        .map(|p| (p[1] * p[1] + p[2] * p[2] + p[3] * p[3]).sqrt() - 1.0)
-        .map(|d| if enclosed { d } else { d.abs() })
+        .zip(&marks)
+        .map(|(p, m)| {
+            let d = (p[1] * p[1] + p[2] * p[2] + p[3] * p[3]).sqrt() - 1.0;
+            let h = 2.0 * m[1];
+            let reach = if m[0] == 1.0 {
+                0.0
+            } else {
+                1.5 * p[4].abs() * h * h / 12.0
+            };
+            if enclosed {
+                d - reach
+            } else {
+                d.abs()
+            }
+        })
         .fold(f64::NEG_INFINITY, f64::max);
     if worst > 1e-9 {
         problems.push(format!(
@@ -102,7 +124,20 @@ fn check_file(
             .sum::<f64>()
             / PI
     };
-    let (fine, coarse) = (trap(1), trap(2));
+    // Enclosed files carry the model's quadrature: weights h/2 at the Gauss points, 0 at
+    // the nodes (two-point Gauss, exact for the quartic energy density of a cell's curve to
+    // the scheme's order); surface files, the periodic trapezoid on the written points.
+    let (fine, coarse) = if enclosed {
+        let e = pts
+            .iter()
+            .zip(&marks)
+            .map(|(p, m)| m[1] * 0.5 * p[5] * p[4] * p[4])
+            .sum::<f64>()
+            / PI;
+        (e, e)
+    } else {
+        (trap(1), trap(2))
+    };
     let scale = energy.abs().max(1.0);
     let allowed = estimate.map_or(NO_ESTIMATE * scale, |e| ESTIMATES * e);
     let tol = allowed + (fine - coarse).abs() + 1e-9 * scale;
