@@ -805,11 +805,11 @@ impl EnclosedModel {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    /// Pseudo-random entries in `[-1, 1)`.
-    fn filler(seed: u64) -> impl FnMut() -> f64 {
+    /// Pseudo-random entries in `[-1, 1)` (a fixed-seed LCG; the wall's tests use it too).
+    pub(crate) fn filler(seed: u64) -> impl FnMut() -> f64 {
         let mut s = seed;
         move || {
             s = s

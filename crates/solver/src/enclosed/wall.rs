@@ -175,16 +175,7 @@ impl Wall for SphereWall {
 mod tests {
     use super::*;
 
-    /// Pseudo-random numbers in `[-1, 1)` (fixed seed).
-    fn filler(seed: u64) -> impl FnMut() -> f64 {
-        let mut s = seed;
-        move || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        }
-    }
+    use crate::enclosed::lifted::tests::filler;
 
     /// A wall with only the three required derivatives: it takes the default
     /// [`Wall::node_pairing`] (the general formula an ellipsoid would use).
