@@ -354,13 +354,7 @@ pub fn solve_state_with(
     for why in &given_up {
         method.push_str(&format!("; {why}"));
     }
-    if let Some(d) = descent.filter(|d| d.start().index > 0) {
-        method.push_str(&format!(
-            "; {} (descent at N/4 = {} cells, energies at N)",
-            d.describe(),
-            b.quarter.model.cells()
-        ));
-    }
+    describe_descent(&mut method, descent.as_ref(), &b);
     Ok(EnclosedResult {
         model_energy: (b.energy, b.energy_error),
         state: b.fine,
@@ -370,6 +364,22 @@ pub fn solve_state_with(
         method,
         attached_loop,
     })
+}
+
+/// Append a descent from a saddle (started at index > 0) to `method`: what it did, on the
+/// ladder's `N/4` mesh with energies at `N`.
+fn describe_descent(
+    method: &mut String,
+    descent: Option<&rodloop_solver::descend::Descent<EnclosedState>>,
+    b: &rodloop_solver::enclosed::branch::BranchSolve,
+) {
+    if let Some(d) = descent.filter(|d| d.start().index > 0) {
+        method.push_str(&format!(
+            "; {} (descent at N/4 = {} cells, energies at N)",
+            d.describe(),
+            b.quarter.model.cells()
+        ));
+    }
 }
 
 /// Solve from a saved enclosed shape at `lbar`: the shape's curvature vectors, aligned by
@@ -401,13 +411,7 @@ pub fn solve_from_shape(
         "3-D enclosed model, N = {cells} cells (semismooth Newton from the saved shape); {}",
         b.estimate_method()
     );
-    if let Some(d) = descent.filter(|d| d.start().index > 0) {
-        method.push_str(&format!(
-            "; {} (descent at N/4 = {} cells, energies at N)",
-            d.describe(),
-            b.quarter.model.cells()
-        ));
-    }
+    describe_descent(&mut method, descent.as_ref(), &b);
     Ok(EnclosedResult {
         model_energy: (b.energy, b.energy_error),
         energy: (b.energy, b.energy_error),
