@@ -39,20 +39,6 @@ struct Row {
     source: &'static str,
 }
 
-/// The first stretch of lengths over which the diagram labels branch `branch` stable (the
-/// stable rows of every branch in increasing `L̄`, split where another branch's come between).
-fn first_stable_stretch(rows: &[rodloop_diagram::DiagramRow], branch: u32) -> Option<(f64, f64)> {
-    let mut stable: Vec<&rodloop_diagram::DiagramRow> = rows
-        .iter()
-        .filter(|r| r.stability == Label::Stable)
-        .collect();
-    stable.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
-    stable
-        .chunk_by(|a, b| (a.branch == branch) == (b.branch == branch))
-        .find(|run| run[0].branch == branch)
-        .map(|run| (run[0].lbar, run[run.len() - 1].lbar))
-}
-
 /// Run the comparison for a two-segment surface scene.
 pub fn run(scene: &Scene, out: &Path) -> Result<()> {
     let StiffnessSpec::Tanh { d0, d1, s0, s1, .. } = scene.stiffness else {
@@ -110,7 +96,7 @@ pub fn run(scene: &Scene, out: &Path) -> Result<()> {
     }
     // The symmetry of branch 1 in the middle of its first stable stretch (the saddle-like
     // states of the paper's first row of Fig. 10, before the figure-eight takes over).
-    if let Some((a, b)) = first_stable_stretch(&rows, 1) {
+    if let Some(&(a, b)) = rodloop_diagram::representative::stable_stretches(&rows, 1).first() {
         let mid = 0.5 * (a + b);
         if let Some(r) = rows
             .iter()
