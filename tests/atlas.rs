@@ -52,7 +52,7 @@ fn resolve_matches(dir: &Path, row: &BTreeMap<String, String>, scene: Option<&Pa
     }
     let (ok, _, err) = run(&mut cmd);
     assert!(ok, "{}: {err}", file.display());
-    let s = summary(&out);
+    let s = summary(out);
     let e_solve = s["energy"].as_f64().unwrap();
     let est_solve = s["error_estimate"].as_f64().unwrap();
     let e_diagram: f64 = row["energy"].parse().unwrap();

@@ -155,6 +155,38 @@ pub fn stable_stretches(rows: &[DiagramRow], branch: u32) -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// The stable row nearest each half-integer length `m + ½` strictly inside `(lo, hi)` (of any
+/// branch), in increasing `m + ½`; none where the diagram has no stable row.
+pub fn stable_near_half_integers(rows: &[DiagramRow], lo: f64, hi: f64) -> Vec<&DiagramRow> {
+    let mut out = Vec::new();
+    let mut t = lo.floor() + 0.5;
+    while t < hi {
+        if t > lo {
+            if let Some(r) = nearest_stable(rows.iter(), t) {
+                out.push(r);
+            }
+        }
+        t += 1.0;
+    }
+    out
+}
+
+/// The stable row of branch `branch` nearest the middle of its first stable stretch
+/// ([`stable_stretches`]).
+pub fn middle_of_first_stable(rows: &[DiagramRow], branch: u32) -> Option<&DiagramRow> {
+    let &(a, b) = stable_stretches(rows, branch).first()?;
+    nearest_stable(rows.iter().filter(|r| r.branch == branch), 0.5 * (a + b))
+}
+
+/// The stable row of `rows` nearest `lbar`.
+fn nearest_stable<'a>(
+    rows: impl Iterator<Item = &'a DiagramRow>,
+    lbar: f64,
+) -> Option<&'a DiagramRow> {
+    rows.filter(|r| r.stability == Label::Stable)
+        .min_by(|a, b| (a.lbar - lbar).abs().total_cmp(&(b.lbar - lbar).abs()))
+}
+
 /// One length per traced branch of a surface diagram, in increasing branch number: the
 /// middle of its widest stable stretch ([`stable_stretches`]), or of its traced range (the
 /// union of its families' and sheets') when it is never the lowest.
