@@ -301,6 +301,76 @@ fn enclosed_pick(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::shapes::StateShape;
+
+    fn row(branch: u32, lbar: f64, stability: Label) -> DiagramRow {
+        DiagramRow {
+            branch,
+            eta: branch,
+            family: 0,
+            arc: 0,
+            multiplicity: 1,
+            lbar,
+            energy: lbar,
+            energy_g: 0.0,
+            energy_error: None,
+            stability,
+            index: 0,
+            lambda_min: 0.0,
+            lambda_max: 0.0,
+            shape: StateShape {
+                point_group: None,
+                self_intersections: None,
+            },
+        }
+    }
+
+    /// Branch 1 stable on 1.1–1.3 and 1.7–2.2, branch 2 stable at 1.5 between them (its two
+    /// families' rows interleave with branch 1's in `rows`), branch 1 unstable at 1.4.
+    fn rows() -> Vec<DiagramRow> {
+        use Label::*;
+        vec![
+            row(1, 2.2, Stable),
+            row(1, 1.1, Stable),
+            row(2, 1.5, Stable),
+            row(1, 1.4, Unstable),
+            row(1, 1.3, Stable),
+            row(1, 1.7, Stable),
+            row(2, 1.45, Metastable),
+        ]
+    }
+
+    #[test]
+    fn stable_stretches_split_where_another_branch_is_stable() {
+        let rows = rows();
+        assert_eq!(stable_stretches(&rows, 1), vec![(1.1, 1.3), (1.7, 2.2)]);
+        assert_eq!(stable_stretches(&rows, 2), vec![(1.5, 1.5)]);
+        assert!(stable_stretches(&rows, 3).is_empty());
+        // Branch 1 nearest 1.2, the middle of its first stretch: the row at 1.1 or 1.3 (equally
+        // near), the first of them in `rows` order.
+        let r = middle_of_first_stable(&rows, 1).unwrap();
+        assert!(r.lbar == 1.1 || r.lbar == 1.3, "{}", r.lbar);
+        // Half-integer lengths inside (1.0, 2.6): 1.5 (branch 2's row) and 2.5 (1.7–2.2: 2.2).
+        let near: Vec<(u32, f64)> = stable_near_half_integers(&rows, 1.0, 2.6)
+            .iter()
+            .map(|r| (r.branch, r.lbar))
+            .collect();
+        assert_eq!(near, vec![(2, 1.5), (1, 2.2)]);
+    }
+
+    #[test]
+    fn a_choice_labels_its_state_by_index_and_lowest() {
+        let mut c = Choice {
+            branch: 1,
+            eta: 1,
+            lbar: 1.2,
+            why: String::new(),
+            lowest: true,
+        };
+        assert_eq!((c.label(0), c.label(1)), ("stable", "unstable"));
+        c.lowest = false;
+        assert_eq!((c.label(0), c.label(2)), ("metastable", "unstable"));
+    }
 
     #[test]
     fn middle_rounds_only_inside_the_middle_half() {
