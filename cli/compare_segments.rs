@@ -16,7 +16,8 @@
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
-use rodloop_diagram::{DiagramOptions, Label};
+use rodloop_diagram::representative::{middle_of_first_stable, stable_near_half_integers};
+use rodloop_diagram::DiagramOptions;
 use rodloop_scene::{Scene, StiffnessSpec};
 
 use crate::output::{checked_json, Cell, OutputRun, Table};
@@ -37,20 +38,6 @@ struct Row {
     tolerance: Option<f64>,
     agrees: Option<bool>,
     source: &'static str,
-}
-
-/// The first stretch of lengths over which the diagram labels branch `branch` stable (the
-/// stable rows of every branch in increasing `L̄`, split where another branch's come between).
-fn first_stable_stretch(rows: &[rodloop_diagram::DiagramRow], branch: u32) -> Option<(f64, f64)> {
-    let mut stable: Vec<&rodloop_diagram::DiagramRow> = rows
-        .iter()
-        .filter(|r| r.stability == Label::Stable)
-        .collect();
-    stable.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
-    stable
-        .chunk_by(|a, b| (a.branch == branch) == (b.branch == branch))
-        .find(|run| run[0].branch == branch)
-        .map(|run| (run[0].lbar, run[run.len() - 1].lbar))
 }
 
 /// Run the comparison for a two-segment surface scene.
@@ -77,58 +64,41 @@ pub fn run(scene: &Scene, out: &Path) -> Result<()> {
     let stiff = 1.0 - (s1 - s0);
     let mut out_rows = Vec::new();
     // The energy estimate at the stable state nearest each half-integer length.
-    let mut t = scene.lbar_min.floor() + 0.5;
-    while t < scene.lbar_max {
-        if t > scene.lbar_min {
-            if let Some(r) = rows
-                .iter()
-                .filter(|r| r.stability == Label::Stable)
-                .min_by(|a, b| (a.lbar - t).abs().total_cmp(&(b.lbar - t).abs()))
-            {
-                let estimate = stiff * r.lbar;
-                let dev = (r.energy - estimate) / estimate;
-                let judged = ratio <= SOFT_LIMIT;
-                out_rows.push(Row {
-                    id: format!("soft_energy_{:.2}", r.lbar),
-                    lbar: Some(r.lbar),
-                    paper: format!("{estimate:.10}"),
-                    numeric: format!(
-                        "{:.10}{}",
-                        r.energy,
-                        r.energy_error
-                            .map(|e| format!(" ± {e:.1e}"))
-                            .unwrap_or_default()
-                    ),
-                    deviation: Some(dev),
-                    tolerance: judged.then_some(ENERGY_TOLERANCE),
-                    agrees: judged.then_some(dev.abs() <= ENERGY_TOLERANCE),
-                    source: "Sec. 5 (Fig. 9): E ≈ D0 ℓ_stiff/(2R²) for an extremely soft segment; stable state of the diagram",
-                });
-            }
-        }
-        t += 1.0;
+    for r in stable_near_half_integers(&rows, scene.lbar_min, scene.lbar_max) {
+        let estimate = stiff * r.lbar;
+        let dev = (r.energy - estimate) / estimate;
+        let judged = ratio <= SOFT_LIMIT;
+        out_rows.push(Row {
+            id: format!("soft_energy_{:.2}", r.lbar),
+            lbar: Some(r.lbar),
+            paper: format!("{estimate:.10}"),
+            numeric: format!(
+                "{:.10}{}",
+                r.energy,
+                r.energy_error
+                    .map(|e| format!(" ± {e:.1e}"))
+                    .unwrap_or_default()
+            ),
+            deviation: Some(dev),
+            tolerance: judged.then_some(ENERGY_TOLERANCE),
+            agrees: judged.then_some(dev.abs() <= ENERGY_TOLERANCE),
+            source: "Sec. 5 (Fig. 9): E ≈ D0 ℓ_stiff/(2R²) for an extremely soft segment; stable state of the diagram",
+        });
     }
     // The symmetry of branch 1 in the middle of its first stable stretch (the saddle-like
     // states of the paper's first row of Fig. 10, before the figure-eight takes over).
-    if let Some((a, b)) = first_stable_stretch(&rows, 1) {
-        let mid = 0.5 * (a + b);
-        if let Some(r) = rows
-            .iter()
-            .filter(|r| r.branch == 1 && r.stability == Label::Stable)
-            .min_by(|x, y| (x.lbar - mid).abs().total_cmp(&(y.lbar - mid).abs()))
-        {
-            let group = r.shape.point_group.clone().unwrap_or_else(|| "?".into());
-            out_rows.push(Row {
-                id: "sym_branch1".into(),
-                lbar: Some(r.lbar),
-                paper: "Cs".into(),
-                agrees: Some(group == "Cs"),
-                numeric: group,
-                deviation: None,
-                tolerance: None,
-                source: "Sec. 5 (Fig. 10): saddle-like states keep only a mirror plane",
-            });
-        }
+    if let Some(r) = middle_of_first_stable(&rows, 1) {
+        let group = r.shape.point_group.clone().unwrap_or_else(|| "?".into());
+        out_rows.push(Row {
+            id: "sym_branch1".into(),
+            lbar: Some(r.lbar),
+            paper: "Cs".into(),
+            agrees: Some(group == "Cs"),
+            numeric: group,
+            deviation: None,
+            tolerance: None,
+            source: "Sec. 5 (Fig. 10): saddle-like states keep only a mirror plane",
+        });
     }
     if out_rows.is_empty() {
         bail!(

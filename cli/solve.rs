@@ -10,7 +10,7 @@ use rodloop_solver::identify::identify_equilibrium;
 use rodloop_solver::start::from_points;
 use rodloop_solver::{solve_robust_verified, verify_accurate, SolveOptions, StartShape, Strategy};
 
-use crate::output::{checked_json, plural, Cell, OutputRun, Table};
+use crate::output::{checked_json, plural, OutputRun, Table};
 
 pub use crate::args::SolveArgs as Args;
 use crate::args::{accuracy_of, load_scene, stiffness_of};
@@ -113,35 +113,7 @@ fn start_from_file(path: &Path) -> Result<StartShape> {
 /// `D0`: lengths in units of `R`, curvatures in `1/R`, `λR³/D0`, `F R²/D0`, `D/D0` (the model
 /// works in the scene's dimensional `R` and `D`).
 pub fn config_table(profile: &[rodloop_solver::ProfilePoint], scene: &Scene) -> Result<Table> {
-    config_table_in(profile, scene.radius, scene.stiffness.reference())
-}
-
-/// [`config_table`] for a sphere of radius `r` and reference stiffness `d0`.
-pub fn config_table_in(profile: &[rodloop_solver::ProfilePoint], r: f64, d0: f64) -> Result<Table> {
-    let (lam_unit, f_unit) = (r * r * r / d0, r * r / d0);
-    let mut table = Table::new(
-        "config.csv",
-        &[
-            "s", "x", "y", "z", "kappa", "tau", "kappa_g", "lambda", "F_t", "F_n", "F_b", "D",
-        ],
-    );
-    for p in profile {
-        table.push(vec![
-            Cell::F(p.s / r),
-            Cell::F(p.x / r),
-            Cell::F(p.y / r),
-            Cell::F(p.z / r),
-            Cell::F(p.kappa * r),
-            Cell::F(p.tau * r),
-            Cell::F(p.kappa_g * r),
-            Cell::F(p.lambda * lam_unit),
-            Cell::F(p.f_t * f_unit),
-            Cell::F(p.f_n * f_unit),
-            Cell::F(p.f_b * f_unit),
-            Cell::F(p.d / d0),
-        ])?;
-    }
-    Ok(table)
+    crate::states::config_table_in(profile, scene.radius, scene.stiffness.reference())
 }
 
 /// Run the subcommand.

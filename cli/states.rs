@@ -6,7 +6,7 @@
 use anyhow::Result;
 use rodloop_diagram::{DiagramOptions, NumericDiagram, TracedBranch};
 
-use crate::output::OutputRun;
+use crate::output::{Cell, OutputRun, Table};
 
 /// Points per state file of an enclosed diagram's attached and exact states.
 pub use rodloop_diagram::STATE_POINTS;
@@ -68,9 +68,37 @@ pub fn write_state_file(
     d0: f64,
 ) -> Result<()> {
     let file = name.trim_start_matches("states/");
-    let bytes = crate::solve::config_table_in(&f.profile, r, d0)?.to_bytes()?;
+    let bytes = config_table_in(&f.profile, r, d0)?.to_bytes()?;
     crate::output::write_atomic(dir, file, &bytes)?;
     Ok(())
+}
+
+/// [`crate::solve::config_table`] for a sphere of radius `r` and reference stiffness `d0`.
+pub fn config_table_in(profile: &[rodloop_solver::ProfilePoint], r: f64, d0: f64) -> Result<Table> {
+    let (lam_unit, f_unit) = (r * r * r / d0, r * r / d0);
+    let mut table = Table::new(
+        "config.csv",
+        &[
+            "s", "x", "y", "z", "kappa", "tau", "kappa_g", "lambda", "F_t", "F_n", "F_b", "D",
+        ],
+    );
+    for p in profile {
+        table.push(vec![
+            Cell::F(p.s / r),
+            Cell::F(p.x / r),
+            Cell::F(p.y / r),
+            Cell::F(p.z / r),
+            Cell::F(p.kappa * r),
+            Cell::F(p.tau * r),
+            Cell::F(p.kappa_g * r),
+            Cell::F(p.lambda * lam_unit),
+            Cell::F(p.f_t * f_unit),
+            Cell::F(p.f_n * f_unit),
+            Cell::F(p.f_b * f_unit),
+            Cell::F(p.d / d0),
+        ])?;
+    }
+    Ok(table)
 }
 
 /// `f` over `items` on the available cores, results in the order of `items`.
@@ -159,8 +187,7 @@ pub const ENCLOSED_COLUMNS: [&str; 12] = [
 /// uniform in arclength over the length `length`: the surface loop is the enclosed state
 /// where it is attached, with curvature vector `(κ1, κ2) = (κ_g, −1/R)` in the Darboux frame
 /// (rotation-minimising on the sphere, as in the 3-D model's start from a surface loop).
-fn sphere_table(rows: &[[f64; 7]], length: f64, r: f64, d0: f64) -> Result<crate::output::Table> {
-    use crate::output::{Cell, Table};
+fn sphere_table(rows: &[[f64; 7]], length: f64, r: f64, d0: f64) -> Result<Table> {
     let mut table = Table::new("config.csv", &ENCLOSED_COLUMNS);
     let weight = length / rows.len() as f64;
     for &[s, x, y, z, kg, lam, d] in rows {
@@ -188,12 +215,7 @@ fn sphere_table(rows: &[[f64; 7]], length: f64, r: f64, d0: f64) -> Result<crate
 /// ([`rodloop_solver::enclosed_profile`]). The contact force `λ` is nodal (the wall is
 /// imposed at the nodes); a Gauss row holds it interpolated linearly between its cell's
 /// nodes.
-pub fn model_table(
-    st: &rodloop_solver::enclosed::EnclosedState,
-    r: f64,
-    d0: f64,
-) -> Result<crate::output::Table> {
-    use crate::output::{Cell, Table};
+pub fn model_table(st: &rodloop_solver::enclosed::EnclosedState, r: f64, d0: f64) -> Result<Table> {
     let m = &st.model;
     let lam = m.contact_force(&st.z);
     let n = m.cells();
@@ -233,7 +255,7 @@ pub fn result_table(
     res: &rodloop_diagram::enclosed_state::EnclosedResult,
     r: f64,
     d0: f64,
-) -> Result<crate::output::Table> {
+) -> Result<Table> {
     match &res.attached_loop {
         Some((source, points)) => {
             let rows = rodloop_diagram::enclosed_state::attached_rows(source, *points, r, d0)?;
@@ -244,11 +266,7 @@ pub fn result_table(
 }
 
 /// The table of one enclosed diagram point's loop (see [`sphere_table`] for attached ones).
-fn enclosed_table(
-    p: &rodloop_diagram::enclosed::EnclosedPoint,
-    r: f64,
-    d0: f64,
-) -> Result<crate::output::Table> {
+fn enclosed_table(p: &rodloop_diagram::enclosed::EnclosedPoint, r: f64, d0: f64) -> Result<Table> {
     use rodloop_diagram::enclosed::PointShape;
     use std::f64::consts::PI;
     match &p.shape {
@@ -271,7 +289,6 @@ fn enclosed_table(
         PointShape::Circle => {
             // Radius `ρ = R L̄` about the centre, in the plane y = 0; curvature vector
             // (0, −1/ρ) in the frame whose tangent starts along x (the model's start).
-            use crate::output::{Cell, Table};
             let rho = p.lbar;
             let mut table = Table::new("config.csv", &ENCLOSED_COLUMNS);
             for i in 0..STATE_POINTS {

@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{bin, run};
+use common::{bin, run, summary};
 
 fn tmp(name: &str) -> PathBuf {
     common::fresh_dir("rodloop-atlas", name)
@@ -27,10 +27,6 @@ fn rows(dir: &Path) -> Vec<BTreeMap<String, String>> {
                 .collect()
         })
         .collect()
-}
-
-fn json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
 /// Re-solve the state of `row` with `solve --from … --keep-saddle` (the written state as it
@@ -56,7 +52,7 @@ fn resolve_matches(dir: &Path, row: &BTreeMap<String, String>, scene: Option<&Pa
     }
     let (ok, _, err) = run(&mut cmd);
     assert!(ok, "{}: {err}", file.display());
-    let s = json(&out.join("summary.json"));
+    let s = summary(out);
     let e_solve = s["energy"].as_f64().unwrap();
     let est_solve = s["error_estimate"].as_f64().unwrap();
     let e_diagram: f64 = row["energy"].parse().unwrap();
@@ -134,7 +130,7 @@ fn homogeneous_states_resolve_and_the_atlas_has_k_cells_per_branch() {
     let png = std::fs::read(d.join("atlas.png")).unwrap();
     rodloop_figures::raster::png_size(&png).unwrap();
     // summary.json names the state directory and every atlas file, which exist.
-    let summary = json(&d.join("summary.json"));
+    let summary = summary(&d);
     assert_eq!(summary["states_dir"], "states");
     let listed = summary["atlas"]["files"].as_array().unwrap();
     assert_eq!(listed.len(), 2 * 4 * branches.len() + 2);
@@ -329,7 +325,7 @@ fn enclosed_atlas_states_are_in_the_ball_and_off_the_wall_where_the_diagram_says
             )
         })
         .collect();
-    let summary = json(&d.join("summary.json"));
+    let summary = summary(&d);
     let rows = summary["atlas"]["rows"].as_array().unwrap();
     let mut lifted = 0;
     for row in rows {

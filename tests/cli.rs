@@ -1,34 +1,10 @@
 //! End-to-end tests: run the built `rodloop` binary as a user would.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn rodloop(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rodloop"))
-        .args(args)
-        .output()
-        .expect("run rodloop")
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
-
-fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines();
-    let header = lines.next().unwrap().split(',').map(String::from).collect();
-    let rows = lines
-        .map(|l| l.split(',').map(String::from).collect())
-        .collect();
-    (header, rows)
-}
-
-fn read_json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
+mod common;
+use common::{bin, read_csv, read_json, rodloop, tmp};
 
 fn assert_no_nan(path: &Path) {
     let text = std::fs::read_to_string(path).unwrap();
@@ -226,7 +202,7 @@ fn bad_input_gives_clear_errors_without_panics() {
 fn closed_stdout_is_not_a_panic() {
     use std::process::Stdio;
     let out = tmp("pipe");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_rodloop"))
+    let mut child = bin()
         .args([
             "analytic",
             "--lbar",
@@ -1267,7 +1243,7 @@ fn output_directory_lock_and_cleanup() {
     );
     assert!(!dir.join("summary.json").exists());
     // A dead process: a child that has exited.
-    let mut child = Command::new(env!("CARGO_BIN_EXE_rodloop"))
+    let mut child = bin()
         .arg("--version")
         .stdout(std::process::Stdio::null())
         .spawn()
@@ -1401,7 +1377,7 @@ fn param_diagram_with_closed_stdout_is_not_a_panic() {
     use std::process::Stdio;
     let out = tmp("param-pipe");
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/scenes/inhomogeneous-d1-0.5.toml");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_rodloop"))
+    let mut child = bin()
         .args([
             "diagram",
             "--scene",

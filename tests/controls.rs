@@ -1,22 +1,15 @@
 //! The continuation controls of `diagram`: each one changes what the
 //! tracer does, bad values and the exact model are refused with a message.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
+use std::process::Output;
 
+mod common;
+use common::{bin, tmp};
+
+/// Run the built binary with `--out out`.
 fn rodloop(args: &[&str], out: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rodloop"))
-        .args(args)
-        .arg("--out")
-        .arg(out)
-        .output()
-        .unwrap()
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    d
+    bin().args(args).arg("--out").arg(out).output().unwrap()
 }
 
 #[test]

@@ -1,14 +1,13 @@
 //! `rodloop converge` end to end: the ladder shows fourth-order convergence to the exact
 //! loop, and the printed estimates bound the true errors.
 
-use std::path::Path;
-use std::process::Command;
+mod common;
+use common::{bin, read_csv, tmp};
 
 #[test]
 fn converge_ladder_is_fourth_order_against_the_exact_loop() {
-    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("converge-ladder");
-    let _ = std::fs::remove_dir_all(&out);
-    let o = Command::new(env!("CARGO_BIN_EXE_rodloop"))
+    let out = tmp("converge-ladder");
+    let o = bin()
         .args([
             "converge", "--lbar", "1.3", "--branch", "2", "--levels", "4",
         ])
@@ -17,13 +16,8 @@ fn converge_ladder_is_fourth_order_against_the_exact_loop() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let text = std::fs::read_to_string(out.join("converge.csv")).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
-    let rows: Vec<Vec<String>> = lines
-        .map(|l| l.split(',').map(String::from).collect())
-        .collect();
+    let (header, rows) = read_csv(&out.join("converge.csv"));
+    let col = |n: &str| common::col(&header, n);
     assert_eq!(rows.len(), 4);
     // The exact energy comes from the exact layer, independently of the numerical model.
     let exact = rodloop_exact::paper_branch_loop(1, 1.3)

@@ -4,11 +4,6 @@
 mod common;
 
 use common::{assert_refused, rodloop, tmp};
-use std::path::Path;
-
-fn json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
-}
 
 /// The number after `key` in `text`.
 fn number_after(text: &str, key: &str) -> f64 {
@@ -39,7 +34,7 @@ fn sweep_meets_the_phase_switch_and_solve() {
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let summary = json(&out.join("summary.json"));
+    let summary = common::summary(&out);
     let switch = summary["curves"][0]["switches"][0]
         .as_str()
         .unwrap()
@@ -62,7 +57,7 @@ fn sweep_meets_the_phase_switch_and_solve() {
         sweep.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let s = json(&sweep.join("summary.json"));
+    let s = common::summary(&sweep);
     let near: Vec<f64> = s["special_points"]
         .as_array()
         .unwrap()
@@ -99,7 +94,7 @@ fn sweep_meets_the_phase_switch_and_solve() {
             dir.to_str().unwrap(),
         ]);
         assert!(o.status.success());
-        let so = json(&dir.join("summary.json"));
+        let so = common::summary(&dir);
         let (es, ests) = (
             so["energy"].as_f64().unwrap(),
             so["error_estimate"].as_f64().unwrap(),

@@ -11,20 +11,14 @@ use std::process::{Command, Output, Stdio};
 use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
-fn rodloop(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rodloop"))
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .args(args)
-        .output()
-        .expect("run rodloop")
-}
+mod common;
+use common::{col, read_csv, rodloop, tmp};
 
 /// The report of the default scene, made once for every test of this file.
 fn report() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     DIR.get_or_init(|| {
-        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-default");
-        let _ = std::fs::remove_dir_all(&dir);
+        let dir = tmp("report-default");
         let o = rodloop(&["report", "--quiet", "--out", dir.to_str().unwrap()]);
         assert!(
             o.status.success(),
@@ -39,24 +33,6 @@ fn report() -> &'static Path {
 
 fn html() -> String {
     std::fs::read_to_string(report().join("report.html")).unwrap()
-}
-
-/// Rows of a CSV file without quoted fields (`#` lines are comments): header, rows.
-fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
-    let text = std::fs::read_to_string(path).unwrap();
-    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
-    let header = lines.next().unwrap().split(',').map(String::from).collect();
-    let rows = lines
-        .map(|l| l.split(',').map(String::from).collect())
-        .collect();
-    (header, rows)
-}
-
-fn col(header: &[String], name: &str) -> usize {
-    header
-        .iter()
-        .position(|h| h == name)
-        .unwrap_or_else(|| panic!("no column {name} in {header:?}"))
 }
 
 /// The text between `start` (inclusive) and the next `end` (inclusive).
@@ -190,9 +166,7 @@ fn every_figure_is_an_inline_svg_and_nothing_is_fetched() {
         assert!(ids.contains(id), "url(#{id}) has no target");
     }
     // summary.json lists every file the run wrote, the state files among them.
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(report().join("summary.json")).unwrap())
-            .unwrap();
+    let summary = common::summary(report());
     let files = summary["report"]["files"].as_array().unwrap();
     assert!(files
         .iter()
@@ -248,9 +222,7 @@ fn every_figure_is_an_inline_svg_and_nothing_is_fetched() {
     ] {
         assert!(html.contains(needle), "{needle}");
     }
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(report().join("summary.json")).unwrap())
-            .unwrap();
+    let summary = common::summary(report());
     assert_eq!(summary["report"]["figures"], expected.len());
     assert!(summary["run_id"].is_string());
     assert!(summary["report"]["seconds"]["total"].as_f64().unwrap() > 0.0);
@@ -486,8 +458,7 @@ fn page_loads_in_headless_chromium_without_console_errors() {
 
 #[test]
 fn bad_input_is_one_line_and_writes_nothing() {
-    let base = Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-bad");
-    let _ = std::fs::remove_dir_all(&base);
+    let base = tmp("report-bad");
     let broken = base.join("broken.toml");
     std::fs::create_dir_all(&base).unwrap();
     std::fs::write(&broken, "radius = -1\n").unwrap();
@@ -528,8 +499,7 @@ fn bad_input_is_one_line_and_writes_nothing() {
 fn enclosed_report() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     DIR.get_or_init(|| {
-        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-enclosed");
-        let _ = std::fs::remove_dir_all(&dir);
+        let dir = tmp("report-enclosed");
         let o = rodloop(&[
             "report",
             "--quiet",
@@ -583,8 +553,7 @@ fn enclosed_report_has_every_figure_and_the_tables_of_its_csv_files() {
     }
     // The lift-off interval of the lowest state runs from the exchange 1 → 2 (branch 2 lifted
     // off) to the landing of branch 2: a critical length and an event of the CSV files.
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let summary = common::summary(dir);
     let lifted = summary["report"]["lowest_lifted_off"].as_array().unwrap();
     assert_eq!(lifted.len(), 1, "{lifted:?}");
     let (a, b) = (
@@ -612,8 +581,7 @@ fn enclosed_report_has_every_figure_and_the_tables_of_its_csv_files() {
 #[test]
 fn enclosed_states_are_in_the_ball_and_agree_with_the_exact_surface_loops() {
     let dir = enclosed_report();
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let summary = common::summary(dir);
     let states = summary["report"]["states"].as_array().unwrap();
     assert_eq!(states.len(), 3, "{states:?}");
     let mut lifted = 0;
@@ -699,8 +667,7 @@ fn enclosed_page_loads_in_headless_chromium_without_console_errors() {
 /// push: lifting off lowers the energy) with λ ≥ 0 on its contact set.
 #[test]
 fn two_segment_enclosed_report_lists_its_exchange_and_states_below_the_surface() {
-    let base = Path::new(env!("CARGO_TARGET_TMPDIR")).join("report-enclosed-two-segment");
-    let _ = std::fs::remove_dir_all(&base);
+    let base = tmp("report-enclosed-two-segment");
     std::fs::create_dir_all(&base).unwrap();
     let text = std::fs::read_to_string(
         Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -734,8 +701,7 @@ fn two_segment_enclosed_report_lists_its_exchange_and_states_below_the_surface()
     for (t, r) in table.iter().zip(&rows) {
         assert!((num(&t[1]) - num(&r[col(&h, "lbar_cr")])).abs() < 1e-11);
     }
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let summary = common::summary(&dir);
     let states = summary["report"]["states"].as_array().unwrap();
     assert!(!states.is_empty());
     let mut solved = 0;

@@ -17,7 +17,7 @@ mod common;
 use std::f64::consts::PI;
 use std::path::Path;
 
-use common::{fresh_dir, rodloop_ok};
+use common::{fresh_dir, rodloop_ok, summary};
 
 /// Multiple of a row's error estimate within which its file's energy must lie.
 const ESTIMATES: f64 = 5.0;
@@ -268,10 +268,6 @@ fn dominant_harmonic(dir: &Path, file: &str) -> usize {
         .max_by(|a, b| a.1.total_cmp(&b.1))
         .unwrap()
         .0
-}
-
-fn summary(dir: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
 }
 
 /// `phase`: both states of every Maxwell-point row are in `states/` (the limit row, an

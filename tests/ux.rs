@@ -5,14 +5,10 @@
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{bin, run};
+use common::{bin, read_json, run};
 
 fn tmp(name: &str) -> PathBuf {
     common::fresh_dir("rodloop-ux", name)
-}
-
-fn read_json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
 /// A CSV as its header and rows of numbers (columns that are not numbers become NaN).

@@ -48,25 +48,28 @@ pub fn k2_figure(d: &Diagram, width: f64, height: f64) -> Result<String> {
     Ok(rodloop_figures::k2::k2_figure(&k2, width, height)?)
 }
 
-/// The exact diagram's counterpart of a numeric critical length: the same kind between the
-/// same branches, within 0.05 in `L̄`, the nearest one.
+/// The exact diagram's counterpart of a numeric critical length of kind `kind` (`crossing`,
+/// `collapse`) between the branches `from → to` at `lbar_cr`: the same kind between the same
+/// branches, within 0.05 in `L̄`, the nearest one.
 pub fn exact_match<'a>(
-    c: &rodloop_diagram::CriticalLength,
+    kind: &str,
+    (from, to): (u32, u32),
+    lbar_cr: f64,
     exact: &'a Diagram,
 ) -> Option<&'a rodloop_exact::diagram::Critical> {
     exact
         .critical
         .iter()
         .filter(|x| {
-            x.kind == c.kind
-                && x.from_branch == c.from_branch
-                && x.to_branch == c.to_branch
-                && (x.lbar_cr - c.lbar_cr).abs() < 0.05
+            x.kind.to_string() == kind
+                && x.from_branch == from
+                && x.to_branch == to
+                && (x.lbar_cr - lbar_cr).abs() < 0.05
         })
         .min_by(|a, b| {
-            (a.lbar_cr - c.lbar_cr)
+            (a.lbar_cr - lbar_cr)
                 .abs()
-                .total_cmp(&(b.lbar_cr - c.lbar_cr).abs())
+                .total_cmp(&(b.lbar_cr - lbar_cr).abs())
         })
 }
 
@@ -312,7 +315,14 @@ fn run_numeric(
     for c in &d.critical {
         let dev = exact
             .as_ref()
-            .and_then(|e| exact_match(c, e))
+            .and_then(|e| {
+                exact_match(
+                    &c.kind.to_string(),
+                    (c.from_branch, c.to_branch),
+                    c.lbar_cr,
+                    e,
+                )
+            })
             .map(|x| c.lbar_cr - x.lbar_cr);
         outln!(
             "  {:>2}  {:>18.12}  {:>9}  {:>3}->{:<3}  {:>16.10}  {:>9.1e}{}",

@@ -30,14 +30,3 @@ pub struct Args {
     #[arg(long, default_value = "out/report")]
     pub out: PathBuf,
 }
-
-/// The middle of `(a, b)`, rounded to 0.01 when that stays well inside.
-pub fn middle(a: f64, b: f64) -> f64 {
-    let m = 0.5 * (a + b);
-    let r = (m * 100.0).round() / 100.0;
-    if r > a + 0.25 * (b - a) && r < b - 0.25 * (b - a) {
-        r
-    } else {
-        m
-    }
-}

@@ -13,22 +13,22 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use rodloop_diagram::enclosed::{EnclosedDiagram, EnclosedDiagramOptions};
-use rodloop_diagram::Label;
+use rodloop_diagram::enclosed::EnclosedDiagramOptions;
+use rodloop_diagram::representative::{enclosed_choices, Choice};
 use rodloop_diagram::{EnclosedEngine, Engine};
 use rodloop_figures::atlas::atlas_figure;
 use rodloop_figures::color::branch_color;
 use rodloop_figures::data::LoopData;
 use rodloop_figures::diagram::{energy_figure, DiagramData};
 use rodloop_figures::loops::{loop_picture, point_group, LoopPictureOptions};
-use rodloop_figures::plot::{Plot, Series};
-use rodloop_figures::svg::{esc, Svg};
+use rodloop_figures::profiles::{along_loop_figure, AlongLoop};
+use rodloop_figures::svg::esc;
 use rodloop_scene::Scene;
 use rodloop_solver::Accuracy;
 
-use super::args::{middle, Args, ATLAS_SHAPES, FIG_H, FIG_W, PANEL};
+use super::args::{Args, ATLAS_SHAPES, FIG_H, FIG_W, PANEL};
 use super::page::{Entry, Page};
-use super::tables::sci;
+use super::tables::{critical_html, num, sci, special_html, td};
 use crate::output::{checked_json, OutputRun};
 
 /// A solved state with its pictures.
@@ -48,86 +48,42 @@ struct Solved {
     seconds: f64,
 }
 
-/// Where to show branch `b`: the middle of a stretch where it is the lowest state and has
-/// lifted off (from `lifted`), else of its first stretch as the lowest state, else of its
-/// sampled range. `None` for a branch sampled at one length only.
-fn pick(d: &EnclosedDiagram, b: u32, lifted: &[(f64, f64)]) -> Option<(f64, String, bool)> {
-    let mut pts: Vec<_> = d.points.iter().filter(|p| p.branch == b).collect();
-    pts.sort_by(|a, c| a.lbar.total_cmp(&c.lbar));
-    let (lo, hi) = (pts.first()?.lbar, pts.last()?.lbar);
-    if hi <= lo {
-        return None;
-    }
-    for &(a, c) in lifted {
-        let inside: Vec<_> = pts.iter().filter(|p| p.lbar > a && p.lbar < c).collect();
-        if !inside.is_empty() && inside.iter().all(|p| p.lowest && !p.attached) {
-            return Some((
-                middle(a, c),
-                format!("middle of the stretch {a:.6} < L̄ < {c:.6} where it is the lowest state and has lifted off the wall"),
-                true,
-            ));
-        }
-    }
-    if let Some(start) = pts.iter().position(|p| p.label == Label::Stable) {
-        let len = pts[start..]
-            .iter()
-            .take_while(|p| p.label == Label::Stable)
-            .count();
-        let (a, c) = (pts[start].lbar, pts[start + len - 1].lbar);
-        let at = if c > a { middle(a, c) } else { a };
-        return Some((
-            at,
-            format!("middle of its first stable stretch (samples at {a:.4} ≤ L̄ ≤ {c:.4})"),
-            true,
-        ));
-    }
-    Some((
-        middle(lo, hi),
-        format!("middle of its sampled range {lo:.4} ≤ L̄ ≤ {hi:.4} (never the lowest state there)"),
-        false,
-    ))
-}
-
 /// `λ(s)` and, for a loop off the wall somewhere, the gap `(R − |r|)/R` along the loop.
 fn profile_figure(data: &LoopData, branch: u32, lifted: bool) -> Result<String> {
-    let length = data.length();
-    let s = data.s();
-    let panel = |col: &str, title: &str, ylabel: &str| -> Result<Plot> {
-        let v = data
-            .column(col)
-            .with_context(|| format!("the state has no {col} column"))?;
-        let mut points: Vec<(f64, f64)> = s.iter().zip(v).map(|(&a, &b)| (a / length, b)).collect();
-        if let (Some(&s0), Some(&v0)) = (s.first(), v.first()) {
-            points.push((s0 / length + 1.0, v0));
-        }
-        Ok(Plot {
-            title: title.into(),
-            xlabel: "s/L (s = 0 as marked on the loop)".into(),
-            ylabel: ylabel.into(),
-            series: vec![Series {
-                color: branch_color(branch).to_string(),
-                width: 2.0,
-                dash: String::new(),
-                points,
-            }],
-            hlines: vec![0.0],
-            ..Default::default()
-        })
+    let force = AlongLoop {
+        column: "lambda",
+        title: "Contact force along the loop",
+        ylabel: "λR³/D₀",
+        id: "force",
+        clip: None,
     };
-    let (w, h) = (380.0, 300.0);
-    let mut svg = Svg::new(if lifted { 2.0 * w } else { w }, h);
-    panel("lambda", "Contact force along the loop", "λR³/D₀")?
-        .render(&mut svg, 0.0, 0.0, w, h, "force");
-    if lifted {
-        panel("gap", "Gap to the wall along the loop", "gap (R − |r|)/R")?
-            .render(&mut svg, w, 0.0, w, h, "gap");
-    }
-    Ok(svg.finish())
+    let gap = AlongLoop {
+        column: "gap",
+        title: "Gap to the wall along the loop",
+        ylabel: "gap (R − |r|)/R",
+        id: "gap",
+        clip: None,
+    };
+    let panels = if lifted {
+        vec![force, gap]
+    } else {
+        vec![force]
+    };
+    Ok(along_loop_figure(
+        data,
+        &panels,
+        branch_color(branch),
+        (380.0, 300.0),
+    )?)
 }
 
 impl super::page::Solved for Solved {
     fn seconds(&self) -> f64 {
         self.seconds
+    }
+
+    fn pictures(&self) -> (&str, &str) {
+        (&self.picture, &self.profile)
     }
 
     fn note(&self) -> Result<serde_json::Value> {
@@ -143,15 +99,10 @@ impl super::page::Solved for Solved {
     }
 }
 
-fn solve_one(
-    scene: &Scene,
-    accuracy: Accuracy,
-    branch: u32,
-    eta: u32,
-    lbar: f64,
-    lowest: bool,
-) -> Result<Solved> {
+/// Branch `choice.branch` solved at `choice.lbar` as `rodloop solve` solves it, and drawn.
+fn solve_one(scene: &Scene, accuracy: Accuracy, choice: &Choice) -> Result<Solved> {
     let t0 = Instant::now();
+    let (branch, eta, lbar) = (choice.branch, choice.eta, choice.lbar);
     let stiffness = crate::args::stiffness_of(&scene.stiffness);
     let res = crate::enclosed::solve_state(scene, &stiffness, lbar, branch, accuracy)?;
     let table = crate::states::result_table(&res, scene.radius, scene.stiffness.reference())?;
@@ -160,20 +111,10 @@ fn solve_one(
         &table.to_bytes()?,
     )?;
     let index = res.stability.0;
-    let label = match (index, lowest) {
-        (0, true) => "stable",
-        (0, false) => "metastable",
-        _ => "unstable",
-    };
+    let label = choice.label(index);
     let lifted = data.lifted_off();
     let color = if lifted { "gap" } else { "lambda" };
-    let gap = data.column("gap").unwrap_or(&[]);
-    let lam = data.column("lambda").unwrap_or(&[]);
-    let max_gap = gap.iter().fold(0.0f64, |m, &v| m.max(v));
-    let touching = gap
-        .iter()
-        .filter(|&&v| v <= rodloop_figures::data::GAP_TOUCH)
-        .count();
+    let wall = data.wall_contact();
     let pic = loop_picture(
         &data,
         &LoopPictureOptions {
@@ -191,15 +132,14 @@ fn solve_one(
             extremes: None,
         },
     )?;
-    let _ = eta;
     Ok(Solved {
         energy: res.energy,
         surface: res.surface,
         index,
         label,
-        max_gap,
-        contact_fraction: touching as f64 / gap.len().max(1) as f64,
-        lambda_min: lam.iter().fold(f64::INFINITY, |m, &v| m.min(v)),
+        max_gap: wall.max_gap,
+        contact_fraction: wall.contact_fraction,
+        lambda_min: wall.lambda_min,
         method: res.method,
         point_group: point_group(&data, crate::draw::POINT_GROUP_TOL).map(|g| g.0),
         picture: pic.svg,
@@ -242,6 +182,8 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     let mut schema = engine.schema(&d, &scene.name)?;
     let (w, h) = crate::diagram::FIGURE_SIZE;
     crate::diagram::enclosed::write_outputs(&mut schema, &d, &opts, &run, w, h)?;
+    // The page's tables from the diagram directory as the schema reads it back.
+    let dir = rodloop_schema::Diagram::read(run.stage_dir())?;
     let lifted = rodloop_diagram::engine::lowest_lifted_off(&d);
     let t_diagram = t.elapsed().as_secs_f64();
 
@@ -268,27 +210,9 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
 
     // 4. One state per branch.
     let t = Instant::now();
-    let mut branches: Vec<(u32, u32)> = d.points.iter().map(|p| (p.branch, p.eta)).collect();
-    branches.sort_unstable();
-    branches.dedup();
-    let plan: Vec<(u32, u32, f64, String, bool)> = branches
-        .iter()
-        .filter_map(|&(b, eta)| pick(&d, b, &lifted).map(|(l, why, low)| (b, eta, l, why, low)))
-        .collect();
-    let solved = crate::states::parallel_map(&plan, |(b, eta, lbar, _, low)| {
-        solve_one(scene, accuracy, *b, *eta, *lbar, *low).map_err(|e| format!("{e:#}"))
+    let states = Entry::solve_all(enclosed_choices(&d, &lifted), |c| {
+        solve_one(scene, accuracy, c)
     });
-    let states: Vec<Entry<Solved>> = plan
-        .into_iter()
-        .zip(solved)
-        .map(|((branch, eta, lbar, why, _), outcome)| Entry {
-            branch,
-            eta,
-            lbar,
-            why,
-            outcome,
-        })
-        .collect();
     let t_states = t.elapsed().as_secs_f64();
 
     // 5. The page.
@@ -300,9 +224,9 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
             lo = opts.lbar_min,
             hi = opts.lbar_max,
             acc = format!("{accuracy:?}").to_lowercase(),
-            nstates = d.points.len(),
-            nbranches = branches.len(),
-            ncrit = d.critical.len(),
+            nstates = dir.points.len(),
+            nbranches = dir.points.iter().map(|p| p.branch).collect::<std::collections::BTreeSet<_>>().len(),
+            ncrit = dir.critical.len(),
             nev = crate::output::plural(d.events.len() as u64, "special point"),
         ),
         &[
@@ -327,42 +251,29 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     page.h.push_str("</section>\n");
 
     page.h.push_str("<section id=\"critical\">\n<h2>2. Critical lengths and lift-off</h2>\n<p>Where the lowest branch changes. An exchange between two attached states is the surface one (exact layer); where one of the two has lifted off, E<sub>a</sub> = E<sub>b</sub> is solved again on re-solved 3-D states, with the error estimate of L̄<sub>cr</sub> itself. The same numbers are in <code>critical.csv</code>; the surface value is the surface diagram's.</p>\n");
-    page.h.push_str("<table id=\"critical-table\"><thead><tr><th>i</th><th>L̄<sub>cr</sub></th><th>kind</th><th>from → to</th><th>E R/(πD₀)</th><th>error estimate of L̄<sub>cr</sub></th><th>surface L̄<sub>cr</sub></th><th>enclosed − surface</th><th>method</th></tr></thead><tbody>\n");
-    for e in &d.critical {
-        let c = &e.critical;
-        let _ = writeln!(page.h,
-            "<tr><td>{}</td><td class=\"num\">{:.12}</td><td>{}</td><td>{} → {}</td><td class=\"num\">{:.10}</td><td class=\"num\">{}</td><td class=\"num\">{:.12}</td><td class=\"num\">{}</td><td>{}</td></tr>",
-            c.index,
-            c.lbar_cr,
-            c.kind,
-            c.from_branch,
-            c.to_branch,
-            c.energy,
-            sci(c.error_estimate),
-            e.surface_lbar_cr,
-            sci(c.lbar_cr - e.surface_lbar_cr),
-            esc(&e.method)
-        );
-    }
-    page.h.push_str("</tbody></table>\n");
-    if d.events.is_empty() {
+    page.h.push_str(&critical_html(
+        &dir.critical,
+        &["surface L̄<sub>cr</sub>", "enclosed − surface", "method"],
+        |c| {
+            let surface = c.extra.get("surface_lbar_cr").and_then(|v| v.as_f64());
+            vec![
+                num(surface.map_or("–".into(), |x| format!("{x:.12}"))),
+                num(surface.map_or("–".into(), |x| sci(c.lbar_cr - x))),
+                td(esc(c
+                    .extra
+                    .get("method")
+                    .and_then(|v| v.as_str())
+                    .unwrap_or("–"))),
+            ]
+        },
+    ));
+    let special = dir.special.as_deref().unwrap_or_default();
+    if special.is_empty() {
         page.h
             .push_str("<p>No branch lifts off or lands inside the range.</p>\n");
     } else {
-        page.h.push_str("<p>Special points (<code>special_points.csv</code>). Lift-off and landing: where λ<sub>min</sub> of a branch's surface loop crosses zero, i.e. k²(L̄) = 1/2 (Eq. (38)) for a uniform rod, bisected on the exact layer (located on re-solved surface states for a two-segment rod). Detachment: where the last contact force of a lifted-off branch vanishes and the loop leaves the wall (below it the loop is free). Branch point: where the Hessian index of a lifted-off sheet changes, at the interpolated root of the crossing eigenvalue.</p>\n<table id=\"events-table\"><thead><tr><th>event</th><th>branch</th><th>L̄</th><th>error estimate</th><th>E R/(πD₀)</th><th>index below</th><th>index above</th></tr></thead><tbody>\n");
-        for e in &d.events {
-            let _ = writeln!(page.h,
-                "<tr><td>{}</td><td>{}</td><td class=\"num\">{:.12}</td><td class=\"num\">{}</td><td class=\"num\">{:.10}</td><td>{}</td><td>{}</td></tr>",
-                e.kind.as_str(),
-                e.branch,
-                e.lbar,
-                sci(e.error_estimate),
-                e.energy,
-                e.index_before,
-                e.index_after
-            );
-        }
-        page.h.push_str("</tbody></table>\n");
+        page.h.push_str("<p>Special points (<code>special_points.csv</code>). Lift-off and landing: where λ<sub>min</sub> of a branch's surface loop crosses zero, i.e. k²(L̄) = 1/2 (Eq. (38)) for a uniform rod, bisected on the exact layer (located on re-solved surface states for a two-segment rod). Detachment: where the last contact force of a lifted-off branch vanishes and the loop leaves the wall (below it the loop is free). Branch point: where the Hessian index of a lifted-off sheet changes, at the interpolated root of the crossing eigenvalue.</p>\n");
+        page.h.push_str(&special_html(special));
     }
     if lifted.is_empty() {
         page.h.push_str("<p id=\"lifted-off\">The lowest state of a paper branch lies on the wall at every sampled length: the Sec. 3.2 hypothesis (stable loops with L̄ ≥ 1 stay on the surface) holds in this range.</p>\n");
@@ -403,38 +314,55 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     page.h.push_str("</section>\n");
 
     page.h.push_str("<section id=\"states\">\n<h2>4. One state of each branch</h2>\n<p>Each branch solved at one length as <code>rodloop solve</code> solves it: the exact surface loop where its λ ≥ 0 (then it is the enclosed equilibrium; the 3-D model re-solves it as a check), else the 3-D enclosed model from it (energy error from the cascade's last three or four levels, as its method says). A loop that has lifted off is coloured by its gap (R − |r|)/R, one on the wall by its contact force λR³/D₀; nearer strands are darker and thicker; red circles: self-contacts in 3-D.</p>\n");
-    page.h.push_str("<table id=\"states-table\"><thead><tr><th>branch</th><th>η</th><th>L̄</th><th>chosen as</th><th>E R/(πD₀)</th><th>error</th><th>surface E</th><th>surface λ<sub>min</sub>R³/D₀</th><th>index</th><th>state</th><th>on the wall</th><th>max gap / R</th><th>point group</th><th>method</th></tr></thead><tbody>\n");
-    page.state_rows(&states, 10, |st, s| {
-        let (se, sl) = s
-            .surface
-            .map(|(e, l)| (format!("{e:.10}"), format!("{l:.6}")))
-            .unwrap_or_else(|| ("–".into(), "–".into()));
-        format!(
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"num\">{:.10}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td>{}</td><td>{}</td><td class=\"num\">{:.1} %</td><td class=\"num\">{}</td><td>{}</td><td>{}</td></tr>",
-            st.branch,
-            st.eta,
-            st.lbar,
-            esc(&st.why),
-            s.energy.0,
-            sci(s.energy.1),
-            se,
-            sl,
-            s.index,
-            s.label,
-            100.0 * s.contact_fraction,
-            sci(s.max_gap),
-            s.point_group.as_deref().map(esc).unwrap_or_else(|| "–".into()),
-            esc(&s.method)
-        )
-    });
-    page.h.push_str("</tbody></table>\n");
-    for st in &states {
-        if let Ok(s) = &st.outcome {
-            let _ = writeln!(page.h, "<div class=\"state\" id=\"state-{}\">", st.branch);
-            page.fig(
-                &s.picture,
-                &format!("loop of branch {} at length {}", st.branch, st.lbar),
-                &format!(
+    page.states_table(
+        &[
+            "branch",
+            "η",
+            "L̄",
+            "chosen as",
+            "E R/(πD₀)",
+            "error",
+            "surface E",
+            "surface λ<sub>min</sub>R³/D₀",
+            "index",
+            "state",
+            "on the wall",
+            "max gap / R",
+            "point group",
+            "method",
+        ],
+        &states,
+        |st, s| {
+            let (se, sl) = s
+                .surface
+                .map(|(e, l)| (format!("{e:.10}"), format!("{l:.6}")))
+                .unwrap_or_else(|| ("–".into(), "–".into()));
+            vec![
+                td(st.branch),
+                td(st.eta),
+                td(st.lbar),
+                td(esc(&st.why)),
+                num(format!("{:.10}", s.energy.0)),
+                num(sci(s.energy.1)),
+                num(se),
+                num(sl),
+                td(s.index),
+                td(s.label),
+                num(format!("{:.1} %", 100.0 * s.contact_fraction)),
+                num(sci(s.max_gap)),
+                td(s.point_group
+                    .as_deref()
+                    .map(esc)
+                    .unwrap_or_else(|| "–".into())),
+                td(esc(&s.method)),
+            ]
+        },
+    );
+    page.state_pictures(&states, |st, s| {
+        [
+            (
+                format!("loop of branch {} at length {}", st.branch, st.lbar),
+                format!(
                     "Branch {} (η = {}) at L̄ = {}: {}, E R/(πD₀) = {:.8} ± {}, coloured by {}; {:.1} % of the nodes on the wall, largest gap {} R.",
                     st.branch,
                     st.eta,
@@ -450,23 +378,19 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
                     100.0 * s.contact_fraction,
                     sci(s.max_gap)
                 ),
-                &format!("fig-loop-{}", st.branch),
-            );
-            page.fig(
-                &s.profile,
-                &format!("contact force and gap along the loop of branch {}", st.branch),
-                &format!(
+            ),
+            (
+                format!("contact force and gap along the loop of branch {}", st.branch),
+                format!(
                     "Contact force λR³/D₀{} along the loop of branch {} at L̄ = {} (smallest λ {:.6}; the wall only pushes, λ ≥ 0, and λ = 0 wherever the loop is off the wall).",
                     if s.color == "gap" { " and gap (R − |r|)/R" } else { "" },
                     st.branch,
                     st.lbar,
                     s.lambda_min
                 ),
-                &format!("fig-force-{}", st.branch),
-            );
-            page.h.push_str("</div>\n");
-        }
-    }
+            ),
+        ]
+    });
     page.h.push_str("</section>\n");
 
     let t_page = t.elapsed().as_secs_f64();

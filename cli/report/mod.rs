@@ -5,9 +5,11 @@
 //! homogeneous scenes), the branch atlas (Figs. 2, 9, 10; [`crate::atlas`]), a picture and the
 //! contact force `λ(s)` of the stable state of every branch at one length, the shape of the
 //! first against its Euler curve (Fig. 5), the run's settings and its timings. The page builder
-//! both kinds of scene share is `page.rs`, the representative states of this page `states.rs`,
-//! the tables and the style sheet `tables.rs`, the arguments and page sizes `args.rs`, the page
-//! of an enclosed scene `enclosed.rs`.
+//! both kinds of scene share is `page.rs`, the representative states of this page `states.rs`
+//! (where each branch is shown: [`rodloop_diagram::representative`]), the tables (the one
+//! table markup, the critical lengths and special points of the diagram directory as
+//! [`rodloop_schema::Diagram::read`] reads it back) and the style sheet `tables.rs`, the
+//! arguments and page sizes `args.rs`, the page of an enclosed scene `enclosed.rs`.
 //!
 //! The page needs no network and no file beside it: every figure is an inline `<svg>`, the
 //! style sheet is inline, there is no script and no external font (the figures name
@@ -36,7 +38,7 @@ mod tables;
 pub use args::Args;
 use args::{ATLAS_SHAPES, FIG_H, FIG_W};
 use page::Page;
-use tables::{compare_html, critical_html, sci};
+use tables::{compare_html, critical_html, exact_cells, num, sci, td, HtmlTable};
 
 /// Run the subcommand.
 pub fn run(args: &Args) -> Result<()> {
@@ -67,6 +69,8 @@ pub fn run(args: &Args) -> Result<()> {
     let t = Instant::now();
     let d = crate::diagram::surface::run_numeric(&opts, run.stage_dir(), false, args.quiet, None)?;
     crate::diagram::surface::write_outputs(&d, &opts, &scene.name, &run)?;
+    // The page's tables from the diagram directory as the schema reads it back.
+    let dir = rodloop_schema::Diagram::read(run.stage_dir())?;
     let t_diagram = t.elapsed().as_secs_f64();
 
     // 2. The diagram figures, from the staged CSV files as `rodloop draw` reads them.
@@ -120,9 +124,9 @@ pub fn run(args: &Args) -> Result<()> {
             lo = opts.lbar_min,
             hi = opts.lbar_max,
             acc = format!("{accuracy:?}").to_lowercase(),
-            nstates = d.rows().len(),
+            nstates = dir.points.len(),
             nbranches = crate::diagram::surface::branch_count(&d.branches),
-            ncrit = d.critical.len(),
+            ncrit = dir.critical.len(),
         ),
         &[
             ("diagram", "Diagram"),
@@ -178,7 +182,15 @@ pub fn run(args: &Args) -> Result<()> {
     }
     page.h
         .push_str(" The same numbers are in <code>critical.csv</code>.</p>\n");
-    page.h.push_str(&critical_html(&d, exact.as_ref()));
+    let exact_heads: &[&str] = if exact.is_some() {
+        &["exact L̄<sub>cr</sub>", "numeric − exact"]
+    } else {
+        &[]
+    };
+    page.h
+        .push_str(&critical_html(&dir.critical, exact_heads, |c| {
+            exact.as_ref().map_or(Vec::new(), |e| exact_cells(c, e))
+        }));
     if let Some(gc) = &d.great_circles {
         let loads: Vec<_> = gc
             .loads
@@ -186,19 +198,29 @@ pub fn run(args: &Args) -> Result<()> {
             .filter_map(|l| Some((l, l.lambda_formula?, l.equation.as_ref()?)))
             .collect();
         if !loads.is_empty() {
-            page.h.push_str("<p>Buckling loads of the m-fold great circles, found numerically where the constrained Hessian becomes singular, against Eqs. (33)–(34):</p>\n<table id=\"buckling-table\"><thead><tr><th>m</th><th>mode (periods of κ<sub>g</sub>)</th><th>numeric λR³/D₀</th><th>error estimate</th><th>formula</th><th>value</th></tr></thead><tbody>\n");
+            page.h.push_str("<p>Buckling loads of the m-fold great circles, found numerically where the constrained Hessian becomes singular, against Eqs. (33)–(34):</p>\n");
+            let mut t = HtmlTable::new(
+                "buckling-table",
+                &[
+                    "m",
+                    "mode (periods of κ<sub>g</sub>)",
+                    "numeric λR³/D₀",
+                    "error estimate",
+                    "formula",
+                    "value",
+                ],
+            );
             for (l, f, eq) in loads {
-                let _ = writeln!(page.h,
-                    "<tr><td>{}</td><td>{}</td><td class=\"num\">{:.10}</td><td class=\"num\">{}</td><td>Eq. ({})</td><td class=\"num\">{:.10}</td></tr>",
-                    l.m,
-                    l.mode_periods,
-                    l.lambda_numeric,
-                    sci(l.lambda_error),
-                    esc(eq),
-                    f
-                );
+                t.row([
+                    td(l.m),
+                    td(l.mode_periods),
+                    num(format!("{:.10}", l.lambda_numeric)),
+                    num(sci(l.lambda_error)),
+                    td(format!("Eq. ({})", esc(eq))),
+                    num(format!("{f:.10}")),
+                ]);
             }
-            page.h.push_str("</tbody></table>\n");
+            page.h.push_str(&t.finish());
         }
     }
     page.h.push_str("</section>\n");
@@ -219,28 +241,49 @@ pub fn run(args: &Args) -> Result<()> {
     page.h.push_str("</section>\n");
 
     page.h.push_str("<section id=\"states\">\n<h2>4. The stable state of each branch</h2>\n<p>Each branch solved at one length (the middle of the widest stretch where the diagram finds it the lowest branch), from the Euler rotation curve with l = η at the report's accuracy, as <code>rodloop solve</code> does; the converged state's branch is checked from the periods of its κ<sub>g</sub>. Each picture shows the loop on the sphere from an oblique view and along the three axes, coloured by the contact force λR³/D₀ (uniform rods) or by the stiffness D/D₀ (other profiles); nearer strands are darker and thicker. Red circles: self-contacts in 3-D.</p>\n");
-    page.h.push_str("<table id=\"states-table\"><thead><tr><th>branch</th><th>η</th><th>L̄</th><th>chosen as</th><th>solved from</th><th>E R/(πD₀)</th><th>error</th><th>index</th><th>state</th><th>λR³/D₀ range</th><th>point group</th><th>self-contacts</th><th>cells</th></tr></thead><tbody>\n");
-    page.state_rows(&states, 9, |st, s| {
-        format!(
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"num\">{:.10}</td><td class=\"num\">{}</td><td>{}</td><td>{}</td><td class=\"num\">[{:.6}, {:.6}] ± {}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-            st.branch,
-            st.eta,
-            st.lbar,
-            esc(&st.why),
-            esc(&s.start),
-            s.energy,
-            sci(s.energy_error),
-            s.index,
-            s.label,
-            s.lambda_range.0,
-            s.lambda_range.1,
-            sci(s.lambda_error),
-            s.point_group.as_deref().map(esc).unwrap_or_else(|| "–".into()),
-            s.self_contacts,
-            s.cells
-        )
-    });
-    page.h.push_str("</tbody></table>\n");
+    page.states_table(
+        &[
+            "branch",
+            "η",
+            "L̄",
+            "chosen as",
+            "solved from",
+            "E R/(πD₀)",
+            "error",
+            "index",
+            "state",
+            "λR³/D₀ range",
+            "point group",
+            "self-contacts",
+            "cells",
+        ],
+        &states,
+        |st, s| {
+            vec![
+                td(st.branch),
+                td(st.eta),
+                td(st.lbar),
+                td(esc(&st.why)),
+                td(esc(&s.start)),
+                num(format!("{:.10}", s.energy)),
+                num(sci(s.energy_error)),
+                td(s.index),
+                td(s.label),
+                num(format!(
+                    "[{:.6}, {:.6}] ± {}",
+                    s.lambda_range.0,
+                    s.lambda_range.1,
+                    sci(s.lambda_error)
+                )),
+                td(s.point_group
+                    .as_deref()
+                    .map(esc)
+                    .unwrap_or_else(|| "–".into())),
+                td(s.self_contacts),
+                td(s.cells),
+            ]
+        },
+    );
     // Fig. 5 for the first solved state: its shape against the Euler curve.
     if let Some((st, (svg, dist))) = states.iter().find_map(|st| {
         st.outcome
@@ -259,13 +302,11 @@ pub fn run(args: &Args) -> Result<()> {
             "fig-shape",
         );
     }
-    for st in &states {
-        if let Ok(s) = &st.outcome {
-            let _ = writeln!(page.h, "<div class=\"state\" id=\"state-{}\">", st.branch);
-            page.fig(
-                &s.picture,
-                &format!("loop of branch {} at length {}", st.branch, st.lbar),
-                &format!(
+    page.state_pictures(&states, |st, s| {
+        [
+            (
+                format!("loop of branch {} at length {}", st.branch, st.lbar),
+                format!(
                     "Branch {} (η = {}) at L̄ = {}: {}, E R/(πD₀) = {:.8} ± {}{}, {}.",
                     st.branch,
                     st.eta,
@@ -279,12 +320,10 @@ pub fn run(args: &Args) -> Result<()> {
                         .unwrap_or_default(),
                     crate::output::plural(s.self_contacts as u64, "self-contact"),
                 ),
-                &format!("fig-loop-{}", st.branch),
-            );
-            page.fig(
-                &s.force,
-                &format!("contact force along the loop of branch {}", st.branch),
-                &format!(
+            ),
+            (
+                format!("contact force along the loop of branch {}", st.branch),
+                format!(
                     "Contact force λR³/D₀ along the loop of branch {} at L̄ = {} (paper Fig. 6): from {:.6} to {:.6} ± {}.",
                     st.branch,
                     st.lbar,
@@ -292,11 +331,9 @@ pub fn run(args: &Args) -> Result<()> {
                     s.lambda_range.1,
                     sci(s.lambda_error)
                 ),
-                &format!("fig-force-{}", st.branch),
-            );
-            page.h.push_str("</div>\n");
-        }
-    }
+            ),
+        ]
+    });
     page.h.push_str("</section>\n");
 
     page.h.push_str("<section id=\"paper\">\n<h2>5. Comparison with the paper's printed values</h2>\n<p>Values printed in the paper (<code>data/reference/paper_values.csv</code>, with their sources), next to rodloop's. “Agrees” means within half a unit of the last printed digit (exact statements: within 1e−6).");

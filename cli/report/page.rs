@@ -6,12 +6,14 @@
 use std::fmt::Write as _;
 
 use anyhow::Result;
+use rodloop_diagram::representative::Choice;
 use rodloop_figures::svg::esc;
 
-use super::tables::{self, Figures, Settings, STYLE};
+use super::tables::{self, td, Figures, HtmlTable, Settings, STYLE};
 use crate::output::{checked_json, OutputRun};
 
-/// The representative state of one branch: where it was taken and what came out.
+/// The representative state of one branch: where it was taken (a [`Choice`]) and what came
+/// out.
 pub struct Entry<T> {
     /// Paper branch number.
     pub branch: u32,
@@ -25,12 +27,37 @@ pub struct Entry<T> {
     pub outcome: Result<T, String>,
 }
 
+impl<T: Send> Entry<T> {
+    /// Every choice solved by `solve` on the available cores, in the order of `choices`, each
+    /// error on one line.
+    pub fn solve_all(
+        choices: Vec<Choice>,
+        solve: impl Fn(&Choice) -> Result<T> + Sync,
+    ) -> Vec<Self> {
+        let solved =
+            crate::states::parallel_map(&choices, |c| solve(c).map_err(|e| format!("{e:#}")));
+        choices
+            .into_iter()
+            .zip(solved)
+            .map(|(c, outcome)| Entry {
+                branch: c.branch,
+                eta: c.eta,
+                lbar: c.lbar,
+                why: c.why,
+                outcome,
+            })
+            .collect()
+    }
+}
+
 /// A solved representative state as the page's timings and `summary.json` need it.
 pub trait Solved {
     /// Wall time of the solve and its pictures, seconds.
     fn seconds(&self) -> f64;
     /// The state's fields in `summary.json` (`report.states`), besides branch, `η`, `L̄`.
     fn note(&self) -> Result<serde_json::Value>;
+    /// The loop picture and the profile along the loop (SVG).
+    fn pictures(&self) -> (&str, &str);
 }
 
 /// A report page being written.
@@ -74,27 +101,61 @@ impl Page {
         self.h.push_str(&f);
     }
 
-    /// The rows of the states table: `row` for a solved state, a "not solved" row spanning
-    /// `span` columns otherwise.
-    pub fn state_rows<T>(
+    /// The table `states-table` of the representative states under the column heads
+    /// `heads` (the first four: branch, `η`, `L̄`, why that length): `row` gives the cells of
+    /// a solved state; a state that could not be solved has the error across the rest.
+    pub fn states_table<T>(
         &mut self,
+        heads: &[&str],
         states: &[Entry<T>],
-        span: usize,
-        mut row: impl FnMut(&Entry<T>, &T) -> String,
+        row: impl Fn(&Entry<T>, &T) -> Vec<String>,
     ) {
+        let mut t = HtmlTable::new("states-table", heads);
         for st in states {
             match &st.outcome {
-                Ok(s) => {
-                    let r = row(st, s);
-                    let _ = writeln!(self.h, "{r}");
-                }
-                Err(e) => tables::not_solved_row(
-                    &mut self.h,
-                    (st.branch, st.eta, st.lbar),
-                    &st.why,
-                    e,
-                    span,
-                ),
+                Ok(s) => t.row(row(st, s)),
+                Err(e) => t.row([
+                    td(st.branch),
+                    td(st.eta),
+                    td(st.lbar),
+                    td(esc(&st.why)),
+                    format!(
+                        "<td colspan=\"{}\" class=\"bad\">not solved: {}</td>",
+                        heads.len().saturating_sub(4),
+                        esc(e)
+                    ),
+                ]),
+            }
+        }
+        self.h.push_str(&t.finish());
+    }
+
+    /// The two pictures of every solved state side by side in `<div class="state">`: the loop
+    /// (`fig-loop-B`) and its profile along the loop (`fig-force-B`), with the labels and
+    /// captions `text` gives (`[(label, caption); 2]`).
+    pub fn state_pictures<T: Solved>(
+        &mut self,
+        states: &[Entry<T>],
+        text: impl Fn(&Entry<T>, &T) -> [(String, String); 2],
+    ) {
+        for st in states {
+            if let Ok(s) = &st.outcome {
+                let _ = writeln!(self.h, "<div class=\"state\" id=\"state-{}\">", st.branch);
+                let [(loop_label, loop_caption), (force_label, force_caption)] = text(st, s);
+                let (picture, profile) = s.pictures();
+                self.fig(
+                    picture,
+                    &loop_label,
+                    &loop_caption,
+                    &format!("fig-loop-{}", st.branch),
+                );
+                self.fig(
+                    profile,
+                    &force_label,
+                    &force_caption,
+                    &format!("fig-force-{}", st.branch),
+                );
+                self.h.push_str("</div>\n");
             }
         }
     }

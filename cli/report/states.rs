@@ -4,17 +4,17 @@
 
 use std::time::Instant;
 
-use anyhow::{Context, Result};
-use rodloop_diagram::{DiagramOptions, DiagramRow, Label, NumericDiagram};
+use anyhow::Result;
+use rodloop_diagram::representative::{surface_choices, Choice};
+use rodloop_diagram::{DiagramOptions, NumericDiagram};
 use rodloop_figures::color::branch_color;
 use rodloop_figures::data::LoopData;
 use rodloop_figures::loops::{loop_picture, point_group, LoopPictureOptions};
-use rodloop_figures::plot::{Plot, Series};
-use rodloop_figures::svg::Svg;
+use rodloop_figures::profiles::{along_loop_figure, AlongLoop};
 use rodloop_scene::Scene;
 use rodloop_solver::Accuracy;
 
-use super::args::{middle, PANEL};
+use super::args::PANEL;
 use super::page::{Entry, Solved};
 use crate::output::checked_json;
 
@@ -51,6 +51,10 @@ impl Solved for SolvedState {
         self.seconds
     }
 
+    fn pictures(&self) -> (&str, &str) {
+        (&self.picture, &self.force)
+    }
+
     fn note(&self) -> Result<serde_json::Value> {
         checked_json!({
             "energy": self.energy, "energy_error": self.energy_error, "index": self.index,
@@ -61,23 +65,6 @@ impl Solved for SolvedState {
     }
 }
 
-/// The widest stretch of lengths over which the diagram labels branch `branch` stable: the
-/// stable rows of every branch in increasing `L̄`, split where another branch's stable row
-/// comes between (a non-uniform rod's branch has several families, so the rows of the branch
-/// alone interleave); the lengths of the first and last row of the widest run.
-fn widest_stable_stretch(rows: &[DiagramRow], branch: u32) -> Option<(f64, f64)> {
-    let mut stable: Vec<&DiagramRow> = rows
-        .iter()
-        .filter(|r| r.stability == Label::Stable)
-        .collect();
-    stable.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
-    stable
-        .chunk_by(|a, b| (a.branch == branch) == (b.branch == branch))
-        .filter(|run| run[0].branch == branch)
-        .map(|run| (run[0].lbar, run[run.len() - 1].lbar))
-        .max_by(|a, b| (a.1 - a.0).total_cmp(&(b.1 - b.0)))
-}
-
 /// Solve branch `eta` at `lbar` from the Euler curve `l = η` (as `rodloop solve` does) or,
 /// when that fails, from the diagram's own state of the branch there (re-solved at the tracing
 /// resolution and passed on as points, as `solve --from` takes them); then draw it.
@@ -86,22 +73,15 @@ fn solve_state(
     accuracy: Accuracy,
     opts: &DiagramOptions,
     d: &NumericDiagram,
-    branch: u32,
-    eta: u32,
-    lbar: f64,
+    choice: &Choice,
 ) -> Result<SolvedState> {
     let t0 = Instant::now();
+    let (branch, eta, lbar) = (choice.branch, choice.eta, choice.lbar);
     let (res, start) =
         rodloop_diagram::representative::solve_on_branch(d, opts, accuracy, eta, lbar)?;
     let eq = &res.equilibrium;
     let index = eq.stability()?.index;
-    let label = if index > 0 {
-        "unstable"
-    } else if d.lowest_at(lbar).contains(&branch) {
-        "stable"
-    } else {
-        "metastable"
-    };
+    let label = choice.label(index);
     let profile = eq.profile();
     let table = crate::solve::config_table(&profile, scene)?;
     let source = format!("branch {branch} at L̄ = {lbar}");
@@ -160,119 +140,32 @@ fn solve_state(
     })
 }
 
-/// One representative state per traced branch: the middle of its first stable range in the
-/// diagram, or of its traced range when it is never the lowest. The solves run in parallel.
+/// One representative state per traced branch, where
+/// [`rodloop_diagram::representative::surface_choices`] shows it; the solves run in parallel.
 pub(super) fn representative_states(
     scene: &Scene,
     accuracy: Accuracy,
     opts: &DiagramOptions,
     d: &NumericDiagram,
 ) -> Vec<Entry<SolvedState>> {
-    let rows = d.rows();
-    // One entry per branch (a non-uniform rod's branch is traced as several families and
-    // sheets): its traced range is the union of theirs.
-    let mut spans: std::collections::BTreeMap<u32, (u32, f64, f64)> = Default::default();
-    for b in &d.branches {
-        let (a, c) = b.span();
-        let e = spans
-            .entry(b.branch)
-            .or_insert((b.eta, f64::INFINITY, f64::NEG_INFINITY));
-        e.1 = e.1.min(a);
-        e.2 = e.2.max(c);
-    }
-    let mut plan: Vec<(u32, u32, f64, String)> = spans
-        .into_iter()
-        .map(|(branch, (eta, lo, hi))| match widest_stable_stretch(&rows, branch) {
-            Some((a, c)) if c > a => (
-                branch,
-                eta,
-                middle(a, c),
-                format!("middle of its widest stable stretch (traced states at {a:.4} ≤ L̄ ≤ {c:.4})"),
-            ),
-            Some((a, _)) => (
-                branch,
-                eta,
-                a,
-                format!("the one length where the diagram finds it the lowest branch (L̄ = {a:.4})"),
-            ),
-            None => (
-                branch,
-                eta,
-                middle(lo, hi),
-                format!("middle of its traced range {lo:.4} ≤ L̄ ≤ {hi:.4} (never the lowest branch there)"),
-            ),
-        })
-        .collect();
-    plan.sort_by_key(|p| p.0);
-    let threads = std::thread::available_parallelism()
-        .map_or(1, |n| n.get())
-        .min(plan.len().max(1));
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let mut results: Vec<Option<Result<SolvedState, String>>> =
-        (0..plan.len()).map(|_| None).collect();
-    let slots = std::sync::Mutex::new(&mut results);
-    std::thread::scope(|scope| {
-        for _ in 0..threads {
-            scope.spawn(|| loop {
-                let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                let Some((branch, eta, lbar, _)) = plan.get(k) else {
-                    break;
-                };
-                let r = solve_state(scene, accuracy, opts, d, *branch, *eta, *lbar)
-                    .map_err(|e| format!("{e:#}"));
-                if let Ok(mut s) = slots.lock() {
-                    s[k] = Some(r);
-                }
-            });
-        }
-    });
-    plan.into_iter()
-        .zip(results)
-        .map(|((branch, eta, lbar, why), r)| Entry {
-            branch,
-            eta,
-            lbar,
-            why,
-            outcome: r.unwrap_or_else(|| Err("the solve thread did not report".into())),
-        })
-        .collect()
+    Entry::solve_all(surface_choices(d), |c| {
+        solve_state(scene, accuracy, opts, d, c)
+    })
 }
 
-/// The contact force `λR³/D0` against `s/L` along one state (the paper's Fig. 6), from the
-/// `lambda` column of its loop table, closed at `s/L = 1`.
+/// The contact force `λR³/D0` against `s/L` along one state (the paper's Fig. 6), closed at
+/// `s/L = 1`, its bulk shown where a few sharp peaks stand out.
 fn force_figure(data: &LoopData, branch: u32) -> Result<String> {
-    let length = data.length();
-    let s = data.s();
-    let lam = data
-        .column("lambda")
-        .context("the loop table has no lambda column")?;
-    let mut points: Vec<(f64, f64)> = s.iter().zip(lam).map(|(&a, &b)| (a / length, b)).collect();
-    if let (Some(&s0), Some(&l0)) = (s.first(), lam.first()) {
-        points.push((s0 / length + 1.0, l0));
-    }
-    let clip = rodloop_figures::plot::robust_range(
-        lam,
-        Some(&rodloop_figures::plot::arclength_weights(s, length)),
-    );
-    let mut plot = Plot {
-        title: "Contact force along the loop".into(),
-        xlabel: "s/L (s = 0 as marked on the loop)".into(),
-        ylabel: "λR³/D₀".into(),
-        series: vec![Series {
-            color: branch_color(branch).to_string(),
-            width: 2.0,
-            dash: String::new(),
-            points,
+    Ok(along_loop_figure(
+        data,
+        &[AlongLoop {
+            column: "lambda",
+            title: "Contact force along the loop",
+            ylabel: "λR³/D₀",
+            id: "force",
+            clip: Some("λ"),
         }],
-        hlines: vec![0.0],
-        ..Default::default()
-    };
-    if let Some(shown) = clip {
-        let (x0, x1) = plot.x_range();
-        plot.range = Some((x0, x1, shown.0, shown.1));
-        plot.note = rodloop_figures::plot::clipped_note("λ", lam, shown);
-    }
-    let mut svg = Svg::new(FORCE_W, FORCE_H);
-    plot.render(&mut svg, 0.0, 0.0, FORCE_W, FORCE_H, "force");
-    Ok(svg.finish())
+        branch_color(branch),
+        (FORCE_W, FORCE_H),
+    )?)
 }

@@ -1,11 +1,12 @@
-//! The tables and the style sheet of `rodloop report`'s page (cli/report.rs): the critical
-//! lengths with their exact values, the paper's printed values.
+//! The tables and the style sheet of `rodloop report`'s pages: the one table markup
+//! ([`HtmlTable`]), the critical lengths and special points of a diagram directory read through
+//! the schema, the paper's printed values, the settings and the timings.
 
 use std::fmt::Write as _;
 
-use rodloop_diagram::NumericDiagram;
 use rodloop_exact::diagram::Diagram;
 use rodloop_figures::svg::esc;
+use rodloop_schema::{Critical, SpecialPoint};
 
 use crate::compare::CompareRow;
 
@@ -18,88 +19,178 @@ pub fn sci(v: f64) -> String {
     }
 }
 
-/// The critical-length table.
-pub fn critical_html(d: &NumericDiagram, exact: Option<&Diagram>) -> String {
-    let mut h = String::new();
-    h.push_str("<table id=\"critical-table\">\n<thead><tr><th>i</th><th>L̄<sub>cr</sub></th><th>kind</th><th>from → to</th><th>E R/(πD₀)</th><th>error estimate of L̄<sub>cr</sub></th>");
-    if exact.is_some() {
-        h.push_str("<th>exact L̄<sub>cr</sub></th><th>numeric − exact</th>");
-    }
-    h.push_str("</tr></thead>\n<tbody>\n");
-    for c in &d.critical {
-        let _ = write!(
-            h,
-            "<tr><td>{}</td><td class=\"num\">{:.12}</td><td>{}</td><td>{} → {}</td><td class=\"num\">{:.10}</td><td class=\"num\">{}</td>",
-            c.index,
-            c.lbar_cr,
-            c.kind,
-            c.from_branch,
-            c.to_branch,
-            c.energy,
-            sci(c.error_estimate)
-        );
-        if let Some(e) = exact {
-            match crate::diagram::exact_match(c, e) {
-                Some(x) => {
-                    let _ = write!(
-                        h,
-                        "<td class=\"num\">{:.12}</td><td class=\"num\">{}</td>",
-                        x.lbar_cr,
-                        sci(c.lbar_cr - x.lbar_cr)
-                    );
-                }
-                None => h.push_str("<td colspan=\"2\">no exact match</td>"),
-            }
+/// An HTML table `<table id=…>` with its header row, built row by row: the one table markup
+/// of the report pages.
+pub struct HtmlTable(String);
+
+impl HtmlTable {
+    /// The table `id` with the column heads `heads` (HTML).
+    pub fn new(id: &str, heads: &[&str]) -> Self {
+        let mut h = format!("<table id=\"{id}\"><thead><tr>");
+        for t in heads {
+            let _ = write!(h, "<th>{t}</th>");
         }
-        h.push_str("</tr>\n");
+        h.push_str("</tr></thead><tbody>\n");
+        Self(h)
     }
-    h.push_str("</tbody></table>\n");
-    h
+
+    /// One row of cells ([`td`], [`num`] or any `<td …>…</td>`).
+    pub fn row(&mut self, cells: impl IntoIterator<Item = String>) {
+        self.0.push_str("<tr>");
+        for c in cells {
+            self.0.push_str(&c);
+        }
+        self.0.push_str("</tr>\n");
+    }
+
+    /// The table's HTML.
+    pub fn finish(mut self) -> String {
+        self.0.push_str("</tbody></table>\n");
+        self.0
+    }
+}
+
+/// A table cell (`v` is HTML).
+pub fn td(v: impl std::fmt::Display) -> String {
+    format!("<td>{v}</td>")
+}
+
+/// A numeric table cell, right-aligned in a monospace font (`v` is HTML).
+pub fn num(v: impl std::fmt::Display) -> String {
+    format!("<td class=\"num\">{v}</td>")
+}
+
+/// A cell of an optional value (`–` where there is none).
+fn or_dash(v: Option<String>) -> String {
+    v.unwrap_or_else(|| "–".into())
+}
+
+/// The critical-length table of a diagram directory (the rows of its `critical.csv` as
+/// [`rodloop_schema::Diagram::read`] reads them): index, `L̄_cr`, kind, branches, energy and
+/// the error estimate of `L̄_cr`, then the columns `heads` with the cells `extra` gives each
+/// row.
+pub fn critical_html(
+    critical: &[Critical],
+    heads: &[&str],
+    extra: impl Fn(&Critical) -> Vec<String>,
+) -> String {
+    let mut all = vec![
+        "i",
+        "L̄<sub>cr</sub>",
+        "kind",
+        "from → to",
+        "E R/(πD₀)",
+        "error estimate of L̄<sub>cr</sub>",
+    ];
+    all.extend(heads);
+    let mut t = HtmlTable::new("critical-table", &all);
+    for c in critical {
+        let mut cells = vec![
+            td(c.index),
+            num(format!("{:.12}", c.lbar_cr)),
+            td(esc(&c.kind)),
+            td(format!("{} → {}", c.from_branch, c.to_branch)),
+            num(format!("{:.10}", c.energy)),
+            num(sci(c.error_estimate)),
+        ];
+        cells.extend(extra(c));
+        t.row(cells);
+    }
+    t.finish()
+}
+
+/// The cells of the exact layer's value of critical length `c` and the difference to it, or
+/// one cell saying there is no exact match.
+pub fn exact_cells(c: &Critical, exact: &Diagram) -> Vec<String> {
+    match crate::diagram::exact_match(&c.kind, (c.from_branch, c.to_branch), c.lbar_cr, exact) {
+        Some(x) => vec![
+            num(format!("{:.12}", x.lbar_cr)),
+            num(sci(c.lbar_cr - x.lbar_cr)),
+        ],
+        None => vec!["<td colspan=\"2\">no exact match</td>".into()],
+    }
+}
+
+/// The special points of a diagram directory (its `special_points.csv`): kind, branch, `L̄`,
+/// error estimate, energy and the Hessian index on either side.
+pub fn special_html(special: &[SpecialPoint]) -> String {
+    let mut t = HtmlTable::new(
+        "events-table",
+        &[
+            "event",
+            "branch",
+            "L̄",
+            "error estimate",
+            "E R/(πD₀)",
+            "index below",
+            "index above",
+        ],
+    );
+    for e in special {
+        t.row([
+            td(esc(&e.kind)),
+            td(e.branch),
+            num(format!("{:.12}", e.lbar)),
+            num(or_dash(e.error_estimate.map(sci))),
+            num(format!("{:.10}", e.energy)),
+            td(or_dash(e.index_before.map(|i| i.to_string()))),
+            td(or_dash(e.index_after.map(|i| i.to_string()))),
+        ]);
+    }
+    t.finish()
 }
 
 /// The comparison with the paper's printed values.
 pub fn compare_html(rows: &[CompareRow], numeric: bool) -> String {
-    let yes = |a: Option<bool>| match a {
-        Some(true) => "<td class=\"ok\">yes</td>",
-        Some(false) => "<td class=\"bad\">NO</td>",
-        None => "<td>–</td>",
+    let yes = |a: Option<bool>| {
+        match a {
+            Some(true) => "<td class=\"ok\">yes</td>",
+            Some(false) => "<td class=\"bad\">NO</td>",
+            None => "<td>–</td>",
+        }
+        .to_string()
     };
-    let opt_sci = |v: Option<f64>| v.map(sci).unwrap_or_else(|| "–".into());
-    let mut h = String::new();
-    h.push_str("<table id=\"compare-table\">\n<thead><tr><th>id</th><th>quantity</th><th>branch</th><th>L̄</th><th>paper</th><th>exact layer</th><th>exact − paper</th><th>agrees</th>");
+    let opt_sci = |v: Option<f64>| or_dash(v.map(sci));
+    let mut heads = vec![
+        "id",
+        "quantity",
+        "branch",
+        "L̄",
+        "paper",
+        "exact layer",
+        "exact − paper",
+        "agrees",
+    ];
     if numeric {
-        h.push_str("<th>numeric</th><th>numeric − paper</th><th>agrees</th>");
+        heads.extend(["numeric", "numeric − paper", "agrees"]);
     }
-    h.push_str("<th>source in the paper</th></tr></thead>\n<tbody>\n");
+    heads.push("source in the paper");
+    let mut t = HtmlTable::new("compare-table", &heads);
     for r in rows {
-        let _ = write!(
-            h,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td>{}",
-            esc(&r.id),
-            esc(&r.kind.replace('_', " ")),
-            r.branch,
-            r.lbar.map(|l| l.to_string()).unwrap_or_default(),
-            esc(&r.paper),
-            esc(&r.exact_text()),
-            opt_sci(r.exact_deviation),
+        let mut cells = vec![
+            td(esc(&r.id)),
+            td(esc(&r.kind.replace('_', " "))),
+            td(r.branch),
+            td(r.lbar.map(|l| l.to_string()).unwrap_or_default()),
+            num(esc(&r.paper)),
+            num(esc(&r.exact_text())),
+            num(opt_sci(r.exact_deviation)),
             yes(r.agrees_exact),
-        );
+        ];
         if numeric {
-            let _ = write!(
-                h,
-                "<td class=\"num\">{}</td><td class=\"num\">{}</td>{}",
-                match r.numeric_text().as_str() {
+            cells.extend([
+                num(match r.numeric_text().as_str() {
                     "-" => "–".to_string(),
                     t => esc(t),
-                },
-                opt_sci(r.numeric_deviation),
-                yes(r.agrees_numeric)
-            );
+                }),
+                num(opt_sci(r.numeric_deviation)),
+                yes(r.agrees_numeric),
+            ]);
         }
-        let _ = writeln!(h, "<td class=\"src\">{}</td></tr>", esc(&r.source));
+        cells.push(format!("<td class=\"src\">{}</td>", esc(&r.source)));
+        t.row(cells);
     }
-    h.push_str("</tbody></table>\n");
-    h
+    t.finish()
 }
 
 pub const STYLE: &str = "body{font-family:'DejaVu Sans',Verdana,Arial,sans-serif;margin:0 auto;max-width:1240px;padding:16px 20px 40px;color:#1a1a1a;background:#fff;line-height:1.45}
@@ -114,18 +205,6 @@ td.ok{color:#1b7a1b}td.bad{color:#c01818;font-weight:bold}td.src{color:#555;font
 .note{background:#fff6e0;border-left:4px solid #e0a800;padding:6px 10px;font-size:13px}
 dl{display:grid;grid-template-columns:max-content auto;gap:2px 16px;font-size:14px}dt{font-weight:bold}dd{margin:0}
 pre{background:#f6f8fa;padding:8px;font-size:12px;overflow-x:auto}";
-
-/// A row of a representative-states table for a state that could not be solved: branch,
-/// `η`, `L̄`, why that length was chosen, and the error across the `span` remaining columns.
-pub fn not_solved_row(h: &mut String, state: (u32, u32, f64), why: &str, err: &str, span: usize) {
-    let (branch, eta, lbar) = state;
-    let _ = writeln!(
-        h,
-        "<tr><td>{branch}</td><td>{eta}</td><td>{lbar}</td><td>{}</td><td colspan=\"{span}\" class=\"bad\">not solved: {}</td></tr>",
-        esc(why),
-        esc(err)
-    );
-}
 
 /// The figures of a report page, numbered in page order (the number keeps the ids inside
 /// each inlined SVG unique on the page).
@@ -235,13 +314,9 @@ pub fn finish_page(
     t_page: f64,
     total: f64,
 ) -> anyhow::Result<()> {
-    let _ = writeln!(
-        h,
-        "<section id=\"timings\">\n<h2>{number}. Timings</h2>\n<table id=\"timings-table\"><thead><tr><th>stage</th><th>wall time (s)</th></tr></thead><tbody>"
-    );
-    let mut row = |k: &str, v: f64| {
-        let _ = writeln!(h, "<tr><td>{k}</td><td class=\"num\">{v:.3}</td></tr>");
-    };
+    let _ = writeln!(h, "<section id=\"timings\">\n<h2>{number}. Timings</h2>");
+    let mut t = HtmlTable::new("timings-table", &["stage", "wall time (s)"]);
+    let mut row = |k: &str, v: f64| t.row([td(k), num(format!("{v:.3}"))]);
     for (k, v) in stages {
         row(k, *v);
     }
@@ -257,7 +332,8 @@ pub fn finish_page(
     }
     row("page assembly", t_page);
     row("total", total);
-    h.push_str("</tbody></table>\n</section>\n");
+    h.push_str(&t.finish());
+    h.push_str("</section>\n");
     let _ = writeln!(
         h,
         "<footer><p class=\"lead\">Written by rodloop {}. This page is self-contained: no scripts, no external style sheets, fonts or images.</p></footer>\n</body>\n</html>",

@@ -1,4 +1,5 @@
-//! Helpers shared by the end-to-end tests (`phase`, `diagram --param`, `draw`, the atlas).
+//! Helpers shared by the end-to-end tests: running the built binary, fresh output
+//! directories, and reading what a run wrote (CSV tables, `summary.json`).
 //! Each test file uses some of them.
 #![allow(dead_code)]
 
@@ -61,4 +62,34 @@ pub fn fresh_dir(prefix: &str, name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
+}
+
+/// A CSV file without quoted fields as its header and rows of text (`#` lines are comments).
+pub fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut lines = text.lines().filter(|l| !l.starts_with('#'));
+    let header = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows = lines
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect();
+    (header, rows)
+}
+
+/// The position of column `name` in `header`.
+pub fn col(header: &[String], name: &str) -> usize {
+    header
+        .iter()
+        .position(|h| h == name)
+        .unwrap_or_else(|| panic!("no column {name} in {header:?}"))
+}
+
+/// A JSON file.
+pub fn read_json(path: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// The `summary.json` of an output directory.
+pub fn summary(dir: &Path) -> serde_json::Value {
+    read_json(&dir.join("summary.json"))
 }

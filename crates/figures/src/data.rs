@@ -12,6 +12,17 @@ use crate::FigureError;
 /// enclosed solver's touching tolerance is 1e-9 R).
 pub const GAP_TOUCH: f64 = 1e-9;
 
+/// The wall contact of an enclosed loop ([`LoopData::wall_contact`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WallContact {
+    /// Largest gap `(R − |r|)/R`.
+    pub max_gap: f64,
+    /// Fraction of the points on the wall (gap at most [`GAP_TOUCH`]).
+    pub contact_fraction: f64,
+    /// Smallest contact force `λR³/D₀`.
+    pub lambda_min: f64,
+}
+
 /// A closed curve and its per-point columns.
 #[derive(Clone, Debug)]
 pub struct LoopData {
@@ -215,6 +226,20 @@ impl LoopData {
     pub fn lifted_off(&self) -> bool {
         self.column("gap")
             .is_some_and(|g| g.iter().any(|&v| v > GAP_TOUCH))
+    }
+
+    /// The wall contact of an enclosed loop from its `gap` and `lambda` columns: the largest
+    /// gap (0 without a `gap` column), the fraction of points within [`GAP_TOUCH`] of the wall
+    /// (0 without one) and the smallest contact force (`+∞` without a `lambda` column).
+    pub fn wall_contact(&self) -> WallContact {
+        let gap = self.column("gap").unwrap_or(&[]);
+        let lam = self.column("lambda").unwrap_or(&[]);
+        let touching = gap.iter().filter(|&&v| v <= GAP_TOUCH).count();
+        WallContact {
+            max_gap: gap.iter().fold(0.0f64, |m, &v| m.max(v)),
+            contact_fraction: touching as f64 / gap.len().max(1) as f64,
+            lambda_min: lam.iter().fold(f64::INFINITY, |m, &v| m.min(v)),
+        }
     }
 
     /// Number of periods η of the geodesic curvature (half its sign changes round the loop),

@@ -226,3 +226,69 @@ fn forces_panel(
     }
     plot.render(svg, px, py, w, h, &format!("prof{k}"));
 }
+
+/// One panel of [`along_loop_figure`]: a column of the loop table against `s/L`.
+#[derive(Clone, Copy, Debug)]
+pub struct AlongLoop<'a> {
+    /// The column (`lambda`, `gap`, …).
+    pub column: &'a str,
+    /// The panel's title.
+    pub title: &'a str,
+    /// The label of its value axis.
+    pub ylabel: &'a str,
+    /// The panel's id in the SVG.
+    pub id: &'a str,
+    /// When set, a panel whose values have a few sharp peaks (the contact force at the
+    /// stiffness steps of a two-segment rod) shows their bulk ([`robust_range`]) and a note
+    /// under its axis names the quantity by this symbol.
+    pub clip: Option<&'a str>,
+}
+
+/// Columns of a loop table against `s/L` (`s = 0` as marked on the loop), closed at
+/// `s/L = 1`, one `w × h` panel each side by side, drawn in `color` with a zero line: the
+/// contact force `λ(s)` of the paper's Fig. 6 and, for an enclosed loop, its gap to the wall.
+pub fn along_loop_figure(
+    data: &LoopData,
+    panels: &[AlongLoop],
+    color: &str,
+    (w, h): (f64, f64),
+) -> Result<String, FigureError> {
+    let length = data.length();
+    let s = data.s();
+    let mut svg = Svg::new(w * panels.len() as f64, h);
+    for (k, p) in panels.iter().enumerate() {
+        let v = data
+            .column(p.column)
+            .ok_or_else(|| FigureError::MissingColumn {
+                path: data.source.clone(),
+                column: p.column.into(),
+                found: data.names.join(", "),
+            })?;
+        let mut points: Vec<(f64, f64)> = s.iter().zip(v).map(|(&a, &b)| (a / length, b)).collect();
+        if let (Some(&s0), Some(&v0)) = (s.first(), v.first()) {
+            points.push((s0 / length + 1.0, v0));
+        }
+        let mut plot = Plot {
+            title: p.title.into(),
+            xlabel: "s/L (s = 0 as marked on the loop)".into(),
+            ylabel: p.ylabel.into(),
+            series: vec![Series {
+                color: color.into(),
+                width: 2.0,
+                dash: String::new(),
+                points,
+            }],
+            hlines: vec![0.0],
+            ..Default::default()
+        };
+        if let Some(what) = p.clip {
+            if let Some(shown) = robust_range(v, Some(&arclength_weights(s, length))) {
+                let (x0, x1) = plot.x_range();
+                plot.range = Some((x0, x1, shown.0, shown.1));
+                plot.note = clipped_note(what, v, shown);
+            }
+        }
+        plot.render(&mut svg, w * k as f64, 0.0, w, h, p.id);
+    }
+    Ok(svg.finish())
+}
