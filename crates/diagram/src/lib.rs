@@ -439,24 +439,21 @@ impl DiagramOptions {
     /// profile needs (`γ` cells for Eq. (51), one per table point; twice that for modest
     /// profiles (`≤ 64` cells) except at the fast level, so that the half-resolution partner
     /// of the energy extrapolation resolves the profile too; sharp profiles are traced
-    /// without that partner, the reporting resolution resolves them) and 8, rounded up to a
-    /// multiple of 4.
+    /// without that partner, the reporting resolution resolves them), raised by the scene's
+    /// bending factor ([`bending_factor`]: a very soft segment bends sharply; at
+    /// `D1/D0 = 0.001` the transitions' 80 cells miss a family of branch 2 that 120 and 160
+    /// cells both find, with the same refined exchanges), and 8, rounded up to a multiple
+    /// of 4. The count grows continuously as `D1/D0` falls: no threshold on the contrast.
     pub fn trace_cells(&self, eta: u32) -> usize {
         let base = self.trace_cells_per_period() * (eta as usize + 1);
-        let mut profile = profile_cells(&self.stiffness);
-        if let Stiffness::Tanh { d0, d1, .. } = &self.stiffness {
-            // A very soft segment bends sharply: at D1/D0 = 0.001 the default 80 cells miss
-            // a family of branch 2 that 120 and 160 cells both find (same refined exchanges).
-            if d1 / d0 < STRONG_CONTRAST {
-                profile = profile * 3 / 2;
-            }
-        }
+        let profile = profile_cells(&self.stiffness);
         let factor = if self.accuracy == Accuracy::Fast || profile > 64 {
             1
         } else {
             2
         };
-        base.max(factor * profile).max(8).div_ceil(4) * 4
+        let resolved = bending_scaled(factor * profile, &self.stiffness);
+        base.max(resolved).max(8).div_ceil(4) * 4
     }
 
     /// Worker threads actually used.
@@ -491,9 +488,30 @@ impl DiagramOptions {
     }
 }
 
-/// `D1/D0` below which the tracing resolution of an Eq. (51) profile is raised by half (see
-/// [`DiagramOptions::trace_cells`]).
-pub(crate) const STRONG_CONTRAST: f64 = 0.05;
+/// How much finer than the transitions' width the cells must be to resolve the bending of a
+/// soft segment (Eq. (51)), a number of the scene: the loop's contact forces are of order
+/// `D0/R²`, under which a segment of stiffness `D1` bends over lengths of order
+/// `ℓ = R √(D1/D0)` (its bending length); the cells at the transitions are as wide as the
+/// transition, `L/γ` with `L = 2πR` for a loop of one great circle's length
+/// ([`profile_cells`]), and must also be no wider than `2ℓ/3`. The factor
+/// `max(1, (2πR/γ)/(2ℓ/3)) = max(1, 3π/(γ √(D1/D0)))` grows continuously as the soft
+/// segment softens or the transition widens, whatever the scene: 1.49 at
+/// `D1/D0 = 0.001, γ = 200`, 1 at `D1/D0 = 0.1` (any `γ ≥ 30`); 1 for every other profile.
+pub(crate) fn bending_factor(stiffness: &Stiffness) -> f64 {
+    match stiffness {
+        Stiffness::Tanh { d0, d1, gamma, .. } if *d0 > 0.0 && *d1 > 0.0 && *gamma > 0.0 => {
+            let ratio = (d1 / d0).min(1.0);
+            (3.0 * std::f64::consts::PI / (gamma * ratio.sqrt())).max(1.0)
+        }
+        _ => 1.0,
+    }
+}
+
+/// `cells` raised by [`bending_factor`] (rounded down: the factor refines a count that
+/// already resolves the transitions).
+pub(crate) fn bending_scaled(cells: usize, stiffness: &Stiffness) -> usize {
+    ((cells as f64 * bending_factor(stiffness)).floor() as usize).max(cells)
+}
 
 /// Cells a stiffness profile needs to be resolved at all: for Eq. (51) on a uniform mesh
 /// `γ` (one cell per transition width `L/γ`); on the graded mesh of

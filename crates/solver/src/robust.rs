@@ -117,7 +117,7 @@ pub struct Fallbacks {
     /// Newton from the start and from the start with its origin moved (`false`: the caller
     /// has tried those already).
     pub starts: bool,
-    /// Continuation in `D1/D0` from the mild contrasts 0.9 and 0.6.
+    /// Continuation in `D1/D0` from the contrasts of [`HOMOTOPY_STARTS`].
     pub homotopy: bool,
     /// Continuation in `L̄` from other lengths of the branch's range.
     pub lbar_path: bool,
@@ -158,25 +158,32 @@ impl Budget {
     }
 }
 
-/// Mild contrasts tried as homotopy starts, in order.
-const MILD: [f64; 2] = [0.9, 0.6];
+/// Contrasts `D1/D0` at which the homotopy starts, in order: where the start shapes (the
+/// uniform rod's loops) lie within Newton's reach of an equilibrium whose soft segment sits
+/// firmly in place. They are properties of the start shapes and of Newton's method, not of a
+/// scene: a contrast this mild moves the loop little from the uniform rod's, and one this
+/// clear makes the shift of the soft segment along the loop stiff (near `D1/D0 = 1` that
+/// shift is nearly a symmetry, and Newton from a start drifts along it: `solve` failed for
+/// every `D1/D0 ≥ 0.95` at `L̄ = 1.3`).
+const HOMOTOPY_STARTS: [f64; 2] = [0.9, 0.6];
 
-/// Homotopy starts for a nearly uniform rod (`D1/D0` above every [`MILD`] value), followed
-/// up to the target. Near `D1/D0 = 1` the shift of the soft segment along the loop is nearly
-/// a symmetry, so Newton from an Euler start drifts along that nearly neutral direction
-/// (`solve` failed for every `D1/D0 ≥ 0.95` at `L̄ = 1.3`); at a clear contrast the placement
-/// is stiff, and the followed state keeps it as the contrast fades.
-const STRONGER: [f64; 2] = [0.8, 0.6];
+/// First step of the homotopy, in `ln(D1/D0)` ([`follow_to`]).
+const LOG_STEP: f64 = 0.05;
 
-/// The homotopy starts for the contrast `target`: the [`MILD`] ones above it, else the
-/// [`STRONGER`] ones.
+/// The homotopy starts for the contrast `target`: every [`HOMOTOPY_STARTS`] contrast more
+/// than one first step ([`LOG_STEP`], in `ln(D1/D0)`) away from the target, on the target's
+/// side of the uniform rod (a start within one step is the direct solve again; a path
+/// through `D1/D0 = 1` would cross the uniform rod, where the placement of the soft segment
+/// is free). Which starts are tried depends on no threshold on the scene's contrast: a
+/// scene milder than a start continues from it towards `D1/D0 = 1`, a stronger one away
+/// from it.
 fn homotopy_sources(target: f64) -> Vec<f64> {
-    let mild: Vec<f64> = MILD.iter().copied().filter(|&m| m > target).collect();
-    if mild.is_empty() && target < 1.0 {
-        STRONGER.to_vec()
-    } else {
-        mild
-    }
+    HOMOTOPY_STARTS
+        .iter()
+        .copied()
+        .filter(|&m| (m < 1.0) == (target < 1.0))
+        .filter(|&m| (m.ln() - target.ln()).abs() > LOG_STEP)
+        .collect()
 }
 
 /// Solve a state of the branch with `eta` periods of `κ_g` at `lbar` (see
@@ -634,7 +641,7 @@ fn follow_to(
     } else {
         Direction::Forward
     };
-    let (ds, ds_max) = if log { (0.05, 0.5) } else { (0.05, 1.0) };
+    let (ds, ds_max) = if log { (LOG_STEP, 0.5) } else { (0.05, 1.0) };
     let settings = PseudoArclength::new()
         .with_ds(ds)
         .and_then(|s| s.with_ds_bounds(1e-7, ds_max))
@@ -676,6 +683,22 @@ fn follow_to(
 #[cfg(test)]
 mod tests {
     use super::summarize_tried;
+
+    /// The homotopy starts lie on the target's side of the uniform rod, more than one first
+    /// step away from it in `ln(D1/D0)`, by one rule for every contrast: a nearly uniform
+    /// rod continues from both starts towards `D1/D0 = 1`, a contrast next to a start skips
+    /// it, strong contrasts use both, and a stiffer segment (`D1 > D0`) none.
+    #[test]
+    fn homotopy_starts_follow_the_target() {
+        use super::homotopy_sources;
+        assert_eq!(homotopy_sources(0.001), vec![0.9, 0.6]);
+        assert_eq!(homotopy_sources(0.5), vec![0.9, 0.6]);
+        assert_eq!(homotopy_sources(0.95), vec![0.9, 0.6]);
+        assert_eq!(homotopy_sources(0.999), vec![0.9, 0.6]);
+        assert_eq!(homotopy_sources(0.88), vec![0.6]);
+        assert_eq!(homotopy_sources(0.62), vec![0.9]);
+        assert!(homotopy_sources(2.0).is_empty());
+    }
 
     /// Each fallback path is named once, with how many of its starts failed and the first
     /// failure; the order of first appearance is kept.
