@@ -181,7 +181,7 @@ def named_periods(s, signal, length):
         return None
     h = max(4.0 * _cubic_residual(s, dev, length), 1e-12 * scale)
     fine, coarse = _sign_changes(dev, h), _sign_changes(dev, max(h, 0.1 * amp))
-    if fine is None or coarse is None or fine != coarse:
+    if fine is None or coarse is None or fine != coarse or coarse == 0:
         return None
     return coarse // 2
 

@@ -202,6 +202,12 @@ pub fn identify_periods(s: &[f64], signal: &[f64], length: f64) -> Result<Period
              times the state's grid-scale noise {noise:.2e}: its periods are not resolved"
         ));
     };
+    if coarse == 0 {
+        return bad(format!(
+            "the curvature pattern leaves its mean by more than a tenth of its amplitude \
+             ({amplitude:.2e}) on one side only: it has no periods"
+        ));
+    }
     if fine != coarse {
         return bad(format!(
             "the curvature pattern changes sign {fine} times above {NOISE_FACTOR} times the \
