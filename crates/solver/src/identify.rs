@@ -280,12 +280,13 @@ pub fn projected_geodesic_curvature(
     radius: f64,
 ) -> Option<f64> {
     let q = r.norm();
-    if !(q >= PROJECTION_REGULARITY * radius) {
+    // NaN compares false: a non-finite position is not regular either.
+    if q.is_nan() || q < PROJECTION_REGULARITY * radius {
         return None;
     }
     let along = r.dot(t) / (q * t.norm());
     let sin2 = 1.0 - along * along;
-    if !(sin2 >= PROJECTION_REGULARITY * PROJECTION_REGULARITY) {
+    if sin2.is_nan() || sin2 < PROJECTION_REGULARITY * PROJECTION_REGULARITY {
         return None;
     }
     let v = r.dot(&t.cross(kappa)) / (radius * sin2.powf(1.5));
