@@ -195,6 +195,13 @@ def branch_of_file(rows, length):
         kg = projected_kappa_g(rows, length)
         if kg is None:
             return None
+        # A loop in a plane through the centre projects onto a great circle: no periods
+        # (rodloop_solver::identify::PLANAR, relative to the largest D |kappa|).
+        mean = sum(kg) / len(kg)
+        if max(abs(k - mean) * r["D"] for k, r in zip(kg, rows)) <= 1e-6 * max(
+            r["D"] * abs(r["kappa"]) for r in rows
+        ):
+            return None
     return named_periods([r["s"] for r in rows], [k * r["D"] for k, r in zip(kg, rows)], length)
 
 
@@ -388,8 +395,11 @@ def check_diagram_branches(out_dir):
     (contradictions, unnamed, checked): the files whose periods name another eta than the
     row's, and those whose periods name none (their row's branch is the family's, from the
     state it was continued from)."""
-    with open(os.path.join(out_dir, "branches.csv")) as f:
-        table = list(csv.DictReader(l for l in f if not l.startswith("#")))
+    try:
+        with open(os.path.join(out_dir, "branches.csv")) as f:
+            table = list(csv.DictReader(l for l in f if not l.startswith("#")))
+    except OSError:
+        return [("branches.csv", "unreadable")], [], 0
     contradictions, unnamed, checked = [], [], 0
     for row in table:
         name = (row.get("state_file") or "").strip()

@@ -293,6 +293,13 @@ pub fn projected_geodesic_curvature(
     v.is_finite().then_some(v)
 }
 
+/// Largest geodesic curvature of the central projection, relative to the largest `D |κ|`,
+/// of a loop that counts as lying in a plane through the centre: far below the out-of-plane
+/// pattern of a branch next to the great circle it collapses onto (1e-3 relative within
+/// `5·10⁻⁵` of the collapse length on `D1/D0 = 0.1`), far above the out-of-plane round-off
+/// of a planar state (1e-12–1e-9 on the diagram of the two-segment enclosed scene).
+pub const PLANAR: f64 = 1e-6;
+
 /// Where the central projection of an enclosed loop counts as regular: every point at least
 /// this fraction of `R` from the centre, and its tangent at least `asin` of this from the
 /// radial direction (the projection's speed `|ρ'| = R sin∠(t, r)/|r|` stays at least a
@@ -348,7 +355,7 @@ pub fn enclosed_signal(
         let spread = projected
             .iter()
             .fold(0.0f64, |a, v| a.max((v - mean).abs()));
-        if spread <= 1e-9 * scale {
+        if spread <= PLANAR * scale {
             return Err(SolverError::InvalidInput(format!(
                 "the loop lies in a plane through the centre of the ball (the geodesic \
                  curvature of its central projection is {spread:.1e} of its curvature): it \
