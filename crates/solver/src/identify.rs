@@ -13,7 +13,8 @@
 //! the forces along the whole loop, while `κ_g = M/D` is magnified `D0/D1` times in the soft
 //! segment, whose bumps would otherwise outnumber or outweigh the loop's periods (on
 //! `D1/D0 = 0.1` the dominant Fourier harmonic of `κ_g` differs from the branch each state of
-//! the diagram is traced on for 78 of its 199 states; the count below, on `M`, for none). An
+//! the diagram is traced on for 35 of its 199 states, and the sign changes of `κ_g` for 67;
+//! the count below, on `M`, for none). An
 //! enclosed state's signal is the moment of its central projection onto the sphere
 //! ([`enclosed_signal`]).
 //!
