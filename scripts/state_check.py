@@ -32,6 +32,11 @@ check_state(out_dir, branch) returns a list of problems, each one of:
                          dominant Fourier harmonic of the file's kappa_g (enclosed: kappa_1 at
                          the nodes; its number of periods eta) is not the asked branch's eta;
   "unreadable"           the files are missing or malformed.
+
+check_diagram_branches(out_dir) names the branch of every state file of a diagram from the
+file alone (branch_of_file: the periods of the bending moment D kappa_g, an enclosed 3-D
+file's from the central projection of its positions onto the sphere; the count of
+rodloop_solver::identify re-implemented) and lists the files that contradict their row.
 """
 import csv, json, math, os
 
@@ -65,6 +70,139 @@ def dominant_harmonic(s, kg, length):
         if a > amp_best:
             best, amp_best = k, a
     return best
+
+
+def _solve(a, b):
+    """Gaussian elimination with partial pivoting (small dense systems)."""
+    n = len(b)
+    m = [row[:] + [bb] for row, bb in zip(a, b)]
+    for i in range(n):
+        p = max(range(i, n), key=lambda r: abs(m[r][i]))
+        m[i], m[p] = m[p], m[i]
+        for r in range(i + 1, n):
+            f = m[r][i] / m[i][i]
+            for c in range(i, n + 1):
+                m[r][c] -= f * m[i][c]
+    x = [0.0] * n
+    for i in reversed(range(n)):
+        x[i] = (m[i][n] - sum(m[i][c] * x[c] for c in range(i + 1, n))) / m[i][i]
+    return x
+
+
+def projected_kappa_g(rows, length, half=3, deg=4):
+    """Geodesic curvature of the central projection r/|r| of an enclosed file's loop onto the
+    unit sphere at each row, from the positions alone: r' and r'' of the least-squares
+    polynomial of degree `deg` in s through the 2*half+1 nearest rows (the loop closed), then
+    det(r, t, r'') / (1 - (r.t/|r|)^2)^(3/2). On the sphere it is the loop's kappa_g. None
+    where the projection is not regular (|r| < 1/4 or the tangent within asin(1/4) of
+    radial; rodloop_solver::identify::PROJECTION_REGULARITY)."""
+    n = len(rows)
+    out = []
+    for j in range(n):
+        ds, pts = [], []
+        for o in range(-half, half + 1):
+            i = (j + o) % n
+            d = rows[i]["s"] - rows[j]["s"]
+            if j + o >= n:
+                d += length
+            if j + o < 0:
+                d -= length
+            ds.append(d)
+            pts.append((rows[i]["x"], rows[i]["y"], rows[i]["z"]))
+        ata = [[sum(d ** (a + b) for d in ds) for b in range(deg + 1)] for a in range(deg + 1)]
+        t, k = [], []
+        for c in range(3):
+            co = _solve(ata, [sum(d ** a * p[c] for d, p in zip(ds, pts)) for a in range(deg + 1)])
+            t.append(co[1])
+            k.append(2 * co[2])
+        r = pts[half]
+        tn = math.sqrt(sum(v * v for v in t))
+        t = [v / tn for v in t]
+        q = math.sqrt(sum(v * v for v in r))
+        along = sum(a * b for a, b in zip(r, t)) / q if q > 0 else 1.0
+        if q < 0.25 or 1 - along * along < 0.0625:
+            return None
+        det = (r[0] * (t[1] * k[2] - t[2] * k[1]) - r[1] * (t[0] * k[2] - t[2] * k[0])
+               + r[2] * (t[0] * k[1] - t[1] * k[0]))
+        out.append(det / (1 - along * along) ** 1.5)
+    return out
+
+
+def _sign_changes(dev, h):
+    start = next((i for i, v in enumerate(dev) if abs(v) > h), None)
+    if start is None:
+        return None
+    positive, changes = dev[start] > 0, 0
+    for i in range(1, len(dev) + 1):
+        v = dev[(start + i) % len(dev)]
+        if positive and v < -h:
+            positive, changes = False, changes + 1
+        elif not positive and v > h:
+            positive, changes = True, changes + 1
+    return changes
+
+
+def _cubic_residual(s, v, length):
+    """Largest |v_j - p_j(s_j)|, p_j the cubic through the rows j-2, j-1, j+1, j+2."""
+    n, worst = len(v), 0.0
+    for j in range(n):
+        xs, ys = [], []
+        for o in (-2, -1, 1, 2):
+            i = (j + o) % n
+            d = s[i] - s[j] + (length if j + o >= n else -length if j + o < 0 else 0.0)
+            xs.append(d)
+            ys.append(v[i])
+        p = 0.0
+        for a in range(4):
+            term = ys[a]
+            for b in range(4):
+                if b != a:
+                    term *= xs[b] / (xs[b] - xs[a])
+            p += term
+        worst = max(worst, abs(v[j] - p))
+    return worst
+
+
+def named_periods(s, signal, length):
+    """The branch count of rodloop_solver::identify, re-implemented: half the sign changes of
+    signal - mean (trapezoid-weighted), with hysteresis at 4 x the grid-scale noise (the
+    cubic residual) and at a tenth of the amplitude; None unless both give the same count."""
+    n = len(s)
+    w = []
+    for j in range(n):
+        nxt = s[j + 1] - s[j] if j + 1 < n else s[0] + length - s[j]
+        prv = s[j] - s[j - 1] if j > 0 else s[0] + length - s[n - 1]
+        w.append(0.5 * (nxt + prv))
+    mean = sum(a * b for a, b in zip(signal, w)) / length
+    dev = [v - mean for v in signal]
+    amp = max(abs(v) for v in dev)
+    scale = max(max(abs(v) for v in signal), 1.0 / length)
+    if amp <= 1e-9 * scale:
+        return None
+    h = max(4.0 * _cubic_residual(s, dev, length), 1e-12 * scale)
+    fine, coarse = _sign_changes(dev, h), _sign_changes(dev, max(h, 0.1 * amp))
+    if fine is None or coarse is None or fine != coarse or coarse == 0:
+        return None
+    return coarse // 2
+
+
+def branch_of_file(rows, length):
+    """The periods eta of a state file's bending moment D kappa_g (an enclosed 3-D file: of its
+    central projection's, from the positions), or None where they name no branch."""
+    if "kappa_g" in rows[0]:
+        kg = [r["kappa_g"] for r in rows]
+    else:
+        kg = projected_kappa_g(rows, length)
+        if kg is None:
+            return None
+        # A loop in a plane through the centre projects onto a great circle: no periods
+        # (rodloop_solver::identify::PLANAR, relative to the largest D |kappa|).
+        mean = sum(kg) / len(kg)
+        if max(abs(k - mean) * r["D"] for k, r in zip(kg, rows)) <= 1e-6 * max(
+            r["D"] * abs(r["kappa"]) for r in rows
+        ):
+            return None
+    return named_periods([r["s"] for r in rows], [k * r["D"] for k, r in zip(kg, rows)], length)
 
 
 def weighted_energy(rows):
@@ -252,6 +390,31 @@ def check_diagram(out_dir, enclosed=False):
     return problems, checked
 
 
+def check_diagram_branches(out_dir):
+    """Every state file of a diagram against its row's branch (branch_of_file). Returns
+    (contradictions, unnamed, checked): the files whose periods name another eta than the
+    row's, and those whose periods name none (their row's branch is the family's, from the
+    state it was continued from)."""
+    try:
+        with open(os.path.join(out_dir, "branches.csv")) as f:
+            table = list(csv.DictReader(l for l in f if not l.startswith("#")))
+    except OSError:
+        return [("branches.csv", "unreadable")], [], 0
+    contradictions, unnamed, checked = [], [], 0
+    for row in table:
+        name = (row.get("state_file") or "").strip()
+        if not name or not row.get("eta"):
+            continue
+        checked += 1
+        eta = branch_of_file(_rows(os.path.join(out_dir, name)), 2 * math.pi * float(row["lbar"]))
+        if eta is None:
+            if int(row["eta"]) != 0:  # branch 0, the circle, has no periods
+                unnamed.append(name)
+        elif eta != int(row["eta"]):
+            contradictions.append((name, f"branch contradiction: {eta} periods, row eta {row['eta']}"))
+    return contradictions, unnamed, checked
+
+
 if __name__ == "__main__":
     import sys
 
@@ -260,7 +423,10 @@ if __name__ == "__main__":
         enclosed = os.path.exists(os.path.join(d, "branches.csv")) and any(
             n.startswith("enclosed-") for n in os.listdir(os.path.join(d, "states")) if os.path.isdir(os.path.join(d, "states")))
         probs, n = check_diagram(d, enclosed)
-        print(f"{d}: {n} state files checked, {len(probs)} problems")
+        wrong, unnamed, _ = check_diagram_branches(d)
+        probs += wrong
+        print(f"{d}: {n} state files checked, {len(probs)} problems, {len(unnamed)} whose "
+              "periods name no branch")
         for name, why in probs[:20]:
             print(f"  {name}: {why}")
         bad += len(probs)

@@ -603,3 +603,47 @@ fn two_segment_enclosed_diagram_certificate() {
         }
     }
 }
+
+/// Next to the 3-fold great circle the two-segment rod's branch-1 state is named from the
+/// moment of its central projection, or refused with the reason the state gives: at
+/// `L̄ = 2.99` a lifted-off state of branch 1; at `L̄ = 2.9972` the descent reaches a loop in
+/// a plane through the centre (three turns against the wall), which projects onto a great
+/// circle and names no branch. Either way no file is written under a branch the state does
+/// not have.
+#[test]
+fn two_segment_enclosed_branch_next_to_the_three_fold_circle() {
+    let sc = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/data/scenes/inhomogeneous-d1-0.5-enclosed.toml"
+    );
+    for lbar in ["2.99", "2.9972"] {
+        let dir = out(&format!("enclosed-three-fold-{lbar}"));
+        let o = rodloop(&[
+            "solve",
+            "--scene",
+            sc,
+            "--lbar",
+            lbar,
+            "--branch",
+            "1",
+            "--out",
+            dir.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!err.contains("panicked"), "{err}");
+        if o.status.success() {
+            let s: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap())
+                    .unwrap();
+            assert_eq!(s["branch"], 1, "{s}");
+            assert!(s["max_gap"].as_f64().unwrap() > 1e-4, "{s}");
+        } else {
+            assert_eq!(lbar, "2.9972", "{err}");
+            assert!(
+                err.contains("plane through the centre") && err.contains("great circle"),
+                "{err}"
+            );
+            assert!(!dir.join("summary.json").exists());
+        }
+    }
+}

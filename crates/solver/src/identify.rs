@@ -2,59 +2,151 @@
 //!
 //! The paper's branches are told apart by the number `η` of periods of the geodesic
 //! curvature `κ_g(s)` along the loop (Sec. 4.3: `κ_g = −2ck cn(cs, k)` with `η` periods of
-//! `cn` per loop length, Eq. (49)). A starting shape (a `--from` file, a resampled state)
-//! carries no branch label, and Newton may converge to a state of another branch, so every
-//! returned state is identified here rather than trusted to be on the branch that was asked
-//! for.
+//! `cn` per loop length, Eq. (49), so `κ_g` changes sign `2η` times). A starting shape (a
+//! `--from` file, a resampled state) carries no branch label, and Newton may converge to a
+//! state of another branch, so every returned state is identified here rather than trusted to
+//! be on the branch that was asked for.
 //!
-//! Two independent counts are made:
+//! **The signal** is the bending moment about the sphere's normal, `M = D κ_g`
+//! (Eq. (41): `κ_g = 𝓜·n/D`). For a uniform rod it is `κ_g` times a constant. For a
+//! two-segment rod it is continuous across the stiffness steps and carries the pattern of
+//! the forces along the whole loop, while `κ_g = M/D` is magnified `D0/D1` times in the soft
+//! segment, whose bumps would otherwise outnumber or outweigh the loop's periods (on
+//! `D1/D0 = 0.1` the dominant Fourier harmonic of `κ_g` differs from the branch each state of
+//! the diagram is traced on for 35 of its 199 states, and the sign changes of `κ_g` for 67;
+//! the count below, on `M`, for none). An
+//! enclosed state's signal is the moment of its central projection onto the sphere
+//! ([`enclosed_signal`]).
 //!
-//! * the **dominant Fourier harmonic** of `κ_g(s)`: the `k ≥ 1` maximising
-//!   `|∮ κ_g e^{−2πiks/L} ds|`. For the exact loops `κ_g ∝ cn` has period `L/η`, so only
-//!   harmonics that are odd multiples of `η` are present and the first is the largest;
-//! * the **sign changes** of `κ_g − mean(κ_g)` around the loop, counted with a hysteresis of
-//!   a tenth of the amplitude (so that noise near a zero does not count), divided by two.
+//! **The count** is the number of sign changes of `M − mean(M)` around the loop, halved,
+//! counted with hysteresis: a change counts when the deviation crosses from below `−h` to
+//! above `+h` or back. Two levels are used, and they must agree:
 //!
-//! [`Periods::eta`] is the Fourier count; [`Periods::consistent`] says whether the
-//! sign-change count agrees.
+//! * `h` = [`NOISE_FACTOR`] times the state's own noise level: the largest difference between
+//!   a sample and the cubic through its two neighbours on either side (the discretisation's
+//!   grid-scale error; a smooth signal sampled at the model's resolution leaves `O(h⁴ M⁗)`
+//!   there). Oscillations below it are not resolved by the state and do not count;
+//! * `h` = a tenth of the amplitude `max |M − mean|` (or the first level, if larger): small
+//!   ripples on top of the loop's pattern do not count.
+//!
+//! Where the two counts differ, or the amplitude does not clear the noise level, the pattern
+//! is not the one of a branch and the state is **not named** (an error saying which): near a
+//! great circle the oscillation may sink into the discretisation noise, and on a very soft
+//! segment (`D1/D0 = 10⁻³`) the stiff segment can be a geodesic arc to within that noise,
+//! leaving a moment without periods. A traced family of such states keeps the branch of the
+//! state it was continued from (its continuation history); `solve`, which has no history,
+//! refuses such a state for a requested branch rather than reporting it under that branch.
+//!
+//! The dominant Fourier harmonic of the signal (the `k ≥ 1` maximising
+//! `|∮ M e^{−2πiks/L} ds|`) is kept as a diagnostic ([`Periods::harmonic`]): for the exact
+//! loops it is `η` (only odd multiples of `η` are present and the first is the largest).
 
 use std::f64::consts::PI;
 
+use nalgebra::Vector3;
+
 use crate::{Equilibrium, SolverError};
 
-/// The periods of `κ_g` found along a loop.
+/// Multiple of a state's grid-scale noise level below which sign changes of its signal do
+/// not count (see the module docs). The noise level is a maximum over the loop, and the
+/// factor keeps a deviation that merely touches it from counting.
+pub const NOISE_FACTOR: f64 = 4.0;
+
+/// Fraction of the amplitude of the second hysteresis level (see the module docs).
+pub const RIPPLE_FRACTION: f64 = 0.1;
+
+/// The periods found along a loop.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Periods {
-    /// Number of periods `η` (the dominant Fourier harmonic of `κ_g`).
+    /// Number of periods `η`: half the sign changes of the signal about its mean, the same at
+    /// both hysteresis levels.
     pub eta: u32,
-    /// Half the number of sign changes of `κ_g − mean`, if that number is even.
-    pub sign_change_eta: Option<u32>,
-    /// Amplitude of the dominant harmonic divided by the next largest one (≥ 1; large when
-    /// the identification is clear-cut).
+    /// The dominant Fourier harmonic of the signal (a diagnostic).
+    pub harmonic: u32,
+    /// Amplitude of the dominant harmonic divided by the next largest one (≥ 1).
     pub dominance: f64,
+    /// Amplitude `max |signal − mean|` divided by the grid-scale noise level (large when the
+    /// pattern is resolved).
+    pub resolution: f64,
 }
 
 impl Periods {
-    /// Whether the sign-change count agrees with the Fourier count.
+    /// Whether the dominant Fourier harmonic agrees with the count.
     pub fn consistent(&self) -> bool {
-        self.sign_change_eta == Some(self.eta)
+        self.harmonic == self.eta
     }
 }
 
-/// Count the periods of `κ_g` from samples `kappa_g[j]` at arclengths `s[j]` (strictly
-/// increasing, in `[0, length)`, the loop being closed: the sample after the last is the
-/// first, at `s[0] + length`).
+/// Sign changes of `dev` around the closed loop with hysteresis `h` (`None`: no sample
+/// deviates by more than `h`).
+fn sign_changes(dev: &[f64], h: f64) -> Option<u32> {
+    let n = dev.len();
+    let start = dev.iter().position(|v| v.abs() > h)?;
+    let mut positive = dev[start] > 0.0;
+    let mut changes = 0u32;
+    for i in 1..=n {
+        let v = dev[(start + i) % n];
+        if positive && v < -h {
+            positive = false;
+            changes += 1;
+        } else if !positive && v > h {
+            positive = true;
+            changes += 1;
+        }
+    }
+    Some(changes)
+}
+
+/// Grid-scale noise level of a periodic signal: the largest `|v_j − p_j(s_j)|` with `p_j` the
+/// cubic through the samples `j − 2, j − 1, j + 1, j + 2`.
+fn noise_level(s: &[f64], v: &[f64], length: f64) -> f64 {
+    let n = s.len();
+    let mut worst = 0.0f64;
+    for j in 0..n {
+        let mut xs = [0.0; 4];
+        let mut ys = [0.0; 4];
+        for (k, o) in [-2isize, -1, 1, 2].into_iter().enumerate() {
+            let i = (j as isize + o).rem_euclid(n as isize) as usize;
+            let wrap = if j as isize + o >= n as isize {
+                length
+            } else if j as isize + o < 0 {
+                -length
+            } else {
+                0.0
+            };
+            xs[k] = s[i] - s[j] + wrap;
+            ys[k] = v[i];
+        }
+        let mut p = 0.0;
+        for a in 0..4 {
+            let mut l = ys[a];
+            for b in 0..4 {
+                if b != a {
+                    l *= xs[b] / (xs[b] - xs[a]);
+                }
+            }
+            p += l;
+        }
+        worst = worst.max((v[j] - p).abs());
+    }
+    worst
+}
+
+/// Count the periods of a signal (`κ_g`, or the moment `D κ_g`) from samples `signal[j]`
+/// at arclengths `s[j]` (strictly increasing, in `[0, length)`, the loop being closed: the
+/// sample after the last is the first, at `s[0] + length`); see the module docs.
 ///
 /// Errors ([`SolverError::InvalidInput`]): fewer than 8 samples, mismatched lengths,
-/// non-finite values, `s` not increasing within one period, or a constant `κ_g` (a circle,
-/// which has no periods).
-pub fn identify_periods(s: &[f64], kappa_g: &[f64], length: f64) -> Result<Periods, SolverError> {
+/// non-finite values, `s` not increasing within one period, a constant signal (a circle,
+/// which has no periods), an oscillation not above the noise level, or counts that differ
+/// between the two hysteresis levels.
+pub fn identify_periods(s: &[f64], signal: &[f64], length: f64) -> Result<Periods, SolverError> {
     let n = s.len();
     let bad = |m: String| Err(SolverError::InvalidInput(m));
-    if n != kappa_g.len() {
+    if n != signal.len() {
         return bad(format!(
             "identify_periods: {n} arclengths but {} curvature samples",
-            kappa_g.len()
+            signal.len()
         ));
     }
     if n < 8 {
@@ -67,7 +159,7 @@ pub fn identify_periods(s: &[f64], kappa_g: &[f64], length: f64) -> Result<Perio
             "identify_periods: loop length {length} is not positive"
         ));
     }
-    if s.iter().chain(kappa_g).any(|v| !v.is_finite()) {
+    if s.iter().chain(signal).any(|v| !v.is_finite()) {
         return bad("identify_periods: a sample is not finite".into());
     }
     if s.windows(2).any(|w| w[1] <= w[0]) || s[n - 1] - s[0] >= length {
@@ -85,18 +177,44 @@ pub fn identify_periods(s: &[f64], kappa_g: &[f64], length: f64) -> Result<Perio
     let w: Vec<f64> = (0..n)
         .map(|j| 0.5 * (gap(j) + gap((j + n - 1) % n)))
         .collect();
-    let mean = kappa_g.iter().zip(&w).map(|(k, w)| k * w).sum::<f64>() / length;
-    let dev: Vec<f64> = kappa_g.iter().map(|k| k - mean).collect();
+    let mean = signal.iter().zip(&w).map(|(k, w)| k * w).sum::<f64>() / length;
+    let dev: Vec<f64> = signal.iter().map(|k| k - mean).collect();
     let amplitude = dev.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let scale = kappa_g
+    let scale = signal
         .iter()
         .fold(0.0f64, |m, v| m.max(v.abs()))
         .max(1.0 / length);
     if amplitude <= 1e-9 * scale {
-        return bad(
-            "the geodesic curvature is constant along the loop (a circle): it has no periods"
-                .into(),
-        );
+        return bad(format!(
+            "the curvature pattern is constant along the loop (a circle; relative variation \
+             {:.1e}): it has no periods",
+            amplitude / scale
+        ));
+    }
+    let noise = noise_level(s, &dev, length);
+    let h_noise = (NOISE_FACTOR * noise).max(1e-12 * scale);
+    let resolution = amplitude / noise.max(1e-300);
+    let (Some(fine), Some(coarse)) = (
+        sign_changes(&dev, h_noise),
+        sign_changes(&dev, h_noise.max(RIPPLE_FRACTION * amplitude)),
+    ) else {
+        return bad(format!(
+            "the curvature pattern's amplitude {amplitude:.2e} does not clear {NOISE_FACTOR} \
+             times the state's grid-scale noise {noise:.2e}: its periods are not resolved"
+        ));
+    };
+    if coarse == 0 {
+        return bad(format!(
+            "the curvature pattern leaves its mean by more than a tenth of its amplitude \
+             ({amplitude:.2e}) on one side only: it has no periods"
+        ));
+    }
+    if fine != coarse {
+        return bad(format!(
+            "the curvature pattern changes sign {fine} times above {NOISE_FACTOR} times the \
+             state's grid-scale noise ({noise:.2e}) but {coarse} times above a tenth of its \
+             amplitude ({amplitude:.2e}): its periods are not those of one branch"
+        ));
     }
     // Harmonics up to a quarter of the samples (higher ones are not resolved).
     let k_max = (n / 4).max(1);
@@ -126,35 +244,158 @@ pub fn identify_periods(s: &[f64], kappa_g: &[f64], length: f64) -> Result<Perio
     } else {
         f64::INFINITY
     };
-    // Sign changes with hysteresis: a change counts when the deviation crosses from below
-    // −h to above +h or back.
-    let h = 0.1 * amplitude;
-    let start = dev.iter().position(|v| v.abs() > h).expect("amplitude > h");
-    let mut sign = dev[start] > 0.0;
-    let mut changes = 0u32;
-    for i in 1..=n {
-        let v = dev[(start + i) % n];
-        if sign && v < -h {
-            sign = false;
-            changes += 1;
-        } else if !sign && v > h {
-            sign = true;
-            changes += 1;
-        }
-    }
     Ok(Periods {
-        eta: (best + 1) as u32,
-        sign_change_eta: (changes % 2 == 0).then_some(changes / 2),
+        eta: coarse / 2,
+        harmonic: (best + 1) as u32,
         dominance,
+        resolution,
     })
 }
 
-/// Count the periods of `κ_g` of a solved loop (from its profile at the cell boundaries).
+/// The periods of a solved surface loop: of its bending moment `D κ_g` at the cell
+/// boundaries ([`Equilibrium::profile`]).
 pub fn identify_equilibrium(eq: &Equilibrium) -> Result<Periods, SolverError> {
-    let profile = eq.profile();
+    identify_profile(&eq.profile(), eq.length())
+}
+
+/// The periods of a written surface profile: of its bending moment `D κ_g`.
+pub fn identify_profile(
+    profile: &[crate::solve::ProfilePoint],
+    length: f64,
+) -> Result<Periods, SolverError> {
     let s: Vec<f64> = profile.iter().map(|p| p.s).collect();
-    let kg: Vec<f64> = profile.iter().map(|p| p.kappa_g).collect();
-    identify_periods(&s, &kg, eq.length())
+    let moment: Vec<f64> = profile.iter().map(|p| p.d * p.kappa_g).collect();
+    identify_periods(&s, &moment, length)
+}
+
+/// Geodesic curvature of the central projection `ρ = R r/|r|` of a space curve onto the
+/// sphere of radius `R` about the origin, at a point `r` with unit tangent `t` and curvature
+/// vector `κ = t'`: `κ_g = det(r, t, κ) / (R (1 − (r̂·t)²)^{3/2})` (from `ρ' ∝ t − (r̂·t) r̂`
+/// and `det(ρ, ρ', ρ'') = det(r, t, κ)/|r|³`; the terms along `r` drop out). On the sphere
+/// (`|r| = R`, `t ⊥ r`) it is the loop's own geodesic curvature; off it, the projection's.
+/// `None` where the projection is not regular ([`PROJECTION_REGULARITY`]).
+pub fn projected_geodesic_curvature(
+    r: &Vector3<f64>,
+    t: &Vector3<f64>,
+    kappa: &Vector3<f64>,
+    radius: f64,
+) -> Option<f64> {
+    let q = r.norm();
+    // NaN compares false: a non-finite position is not regular either.
+    if q.is_nan() || q < PROJECTION_REGULARITY * radius {
+        return None;
+    }
+    let along = r.dot(t) / (q * t.norm());
+    let sin2 = 1.0 - along * along;
+    if sin2.is_nan() || sin2 < PROJECTION_REGULARITY * PROJECTION_REGULARITY {
+        return None;
+    }
+    let v = r.dot(&t.cross(kappa)) / (radius * sin2.powf(1.5));
+    v.is_finite().then_some(v)
+}
+
+/// Largest geodesic curvature of the central projection, relative to the largest `D |κ|`,
+/// of a loop that counts as lying in a plane through the centre: far below the out-of-plane
+/// pattern of a branch next to the great circle it collapses onto (1e-3 relative within
+/// `5·10⁻⁵` of the collapse length on `D1/D0 = 0.1`), far above the out-of-plane round-off
+/// of a planar state (1e-12–1e-9 on the diagram of the two-segment enclosed scene).
+pub const PLANAR: f64 = 1e-6;
+
+/// Where the central projection of an enclosed loop counts as regular: every point at least
+/// this fraction of `R` from the centre, and its tangent at least `asin` of this from the
+/// radial direction (the projection's speed `|ρ'| = R sin∠(t, r)/|r|` stays at least a
+/// quarter of the loop's own at the wall).
+pub const PROJECTION_REGULARITY: f64 = 0.25;
+
+/// The signal whose periods name the branch of an enclosed state, at the Gauss points of its
+/// cells (`(s, signal)`), and whether it comes from the central projection: the stiffness
+/// `D` times a curvature, as on the surface.
+///
+/// Where the central projection of the loop is regular ([`PROJECTION_REGULARITY`]), the
+/// curvature is the projection's geodesic curvature ([`projected_geodesic_curvature`]): on the
+/// wall the loop's own `κ_g`, so an attached state counts as on the surface, and a state
+/// that lifts off keeps the count of the surface loop it came from. It does not depend on
+/// the rotation-minimising frame, which off the wall turns about the tangent by the torsion
+/// picked up along the loop (near a great circle, where `κ_g` is small, that turn would
+/// dominate the components `(κ1, κ2)` and their count).
+///
+/// Otherwise (a loop through the middle of the ball, or running radially) the curvature is the
+/// curvature vector `(κ1, κ2)` in the rotation-minimising frame projected on its principal
+/// axis (the direction of largest variance about its mean): a planar loop's signed
+/// curvature.
+pub fn enclosed_signal(
+    state: &crate::enclosed::EnclosedState,
+) -> Result<(Vec<f64>, Vec<f64>, bool), SolverError> {
+    let m = &state.model;
+    let n = m.cells();
+    let z = &state.z;
+    let x = m.transforms(z)?;
+    let r0 = m.start_point(z);
+    let col = |g: &nalgebra::Matrix4<f64>, c: usize| Vector3::new(g[(0, c)], g[(1, c)], g[(2, c)]);
+    let mut s = Vec::with_capacity(2 * n);
+    let mut projected = Vec::with_capacity(2 * n);
+    let mut regular = true;
+    let mut scale = 0.0f64;
+    for c in 0..n {
+        let cell = [z[4 * c], z[4 * c + 1], z[4 * c + 2], z[4 * c + 3]];
+        for (i, theta) in crate::model::GAUSS_OFFSETS.into_iter().enumerate() {
+            let g = x[c] * crate::enclosed::jet::cell_exp_part(m.cell_length(c), cell, theta);
+            let kappa = col(&g, 1) * cell[2 * i] + col(&g, 2) * cell[2 * i + 1];
+            let r = r0 + col(&g, 3);
+            let sigma = m.gauss_sigma(2 * c + i);
+            s.push(sigma * m.length());
+            scale = scale.max(m.stiffness().eval(sigma).d * kappa.norm());
+            match projected_geodesic_curvature(&r, &col(&g, 0), &kappa, m.radius()) {
+                Some(v) if regular => projected.push(m.stiffness().eval(sigma).d * v),
+                _ => regular = false,
+            }
+        }
+    }
+    if regular {
+        let mean = projected.iter().sum::<f64>() / projected.len() as f64;
+        let spread = projected
+            .iter()
+            .fold(0.0f64, |a, v| a.max((v - mean).abs()));
+        if spread <= PLANAR * scale {
+            return Err(SolverError::InvalidInput(format!(
+                "the loop lies in a plane through the centre of the ball (the geodesic \
+                 curvature of its central projection is {spread:.1e} of its curvature): it \
+                 projects onto a great circle, whose curvature has no periods to name a branch"
+            )));
+        }
+        return Ok((s, projected, true));
+    }
+    let w: Vec<f64> = (0..2 * n).map(|g| m.cell_length(g / 2)).collect();
+    let total: f64 = w.iter().sum();
+    let k = |g: usize| (z[2 * g], z[2 * g + 1]);
+    let (mut m1, mut m2) = (0.0, 0.0);
+    for (g, wg) in w.iter().enumerate() {
+        m1 += wg * k(g).0 / total;
+        m2 += wg * k(g).1 / total;
+    }
+    let (mut a, mut b, mut c) = (0.0, 0.0, 0.0);
+    for (g, wg) in w.iter().enumerate() {
+        let (u, v) = (k(g).0 - m1, k(g).1 - m2);
+        a += wg * u * u;
+        b += wg * u * v;
+        c += wg * v * v;
+    }
+    // Principal axis of [[a, b], [b, c]].
+    let theta = 0.5 * (2.0 * b).atan2(a - c);
+    let (e1, e2) = (theta.cos(), theta.sin());
+    let signal = (0..2 * n)
+        .map(|g| {
+            let d = m.stiffness().eval(m.gauss_sigma(g)).d;
+            d * ((k(g).0 - m1) * e1 + (k(g).1 - m2) * e2)
+        })
+        .collect();
+    Ok((s, signal, false))
+}
+
+/// The periods of an enclosed state's [`enclosed_signal`]: its branch `η`.
+pub fn identify_enclosed(state: &crate::enclosed::EnclosedState) -> Result<Periods, SolverError> {
+    let (s, signal, _) = enclosed_signal(state)?;
+    identify_periods(&s, &signal, state.model.length())
 }
 
 #[cfg(test)]
@@ -212,7 +453,7 @@ mod tests {
             .collect();
         let p = identify_periods(&s, &kg, length).unwrap();
         assert_eq!(p.eta, 3);
-        assert_eq!(p.sign_change_eta, Some(3));
+        assert_eq!(p.harmonic, 3);
         assert!((p.dominance - 5.0).abs() < 1e-9, "{}", p.dominance);
     }
 
@@ -224,5 +465,83 @@ mod tests {
         let mut kg: Vec<f64> = s.iter().map(|x| x.sin()).collect();
         kg[3] = f64::NAN;
         assert!(identify_periods(&s, &kg, 16.0).is_err());
+    }
+
+    /// A small pattern of 2 periods on top of a large constant (a loop next to a great circle)
+    /// with grid-scale noise: named 2 while the pattern clears the noise, refused (not named
+    /// as whatever harmonic the noise happens to favour) when it sinks below it.
+    #[test]
+    fn identify_near_circle_with_noise() {
+        let n = 384;
+        let length = 2.0 * PI * 2.9972;
+        let s: Vec<f64> = (0..n).map(|j| length * j as f64 / n as f64).collect();
+        // Deterministic noise of amplitude 1e-4 at the grid scale (a fixed LCG).
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let noise: Vec<f64> = (0..n)
+            .map(|_| {
+                state = state
+                    .wrapping_mul(6_364_136_223_846_793_005)
+                    .wrapping_add(1_442_695_040_888_963_407);
+                1e-4 * ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5)
+            })
+            .collect();
+        let signal = |eps: f64| -> Vec<f64> {
+            s.iter()
+                .zip(&noise)
+                .map(|(&x, e)| -1.0 + eps * (2.0 * PI * 2.0 * x / length).cos() + e)
+                .collect()
+        };
+        for eps in [2e-2, 5e-3] {
+            let p = identify_periods(&s, &signal(eps), length).unwrap();
+            assert_eq!(p.eta, 2, "{eps}: {p:?}");
+        }
+        for eps in [1e-4, 2e-5] {
+            let e = identify_periods(&s, &signal(eps), length).unwrap_err();
+            assert!(e.to_string().contains("noise"), "{eps}: {e}");
+        }
+    }
+
+    /// A pattern of 2 periods whose second lobe is a tenth of the first: the two hysteresis
+    /// levels disagree (2 periods above the noise, 1 above a tenth of the amplitude), and the
+    /// state is not named.
+    #[test]
+    fn identify_refuses_a_pattern_between_two_counts() {
+        let n = 200;
+        let length = 10.0;
+        let s: Vec<f64> = (0..n).map(|j| length * j as f64 / n as f64).collect();
+        let lobe = |x: f64, c: f64, a: f64| a * (-((x - c) / 0.8).powi(2)).exp();
+        let v: Vec<f64> = s
+            .iter()
+            .map(|&x| {
+                lobe(x, 2.5, 1.0) - lobe(x, 5.0, 0.3) + lobe(x, 7.5, 0.08)
+                    - lobe(x, 0.0, 0.3)
+                    - lobe(x, 10.0, 0.3)
+            })
+            .collect();
+        let e = identify_periods(&s, &v, length).unwrap_err().to_string();
+        assert!(e.contains("not those of one branch"), "{e}");
+    }
+
+    /// The central projection's geodesic curvature: a small circle of radius `a` at height
+    /// `h` inside the unit ball projects onto the circle of geodesic curvature `h/a`; a
+    /// circle in a plane through the centre onto a great circle (0); a radial tangent has no
+    /// regular projection.
+    #[test]
+    fn identify_projection_of_circles() {
+        let (a, h) = (0.6, 0.3);
+        for phi in [0.0, 1.0, 2.5] {
+            let (c, s) = (f64::cos(phi), f64::sin(phi));
+            let r = Vector3::new(a * c, a * s, h);
+            let t = Vector3::new(-s, c, 0.0);
+            let k = Vector3::new(-c, -s, 0.0) / a;
+            let kg = projected_geodesic_curvature(&r, &t, &k, 1.0).unwrap();
+            assert!((kg.abs() - h / a).abs() < 1e-14, "{kg}");
+            let flat = projected_geodesic_curvature(&Vector3::new(a * c, a * s, 0.0), &t, &k, 1.0);
+            assert!(flat.unwrap().abs() < 1e-15);
+        }
+        let radial = Vector3::new(0.0, 0.0, 1.0);
+        assert!(
+            projected_geodesic_curvature(&(0.5 * radial), &radial, &Vector3::x(), 1.0).is_none()
+        );
     }
 }

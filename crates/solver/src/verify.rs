@@ -22,22 +22,24 @@
 //!   every other point); and [`ENERGY_RELATIVE_SLACK`] of the energy. As `κ_g` is computed
 //!   from the conserved moment, not copied from the unknowns, the check also fails when
 //!   the state does not satisfy the equilibrium equations;
-//! * **branch**: the number `η` of periods of the written `κ_g` ([`crate::identify`]) is the
-//!   requested one.
+//! * **branch**: the number `η` of periods of the written bending moment `D κ_g`
+//!   ([`crate::identify`]) is the requested one.
 //!
 //! # How the branch of a state is identified
 //!
-//! Always from the state: `η` is the dominant Fourier harmonic of `κ_g(s)` of the state that
-//! is written ([`crate::identify::identify_periods`]). A state reached by continuation (in
-//! `L̄` or in `D1/D0`) is counted again at its end point; where the count changed along the
-//! path (a very soft segment, `D1/D0 ≪ 1`, where the stiff segment is nearly a geodesic arc
-//! and the harmonics of the soft one dominate), the state is refused rather than reported
-//! under the branch the path started from. `solve` then tries its next fallback, and
-//! says so if none passes.
+//! Always from the state: `η` is half the number of sign changes of the written moment
+//! `D κ_g(s)` about its mean, counted with hysteresis at the state's own grid-scale noise
+//! level and at a tenth of the amplitude, which must agree
+//! ([`crate::identify::identify_periods`]). A state reached by continuation (in `L̄` or in
+//! `D1/D0`) is counted again at its end point; where the count is not the requested one, or
+//! the state's pattern names no branch (near a great circle, below the noise; on a very soft
+//! segment, `D1/D0 ≪ 1`, where the stiff segment is a geodesic arc to within the noise), the
+//! state is refused rather than reported under the branch the path started from. `solve`
+//! then tries its next fallback, and says so if none passes.
 
 use std::f64::consts::PI;
 
-use crate::identify::identify_periods;
+use crate::identify::{identify_enclosed, identify_profile};
 use crate::solve::{Equilibrium, ProfilePoint};
 use crate::SolverError;
 
@@ -167,10 +169,8 @@ pub fn verify_state(
             claim.energy
         ));
     }
-    let s: Vec<f64> = profile.iter().map(|p| p.s).collect();
-    let kg: Vec<f64> = profile.iter().map(|p| p.kappa_g).collect();
-    // Without a requested branch, a `κ_g` without periods (a circle) counts 0.
-    let eta = match (identify_periods(&s, &kg, length), claim.eta) {
+    // Without a requested branch, a state whose periods are not named counts 0.
+    let eta = match (identify_profile(profile, length), claim.eta) {
         (Ok(p), _) => p.eta,
         (Err(_), None) => 0,
         (Err(e), Some(_)) => {
@@ -180,7 +180,7 @@ pub fn verify_state(
     if let Some(want) = claim.eta {
         if eta != want {
             return fail(format!(
-                "its geodesic curvature has {eta} periods, not the requested {want}"
+                "its bending moment D κ_g has {eta} periods, not the requested {want}"
             ));
         }
     }
@@ -368,8 +368,8 @@ pub struct EnclosedVerification {
     pub energy_from_profile: f64,
     /// Allowed `|energy_from_profile − claimed energy|`.
     pub energy_tolerance: f64,
-    /// Dominant harmonic of the written `κ1` (the branch as counted on the state; 0 where
-    /// `κ1` has no periods and no branch was requested).
+    /// Periods of the state ([`crate::identify::identify_enclosed`]; 0 where they are not
+    /// named and no branch was requested).
     pub eta: u32,
 }
 
@@ -386,8 +386,8 @@ pub struct EnclosedVerification {
 ///   weights ([`weighted_energy`]: the model's own two-point Gauss rule, exact for the
 ///   written state) equals the claim within `claim.energy_error + claim.profile_error` and
 ///   [`ENERGY_RELATIVE_SLACK`];
-/// * **branch**: the dominant harmonic of the written nodes' `κ1` equals `claim.eta` when
-///   given.
+/// * **branch**: the periods of the moment of the state's central projection onto the
+///   sphere ([`crate::identify::identify_enclosed`]) equal `claim.eta` when given.
 ///
 /// Errors: [`SolverError::Unverified`] naming the first check that fails.
 pub fn verify_enclosed(
@@ -396,7 +396,7 @@ pub fn verify_enclosed(
 ) -> Result<EnclosedVerification, SolverError> {
     let fail = |m: String| Err(SolverError::Unverified(m));
     let m = &st.model;
-    let (r, length) = (m.radius(), m.length());
+    let r = m.radius();
     let d0 = m.stiffness().kind().reference();
     let x = m.transforms(&st.z)?;
     let end = &x[m.cells()];
@@ -470,11 +470,9 @@ pub fn verify_enclosed(
             claim.energy
         ));
     }
-    let nodes: Vec<&EnclosedPoint> = pts.iter().filter(|p| p.node).collect();
-    let s: Vec<f64> = nodes.iter().map(|p| p.s).collect();
-    let k1: Vec<f64> = nodes.iter().map(|p| p.kappa.0).collect();
-    // Without a requested branch, a `κ1` without periods (the planar circle) counts 0.
-    let eta = match (identify_periods(&s, &k1, length), claim.eta) {
+    // Without a requested branch, a state whose periods are not named (the planar circle)
+    // counts 0.
+    let eta = match (identify_enclosed(st), claim.eta) {
         (Ok(p), _) => p.eta,
         (Err(_), None) => 0,
         (Err(e), Some(_)) => {
@@ -484,7 +482,8 @@ pub fn verify_enclosed(
     if let Some(want) = claim.eta {
         if eta != want {
             return fail(format!(
-                "its curvature κ1 has {eta} periods, not the requested {want}"
+                "the moment D κ_g of its central projection onto the sphere has {eta} periods, \
+                 not the requested {want}"
             ));
         }
     }

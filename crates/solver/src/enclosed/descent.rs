@@ -19,7 +19,7 @@ use super::branch::{
 };
 use super::solve::{solve_enclosed, EnclosedOptions, EnclosedState};
 use crate::descend::{descend as descend_saddle, Descent, DescentSettings, SaddleModel};
-use crate::identify::{identify_periods, Periods};
+use crate::identify::Periods;
 use crate::SolverError;
 
 /// The most negative eigenvalue of the mass-normalised Hessian of the Lagrangian on the
@@ -93,40 +93,10 @@ fn step_and_solve(
     solve_enclosed(&state.model, z, opts)
 }
 
-/// Periods of an enclosed loop's curvature, the branch number `η` of [`crate::identify`]:
-/// the curvature vector `(κ1, κ2)` in the rotation-minimising frame (periodic, since the
-/// model closes the frame) at the Gauss points, projected on its principal axis (the
-/// direction of largest variance about its mean), and the periods of that signal counted.
-/// On the wall the frame is the Darboux frame, `(κ1, κ2) = (κ_g, −1/R)`, so the signal is
-/// `κ_g` and the count is the surface one; a loop that lifts off keeps the count as long as
-/// its curvature keeps its pattern (a planar figure-eight: the signed curvature, one
-/// period).
+/// Periods of an enclosed loop's curvature, the branch number `η`
+/// ([`crate::identify::identify_enclosed`]).
 pub fn enclosed_periods(state: &EnclosedState) -> Result<Periods, SolverError> {
-    let m = &state.model;
-    let ng = 2 * m.cells();
-    let w: Vec<f64> = (0..ng).map(|g| m.cell_length(g / 2)).collect();
-    let total: f64 = w.iter().sum();
-    let k = |g: usize| (state.z[2 * g], state.z[2 * g + 1]);
-    let (mut m1, mut m2) = (0.0, 0.0);
-    for (g, wg) in w.iter().enumerate() {
-        m1 += wg * k(g).0 / total;
-        m2 += wg * k(g).1 / total;
-    }
-    let (mut a, mut b, mut c) = (0.0, 0.0, 0.0);
-    for (g, wg) in w.iter().enumerate() {
-        let (x, y) = (k(g).0 - m1, k(g).1 - m2);
-        a += wg * x * x;
-        b += wg * x * y;
-        c += wg * y * y;
-    }
-    // Principal axis of [[a, b], [b, c]].
-    let theta = 0.5 * (2.0 * b).atan2(a - c);
-    let (e1, e2) = (theta.cos(), theta.sin());
-    let s: Vec<f64> = (0..ng).map(|g| m.gauss_sigma(g) * m.length()).collect();
-    let signal: Vec<f64> = (0..ng)
-        .map(|g| (k(g).0 - m1) * e1 + (k(g).1 - m2) * e2)
-        .collect();
-    identify_periods(&s, &signal, m.length())
+    crate::identify::identify_enclosed(state)
 }
 
 /// The enclosed model as a [`SaddleModel`] (see [`crate::descend`]): index and directions
