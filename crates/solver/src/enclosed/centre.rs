@@ -35,6 +35,7 @@ use super::solve::{
     least_squares_multipliers, solve_enclosed, start_from_curvature, transfer_multipliers,
     EnclosedOptions, EnclosedState, LEAST_SQUARES_MAX_CELLS,
 };
+use crate::mesh::MeshMap;
 use crate::model::GAUSS_OFFSETS;
 use crate::SolverError;
 
@@ -371,5 +372,181 @@ pub fn centre_levels(
         out.push(level);
     }
     out.push(top.state);
+    Some(out)
+}
+
+/// Cell boundaries on the mesh map `map` with a node at each of `breaks` (sorted, in
+/// `[0, 1)`, the first 0): piece `i` has `counts[i]` cells of equal length in the map's
+/// uniform coordinate `u` ([`MeshMap::u_of_sigma`]), so the cells keep the map's grading
+/// (finer at a stiffness transition) and halving every piece's cells halves every cell.
+pub fn mapped_bounds(map: &MeshMap, breaks: &[f64], counts: &[usize]) -> Vec<f64> {
+    let mut u = map.u_of_sigmas(breaks.iter().copied());
+    u.push(1.0);
+    let mut b = Vec::with_capacity(counts.iter().sum::<usize>() + 1);
+    for (i, &c) in counts.iter().enumerate() {
+        b.push(breaks[i]);
+        b.extend((1..c).map(|k| map.sigma_of_u(u[i] + (u[i + 1] - u[i]) * k as f64 / c as f64)));
+    }
+    b.push(1.0);
+    b
+}
+
+/// The start of `state` on the cell boundaries `bounds` with the same arclength origin:
+/// curvature interpolated ([`EnclosedState::curvature_at`]), the same start point, gauge and
+/// closure multipliers, wall impulses through the contact force density
+/// ([`transfer_multipliers`]).
+pub fn placed_start(
+    state: &EnclosedState,
+    bounds: Vec<f64>,
+) -> Result<(EnclosedModel, Vec<f64>), SolverError> {
+    let m = &state.model;
+    let stiff = m.stiffness().kind().clone();
+    let cells = bounds.len() - 1;
+    let zero = Gauge {
+        reference: vec![0.0; 4 * cells],
+        slope: None,
+        pin: m.gauge().pin,
+    };
+    let probe = EnclosedModel::with_bounds(m.radius(), m.lbar(), bounds.clone(), &stiff, zero)?;
+    let reference = probe.sample_gauss(|s| state.curvature_at(s));
+    let gauge = Gauge {
+        reference: reference.clone(),
+        slope: None,
+        pin: m.gauge().pin,
+    };
+    let model = EnclosedModel::with_bounds(m.radius(), m.lbar(), bounds, &stiff, gauge)?
+        .with_wall(m.wall().clone())?;
+    let mut z = vec![0.0; model.dim()];
+    z[..4 * cells].copy_from_slice(&reference);
+    let r0 = m.start_point(&state.z);
+    z[4 * cells..4 * cells + 3].copy_from_slice(&[r0[0], r0[1], r0[2]]);
+    transfer_multipliers(m, &state.z, &model, &mut z);
+    Ok((model, z))
+}
+
+/// Where the contacts of `state` begin and end (`σ`, sorted, the first 0, for
+/// [`mapped_bounds`]): a contact on one or two nodes is a point (its node, or the lever
+/// rule on the two, [`contact_points`]); a contact on three or more nodes is an arc, whose
+/// ends are extrapolated from the gaps at the two nodes outside each end, `g ∝ (σ − σ_e)³`
+/// (curvature continuous across the end, a point force at it: `g`, `g'`, `g''` vanish
+/// there), and taken no farther out than the end node.
+pub fn contact_breaks(state: &EnclosedState) -> Result<Vec<f64>, SolverError> {
+    let m = &state.model;
+    let n = m.cells() as isize;
+    let gaps = m.gaps(&state.z)?;
+    let b = m.bounds();
+    // (σ unwrapped, cube root of the gap) at node j (any integer).
+    let at = |j: isize| {
+        let k = j.rem_euclid(n) as usize;
+        (b[k] + j.div_euclid(n) as f64, gaps[k].max(0.0).cbrt())
+    };
+    let mut pts = Vec::new();
+    for (nodes, lever) in contact_groups(state) {
+        if nodes.len() <= 2 {
+            pts.push(lever);
+            continue;
+        }
+        let first = nodes[0] as isize;
+        let mut last = nodes[nodes.len() - 1] as isize;
+        if last < first {
+            last += n;
+        }
+        let ((s1, t1), (s2, t2), (sf, _)) = (at(first - 1), at(first - 2), at(first));
+        let start = if t2 > t1 {
+            (s1 + t1 * (s1 - s2) / (t2 - t1)).min(sf)
+        } else {
+            sf
+        };
+        let ((s1, t1), (s2, t2), (sl, _)) = (at(last + 1), at(last + 2), at(last));
+        let end = if t2 > t1 {
+            (s1 - t1 * (s2 - s1) / (t2 - t1)).max(sl)
+        } else {
+            sl
+        };
+        pts.push(start);
+        pts.push(end);
+    }
+    let mut breaks = vec![0.0];
+    let mut moved: Vec<f64> = pts.into_iter().map(|p| p.rem_euclid(1.0)).collect();
+    moved.sort_by(f64::total_cmp);
+    for p in moved {
+        if p - breaks.last().expect("0") > MIN_PIECE && 1.0 - p > MIN_PIECE {
+            breaks.push(p);
+        }
+    }
+    Ok(breaks)
+}
+
+/// Cells per piece between `breaks` for `cells` cells in all on the mesh map `map`: in
+/// proportion to the pieces' lengths in `u`, at least one each.
+fn mapped_counts(map: &MeshMap, breaks: &[f64], cells: usize) -> Option<Vec<usize>> {
+    apportion(&map.u_of_sigmas(breaks.iter().copied()), cells)
+}
+
+/// `state` solved again on the mesh map of its stiffness profile with nodes at `breaks`,
+/// `counts` cells per piece; the watchdog first, plain backtracking where it fails.
+fn solve_placed(
+    state: &EnclosedState,
+    breaks: &[f64],
+    counts: &[usize],
+    opts: &EnclosedOptions,
+) -> Option<EnclosedState> {
+    let map = MeshMap::for_profile(state.model.stiffness().kind());
+    let (model, z) = placed_start(state, mapped_bounds(&map, breaks, counts)).ok()?;
+    let watchdog = EnclosedOptions {
+        watchdog: opts.watchdog.max(2),
+        ..opts.clone()
+    };
+    solve_enclosed(&model, z.clone(), &watchdog)
+        .or_else(|_| solve_enclosed(&model, z, opts))
+        .ok()
+}
+
+/// A ladder of meshes with a node at every contact point and contact end of `from`, for a
+/// rod whose arclength origin is not a gauge (a non-uniform rod): the profile's mesh map
+/// ([`mapped_bounds`]) with breakpoints from [`contact_breaks`], the cells of the pieces in
+/// the proportion of a `coarsest`-cell mesh. The breakpoints are taken again from the
+/// solution at each doubling from `2·coarsest` up to twice the finest level (each started
+/// from the one before: a contact that the coarse mesh merges with an arc, a point contact
+/// next to an arc's end, separates on the finer meshes), and the `levels` levels
+/// `coarsest·2^k`, `k < levels`, are then solved on the last ones, each from the finest.
+/// `None` where a solve fails.
+pub fn placed_levels(
+    from: &EnclosedState,
+    coarsest: usize,
+    levels: usize,
+    opts: &EnclosedOptions,
+) -> Option<Vec<EnclosedState>> {
+    let map = MeshMap::for_profile(from.model.stiffness().kind());
+    let top = coarsest << levels.checked_sub(1)?;
+    let mut source = from.clone();
+    let mut breaks = contact_breaks(&source).ok()?;
+    let mut cells = 2 * coarsest;
+    let mut moves = 0;
+    while cells <= 2 * top {
+        let counts: Vec<usize> = mapped_counts(&map, &breaks, coarsest)?
+            .into_iter()
+            .map(|c| c * (cells / coarsest))
+            .collect();
+        source = solve_placed(&source, &breaks, &counts, opts)?;
+        breaks = contact_breaks(&source).ok()?;
+        if cells < 2 * top || moves >= CENTRE_MOVES {
+            cells *= 2;
+        } else {
+            moves += 1;
+        }
+    }
+    let base = mapped_counts(&map, &breaks, coarsest)?;
+    let mut out: Vec<EnclosedState> = Vec::with_capacity(levels);
+    for k in (0..levels).rev() {
+        let counts: Vec<usize> = base.iter().map(|c| c << k).collect();
+        let level = solve_placed(&source, &breaks, &counts, opts)
+            .or_else(|| solve_placed(out.last()?, &breaks, &counts, opts))?;
+        if k == levels - 1 {
+            source = level.clone();
+        }
+        out.push(level);
+    }
+    out.reverse();
     Some(out)
 }
