@@ -116,7 +116,7 @@ pub(super) struct Ladder {
 
 impl Ladder {
     /// From a trace's levels at `lbar`, with `extra` doublings on top.
-    fn from_levels(t: &Levels, lbar: f64, extra: usize) -> Result<Self, SolverError> {
+    pub(super) fn from_levels(t: &Levels, lbar: f64, extra: usize) -> Result<Self, SolverError> {
         let opts = EnclosedOptions::default();
         let at = t.step_to(lbar, &opts)?;
         let mut states: Vec<EnclosedState> = at.states.to_vec();
@@ -139,7 +139,7 @@ impl Ladder {
     }
 
     /// Newton at `lbar` from this ladder, level by level.
-    fn step_to(&self, lbar: f64) -> Result<Self, SolverError> {
+    pub(super) fn step_to(&self, lbar: f64) -> Result<Self, SolverError> {
         let opts = EnclosedOptions::default();
         let states = self
             .states
@@ -152,7 +152,7 @@ impl Ladder {
     /// Energy of the finest level and its error: [`four_level_estimate`] over the last four
     /// levels (order capped at [`LIFTED_OFF_MAX_ORDER`], or 1 for point-like contact), or
     /// the three-level rule where the ladder has three.
-    fn energy(&self) -> Result<(f64, f64), SolverError> {
+    pub(super) fn energy(&self) -> Result<(f64, f64), SolverError> {
         let e: Vec<f64> = self.states.iter().map(EnclosedState::energy).collect();
         let fine = self.states.last().expect("a level");
         let c = fine.contact(super::TOUCH)?;

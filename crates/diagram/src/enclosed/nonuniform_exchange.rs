@@ -2,12 +2,20 @@
 //! `nonuniform.rs`): the lowest sheet at a length, `E_a = E_b` located on re-solved states
 //! (the exchange locator, [`rodloop_continuation::exchange::locate`]), and the energy of
 //! the `m`-fold great circle.
+//!
+//! A lifted-off exchange is located first on the trace's levels `N/4, N/2, N`, then again
+//! on the ladder of meshes of the uniform rod's exchanges ([`Ladder`]: the finest level
+//! prolonged and re-solved once more per accuracy step, the last four levels kept) where
+//! every lifted-off state re-solves on it. Where one does not (the far lifted-off
+//! figure-eight of `D1/D0 = 0.5`: its point contacts fall between nodes and the prolonged
+//! contact set is the wrong one, so Newton stalls from `2N` up), or where the ladder's root
+//! lies outside the levels' estimate, the levels' result stands.
 
 use rodloop_solver::SolverError;
 
 use rodloop_continuation::exchange::ExchangeSettings;
 
-use super::critical::{locate_from, EnclosedPair};
+use super::critical::{exchange_doublings, locate_from, EnclosedPair, Ladder};
 use super::nonuniform_sheet::{surface_energy, walk, SheetOut};
 use super::trace::Levels;
 use super::{EnclosedDiagramOptions, PointSource};
@@ -154,6 +162,27 @@ pub(super) fn locate_crossing(
             EnclosedPair::new(|k, x| sheet_energy(dopts, surfaces[k], x, &mut tracks[k]));
         locate_from(&mut pair, xg, &lifted_settings)?
     };
+    if let Ok((fine, ladder_cells)) = ladder_crossing(
+        dopts,
+        surfaces,
+        &tracks,
+        ex.x,
+        exchange_doublings(dopts.accuracy),
+    ) {
+        if (fine.x - ex.x).abs() <= ex.error {
+            let cells: Vec<String> = ladder_cells.iter().map(|c| c.to_string()).collect();
+            return Ok((
+                fine.x,
+                fine.error,
+                0.5 * (fine.energies.a + fine.energies.b),
+                xs,
+                format!(
+                    "the exchange locator on E_a = E_b with the lifted-off state(s) re-solved on a ladder of meshes (3-D model at N = {}; the trace's levels N/4, N/2, N first, hunt from the interpolated root, Brent to 1e-10, then the ladder from that root); error: the ladder's energy estimates (four levels) plus the misfit of the chord over +-1e-5, over its slope, plus the final bracket; surface value on the same sheets",
+                    cells.join(", ")
+                ),
+            ));
+        }
+    }
     let cells = tracks
         .iter()
         .flatten()
@@ -172,6 +201,47 @@ pub(super) fn locate_crossing(
             cells
         ),
     ))
+}
+
+/// `E_a = E_b` near `x` on ladders of meshes ([`Ladder::from_levels`] with `doublings`
+/// more levels) for the lifted-off sheets (`tracks`, walked to `x` first) and the surface
+/// energies for the others; first step `−10⁻⁵`, slope and noise from the chord over
+/// `±10⁻⁵`. Returns the exchange and the cells of the finest ladder's levels.
+fn ladder_crossing(
+    dopts: &DiagramOptions,
+    surfaces: [&TracedBranch; 2],
+    tracks: &[Option<Levels>; 2],
+    x: f64,
+    doublings: usize,
+) -> Result<(rodloop_continuation::exchange::Exchange, Vec<usize>), SolverError> {
+    let mut ladders: [Option<Ladder>; 2] = [None, None];
+    let mut cells = Vec::new();
+    for (k, t) in tracks.iter().enumerate() {
+        if let Some(t) = t {
+            let at = walk(t, x)?;
+            let lad = Ladder::from_levels(&at, x, doublings)?;
+            if lad.cells().last() > cells.last() {
+                cells = lad.cells();
+            }
+            ladders[k] = Some(lad);
+        }
+    }
+    let settings = ExchangeSettings {
+        probe: -1e-5,
+        baseline: 1e-5,
+        ..ExchangeSettings::default()
+    };
+    let mut pair = EnclosedPair::new(|k, y| match &mut ladders[k] {
+        Some(lad) => {
+            let next = lad.step_to(y)?;
+            let e = next.energy()?;
+            *lad = next;
+            Ok(e)
+        }
+        None => surface_energy(dopts, surfaces[k], y),
+    });
+    let ex = locate_from(&mut pair, x, &settings)?;
+    Ok((ex, cells))
 }
 
 /// Distance from a great circle `L̄ = m` within which a change of the lowest sheet is
