@@ -253,6 +253,7 @@ mod tests {
                     amplitude: 0.0,
                     source: PointSource::Continuation,
                     state: Vec::new(),
+                    finer: Default::default(),
                 }
             })
             .collect();

@@ -7,12 +7,12 @@
 use std::f64::consts::PI;
 
 use rodloop_solver::{
-    solve, Claim, Confinement, Equilibrium, Globalization, Param, ParamProblem, Phase,
-    SolveOptions, SolverError, SurfaceSolve,
+    solve, solve_newton_keeping, Claim, Confinement, Equilibrium, Globalization, Param,
+    ParamProblem, Phase, SolveOptions, SolverError, SurfaceSolve,
 };
 
 use crate::march::MarchPoint;
-use crate::types::{TracedBranch, TracedPoint};
+use crate::types::{FinerRun, TracedBranch, TracedPoint};
 use crate::DiagramOptions;
 
 /// Threshold below which an eigenvalue (units of `D0`) counts as negative (the solver's
@@ -76,13 +76,17 @@ pub(crate) fn finish_point<M: SurfaceSolve>(
     } else {
         None
     };
+    let mut kept = FinerRun::default();
     let (energy, energy_g, energy_error, lambda_min, lambda_max) = match partner {
         Some(h) => {
             let eh = h.energy();
             let (hmin, hmax) = h.lambda_range();
             let rich = rodloop_solver::richardson;
-            // The third rung of the estimate's ladder (`crate::estimate`).
-            let finer = half_resolution(opts, &eq, 2 * cells).map(|d| d.energy().total);
+            // The third rung of the estimate's ladder (`crate::estimate`), its run kept for
+            // the verification's re-solve at the same resolution (`resolved`).
+            let (finer, run) = finer_resolution(opts, &eq, 2 * cells);
+            kept = run;
+            let finer = finer.map(|d| d.energy().total);
             (
                 rich(en.total, eh.total),
                 rich(en.geodesic, eh.geodesic),
@@ -110,6 +114,7 @@ pub(crate) fn finish_point<M: SurfaceSolve>(
         amplitude,
         source: raw.source,
         state: z,
+        finer: kept,
     })
 }
 
@@ -126,6 +131,27 @@ pub(crate) fn half_resolution(
     let kappa = eq.resample(cells).ok()?;
     let model = model_with_phase(opts, eq.lbar(), cells, &kappa).ok()?;
     solve(&model, &kappa, &newton_options()).ok()
+}
+
+/// [`half_resolution`] at `cells` cells by [`rodloop_solver::solve_newton_keeping`]: the
+/// equilibrium, and the run kept for [`resolved`] (its tolerance, [`RESOLVED_TOLERANCE`]).
+fn finer_resolution(
+    opts: &DiagramOptions,
+    eq: &Equilibrium,
+    cells: usize,
+) -> (Option<Equilibrium>, FinerRun) {
+    let none = || (None, FinerRun::default());
+    if cells < 4 {
+        return none();
+    }
+    let Ok(kappa) = eq.resample(cells) else {
+        return none();
+    };
+    let Ok(model) = model_with_phase(opts, eq.lbar(), cells, &kappa) else {
+        return none();
+    };
+    let (r, run) = solve_newton_keeping(&model, &kappa, &newton_options(), RESOLVED_TOLERANCE);
+    (r.ok(), FinerRun::new(kappa, run))
 }
 
 /// Re-solving a traced branch's states (here, beside the solver helpers they use, so that
@@ -342,11 +368,12 @@ impl TracedBranch {
     ) -> Result<StateFile, SolverError> {
         let eq = self.equilibrium_of(opts, k)?;
         let p = &self.points[k];
-        verify_refining(
+        verify_refining_from(
             &eq,
             p.energy,
             sheet_estimate(&self.points, k),
             Ladder::ReEstimate,
+            &p.finer,
         )
     }
 }
@@ -378,6 +405,19 @@ pub(crate) fn verify_refining(
     energy: f64,
     energy_error: Option<f64>,
     ladder: Ladder,
+) -> Result<StateFile, SolverError> {
+    verify_refining_from(eq, energy, energy_error, ladder, &FinerRun::default())
+}
+
+/// [`verify_refining`] whose re-solve at `2N` goes on from `finer` where that is a run of
+/// the same model from the same start ([`resolved_from`]): the same result without repeating
+/// the run.
+fn verify_refining_from(
+    eq: &Equilibrium,
+    energy: f64,
+    energy_error: Option<f64>,
+    ladder: Ladder,
+    finer: &FinerRun,
 ) -> Result<StateFile, SolverError> {
     let d0 = eq.model().stiffness().kind().reference();
     let scale = energy.abs().max(1.0);
@@ -434,7 +474,7 @@ pub(crate) fn verify_refining(
                     SolverError::Unverified(m) => m,
                     e => e.to_string(),
                 };
-                let next = resolved(at, 2 * cells).map_err(|e| {
+                let next = resolved_from(at, 2 * cells, finer).map_err(|e| {
                     SolverError::Unverified(format!(
                         "at the {cells} cells of its file {why}; at {} cells Newton finds no \
                          equilibrium next to it at this L̄ (a state near a fold of the \
@@ -456,6 +496,19 @@ pub(crate) fn verify_refining(
 /// [`crate::TracedBranch::equilibrium_of`]; on a very soft segment, `D1/D0 = 0.001`, the
 /// residual of the finer resolutions stalls at a few 1e-9 in round-off), with up to 60 steps.
 pub(crate) fn resolved(eq: &Equilibrium, cells: usize) -> Result<Equilibrium, SolverError> {
+    resolved_from(eq, cells, &FinerRun::default())
+}
+
+/// The tolerance of [`resolved`]'s Newton run.
+const RESOLVED_TOLERANCE: f64 = 1e-8;
+
+/// [`resolved`], going on from the kept run `finer` where it is a run of the same model
+/// from the same start ([`FinerRun::resume`]; the same iterates, so the same result).
+fn resolved_from(
+    eq: &Equilibrium,
+    cells: usize,
+    finer: &FinerRun,
+) -> Result<Equilibrium, SolverError> {
     let m = eq.model();
     let kappa = eq.resample(cells)?;
     let kind = m.stiffness().kind();
@@ -464,10 +517,13 @@ pub(crate) fn resolved(eq: &Equilibrium, cells: usize) -> Result<Equilibrium, So
         model = model.with_phase(Phase::from_gauss_values(&kappa, cells)?)?;
     }
     let newton = SolveOptions {
-        tolerance: 1e-8,
+        tolerance: RESOLVED_TOLERANCE,
         max_iterations: 60,
         ..newton_options()
     };
+    if let Some(r) = finer.resume(&model, &kappa, &newton) {
+        return r;
+    }
     solve(&model, &kappa, &newton)
 }
 

@@ -134,6 +134,49 @@ pub struct TracedPoint {
     pub source: PointSource,
     /// KKT state `(κ, μ, ν)` at the tracing resolution ([`TracedBranch::cells`] cells).
     pub state: Vec<f64>,
+    /// Newton's run at twice the tracing resolution from this state (the third rung of
+    /// [`TracedPoint::energy_error`]), kept for the verification of its state file; not in
+    /// files, and no part of comparisons.
+    #[serde(skip)]
+    pub(crate) finer: FinerRun,
+}
+
+/// The Newton run of a traced state at twice its resolution ([`TracedPoint`]'s third rung),
+/// kept where a run to the tolerance of a state file's refinement would stop or go on
+/// ([`rodloop_solver::solve_newton_keeping`]), with the start it ran from: the verification
+/// of the state's file, which re-solves the state at that resolution from the same start
+/// when its own resolution does not reproduce the row, goes on from here instead of
+/// repeating the run. Equal to every other (a cache, not a value of the state).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct FinerRun(Option<std::sync::Arc<(Vec<f64>, rodloop_solver::NewtonRun)>>);
+
+impl FinerRun {
+    /// The run of `start` (curvature at the Gauss points), if there is one.
+    pub(crate) fn new(start: Vec<f64>, run: Option<rodloop_solver::NewtonRun>) -> Self {
+        Self(run.map(|r| std::sync::Arc::new((start, r))))
+    }
+
+    /// The result of [`rodloop_solver::solve`] of `model` from `start` with Newton's
+    /// `opts`, continued from the kept run: `None` unless the run is of this model and
+    /// start and can go on with `opts` ([`rodloop_solver::NewtonRun::resume`]).
+    pub(crate) fn resume(
+        &self,
+        model: &rodloop_solver::SurfaceModel,
+        start: &[f64],
+        opts: &rodloop_solver::SolveOptions,
+    ) -> Option<Result<rodloop_solver::Equilibrium, rodloop_solver::SolverError>> {
+        let (s, run) = self.0.as_deref()?;
+        if s.as_slice() != start || run.model() != model {
+            return None;
+        }
+        run.clone().resume(opts)
+    }
+}
+
+impl PartialEq for FinerRun {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 /// A located change of the stability index along a branch.

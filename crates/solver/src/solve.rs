@@ -204,26 +204,8 @@ pub fn solve(
     start: &[f64],
     opts: &SolveOptions,
 ) -> Result<Equilibrium, SolverError> {
-    let mut model = model.clone();
-    if start.len() != model.n_kappa() {
-        return Err(SolverError::WrongLength {
-            expected: model.n_kappa(),
-            found: start.len(),
-        });
-    }
-    if model.stiffness().kind().is_uniform() && model.phase().is_none() {
-        let phase = Phase::from_gauss_values(start, model.cells())?;
-        model = model.with_phase(phase)?;
-    }
-    let state_of = |kappa: &[f64]| -> Result<Vec<f64>, SolverError> {
-        let mu = initial_multiplier(&model, kappa)?;
-        let mut z: Vec<f64> = kappa.to_vec();
-        z.extend_from_slice(&mu);
-        if model.phase().is_some() {
-            z.push(0.0);
-        }
-        Ok(z)
-    };
+    let model = with_start_phase(model, start)?;
+    let state_of = |kappa: &[f64]| full_state(&model, kappa);
     let newton_opts = SolveOptions {
         globalization: Globalization::Newton,
         ..opts.clone()
@@ -440,93 +422,247 @@ pub fn solve_from_state(
     z0: Vec<f64>,
     opts: &SolveOptions,
 ) -> Result<Equilibrium, SolverError> {
-    let scales = model.residual_scales();
-    let merit = |f: &DVector<f64>| -> f64 {
-        scales
-            .iter()
-            .zip(f.iter())
-            .map(|(s, v)| s * v * v)
-            .sum::<f64>()
+    NewtonRun::start(model, z0)?.iterate(opts, None)
+}
+
+/// [`solve`] with [`Globalization::Newton`] that also keeps the iteration where a run to
+/// the tolerance `keep` would stop or go on ([`NewtonRun`]): the run at the first pass whose
+/// residual is at most `keep`, or else at its last pass. The run is `None` where the start
+/// cannot be evaluated.
+pub fn solve_newton_keeping(
+    model: &SurfaceModel,
+    start: &[f64],
+    opts: &SolveOptions,
+    keep: f64,
+) -> (Result<Equilibrium, SolverError>, Option<NewtonRun>) {
+    let newton = SolveOptions {
+        globalization: Globalization::Newton,
+        ..opts.clone()
     };
-    let mut z = DVector::from_vec(z0);
-    let mut history = Vec::new();
-    let mut steps = Vec::new();
-    let mut f = model.kkt_residual(z.as_slice())?;
-    let mut m = merit(&f);
-    let mut iterations = 0;
-    let mut converged = false;
-    loop {
-        history.push(m.sqrt());
-        if !m.is_finite() {
-            break;
+    let run = newton_start(model, start).and_then(|(m, z0)| NewtonRun::start(m, z0));
+    match run {
+        Ok(run) => {
+            let mut kept = None;
+            let eq = run.iterate(&newton, Some((keep, &mut kept)));
+            (eq, kept)
         }
-        if m.sqrt() <= opts.tolerance {
-            converged = true;
-            break;
-        }
-        if iterations >= opts.max_iterations {
-            break;
-        }
-        iterations += 1;
-        let delta = newton_step(&model, z.as_slice(), &f).ok_or(SolverError::SingularJacobian {
-            iteration: iterations,
-        })?;
-        let mut alpha = 1.0;
-        let mut accepted = None;
-        for _ in 0..=opts.max_backtracks {
-            let trial = &z + &delta * alpha;
-            match model.kkt_residual(trial.as_slice()) {
-                Ok(ft) => {
-                    let mt = merit(&ft);
-                    if mt.is_finite() && mt <= (1.0 - 1e-4 * alpha) * m {
-                        accepted = Some((trial, ft, mt));
-                        break;
-                    }
-                }
-                Err(SolverError::InvalidInput(_)) => {}
-                Err(e) => return Err(e),
-            }
-            alpha *= 0.5;
-        }
-        let Some((zn, fnew, mnew)) = accepted else {
-            // No decrease possible: at the round-off floor or stuck.
-            let step_small = delta.norm() <= 1e-12 * (1.0 + z.norm());
-            if step_small && m.sqrt() <= 1e3 * opts.tolerance {
-                converged = true;
-            }
-            break;
-        };
-        steps.push(alpha);
-        z = zn;
-        f = fnew;
-        m = mnew;
+        Err(e) => (Err(e), None),
     }
-    let (kappa, mu, nu) = model.split(z.as_slice())?;
-    let cl = model.closure(kappa)?;
-    let closure = (cl[0] * cl[0] + cl[1] * cl[1] + cl[2] * cl[2]).sqrt();
-    let report = ConvergenceReport {
-        iterations,
-        residual: m.sqrt(),
-        closure,
-        converged,
-        history,
-        step_lengths: steps,
-        relax_iterations: 0,
-    };
-    if !converged {
-        return Err(SolverError::NewtonNotConverged {
-            iterations,
-            residual: report.residual,
-            closure,
+}
+
+/// The model and full KKT state [`solve`] starts Newton's method from: `start` with the
+/// least-squares closure multiplier, and for a uniform rod without a phase condition one
+/// built from `start`.
+fn newton_start(
+    model: &SurfaceModel,
+    start: &[f64],
+) -> Result<(SurfaceModel, Vec<f64>), SolverError> {
+    let model = with_start_phase(model, start)?;
+    let z = full_state(&model, start)?;
+    Ok((model, z))
+}
+
+/// `model` checked against the length of `start` and, for a uniform rod without a phase
+/// condition, with one built from `start` ([`Phase::from_gauss_values`]).
+fn with_start_phase(model: &SurfaceModel, start: &[f64]) -> Result<SurfaceModel, SolverError> {
+    let mut model = model.clone();
+    if start.len() != model.n_kappa() {
+        return Err(SolverError::WrongLength {
+            expected: model.n_kappa(),
+            found: start.len(),
         });
     }
-    Ok(Equilibrium {
-        kappa: kappa.to_vec(),
-        mu,
-        nu,
-        model,
-        report,
-    })
+    if model.stiffness().kind().is_uniform() && model.phase().is_none() {
+        let phase = Phase::from_gauss_values(start, model.cells())?;
+        model = model.with_phase(phase)?;
+    }
+    Ok(model)
+}
+
+/// The full KKT state `(κ, μ, ν)` of the curvature `kappa`: the least-squares closure
+/// multiplier, and `ν = 0`.
+fn full_state(model: &SurfaceModel, kappa: &[f64]) -> Result<Vec<f64>, SolverError> {
+    let mu = initial_multiplier(model, kappa)?;
+    let mut z: Vec<f64> = kappa.to_vec();
+    z.extend_from_slice(&mu);
+    if model.phase().is_some() {
+        z.push(0.0);
+    }
+    Ok(z)
+}
+
+/// Newton's method of [`solve_from_state`] at the top of one pass (before its convergence
+/// test): everything the iteration carries from pass to pass, so that it can go on later,
+/// with other options, exactly as one run from the start would.
+///
+/// [`solve_newton_keeping`] keeps the run where a run to a looser tolerance `keep` stops
+/// (or, if it never gets there, where its own run stopped); [`NewtonRun::resume`] with
+/// options of tolerance at most `keep` then gives the iterates, the result and the report of
+/// a run from the start with those options, without repeating the passes before.
+#[derive(Clone, Debug)]
+pub struct NewtonRun {
+    model: SurfaceModel,
+    z: DVector<f64>,
+    f: DVector<f64>,
+    /// The merit `‖F‖²` (weighted) at `z`.
+    m: f64,
+    iterations: usize,
+    history: Vec<f64>,
+    steps: Vec<f64>,
+    /// The tolerance the run was kept for (`+∞` for a run that was not kept).
+    keep: f64,
+    /// The line search's limit of the run so far.
+    max_backtracks: usize,
+}
+
+impl NewtonRun {
+    /// The run at its start `z0`.
+    fn start(model: SurfaceModel, z0: Vec<f64>) -> Result<Self, SolverError> {
+        let z = DVector::from_vec(z0);
+        let f = model.kkt_residual(z.as_slice())?;
+        let m = merit(&model.residual_scales(), &f);
+        Ok(Self {
+            model,
+            z,
+            f,
+            m,
+            iterations: 0,
+            history: Vec::new(),
+            steps: Vec::new(),
+            keep: f64::INFINITY,
+            max_backtracks: 0,
+        })
+    }
+
+    /// The model the run solves.
+    pub fn model(&self) -> &SurfaceModel {
+        &self.model
+    }
+
+    /// Newton iterations done.
+    pub fn iterations(&self) -> usize {
+        self.iterations
+    }
+
+    /// The run continued with `opts` (its globalisation is ignored): the result of
+    /// [`solve_from_state`] with `opts` from the run's start, or `None` if `opts` could have
+    /// stopped the run before this pass (a tolerance above the one it was kept for, fewer
+    /// iterations than it has done, another line-search limit).
+    pub fn resume(self, opts: &SolveOptions) -> Option<Result<Equilibrium, SolverError>> {
+        let fits = opts.tolerance <= self.keep
+            && opts.max_iterations >= self.iterations
+            && (self.iterations == 0 || opts.max_backtracks == self.max_backtracks);
+        fits.then(|| self.iterate(opts, None))
+    }
+
+    /// The iteration from this pass on (Sec. 4.1): a Newton step by the block factorisation,
+    /// a backtracking line search on the merit, until the residual is below the tolerance.
+    /// With `keep = Some((tol, kept))`, `kept` receives the run at the first pass whose
+    /// residual is at most `tol`, or else at the last pass.
+    fn iterate(
+        mut self,
+        opts: &SolveOptions,
+        mut keep: Option<(f64, &mut Option<NewtonRun>)>,
+    ) -> Result<Equilibrium, SolverError> {
+        let scales = self.model.residual_scales();
+        self.max_backtracks = opts.max_backtracks;
+        let mut converged = false;
+        let mut frozen = false;
+        loop {
+            if let Some((tol, kept)) = keep.as_mut() {
+                if !frozen {
+                    **kept = Some(NewtonRun {
+                        keep: *tol,
+                        ..self.clone()
+                    });
+                    frozen = self.m.sqrt() <= *tol;
+                }
+            }
+            let m = self.m;
+            self.history.push(m.sqrt());
+            if !m.is_finite() {
+                break;
+            }
+            if m.sqrt() <= opts.tolerance {
+                converged = true;
+                break;
+            }
+            if self.iterations >= opts.max_iterations {
+                break;
+            }
+            self.iterations += 1;
+            let (model, z) = (&self.model, &self.z);
+            let delta =
+                newton_step(model, z.as_slice(), &self.f).ok_or(SolverError::SingularJacobian {
+                    iteration: self.iterations,
+                })?;
+            let mut alpha = 1.0;
+            let mut accepted = None;
+            for _ in 0..=opts.max_backtracks {
+                let trial = z + &delta * alpha;
+                match model.kkt_residual(trial.as_slice()) {
+                    Ok(ft) => {
+                        let mt = merit(&scales, &ft);
+                        if mt.is_finite() && mt <= (1.0 - 1e-4 * alpha) * m {
+                            accepted = Some((trial, ft, mt));
+                            break;
+                        }
+                    }
+                    Err(SolverError::InvalidInput(_)) => {}
+                    Err(e) => return Err(e),
+                }
+                alpha *= 0.5;
+            }
+            let Some((zn, fnew, mnew)) = accepted else {
+                // No decrease possible: at the round-off floor or stuck.
+                let step_small = delta.norm() <= 1e-12 * (1.0 + z.norm());
+                if step_small && m.sqrt() <= 1e3 * opts.tolerance {
+                    converged = true;
+                }
+                break;
+            };
+            self.steps.push(alpha);
+            self.z = zn;
+            self.f = fnew;
+            self.m = mnew;
+        }
+        let model = self.model;
+        let (kappa, mu, nu) = model.split(self.z.as_slice())?;
+        let cl = model.closure(kappa)?;
+        let closure = (cl[0] * cl[0] + cl[1] * cl[1] + cl[2] * cl[2]).sqrt();
+        let report = ConvergenceReport {
+            iterations: self.iterations,
+            residual: self.m.sqrt(),
+            closure,
+            converged,
+            history: self.history,
+            step_lengths: self.steps,
+            relax_iterations: 0,
+        };
+        if !converged {
+            return Err(SolverError::NewtonNotConverged {
+                iterations: self.iterations,
+                residual: report.residual,
+                closure,
+            });
+        }
+        Ok(Equilibrium {
+            kappa: kappa.to_vec(),
+            mu,
+            nu,
+            model,
+            report,
+        })
+    }
+}
+
+/// The weighted merit `Σ sᵢ Fᵢ²` ([`SurfaceModel::residual_scales`]).
+fn merit(scales: &[f64], f: &DVector<f64>) -> f64 {
+    scales
+        .iter()
+        .zip(f.iter())
+        .map(|(s, v)| s * v * v)
+        .sum::<f64>()
 }
 
 impl Equilibrium {

@@ -273,6 +273,7 @@ mod tests {
                 amplitude: 0.0,
                 source: src,
                 state: vec![],
+                finer: Default::default(),
             },
             src,
         )

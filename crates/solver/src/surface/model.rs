@@ -166,7 +166,7 @@ fn check_len(found: usize, expected: usize) -> Result<(), SolverError> {
 }
 
 /// The discretised loop on a sphere (see the module docs).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct SurfaceModel {
     radius: f64,
     lbar: f64,
