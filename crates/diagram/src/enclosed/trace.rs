@@ -24,6 +24,11 @@ use super::{
 use crate::labels::Label;
 use crate::DiagramError;
 
+thread_local! {
+    /// The level whose solve failed last in [`Levels::solve_each`] on this thread.
+    static FAILED_LEVEL: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
 /// A traced lifted-off state at three resolutions `N/4, N/2, N`.
 #[derive(Clone, Debug)]
 pub(super) struct Levels {
@@ -52,16 +57,31 @@ impl Levels {
         self.states[2].model.gauge().pin.is_some()
     }
 
-    /// The levels solved by `solve` (each from its own state and level index), the finest
-    /// first: a step fails where any level fails, most often on the finest mesh, and the
-    /// coarser solves (three quarters of the finest's cost) are then not spent.
+    /// The levels solved by `solve` (each from its own state and level index): the level
+    /// that failed last on this thread first, then the others from the coarsest. A step
+    /// fails where any level fails, and consecutive failures of a walk tend to fail on the
+    /// same level (the coarsest in the creeps of the two-segment rod, the finest in most
+    /// halved steps), so the solves of the other levels are not spent on a step that fails.
+    /// The order does not change the result: each level is solved from its own state.
     fn solve_each<F>(&self, lbar: f64, mut solve: F) -> Result<Levels, SolverError>
     where
         F: FnMut(usize, &EnclosedState) -> Result<EnclosedState, SolverError>,
     {
-        let c = solve(2, &self.states[2])?;
-        let b = solve(1, &self.states[1])?;
-        let a = solve(0, &self.states[0])?;
+        let first = FAILED_LEVEL.get();
+        let order = std::iter::once(first).chain((0..3).filter(|&k| k != first));
+        let mut out: [Option<EnclosedState>; 3] = [None, None, None];
+        for k in order {
+            match solve(k, &self.states[k]) {
+                Ok(s) => out[k] = Some(s),
+                Err(e) => {
+                    FAILED_LEVEL.set(k);
+                    return Err(e);
+                }
+            }
+        }
+        let [Some(a), Some(b), Some(c)] = out else {
+            return Err(SolverError::InvalidInput("a level was not solved".into()));
+        };
         Ok(Levels {
             lbar,
             states: [a, b, c],
