@@ -404,7 +404,8 @@ pub(super) fn follow(
         for &x in &targets {
             let start = out.last().expect("seed").clone();
             let prev = out.len().checked_sub(2).map(|k| out[k].clone());
-            let walked = stats::stage(Stage::Trace, || {
+            let walked = {
+                let _stage = stats::enter(Stage::Trace);
                 walk(
                     start,
                     prev,
@@ -413,7 +414,7 @@ pub(super) fn follow(
                     &settings,
                     |cur, prev, to, halvings| step(cur, prev, to, halvings, sopts),
                 )
-            });
+            };
             let stuck = match walked {
                 Ok(w) => {
                     out.push(w.last);

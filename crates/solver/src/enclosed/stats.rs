@@ -179,9 +179,9 @@ pub fn within<R>(h: &Handle, f: impl FnOnce() -> R) -> R {
     }
 }
 
-/// Run `f` with the solves of this thread counted under `stage` in the current scope's
-/// counters (nothing is counted outside a scope).
-pub fn stage<R>(stage: Stage, f: impl FnOnce() -> R) -> R {
+/// Count the solves of this thread under `stage` in the current scope's counters until the
+/// guard is dropped (then the previous stage again; nothing is counted outside a scope).
+pub fn enter(stage: Stage) -> StageGuard {
     let prev = CURRENT.with(|c| {
         let mut c = c.borrow_mut();
         let prev = c.as_ref().map(|(_, s)| *s);
@@ -190,15 +190,32 @@ pub fn stage<R>(stage: Stage, f: impl FnOnce() -> R) -> R {
         }
         prev
     });
-    let out = f();
-    if let Some(p) = prev {
-        CURRENT.with(|c| {
-            if let Some((_, s)) = c.borrow_mut().as_mut() {
-                *s = p;
-            }
-        });
+    StageGuard { prev }
+}
+
+/// The guard of [`enter`].
+#[must_use = "the stage ends when the guard is dropped"]
+pub struct StageGuard {
+    prev: Option<Stage>,
+}
+
+impl Drop for StageGuard {
+    fn drop(&mut self) {
+        if let Some(p) = self.prev {
+            CURRENT.with(|c| {
+                if let Some((_, s)) = c.borrow_mut().as_mut() {
+                    *s = p;
+                }
+            });
+        }
     }
-    out
+}
+
+/// Run `f` with the solves of this thread counted under `stage` in the current scope's
+/// counters (nothing is counted outside a scope).
+pub fn stage<R>(stage: Stage, f: impl FnOnce() -> R) -> R {
+    let _guard = enter(stage);
+    f()
 }
 
 /// Whether this thread counts its solves (a [`scope`] is open).
