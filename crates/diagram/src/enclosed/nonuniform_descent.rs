@@ -160,36 +160,33 @@ pub(super) fn descend_unstable(
             &mut |_| {},
             &mut |_: &(usize, Vec<f64>, Option<Found>)| {},
             |(k, cands), _| {
-                stats::within(&scope, || {
-                    let parent = &shared[k];
-                    let what = format!(
-                        "branch {} (eta = {}) below family {}",
-                        parent.branch, parent.eta, parent.family
-                    );
-                    let mut found = None;
-                    for &x in &cands {
-                        let Some(lv) = parent.levels.iter().find(|l| (l.lbar - x).abs() < 1e-12)
-                        else {
-                            continue;
-                        };
-                        let lower =
-                            stats::stage(Stage::Descent, || lower_state(lv, shared, &dopts));
-                        if let Some(first) = lower {
-                            let mut grid: Vec<f64> = parent.levels.iter().map(|l| l.lbar).collect();
-                            grid.sort_by(f64::total_cmp);
-                            grid.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
-                            let mid = grid
-                                .iter()
-                                .position(|&g| (g - x).abs() < 1e-12)
-                                .unwrap_or(0);
-                            let mut stops = Vec::new();
-                            let traced = follow(first, &grid, mid, &what, &sopts, true, &mut stops);
-                            found = Some((traced, stops));
-                            break;
-                        }
+                let _counted = stats::reopen(&scope);
+                let parent = &shared[k];
+                let what = format!(
+                    "branch {} (eta = {}) below family {}",
+                    parent.branch, parent.eta, parent.family
+                );
+                let mut found = None;
+                for &x in &cands {
+                    let Some(lv) = parent.levels.iter().find(|l| (l.lbar - x).abs() < 1e-12) else {
+                        continue;
+                    };
+                    let lower = stats::stage(Stage::Descent, || lower_state(lv, shared, &dopts));
+                    if let Some(first) = lower {
+                        let mut grid: Vec<f64> = parent.levels.iter().map(|l| l.lbar).collect();
+                        grid.sort_by(f64::total_cmp);
+                        grid.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
+                        let mid = grid
+                            .iter()
+                            .position(|&g| (g - x).abs() < 1e-12)
+                            .unwrap_or(0);
+                        let mut stops = Vec::new();
+                        let traced = follow(first, &grid, mid, &what, &sopts, true, &mut stops);
+                        found = Some((traced, stops));
+                        break;
                     }
-                    (k, cands, found)
-                })
+                }
+                (k, cands, found)
             },
         );
         for (k, cands, found) in results {

@@ -179,6 +179,30 @@ pub fn within<R>(h: &Handle, f: impl FnOnce() -> R) -> R {
     }
 }
 
+/// Open the scope `h` (taken by [`current`] on another thread) on this thread until the
+/// guard is dropped, then the thread's previous scope again; without one, nothing changes.
+pub fn reopen(h: &Handle) -> ScopeGuard {
+    let prev = h
+        .as_ref()
+        .map(|open| CURRENT.with(|c| c.borrow_mut().replace(open.clone())));
+    ScopeGuard { prev }
+}
+
+/// The guard of [`reopen`].
+#[must_use = "the scope ends when the guard is dropped"]
+pub struct ScopeGuard {
+    /// `Some(previous scope)` where a scope was opened.
+    prev: Option<Handle>,
+}
+
+impl Drop for ScopeGuard {
+    fn drop(&mut self) {
+        if let Some(p) = self.prev.take() {
+            CURRENT.with(|c| *c.borrow_mut() = p);
+        }
+    }
+}
+
 /// Count the solves of this thread under `stage` in the current scope's counters until the
 /// guard is dropped (then the previous stage again; nothing is counted outside a scope).
 pub fn enter(stage: Stage) -> StageGuard {
@@ -282,16 +306,26 @@ mod tests {
         record(Outcome::Converged, 5, 0, t);
         // A worker thread reopens the scope it is handed.
         let h = scope(&stats, Stage::Seed, current);
+        let h2 = h.clone();
         std::thread::spawn(move || within(&h, || record(Outcome::Converged, 4, 0, t)))
             .join()
             .expect("worker");
+        std::thread::spawn(move || {
+            {
+                let _counted = reopen(&h2);
+                record(Outcome::Converged, 1, 0, t);
+            }
+            assert!(!active());
+        })
+        .join()
+        .expect("worker");
         let snap = stats.snapshot();
         assert_eq!(snap.len(), 3);
         let (s0, seed) = snap[0];
         let (s1, trace) = snap[1];
         let (s2, creep) = snap[2];
         assert_eq!((s0, s1, s2), (Stage::Seed, Stage::Trace, Stage::Creep));
-        assert_eq!((seed.attempted, seed.iterations), (1, 4));
+        assert_eq!((seed.attempted, seed.iterations), (2, 5));
         assert_eq!(
             (trace.attempted, trace.converged, trace.failed()),
             (2, 1, 1)
