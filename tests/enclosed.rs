@@ -238,6 +238,20 @@ fn diagram_on_enclosed_scene() {
     assert!(a > 1.3798 && a < 1.379941144287, "{a}");
     assert!((b - 1.506123217436).abs() < 1e-9, "{b}");
     assert!(text.contains("lifted off the wall"), "{text}");
+    // The 3-D solves by stage: the lifted-off trace and the exchange solve, and every
+    // solve either converged or failed for one of the three reasons.
+    let solves = summary["solves"].as_object().unwrap();
+    for stage in ["seed", "trace", "exchange"] {
+        let c = &solves[stage];
+        let n = |k: &str| c[k].as_u64().unwrap();
+        assert!(n("converged") > 0, "{stage}: {c}");
+        assert_eq!(
+            n("attempted"),
+            n("converged") + n("failed_cap") + n("failed_stall") + n("failed_other"),
+            "{stage}: {c}"
+        );
+        assert!(n("iterations") >= n("converged"), "{stage}: {c}");
+    }
 }
 
 #[test]

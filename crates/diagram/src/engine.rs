@@ -350,6 +350,9 @@ impl Engine for EnclosedEngine {
         );
         out.warnings = Some(d.warnings.clone());
         out.set_timings(&d.seconds)?;
+        let solves: std::collections::BTreeMap<&str, _> =
+            d.solves.iter().map(|(s, c)| (s.name(), *c)).collect();
+        out.put("solves", &solves)?;
         out.states_dir = Some("states".into());
         out.put("step", &opts.step)?;
         out.put("states", &d.points.len())?;

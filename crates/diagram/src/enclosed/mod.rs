@@ -56,6 +56,7 @@ use std::time::Instant;
 use rodloop_exact::diagram::{compute, Critical, CriticalKind, DiagramSettings};
 use rodloop_exact::ExactLoop;
 use rodloop_exact::{branch_of_eta, eta_of_branch};
+use rodloop_solver::enclosed::stats::{self, SolveStats, Stage, StageCounts};
 use rodloop_solver::enclosed::{enclosed_cells, EnclosedState};
 use rodloop_solver::{Accuracy, Equilibrium, SolverError, Stiffness};
 use serde::Serialize;
@@ -310,6 +311,9 @@ pub struct EnclosedDiagram {
     /// Wall-clock seconds: total, attached samples (index checks), lifted-off traces,
     /// critical lengths.
     pub seconds: EnclosedTimings,
+    /// The enclosed Newton solves by stage: attempted, converged, failed, iterations and
+    /// their time ([`rodloop_solver::enclosed::stats`]).
+    pub solves: Vec<(Stage, StageCounts)>,
 }
 
 /// Wall-clock seconds of the parts of [`enclosed_diagram`].
@@ -348,9 +352,25 @@ pub fn enclosed_diagram_with(
     progress: &mut dyn FnMut(EnclosedProgress),
 ) -> Result<EnclosedDiagram, DiagramError> {
     opts.validate()?;
-    if !opts.stiffness.is_uniform() {
-        return nonuniform::nonuniform_diagram(opts, progress).map(verify::verified);
-    }
+    // Every enclosed Newton solve of the diagram counted by stage (`solves`).
+    let counters = SolveStats::new();
+    let mut d = stats::scope(&counters, Stage::Other, || {
+        if opts.stiffness.is_uniform() {
+            uniform_diagram(opts, progress)
+        } else {
+            nonuniform::nonuniform_diagram(opts, progress)
+        }
+    })?;
+    d = verify::verified(d);
+    d.solves = counters.snapshot();
+    Ok(d)
+}
+
+/// The enclosed diagram of a uniform rod (see the module docs), before verification.
+fn uniform_diagram(
+    opts: &EnclosedDiagramOptions,
+    progress: &mut dyn FnMut(EnclosedProgress),
+) -> Result<EnclosedDiagram, DiagramError> {
     let t0 = Instant::now();
     let (lo, hi) = (opts.lbar_min, opts.lbar_max);
     let mut warnings = Vec::new();
@@ -379,6 +399,7 @@ pub fn enclosed_diagram_with(
     order.sort_by_key(|&e| u32::from(e != 1));
     // Tasks: the branches, then the critical lengths.
     progress(EnclosedProgress::Planned(order.len() + 1));
+    let scope = stats::current();
     let outs = run_parallel(
         threads,
         order.clone(),
@@ -392,7 +413,7 @@ pub fn enclosed_diagram_with(
                 )));
             }
         },
-        |eta, _| trace_branch(opts, eta),
+        |eta, _| stats::within(&scope, || trace_branch(opts, eta)),
     );
     let mut outs: Vec<(u32, Result<BranchOut, DiagramError>)> =
         order.into_iter().zip(outs).collect();
@@ -466,13 +487,15 @@ pub fn enclosed_diagram_with(
             })
         };
         let mut tracks = [nearest(etas2[0]), nearest(etas2[1])];
-        let (x, err, energy, cells) = enclosed_crossing(
-            etas2[0],
-            etas2[1],
-            c.lbar_cr,
-            &mut tracks,
-            exchange_doublings(opts.accuracy),
-        )
+        let (x, err, energy, cells) = stats::stage(Stage::Exchange, || {
+            enclosed_crossing(
+                etas2[0],
+                etas2[1],
+                c.lbar_cr,
+                &mut tracks,
+                exchange_doublings(opts.accuracy),
+            )
+        })
         .map_err(|e| DiagramError::Critical {
             from_branch: c.from_branch,
             to_branch: c.to_branch,
@@ -502,7 +525,7 @@ pub fn enclosed_diagram_with(
     )));
     label(&mut points, &critical, &mut warnings);
     timings.total = t0.elapsed().as_secs_f64();
-    Ok(verify::verified(EnclosedDiagram {
+    Ok(EnclosedDiagram {
         points,
         events,
         critical,
@@ -510,5 +533,6 @@ pub fn enclosed_diagram_with(
         notes: Vec::new(),
         cells,
         seconds: timings,
-    }))
+        solves: Vec::new(),
+    })
 }

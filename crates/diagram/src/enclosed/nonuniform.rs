@@ -48,6 +48,7 @@ use std::time::Instant;
 use rodloop_continuation::exchange::{self, Ranked};
 use rodloop_exact::branch_of_eta;
 use rodloop_exact::diagram::{Critical, CriticalKind};
+use rodloop_solver::enclosed::stats::{self, Stage};
 use rodloop_solver::enclosed::{nonuniform_cells, solve_branch, EnclosedOptions, SurfaceSource};
 use rodloop_solver::{solve_from_state, SolverError};
 
@@ -467,7 +468,7 @@ fn trace_sheet(
         let mut seeded = None;
         let mut last_err = None;
         for &i in order.iter().take(4) {
-            match seed_at(run[i]) {
+            match stats::stage(Stage::Seed, || seed_at(run[i])) {
                 Ok(l) => {
                     seeded = Some((i, l));
                     break;
@@ -627,6 +628,7 @@ pub(super) fn nonuniform_diagram(
         }
     }
     progress(EnclosedProgress::Planned(order.len()));
+    let scope = stats::current();
     let outs = run_parallel(
         threads,
         order.clone(),
@@ -641,7 +643,11 @@ pub(super) fn nonuniform_diagram(
                 )));
             }
         },
-        |i, _| trace_sheet(opts, &dopts, &sheets[i], &repeats[i]),
+        |i, _| {
+            stats::within(&scope, || {
+                trace_sheet(opts, &dopts, &sheets[i], &repeats[i])
+            })
+        },
     );
     let mut traced: Vec<(usize, SheetOut)> = Vec::new();
     for (i, o) in order.into_iter().zip(outs) {
@@ -743,7 +749,10 @@ pub(super) fn nonuniform_diagram(
             error_estimate: f64::NAN,
         };
         if overlap {
-            match locate_crossing(&dopts, [sa, sb], [surf[a], surf[b]], w[0], w[1]) {
+            let located = stats::stage(Stage::Exchange, || {
+                locate_crossing(&dopts, [sa, sb], [surf[a], surf[b]], w[0], w[1])
+            });
+            match located {
                 Ok((x, err, e, xs, method)) => {
                     brackets.push((w[0], w[1], a, b));
                     critical.push(EnclosedCritical {
@@ -856,5 +865,6 @@ pub(super) fn nonuniform_diagram(
         notes,
         cells,
         seconds: timings,
+        solves: Vec::new(),
     })
 }

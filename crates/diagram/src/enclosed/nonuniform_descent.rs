@@ -13,6 +13,7 @@
 //! descended from.
 
 use rodloop_solver::enclosed::descent::descend;
+use rodloop_solver::enclosed::stats::{self, Stage};
 use rodloop_solver::enclosed::{solve_levels, EnclosedOptions};
 
 use super::nonuniform_exchange::{interp, lowest_near_circle};
@@ -152,12 +153,14 @@ pub(super) fn descend_unstable(
             }
         }
         let shared: &[SheetOut] = outs;
+        let scope = stats::current();
         let results = run_parallel(
             threads,
             jobs,
             &mut |_| {},
             &mut |_: &(usize, Vec<f64>, Option<Found>)| {},
             |(k, cands), _| {
+                let _counted = stats::reopen(&scope);
                 let parent = &shared[k];
                 let what = format!(
                     "branch {} (eta = {}) below family {}",
@@ -168,7 +171,8 @@ pub(super) fn descend_unstable(
                     let Some(lv) = parent.levels.iter().find(|l| (l.lbar - x).abs() < 1e-12) else {
                         continue;
                     };
-                    if let Some(first) = lower_state(lv, shared, &dopts) {
+                    let lower = stats::stage(Stage::Descent, || lower_state(lv, shared, &dopts));
+                    if let Some(first) = lower {
                         let mut grid: Vec<f64> = parent.levels.iter().map(|l| l.lbar).collect();
                         grid.sort_by(f64::total_cmp);
                         grid.dedup_by(|a, b| (*a - *b).abs() < 1e-12);

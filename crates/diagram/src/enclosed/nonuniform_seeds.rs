@@ -14,6 +14,7 @@
 use rodloop_exact::eta_of_branch;
 use rodloop_solver::enclosed::descent::stiffness_homotopy_states;
 use rodloop_solver::enclosed::solve_levels;
+use rodloop_solver::enclosed::stats::{self, Stage};
 
 use super::nonuniform_exchange::interp;
 use super::nonuniform_sheet::SheetOut;
@@ -96,13 +97,16 @@ fn seed_branch(
         }
         at.push(x);
         searched += 1;
-        let Ok(found) =
+        let Ok(found) = stats::stage(Stage::StiffnessPath, || {
             stiffness_homotopy_states(opts.radius, x, eta, &opts.stiffness, n / 4, &dopts)
-        else {
+        }) else {
             continue;
         };
         for s in found {
-            let Ok(b) = solve_levels(&s.model, s.z.clone(), None, &dopts) else {
+            let levels = stats::stage(Stage::StiffnessPath, || {
+                solve_levels(&s.model, s.z.clone(), None, &dopts)
+            });
+            let Ok(b) = levels else {
                 continue;
             };
             let first = Levels {
@@ -172,13 +176,14 @@ pub(super) fn seed_from_stiffness_path(
         .filter(|(_, g)| !g.is_empty())
         .collect();
     let shared: &[SheetOut] = outs;
+    let scope = stats::current();
     let results = run_parallel(
         threads,
         jobs,
         &mut |_| {},
         &mut |_: &(u32, Vec<SheetOut>, usize)| {},
         |(b, grid), _| {
-            let (added, searched) = seed_branch(opts, shared, b, &grid);
+            let (added, searched) = stats::within(&scope, || seed_branch(opts, shared, b, &grid));
             (b, added, searched)
         },
     );

@@ -11,6 +11,7 @@ use std::time::Instant;
 
 use rodloop_continuation::natural::{walk, NaturalSettings};
 use rodloop_exact::{branch_of_eta, paper_branch_loop, ExactLoop};
+use rodloop_solver::enclosed::stats::{self, Stage};
 use rodloop_solver::enclosed::{
     detached_intervals, enclosed_cells, solve_branch, solve_enclosed, start_from_surface,
     three_level_estimate, EnclosedOptions, EnclosedState, SurfaceSource, LIFTED_OFF_MAX_ORDER,
@@ -22,6 +23,11 @@ use super::{
 };
 use crate::labels::Label;
 use crate::DiagramError;
+
+thread_local! {
+    /// The level whose solve failed last in [`Levels::solve_each`] on this thread.
+    static FAILED_LEVEL: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
 
 /// A traced lifted-off state at three resolutions `N/4, N/2, N`.
 #[derive(Clone, Debug)]
@@ -51,21 +57,47 @@ impl Levels {
         self.states[2].model.gauge().pin.is_some()
     }
 
-    /// Natural-parameter step of each level to `lbar` (a free loop re-centred and pinned,
-    /// [`EnclosedState::step_free`]).
-    pub(super) fn step_to(&self, lbar: f64, opts: &EnclosedOptions) -> Result<Levels, SolverError> {
-        let mut out = Vec::with_capacity(3);
-        for s in &self.states {
-            out.push(if self.free() {
-                s.step_free(lbar, opts)?
-            } else {
-                s.step_to(lbar, opts)?
-            });
+    /// The levels solved by `solve` (each from its own state and level index): the level
+    /// that failed last on this thread first, then the others from the coarsest. A step
+    /// fails where any level fails, and consecutive failures of a walk tend to fail on the
+    /// same level (the coarsest in the creeps of the two-segment rod, the finest in most
+    /// halved steps), so the solves of the other levels are not spent on a step that fails.
+    /// The order does not change the result: each level is solved from its own state.
+    fn solve_each<F>(&self, lbar: f64, mut solve: F) -> Result<Levels, SolverError>
+    where
+        F: FnMut(usize, &EnclosedState) -> Result<EnclosedState, SolverError>,
+    {
+        let first = FAILED_LEVEL.get();
+        let order = std::iter::once(first).chain((0..3).filter(|&k| k != first));
+        let mut out: [Option<EnclosedState>; 3] = [None, None, None];
+        for k in order {
+            match solve(k, &self.states[k]) {
+                Ok(s) => out[k] = Some(s),
+                Err(e) => {
+                    FAILED_LEVEL.set(k);
+                    return Err(e);
+                }
+            }
         }
-        let [a, b, c]: [EnclosedState; 3] = out.try_into().expect("three levels");
+        let [Some(a), Some(b), Some(c)] = out else {
+            return Err(SolverError::InvalidInput("a level was not solved".into()));
+        };
         Ok(Levels {
             lbar,
             states: [a, b, c],
+        })
+    }
+
+    /// Natural-parameter step of each level to `lbar` (a free loop re-centred and pinned,
+    /// [`EnclosedState::step_free`]).
+    pub(super) fn step_to(&self, lbar: f64, opts: &EnclosedOptions) -> Result<Levels, SolverError> {
+        let free = self.free();
+        self.solve_each(lbar, |_, s| {
+            if free {
+                s.step_free(lbar, opts)
+            } else {
+                s.step_to(lbar, opts)
+            }
         })
     }
 
@@ -77,17 +109,11 @@ impl Levels {
         lbar: f64,
         opts: &EnclosedOptions,
     ) -> Result<Levels, SolverError> {
-        let mut out = Vec::with_capacity(3);
-        for (s, p) in self.states.iter().zip(&prev.states) {
-            let (model, z) = s.predict_to(p, lbar)?.ok_or_else(|| {
+        self.solve_each(lbar, |k, s| {
+            let (model, z) = s.predict_to(&prev.states[k], lbar)?.ok_or_else(|| {
                 SolverError::InvalidInput("no secant predictor for this pair of states".into())
             })?;
-            out.push(solve_enclosed(&model, z, opts)?);
-        }
-        let [a, b, c]: [EnclosedState; 3] = out.try_into().expect("three levels");
-        Ok(Levels {
-            lbar,
-            states: [a, b, c],
+            solve_enclosed(&model, z, opts)
         })
     }
 
@@ -103,8 +129,7 @@ impl Levels {
         lbar: f64,
         opts: &EnclosedOptions,
     ) -> Result<Levels, SolverError> {
-        let mut out = Vec::with_capacity(3);
-        for s in &self.states {
+        self.solve_each(lbar, |_, s| {
             let t = s.step_free(lbar, opts)?;
             let touching =
                 t.multipliers().iter().any(|&l| l != 0.0) || t.contact(TOUCH)?.fraction > 0.0;
@@ -113,12 +138,7 @@ impl Levels {
                     "the pinned state at lbar = {lbar} still touches the wall"
                 )));
             }
-            out.push(t);
-        }
-        let [a, b, c]: [EnclosedState; 3] = out.try_into().expect("three levels");
-        Ok(Levels {
-            lbar,
-            states: [a, b, c],
+            Ok(t)
         })
     }
 
@@ -215,7 +235,9 @@ pub(super) fn attached_index(
             .map(|p| p.kappa_g / radius)
             .unwrap_or(f64::NAN)
     })?;
-    let st = solve_enclosed(&model, z0, &EnclosedOptions::default())?;
+    let st = stats::stage(Stage::Attached, || {
+        solve_enclosed(&model, z0, &EnclosedOptions::default())
+    })?;
     st.index(1e-6)
 }
 
@@ -312,14 +334,16 @@ pub(super) fn trace_detached(
     let mid = xs.len() / 2;
     let seed_at = xs[mid];
     let l = exact(eta, seed_at)?;
-    let seed = solve_branch(
-        opts.radius,
-        seed_at,
-        &opts.stiffness,
-        &SurfaceSource::Exact(l),
-        n,
-        &sopts,
-    )
+    let seed = stats::stage(Stage::Seed, || {
+        solve_branch(
+            opts.radius,
+            seed_at,
+            &opts.stiffness,
+            &SurfaceSource::Exact(l),
+            n,
+            &sopts,
+        )
+    })
     .map_err(|source| DiagramError::Seed {
         eta,
         lbar: seed_at,
@@ -380,14 +404,17 @@ pub(super) fn follow(
         for &x in &targets {
             let start = out.last().expect("seed").clone();
             let prev = out.len().checked_sub(2).map(|k| out[k].clone());
-            let walked = walk(
-                start,
-                prev,
-                x,
-                |l: &Levels| l.lbar,
-                &settings,
-                |cur, prev, to, halvings| step(cur, prev, to, halvings, sopts),
-            );
+            let walked = {
+                let _stage = stats::enter(Stage::Trace);
+                walk(
+                    start,
+                    prev,
+                    x,
+                    |l: &Levels| l.lbar,
+                    &settings,
+                    |cur, prev, to, halvings| step(cur, prev, to, halvings, sopts),
+                )
+            };
             let stuck = match walked {
                 Ok(w) => {
                     out.push(w.last);
@@ -401,17 +428,22 @@ pub(super) fn follow(
             // non-planar state of its mesh, holonomy ~0.1 rad at N = 64, whose discrete
             // branch ends in a fold a little further on) stalls the halved steps; a plain
             // step of every level straight to the target lands back on the traced state.
-            if let Ok(at) = cur.step_to(x, sopts) {
+            if let Ok(at) = stats::stage(Stage::Retry, || cur.step_to(x, sopts)) {
                 out.push(at);
                 continue;
             }
             if extend {
                 let over = x + (x - cur.lbar);
-                if let Ok(at) = cur.step_to(over, sopts).and_then(|j| j.step_to(x, sopts)) {
+                let jumped = stats::stage(Stage::Retry, || {
+                    cur.step_to(over, sopts).and_then(|j| j.step_to(x, sopts))
+                });
+                if let Ok(at) = jumped {
                     out.push(at);
                     continue;
                 }
-                match creep(cur, stuck.prev, x, &settings, sopts) {
+                let crept =
+                    stats::stage(Stage::Creep, || creep(cur, stuck.prev, x, &settings, sopts));
+                match crept {
                     Ok(at) => {
                         out.push(at);
                         continue;

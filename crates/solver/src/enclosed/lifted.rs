@@ -336,6 +336,11 @@ fn block_solve(a: &Blk, perm: &[usize; B], b: &mut [f64], ncols: usize) -> bool 
         }
         for i in 0..B - 1 {
             let c = x[i];
+            // A zero entry adds nothing (the right-hand sides are sparse: the `δm` columns
+            // have one nonzero, the border columns a few).
+            if c == 0.0 {
+                continue;
+            }
             let col = &m[i * B..(i + 1) * B];
             for r in i + 1..B {
                 x[r] += -c * col[r];
@@ -348,6 +353,9 @@ fn block_solve(a: &Blk, perm: &[usize; B], b: &mut [f64], ncols: usize) -> bool 
             }
             let c = x[i] / d;
             x[i] = c;
+            if c == 0.0 {
+                continue;
+            }
             let col = &m[i * B..(i + 1) * B];
             for r in 0..i {
                 x[r] += -c * col[r];
@@ -396,9 +404,9 @@ impl Factor {
         self.yc.resize(n, BCol::zeros());
         self.rb.resize(n, BRow::zeros());
         let mut corner = sys.corner;
-        self.lu[0] = sys.diag[0];
-        self.yc[0] = sys.bcol[0];
-        self.rb[0] = sys.brow[0];
+        self.lu[0].copy_from(&sys.diag[0]);
+        self.yc[0].copy_from(&sys.bcol[0]);
+        self.rb[0].copy_from(&sys.brow[0]);
         let mut em = B6::zeros();
         for k in 0..6 {
             em[(M0 + k, k)] = -1.0;
@@ -423,17 +431,26 @@ impl Factor {
             if !block_solve(f, perm, y.as_mut_slice(), g) {
                 return Err(singular());
             }
-            let (y, u, r) = (&self.yc[c], &self.yu[c], &self.rb[c]);
-            // corner −= R_c y (rows and columns past `g` are zero).
-            for j in 0..g {
-                for i in 0..g {
-                    corner[(i, j)] -= dot_rc(r, i, y, j);
+            {
+                let (y, r) = (&self.yc[c], &self.rb[c]);
+                // corner −= R_c y (rows and columns past `g` are zero).
+                for j in 0..g {
+                    for i in 0..g {
+                        corner[(i, j)] -= dot_rc(r, i, y, j);
+                    }
                 }
             }
             if c + 1 < n {
                 let low = &sys.low[c + 1];
-                // S_{c+1} = D_{c+1} − L_{c+1} S⁻¹U: only the δm columns change.
-                let mut s = sys.diag[c + 1];
+                // S_{c+1} = D_{c+1} − L_{c+1} S⁻¹U: only the δm columns change. (Written in
+                // place: the next blocks are copied once from the system.)
+                let (yc_done, yc_next) = self.yc.split_at_mut(c + 1);
+                let (rb_done, rb_next) = self.rb.split_at_mut(c + 1);
+                let (y, u, r) = (&yc_done[c], &self.yu[c], &rb_done[c]);
+                let (s, cb, rn) = (&mut self.lu[c + 1], &mut yc_next[0], &mut rb_next[0]);
+                s.copy_from(&sys.diag[c + 1]);
+                cb.copy_from(&sys.bcol[c + 1]);
+                rn.copy_from(&sys.brow[c + 1]);
                 let ux = u.fixed_rows::<6>(X0);
                 let lk = low * ux;
                 for j in 0..6 {
@@ -445,7 +462,6 @@ impl Factor {
                     }
                 }
                 // C'_{c+1} = C_{c+1} − L_{c+1} y.
-                let mut cb = sys.bcol[c + 1];
                 let yx = y.fixed_rows::<6>(X0);
                 let ly = low * yx;
                 for j in 0..g {
@@ -457,15 +473,11 @@ impl Factor {
                     }
                 }
                 // R_{c+1} = B_{c+1} − R_c S⁻¹U: only the δm columns change.
-                let mut rn = sys.brow[c + 1];
                 for j in 0..6 {
                     for i in 0..g {
                         rn[(i, M0 + j)] -= dot_rc(r, i, u, j);
                     }
                 }
-                self.lu[c + 1] = s;
-                self.yc[c + 1] = cb;
-                self.rb[c + 1] = rn;
             }
         }
         let corner = corner.lu();

@@ -25,6 +25,7 @@
 //! * [`seam`]: the model behind [`crate::Confinement`] (continuation through the seam).
 //! * [`centre`]: point contacts moved onto nodes (the origin shifted to a contact point).
 //! * [`branch`]: a paper branch in an enclosed scene with the two-resolution error estimate.
+//! * [`stats`]: counters of the Newton solves by stage of a caller.
 
 pub mod branch;
 pub mod centre;
@@ -37,6 +38,7 @@ pub mod lifted;
 pub mod model;
 pub mod seam;
 pub mod solve;
+pub mod stats;
 pub mod wall;
 
 pub use branch::{

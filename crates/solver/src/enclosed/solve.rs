@@ -21,11 +21,13 @@
 #![allow(clippy::needless_range_loop)] // index arithmetic over cells, nodes and unknowns
 
 use std::f64::consts::PI;
+use std::time::Instant;
 
 use nalgebra::{DMatrix, DVector, Vector3};
 use rodloop_continuation::natural::NaturalSettings;
 
 use super::model::{phase_slope, EnclosedModel, Gauge};
+use super::stats::{self, Outcome};
 use crate::stiffness::Stiffness;
 use crate::SolverError;
 
@@ -131,11 +133,46 @@ pub fn least_squares_multipliers(model: &EnclosedModel, z: &mut [f64]) -> Result
     Ok(())
 }
 
-/// Semismooth Newton from `z0` (see the module docs).
+/// How a Newton run ended, for the counters of [`super::stats`].
+#[derive(Clone, Copy)]
+struct Ended {
+    outcome: Outcome,
+    iterations: usize,
+    dense: usize,
+}
+
+/// Semismooth Newton from `z0` (see the module docs). Counted in [`super::stats`] when the
+/// thread has a scope open.
 pub fn solve_enclosed(
     model: &EnclosedModel,
     z0: Vec<f64>,
     opts: &EnclosedOptions,
+) -> Result<EnclosedState, SolverError> {
+    let mut ended = Ended {
+        outcome: Outcome::Other,
+        iterations: 0,
+        dense: 0,
+    };
+    if !stats::active() {
+        return newton(model, z0, opts, &mut ended);
+    }
+    let start = Instant::now();
+    let out = newton(model, z0, opts, &mut ended);
+    let outcome = if out.is_ok() {
+        Outcome::Converged
+    } else {
+        ended.outcome
+    };
+    stats::record(outcome, ended.iterations, ended.dense, start);
+    out
+}
+
+/// [`solve_enclosed`]'s iteration; `ended` says where it stopped.
+fn newton(
+    model: &EnclosedModel,
+    z0: Vec<f64>,
+    opts: &EnclosedOptions,
+    ended: &mut Ended,
 ) -> Result<EnclosedState, SolverError> {
     let mut z = z0;
     let mut norm = f64::INFINITY;
@@ -153,12 +190,14 @@ pub fn solve_enclosed(
     let mut resume: Option<DVector<f64>> = None;
     let mut history: Vec<f64> = Vec::new();
     for it in 0..=opts.max_iterations {
+        ended.iterations = it;
         let (residual, step) = match resume.take() {
             Some(dz) => (model.residual(&z)?, Err(dz)),
             None => match model.newton_step(&z) {
                 Ok((f, dz)) => (f, Ok(Ok(dz))),
                 Err(SolverError::SingularJacobian { .. }) => {
                     // The block factorisation cannot be trusted here: the dense Jacobian.
+                    ended.dense += 1;
                     let ev = model.evaluate(&z)?;
                     let dz = ev.jacobian.lu().solve(&(-&ev.residual));
                     (
@@ -193,6 +232,7 @@ pub fn solve_enclosed(
             return Ok(done(z, it, norm));
         }
         if it == opts.max_iterations {
+            ended.outcome = Outcome::Cap;
             break;
         }
         history.push(norm);
@@ -202,6 +242,7 @@ pub fn solve_enclosed(
             && history.len() > w
             && norm > 0.5 * history[history.len() - 1 - w]
         {
+            ended.outcome = Outcome::Stall;
             break;
         }
         let (dz, mut t) = match step {
