@@ -23,7 +23,7 @@
 //! Positions and frames at the nodes `s_j` (cell boundaries) follow from the SE(3) Magnus
 //! chain `P_{c+1} = P_c exp(Θ_c)` ([`super::jet`]), `r_j = r0 + p_j`. Closure of position
 //! and tangent, `C = (c_rot(X_N), p_N) = 0` with the rows of [`closure_rotation`] (the tangent
-//! `t(L) = X_N e1` back on `e1`, full rank at every turn of the frame about it); the
+//! back on `t(0) = e1`, full rank at every turn of the frame about it); the
 //! rotation about the tangent (row [`TWIST_ROW`]) is free: its row reads `μ_twist = 0` (no
 //! twisting moment). The wall
 //! `g_j = R² − |r_j|² ≥ 0` (the sphere's gap; the model reads `g`, `∇g` and `∇²g` from its
@@ -130,16 +130,20 @@ pub(super) fn vee_skew3(m: &M4) -> V3 {
 
 /// The rotation rows of the closure of the frame `X = P_N` (linear in `X`): the twist row
 /// [`TWIST_ROW`] `½(X₃₂ − X₂₃)` (unused: its row of the KKT system is `μ_twist = 0`) and the
-/// tangent rows `(−X₃₁, X₂₁) = (−t_z, t_y)` of the tangent `t(L) = X e1`. They vanish
-/// exactly where `t(L) = ±t(0)`, and their Jacobian in a rotation `X hat(ω)` is
-/// `(ω_y, ω_z)` turned by the holonomy: rank 2 whatever the frame's turn about the tangent.
+/// tangent rows `(X₁₃, −X₁₂)`, two components of `Xᵀe1` (the tangent `t(0)` in the returning
+/// frame; `Xᵀe1 = ±e1` exactly where `t(L) = X e1 = ±t(0)`). They vanish only there, and
+/// their Jacobian in a rotation `X hat(ω)` is `(ω_y, ω_z)` turned by the holonomy: rank 2
+/// whatever the frame's turn about the tangent. (The rows `(−X₃₁, X₂₁)` of `X e1` have the
+/// same zeros and rank; they differ at second order, `(ω_y, ω_z)` turned by `±ω_x/2`, and
+/// with them the trace of the uniform rod's figure-eight stalls at `L̄ = 1.132`, where
+/// non-planar states branch off.)
 /// The rows `vee(skew X)` restricted to the same components vanish at every half-turn (the
 /// tangent then comes back anywhere: `t(L) = 2(a·e1)a − e1` for a half-turn about `a`) and
 /// their Jacobian vanishes at the half-turn about the tangent (holonomy `π`, a closed
 /// loop), where Newton stalls. Near `X = I` both agree to first order, so the multipliers
 /// keep their meaning (the moment at the cut).
 pub(super) fn closure_rotation(m: &M4) -> V3 {
-    V3::new(0.5 * (m[(2, 1)] - m[(1, 2)]), -m[(2, 0)], m[(1, 0)])
+    V3::new(0.5 * (m[(2, 1)] - m[(1, 2)]), m[(0, 2)], -m[(0, 1)])
 }
 
 pub(super) fn tr4(a: &M4, b: &M4) -> f64 {
@@ -609,8 +613,8 @@ impl EnclosedModel {
         // Rotation ([`closure_rotation`]): `tr(X K) = Σ X_ij K_ji`.
         k[(1, 2)] = 0.5 * mu[0];
         k[(2, 1)] = -0.5 * mu[0];
-        k[(0, 2)] = -mu[1];
-        k[(0, 1)] = mu[2];
+        k[(2, 0)] = mu[1];
+        k[(1, 0)] = -mu[2];
         for i in 0..3 {
             k[(3, i)] = mu[3 + i];
         }
@@ -1018,14 +1022,14 @@ mod tests {
             let axis = V3::new(beta.cos(), beta.sin(), 0.0);
             let x = frame(rot(axis, PI));
             let [a, b] = rows(&x);
-            // t(L) = (cos 2β, sin 2β, 0): the rows are (−t_z, t_y) = (0, sin 2β), zero only
-            // for the reversed tangent (β = π/2, a cusp that verification refuses).
+            // Xᵀe1 = t(L) = (cos 2β, sin 2β, 0) (X symmetric): the rows are (0, −sin 2β),
+            // zero only for the reversed tangent (β = π/2, a cusp that verification refuses).
             assert!(
-                a.abs() < 1e-15 && (b - (2.0 * beta).sin()).abs() < 1e-12,
+                a.abs() < 1e-15 && (b + (2.0 * beta).sin()).abs() < 1e-12,
                 "{beta}"
             );
             if beta < PI / 2.0 {
-                assert!(b > 0.09, "beta {beta}: {b}");
+                assert!(b < -0.09, "beta {beta}: {b}");
             }
             let old = vee_skew3(&x);
             assert!(old[1].abs() < 1e-15 && old[2].abs() < 1e-15);
