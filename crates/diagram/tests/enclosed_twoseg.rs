@@ -268,7 +268,7 @@ fn the_exchange_of_the_lowest_branch_agrees_with_independent_solves() {
 }
 
 #[test]
-#[ignore = "Newton from the surface figure-eight at 1.4 does not converge (N = 96: KKT residual 7.1e-3 after 80 iterations; 1.4e-2 with the vee(skew X) closure rows), and the index-1 state that the stiffness path and the loop shrunk to 0.9 R reach there (1.7522887170, N = 96) descends to no lower state, so the descent has no index-1 start"]
+#[ignore = "Newton from the surface figure-eight at 1.4 does not converge (N = 96: KKT residual 6.4e-3 after 80 iterations; 1.4e-2 with the vee(skew X) closure rows), and the index-1 state that the stiffness path reaches there (1.7522887170, N = 96) descends to no lower state, so the descent has no index-1 start"]
 fn the_unstable_figure_eight_descends_to_a_stable_lower_state() {
     // The sharp rod's branch 2 at L̄ = 1.4, solved from `rodloop solve`'s surface loop, is a
     // saddle in the ball (index 1 on the tangent space of its active constraints).
