@@ -111,32 +111,36 @@ fn minimum_is_returned_as_it_is() {
     assert!(!String::from_utf8_lossy(&o.stdout).contains("descended"));
 }
 
+/// `solve` on the two-segment enclosed scene at `L̄`, branch 2, at `accuracy` (with `extra`
+/// flags): its summary.
+fn enclosed_run(dir: &Path, lbar: &str, acc: &str, extra: &[&str]) -> serde_json::Value {
+    let out = dir.join(format!("{acc}{}", extra.len()));
+    let mut args = vec![
+        "solve",
+        "--scene",
+        "data/scenes/inhomogeneous-d1-0.5-enclosed.toml",
+        "--lbar",
+        lbar,
+        "--branch",
+        "2",
+        "--accuracy",
+        acc,
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    rodloop_ok(&args);
+    serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
+}
+
 /// The two-segment enclosed scene at L̄ = 0.9, branch 2: one state, index 0, at every
 /// accuracy level, the energies within each other's estimates; `--keep-saddle` at `fast`
 /// keeps the index-1 state Newton reaches there, above it.
 #[test]
-#[ignore = "with closure of position and tangent only, solve at lbar = 0.9 branch 2 returns an index-1 state (2.3068717976) and its descent reaches nothing lower"]
+#[ignore = "no index-0 state of branch 2 at lbar = 0.9 is found, and the saddle reported depends on the accuracy: fast 2.3063925668 +- 3.2e-3 (index 1), default and high 2.3241003738 +- 5.4e-3 (index 2); the stiffness path from the uniform loop at every shift, Newton from the surface loop and loops shrunk to 0.95..0.6 R reach only saddles (or do not converge), and the descents from them reach no lower state of the branch"]
 fn enclosed_state_is_the_same_at_every_accuracy() {
     let dir = tmp("descend-enclosed-0.9");
-    let run = |acc: &str, extra: &[&str]| -> serde_json::Value {
-        let out = dir.join(format!("{acc}{}", extra.len()));
-        let mut args = vec![
-            "solve",
-            "--scene",
-            "data/scenes/inhomogeneous-d1-0.5-enclosed.toml",
-            "--lbar",
-            "0.9",
-            "--branch",
-            "2",
-            "--accuracy",
-            acc,
-            "--out",
-            out.to_str().unwrap(),
-        ];
-        args.extend_from_slice(extra);
-        rodloop_ok(&args);
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
-    };
+    let run = |acc: &str, extra: &[&str]| enclosed_run(&dir, "0.9", acc, extra);
     let states: Vec<serde_json::Value> = ["fast", "default", "high"]
         .iter()
         .map(|a| run(a, &[]))

@@ -369,13 +369,13 @@ fn three_level_estimate_is_exact_on_power_laws() {
 /// The interpolated curvature of a state whose frame comes back turned about the tangent
 /// (`EnclosedState::curvature_at`, the start of every finer level) is as accurate next to
 /// the closing node as elsewhere: the two-segment rod of Eq. (51) (`D1/D0 = 0.5`, `γ = 200`)
-/// at `L̄ = 1.35`, branch 2 lifted off (a loop shrunk into the ball and relaxed), holonomy
+/// at `L̄ = 1.35`, branch 2 lifted off (the lowest state of the stiffness path), holonomy
 /// about 1 rad, at 24 cells, against the same state solved at 48 cells. Components of the
 /// other lap enter the stencil turned by the holonomy; taken as they are, the Gauss points
 /// next to the closing node would be off by `O(α |κ|)`.
 #[test]
 fn curvature_is_interpolated_across_the_closing_node_with_the_holonomy() {
-    use rodloop_solver::enclosed::solve::start_from_curvature;
+    use rodloop_solver::enclosed::descent::stiffness_homotopy_states;
     use rodloop_solver::enclosed::solve_enclosed;
     let st = Stiffness::Tanh {
         d0: 1.0,
@@ -384,31 +384,13 @@ fn curvature_is_interpolated_across_the_closing_node_with_the_holonomy() {
         s1: 0.8,
         gamma: 200.0,
     };
-    let (lbar, eta, a) = (1.35, 1u32, 0.9);
-    let (res, _) = rodloop_solver::solve_robust(
-        1.0,
-        lbar / a,
-        &st,
-        &rodloop_solver::StartShape::Euler { l: eta },
-        rodloop_solver::Accuracy::Default,
-        Some(eta),
-        &rodloop_solver::SolveOptions::default(),
-    )
-    .unwrap();
+    let (lbar, eta) = (1.35, 1u32);
     let opts = EnclosedOptions::default();
-    let (m, z) = start_from_curvature(
-        1.0,
-        lbar,
-        24,
-        &st,
-        |s| {
-            let k = res.equilibrium.sample_at(&[s]).unwrap()[0];
-            (k / a, -1.0 / a)
-        },
-        [0.0, 0.0, a],
-    )
-    .unwrap();
-    let coarse = solve_enclosed(&m, z, &opts).unwrap();
+    let coarse = stiffness_homotopy_states(1.0, lbar, eta, &st, 24, &opts)
+        .unwrap()
+        .into_iter()
+        .next()
+        .expect("a state from the stiffness path");
     let p = coarse.model.transforms(&coarse.z).unwrap();
     let x = &p[coarse.model.cells()];
     let alpha = (x[(2, 1)] - x[(1, 2)]).atan2(x[(1, 1)] + x[(2, 2)]);

@@ -431,13 +431,31 @@ pub fn stiffness_homotopy_states(
     cells: usize,
     opts: &EnclosedOptions,
 ) -> Result<Vec<EnclosedState>, SolverError> {
+    Ok(
+        stiffness_homotopy_starts(radius, lbar, eta, stiffness, cells, opts)?
+            .into_iter()
+            .map(|(_, s)| s)
+            .collect(),
+    )
+}
+
+/// [`stiffness_homotopy_states`] with the shift `φ` (fraction of the length) of the uniform
+/// rod's loop each state comes from: the start a `solve` names.
+pub fn stiffness_homotopy_starts(
+    radius: f64,
+    lbar: f64,
+    eta: u32,
+    stiffness: &crate::Stiffness,
+    cells: usize,
+    opts: &EnclosedOptions,
+) -> Result<Vec<(f64, EnclosedState)>, SolverError> {
     let l = rodloop_exact::paper_branch_loop(eta, lbar)?;
     let uniform = crate::Stiffness::Uniform {
         d: stiffness.reference(),
     };
     let lmin = l.lambda_range().0;
     let len = l.length();
-    let mut out: Vec<EnclosedState> = Vec::new();
+    let mut out: Vec<(f64, EnclosedState)> = Vec::new();
     for phi in homotopy_shifts(stiffness, eta, lbar)? {
         let kg = |s: f64| {
             l.point((s + phi).rem_euclid(1.0) * len)
@@ -464,12 +482,16 @@ pub fn stiffness_homotopy_states(
             continue;
         }
         let e = s.energy();
-        if !e.is_finite() || out.iter().any(|o| (o.energy() - e).abs() <= 1e-9 * e.abs()) {
+        if !e.is_finite()
+            || out
+                .iter()
+                .any(|(_, o)| (o.energy() - e).abs() <= 1e-9 * e.abs())
+        {
             continue;
         }
-        out.push(s);
+        out.push((phi, s));
     }
-    out.sort_by(|a, b| a.energy().total_cmp(&b.energy()));
+    out.sort_by(|a, b| a.1.energy().total_cmp(&b.1.energy()));
     Ok(out)
 }
 
@@ -534,13 +556,13 @@ pub fn solve_branch_lowest(
         same.then_some((usize::from(index > 0), b.energy))
     };
     let better = |x: (usize, f64), y: (usize, f64)| x.0 < y.0 || (x.0 == y.0 && x.1 < y.1);
-    let mut best: Option<(BranchSolve, Option<Descent<EnclosedState>>)> = None;
+    let mut best: Option<(BranchSolve, Option<Descent<EnclosedState>>, f64)> = None;
     if cells >= 32 && cells % 4 == 0 {
         // The path is followed on the coarsest mesh that resolves the profile (the `N/4`
         // level of the diagram's default mesh, `8(2 + η)` cells), so that every accuracy
         // follows the same path; its end is carried to this ladder's `N/4`.
         let search = (8 * (2 + eta as usize)).min(cells / 4);
-        for s in stiffness_homotopy_states(radius, lbar, eta, stiffness, search, opts)
+        for (phi, s) in stiffness_homotopy_starts(radius, lbar, eta, stiffness, search, opts)
             .unwrap_or_default()
         {
             let Some(b) = carry_to_ladder(&s, cells, opts) else {
@@ -552,15 +574,15 @@ pub fn solve_branch_lowest(
             let Some(r) = rank(&b) else { continue };
             if best
                 .as_ref()
-                .and_then(|(o, _)| rank(o))
+                .and_then(|(o, _, _)| rank(o))
                 .is_none_or(|o| better(r, o))
             {
-                best = Some((b, d));
+                best = Some((b, d, phi));
             }
         }
     }
     match (base, best) {
-        (Ok(base), Some((b, d))) => {
+        (Ok(base), Some((b, d, phi))) => {
             let replace = match (rank(&base.0), rank(&b)) {
                 (Some(x), Some(y)) => better(y, x),
                 (None, Some(_)) => true,
@@ -571,17 +593,17 @@ pub fn solve_branch_lowest(
             }
             let mut notes = base.2;
             notes.push(format!(
-                "the state reached from the surface loop (E R/(pi D0) = {:.10}) is not the lowest local minimum found: continuation in the stiffness from the uniform rod's loop reaches this one",
+                "the state reached from the surface loop (E R/(pi D0) = {:.10}) is not the lowest local minimum found: continuation in the stiffness from the uniform rod's loop with its arclength origin shifted by {phi:.4} L reaches this one",
                 base.0.energy
             ));
             Ok(((b, d, notes), true))
         }
         (Ok(base), None) => Ok((base, false)),
-        (Err(_), Some((b, d))) => Ok((
+        (Err(_), Some((b, d, phi))) => Ok((
             (
                 b,
                 d,
-                vec!["the solve from the surface loop did not converge; the state comes from continuation in the stiffness from the uniform rod's loop".into()],
+                vec![format!("the solve from the surface loop did not converge; the state comes from continuation in the stiffness from the uniform rod's loop with its arclength origin shifted by {phi:.4} L")],
             ),
             true,
         )),
@@ -631,9 +653,9 @@ mod tests {
     /// The two-segment rod of the paper's Sec. 5 (`D1/D0 = 0.5`) in the ball at `L̄ = 1.35`,
     /// branch 2 (η = 1), `N = 96`. Two routes that share no start: the uniform rod's
     /// loop continued in the stiffness ([`stiffness_homotopy_states`]), and a loop shrunk
-    /// into the ball (the two-segment surface loop at `L̄/0.9` on the sphere of radius
-    /// `0.9 R`, which has the same length and touches nothing) relaxed by Newton and the
-    /// descent from saddles. The lowest local minimum found is a bending-only equilibrium
+    /// into the ball (the two-segment surface loop at `L̄/a` on the sphere of radius
+    /// `a R`, `a = 0.95, 0.9`, which has the same length and touches nothing) relaxed by
+    /// Newton and the descent from saddles. The lowest local minimum found is a bending-only equilibrium
     /// whose frame does not return (a pure-bending rod carries no twisting moment, so the
     /// holonomy is free), and no route finds a lower minimum.
     #[test]
@@ -671,49 +693,69 @@ mod tests {
         assert!(comp < 1e-8 && stat < 1e-8, "{comp:e} {stat:e}");
         let alpha = holonomy(&best.fine);
         assert!(alpha.abs() > 1e-2, "holonomy {alpha}");
-        // Route 2: the shrunk loop.
-        let a = 0.9;
-        let (res, _) = crate::solve_robust(
-            1.0,
-            lbar / a,
-            &st,
-            &crate::StartShape::Euler { l: eta },
-            crate::Accuracy::Default,
-            Some(eta),
-            &crate::SolveOptions::default(),
-        )
-        .unwrap();
-        let (m, z) = super::super::solve::start_from_curvature(
-            1.0,
-            lbar,
-            cells / 4,
-            &st,
-            |s| {
-                let k = res.equilibrium.sample_at(&[s]).unwrap()[0];
-                (k / a, -1.0 / a)
-            },
-            [0.0, 0.0, a],
-        )
-        .unwrap();
-        let gmin = m
-            .gaps(&z)
-            .unwrap()
-            .iter()
-            .cloned()
-            .fold(f64::INFINITY, f64::min);
-        assert!(gmin > 0.05, "the shrunk loop touches ({gmin})");
-        let shrunk = solve_enclosed(&m, z, &opts)
-            .ok()
-            .and_then(|s| solve_levels(&s.model, s.z.clone(), None, &opts).ok())
-            .and_then(minimum)
-            .expect("a local minimum from the shrunk loop");
-        println!(
-            "stiffness path {:.10} ± {:.1e} (holonomy {alpha:.4}), shrunk loop {:.10} ± {:.1e}",
-            best.energy, best.energy_error, shrunk.energy, shrunk.energy_error
-        );
+        // Route 2: loops shrunk into the ball (radius `a R`, touching nothing), relaxed by
+        // Newton, cascaded and descended where they are saddles: every state of the branch
+        // they reach lies no lower than the stiffness path's minimum.
+        let mut reached = Vec::new();
+        for a in [0.95, 0.9] {
+            let (res, _) = crate::solve_robust(
+                1.0,
+                lbar / a,
+                &st,
+                &crate::StartShape::Euler { l: eta },
+                crate::Accuracy::Default,
+                Some(eta),
+                &crate::SolveOptions::default(),
+            )
+            .unwrap();
+            let (m, z) = super::super::solve::start_from_curvature(
+                1.0,
+                lbar,
+                cells / 4,
+                &st,
+                |s| {
+                    let k = res.equilibrium.sample_at(&[s]).unwrap()[0];
+                    (k / a, -1.0 / a)
+                },
+                [0.0, 0.0, a],
+            )
+            .unwrap();
+            let gmin = m
+                .gaps(&z)
+                .unwrap()
+                .iter()
+                .cloned()
+                .fold(f64::INFINITY, f64::min);
+            assert!(gmin > 0.03, "the loop shrunk to {a} R touches ({gmin})");
+            let relaxed = solve_enclosed(&m, z, &opts)
+                .ok()
+                .and_then(|s| solve_levels(&s.model, s.z.clone(), None, &opts).ok())
+                .and_then(|b| descend_branch(b, &opts).ok())
+                .map(|(b, _)| b)
+                .filter(|b| enclosed_periods(&b.fine).ok().map(|p| p.eta) == Some(eta));
+            if let Some(b) = relaxed {
+                println!(
+                    "stiffness path {:.10} ± {:.1e} (holonomy {alpha:.4}), loop shrunk to {a} R: {:.10} ± {:.1e}, index {}",
+                    best.energy,
+                    best.energy_error,
+                    b.energy,
+                    b.energy_error,
+                    saddle.index(&b.quarter).unwrap()
+                );
+                reached.push(b);
+            }
+        }
         assert!(
-            best.energy <= shrunk.energy + 3.0 * (best.energy_error + shrunk.energy_error),
-            "the shrunk loop relaxes below the lowest minimum found"
+            !reached.is_empty(),
+            "no shrunk loop relaxes to a state of the branch"
         );
+        for b in &reached {
+            assert!(
+                best.energy <= b.energy + 3.0 * (best.energy_error + b.energy_error),
+                "a shrunk loop relaxes below the lowest minimum found: {} against {}",
+                b.energy,
+                best.energy
+            );
+        }
     }
 }

@@ -51,7 +51,7 @@
 
 use nalgebra::{Const, DVector, Matrix3, Matrix4, SMatrix, SVector, Vector3};
 
-use super::model::{tr4, translation, vee_skew3, EnclosedModel, TWIST_ROW};
+use super::model::{closure_rotation, tr4, translation, vee_skew3, EnclosedModel, TWIST_ROW};
 use crate::SolverError;
 
 const B: usize = 17;
@@ -760,7 +760,9 @@ impl EnclosedModel {
                 d[(L0, L0)] = 1.0;
                 // Closure rows: δF = −(vee skew(hat ω R_N), hat ω p_N + v).
                 for l in 0..6 {
-                    let v = vee6(&(basis[l] * pn));
+                    let m = basis[l] * pn;
+                    let (w, t) = (closure_rotation(&m), translation(&m));
+                    let v = [w[0], w[1], w[2], t[0], t[1], t[2]];
                     for k in (0..6).filter(|&k| k != TWIST_ROW) {
                         sys.brow[c][(gmu + k, X0 + l)] = -v[k];
                     }

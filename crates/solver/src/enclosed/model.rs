@@ -22,8 +22,10 @@
 //!
 //! Positions and frames at the nodes `s_j` (cell boundaries) follow from the SE(3) Magnus
 //! chain `P_{c+1} = P_c exp(Θ_c)` ([`super::jet`]), `r_j = r0 + p_j`. Closure of position
-//! and frame, `C = (vee(skew(X_N)), p_N) = 0`, of which the rotation about the tangent
-//! (row [`TWIST_ROW`]) is free: its row reads `μ_twist = 0` (no twisting moment). The wall
+//! and tangent, `C = (c_rot(X_N), p_N) = 0` with the rows of [`closure_rotation`] (the tangent
+//! back on `t(0) = e1`, full rank at every turn of the frame about it); the
+//! rotation about the tangent (row [`TWIST_ROW`]) is free: its row reads `μ_twist = 0` (no
+//! twisting moment). The wall
 //! `g_j = R² − |r_j|² ≥ 0` (the sphere's gap; the model reads `g`, `∇g` and `∇²g` from its
 //! [`Wall`]) is imposed at the `N` nodes; its multipliers `λ_j ≥ 0` are the
 //! nodal contact impulses (the force per unit length is `λ(s_j) ≈ 2Rλ_j/w_j`, `w_j` the
@@ -62,7 +64,7 @@ type M4 = Matrix4<f64>;
 type V3 = Vector3<f64>;
 
 /// The closure row of the rotation about the tangent `t(0)` (the first component of
-/// `vee(skew X_N)`). The rod has no twist energy (paper Sec. 2: pure bending, `M·t = 0`), so
+/// [`closure_rotation`]). The rod has no twist energy (paper Sec. 2: pure bending, `M·t = 0`), so
 /// the rotation-minimising frame need not return about the tangent: a space curve's frame
 /// comes back turned by its holonomy (`−∮τ ds` mod 2π; zero on the sphere, Geppert's
 /// theorem, but not for a loop off the wall). Requiring it to return would be a constraint
@@ -124,6 +126,24 @@ pub(super) fn vee_skew3(m: &M4) -> V3 {
         0.5 * (m[(0, 2)] - m[(2, 0)]),
         0.5 * (m[(1, 0)] - m[(0, 1)]),
     )
+}
+
+/// The rotation rows of the closure of the frame `X = P_N` (linear in `X`): the twist row
+/// [`TWIST_ROW`] `½(X₃₂ − X₂₃)` (unused: its row of the KKT system is `μ_twist = 0`) and the
+/// tangent rows `(X₁₃, −X₁₂)`, two components of `Xᵀe1` (the tangent `t(0)` in the returning
+/// frame; `Xᵀe1 = ±e1` exactly where `t(L) = X e1 = ±t(0)`). They vanish only there, and
+/// their Jacobian in a rotation `X hat(ω)` is `(ω_y, ω_z)` turned by the holonomy: rank 2
+/// whatever the frame's turn about the tangent. (The rows `(−X₃₁, X₂₁)` of `X e1` have the
+/// same zeros and rank; they differ at second order, `(ω_y, ω_z)` turned by `±ω_x/2`, and
+/// with them the trace of the uniform rod's figure-eight stalls at `L̄ = 1.132`, where
+/// non-planar states branch off.)
+/// The rows `vee(skew X)` restricted to the same components vanish at every half-turn (the
+/// tangent then comes back anywhere: `t(L) = 2(a·e1)a − e1` for a half-turn about `a`) and
+/// their Jacobian vanishes at the half-turn about the tangent (holonomy `π`, a closed
+/// loop), where Newton stalls. Near `X = I` both agree to first order, so the multipliers
+/// keep their meaning (the moment at the cut).
+pub(super) fn closure_rotation(m: &M4) -> V3 {
+    V3::new(0.5 * (m[(2, 1)] - m[(1, 2)]), m[(0, 2)], -m[(0, 1)])
 }
 
 pub(super) fn tr4(a: &M4, b: &M4) -> f64 {
@@ -439,14 +459,14 @@ impl EnclosedModel {
             .collect())
     }
 
-    /// Closure residual `(vee(skew X_N), p_N)` with its twist component (about `t(0)`, the
-    /// first) reported as 0: the loop closes when position and tangent return; the
+    /// Closure residual `(c_rot(X_N), p_N)` ([`closure_rotation`]) with its twist component
+    /// (about `t(0)`, the first) reported as 0: the loop closes when position and tangent return; the
     /// rotation-minimising frame may come back turned about the tangent (see
     /// [`TWIST_ROW`]).
     pub fn closure(&self, z: &[f64]) -> Result<[f64; 6], SolverError> {
         let p = self.transforms(z)?;
         let pn = &p[self.cells];
-        let v = vee_skew3(pn);
+        let v = closure_rotation(pn);
         let t = translation(pn);
         Ok([0.0, v[1], v[2], t[0], t[1], t[2]])
     }
@@ -590,12 +610,12 @@ impl EnclosedModel {
     /// `K` with `μ·C = tr(P_N K)`.
     pub(super) fn closure_functional(mu: &[f64]) -> M4 {
         let mut k = M4::zeros();
-        // Rotation: μ_r·vee(skew X) = −½ tr(hat(μ_r) X).
-        let h = crate::frame::hat(&V3::new(mu[0], mu[1], mu[2]));
+        // Rotation ([`closure_rotation`]): `tr(X K) = Σ X_ij K_ji`.
+        k[(1, 2)] = 0.5 * mu[0];
+        k[(2, 1)] = -0.5 * mu[0];
+        k[(2, 0)] = mu[1];
+        k[(1, 0)] = -mu[2];
         for i in 0..3 {
-            for j in 0..3 {
-                k[(i, j)] = -0.5 * h[(i, j)];
-            }
             k[(3, i)] = mu[3 + i];
         }
         k
@@ -669,7 +689,7 @@ impl EnclosedModel {
         }
         // Closure.
         let pn = &ch.prefix[n];
-        let v = vee_skew3(pn);
+        let v = closure_rotation(pn);
         let t = translation(pn);
         for k in 0..3 {
             f[np + k] = -v[k];
@@ -721,7 +741,7 @@ impl EnclosedModel {
                         jp[(3 * (j - 1) + k, a)] = t[k];
                     }
                     if j == n {
-                        let v = vee_skew3(&m);
+                        let v = closure_rotation(&m);
                         for k in 0..3 {
                             jrot[(k, a)] = v[k];
                         }
@@ -954,4 +974,65 @@ pub fn phase_slope(reference: &[f64], cells: usize) -> Result<Option<Vec<f64>>, 
 /// The frame at node transforms: the rotation block of `P`.
 pub fn rotation(p: &M4) -> Matrix3<f64> {
     p.fixed_view::<3, 3>(0, 0).into_owned()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame(r: Matrix3<f64>) -> M4 {
+        let mut m = M4::identity();
+        m.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
+        m
+    }
+
+    fn rot(axis: V3, angle: f64) -> Matrix3<f64> {
+        crate::frame::expm_skew(&crate::frame::hat(&(axis.normalize() * angle)))
+    }
+
+    /// The tangent rows of the closure vanish where the tangent returns, whatever the turn
+    /// of the frame about it (a half-turn included), and among the other half-turns only
+    /// where the tangent comes back reversed; their Jacobian has rank 2 at every such turn. `vee(skew X)` vanishes at every
+    /// half-turn (the tangent then comes back at `2β` from `e1` for an axis at `β`) and its
+    /// Jacobian vanishes at the half-turn about the tangent.
+    #[test]
+    fn tangent_closure_is_zero_only_where_the_tangent_returns_and_has_full_rank() {
+        let rows = |x: &M4| {
+            let v = closure_rotation(x);
+            [v[1], v[2]]
+        };
+        for alpha in [0.0, 0.3, -2.0, PI - 1e-3, PI] {
+            let x = frame(rot(V3::x(), alpha));
+            let [a, b] = rows(&x);
+            assert!(a.abs() < 1e-15 && b.abs() < 1e-15, "{alpha}");
+            // Jacobian in a body rotation ω = (0, ω_y, ω_z), central differences.
+            let h = 1e-6;
+            let mut jac = [[0.0; 2]; 2];
+            for (k, col) in [V3::y(), V3::z()].iter().enumerate() {
+                let p = rows(&(x * frame(rot(*col, h))));
+                let m = rows(&(x * frame(rot(*col, -h))));
+                for i in 0..2 {
+                    jac[i][k] = (p[i] - m[i]) / (2.0 * h);
+                }
+            }
+            let det = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
+            assert!((det - 1.0).abs() < 1e-8, "alpha {alpha}: det {det}");
+        }
+        for beta in [0.05f64, 0.3, 1.0, PI / 2.0] {
+            let axis = V3::new(beta.cos(), beta.sin(), 0.0);
+            let x = frame(rot(axis, PI));
+            let [a, b] = rows(&x);
+            // Xᵀe1 = t(L) = (cos 2β, sin 2β, 0) (X symmetric): the rows are (0, −sin 2β),
+            // zero only for the reversed tangent (β = π/2, a cusp that verification refuses).
+            assert!(
+                a.abs() < 1e-15 && (b + (2.0 * beta).sin()).abs() < 1e-12,
+                "{beta}"
+            );
+            if beta < PI / 2.0 {
+                assert!(b < -0.09, "beta {beta}: {b}");
+            }
+            let old = vee_skew3(&x);
+            assert!(old[1].abs() < 1e-15 && old[2].abs() < 1e-15);
+        }
+    }
 }
