@@ -53,14 +53,21 @@ def _rows(path):
     return [{k.strip(): float(v) for k, v in row.items()} for row in r]
 
 
-def dominant_harmonic(s, kg, length):
-    """Number of periods of kappa_g: the k >= 1 with the largest |Fourier coefficient|."""
+def _periodic_weights(s, length):
+    """Trapezoid weights of the samples s of a closed loop of the given length."""
     n = len(s)
     w = []
     for j in range(n):
         nxt = s[j + 1] - s[j] if j + 1 < n else s[0] + length - s[j]
         prv = s[j] - s[j - 1] if j > 0 else s[0] + length - s[n - 1]
         w.append(0.5 * (nxt + prv))
+    return w
+
+
+def dominant_harmonic(s, kg, length):
+    """Number of periods of kappa_g: the k >= 1 with the largest |Fourier coefficient|."""
+    n = len(s)
+    w = _periodic_weights(s, length)
     mean = sum(a * b for a, b in zip(kg, w)) / length
     best, amp_best = 0, -1.0
     for k in range(1, max(2, n // 4 + 1)):
@@ -168,11 +175,7 @@ def named_periods(s, signal, length):
     signal - mean (trapezoid-weighted), with hysteresis at 4 x the grid-scale noise (the
     cubic residual) and at a tenth of the amplitude; None unless both give the same count."""
     n = len(s)
-    w = []
-    for j in range(n):
-        nxt = s[j + 1] - s[j] if j + 1 < n else s[0] + length - s[j]
-        prv = s[j] - s[j - 1] if j > 0 else s[0] + length - s[n - 1]
-        w.append(0.5 * (nxt + prv))
+    w = _periodic_weights(s, length)
     mean = sum(a * b for a, b in zip(signal, w)) / length
     dev = [v - mean for v in signal]
     amp = max(abs(v) for v in dev)

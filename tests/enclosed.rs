@@ -24,6 +24,24 @@ fn out(name: &str) -> PathBuf {
     p
 }
 
+/// `rodloop solve --scene SCENE --lbar LBAR --branch BRANCH --out DIR`, which must succeed;
+/// returns its `summary.json`.
+fn solve_ok(dir: &Path, scene: &str, lbar: &str, branch: &str) -> serde_json::Value {
+    let o = rodloop(&[
+        "solve",
+        "--scene",
+        scene,
+        "--lbar",
+        lbar,
+        "--branch",
+        branch,
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+}
+
 /// `rodloop ARGS --out DIR` fails with a message containing `word`, no panic, no output.
 fn assert_refused(all: Vec<&str>, word: &str, dir: &str) {
     let dir = out(dir);
@@ -42,20 +60,7 @@ fn assert_refused(all: Vec<&str>, word: &str, dir: &str) {
 #[test]
 fn solve_lifted_off_state() {
     let dir = out("enclosed-solve");
-    let o = rodloop(&[
-        "solve",
-        "--scene",
-        &scene(),
-        "--lbar",
-        "1.4",
-        "--branch",
-        "2",
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let s = solve_ok(&dir, &scene(), "1.4", "2");
     let surface = rodloop_exact::paper_branch_loop(1, 1.4).unwrap();
     let e = s["energy"].as_f64().unwrap();
     assert!(e < surface.energy().unwrap() - 1e-5);
@@ -91,20 +96,7 @@ fn numbers(text: &str, name: &str) -> Vec<f64> {
 #[test]
 fn enclosed_file_energy_is_recomputed_by_its_weights() {
     let dir = out("enclosed-file-energy");
-    let o = rodloop(&[
-        "solve",
-        "--scene",
-        &scene(),
-        "--lbar",
-        "1.4",
-        "--branch",
-        "2",
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let s = solve_ok(&dir, &scene(), "1.4", "2");
     let (e, de) = (
         s["energy"].as_f64().unwrap(),
         s["error_estimate"].as_f64().unwrap(),
@@ -150,20 +142,7 @@ fn enclosed_file_energy_is_recomputed_by_its_weights() {
 #[test]
 fn solve_attached_state_is_exact() {
     let dir = out("enclosed-attached");
-    let o = rodloop(&[
-        "solve",
-        "--scene",
-        &scene(),
-        "--lbar",
-        "1.2",
-        "--branch",
-        "1",
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let s = solve_ok(&dir, &scene(), "1.2", "1");
     let exact = rodloop_exact::paper_branch_loop(2, 1.2)
         .unwrap()
         .energy()
@@ -295,20 +274,7 @@ fn two_segment_enclosed_state() {
         env!("CARGO_MANIFEST_DIR"),
         "/data/scenes/inhomogeneous-d1-0.5-enclosed.toml"
     );
-    let o = rodloop(&[
-        "solve",
-        "--scene",
-        sc,
-        "--lbar",
-        "1.4",
-        "--branch",
-        "1",
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let s = solve_ok(&dir, sc, "1.4", "1");
     let f = |k: &str| s[k].as_f64().unwrap_or_else(|| panic!("{k}"));
     assert!(f("surface_lambda_min") < -50.0);
     assert!(f("energy") < f("surface_energy"));

@@ -1,10 +1,10 @@
 //! The enclosed model (`|r| ≤ R`, paper Sec. 3.2): exact derivatives, exact states, lift-off,
 //! optimality and the order of convergence.
 
+mod common;
+
 use rodloop_exact::paper_branch_loop;
-use rodloop_solver::enclosed::{
-    solve_branch, start_from_surface, EnclosedModel, EnclosedOptions, SurfaceSource,
-};
+use rodloop_solver::enclosed::{start_from_surface, EnclosedModel, EnclosedOptions};
 use rodloop_solver::Stiffness;
 
 fn exact_start(eta: u32, lbar: f64, cells: usize, d: &Stiffness) -> (EnclosedModel, Vec<f64>) {
@@ -119,16 +119,7 @@ fn lifted_step_equals_dense_step() {
 }
 
 fn branch(eta: u32, lbar: f64, cells: usize) -> rodloop_solver::enclosed::BranchSolve {
-    let l = paper_branch_loop(eta, lbar).unwrap();
-    solve_branch(
-        1.0,
-        lbar,
-        &Stiffness::uniform(1.0),
-        &SurfaceSource::Exact(l),
-        cells,
-        &EnclosedOptions::default(),
-    )
-    .unwrap()
+    common::enclosed_branch(eta, lbar, cells)
 }
 
 /// First-order optimality of a returned state: λ ≥ 0, gap ≥ 0, λ·gap = 0, stationarity.

@@ -2,23 +2,13 @@
 //! same state as the plain warm start from a start much closer to it, and the pinned free
 //! step re-bases a loop whose node 0 touches the wall without changing the equilibrium.
 
-use rodloop_exact::paper_branch_loop;
-use rodloop_solver::enclosed::{solve_branch, EnclosedOptions, EnclosedState, SurfaceSource};
-use rodloop_solver::Stiffness;
+mod common;
+
+use rodloop_solver::enclosed::{EnclosedOptions, EnclosedState};
 
 /// The lifted-off figure-eight (branch 2) at `lbar`, `N = 64`.
 fn figure_eight(lbar: f64) -> EnclosedState {
-    let l = paper_branch_loop(1, lbar).unwrap();
-    solve_branch(
-        1.0,
-        lbar,
-        &Stiffness::uniform(1.0),
-        &SurfaceSource::Exact(l),
-        64,
-        &EnclosedOptions::default(),
-    )
-    .unwrap()
-    .fine
+    common::enclosed_figure_eight(lbar, 64)
 }
 
 #[test]

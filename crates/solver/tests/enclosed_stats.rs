@@ -2,24 +2,14 @@
 //! counted under the stage named, with the iterations the state reports; a solve stopped by
 //! the iteration cap is counted as failed there; a solve outside every scope is not counted.
 
-use rodloop_exact::paper_branch_loop;
+mod common;
+
 use rodloop_solver::enclosed::stats::{self, SolveStats, Stage};
-use rodloop_solver::enclosed::{solve_branch, EnclosedOptions, EnclosedState, SurfaceSource};
-use rodloop_solver::Stiffness;
+use rodloop_solver::enclosed::{EnclosedOptions, EnclosedState};
 
 /// The lifted-off figure-eight (branch 2) at `lbar`, `N = 32`.
 fn figure_eight(lbar: f64) -> EnclosedState {
-    let l = paper_branch_loop(1, lbar).unwrap();
-    solve_branch(
-        1.0,
-        lbar,
-        &Stiffness::uniform(1.0),
-        &SurfaceSource::Exact(l),
-        32,
-        &EnclosedOptions::default(),
-    )
-    .unwrap()
-    .fine
+    common::enclosed_figure_eight(lbar, 32)
 }
 
 #[test]

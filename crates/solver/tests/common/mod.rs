@@ -4,6 +4,9 @@
 #![allow(dead_code)]
 
 use rodloop_exact::ExactLoop;
+use rodloop_solver::enclosed::{
+    solve_branch, BranchSolve, EnclosedOptions, EnclosedState, SurfaceSource,
+};
 use rodloop_solver::periodic::TrigInterpolant;
 use rodloop_solver::{solve, Equilibrium, SolveOptions, StartShape, Stiffness, SurfaceModel};
 
@@ -95,4 +98,24 @@ pub fn solve_uniform(eta: u32, lbar: f64, cells: usize, start: &StartShape) -> E
     let k0 = start.gauss_values(&model).unwrap();
     solve(&model, &k0, &SolveOptions::default())
         .unwrap_or_else(|e| panic!("eta {eta} lbar {lbar} cells {cells}: {e}"))
+}
+
+/// The uniform rod's enclosed state of the surface branch `eta` at `lbar` on `cells` cells,
+/// from the exact surface loop (R = D = 1).
+pub fn enclosed_branch(eta: u32, lbar: f64, cells: usize) -> BranchSolve {
+    let l = rodloop_exact::paper_branch_loop(eta, lbar).unwrap();
+    solve_branch(
+        1.0,
+        lbar,
+        &Stiffness::uniform(1.0),
+        &SurfaceSource::Exact(l),
+        cells,
+        &EnclosedOptions::default(),
+    )
+    .unwrap()
+}
+
+/// The uniform rod's lifted-off figure-eight (branch 2) at `lbar` on `cells` cells.
+pub fn enclosed_figure_eight(lbar: f64, cells: usize) -> EnclosedState {
+    enclosed_branch(1, lbar, cells).fine
 }
