@@ -67,6 +67,7 @@
 pub mod buckling;
 pub mod certificate;
 mod compute;
+pub mod compare;
 pub mod critical;
 pub mod detached;
 mod diagram;
