@@ -265,7 +265,9 @@ fn run_numeric(
             .iter()
             .map(|c| {
                 exact_match(&c.kind, (c.from_branch, c.to_branch), c.lbar_cr, e)
-                    .map_or("no exact match".into(), |x| format!("{:.1e}", c.lbar_cr - x.lbar_cr))
+                    .map_or("no exact match".into(), |x| {
+                        format!("{:.1e}", c.lbar_cr - x.lbar_cr)
+                    })
             })
             .collect(),
     });

@@ -282,7 +282,6 @@ pub fn compare_rows(nd: Option<&NumericDiagram>) -> Result<Vec<CompareRow>, Diag
     Ok(rows)
 }
 
-
 /// Relative tolerance rodloop reads into the paper's "well approximated" (Sec. 5).
 pub const ENERGY_TOLERANCE: f64 = 0.01;
 

@@ -66,8 +66,8 @@
 
 pub mod buckling;
 pub mod certificate;
-mod compute;
 pub mod compare;
+mod compute;
 pub mod critical;
 pub mod detached;
 mod diagram;
@@ -91,6 +91,7 @@ pub mod sampling;
 mod seed;
 pub mod shapes;
 mod special;
+pub mod state_rows;
 mod states;
 pub mod trace;
 pub mod types;

@@ -62,11 +62,15 @@ impl Diagram {
             "from->to",
             unit,
             "error",
-            side.map_or(String::new(), |s| format!("  {:>w$}", s.header, w = s.width)),
+            side.map_or(String::new(), |s| format!(
+                "  {:>w$}",
+                s.header,
+                w = s.width
+            )),
         )];
         for (i, c) in self.critical.iter().enumerate() {
             lines.push(format!(
-                "  {:>2}  {:>18.lbar_digits$}  {:>9}  {:>3}->{:<to_width$}  {:>e_width$.e_digits$}  {:>9.1e}{}",
+                "  {:>2}  {:>18.lbar_digits$}  {:>8}  {:>3}->{:<to_width$}  {:>e_width$.e_digits$}  {:>9.1e}{}",
                 c.index,
                 c.lbar_cr,
                 c.kind,
