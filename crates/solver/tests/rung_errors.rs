@@ -18,8 +18,13 @@ fn fourth_order_ladder_gives_order_four_and_exact_estimates() {
         let vs_exact = e.vs_exact.expect("an exact value was given");
         assert!((vs_exact - true_err).abs() <= 1e-12 * true_err.max(1.0));
         if i > 0 {
-            let est = e.estimate.expect("every rung above the coarsest has an estimate");
-            assert!((est - true_err).abs() <= 1e-9 * true_err, "rung {i}: {est} vs {true_err}");
+            let est = e
+                .estimate
+                .expect("every rung above the coarsest has an estimate");
+            assert!(
+                (est - true_err).abs() <= 1e-9 * true_err,
+                "rung {i}: {est} vs {true_err}"
+            );
         }
         if i > 0 && i + 1 < cells.len() {
             let p = e.order.expect("inner rungs have an order");
