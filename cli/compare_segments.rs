@@ -1,44 +1,18 @@
 //! `rodloop compare --scene FILE` for a two-segment rod on the sphere (Eq. 51): the paper's
 //! statements of Sec. 5 next to rodloop's numeric diagram of the scene.
 //!
-//! The paper prints no numbers for two-segment rods; it states two things rodloop can check:
-//! - for an extremely soft segment (its Fig. 9, `D1/D0 = 0.001`) the elastic energy is well
-//!   approximated by that of the stiff segment on a great circle,
-//!   `E ≈ D0 ℓ_stiff/(2R²)`, i.e. `E R/(πD0) ≈ (ℓ_stiff/L) L̄` with `ℓ_stiff/L = 1 − (s1* − s0*)`
-//!   (the paper writes `(s1* − s0*) L`, the same for its `s0*/L = 0.3, s1*/L = 0.8`);
-//! - the saddle-like states of branch 1 lose the `D2d` symmetry of the uniform rod and keep
-//!   only a mirror plane (`Cs`; its Fig. 10, `D1/D0 = 0.5`).
-//!
-//! The energy statement gives no tolerance; rodloop reads "well approximated" as within 1 %
-//! and judges it only for a segment within a decade of the paper's softness
-//! (`D1/D0 ≤ 0.01`); for stiffer segments the rows show how far the estimate is off.
+//! The rows ([`rodloop_diagram::compare::segment_rows`]: the energy of an extremely soft
+//! segment, the mirror symmetry of branch 1's saddle-like states) come from the diagram
+//! crate; this module runs the diagram, prints and writes them.
 
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
-use rodloop_diagram::representative::{middle_of_first_stable, stable_near_half_integers};
+use rodloop_diagram::compare::{segment_rows, ENERGY_TOLERANCE, SOFT_LIMIT};
 use rodloop_diagram::DiagramOptions;
 use rodloop_scene::{Scene, StiffnessSpec};
 
 use crate::output::{checked_json, Cell, OutputRun, Table};
-
-/// Relative tolerance rodloop reads into "well approximated".
-const ENERGY_TOLERANCE: f64 = 0.01;
-
-/// Softest segment the paper's energy statement is judged for (a decade above its 0.001).
-const SOFT_LIMIT: f64 = 0.01;
-
-/// One statement next to rodloop's value.
-struct Row {
-    id: String,
-    lbar: Option<f64>,
-    paper: String,
-    numeric: String,
-    deviation: Option<f64>,
-    tolerance: Option<f64>,
-    agrees: Option<bool>,
-    source: &'static str,
-}
 
 /// Run the comparison for a two-segment surface scene.
 pub fn run(scene: &Scene, out: &Path) -> Result<()> {
@@ -59,47 +33,8 @@ pub fn run(scene: &Scene, out: &Path) -> Result<()> {
     opts.validate()?;
     let d = rodloop_diagram::compute(&opts, &mut (), &mut |_| {})
         .with_context(|| format!("numeric diagram of scene {}", scene.name))?;
-    let rows = d.rows();
     let ratio = d1 / d0;
-    let stiff = 1.0 - (s1 - s0);
-    let mut out_rows = Vec::new();
-    // The energy estimate at the stable state nearest each half-integer length.
-    for r in stable_near_half_integers(&rows, scene.lbar_min, scene.lbar_max) {
-        let estimate = stiff * r.lbar;
-        let dev = (r.energy - estimate) / estimate;
-        let judged = ratio <= SOFT_LIMIT;
-        out_rows.push(Row {
-            id: format!("soft_energy_{:.2}", r.lbar),
-            lbar: Some(r.lbar),
-            paper: format!("{estimate:.10}"),
-            numeric: format!(
-                "{:.10}{}",
-                r.energy,
-                r.energy_error
-                    .map(|e| format!(" ± {e:.1e}"))
-                    .unwrap_or_default()
-            ),
-            deviation: Some(dev),
-            tolerance: judged.then_some(ENERGY_TOLERANCE),
-            agrees: judged.then_some(dev.abs() <= ENERGY_TOLERANCE),
-            source: "Sec. 5 (Fig. 9): E ≈ D0 ℓ_stiff/(2R²) for an extremely soft segment; stable state of the diagram",
-        });
-    }
-    // The symmetry of branch 1 in the middle of its first stable stretch (the saddle-like
-    // states of the paper's first row of Fig. 10, before the figure-eight takes over).
-    if let Some(r) = middle_of_first_stable(&rows, 1) {
-        let group = r.shape.point_group.clone().unwrap_or_else(|| "?".into());
-        out_rows.push(Row {
-            id: "sym_branch1".into(),
-            lbar: Some(r.lbar),
-            paper: "Cs".into(),
-            agrees: Some(group == "Cs"),
-            numeric: group,
-            deviation: None,
-            tolerance: None,
-            source: "Sec. 5 (Fig. 10): saddle-like states keep only a mirror plane",
-        });
-    }
+    let out_rows = segment_rows(&d, ratio, (s0, s1), (scene.lbar_min, scene.lbar_max));
     if out_rows.is_empty() {
         bail!(
             "compare --scene {}: the diagram has no stable state to compare (range {} to {})",

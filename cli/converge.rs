@@ -184,19 +184,11 @@ pub fn run(args: &Args) -> Result<()> {
         "seconds"
     );
     let mut rows = Vec::new();
-    for (i, r) in rungs.iter().enumerate() {
-        let estimate =
-            (i > 0).then(|| rodloop_solver::richardson_error(r.energy, rungs[i - 1].energy));
-        let vs_finest = (i + 1 < rungs.len()).then(|| (r.energy - finest_e).abs());
-        let vs_exact = exact.map(|x| (r.energy - x).abs());
-        // Order from three consecutive rungs: log2(|E_{N/2} − E_N| / |E_N − E_{2N}|).
-        let order = (i > 0 && i + 1 < rungs.len())
-            .then(|| {
-                let a = (rungs[i - 1].energy - r.energy).abs();
-                let b = (r.energy - rungs[i + 1].energy).abs();
-                (a / b).log2()
-            })
-            .filter(|o| o.is_finite());
+    let energies: Vec<f64> = rungs.iter().map(|r| r.energy).collect();
+    let errors = rodloop_solver::accuracy::rung_errors(&energies, exact);
+    for (i, (r, err)) in rungs.iter().zip(errors).enumerate() {
+        let (estimate, vs_finest, vs_exact, order) =
+            (err.estimate, err.vs_finest, err.vs_exact, err.order);
         let opt = |v: Option<f64>| v.map(Cell::F).unwrap_or(Cell::S(String::new()));
         table.push(vec![
             Cell::I(r.cells as i64),

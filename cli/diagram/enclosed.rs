@@ -91,7 +91,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
         crate::atlas::write_enclosed_atlas(&run, args.shapes, scene, accuracy, &d)?;
     }
     run.commit()?;
-    print(&d, scene, opts, &args.out);
+    print(&schema, &d, scene, opts, &args.out);
     print_certificate(&cert);
     Ok(())
 }
@@ -250,35 +250,22 @@ pub(crate) fn write_outputs(
     Ok(())
 }
 
-fn print(d: &EnclosedDiagram, scene: &Scene, opts: &EnclosedDiagramOptions, out: &Path) {
+fn print(
+    schema: &rodloop_schema::Diagram,
+    d: &EnclosedDiagram,
+    scene: &Scene,
+    opts: &EnclosedDiagramOptions,
+    out: &Path,
+) {
     outln!(
         "Critical lengths (enclosed scene {}, accuracy {:?}):",
         scene.name,
         opts.accuracy
     );
-    outln!(
-        "  {:>2}  {:>18}  {:>9}  {:>8}  {:>16}  {:>9}  {:>18}",
-        "i",
-        "lbar_cr",
-        "kind",
-        "from->to",
-        "E R/(pi D)",
-        "error",
-        "surface lbar_cr"
-    );
-    for e in &d.critical {
-        let c = &e.critical;
-        outln!(
-            "  {:>2}  {:>18.12}  {:>9}  {:>3}->{:<3}  {:>16.10}  {:>9.1e}  {:>18.12}",
-            c.index,
-            c.lbar_cr,
-            c.kind,
-            c.from_branch,
-            c.to_branch,
-            c.energy,
-            c.error_estimate,
-            e.surface_lbar_cr
-        );
+    let surface: Vec<f64> = d.critical.iter().map(|e| e.surface_lbar_cr).collect();
+    let side = rodloop_schema::SideColumn::fixed("surface lbar_cr", 18, 12, &surface);
+    for line in schema.critical_table(Some(&side)) {
+        outln!("{line}");
     }
     for e in &d.events {
         use rodloop_diagram::enclosed::EventKind;

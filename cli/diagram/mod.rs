@@ -6,6 +6,7 @@
 use anyhow::{bail, Result};
 use rodloop_diagram::{Engine, ExactEngine};
 use rodloop_exact::diagram::Diagram;
+use rodloop_schema::SideColumn;
 
 use crate::engine::EngineKind;
 use crate::output::OutputRun;
@@ -17,6 +18,7 @@ pub mod surface;
 
 pub use args::{Args, Model, FIGURE_SIZE};
 
+pub use rodloop_diagram::critical::exact_match;
 pub use rodloop_diagram::engine::{etas_in, exact_window};
 
 /// The figures of `draw_diagram` (diagram, diagram_split, diagram_lambda, and diagram_g for
@@ -46,31 +48,6 @@ pub fn k2_figure(d: &Diagram, width: f64, height: f64) -> Result<String> {
         })
         .collect();
     Ok(rodloop_figures::k2::k2_figure(&k2, width, height)?)
-}
-
-/// The exact diagram's counterpart of a numeric critical length of kind `kind` (`crossing`,
-/// `collapse`) between the branches `from → to` at `lbar_cr`: the same kind between the same
-/// branches, within 0.05 in `L̄`, the nearest one.
-pub fn exact_match<'a>(
-    kind: &str,
-    (from, to): (u32, u32),
-    lbar_cr: f64,
-    exact: &'a Diagram,
-) -> Option<&'a rodloop_exact::diagram::Critical> {
-    exact
-        .critical
-        .iter()
-        .filter(|x| {
-            x.kind.to_string() == kind
-                && x.from_branch == from
-                && x.to_branch == to
-                && (x.lbar_cr - lbar_cr).abs() < 0.05
-        })
-        .min_by(|a, b| {
-            (a.lbar_cr - lbar_cr)
-                .abs()
-                .total_cmp(&(b.lbar_cr - lbar_cr).abs())
-        })
 }
 
 /// The selected branch numbers, checked against the window.
@@ -213,26 +190,8 @@ pub fn run(args: &Args) -> Result<()> {
     run.commit()?;
 
     outln!("Critical lengths (exact model, homogeneous loops on the sphere):");
-    outln!(
-        "  {:>2}  {:>18}  {:>9}  {:>6}  {:>18}  {:>9}",
-        "i",
-        "lbar_cr",
-        "kind",
-        "from->to",
-        "E R/(pi D)",
-        "error"
-    );
-    for c in &d.critical {
-        outln!(
-            "  {:>2}  {:>18.15}  {:>9}  {:>3}->{:<2}  {:>18.15}  {:>9.1e}",
-            c.index,
-            c.lbar_cr,
-            c.kind,
-            c.from_branch,
-            c.to_branch,
-            c.energy,
-            c.error_estimate
-        );
+    for line in schema.critical_table(None) {
+        outln!("{line}");
     }
     outln!(
         "{} on {}, {} continuation points, computed in {:.3} s; wrote branches.csv, critical.csv, diagram.svg/.png, diagram_g.svg/.png, diagram_split.svg/.png, diagram_lambda.svg/.png, diagram_k2.svg/.png (Fig. 11), summary.json to {}",
@@ -279,7 +238,7 @@ fn run_numeric(
     let run = OutputRun::begin(&args.out)?;
     run.keep_branch_files();
     let d = surface::run_numeric(&opts, &args.out, args.resume, args.quiet, selection)?;
-    surface::write_outputs(&d, &opts, &scene.name, &run)?;
+    let schema = surface::write_outputs(&d, &opts, &scene.name, &run)?;
     let atlas = match args.shapes {
         0 => None,
         k => Some(crate::atlas::write_atlas(&run, k, &scene.name)?),
@@ -298,47 +257,22 @@ fn run_numeric(
         scene.name,
         accuracy
     );
-    outln!(
-        "  {:>2}  {:>18}  {:>9}  {:>8}  {:>16}  {:>9}{}",
-        "i",
-        "lbar_cr",
-        "kind",
-        "from->to",
-        "E R/(pi D0)",
-        "error",
-        if exact.is_some() {
-            "    exact deviation"
-        } else {
-            ""
-        }
-    );
-    for c in &d.critical {
-        let dev = exact
-            .as_ref()
-            .and_then(|e| {
-                exact_match(
-                    &c.kind.to_string(),
-                    (c.from_branch, c.to_branch),
-                    c.lbar_cr,
-                    e,
-                )
+    let side = exact.as_ref().map(|e| SideColumn {
+        header: "exact deviation".into(),
+        width: 17,
+        cells: schema
+            .critical
+            .iter()
+            .map(|c| {
+                exact_match(&c.kind, (c.from_branch, c.to_branch), c.lbar_cr, e)
+                    .map_or("no exact match".into(), |x| {
+                        format!("{:.1e}", c.lbar_cr - x.lbar_cr)
+                    })
             })
-            .map(|x| c.lbar_cr - x.lbar_cr);
-        outln!(
-            "  {:>2}  {:>18.12}  {:>9}  {:>3}->{:<3}  {:>16.10}  {:>9.1e}{}",
-            c.index,
-            c.lbar_cr,
-            c.kind,
-            c.from_branch,
-            c.to_branch,
-            c.energy,
-            c.error_estimate,
-            match (dev, exact.is_some()) {
-                (Some(x), _) => format!("  {x:>17.1e}"),
-                (None, true) => format!("  {:>17}", "no exact match"),
-                (None, false) => String::new(),
-            }
-        );
+            .collect(),
+    });
+    for line in schema.critical_table(side.as_ref()) {
+        outln!("{line}");
     }
     if let Some(gc) = &d.great_circles {
         for l in &gc.loads {

@@ -280,13 +280,13 @@ pub fn run_numeric(
 
 /// Write states/ and the diagram's files in the result schema (branches.csv, critical.csv,
 /// special_points.csv, summary.json); the figures are drawn from these files by
-/// [`crate::draw::draw_diagram`].
+/// [`crate::draw::draw_diagram`]. Returns the schema written.
 pub fn write_outputs(
     d: &NumericDiagram,
     opts: &DiagramOptions,
     scene: &str,
     run: &OutputRun,
-) -> Result<()> {
+) -> Result<rodloop_schema::Diagram> {
     let mut schema = rodloop_diagram::engine::surface_schema(d, opts, scene)?;
     // Every traced state's shape in states/ (cli/states.rs), named in the last column.
     let (state_files, state_warnings) = crate::states::write_states(d, opts, run)?;
@@ -297,5 +297,6 @@ pub fn write_outputs(
         .warnings
         .get_or_insert_with(Vec::new)
         .extend(state_warnings);
-    crate::output::write_diagram(run, &mut schema)
+    crate::output::write_diagram(run, &mut schema)?;
+    Ok(schema)
 }

@@ -66,6 +66,7 @@
 
 pub mod buckling;
 pub mod certificate;
+pub mod compare;
 mod compute;
 pub mod critical;
 pub mod detached;
@@ -90,6 +91,7 @@ pub mod sampling;
 mod seed;
 pub mod shapes;
 mod special;
+pub mod state_rows;
 mod states;
 pub mod trace;
 pub mod types;

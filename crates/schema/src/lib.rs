@@ -7,6 +7,8 @@
 //! state changes ([`Critical`]), the special points (folds, branch points, lift-off and
 //! landing events: [`SpecialPoint`]), the completeness certificate, warnings and timings.
 //!
+//! [`Diagram::critical_table`] is the one printed table of its critical lengths.
+//!
 //! [`Diagram::files`] turns it into the files a diagram directory holds (`branches.csv`,
 //! `critical.csv`, `special_points.csv`, `summary.json`), refusing a non-finite number
 //! anywhere and writing no `null`; [`Diagram::read`] reads such a directory back into the same
@@ -33,11 +35,13 @@ use serde::{Deserialize, Serialize};
 
 mod columns;
 mod finite;
+mod print;
 mod read;
 mod write;
 
 pub use columns::{column, ColumnSpec, Field, COLUMNS, CRITICAL_COLUMNS, SPECIAL_COLUMNS};
 pub use finite::check_finite;
+pub use print::SideColumn;
 pub use write::strip_nulls;
 
 /// Version of the schema (`schema_version` in `summary.json`).

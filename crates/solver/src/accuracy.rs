@@ -124,6 +124,41 @@ pub fn richardson_error(fine: f64, coarse: f64) -> f64 {
     (fine - coarse).abs() / 15.0
 }
 
+/// What a ladder of resolutions says of each of its rungs (cells doubling from one to the
+/// next): the Richardson error estimate against the rung below, the distance to the finest
+/// rung's value, the distance to an exact value when there is one, and the observed order
+/// from three consecutive rungs, `log2(|X_{N/2} − X_N| / |X_N − X_{2N}|)` (finite values only).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RungErrors {
+    /// [`richardson_error`] against the rung below (none for the coarsest).
+    pub estimate: Option<f64>,
+    /// `|X − X_finest|` (none for the finest).
+    pub vs_finest: Option<f64>,
+    /// `|X − X_exact|`.
+    pub vs_exact: Option<f64>,
+    /// Observed order (none for the coarsest and the finest rung).
+    pub order: Option<f64>,
+}
+
+/// [`RungErrors`] of every rung of `values` (coarsest first, the cells doubling each time).
+pub fn rung_errors(values: &[f64], exact: Option<f64>) -> Vec<RungErrors> {
+    let n = values.len();
+    let finest = values.last().copied().unwrap_or(f64::NAN);
+    (0..n)
+        .map(|i| {
+            let x = values[i];
+            RungErrors {
+                estimate: (i > 0).then(|| richardson_error(x, values[i - 1])),
+                vs_finest: (i + 1 < n).then(|| (x - finest).abs()),
+                vs_exact: exact.map(|e| (x - e).abs()),
+                order: (i > 0 && i + 1 < n)
+                    .then(|| ((values[i - 1] - x).abs() / (x - values[i + 1]).abs()).log2())
+                    .filter(|o| o.is_finite()),
+            }
+        })
+        .collect()
+}
+
 /// How [`ladder_estimate`] treats a ladder that shows no convergence (an observed order
 /// below 1: the last difference is more than half the one before).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
