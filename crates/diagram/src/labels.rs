@@ -347,11 +347,12 @@ mod tests {
         let branches = vec![a, b];
         let critical = vec![handing_to(0, 0.9)];
         let labels = label_all(&branches, &critical);
-        // a: 1.0, 1.1, 1.2, 1.3, 1.4; b: 1.2, 1.1, 1.0, 0.9, 0.8 (equal at 1.1, where the
-        // sheet the critical length names keeps the label).
+        // a: 1.0, 1.1, 1.2, 1.3, 1.4; b: 1.2, 1.1, 1.0, 0.9, 0.8 (equal at 1.1, where both
+        // are the lowest: the family the critical length names and the one of its branch
+        // tied with it).
         use Label::{Metastable as M, Stable as S};
         assert_eq!(labels[0], vec![S, S, M, M, M]);
-        assert_eq!(labels[1], vec![M, M, S, S, S]);
+        assert_eq!(labels[1], vec![M, S, S, S, S]);
     }
 
     /// The lowest traced state is a saddle: the lowest index-0 state is stable (and a length
