@@ -10,8 +10,9 @@ examples of anything but success/clean error. Every state a successful run write
 checked by scripts/state_check.py: solve's config.csv by check_state (closed, on the sphere,
 energy recomputed from config.csv, branch), every file of a diagram's states/ by
 check_diagram (closed, on the sphere or inside the ball, energy recomputed from the file
-against its row of branches.csv); a success whose files fail a check is counted under that
-problem instead.
+against its row of branches.csv) and check_diagram_branches (the branch named by the file's
+own periods against its row), and a diagram's labels by scripts/label_check.py (against its
+own energies); a success whose files fail a check is counted under that problem instead.
 
 Usage: scripts/fuzz_cli.py [N=10000] [BIN=target/release/rodloop] [SECONDS=20] [VALID=0.8]
                           [DIAGRAMS=0.05]
@@ -19,7 +20,8 @@ Usage: scripts/fuzz_cli.py [N=10000] [BIN=target/release/rodloop] [SECONDS=20] [
 import os, random, shutil, subprocess, sys, tempfile, collections, glob
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from state_check import check_state, check_diagram  # noqa: E402
+from state_check import check_state, check_diagram, check_diagram_branches  # noqa: E402
+from label_check import check as check_labels  # noqa: E402
 
 N = int(sys.argv[1]) if len(sys.argv) > 1 else 10000
 BIN = sys.argv[2] if len(sys.argv) > 2 else "target/release/rodloop"
@@ -95,7 +97,11 @@ with tempfile.TemporaryDirectory() as tmp:
             if p.returncode == 0 and is_diagram:
                 text = open(path).read()
                 enclosed = 'confinement = "enclosed"' in text.replace("'", '"')
-                probs = sorted({why for _, why in check_diagram(out, enclosed)[0]})
+                found = check_diagram(out, enclosed)[0] + check_diagram_branches(out)[0]
+                probs = {why.split(":")[0] for _, why in found}
+                # The labels against the diagram's own energies (scripts/label_check.py).
+                probs |= {"label " + b.split(":")[0] for b in check_labels(out)}
+                probs = sorted(probs)
                 kind = "success" if not probs else "written state: " + ", ".join(probs)
             elif p.returncode == 0:
                 text = open(path).read()

@@ -36,8 +36,11 @@
 //! states whose energies lie within their combined error estimates of it are *tied* with
 //! it. A tie is decided by the caller's preference (e.g. the branch a located critical
 //! length names as lowest there, which is more accurate than sampled energies): the
-//! preferred tied states are the lowest, and with no preferred state among the tied ones
-//! the least energy alone is. [`label`] applies this to the states of stability index 0:
+//! preferred tied states are the lowest. With no preferred state among the tied ones,
+//! nothing orders them (their energies are equal within what is known of them; two
+//! copies of one state, or states related by a symmetry, are tied this way), and every tied
+//! state is lowest: a state and its copy always share their standing, whichever of the two
+//! numbers happens to be smaller. [`label`] applies this to the states of stability index 0:
 //! the lowest of them are stable, the other index-0 states metastable, every state of
 //! index > 0 unstable (stable = global minimum among the equilibria, metastable = another
 //! local minimum, unstable = not a local minimum).
@@ -352,16 +355,19 @@ pub fn lowest(states: &[Ranked]) -> Vec<usize> {
     else {
         return Vec::new();
     };
-    let preferred: Vec<usize> = states
+    let tied: Vec<usize> = states
         .iter()
         .enumerate()
-        .filter(|(_, s)| {
-            s.preferred && s.energy - s.error.abs() <= least.energy + least.error.abs()
-        })
+        .filter(|(i, s)| *i == m || s.energy - s.error.abs() <= least.energy + least.error.abs())
         .map(|(i, _)| i)
         .collect();
+    let preferred: Vec<usize> = tied
+        .iter()
+        .copied()
+        .filter(|&i| states[i].preferred)
+        .collect();
     if preferred.is_empty() {
-        vec![m]
+        tied
     } else {
         preferred
     }
@@ -597,14 +603,53 @@ mod tests {
             state(1.000_001_5, 1e-7, 0, true),
         ];
         assert_eq!(label(&apart), vec![S, M]);
-        // A tie with no preferred state: the least energy alone.
+        // A tie with no preferred state: nothing orders the two, both are lowest.
         let plain = [
             state(1.0, 1e-6, 0, false),
             state(1.000_000_5, 1e-6, 0, false),
         ];
-        assert_eq!(label(&plain), vec![S, M]);
+        assert_eq!(label(&plain), vec![S, S]);
+        // The tied pair above a third minimum that lies below both by more than the
+        // estimates: both metastable.
+        let below = [
+            state(1.0, 1e-6, 0, false),
+            state(1.000_000_5, 1e-6, 0, false),
+            state(0.9, 1e-6, 0, false),
+        ];
+        assert_eq!(label(&below), vec![M, M, S]);
+        // Tied with the least but not with each other: only the tied ones are lowest.
+        let chain = [
+            state(1.0, 1e-6, 0, false),
+            state(1.000_001_5, 1e-6, 0, false),
+            state(1.000_003, 1e-6, 0, false),
+        ];
+        assert_eq!(label(&chain), vec![S, S, M]);
         // Two preferred tied states (at a critical length): both stable.
         let both = [state(1.0, 1e-6, 0, true), state(1.000_000_5, 1e-6, 0, true)];
         assert_eq!(label(&both), vec![S, S]);
+    }
+
+    /// One state listed twice (two traced copies of one equilibrium, energies `7e-10` apart,
+    /// each known to `5e-8`) shares one standing whichever copy comes first or is smaller,
+    /// and both copies stay below a distinct minimum `10⁻⁴` above them.
+    #[test]
+    fn copies_of_one_state_share_their_label() {
+        use Standing::{Metastable as M, Stable as S, Unstable as U};
+        let (e, d, err) = (0.511_032_090_2, 7e-10, 5e-8);
+        for (a, b) in [(e, e + d), (e + d, e)] {
+            let copies = [
+                state(a, err, 0, false),
+                state(b, err, 0, false),
+                state(e + 1e-4, err, 0, false),
+                state(e - 1e-3, err, 1, false),
+            ];
+            assert_eq!(label(&copies), vec![S, S, M, U]);
+            let mut low = lowest(&copies);
+            low.sort_unstable();
+            assert_eq!(low, vec![3]);
+        }
+        // A NaN energy is never tied.
+        let nan = [state(1.0, 1e-6, 0, false), state(f64::NAN, 1e-6, 0, false)];
+        assert_eq!(label(&nan), vec![S, M]);
     }
 }

@@ -120,13 +120,34 @@ pub(crate) fn lowest_etas(
         .collect()
 }
 
-/// Relative margin by which another index-0 sheet must lie below the sheet the critical
-/// lengths name before the label follows the energies instead (each interpolated energy is
-/// given half of it as its error estimate in the labeller's tie rule,
-/// [`rodloop_continuation::exchange`]): the Hermite interpolation of traced energies between
-/// samples (their spacing is at most a few `10⁻²` in `L̄`) is accurate to far better than
-/// this, and within it of a located crossing the critical length decides.
+/// Relative allowance for the interpolation between traced states, added to each sheet's
+/// energy estimate in the labeller's tie rule ([`rodloop_continuation::exchange`]; half of it
+/// per sheet): the Hermite interpolation of traced energies between samples (their spacing
+/// is at most a few `10⁻²` in `L̄`) is accurate to far better than this, and within it of a
+/// located crossing the critical length decides.
 const LABEL_MARGIN: f64 = 1e-7;
+
+/// The error estimate of sheet `b`'s energy at `lbar` as the labeller sees it: the traced
+/// state's own estimate there ([`crate::TracedPoint::energy_error`]), between two states the
+/// larger of theirs, a state without one taking the largest of its sheet (none on the
+/// sheet: 0), plus half of [`LABEL_MARGIN`] (relative) for the interpolation.
+fn error_at(b: &TracedBranch, lbar: f64, energy: f64) -> f64 {
+    let worst = b
+        .points
+        .iter()
+        .filter_map(|p| p.energy_error)
+        .fold(0.0, f64::max);
+    let of = |p: &crate::TracedPoint| p.energy_error.unwrap_or(worst).abs();
+    let k = b.points.partition_point(|p| p.value < lbar);
+    let own = match (k.checked_sub(1).map(|i| &b.points[i]), b.points.get(k)) {
+        (_, Some(p)) if p.value == lbar => of(p),
+        (Some(a), Some(c)) => of(a).max(of(c)),
+        (None, Some(c)) => of(c),
+        (Some(a), None) => of(a),
+        (None, None) => 0.0,
+    };
+    own + 0.5 * LABEL_MARGIN * energy.abs().max(1.0)
+}
 
 /// Whether sheet `b` has stability index 0 at `lbar`: at a traced state, that state's
 /// index; between two, both neighbours' (`None` outside the traced span).
@@ -150,11 +171,14 @@ fn index0_at(b: &TracedBranch, lbar: f64) -> Option<bool> {
 /// the equilibria at that length, metastable = another local minimum).
 ///
 /// The labeller [`rodloop_continuation::exchange::label`] on the sheets covering `lbar`,
-/// those the critical lengths name as lowest ([`lowest_sheets`]) preferred in ties: where
-/// they have index 0 there and no other index-0 sheet lies below them by more than
-/// [`LABEL_MARGIN`] (relative), those (so labels agree with the located critical lengths,
-/// not with the interpolated samples). Otherwise the index-0 sheet of lowest interpolated
-/// energy: the
+/// each with its energy's error estimate ([`error_at`]), those the critical lengths name as
+/// lowest ([`lowest_sheets`]) preferred in ties: where they have index 0 there and no other
+/// index-0 sheet lies below them by more than the estimates, those (so labels agree with
+/// the located critical lengths, not with the interpolated samples). A sheet of the same
+/// branch tied with a preferred one is preferred too (two traced copies of one state, or
+/// two families crossing there: one label for both). Where no preferred sheet is tied with
+/// the least, every index-0 sheet tied with it is stable (its copies included). Otherwise
+/// the index-0 sheet of lowest interpolated energy: the
 /// critical lengths are exchanges between branches, and the lowest family within one branch
 /// can change without one (two families of branch 1 at `D1/D0 = 0.001` near `L̄ = 2.85`),
 /// or the lowest state can be a saddle (then a lower minimum was not traced, and the lowest
@@ -176,9 +200,9 @@ pub(crate) fn stable_sheets(
         return Vec::new();
     }
     // Every sheet covering `lbar` as the labeller sees it: index 0 where the sheet has
-    // index 0 there, the interpolated energy with half the margin as its error, preferred
-    // where the critical lengths name it.
-    let sheets: Vec<(usize, Ranked)> = branches
+    // index 0 there, the interpolated energy with its error estimate, preferred where the
+    // critical lengths name it or it is tied with a named sheet of its branch.
+    let mut sheets: Vec<(usize, Ranked)> = branches
         .iter()
         .enumerate()
         .filter_map(|(i, b)| {
@@ -188,13 +212,25 @@ pub(crate) fn stable_sheets(
                 i,
                 Ranked {
                     energy,
-                    error: 0.5 * LABEL_MARGIN * energy.abs().max(1.0),
+                    error: error_at(b, lbar, energy),
                     index: usize::from(!index0),
                     preferred: by_critical.contains(&i),
                 },
             ))
         })
         .collect();
+    let named: Vec<(u32, usize, Ranked)> = sheets
+        .iter()
+        .filter(|(_, r)| r.preferred)
+        .map(|&(i, r)| (branches[i].branch, r.index, r))
+        .collect();
+    for (i, r) in &mut sheets {
+        r.preferred |= named.iter().any(|(branch, index, n)| {
+            *branch == branches[*i].branch
+                && *index == r.index
+                && (r.energy - n.energy).abs() <= r.error + n.error
+        });
+    }
     let ranked: Vec<Ranked> = sheets.iter().map(|(_, r)| *r).collect();
     exchange::label(&ranked)
         .into_iter()
@@ -311,11 +347,12 @@ mod tests {
         let branches = vec![a, b];
         let critical = vec![handing_to(0, 0.9)];
         let labels = label_all(&branches, &critical);
-        // a: 1.0, 1.1, 1.2, 1.3, 1.4; b: 1.2, 1.1, 1.0, 0.9, 0.8 (equal at 1.1, where the
-        // sheet the critical length names keeps the label).
+        // a: 1.0, 1.1, 1.2, 1.3, 1.4; b: 1.2, 1.1, 1.0, 0.9, 0.8 (equal at 1.1, where both
+        // are the lowest: the family the critical length names and the one of its branch
+        // tied with it).
         use Label::{Metastable as M, Stable as S};
         assert_eq!(labels[0], vec![S, S, M, M, M]);
-        assert_eq!(labels[1], vec![M, M, S, S, S]);
+        assert_eq!(labels[1], vec![M, S, S, S, S]);
     }
 
     /// The lowest traced state is a saddle: the lowest index-0 state is stable (and a length
@@ -332,5 +369,62 @@ mod tests {
         assert_eq!(labels[1], vec![S, S, S, U, U]);
         assert!(stable_sheets(&branches, &critical, 1.35).is_empty());
         assert_eq!(stable_sheets(&branches, &critical, 1.15), vec![1]);
+    }
+
+    /// `b` with every state's energy raised by `shift` and given the error estimate `err`.
+    fn copy_of(b: &TracedBranch, family: u32, shift: f64, err: f64) -> TracedBranch {
+        let mut c = b.clone();
+        c.family = family;
+        for p in &mut c.points {
+            p.energy += shift;
+            p.energy_error = Some(err);
+        }
+        c
+    }
+
+    /// One state traced twice (two families of one branch whose energies agree to `7e-10`,
+    /// each estimated to `5e-8`): both copies carry one label at every length, whether a
+    /// critical length names one of them, none, or a lower minimum of another branch lies
+    /// below both.
+    #[test]
+    fn copies_of_one_state_share_their_label() {
+        use Label::{Metastable as M, Stable as S};
+        let a = copy_of(&sheet(1, 1.0, 0.5, &[0, 0, 0, 0, 0]), 1, 0.0, 5e-8);
+        for shift in [7e-10, -7e-10] {
+            let b = copy_of(&a, 2, shift, 5e-8);
+            // Named by a critical length, and named by none.
+            for critical in [vec![handing_to(0, 0.9)], vec![handing_to(1, 0.9)], vec![]] {
+                let labels = label_all(&[a.clone(), b.clone()], &critical);
+                assert_eq!(labels[0], vec![S; 5], "shift {shift}, {critical:?}");
+                assert_eq!(labels[1], vec![S; 5], "shift {shift}, {critical:?}");
+            }
+            // A minimum of branch 2 below both by 1e-3 (far beyond the estimates), which a
+            // critical length names: both copies metastable.
+            let mut low = copy_of(&a, 1, -1e-3, 5e-8);
+            low.branch = 2;
+            low.eta = 1;
+            let labels = label_all(&[a.clone(), b.clone(), low], &[handing_to(2, 0.9)]);
+            assert_eq!(labels[0], vec![M; 5]);
+            assert_eq!(labels[1], vec![M; 5]);
+            assert_eq!(labels[2], vec![S; 5]);
+        }
+    }
+
+    /// A sheet's error estimate at a length: its own state's there, the larger of the two
+    /// neighbours' between states, the sheet's largest for a state without one, plus the
+    /// interpolation allowance.
+    #[test]
+    fn error_estimate_of_a_sheet_at_a_length() {
+        let mut b = sheet(1, 1.0, 0.0, &[0, 0, 0, 0, 0]);
+        b.points[1].energy_error = Some(2e-6);
+        b.points[2].energy_error = Some(3e-6);
+        let allowance = 0.5 * LABEL_MARGIN;
+        let close = |x: f64, y: f64| (x - y).abs() <= 1e-15;
+        assert!(close(error_at(&b, 1.1, 1.0), 2e-6 + allowance));
+        assert!(close(error_at(&b, 1.15, 1.0), 3e-6 + allowance));
+        // States 0, 3, 4 have none: the sheet's largest.
+        assert!(close(error_at(&b, 1.0, 1.0), 3e-6 + allowance));
+        assert!(close(error_at(&b, 1.35, 1.0), 3e-6 + allowance));
+        assert!(close(error_at(&b, 1.35, 4.0), 3e-6 + 4.0 * allowance));
     }
 }
