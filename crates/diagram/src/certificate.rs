@@ -15,7 +15,7 @@
 use rodloop_exact::branch_of_eta;
 use rodloop_solver::{
     finish_with_accuracy, richardson, solve, verify_accurate, Accuracy, Confinement, Equilibrium,
-    SolveOptions, StartShape, Stiffness, Strategy,
+    SolveOptions, SolverError, StartShape, Stiffness, Strategy, SurfaceModel,
 };
 use serde::Serialize;
 
@@ -373,11 +373,27 @@ impl<'a> SurfaceSearch<'a> {
     }
 
     /// The starts of branch `eta` at `lbar`: the Euler curve as `solve` places it, then (at
-    /// the feature lengths) the feature-placed ones, each with how it is described.
-    fn starts(&self, lbar: f64, eta: u32) -> Vec<(StartShape, String)> {
+    /// the feature lengths) the feature-placed ones, each with its curvature at the Gauss
+    /// points of `model` (the model at `lbar`) and how it is described. The Euler curve is
+    /// sampled once for all of them (the shifted starts are its samples at shifted points).
+    fn starts(
+        &self,
+        lbar: f64,
+        eta: u32,
+        model: &SurfaceModel,
+    ) -> Vec<(StartShape, Result<Vec<f64>, SolverError>, String)> {
         let euler = StartShape::Euler { l: eta };
+        let Ok(sampled) = euler.interpolant(lbar).map(StartShape::Profile) else {
+            return Vec::new();
+        };
+        let kappa = if model.lbar() == lbar {
+            sampled.gauss_values(model)
+        } else {
+            euler.gauss_values(model)
+        };
         let mut out = vec![(
             euler.clone(),
+            kappa,
             format!(
                 "rodloop solve --branch {}: {}",
                 branch_of_eta(eta),
@@ -390,9 +406,16 @@ impl<'a> SurfaceSearch<'a> {
             .any(|&l| (l - lbar).abs() < 1e-12)
         {
             for shift in Self::feature_shifts(&self.opts.stiffness, eta) {
-                if let Ok(start) = euler.shifted(lbar, shift) {
+                let start = if shift == 0.0 {
+                    Ok(euler.clone())
+                } else {
+                    sampled.shifted(lbar, shift)
+                };
+                if let Ok(start) = start {
+                    let kappa = start.gauss_values(model);
                     out.push((
                         start,
+                        kappa,
                         format!(
                             "Newton from the Euler curve l = {eta} with its origin moved by \
                              {shift:.4} (a stiffness change at a phase of κ_g)"
@@ -421,9 +444,8 @@ impl StateSearch for SurfaceSearch<'_> {
                 continue;
             };
             let first = out.len();
-            for (start, how) in self.starts(lbar, eta) {
-                let Some(eq) = start
-                    .gauss_values(&model)
+            for (start, kappa, how) in self.starts(lbar, eta, &model) {
+                let Some(eq) = kappa
                     .and_then(|k| solve(&model, &k, &SolveOptions::default()))
                     .ok()
                 else {

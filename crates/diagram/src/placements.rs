@@ -79,17 +79,7 @@ pub(crate) fn uniform_placements(
     let at = |j: usize| j as f64 / m as f64;
     let k2: Vec<f64> = (0..m).map(|j| kg.eval(at(j)).powi(2)).collect();
     let d: Vec<f64> = (0..m).map(|j| profile.eval(at(j)).d).collect();
-    // f_k = Σ_j d_j κ²_{(j+k) mod m} / m, summed in the order of j (the wrap of the
-    // index split off rather than taken modulo m in the inner loop).
-    let f: Vec<f64> = (0..half)
-        .map(|k| {
-            let dot = |acc: f64, d: &[f64], k2: &[f64]| {
-                d.iter().zip(k2).fold(acc, |acc, (a, b)| acc + a * b)
-            };
-            let head = dot(0.0, &d[..m - k], &k2[k..]);
-            dot(head, &d[m - k..], &k2[..k]) / m as f64
-        })
-        .collect();
+    let f = placed_energies(&d, &k2, half);
     let mut out: Vec<f64> = critical_points(&f)
         .into_iter()
         .map(|x| x / m as f64)
@@ -114,6 +104,35 @@ pub(crate) fn uniform_placements(
     }
     out.sort_by(f64::total_cmp);
     Ok(out)
+}
+
+/// Lanes of [`placed_energies`]: shifts summed side by side (independent sums, so that they
+/// do not wait on each other's additions).
+const LANES: usize = 8;
+
+/// `f_k = Σ_j d_j κ²_{(j+k) mod m} / m` for the shifts `k = 0..half` (`m` = the samples of
+/// `d` and `k2`), each summed in the order of `j` from `0`. [`LANES`] shifts are summed side
+/// by side over one copy of `k2` extended by its first `half + LANES` samples (no index
+/// wraps); every sum sees the same additions in the same order as one summed alone.
+fn placed_energies(d: &[f64], k2: &[f64], half: usize) -> Vec<f64> {
+    let m = d.len();
+    let ext: Vec<f64> = k2
+        .iter()
+        .chain(k2.iter().cycle().take(half + LANES))
+        .copied()
+        .collect();
+    let mut f = Vec::with_capacity(half);
+    for k0 in (0..half).step_by(LANES) {
+        let mut acc = [0.0f64; LANES];
+        for (j, dj) in d.iter().enumerate() {
+            let w = &ext[j + k0..j + k0 + LANES];
+            for (a, x) in acc.iter_mut().zip(w) {
+                *a += dj * x;
+            }
+        }
+        f.extend(acc.iter().take(half - k0).map(|a| a / m as f64));
+    }
+    f
 }
 
 /// The maxima and minima of the periodic samples `f` (positions in samples, refined by the
@@ -195,6 +214,30 @@ mod tests {
             assert!(d.abs() < 0.02, "derivative {d} at {x}");
         }
         assert!(critical_points(&vec![1.0; n]).is_empty());
+    }
+
+    /// The lanes of `placed_energies` give each shift's sum bit for bit as the sum over `j`
+    /// taken alone with the index wrapped modulo `m`, including a count of shifts that is
+    /// not a multiple of the lanes and more shifts than samples.
+    #[test]
+    fn placed_energies_are_the_wrapped_sums_in_order() {
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 11) as f64 / (1u64 << 53) as f64 - 0.3
+        };
+        for (m, half) in [(96, 48), (100, 13), (7, 20), (2048, 512)] {
+            let d: Vec<f64> = (0..m).map(|_| next()).collect();
+            let k2: Vec<f64> = (0..m).map(|_| next() * 1e3).collect();
+            let f = placed_energies(&d, &k2, half);
+            assert_eq!(f.len(), half);
+            for (k, fk) in f.iter().enumerate() {
+                let want = (0..m).fold(0.0, |acc, j| acc + d[j] * k2[(j + k) % m]) / m as f64;
+                assert_eq!(fk.to_bits(), want.to_bits(), "m {m} half {half} k {k}");
+            }
+        }
     }
 
     /// The placements of a two-segment profile are critical points of the placed uniform

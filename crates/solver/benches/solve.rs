@@ -2,12 +2,15 @@
 //! one equilibrium solve from an Euler-curve start (start construction included), one
 //! stability evaluation of the converged equilibrium, and one `O(N)` factorisation of the
 //! Newton matrix with one solve (the core of a Newton step) at a two-segment rod's equilibrium,
-//! and the construction of a two-segment rod's model on its graded mesh.
+//! the construction of a two-segment rod's model on its graded mesh, and a two-segment rod's
+//! Newton run that keeps the run where a looser tolerance stops (what a diagram's state
+//! verification runs for every state it writes).
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::DVector;
 use rodloop_solver::{
-    solve, Accuracy, KktFactor, SolveOptions, StartShape, Stiffness, SurfaceModel,
+    solve, solve_newton_keeping, Accuracy, Globalization, KktFactor, SolveOptions, StartShape,
+    Stiffness, SurfaceModel,
 };
 
 fn benches(c: &mut Criterion) {
@@ -45,6 +48,20 @@ fn benches(c: &mut Criterion) {
         b.iter(|| SurfaceModel::new(1.0, 1.2, cells, &st).unwrap())
     });
     let k0 = start.gauss_values(&model).unwrap();
+    let newton = SolveOptions {
+        globalization: Globalization::Newton,
+        tolerance: 1e-10,
+        ..SolveOptions::default()
+    };
+    c.bench_function(
+        &format!("solve_newton_keeping_d1_0.5_lbar1.2_N{cells}"),
+        |b| {
+            b.iter(|| {
+                let (eq, kept) = solve_newton_keeping(&model, &k0, &newton, 1e-6);
+                (eq.unwrap(), kept.unwrap())
+            })
+        },
+    );
     let eq = solve(&model, &k0, &opts).unwrap();
     let (model, z) = (eq.model(), eq.state());
     let rhs = DVector::from_fn(model.dim(), |i, _| ((i * 7919) % 101) as f64 / 101.0 - 0.5);

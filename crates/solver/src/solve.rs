@@ -566,36 +566,40 @@ impl NewtonRun {
     ) -> Result<Equilibrium, SolverError> {
         let scales = self.model.residual_scales();
         self.max_backtracks = opts.max_backtracks;
-        let mut converged = false;
+        // The kept run is cloned once: where it freezes (the first pass at most `tol`), or
+        // else, after the last pass, rebuilt from the run at its exit (within a pass only the
+        // history and the iteration count change before a step is accepted).
         let mut frozen = false;
-        loop {
+        let mut top;
+        let exit: Result<bool, SolverError> = loop {
             if let Some((tol, kept)) = keep.as_mut() {
-                if !frozen {
+                if !frozen && self.m.sqrt() <= *tol {
                     **kept = Some(NewtonRun {
                         keep: *tol,
                         ..self.clone()
                     });
-                    frozen = self.m.sqrt() <= *tol;
+                    frozen = true;
                 }
             }
+            top = (self.iterations, self.history.len());
             let m = self.m;
             self.history.push(m.sqrt());
             if !m.is_finite() {
-                break;
+                break Ok(false);
             }
             if m.sqrt() <= opts.tolerance {
-                converged = true;
-                break;
+                break Ok(true);
             }
             if self.iterations >= opts.max_iterations {
-                break;
+                break Ok(false);
             }
             self.iterations += 1;
             let (model, z) = (&self.model, &self.z);
-            let delta =
-                newton_step(model, z.as_slice(), &self.f).ok_or(SolverError::SingularJacobian {
+            let Some(delta) = newton_step(model, z.as_slice(), &self.f) else {
+                break Err(SolverError::SingularJacobian {
                     iteration: self.iterations,
-                })?;
+                });
+            };
             let mut alpha = 1.0;
             let mut accepted = None;
             for _ in 0..=opts.max_backtracks {
@@ -604,28 +608,44 @@ impl NewtonRun {
                     Ok(ft) => {
                         let mt = merit(&scales, &ft);
                         if mt.is_finite() && mt <= (1.0 - 1e-4 * alpha) * m {
-                            accepted = Some((trial, ft, mt));
+                            accepted = Some(Ok((trial, ft, mt)));
                             break;
                         }
                     }
                     Err(SolverError::InvalidInput(_)) => {}
-                    Err(e) => return Err(e),
+                    Err(e) => {
+                        accepted = Some(Err(e));
+                        break;
+                    }
                 }
                 alpha *= 0.5;
             }
-            let Some((zn, fnew, mnew)) = accepted else {
-                // No decrease possible: at the round-off floor or stuck.
-                let step_small = delta.norm() <= 1e-12 * (1.0 + z.norm());
-                if step_small && m.sqrt() <= 1e3 * opts.tolerance {
-                    converged = true;
+            let (zn, fnew, mnew) = match accepted {
+                Some(Ok(a)) => a,
+                Some(Err(e)) => break Err(e),
+                None => {
+                    // No decrease possible: at the round-off floor or stuck.
+                    let step_small = delta.norm() <= 1e-12 * (1.0 + z.norm());
+                    break Ok(step_small && m.sqrt() <= 1e3 * opts.tolerance);
                 }
-                break;
             };
             self.steps.push(alpha);
             self.z = zn;
             self.f = fnew;
             self.m = mnew;
+        };
+        if let Some((tol, kept)) = keep {
+            if !frozen {
+                let mut last = NewtonRun {
+                    keep: tol,
+                    ..self.clone()
+                };
+                (last.iterations, _) = top;
+                last.history.truncate(top.1);
+                *kept = Some(last);
+            }
         }
+        let converged = exit?;
         let model = self.model;
         let (kappa, mu, nu) = model.split(self.z.as_slice())?;
         let cl = model.closure(kappa)?;
