@@ -401,10 +401,11 @@ pub(crate) enum Ladder {
 /// value with its estimate ([`StateFile::row`]).
 ///
 /// A state that still fails is left out with the cause named: where Newton finds no
-/// equilibrium at the next resolution, that the state is not resolved at its own (the check
-/// that fails there, the largest turning of its tangent in one cell and its own error
-/// estimate) and how Newton ended; where the refined states do not converge like `h⁴`, that
-/// the finer resolutions hold another state than the row's, with the ladder's energies.
+/// equilibrium at the next resolution, the check that fails at its own, whether its cells
+/// resolve its bends (the largest turning of its tangent in one cell against
+/// [`UNRESOLVED_TURNING`]), its own error estimate, and how Newton ended; where the refined
+/// states do not converge like `h⁴`, that the finer resolutions hold another state than the
+/// row's, with the ladder's energies.
 pub(crate) fn verify_refining(
     eq: &Equilibrium,
     energy: f64,
@@ -497,13 +498,24 @@ fn verify_refining_from(
                     )));
                 }
                 let next = resolved_from(at, 2 * cells, finer).map_err(|e| {
+                    let turning = turning_per_cell(at);
+                    let estimate = energy_error.map_or("none".into(), |e| format!("{e:.1e}"));
+                    let cause = if turning > UNRESOLVED_TURNING {
+                        format!(
+                            "it is not resolved at {cells} cells (its tangent turns by up to \
+                             {turning:.2} rad in one cell; its own error estimate is {estimate})"
+                        )
+                    } else {
+                        format!(
+                            "its resolutions disagree beyond its own error estimate, \
+                             {estimate}, although its tangent turns by at most {turning:.2} \
+                             rad in one of its {cells} cells"
+                        )
+                    };
                     SolverError::Unverified(format!(
-                        "{}: it is not resolved at {cells} cells (its tangent turns by up to \
-                         {:.2} rad in one cell, its own error estimate is {}), and at {} \
-                         cells Newton from its resampled profile finds no equilibrium ({e})",
+                        "{}: {cause}, and at {} cells Newton from its resampled profile finds \
+                         no equilibrium within reach ({e})",
                         own(),
-                        turning_per_cell(at),
-                        energy_error.map_or("unknown".into(), |e| format!("{e:.1e}")),
                         2 * cells
                     ))
                 })?;
@@ -513,6 +525,11 @@ fn verify_refining_from(
         }
     }
 }
+
+/// Turning of the tangent within one cell (radians) above which a state's cells do not
+/// resolve its bends: the scheme's error terms, powers of `κ h` from `(κ h)⁴` on, are no
+/// longer small (`0.5⁴ ≈ 0.06`).
+const UNRESOLVED_TURNING: f64 = 0.5;
 
 /// The largest turning of the tangent within one cell of `eq`, `max |κ_g| h` over its cell
 /// boundaries (radians): the state's own scale of resolution (of order 1 where the cells do
@@ -586,9 +603,11 @@ const RESOLVED_TOLERANCE: f64 = 1e-8;
 const NEWTON_STRETCH: usize = 20;
 
 /// Least factor by which the KKT residual falls over [`NEWTON_STRETCH`] passes for
-/// [`newton_until_stall`] to go on: a steady linear rate of at least 11 % per pass (a
-/// Newton-like run falls far faster); a run that falls slower has stalled.
-const STEADY_FALL: f64 = 10.0;
+/// [`newton_until_stall`] to go on: a steady linear rate of at least 3.5 % per pass (a
+/// Newton-like run falls far faster; damped steps from a start that its resolution moves,
+/// a very soft segment bent sharply, creep at such rates); a run that falls slower has
+/// stalled.
+const STEADY_FALL: f64 = 2.0;
 
 /// [`resolved`], going on from the kept run `finer` where it is a run of the same model
 /// from the same start ([`FinerRun::resume_keeping`]; the same iterates, so the same result).
@@ -611,7 +630,7 @@ fn resolved_from(
 /// [`RESOLVED_TOLERANCE`], its iteration limit following the run's own convergence: the run
 /// goes on by [`NEWTON_STRETCH`] passes at a time while its residual keeps falling at least
 /// [`STEADY_FALL`]-fold per stretch, and stops where it stalls (then the error of the last
-/// pass). The residual falls tenfold per stretch from a finite start to the tolerance, so
+/// pass). The residual falls that much per stretch from a finite start to the tolerance, so
 /// the run ends. Goes on from the kept run `finer` where that is a run of this model and
 /// start.
 fn newton_until_stall(
