@@ -454,3 +454,118 @@ fn param_diagram_files_hold_their_rows() {
     // Those are counted in the summary.
     assert_eq!(s["states_counted_other_eta"].as_u64(), Some(other));
 }
+
+/// The periods of a surface state file's bending moment `D κ_g` (samples `s`, loop `length`),
+/// counted here as `rodloop_solver::identify` counts them (the count of
+/// `scripts/state_check.py`, `named_periods`): half the sign changes of the moment about its
+/// trapezoid-weighted mean, with hysteresis at 4 times the grid-scale noise (the largest
+/// residual of the cubic through the two neighbours on either side) and at a tenth of the
+/// amplitude; `None` unless both levels give the same non-zero count.
+fn named_periods(s: &[f64], m: &[f64], length: f64) -> Option<usize> {
+    let n = s.len();
+    let gap = |j: usize, o: isize| {
+        let i = (j as isize + o).rem_euclid(n as isize) as usize;
+        let wrap = if j as isize + o >= n as isize {
+            length
+        } else if (j as isize + o) < 0 {
+            -length
+        } else {
+            0.0
+        };
+        (i, s[i] - s[j] + wrap)
+    };
+    let w: Vec<f64> = (0..n).map(|j| 0.5 * (gap(j, 1).1 - gap(j, -1).1)).collect();
+    let mean = m.iter().zip(&w).map(|(a, b)| a * b).sum::<f64>() / length;
+    let dev: Vec<f64> = m.iter().map(|v| v - mean).collect();
+    let amp = dev.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let scale = m.iter().fold(1.0 / length, |a, v| a.max(v.abs()));
+    if amp <= 1e-9 * scale {
+        return None;
+    }
+    let noise = (0..n)
+        .map(|j| {
+            let pts: Vec<(f64, f64)> = [-2, -1, 1, 2]
+                .iter()
+                .map(|&o| {
+                    let (i, d) = gap(j, o);
+                    (d, dev[i])
+                })
+                .collect();
+            let p: f64 = (0..4)
+                .map(|a| {
+                    (0..4)
+                        .filter(|&b| b != a)
+                        .fold(pts[a].1, |t, b| t * pts[b].0 / (pts[b].0 - pts[a].0))
+                })
+                .sum();
+            (dev[j] - p).abs()
+        })
+        .fold(0.0f64, f64::max);
+    let changes = |h: f64| {
+        let start = dev.iter().position(|v| v.abs() > h)?;
+        let (mut positive, mut count) = (dev[start] > 0.0, 0);
+        for i in 1..=n {
+            let v = dev[(start + i) % n];
+            if positive && v < -h {
+                (positive, count) = (false, count + 1);
+            } else if !positive && v > h {
+                (positive, count) = (true, count + 1);
+            }
+        }
+        Some(count)
+    };
+    let h = (4.0 * noise).max(1e-12 * scale);
+    let (fine, coarse) = (changes(h)?, changes(h.max(0.1 * amp))?);
+    (fine == coarse && coarse > 0).then_some(coarse / 2)
+}
+
+/// `summary.json` of a two-segment diagram says how the branch of each state file is
+/// identified (`branch_identification`, docs/src/methods.md): on the very soft scene near
+/// `L̄ = 1` most files' moments have no resolved periods, so their rows' branches come from
+/// continuation only. The three counts are those of the files, each file's moment counted
+/// here independently ([`named_periods`]) against its row's `η`.
+#[test]
+fn two_segment_summary_says_how_each_branch_is_identified() {
+    let out = fresh_dir("state-files", "d1-0.001-identified");
+    let sc = scene("inhomogeneous-d1-0.001");
+    let args = ["--scene", &sc, "--lbar-min", "0.98", "--lbar-max", "1.05"];
+    let mut all = vec!["diagram", "--out", out.to_str().unwrap()];
+    all.extend_from_slice(&args);
+    rodloop_ok(&all);
+    let mut rdr = csv::ReaderBuilder::new()
+        .comment(Some(b'#'))
+        .from_path(out.join("branches.csv"))
+        .unwrap();
+    let head = rdr.headers().unwrap().clone();
+    let col = |n: &str| head.iter().position(|h| h == n).unwrap();
+    let (il, ieta, ifile) = (col("lbar"), col("eta"), col("state_file"));
+    let (mut own, mut none, mut other) = (0u64, 0u64, 0u64);
+    for row in rdr.records() {
+        let row = row.unwrap();
+        let lbar: f64 = row[il].parse().unwrap();
+        let eta: usize = row[ieta].parse().unwrap();
+        let pts = columns(&out.join(row[ifile].trim()), &["s", "kappa_g", "D"]);
+        let s: Vec<f64> = pts.iter().map(|p| p[0]).collect();
+        let m: Vec<f64> = pts.iter().map(|p| p[1] * p[2]).collect();
+        match named_periods(&s, &m, 2.0 * PI * lbar) {
+            None => none += 1,
+            Some(e) if e == eta => own += 1,
+            Some(_) => other += 1,
+        }
+    }
+    let named = &summary(&out)["branch_identification"];
+    let count = |k: &str| {
+        named[k]
+            .as_u64()
+            .unwrap_or_else(|| panic!("summary.json has no branch_identification.{k}: {named}"))
+    };
+    assert!(none > 0, "no file without resolved periods: {own}, {other}");
+    assert_eq!(
+        (
+            count("by_own_periods"),
+            count("by_continuation_no_periods"),
+            count("by_continuation_other_periods")
+        ),
+        (own, none, other)
+    );
+}

@@ -223,6 +223,8 @@ pub fn surface_schema(
     }
     out.states_dir = Some("states".into());
     out.put("unverified_states", &d.unverified_states)?;
+    let named = crate::branch_identification(&d.branches, &d.state_files);
+    out.put("branch_identification", &named)?;
     out.put("description", &d.scene)?;
     out.put("great_circles", &d.great_circles)?;
     out.put("shape_tolerance", &d.shape_tolerance)?;

@@ -113,7 +113,8 @@ pub use march::{
 /// The error type a [`BranchHook`] returns.
 pub use rodloop_continuation::BoxError;
 pub use states::{
-    StateFile, ESTIMATES, MAX_REFINEMENT, MAX_STATE_POINTS, NO_ESTIMATE_TOLERANCE, STATE_POINTS,
+    branch_identification, BranchIdentification, StateFile, ESTIMATES, MAX_REFINEMENT,
+    MAX_STATE_POINTS, NO_ESTIMATE_TOLERANCE, STATE_POINTS,
 };
 pub use trace::compute_branch;
 pub use types::{BranchEnd, BranchTimings, IndexChange, PointSource, TracedBranch, TracedPoint};

@@ -358,9 +358,8 @@ impl TracedBranch {
     /// (`L̄` at an integer, `κ_g` nearly constant) and on soft segments the dominant harmonic
     /// can differ from the family's `η` ([`StateFile::counted_other_eta`]).
     ///
-    /// Errors: [`SolverError::Unverified`] (with the last check that failed) when no
-    /// resolution up to the limit passes; the state's own errors when it cannot be
-    /// re-evaluated.
+    /// Errors: [`SolverError::Unverified`] naming why no resolution up to the limit passes
+    /// (see [`verify_refining`]); the state's own errors when it cannot be re-evaluated.
     pub fn verified_state(
         &self,
         opts: &DiagramOptions,
@@ -400,6 +399,13 @@ pub(crate) enum Ladder {
 /// states are this state converging, not a neighbouring sheet) and the Richardson value of
 /// the last two disagrees with the claim beyond both estimates, the claim becomes that
 /// value with its estimate ([`StateFile::row`]).
+///
+/// A state that still fails is left out with the cause named: where Newton finds no
+/// equilibrium at the next resolution, the check that fails at its own, whether its cells
+/// resolve its bends (the largest turning of its tangent in one cell against
+/// [`UNRESOLVED_TURNING`]), its own error estimate, and how Newton ended; where the refined
+/// states do not converge like `h⁴`, that the finer resolutions hold another state than the
+/// row's, with the ladder's energies.
 pub(crate) fn verify_refining(
     eq: &Equilibrium,
     energy: f64,
@@ -435,6 +441,8 @@ fn verify_refining_from(
     let mut refined: Option<Equilibrium> = None;
     // Discrete energies of the resolutions so far (the state's own first).
     let mut energies = vec![eq.energy().total];
+    // The check that fails at the state's own resolution.
+    let mut first_why: Option<String> = None;
     loop {
         let at = refined.as_ref().unwrap_or(eq);
         let cells = at.model().cells();
@@ -468,17 +476,46 @@ fn verify_refining_from(
                     row,
                 })
             }
-            Err(e) if 2 * cells > MAX_REFINEMENT * first => return Err(e),
             Err(why) => {
                 let why = match why {
                     SolverError::Unverified(m) => m,
                     e => e.to_string(),
                 };
+                if first_why.is_none() {
+                    first_why = Some(why.clone());
+                }
+                let own = || {
+                    format!(
+                        "at the {first} cells of its file {}",
+                        first_why.as_deref().unwrap_or_default()
+                    )
+                };
+                if 2 * cells > MAX_REFINEMENT * first {
+                    return Err(SolverError::Unverified(format!(
+                        "{}; {}",
+                        own(),
+                        ladder_reason(first, &energies, &why)
+                    )));
+                }
                 let next = resolved_from(at, 2 * cells, finer).map_err(|e| {
+                    let turning = turning_per_cell(at);
+                    let estimate = energy_error.map_or("none".into(), |e| format!("{e:.1e}"));
+                    let cause = if turning > UNRESOLVED_TURNING {
+                        format!(
+                            "it is not resolved at {cells} cells (its tangent turns by up to \
+                             {turning:.2} rad in one cell; its own error estimate is {estimate})"
+                        )
+                    } else {
+                        format!(
+                            "its resolutions disagree beyond its own error estimate, \
+                             {estimate}, although its tangent turns by at most {turning:.2} \
+                             rad in one of its {cells} cells"
+                        )
+                    };
                     SolverError::Unverified(format!(
-                        "at the {cells} cells of its file {why}; at {} cells Newton finds no \
-                         equilibrium next to it at this L̄ (a state near a fold of the \
-                         coarser resolution that the finer one moves): {e}",
+                        "{}: {cause}, and at {} cells Newton from its resampled profile finds \
+                         no equilibrium within reach ({e})",
+                        own(),
                         2 * cells
                     ))
                 })?;
@@ -489,12 +526,72 @@ fn verify_refining_from(
     }
 }
 
+/// Turning of the tangent within one cell (radians) above which a state's cells do not
+/// resolve its bends: the scheme's error terms, powers of `κ h` from `(κ h)⁴` on, are no
+/// longer small (`0.5⁴ ≈ 0.06`).
+const UNRESOLVED_TURNING: f64 = 0.5;
+
+/// The largest turning of the tangent within one cell of `eq`, `max |κ_g| h` over its cell
+/// boundaries (radians): the state's own scale of resolution (of order 1 where the cells do
+/// not resolve its bends).
+fn turning_per_cell(eq: &Equilibrium) -> f64 {
+    let p = eq.profile();
+    let length = eq.model().length();
+    let n = p.len();
+    (0..n)
+        .map(|j| {
+            let ds = if j + 1 < n {
+                p[j + 1].s - p[j].s
+            } else {
+                length + p[0].s - p[j].s
+            };
+            let k = p[j].kappa_g.abs().max(p[(j + 1) % n].kappa_g.abs());
+            k * ds
+        })
+        .fold(0.0, f64::max)
+}
+
+/// Why the finest resolution of the ladder `energies` (`E_N, E_{2N}, …` from `first = N`
+/// cells) still fails (`why`): the refined states either converge like `h⁴` (their
+/// differences fall at least fourfold per doubling) to a value the file's samples miss, or
+/// they do not, and then the finer resolutions hold another state than the row's.
+fn ladder_reason(first: usize, energies: &[f64], why: &str) -> String {
+    let cells: Vec<String> = (0..energies.len())
+        .map(|j| format!("{}", first << j))
+        .collect();
+    let values: Vec<String> = energies.iter().map(|e| format!("{e:.10}")).collect();
+    let diffs: Vec<f64> = energies.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
+    let converging = diffs.len() >= 2 && diffs.windows(2).all(|d| d[1] <= 0.25 * d[0]);
+    let finest = first << (energies.len() - 1);
+    if converging {
+        format!(
+            "re-solved at {} cells its energies {} converge like h⁴, and at {finest} cells {why}",
+            cells.join(", "),
+            values.join(", ")
+        )
+    } else {
+        format!(
+            "re-solved from its own profile at {} cells its energies are {}, which do not \
+             converge like h⁴ (differences {}): the finer resolutions hold another state \
+             than its row's, so no file holds the row's state (at {finest} cells {why})",
+            cells.join(", "),
+            values.join(", "),
+            diffs
+                .iter()
+                .map(|d| format!("{d:.1e}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    }
+}
+
 /// `eq` re-solved with `cells` cells at its own length and stiffness for a state file, by the
 /// diagrams ([`TracedBranch::verified_state`]) and by `phase`, `converge` and
 /// `--param` alike: the resampled profile as start (and, for uniform stiffness, as phase
 /// reference), Newton to the tolerance a traced state is accepted with (`1e-8`, as in
 /// [`crate::TracedBranch::equilibrium_of`]; on a very soft segment, `D1/D0 = 0.001`, the
-/// residual of the finer resolutions stalls at a few 1e-9 in round-off), with up to 60 steps.
+/// residual of the finer resolutions stalls at a few 1e-9 in round-off), for as long as the
+/// run converges ([`newton_until_stall`]).
 pub(crate) fn resolved(eq: &Equilibrium, cells: usize) -> Result<Equilibrium, SolverError> {
     resolved_from(eq, cells, &FinerRun::default())
 }
@@ -502,8 +599,18 @@ pub(crate) fn resolved(eq: &Equilibrium, cells: usize) -> Result<Equilibrium, So
 /// The tolerance of [`resolved`]'s Newton run.
 const RESOLVED_TOLERANCE: f64 = 1e-8;
 
+/// Newton passes of [`resolved`] between two looks at its progress.
+const NEWTON_STRETCH: usize = 20;
+
+/// Least factor by which the KKT residual falls over [`NEWTON_STRETCH`] passes for
+/// [`newton_until_stall`] to go on: a steady linear rate of at least 3.5 % per pass (a
+/// Newton-like run falls far faster; damped steps from a start that its resolution moves,
+/// a very soft segment bent sharply, creep at such rates); a run that falls slower has
+/// stalled.
+const STEADY_FALL: f64 = 2.0;
+
 /// [`resolved`], going on from the kept run `finer` where it is a run of the same model
-/// from the same start ([`FinerRun::resume`]; the same iterates, so the same result).
+/// from the same start ([`FinerRun::resume_keeping`]; the same iterates, so the same result).
 fn resolved_from(
     eq: &Equilibrium,
     cells: usize,
@@ -516,15 +623,54 @@ fn resolved_from(
     if kind.is_uniform() {
         model = model.with_phase(Phase::from_gauss_values(&kappa, cells)?)?;
     }
-    let newton = SolveOptions {
+    newton_until_stall(&model, &kappa, finer)
+}
+
+/// Newton's method for `model` from `start` (curvature at the Gauss points) to
+/// [`RESOLVED_TOLERANCE`], its iteration limit following the run's own convergence: the run
+/// goes on by [`NEWTON_STRETCH`] passes at a time while its residual keeps falling at least
+/// [`STEADY_FALL`]-fold per stretch, and stops where it stalls (then the error of the last
+/// pass). The residual falls that much per stretch from a finite start to the tolerance, so
+/// the run ends. Goes on from the kept run `finer` where that is a run of this model and
+/// start.
+fn newton_until_stall(
+    model: &rodloop_solver::SurfaceModel,
+    start: &[f64],
+    finer: &FinerRun,
+) -> Result<Equilibrium, SolverError> {
+    let mut newton = SolveOptions {
         tolerance: RESOLVED_TOLERANCE,
-        max_iterations: 60,
+        max_iterations: 3 * NEWTON_STRETCH,
         ..newton_options()
     };
-    if let Some(r) = finer.resume(&model, &kappa, &newton) {
-        return r;
+    let (mut result, mut run) = match finer.resume_keeping(model, start, &newton) {
+        Some(r) => r,
+        None => {
+            let (r, run) = solve_newton_keeping(model, start, &newton, RESOLVED_TOLERANCE);
+            (r, run)
+        }
+    };
+    loop {
+        let Err(SolverError::NewtonNotConverged { iterations, .. }) = result else {
+            return result;
+        };
+        let Some(kept) = run.take() else {
+            return result;
+        };
+        let residuals = kept.residuals();
+        let n = residuals.len();
+        let steady = iterations == newton.max_iterations
+            && n > NEWTON_STRETCH
+            && residuals[n - 1] * STEADY_FALL <= residuals[n - 1 - NEWTON_STRETCH];
+        if !steady {
+            return result;
+        }
+        newton.max_iterations += NEWTON_STRETCH;
+        match kept.resume_keeping(&newton) {
+            Some((r, k)) => (result, run) = (r, k),
+            None => return result,
+        }
     }
-    solve(&model, &kappa, &newton)
 }
 
 /// Every traced state of `branches` verified as its file holds it
@@ -587,4 +733,40 @@ pub(crate) fn sheet_estimate(points: &[crate::TracedPoint], k: usize) -> Option<
             .filter_map(|p| p.energy_error)
             .fold(own, f64::max),
     )
+}
+
+/// How the branches of a diagram's state files are identified (`branch_identification` in
+/// `summary.json`; docs/src/methods.md, "How the branch of a state is identified"): every
+/// row carries the branch of the family it is traced on, continued from a seed whose periods
+/// were counted; the periods of each file's own bending moment are counted too.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct BranchIdentification {
+    /// Files whose bending moment has the periods of their row's branch: named by the state
+    /// itself.
+    pub by_own_periods: usize,
+    /// Files whose bending moment has no resolved periods (a very soft segment leaves the
+    /// stiff one a geodesic arc to within the noise): named by their family's continuation
+    /// from its seed only.
+    pub by_continuation_no_periods: usize,
+    /// Files whose bending moment counts another number of periods than their row's branch:
+    /// named by their family's continuation from its seed, which their own count contradicts.
+    pub by_continuation_other_periods: usize,
+}
+
+/// [`BranchIdentification`] of the files `files[i][k]` of `branches[i].points[k]`.
+pub fn branch_identification(
+    branches: &[TracedBranch],
+    files: &[Vec<Option<StateFile>>],
+) -> BranchIdentification {
+    let mut out = BranchIdentification::default();
+    for (b, fs) in branches.iter().zip(files) {
+        for f in fs.iter().flatten() {
+            match f.verification.eta {
+                0 => out.by_continuation_no_periods += 1,
+                e if e == b.eta => out.by_own_periods += 1,
+                _ => out.by_continuation_other_periods += 1,
+            }
+        }
+    }
+    out
 }

@@ -157,19 +157,23 @@ impl FinerRun {
     }
 
     /// The result of [`rodloop_solver::solve`] of `model` from `start` with Newton's
-    /// `opts`, continued from the kept run: `None` unless the run is of this model and
-    /// start and can go on with `opts` ([`rodloop_solver::NewtonRun::resume`]).
-    pub(crate) fn resume(
+    /// `opts`, continued from the kept run, and the run where it stops: `None` unless the run
+    /// is of this model and start and can go on with `opts`
+    /// ([`rodloop_solver::NewtonRun::resume_keeping`]).
+    pub(crate) fn resume_keeping(
         &self,
         model: &rodloop_solver::SurfaceModel,
         start: &[f64],
         opts: &rodloop_solver::SolveOptions,
-    ) -> Option<Result<rodloop_solver::Equilibrium, rodloop_solver::SolverError>> {
+    ) -> Option<(
+        Result<rodloop_solver::Equilibrium, rodloop_solver::SolverError>,
+        Option<rodloop_solver::NewtonRun>,
+    )> {
         let (s, run) = self.0.as_deref()?;
         if s.as_slice() != start || run.model() != model {
             return None;
         }
-        run.clone().resume(opts)
+        run.clone().resume_keeping(opts)
     }
 }
 

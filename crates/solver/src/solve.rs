@@ -555,6 +555,30 @@ impl NewtonRun {
         fits.then(|| self.iterate(opts, None))
     }
 
+    /// [`NewtonRun::resume`] that also keeps the run where it stops (converged, or at the
+    /// iteration limit of `opts`) to go on from with a larger limit: `None` where `resume`
+    /// gives `None`.
+    pub fn resume_keeping(
+        self,
+        opts: &SolveOptions,
+    ) -> Option<(Result<Equilibrium, SolverError>, Option<NewtonRun>)> {
+        let fits = opts.tolerance <= self.keep
+            && opts.max_iterations >= self.iterations
+            && (self.iterations == 0 || opts.max_backtracks == self.max_backtracks);
+        fits.then(|| {
+            let mut kept = None;
+            let eq = self.iterate(opts, Some((opts.tolerance, &mut kept)));
+            (eq, kept)
+        })
+    }
+
+    /// The KKT residual norms of the run: before every pass so far, and at its current state.
+    pub fn residuals(&self) -> Vec<f64> {
+        let mut r = self.history.clone();
+        r.push(self.m.sqrt());
+        r
+    }
+
     /// The iteration from this pass on (Sec. 4.1): a Newton step by the block factorisation,
     /// a backtracking line search on the merit, until the residual is below the tolerance.
     /// With `keep = Some((tol, kept))`, `kept` receives the run at the first pass whose

@@ -109,3 +109,27 @@ fn resume_refuses_options_that_change_the_passes_before() {
     assert!(kept.clone().resume(&other).is_none());
     assert!(kept.resume(&newton(1e-9, 60)).is_some());
 }
+
+/// A run resumed one pass at a time ([`rodloop_solver::NewtonRun::resume_keeping`], each
+/// time from the run kept where the last one stopped) is the fresh run: the same result at
+/// every limit, and residuals ([`rodloop_solver::NewtonRun::residuals`]) that are the fresh
+/// run's history up to its pass.
+#[test]
+fn run_resumed_pass_by_pass_equals_a_fresh_run() {
+    let (model, start) = refinement_start(0.1);
+    let tol = 1e-10;
+    let (mut result, mut kept) = solve_newton_keeping(&model, &start, &newton(tol, 1), tol);
+    let mut limit = 1;
+    while matches!(result, Err(SolverError::NewtonNotConverged { .. })) {
+        let run = kept.take().expect("a run stopped by its limit is kept");
+        assert_eq!(run.iterations(), limit);
+        let fresh = solve(&model, &start, &newton(tol, 60)).unwrap();
+        assert_eq!(run.residuals(), fresh.report().history[..=limit].to_vec());
+        limit += 1;
+        assert!(limit < 60, "no convergence");
+        (result, kept) = run.resume_keeping(&newton(tol, limit)).unwrap();
+        assert_same(&result, &solve(&model, &start, &newton(tol, limit)));
+    }
+    assert!(limit > 2, "converged after {limit} passes");
+    assert!(result.is_ok());
+}
