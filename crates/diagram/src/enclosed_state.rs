@@ -417,7 +417,7 @@ fn lowest_over_surface_starts(
     // Lower by more than round-off: the same state reached from another start stays the
     // state of this level's own start.
     let better = |x: (bool, f64), y: (bool, f64)| {
-        x.0 < y.0 || (x.0 == y.0 && x.1 < y.1 - 1e-9 * y.1.abs().max(1.0))
+        (!x.0 && y.0) || (x.0 == y.0 && x.1 < y.1 - 1e-9 * y.1.abs().max(1.0))
     };
     let Some(mine) = rank(&found.0) else {
         return found;
