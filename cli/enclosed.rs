@@ -179,6 +179,7 @@ pub fn run_solve(args: &crate::args::SolveArgs, scene: &Scene) -> Result<()> {
         "lbar": args.lbar,
         "branch": branch,
         "eta": eta,
+        "identified_eta": check.identified_eta,
         "radius": scene.radius,
         "accuracy": format!("{accuracy:?}").to_lowercase(),
         "energy": res.energy.0,

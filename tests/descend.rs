@@ -133,11 +133,14 @@ fn enclosed_run(dir: &Path, lbar: &str, acc: &str, extra: &[&str]) -> serde_json
     serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()
 }
 
-/// The two-segment enclosed scene at L̄ = 0.9, branch 2: one state, index 0, at every
-/// accuracy level, the energies within each other's estimates; `--keep-saddle` at `fast`
-/// keeps the index-1 state Newton reaches there, above it.
+/// The two-segment enclosed scene at L̄ = 0.9, branch 2 (the figure-eight, η = 1): `solve`
+/// reports one state at every accuracy level: the branch identified from the state, one
+/// stability index, the energies within each other's estimates. Where that state is a saddle
+/// (no local minimum of the branch is found here: the uniform rod's figure-eight held at its
+/// lobe tips is a saddle too, opened toward the planar circle by turning one lobe against
+/// the other about the axis through the two contacts), `solve` says so, and the state Newton
+/// reaches from the surface loop (`--keep-saddle`) does not lie below the one reported.
 #[test]
-#[ignore = "no index-0 state of branch 2 at lbar = 0.9 is found, and the saddle reported depends on the accuracy: fast 2.3063925668 +- 3.2e-3 (index 1), default and high 2.3241003738 +- 5.4e-3 (index 2); the stiffness path from the uniform loop at every shift, Newton from the surface loop and loops shrunk to 0.95..0.6 R reach only saddles (or do not converge), and the descents from them reach no lower state of the branch"]
 fn enclosed_state_is_the_same_at_every_accuracy() {
     let dir = tmp("descend-enclosed-0.9");
     let run = |acc: &str, extra: &[&str]| enclosed_run(&dir, "0.9", acc, extra);
@@ -145,8 +148,17 @@ fn enclosed_state_is_the_same_at_every_accuracy() {
         .iter()
         .map(|a| run(a, &[]))
         .collect();
+    let index = &states[0]["index"];
     for s in &states {
-        assert_eq!(s["index"], 0, "{s}");
+        assert_eq!(s["identified_eta"], 1, "{s}");
+        assert_eq!(&s["index"], index, "{s}");
+        if s["index"].as_u64().unwrap() > 0 {
+            let method = s["method"].as_str().unwrap();
+            assert!(
+                method.contains("no local minimum of branch 2 was found"),
+                "{method}"
+            );
+        }
     }
     for a in &states {
         for b in &states {
@@ -155,11 +167,12 @@ fn enclosed_state_is_the_same_at_every_accuracy() {
             assert!((ea - eb).abs() <= tol, "{ea} vs {eb} (± {tol})");
         }
     }
-    let saddle = run("fast", &["--keep-saddle"]);
-    assert!(saddle["index"].as_u64().unwrap() >= 1, "{saddle}");
-    let low = f(&states[0], "energy");
+    let kept = run("fast", &["--keep-saddle"]);
+    assert_eq!(kept["identified_eta"], 1, "{kept}");
+    let tol = f(&states[0], "error_estimate") + f(&kept, "error_estimate");
     assert!(
-        f(&saddle, "energy") > low + f(&states[0], "error_estimate"),
-        "{saddle}"
+        f(&kept, "energy") >= f(&states[0], "energy") - tol,
+        "{kept} {}",
+        states[0]
     );
 }

@@ -24,8 +24,9 @@ fn out(name: &str) -> PathBuf {
     p
 }
 
-/// `rodloop solve --scene SCENE --lbar LBAR --branch BRANCH --out DIR`, which must succeed;
-/// returns its `summary.json`.
+/// `rodloop solve --scene SCENE --lbar LBAR --branch BRANCH --out DIR`, which must succeed
+/// and name the branch of its written state as requested (`identified_eta`); returns its
+/// `summary.json`.
 fn solve_ok(dir: &Path, scene: &str, lbar: &str, branch: &str) -> serde_json::Value {
     let o = rodloop(&[
         "solve",
@@ -39,7 +40,13 @@ fn solve_ok(dir: &Path, scene: &str, lbar: &str, branch: &str) -> serde_json::Va
         dir.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap()
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    // The branch named from the written state is the one requested.
+    if branch != "0" {
+        assert_eq!(s["identified_eta"], s["eta"], "{s}");
+    }
+    s
 }
 
 /// `rodloop ARGS --out DIR` fails with a message containing `word`, no panic, no output.

@@ -10,7 +10,10 @@
 //! Newton finds the lift-off.
 
 use rodloop_exact::{eta_of_branch, paper_branch_loop};
-use rodloop_solver::enclosed::descent::{descend_branch, solve_branch_lowest};
+use rodloop_solver::enclosed::branch::BranchSolve;
+use rodloop_solver::enclosed::descent::{
+    descend_branch, enclosed_periods, solve_branch_descended, solve_branch_lowest, DescendedSolve,
+};
 use rodloop_solver::enclosed::{
     enclosed_cells, enclosed_solve_cells, free_circle, solve_branch, solve_enclosed, solve_levels,
     start_from_shape, EnclosedOptions, EnclosedState, SavedShape, SurfaceSource,
@@ -50,6 +53,10 @@ pub struct WrittenCheck {
     pub energy_from_file: f64,
     /// Allowed `|energy_from_file − energy|`.
     pub energy_tolerance: f64,
+    /// Periods `η` of the state as its file holds it (the branch identified from the state;
+    /// 0 where they are not named and no branch was requested). An exact surface loop is the
+    /// loop of the branch requested.
+    pub identified_eta: u32,
 }
 
 /// The points of the state file of an attached result: `points` samples of the surface loop,
@@ -113,6 +120,7 @@ pub fn verify_written(
             Ok(WrittenCheck {
                 energy_from_file: v.energy_from_profile,
                 energy_tolerance: v.energy_tolerance,
+                identified_eta: v.eta,
             })
         }
         Some((SurfaceSource::Numeric(eq), points)) => {
@@ -121,6 +129,7 @@ pub fn verify_written(
             Ok(WrittenCheck {
                 energy_from_file: v.energy_from_profile,
                 energy_tolerance: v.energy_tolerance,
+                identified_eta: v.eta,
             })
         }
         Some((source @ SurfaceSource::Exact(_), points)) => {
@@ -154,6 +163,7 @@ pub fn verify_written(
             Ok(WrittenCheck {
                 energy_from_file: fine,
                 energy_tolerance: tolerance,
+                identified_eta: eta.unwrap_or(0),
             })
         }
     }
@@ -315,7 +325,11 @@ pub fn solve_state_with(
         let (out, replaced) = solve_branch_lowest(r, lbar, eta, stiffness, &source, &ladder, &opts)
             .map_err(context(what()))?;
         lower_minimum = replaced;
-        out
+        if stiffness.is_uniform() {
+            out
+        } else {
+            lowest_over_surface_starts(r, lbar, eta, stiffness, accuracy, &ladder, &opts, out)
+        }
     };
     let cells = b.fine.model.cells();
     let stability = b.coarsest().stability(1e-6).map_err(passed)?;
@@ -355,6 +369,16 @@ pub fn solve_state_with(
         method.push_str(&format!("; {why}"));
     }
     describe_descent(&mut method, descent.as_ref(), &b);
+    if stability.0 > 0 && !keep_saddle {
+        method.push_str(&format!(
+            "; no local minimum of branch {branch} was found ({}, and descents from every saddle reached): the lowest saddle of the branch found is reported",
+            if stiffness.is_uniform() {
+                "from the surface loop"
+            } else {
+                "from the surface loops of the three accuracy levels, from the uniform rod's loop continued in the stiffness"
+            }
+        ));
+    }
     Ok(EnclosedResult {
         model_energy: (b.energy, b.energy_error),
         state: b.fine,
@@ -364,6 +388,81 @@ pub fn solve_state_with(
         method,
         attached_loop,
     })
+}
+
+/// Where the lowest state of a two-segment rod's branch `eta` that a solve finds (`found`,
+/// from the surface loop of its accuracy level and the stiffness paths) is a saddle, the
+/// surface loops of the other accuracy levels are solved on the same `ladder` and descended
+/// as well ([`solve_branch_descended`]), and the lowest state of the branch is kept (an
+/// index-0 one first). The pull homotopy ends at different saddles from the surface loops of
+/// different levels (they differ by their discretisation); with every level's start each
+/// level compares the same saddles, so that where no local minimum of the branch is found
+/// the lowest saddle reported is the same state at every accuracy.
+#[allow(clippy::too_many_arguments)]
+fn lowest_over_surface_starts(
+    r: f64,
+    lbar: f64,
+    eta: u32,
+    stiffness: &Stiffness,
+    accuracy: Accuracy,
+    ladder: &[usize],
+    opts: &EnclosedOptions,
+    found: DescendedSolve,
+) -> DescendedSolve {
+    let rank = |b: &BranchSolve| -> Option<(bool, f64)> {
+        let index = b.coarsest().stability(1e-6).ok()?.0;
+        let same = enclosed_periods(&b.fine).ok().map(|p| p.eta) == Some(eta);
+        same.then_some((index > 0, b.energy))
+    };
+    // Lower by more than round-off: the same state reached from another start stays the
+    // state of this level's own start.
+    let better = |x: (bool, f64), y: (bool, f64)| {
+        (!x.0 && y.0) || (x.0 == y.0 && x.1 < y.1 - 1e-9 * y.1.abs().max(1.0))
+    };
+    let Some(mine) = rank(&found.0) else {
+        return found;
+    };
+    if !mine.0 {
+        return found;
+    }
+    let mut best = (found, mine);
+    for level in [Accuracy::Fast, Accuracy::Default, Accuracy::High] {
+        if level == accuracy {
+            continue;
+        }
+        let Ok((surface, _)) = solve_robust(
+            r,
+            lbar,
+            stiffness,
+            &StartShape::Euler { l: eta },
+            level,
+            Some(eta),
+            &SolveOptions::default(),
+        ) else {
+            continue;
+        };
+        let source = SurfaceSource::Numeric(Box::new(surface.equilibrium));
+        let Ok((b, d, mut notes)) =
+            solve_branch_descended(r, lbar, stiffness, &source, ladder, opts)
+        else {
+            continue;
+        };
+        match rank(&b) {
+            Some(other) if better(other, best.1) => {
+                notes.insert(
+                    0,
+                    format!(
+                        "started from the surface loop of the {} level (the state reached from this level's surface loop and the stiffness paths, E R/(pi D0) = {:.10}, has index > 0 and lies higher)",
+                        format!("{level:?}").to_lowercase(),
+                        mine.1
+                    ),
+                );
+                best = ((b, d, notes), other);
+            }
+            _ => {}
+        }
+    }
+    best.0
 }
 
 /// Append a descent from a saddle (started at index > 0) to `method`: what it did, on the

@@ -189,8 +189,10 @@ pub fn descend(
 /// from that state carried to `N` directly ([`solve_levels_from_fine`]). Where neither
 /// converges (point contacts: the coarse minimum's contact sits a node or two off the
 /// finer one's), the solve is returned as it was, with the reason in the descent's
-/// shortfall. Returns the (possibly new) solve and the descent (`None` when the coarsest
-/// level has index 0); the ends of the descent's path carry the energies at `N`.
+/// shortfall. Where the descent ends at a lower saddle of the branch (no local minimum
+/// reached), the solve moves there too. Returns the (possibly new) solve and the descent
+/// (`None` when the coarsest level has index 0); the ends of the descent's path carry the
+/// energies at `N`.
 pub fn descend_branch(
     b: BranchSolve,
     opts: &EnclosedOptions,
@@ -213,7 +215,9 @@ pub fn descend_branch(
     let mut d = descend_saddle(&saddle, b.quarter.clone(), &settings)?;
     let reached = d.end();
     d.path[0].energy = b.energy;
-    if !(d.moved() && reached.index == 0) {
+    // A descent that ends at a lower saddle of the branch (no local minimum reached) still
+    // moves the solve there: the lowest state of the branch reached is the one reported.
+    if !d.moved() {
         return Ok((b, Some(d)));
     }
     let n = b.fine.model.cells();
@@ -228,8 +232,12 @@ pub fn descend_branch(
         solve_levels_from_fine(fine, opts)
     };
     let cascade = solve_levels(&d.state.model, d.state.z.clone(), None, opts);
+    let eta = saddle.branch(&b.fine);
     for out in [cascade, direct()].into_iter().flatten() {
-        if saddle.index(&out.quarter)? == 0 && out.energy < b.energy {
+        if saddle.index(&out.quarter)? <= reached.index
+            && out.energy < b.energy
+            && saddle.branch(&out.fine) == eta
+        {
             let last = d.path.len() - 1;
             d.path[last].energy = out.energy;
             return Ok((out, Some(d)));
@@ -242,7 +250,8 @@ pub fn descend_branch(
             state: d.state,
             path: vec![d.path[0]],
             shortfall: Some(format!(
-                "at N/4 = {m} cells the descent reached an index-0 state of the same branch (E = {:.10} there), but the solves at {} and {n} cells did not converge from it",
+                "at N/4 = {m} cells the descent reached an index-{} state of the same branch (E = {:.10} there), but the solves at {} and {n} cells did not converge from it",
+                reached.index,
                 reached.energy,
                 n / 2
             )),
