@@ -60,7 +60,7 @@ use super::nonuniform_special::{branch_points, classify_stops};
 use super::trace::step_options;
 use super::trace::{follow, Levels};
 use super::{
-    EnclosedCritical, EnclosedDiagram, EnclosedDiagramOptions, EnclosedEvent, EnclosedPoint,
+    BranchFrom, EnclosedCritical, EnclosedDiagram, EnclosedDiagramOptions, EnclosedEvent, EnclosedPoint,
     EnclosedProgress, EnclosedTimings, EventKind, PointShape, PointSource,
 };
 use crate::families::compute_families;
@@ -274,6 +274,7 @@ fn surface_point(dopts: &DiagramOptions, sheet: &TracedBranch, k: usize) -> Encl
         family: sheet.family,
         sheet: sheet.sheet,
         multiplicity: sheet.multiplicity,
+        branch_from: BranchFrom::Exact,
         surface_energy: Some(p.energy),
         shape,
     }
@@ -677,9 +678,13 @@ pub(super) fn nonuniform_diagram(
     ));
     // 2b. Lower states below unstable lowest ones (new families).
     let tdesc = Instant::now();
+    // States that another branch's periods name are no rows of this one (before the descent,
+    // which starts from the lowest rows, and after it, for the families it adds).
+    warnings.extend(outs.iter_mut().filter_map(SheetOut::drop_other_branches));
     let (w, parents) = descend_unstable(&mut outs, &idx, threads);
     warnings.extend(w);
     idx.extend(parents);
+    warnings.extend(outs.iter_mut().filter_map(SheetOut::drop_other_branches));
     timings.lifted_off += tdesc.elapsed().as_secs_f64();
     progress(EnclosedProgress::Done(
         "descent from unstable lowest states".into(),
