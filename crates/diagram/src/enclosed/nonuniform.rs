@@ -456,8 +456,9 @@ fn trace_sheet(
         })
     };
     // Pieces of runs to trace: (samples, seed position or the middle, re-seeded). Where a
-    // trace stops short of a run's end, the rest is seeded once more from its far end (past
-    // a singular point of the lifted-off sheet, e.g. where an asymmetric family meets it).
+    // trace stops short of a run's end, the rest is seeded once more at its sample next to
+    // the stop (past a singular point of the lifted-off sheet, e.g. where an asymmetric
+    // family meets it) and traced from there both ways.
     let mut pieces: Vec<(Vec<usize>, Option<usize>, bool)> =
         runs.into_iter().map(|r| (r, None, false)).collect();
     while let Some((run, at, reseeded)) = pieces.pop() {
@@ -502,14 +503,16 @@ fn trace_sheet(
             );
             let above: Vec<usize> = (0..xs.len()).filter(|&j| xs[j] > t_hi + 1e-9).collect();
             let below: Vec<usize> = (0..xs.len()).filter(|&j| xs[j] < t_lo - 1e-9).collect();
+            // Seeded at the sample next to the stop (the nearest surface state past the
+            // singular point), traced from there both ways.
             if above.len() > 1 {
                 let r: Vec<usize> = above.iter().map(|&j| run[j]).collect();
-                let at = r.len() - 1;
-                pieces.push((r, Some(at), true));
+                pieces.push((r, Some(0), true));
             }
             if below.len() > 1 {
                 let r: Vec<usize> = below.iter().map(|&j| run[j]).collect();
-                pieces.push((r, Some(0), true));
+                let at = r.len() - 1;
+                pieces.push((r, Some(at), true));
             }
         }
         for lv in traced {
