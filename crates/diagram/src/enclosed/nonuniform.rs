@@ -60,8 +60,8 @@ use super::nonuniform_special::{branch_points, classify_stops};
 use super::trace::step_options;
 use super::trace::{follow, Levels};
 use super::{
-    BranchFrom, EnclosedCritical, EnclosedDiagram, EnclosedDiagramOptions, EnclosedEvent, EnclosedPoint,
-    EnclosedProgress, EnclosedTimings, EventKind, PointShape, PointSource,
+    BranchFrom, EnclosedCritical, EnclosedDiagram, EnclosedDiagramOptions, EnclosedEvent,
+    EnclosedPoint, EnclosedProgress, EnclosedTimings, EventKind, PointShape, PointSource,
 };
 use crate::families::compute_families;
 use crate::labels::Label;
