@@ -286,6 +286,7 @@ impl Engine for EnclosedEngine {
             "sheet",
             "multiplicity",
             "surface_energy",
+            "branch_from",
             "state_file",
         ]);
         let mut points = Vec::with_capacity(d.points.len());
@@ -325,6 +326,7 @@ impl Engine for EnclosedEngine {
                         "surface_energy".into(),
                         p.surface_energy.map_or(Cell::Empty, Cell::F),
                     ),
+                    ("branch_from".into(), Cell::S(p.branch_from.as_str().into())),
                 ]),
             });
         }

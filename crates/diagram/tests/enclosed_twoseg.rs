@@ -72,6 +72,15 @@ fn sharp_diagram() -> &'static EnclosedDiagram {
     })
 }
 
+/// The whole diagram of the scene, `1 ≤ L̄ ≤ 3`.
+fn whole_diagram() -> &'static EnclosedDiagram {
+    static D: OnceLock<EnclosedDiagram> = OnceLock::new();
+    D.get_or_init(|| {
+        let o = EnclosedDiagramOptions::new(1.0, sharp(), 1.0, 3.0);
+        enclosed_diagram(&o).expect("two-segment enclosed diagram, 1 to 3")
+    })
+}
+
 /// Surface loop of `branch` at `lbar` (`solve_robust` from the Euler curve, as `rodloop
 /// solve`): energy, `λ_min R³/D0`, and the enclosed state solved from it independently of
 /// the diagram (N/4, N/2, N; pull homotopy where needed): energy, error, contact fraction.
@@ -358,8 +367,7 @@ fn the_lowest_states_next_to_the_exchange_are_stable() {
 /// at `L̄ = 2.99722` (branch 1 family 2: `−2.0e-2` there, `+0.15` at `N = 128`).
 #[test]
 fn every_lowest_state_of_the_scene_is_stable() {
-    let o = EnclosedDiagramOptions::new(1.0, sharp(), 1.0, 3.0);
-    let d = enclosed_diagram(&o).expect("two-segment enclosed diagram, 1 to 3");
+    let d = whole_diagram();
     for w in &d.warnings {
         assert!(!w.contains("index >= 1"), "{w}");
     }
@@ -367,5 +375,58 @@ fn every_lowest_state_of_the_scene_is_stable() {
     assert!(lowest.len() >= 2, "{:?}", d.points);
     for p in &lowest {
         assert_eq!(p.index, 0, "{p:?}");
+    }
+}
+
+/// No state of the whole diagram contradicts its row: every 3-D state whose moment (of its
+/// central projection) has countable periods has its row's `η` and says so
+/// (`branch_from = periods`); one without periods (a loop in a plane through the centre)
+/// keeps its family's branch and says that it is known by continuation. Next to the 3-fold
+/// great circle, descents from branch 1 reach states whose moment has 4 periods; they are
+/// not rows of branch 1.
+#[test]
+fn no_state_contradicts_its_row() {
+    use rodloop_diagram::enclosed::{BranchFrom, PointShape};
+    let d = whole_diagram();
+    let mut counted = 0;
+    for p in &d.points {
+        let PointShape::Model(st) = &p.shape else {
+            continue;
+        };
+        match rodloop_solver::identify::identify_enclosed(st) {
+            Ok(per) => {
+                assert_eq!(per.eta, p.eta, "{p:?}");
+                assert_eq!(p.branch_from, BranchFrom::Periods, "{p:?}");
+                counted += 1;
+            }
+            Err(_) => assert_eq!(p.branch_from, BranchFrom::Continuation, "{p:?}"),
+        }
+    }
+    assert!(
+        counted > d.points.len() / 2,
+        "{counted} of {}",
+        d.points.len()
+    );
+}
+
+/// Branch 1 family 1 (from the surface family that ends on the 3-fold great circle) is
+/// traced over the whole of `2.26 < L̄ < 2.95`, not only up to the point near `L̄ = 2.257`
+/// where its index changes: no gap between its states wider than three sample spacings.
+#[test]
+fn branch_one_family_one_is_traced_past_its_branch_point() {
+    let d = whole_diagram();
+    let mut xs: Vec<f64> = d
+        .points
+        .iter()
+        .filter(|p| p.branch == 1 && p.family == 1)
+        .map(|p| p.lbar)
+        .collect();
+    xs.sort_by(f64::total_cmp);
+    assert!(xs.first().is_some_and(|&x| x < 2.26), "{xs:?}");
+    assert!(xs.last().is_some_and(|&x| x > 2.95), "{xs:?}");
+    for w in xs.windows(2) {
+        if w[1] > 2.26 && w[0] < 2.95 {
+            assert!(w[1] - w[0] < 0.15, "gap {w:?} in {xs:?}");
+        }
     }
 }

@@ -181,6 +181,11 @@ pub const COLUMNS: &[ColumnSpec] = &[
         Field::Number,
         "energy of the branch's surface loop at this length",
     ),
+    col(
+        "branch_from",
+        Field::Text,
+        "how the branch is known: exact, periods (of the state's own moment) or continuation (the family's, where the moment has no periods)",
+    ),
 ];
 
 /// The dictionary entry of column `name`.

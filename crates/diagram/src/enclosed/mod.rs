@@ -157,6 +157,34 @@ pub enum PointSource {
     Surface,
 }
 
+/// How the branch of a point of the enclosed diagram is known
+/// (docs/src/methods.md, "How the branch of a state is identified").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum BranchFrom {
+    /// Closed form: the exact loop of the branch, or the free circle (branch 0).
+    #[default]
+    Exact,
+    /// The periods of the state's own bending moment (of its central projection onto the
+    /// sphere for a 3-D state) equal the branch's `η`.
+    Periods,
+    /// The state's moment has no periods to count (a loop in a plane through the centre of
+    /// the ball projects onto a great circle; a pattern within the noise): the branch is the
+    /// one of the family it was continued on from a named seed.
+    Continuation,
+}
+
+impl BranchFrom {
+    /// `"exact"`, `"periods"` or `"continuation"`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            BranchFrom::Exact => "exact",
+            BranchFrom::Periods => "periods",
+            BranchFrom::Continuation => "continuation",
+        }
+    }
+}
+
 /// The loop behind a point of the enclosed diagram (what `diagram` writes to `states/`).
 #[derive(Clone, Debug, Default)]
 pub enum PointShape {
@@ -222,6 +250,8 @@ pub struct EnclosedPoint {
     pub multiplicity: u32,
     /// Energy of the branch's surface loop at this length (`None` for the free circle).
     pub surface_energy: Option<f64>,
+    /// How the state's branch is known (set by the verification of its file).
+    pub branch_from: BranchFrom,
     /// The loop itself (for `states/`; not serialised).
     #[serde(skip)]
     pub shape: PointShape,

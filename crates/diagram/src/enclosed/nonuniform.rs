@@ -60,8 +60,8 @@ use super::nonuniform_special::{branch_points, classify_stops};
 use super::trace::step_options;
 use super::trace::{follow, Levels};
 use super::{
-    EnclosedCritical, EnclosedDiagram, EnclosedDiagramOptions, EnclosedEvent, EnclosedPoint,
-    EnclosedProgress, EnclosedTimings, EventKind, PointShape, PointSource,
+    BranchFrom, EnclosedCritical, EnclosedDiagram, EnclosedDiagramOptions, EnclosedEvent,
+    EnclosedPoint, EnclosedProgress, EnclosedTimings, EventKind, PointShape, PointSource,
 };
 use crate::families::compute_families;
 use crate::labels::Label;
@@ -274,6 +274,7 @@ fn surface_point(dopts: &DiagramOptions, sheet: &TracedBranch, k: usize) -> Encl
         family: sheet.family,
         sheet: sheet.sheet,
         multiplicity: sheet.multiplicity,
+        branch_from: BranchFrom::Exact,
         surface_energy: Some(p.energy),
         shape,
     }
@@ -455,8 +456,9 @@ fn trace_sheet(
         })
     };
     // Pieces of runs to trace: (samples, seed position or the middle, re-seeded). Where a
-    // trace stops short of a run's end, the rest is seeded once more from its far end (past
-    // a singular point of the lifted-off sheet, e.g. where an asymmetric family meets it).
+    // trace stops short of a run's end, the rest is seeded once more at its sample next to
+    // the stop (past a singular point of the lifted-off sheet, e.g. where an asymmetric
+    // family meets it) and traced from there both ways.
     let mut pieces: Vec<(Vec<usize>, Option<usize>, bool)> =
         runs.into_iter().map(|r| (r, None, false)).collect();
     while let Some((run, at, reseeded)) = pieces.pop() {
@@ -501,14 +503,16 @@ fn trace_sheet(
             );
             let above: Vec<usize> = (0..xs.len()).filter(|&j| xs[j] > t_hi + 1e-9).collect();
             let below: Vec<usize> = (0..xs.len()).filter(|&j| xs[j] < t_lo - 1e-9).collect();
+            // Seeded at the sample next to the stop (the nearest surface state past the
+            // singular point), traced from there both ways.
             if above.len() > 1 {
                 let r: Vec<usize> = above.iter().map(|&j| run[j]).collect();
-                let at = r.len() - 1;
-                pieces.push((r, Some(at), true));
+                pieces.push((r, Some(0), true));
             }
             if below.len() > 1 {
                 let r: Vec<usize> = below.iter().map(|&j| run[j]).collect();
-                pieces.push((r, Some(0), true));
+                let at = r.len() - 1;
+                pieces.push((r, Some(at), true));
             }
         }
         for lv in traced {
@@ -677,9 +681,13 @@ pub(super) fn nonuniform_diagram(
     ));
     // 2b. Lower states below unstable lowest ones (new families).
     let tdesc = Instant::now();
+    // States that another branch's periods name are no rows of this one (before the descent,
+    // which starts from the lowest rows, and after it, for the families it adds).
+    warnings.extend(outs.iter_mut().filter_map(SheetOut::drop_other_branches));
     let (w, parents) = descend_unstable(&mut outs, &idx, threads);
     warnings.extend(w);
     idx.extend(parents);
+    warnings.extend(outs.iter_mut().filter_map(SheetOut::drop_other_branches));
     timings.lifted_off += tdesc.elapsed().as_secs_f64();
     progress(EnclosedProgress::Done(
         "descent from unstable lowest states".into(),

@@ -234,6 +234,9 @@ pub(super) fn descend_unstable(
                 new.points.push(pt);
                 new.levels.push(l);
             }
+            // A descent next to a great circle can reach another branch's state: not a row
+            // of this branch (and no lowest state of it).
+            warnings.extend(new.drop_other_branches());
             if !new.points.is_empty() {
                 new.points.sort_by(|u, v| u.lbar.total_cmp(&v.lbar));
                 added.push(new);

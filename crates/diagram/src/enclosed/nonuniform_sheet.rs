@@ -144,3 +144,48 @@ pub(super) fn walk_with(t: &Levels, x: f64, opts: &EnclosedOptions) -> Result<Le
         )),
     })
 }
+
+impl SheetOut {
+    /// Leave out the lifted-off states whose own periods name another branch than the
+    /// sheet's (the moment of the central projection,
+    /// [`rodloop_solver::identify::identify_enclosed`]): near a great circle the sheets of
+    /// `η` and of another branch through it come close, and a trace or a descent there can
+    /// land on the other one. Such a state is not a state of this row's branch, so neither
+    /// its row nor its file is kept. States whose periods cannot be counted (a loop in a
+    /// plane through the centre) keep the family's branch (continuation history).
+    /// Returns one message per sheet with states left out.
+    pub(super) fn drop_other_branches(&mut self) -> Option<String> {
+        let mut gone: Vec<(f64, u32)> = Vec::new();
+        self.points.retain(|p| {
+            let super::PointShape::Model(st) = &p.shape else {
+                return true;
+            };
+            match rodloop_solver::identify::identify_enclosed(st) {
+                Ok(per) if per.eta != self.eta => {
+                    gone.push((p.lbar, per.eta));
+                    false
+                }
+                _ => true,
+            }
+        });
+        if gone.is_empty() {
+            return None;
+        }
+        self.levels
+            .retain(|l| !gone.iter().any(|&(x, _)| (l.lbar - x).abs() < 1e-12));
+        self.fine_index
+            .retain(|&x| !gone.iter().any(|&(y, _)| (x - y).abs() < 1e-12));
+        let list: Vec<String> = gone
+            .iter()
+            .map(|(x, e)| format!("lbar = {x:.6} (eta = {e})"))
+            .collect();
+        Some(format!(
+            "branch {} (eta = {}) family {}: {} lifted-off state(s) whose moment names another branch left out ({}): the trace reached another branch's states, which are not rows of this family",
+            self.branch,
+            self.eta,
+            self.family,
+            gone.len(),
+            list.join(", ")
+        ))
+    }
+}

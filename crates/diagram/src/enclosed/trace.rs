@@ -19,7 +19,8 @@ use rodloop_solver::enclosed::{
 use rodloop_solver::{Accuracy, SolverError, Stiffness};
 
 use super::{
-    EnclosedDiagramOptions, EnclosedEvent, EnclosedPoint, EventKind, PointShape, PointSource, TOUCH,
+    BranchFrom, EnclosedDiagramOptions, EnclosedEvent, EnclosedPoint, EventKind, PointShape,
+    PointSource, TOUCH,
 };
 use crate::labels::Label;
 use crate::DiagramError;
@@ -171,6 +172,7 @@ impl Levels {
             family: 0,
             sheet: 0,
             multiplicity: 1,
+            branch_from: BranchFrom::Exact,
             surface_energy: None,
             shape: PointShape::Model(Box::new(fine.clone())),
         })
@@ -270,6 +272,7 @@ pub(super) fn exact_point(
         family: 0,
         sheet: 0,
         multiplicity: 1,
+        branch_from: BranchFrom::Exact,
         surface_energy: Some(l.energy()?),
         shape: PointShape::Exact(*l),
     })
@@ -300,6 +303,7 @@ pub(super) fn circle_point(lbar: f64) -> EnclosedPoint {
         family: 0,
         sheet: 0,
         multiplicity: 1,
+        branch_from: BranchFrom::Exact,
         surface_energy: None,
         shape: PointShape::Circle,
     }
