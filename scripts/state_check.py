@@ -29,8 +29,9 @@ check_state(out_dir, branch) returns a list of problems, each one of:
                          |E_N - E_N/2| = 15 x the estimate (measured on the shipped scenes:
                          at most about 12 x);
   "branch contradiction" summary.json names another branch than the one asked, or the
-                         dominant Fourier harmonic of the file's kappa_g (enclosed: kappa_1 at
-                         the nodes; its number of periods eta) is not the asked branch's eta;
+                         periods of the file's bending moment D kappa_g (branch_of_file; an
+                         enclosed file: of its central projection onto the sphere) do not name
+                         the asked branch's eta;
   "unreadable"           the files are missing or malformed.
 
 check_diagram_branches(out_dir) names the branch of every state file of a diagram from the
@@ -62,21 +63,6 @@ def _periodic_weights(s, length):
         prv = s[j] - s[j - 1] if j > 0 else s[0] + length - s[n - 1]
         w.append(0.5 * (nxt + prv))
     return w
-
-
-def dominant_harmonic(s, kg, length):
-    """Number of periods of kappa_g: the k >= 1 with the largest |Fourier coefficient|."""
-    n = len(s)
-    w = _periodic_weights(s, length)
-    mean = sum(a * b for a, b in zip(kg, w)) / length
-    best, amp_best = 0, -1.0
-    for k in range(1, max(2, n // 4 + 1)):
-        re = sum(wj * (v - mean) * math.cos(2 * math.pi * k * sj / length) for sj, v, wj in zip(s, kg, w))
-        im = sum(wj * (v - mean) * math.sin(2 * math.pi * k * sj / length) for sj, v, wj in zip(s, kg, w))
-        a = math.hypot(re, im)
-        if a > amp_best:
-            best, amp_best = k, a
-    return best
 
 
 def _solve(a, b):
@@ -302,12 +288,8 @@ def check_state(out_dir, branch, enclosed=False):
     contradiction = summary.get("branch") not in (None, branch)
     if summary.get("identified_eta") not in (None, want):
         contradiction = True
-    if "kappa_g" in rows[0] and "s" in rows[0] and length:
-        if dominant_harmonic([r["s"] for r in rows], [r["kappa_g"] for r in rows], length) != want:
-            contradiction = True
-    if enclosed and branch > 0 and "kappa_1" in rows[0] and length:
-        nodes = [r for r in rows if r.get("node", 1.0) == 1.0]
-        if dominant_harmonic([r["s"] for r in nodes], [r["kappa_1"] for r in nodes], length) != want:
+    if branch > 0 and "s" in rows[0] and length:
+        if branch_of_file(rows, length) != want:
             contradiction = True
     if contradiction:
         problems.append("branch contradiction")
