@@ -191,7 +191,9 @@ fn newton(
     ended: &mut Ended,
 ) -> Result<EnclosedState, SolverError> {
     let mut best: (Vec<f64>, f64) = (z0.clone(), f64::INFINITY);
-    let out = newton_min(model, z0, opts, ended, &mut best);
+    let start = z0.clone();
+    let mut crawled = false;
+    let out = newton_min(model, z0, opts, ended, &mut best, Some(&mut crawled));
     let rescue = model.complementarity() == Complementarity::Min
         && opts.stall_window == 0
         && best.1.is_finite()
@@ -214,7 +216,7 @@ fn newton(
     };
     let before = ended.iterations;
     let mut fbest = (best.0.clone(), f64::INFINITY);
-    let res = newton_min(&fb, best.0, &fopts, &mut inner, &mut fbest);
+    let res = newton_min(&fb, best.0, &fopts, &mut inner, &mut fbest, None);
     ended.iterations = before + inner.iterations;
     ended.dense += inner.dense;
     ended.outcome = inner.outcome;
@@ -228,18 +230,26 @@ fn newton(
                 residual,
             })
         }
+        // Where the crawl stopped the min-function early, it runs again without the stop
+        // (some crawls end in convergence).
+        Err(_) if crawled => {
+            let mut again = (start.clone(), f64::INFINITY);
+            newton_min(model, start, opts, ended, &mut again, None)
+        }
         Err(_) => out,
     }
 }
 
 /// Damped semismooth Newton on `model`'s residual (its [`Complementarity`]); `best` keeps the
-/// iterate of the lowest residual seen.
+/// iterate of the lowest residual seen; with `crawl`, the iteration stops where it crawls (see
+/// [`newton`]) and sets it.
 fn newton_min(
     model: &EnclosedModel,
     z0: Vec<f64>,
     opts: &EnclosedOptions,
     ended: &mut Ended,
     best: &mut (Vec<f64>, f64),
+    mut crawl: Option<&mut bool>,
 ) -> Result<EnclosedState, SolverError> {
     let mut z = z0;
     let mut norm = f64::INFINITY;
@@ -317,11 +327,15 @@ fn newton_min(
         }
         // The line search crawls (see [`newton`]).
         if w == 0
+            && crawl.is_some()
             && model.complementarity() == Complementarity::Min
             && watch.is_none()
             && history.len() > CRAWL_WINDOW
             && norm > 0.5 * history[history.len() - 1 - CRAWL_WINDOW]
         {
+            if let Some(c) = crawl.as_deref_mut() {
+                *c = true;
+            }
             ended.outcome = Outcome::Stall;
             break;
         }
