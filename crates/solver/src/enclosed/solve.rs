@@ -183,7 +183,9 @@ pub const CRAWL_WINDOW: usize = 10;
 /// continuously differentiable so that the backtracking search on it cannot stall at a kink;
 /// it is run to `tolerance/1.75`, which puts the min-function's residual below `tolerance`
 /// (`|min(a, b)| ≤ |φ_FB(a, b)|/(2 − √2)`), and the state is returned with the residual of the
-/// min-function. Both forms have the same solutions.
+/// min-function. Both forms have the same solutions. Where that fails after a crawl, the
+/// min-function runs again from the start without the crawl stop (some crawls end in
+/// convergence).
 fn newton(
     model: &EnclosedModel,
     z0: Vec<f64>,
