@@ -373,6 +373,24 @@ pub fn lowest(states: &[Ranked]) -> Vec<usize> {
     }
 }
 
+/// The [`lowest`] states at any index, where a local minimum (index 0) is among them only
+/// the local minima: a saddle tied with a minimum within the estimates is not the lowest
+/// state there (what lies lowest is then the minimum, which the saddle's own unstable
+/// directions descend towards); with no minimum among the tied states, all of them are.
+pub fn lowest_state(states: &[Ranked]) -> Vec<usize> {
+    let tied = lowest(states);
+    let minima: Vec<usize> = tied
+        .iter()
+        .copied()
+        .filter(|&i| states[i].index == 0)
+        .collect();
+    if minima.is_empty() {
+        tied
+    } else {
+        minima
+    }
+}
+
 /// The [`Standing`] of every state: the [`lowest`] of the index-0 states are stable, the
 /// other index-0 states metastable, states of index > 0 unstable.
 pub fn label(states: &[Ranked]) -> Vec<Standing> {
@@ -561,6 +579,26 @@ mod tests {
             &ExchangeSettings::default(),
         );
         assert!(matches!(r, Err(RootError::LeftWindow { .. })), "{r:?}");
+    }
+
+    #[test]
+    fn a_saddle_tied_with_a_minimum_is_not_the_lowest_state() {
+        // Energies tied within the estimates: the saddle below by 1e-7, the minimum above.
+        let tied = [
+            state(1.0, 1e-6, 4, false),
+            state(1.000_000_1, 1e-6, 0, false),
+        ];
+        assert_eq!(lowest(&tied), vec![0, 1]);
+        assert_eq!(lowest_state(&tied), vec![1]);
+        // Apart beyond the estimates, the saddle is the lowest state.
+        let apart = [state(1.0, 1e-9, 4, false), state(1.001, 1e-9, 0, false)];
+        assert_eq!(lowest_state(&apart), vec![0]);
+        // Only saddles tied: all of them.
+        let saddles = [
+            state(1.0, 1e-6, 1, false),
+            state(1.000_000_1, 1e-6, 2, false),
+        ];
+        assert_eq!(lowest_state(&saddles), vec![0, 1]);
     }
 
     fn state(energy: f64, error: f64, index: usize, preferred: bool) -> Ranked {

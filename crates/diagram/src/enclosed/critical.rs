@@ -298,7 +298,8 @@ const INTERPOLATION_ALLOWANCE: f64 = 5e-4;
 /// Lowest flags and labels by the labeller ([`rodloop_continuation::exchange`]): at each
 /// sampled state, it and the other branches interpolated to its length, each with its
 /// error estimate plus [`INTERPOLATION_ALLOWANCE`], the branch the critical lengths name as
-/// lowest preferred in ties; `lowest` is the lowest of them at any index. A warning where a
+/// lowest preferred in ties; `lowest` is the lowest of them at any index (a local minimum
+/// before a saddle tied with it, [`exchange::lowest_state`]). A warning where a
 /// sampled state lies below the lowest branch by more than the errors (an exchange the
 /// list does not have).
 pub(super) fn label(
@@ -328,7 +329,7 @@ pub(super) fn label(
                 });
             }
         }
-        p.lowest = exchange::lowest(&states).contains(&0);
+        p.lowest = exchange::lowest_state(&states).contains(&0);
         p.label = exchange::label(&states)[0].into();
     }
     for p in points.iter() {

@@ -850,7 +850,7 @@ pub(super) fn nonuniform_diagram(
         for p in &s.points {
             let mut p = p.clone();
             let states = ranked_at(&outs, &brackets, &critical, k, &p);
-            p.lowest = exchange::lowest(&states).contains(&0);
+            p.lowest = exchange::lowest_state(&states).contains(&0);
             p.label = exchange::label(&states)[0].into();
             points.push(p);
         }
