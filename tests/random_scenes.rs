@@ -96,6 +96,18 @@ struct Row {
     tie: f64,
 }
 
+/// The warnings a run's `summary.json` lists (none when it has no `warnings`).
+fn warnings(summary: &serde_json::Value) -> Vec<String> {
+    summary["warnings"]
+        .as_array()
+        .map(|w| {
+            w.iter()
+                .filter_map(|x| x.as_str().map(String::from))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
 fn rows(dir: &Path) -> Vec<Row> {
     let mut r = csv::Reader::from_path(dir.join("branches.csv")).expect("branches.csv");
     let h = r.headers().unwrap().clone();
@@ -437,8 +449,7 @@ fn check_diagram(dir: &Path, scene_file: &Path, lo: f64, hi: f64, what: &str) ->
     assert!(!rows.is_empty(), "{what}: no rows");
     // The completeness certificate: nothing found below the traced states is left
     // unexplained.
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    let summary = common::summary(dir);
     let unexplained = summary["certificate"]["unexplained"]
         .as_array()
         .map_or(0, Vec::len);
@@ -498,14 +509,7 @@ fn check_diagram(dir: &Path, scene_file: &Path, lo: f64, hi: f64, what: &str) ->
         }
     }
     // Labels against the traced energies.
-    let warnings: Vec<String> = summary["warnings"]
-        .as_array()
-        .map(|w| {
-            w.iter()
-                .filter_map(|x| x.as_str().map(String::from))
-                .collect()
-        })
-        .unwrap_or_default();
+    let warnings = warnings(&summary);
     bad.extend(label_failures(&rows, &warnings, lo, hi, what));
     let sh = sheets(&rows);
     // `solve --branch B` at two sample lengths finds nothing below the stable state.
@@ -552,9 +556,7 @@ fn check_diagram(dir: &Path, scene_file: &Path, lo: f64, hi: f64, what: &str) ->
                 );
                 continue;
             }
-            let s: serde_json::Value =
-                serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
-                    .unwrap();
+            let s = common::summary(&out);
             let (es, err) = (
                 s["energy"].as_f64().unwrap(),
                 s["error_estimate"].as_f64().unwrap_or(0.0),
@@ -632,16 +634,8 @@ fn copies_of_one_state_share_their_label() {
     std::fs::write(&file, sc.toml()).unwrap();
     let out = dir.join("diagram");
     run_diagram(&file, &out, &[]);
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
-    let warnings: Vec<String> = summary["warnings"]
-        .as_array()
-        .map(|w| {
-            w.iter()
-                .filter_map(|x| x.as_str().map(String::from))
-                .collect()
-        })
-        .unwrap_or_default();
+    let summary = common::summary(&out);
+    let warnings = warnings(&summary);
     let bad = label_failures(&rows(&out), &warnings, sc.lo, sc.hi, "random scene 0 of 6");
     assert!(bad.is_empty(), "{}", bad.join("\n"));
 }
