@@ -3,6 +3,8 @@
 //! against independent surface and 3-D solves on both sides, and an exchange of the lowest
 //! branch against independent 3-D solves on both sides.
 
+mod common;
+use common::sharp;
 use std::sync::OnceLock;
 
 use rodloop_diagram::enclosed::{
@@ -27,17 +29,6 @@ fn mild() -> Stiffness {
         s0: 0.3,
         s1: 0.8,
         gamma: 20.0,
-    }
-}
-
-/// The scene `data/scenes/inhomogeneous-d1-0.5-enclosed.toml`.
-fn sharp() -> Stiffness {
-    Stiffness::Tanh {
-        d0: 1.0,
-        d1: 0.5,
-        s0: 0.3,
-        s1: 0.8,
-        gamma: 200.0,
     }
 }
 

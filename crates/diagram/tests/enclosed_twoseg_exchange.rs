@@ -4,21 +4,13 @@
 //! the estimates with the root of `E_1 − E_3` from independent solves (`rodloop solve`'s
 //! states, each refined twice on uniform graded meshes: 512 and 640 cells).
 
+mod common;
+use common::sharp;
 use rodloop_diagram::enclosed::{enclosed_diagram, EnclosedDiagramOptions};
 use rodloop_diagram::enclosed_state::solve_state;
 use rodloop_exact::diagram::CriticalKind;
 use rodloop_solver::enclosed::{solve_enclosed, EnclosedOptions};
-use rodloop_solver::{Accuracy, Stiffness};
-
-fn sharp() -> Stiffness {
-    Stiffness::Tanh {
-        d0: 1.0,
-        d1: 0.5,
-        s0: 0.3,
-        s1: 0.8,
-        gamma: 200.0,
-    }
-}
+use rodloop_solver::Accuracy;
 
 /// Energy of `branch` at `lbar`: `rodloop solve`'s state prolonged and re-solved twice;
 /// the finest energy and its last difference (an error bound where the differences fall at
