@@ -183,7 +183,7 @@ def branch_of_file(rows, length):
     else:
         kg = projected_kappa_g(rows, length)
         if kg is None:
-            return None
+            return principal_axis_periods(rows, length)
         # A loop in a plane through the centre projects onto a great circle: no periods
         # (rodloop_solver::identify::PLANAR, relative to the largest D |kappa|).
         mean = sum(kg) / len(kg)
@@ -192,6 +192,30 @@ def branch_of_file(rows, length):
         ):
             return None
     return named_periods([r["s"] for r in rows], [k * r["D"] for k, r in zip(kg, rows)], length)
+
+
+def principal_axis_periods(rows, length):
+    """The periods of an enclosed file whose central projection is not regular (a loop through
+    the middle of the ball): rodloop_solver::identify::enclosed_signal's fallback, from the
+    file's curvature components (kappa_1, kappa_2) in the rotation-minimising frame at the
+    Gauss points (rows with node = 0), weighted by their quadrature weights, minus their mean
+    and projected on their principal axis (the direction of largest variance), times D.
+    None where the file has no such columns or the count names no branch."""
+    if not all(c in rows[0] for c in ("kappa_1", "kappa_2", "weight", "node", "D")):
+        return None
+    g = [r for r in rows if r["node"] == 0]
+    total = sum(r["weight"] for r in g)
+    if len(g) < 8 or total <= 0:
+        return None
+    m1 = sum(r["weight"] * r["kappa_1"] for r in g) / total
+    m2 = sum(r["weight"] * r["kappa_2"] for r in g) / total
+    a = sum(r["weight"] * (r["kappa_1"] - m1) ** 2 for r in g)
+    b = sum(r["weight"] * (r["kappa_1"] - m1) * (r["kappa_2"] - m2) for r in g)
+    c = sum(r["weight"] * (r["kappa_2"] - m2) ** 2 for r in g)
+    theta = 0.5 * math.atan2(2 * b, a - c)
+    e1, e2 = math.cos(theta), math.sin(theta)
+    signal = [r["D"] * ((r["kappa_1"] - m1) * e1 + (r["kappa_2"] - m2) * e2) for r in g]
+    return named_periods([r["s"] for r in g], signal, length)
 
 
 def weighted_energy(rows):
