@@ -119,7 +119,7 @@ pub(crate) fn run_surface(args: &Args, scene: &rodloop_scene::Scene) -> Result<(
                 "--step {step} applies to --model exact only: the numeric model reports the states its continuation lands on (their spacing adapts to the branch)"
             );
         }
-        return run_numeric(args, &scene, lbar_min, lbar_max, selection.as_deref());
+        return run_numeric(args, scene, lbar_min, lbar_max, selection.as_deref());
     }
     if let Some(a) = &args.accuracy {
         bail!(

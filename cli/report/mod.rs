@@ -56,7 +56,7 @@ pub(crate) fn run_surface(
         ),
         None => None,
     };
-    let accuracy = crate::args::accuracy_of(&scene, args.accuracy.as_deref())?;
+    let accuracy = crate::args::accuracy_of(scene, args.accuracy.as_deref())?;
     let opts = DiagramOptions {
         radius: scene.radius,
         stiffness: crate::args::stiffness_of(&scene.stiffness),
@@ -114,7 +114,7 @@ pub(crate) fn run_surface(
 
     // 4. One state per branch, its picture and its contact force.
     let t = Instant::now();
-    let states = states::representative_states(&scene, accuracy, &opts, &d);
+    let states = states::representative_states(scene, accuracy, &opts, &d);
     let t_states = t.elapsed().as_secs_f64();
 
     // 5. The page.
