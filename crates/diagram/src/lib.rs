@@ -58,8 +58,9 @@
 //! | `trace.rs` | [`compute_branch`]: seed, march both ways, ends, states |
 //! | `compute.rs` | [`compute`] with its [`BranchHook`] (resume, save) |
 //! | `parallel.rs` | the thread pool |
-//! | `engine.rs` | the [`Engine`] interface of every diagram model and its result in the schema |
-//! | `refine.rs`, `critical.rs`, `labels.rs`, `buckling.rs`, `diagram.rs` | the assembly |
+//! | `engine/` | the [`Engine`] interface of every diagram model and its result in the schema |
+//! | `refine.rs`, `critical.rs`, `labels.rs`, `buckling.rs`, `diagram/` | the assembly |
+//! | `param_sweep/` | the sweep in a stiffness parameter at a fixed length (`diagram --param`) |
 //! | `enclosed_state.rs` | one enclosed state solved with its certificate (energy, estimate, index, method) |
 //! | `detached.rs` | where the enclosed loops of a homogeneous rod leave the wall, scanned |
 //!
