@@ -24,20 +24,9 @@ pub struct Args {
     pub scene: Option<String>,
 }
 
-/// Run the subcommand.
+/// Run the subcommand without `--scene`: the default scene's numeric diagram against the
+/// exact layer and the paper's printed values.
 pub fn run(args: &Args) -> Result<()> {
-    if let Some(s) = &args.scene {
-        // A two-segment rod on the sphere: the paper's statements of Sec. 5.
-        if s != "enclosed" {
-            let scene = rodloop_scene::Scene::from_file(std::path::Path::new(s))?;
-            if crate::engine::kind_of(&scene) == crate::engine::EngineKind::Surface
-                && !scene.stiffness.is_uniform()
-            {
-                return crate::compare_segments::run(&scene, &args.out);
-            }
-        }
-        return crate::enclosed::run_compare(s, &args.out);
-    }
     let nd = rodloop_diagram::compute(
         &rodloop_diagram::DiagramOptions::default(),
         &mut (),

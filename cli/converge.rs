@@ -45,9 +45,8 @@ struct Rung {
     seconds: f64,
 }
 
-/// Run the subcommand.
-pub fn run(args: &Args) -> Result<()> {
-    let scene = load_scene(args.scene.as_deref())?;
+/// The `η` of `--branch`, with `--levels` and `--lbar` checked.
+fn checked_eta(args: &Args) -> Result<u32> {
     if args.branch == 0 || args.branch > 1000 {
         bail!("--branch must be from 1 to 1000 (got {})", args.branch);
     }
@@ -65,9 +64,12 @@ pub fn run(args: &Args) -> Result<()> {
             args.lbar
         );
     }
-    let stiffness = stiffness_of(&scene.stiffness);
-    let start = StartShape::Euler { l: eta };
-    let default_cells = Accuracy::Default.cells(eta as usize, &stiffness);
+    Ok(eta)
+}
+
+/// The cells of the coarsest rung (`--min-cells`, else a quarter of the default level's
+/// `default_cells`), checked with the finest rung against the cap.
+fn ladder_base(args: &Args, default_cells: usize) -> Result<usize> {
     if let Some(m) = args.min_cells.filter(|&m| m < 8) {
         bail!("--min-cells must be at least 8 (got {m})");
     }
@@ -78,6 +80,37 @@ pub fn run(args: &Args) -> Result<()> {
             "the finest rung would have {finest} cells (cap 65536): lower --min-cells or --levels"
         );
     }
+    Ok(base)
+}
+
+/// The empty `converge.csv` table.
+fn converge_table() -> Table {
+    Table::new(
+        "converge.csv",
+        &[
+            "nodes",
+            "energy",
+            "error_estimate",
+            "error_vs_finest",
+            "error_vs_exact",
+            "observed_order",
+            "lambda_min",
+            "lambda_max",
+            "seconds",
+            "state_file",
+        ],
+    )
+}
+
+/// The ladder: rung `k` solved at `base · 2^k` cells from `start` (the rung below as the
+/// fallback start), with its energy, force range and time; and the finest state.
+fn solve_ladder(
+    args: &Args,
+    scene: &rodloop_scene::Scene,
+    stiffness: &rodloop_solver::Stiffness,
+    start: &StartShape,
+    base: usize,
+) -> Result<(Vec<Rung>, Option<rodloop_solver::Equilibrium>)> {
     let opts = SolveOptions::default();
     let mut rungs: Vec<Rung> = Vec::new();
     let mut prev = None;
@@ -90,8 +123,8 @@ pub fn run(args: &Args) -> Result<()> {
             scene.radius,
             args.lbar,
             cells,
-            &stiffness,
-            &start,
+            stiffness,
+            start,
             None,
             &opts,
         ) {
@@ -100,8 +133,8 @@ pub fn run(args: &Args) -> Result<()> {
                 scene.radius,
                 args.lbar,
                 cells,
-                &stiffness,
-                &start,
+                stiffness,
+                start,
                 prev.as_ref(),
                 &opts,
             )
@@ -116,6 +149,18 @@ pub fn run(args: &Args) -> Result<()> {
         });
         prev = Some(eq);
     }
+    Ok((rungs, prev))
+}
+
+/// Run the subcommand.
+pub fn run(args: &Args) -> Result<()> {
+    let scene = load_scene(args.scene.as_deref())?;
+    let eta = checked_eta(args)?;
+    let stiffness = stiffness_of(&scene.stiffness);
+    let start = StartShape::Euler { l: eta };
+    let default_cells = Accuracy::Default.cells(eta as usize, &stiffness);
+    let base = ladder_base(args, default_cells)?;
+    let (rungs, prev) = solve_ladder(args, &scene, &stiffness, &start, base)?;
     let exact = match (&scene.stiffness, scene.radius) {
         (StiffnessSpec::Uniform { .. }, _) => rodloop_exact::paper_branch_loop(eta, args.lbar)
             .ok()
@@ -144,21 +189,7 @@ pub fn run(args: &Args) -> Result<()> {
         }
     };
     let reference = exact.unwrap_or(finest_e);
-    let mut table = Table::new(
-        "converge.csv",
-        &[
-            "nodes",
-            "energy",
-            "error_estimate",
-            "error_vs_finest",
-            "error_vs_exact",
-            "observed_order",
-            "lambda_min",
-            "lambda_max",
-            "seconds",
-            "state_file",
-        ],
-    );
+    let mut table = converge_table();
     outln!(
         "branch {} (eta = {eta}) at lbar = {}, scene {}: energy E R/(pi D0) on {} resolutions{}",
         args.branch,

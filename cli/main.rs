@@ -20,6 +20,7 @@ mod compare;
 mod compare_segments;
 mod converge;
 mod diagram;
+mod dispatch;
 mod draw;
 mod enclosed;
 mod engine;
@@ -109,13 +110,13 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Analytic(a) => analytic::run(&a),
-        Command::Solve(a) => solve::run(&a),
+        Command::Solve(a) => dispatch::solve(&a),
         Command::Euler(a) => euler::run(&a),
-        Command::Diagram(a) => diagram::run(&a),
-        Command::Compare(a) => compare::run(&a),
+        Command::Diagram(a) => dispatch::diagram(&a),
+        Command::Compare(a) => dispatch::compare(&a),
         Command::Converge(a) => converge::run(&a),
         Command::Draw(a) => draw::run(&a),
-        Command::Report(a) => report::run(&a),
+        Command::Report(a) => dispatch::report(&a),
         Command::Phase(a) => phase::run(&a),
         Command::Export(a) => export::run(&a),
     };

@@ -13,7 +13,7 @@ use rodloop_solver::{solve_robust_verified, verify_accurate, SolveOptions, Start
 use crate::output::{checked_json, plural, OutputRun, Table};
 
 pub use crate::args::SolveArgs as Args;
-use crate::args::{accuracy_of, load_scene, stiffness_of};
+use crate::args::{accuracy_of, stiffness_of};
 
 /// Largest branch number (or eta) accepted.
 const MAX_BRANCH: u64 = 1000;
@@ -116,15 +116,8 @@ pub fn config_table(profile: &[rodloop_solver::ProfilePoint], scene: &Scene) -> 
     crate::states::config_table_in(profile, scene.radius, scene.stiffness.reference())
 }
 
-/// Run the subcommand.
-pub fn run(args: &Args) -> Result<()> {
-    // Enclosed scenes (|r| <= R) have their own model and outputs.
-    if let Some(p) = args.scene.as_deref() {
-        let scene = Scene::from_file(p)?;
-        if crate::engine::kind_of(&scene) == crate::engine::EngineKind::Enclosed {
-            return crate::enclosed::run_solve(args, &scene);
-        }
-    }
+/// The paper branch and `η` of `--branch` / `--eta`, checked to exist at `--lbar`.
+fn branch_at_length(args: &Args) -> Result<(u32, u32)> {
     let (branch, eta) = match (args.branch, args.eta) {
         (Some(b), _) => {
             if b == 0 {
@@ -153,7 +146,12 @@ pub fn run(args: &Args) -> Result<()> {
             args.lbar
         );
     }
-    let scene = load_scene(args.scene.as_deref())?;
+    Ok((branch, eta))
+}
+
+/// `rodloop solve` on a surface scene.
+pub(crate) fn run_surface(args: &Args, scene: Scene) -> Result<()> {
+    let (branch, eta) = branch_at_length(args)?;
     let accuracy = accuracy_of(&scene, args.accuracy.as_deref())?;
     let stiffness = stiffness_of(&scene.stiffness);
     // Lock the output directory before the work, so that a concurrent run is refused at once.

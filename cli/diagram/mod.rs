@@ -8,7 +8,6 @@ use rodloop_diagram::{Engine, ExactEngine};
 use rodloop_exact::diagram::Diagram;
 use rodloop_schema::SideColumn;
 
-use crate::engine::EngineKind;
 use crate::output::OutputRun;
 
 mod args;
@@ -79,24 +78,24 @@ fn selected_branches(args: &Args, lbar_min: f64, lbar_max: f64) -> Result<Option
     Ok(Some(out))
 }
 
-/// Run the subcommand.
-pub fn run(args: &Args) -> Result<()> {
+/// The part of the subcommand that needs no engine: `--param` (run here; `true`) and the
+/// checks of the arguments of a diagram in `L̄` (`false`: the scene's engine draws it).
+pub fn param_or_checked(args: &Args) -> Result<bool> {
     if args.relative && args.param.is_some() {
         bail!("--relative draws the diagram in L̄ relative to its stable states; it does not apply to --param");
     }
     if let Some(p) = &args.param {
-        return param::run(args, p);
+        param::run(args, p)?;
+        return Ok(true);
     }
     if args.lbar.is_some() || args.to.is_some() {
         bail!("--lbar and --to belong to --param (the equilibria at a fixed length against a parameter); the diagram in L̄ takes --lbar-min and --lbar-max");
     }
-    let (scene, engine) = crate::engine::load(args.scene.as_deref())?;
-    if engine == EngineKind::Enclosed {
-        if args.relative {
-            bail!("--relative applies to surface diagrams; draw an enclosed diagram's branches.csv with `rodloop draw --relative` instead");
-        }
-        return enclosed::run(args, &scene);
-    }
+    Ok(false)
+}
+
+/// The diagram in `L̄` of a surface scene (numeric or exact model).
+pub(crate) fn run_surface(args: &Args, scene: &rodloop_scene::Scene) -> Result<()> {
     let lbar_min = args.lbar_min.unwrap_or(scene.lbar_min);
     let lbar_max = args.lbar_max.unwrap_or(scene.lbar_max);
     if !(lbar_min > 0.0 && lbar_max > lbar_min && lbar_max <= 50.0) {
@@ -120,7 +119,7 @@ pub fn run(args: &Args) -> Result<()> {
                 "--step {step} applies to --model exact only: the numeric model reports the states its continuation lands on (their spacing adapts to the branch)"
             );
         }
-        return run_numeric(args, &scene, lbar_min, lbar_max, selection.as_deref());
+        return run_numeric(args, scene, lbar_min, lbar_max, selection.as_deref());
     }
     if let Some(a) = &args.accuracy {
         bail!(

@@ -250,44 +250,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     );
     page.h.push_str("</section>\n");
 
-    page.h.push_str("<section id=\"critical\">\n<h2>2. Critical lengths and lift-off</h2>\n<p>Where the lowest branch changes. An exchange between two attached states is the surface one (exact layer); where one of the two has lifted off, E<sub>a</sub> = E<sub>b</sub> is solved again on re-solved 3-D states, with the error estimate of L̄<sub>cr</sub> itself. The same numbers are in <code>critical.csv</code>; the surface value is the surface diagram's.</p>\n");
-    page.h.push_str(&critical_html(
-        &dir.critical,
-        &["surface L̄<sub>cr</sub>", "enclosed − surface", "method"],
-        |c| {
-            let surface = c.extra.get("surface_lbar_cr").and_then(|v| v.as_f64());
-            vec![
-                num(surface.map_or("–".into(), |x| format!("{x:.12}"))),
-                num(surface.map_or("–".into(), |x| sci(c.lbar_cr - x))),
-                td(esc(c
-                    .extra
-                    .get("method")
-                    .and_then(|v| v.as_str())
-                    .unwrap_or("–"))),
-            ]
-        },
-    ));
-    let special = dir.special.as_deref().unwrap_or_default();
-    if special.is_empty() {
-        page.h
-            .push_str("<p>No branch lifts off or lands inside the range.</p>\n");
-    } else {
-        page.h.push_str("<p>Special points (<code>special_points.csv</code>). Lift-off and landing: where λ<sub>min</sub> of a branch's surface loop crosses zero, i.e. k²(L̄) = 1/2 (Eq. (38)) for a uniform rod, bisected on the exact layer (located on re-solved surface states for a two-segment rod). Detachment: where the last contact force of a lifted-off branch vanishes and the loop leaves the wall (below it the loop is free). Branch point: where the Hessian index of a lifted-off sheet changes, at the interpolated root of the crossing eigenvalue.</p>\n");
-        page.h.push_str(&special_html(special));
-    }
-    if lifted.is_empty() {
-        page.h.push_str("<p id=\"lifted-off\">The lowest state of a paper branch lies on the wall at every sampled length: the Sec. 3.2 hypothesis (stable loops with L̄ ≥ 1 stay on the surface) holds in this range.</p>\n");
-    } else {
-        page.h
-            .push_str("<p id=\"lifted-off\">The lowest state has <b>lifted off the wall</b> for ");
-        let parts: Vec<String> = lifted
-            .iter()
-            .map(|(a, b)| format!("<span class=\"num\">{a:.9} &lt; L̄ &lt; {b:.9}</span>"))
-            .collect();
-        page.h.push_str(&parts.join(", "));
-        page.h.push_str(" (ends: the critical lengths and events above, with their error estimates): the Sec. 3.2 hypothesis fails there.</p>\n");
-    }
-    page.h.push_str("</section>\n");
+    critical_section(&mut page, &dir, &lifted);
 
     page.h
         .push_str("<section id=\"atlas\">\n<h2>3. Branch atlas</h2>\n");
@@ -313,85 +276,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     }
     page.h.push_str("</section>\n");
 
-    page.h.push_str("<section id=\"states\">\n<h2>4. One state of each branch</h2>\n<p>Each branch solved at one length as <code>rodloop solve</code> solves it: the exact surface loop where its λ ≥ 0 (then it is the enclosed equilibrium; the 3-D model re-solves it as a check), else the 3-D enclosed model from it (energy error from the cascade's last three or four levels, as its method says). A loop that has lifted off is coloured by its gap (R − |r|)/R, one on the wall by its contact force λR³/D₀; nearer strands are darker and thicker; red circles: self-contacts in 3-D.</p>\n");
-    page.states_table(
-        &[
-            "branch",
-            "η",
-            "L̄",
-            "chosen as",
-            "E R/(πD₀)",
-            "error",
-            "surface E",
-            "surface λ<sub>min</sub>R³/D₀",
-            "index",
-            "state",
-            "on the wall",
-            "max gap / R",
-            "point group",
-            "method",
-        ],
-        &states,
-        |st, s| {
-            let (se, sl) = s
-                .surface
-                .map(|(e, l)| (format!("{e:.10}"), format!("{l:.6}")))
-                .unwrap_or_else(|| ("–".into(), "–".into()));
-            vec![
-                td(st.branch),
-                td(st.eta),
-                td(st.lbar),
-                td(esc(&st.why)),
-                num(format!("{:.10}", s.energy.0)),
-                num(sci(s.energy.1)),
-                num(se),
-                num(sl),
-                td(s.index),
-                td(s.label),
-                num(format!("{:.1} %", 100.0 * s.contact_fraction)),
-                num(sci(s.max_gap)),
-                td(s.point_group
-                    .as_deref()
-                    .map(esc)
-                    .unwrap_or_else(|| "–".into())),
-                td(esc(&s.method)),
-            ]
-        },
-    );
-    page.state_pictures(&states, |st, s| {
-        [
-            (
-                format!("loop of branch {} at length {}", st.branch, st.lbar),
-                format!(
-                    "Branch {} (η = {}) at L̄ = {}: {}, E R/(πD₀) = {:.8} ± {}, coloured by {}; {:.1} % of the nodes on the wall, largest gap {} R.",
-                    st.branch,
-                    st.eta,
-                    st.lbar,
-                    s.label,
-                    s.energy.0,
-                    sci(s.energy.1),
-                    if s.color == "gap" {
-                        "the gap (R − |r|)/R"
-                    } else {
-                        "the contact force λR³/D₀"
-                    },
-                    100.0 * s.contact_fraction,
-                    sci(s.max_gap)
-                ),
-            ),
-            (
-                format!("contact force and gap along the loop of branch {}", st.branch),
-                format!(
-                    "Contact force λR³/D₀{} along the loop of branch {} at L̄ = {} (smallest λ {:.6}; the wall only pushes, λ ≥ 0, and λ = 0 wherever the loop is off the wall).",
-                    if s.color == "gap" { " and gap (R − |r|)/R" } else { "" },
-                    st.branch,
-                    st.lbar,
-                    s.lambda_min
-                ),
-            ),
-        ]
-    });
-    page.h.push_str("</section>\n");
+    states_section(&mut page, &states);
 
     let t_page = t.elapsed().as_secs_f64();
     let total = t_start.elapsed().as_secs_f64();
@@ -448,4 +333,130 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
         t_start.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// Section 2 of the enclosed page: the critical lengths of the diagram directory `dir`, its
+/// special points and the stretches where the lowest state has lifted off (`lifted`).
+fn critical_section(page: &mut Page, dir: &rodloop_schema::Diagram, lifted: &[(f64, f64)]) {
+    page.h.push_str("<section id=\"critical\">\n<h2>2. Critical lengths and lift-off</h2>\n<p>Where the lowest branch changes. An exchange between two attached states is the surface one (exact layer); where one of the two has lifted off, E<sub>a</sub> = E<sub>b</sub> is solved again on re-solved 3-D states, with the error estimate of L̄<sub>cr</sub> itself. The same numbers are in <code>critical.csv</code>; the surface value is the surface diagram's.</p>\n");
+    page.h.push_str(&critical_html(
+        &dir.critical,
+        &["surface L̄<sub>cr</sub>", "enclosed − surface", "method"],
+        |c| {
+            let surface = c.extra.get("surface_lbar_cr").and_then(|v| v.as_f64());
+            vec![
+                num(surface.map_or("–".into(), |x| format!("{x:.12}"))),
+                num(surface.map_or("–".into(), |x| sci(c.lbar_cr - x))),
+                td(esc(c
+                    .extra
+                    .get("method")
+                    .and_then(|v| v.as_str())
+                    .unwrap_or("–"))),
+            ]
+        },
+    ));
+    let special = dir.special.as_deref().unwrap_or_default();
+    if special.is_empty() {
+        page.h
+            .push_str("<p>No branch lifts off or lands inside the range.</p>\n");
+    } else {
+        page.h.push_str("<p>Special points (<code>special_points.csv</code>). Lift-off and landing: where λ<sub>min</sub> of a branch's surface loop crosses zero, i.e. k²(L̄) = 1/2 (Eq. (38)) for a uniform rod, bisected on the exact layer (located on re-solved surface states for a two-segment rod). Detachment: where the last contact force of a lifted-off branch vanishes and the loop leaves the wall (below it the loop is free). Branch point: where the Hessian index of a lifted-off sheet changes, at the interpolated root of the crossing eigenvalue.</p>\n");
+        page.h.push_str(&special_html(special));
+    }
+    if lifted.is_empty() {
+        page.h.push_str("<p id=\"lifted-off\">The lowest state of a paper branch lies on the wall at every sampled length: the Sec. 3.2 hypothesis (stable loops with L̄ ≥ 1 stay on the surface) holds in this range.</p>\n");
+    } else {
+        page.h
+            .push_str("<p id=\"lifted-off\">The lowest state has <b>lifted off the wall</b> for ");
+        let parts: Vec<String> = lifted
+            .iter()
+            .map(|(a, b)| format!("<span class=\"num\">{a:.9} &lt; L̄ &lt; {b:.9}</span>"))
+            .collect();
+        page.h.push_str(&parts.join(", "));
+        page.h.push_str(" (ends: the critical lengths and events above, with their error estimates): the Sec. 3.2 hypothesis fails there.</p>\n");
+    }
+    page.h.push_str("</section>\n");
+}
+
+/// Section 4 of the enclosed page: the representative state of each branch and its pictures.
+fn states_section(page: &mut Page, states: &[Entry<Solved>]) {
+    page.h.push_str("<section id=\"states\">\n<h2>4. One state of each branch</h2>\n<p>Each branch solved at one length as <code>rodloop solve</code> solves it: the exact surface loop where its λ ≥ 0 (then it is the enclosed equilibrium; the 3-D model re-solves it as a check), else the 3-D enclosed model from it (energy error from the cascade's last three or four levels, as its method says). A loop that has lifted off is coloured by its gap (R − |r|)/R, one on the wall by its contact force λR³/D₀; nearer strands are darker and thicker; red circles: self-contacts in 3-D.</p>\n");
+    page.states_table(
+        &[
+            "branch",
+            "η",
+            "L̄",
+            "chosen as",
+            "E R/(πD₀)",
+            "error",
+            "surface E",
+            "surface λ<sub>min</sub>R³/D₀",
+            "index",
+            "state",
+            "on the wall",
+            "max gap / R",
+            "point group",
+            "method",
+        ],
+        states,
+        |st, s| {
+            let (se, sl) = s
+                .surface
+                .map(|(e, l)| (format!("{e:.10}"), format!("{l:.6}")))
+                .unwrap_or_else(|| ("–".into(), "–".into()));
+            vec![
+                td(st.branch),
+                td(st.eta),
+                td(st.lbar),
+                td(esc(&st.why)),
+                num(format!("{:.10}", s.energy.0)),
+                num(sci(s.energy.1)),
+                num(se),
+                num(sl),
+                td(s.index),
+                td(s.label),
+                num(format!("{:.1} %", 100.0 * s.contact_fraction)),
+                num(sci(s.max_gap)),
+                td(s.point_group
+                    .as_deref()
+                    .map(esc)
+                    .unwrap_or_else(|| "–".into())),
+                td(esc(&s.method)),
+            ]
+        },
+    );
+    page.state_pictures(states, |st, s| {
+        [
+            (
+                format!("loop of branch {} at length {}", st.branch, st.lbar),
+                format!(
+                    "Branch {} (η = {}) at L̄ = {}: {}, E R/(πD₀) = {:.8} ± {}, coloured by {}; {:.1} % of the nodes on the wall, largest gap {} R.",
+                    st.branch,
+                    st.eta,
+                    st.lbar,
+                    s.label,
+                    s.energy.0,
+                    sci(s.energy.1),
+                    if s.color == "gap" {
+                        "the gap (R − |r|)/R"
+                    } else {
+                        "the contact force λR³/D₀"
+                    },
+                    100.0 * s.contact_fraction,
+                    sci(s.max_gap)
+                ),
+            ),
+            (
+                format!("contact force and gap along the loop of branch {}", st.branch),
+                format!(
+                    "Contact force λR³/D₀{} along the loop of branch {} at L̄ = {} (smallest λ {:.6}; the wall only pushes, λ ≥ 0, and λ = 0 wherever the loop is off the wall).",
+                    if s.color == "gap" { " and gap (R − |r|)/R" } else { "" },
+                    st.branch,
+                    st.lbar,
+                    s.lambda_min
+                ),
+            ),
+        ]
+    });
+    page.h.push_str("</section>\n");
 }

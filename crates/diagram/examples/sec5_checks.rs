@@ -32,13 +32,7 @@ fn uniform_lowest(lbar: f64) -> (u32, f64) {
 }
 
 fn lowest(d1: f64, lbar: f64) -> Lowest {
-    let st = Stiffness::Tanh {
-        d0: 1.0,
-        d1,
-        s0: 0.3,
-        s1: 0.8,
-        gamma: 200.0,
-    };
+    let st = Stiffness::paper_sec5(d1);
     let opts = SolveOptions::default();
     let mut best: Lowest = None;
     for eta in 1..=3u32 {

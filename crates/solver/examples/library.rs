@@ -39,13 +39,7 @@ pub fn main() -> Result<(), Box<dyn std::error::Error>> {
     assert_eq!(index, 0, "the saddle loop is a local minimum");
 
     // A two-segment rod (Eq. (51)): soft segment 0.3 < s/L < 0.8 with D1/D0 = 0.5.
-    let rod = Stiffness::Tanh {
-        d0: 1.0,
-        d1: 0.5,
-        s0: 0.3,
-        s1: 0.8,
-        gamma: 200.0,
-    };
+    let rod = Stiffness::paper_sec5(0.5);
     let (two, strategy) = solve_robust(
         radius,
         lbar,

@@ -256,6 +256,23 @@ pub fn solve_robust_with(
     .map(|(acc, strategy, _)| (acc, strategy))
 }
 
+/// An error where a loop of `periods` periods at `n` cells (doubled for the companion of
+/// [`Accuracy::High`]) exceeds [`MAX_CELLS`].
+fn check_cells(periods: usize, n: usize, accuracy: Accuracy) -> Result<(), SolverError> {
+    let finest = if accuracy == Accuracy::High { 2 * n } else { n };
+    if finest > MAX_CELLS {
+        Err(SolverError::InvalidInput(format!(
+            "a loop with {periods} periods of κ_g needs {finest} cells at {} accuracy, above the \
+             limit of {MAX_CELLS} cells (the dense fallback of Newton's method would need {:.0} \
+             GiB)",
+            format!("{accuracy:?}").to_lowercase(),
+            8.0 * ((2 * finest + 4) as f64).powi(2) / 1024f64.powi(3)
+        )))
+    } else {
+        Ok(())
+    }
+}
+
 /// [`solve_robust_with`], with the verification of the state returned.
 #[allow(clippy::too_many_arguments)]
 fn robust(
@@ -270,16 +287,7 @@ fn robust(
 ) -> Result<(AccurateEquilibrium, Strategy, Verification), SolverError> {
     let periods = start.periods(lbar)?;
     let n = accuracy.cells(periods, stiffness);
-    let finest = if accuracy == Accuracy::High { 2 * n } else { n };
-    if finest > MAX_CELLS {
-        return Err(SolverError::InvalidInput(format!(
-            "a loop with {periods} periods of κ_g needs {finest} cells at {} accuracy, above the \
-             limit of {MAX_CELLS} cells (the dense fallback of Newton's method would need {:.0} \
-             GiB)",
-            format!("{accuracy:?}").to_lowercase(),
-            8.0 * ((2 * finest + 4) as f64).powi(2) / 1024f64.powi(3)
-        )));
-    }
+    check_cells(periods, n, accuracy)?;
     let check = |res: Result<Equilibrium, SolverError>| -> Result<Equilibrium, String> {
         let eq = res.map_err(|e| format!("failed ({e})"))?;
         match (eta, identify_equilibrium(&eq)) {

@@ -115,6 +115,19 @@ impl Stiffness {
         Stiffness::Uniform { d }
     }
 
+    /// The two-segment rod of the paper's Sec. 5 (Eq. (51), Figs. 8–10, S6–S7): `D0 = 1`, a
+    /// softer segment `s0*/L = 0.3 < s/L < s1*/L = 0.8` of stiffness `D1 = d1` (the paper
+    /// takes `D1/D0 = 0.001, 0.1, 0.5`) and transitions of sharpness `γ = 200`.
+    pub fn paper_sec5(d1: f64) -> Self {
+        Stiffness::Tanh {
+            d0: 1.0,
+            d1,
+            s0: 0.3,
+            s1: 0.8,
+            gamma: 200.0,
+        }
+    }
+
     /// `true` for the homogeneous rod (the arclength shift is then a symmetry).
     pub fn is_uniform(&self) -> bool {
         match self {

@@ -368,13 +368,7 @@ fn three_level_estimate_is_exact_on_power_laws() {
 fn curvature_is_interpolated_across_the_closing_node_with_the_holonomy() {
     use rodloop_solver::enclosed::descent::stiffness_homotopy_states;
     use rodloop_solver::enclosed::solve_enclosed;
-    let st = Stiffness::Tanh {
-        d0: 1.0,
-        d1: 0.5,
-        s0: 0.3,
-        s1: 0.8,
-        gamma: 200.0,
-    };
+    let st = Stiffness::paper_sec5(0.5);
     let (lbar, eta) = (1.35, 1u32);
     let opts = EnclosedOptions::default();
     let coarse = stiffness_homotopy_states(1.0, lbar, eta, &st, 24, &opts)

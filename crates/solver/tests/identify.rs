@@ -27,13 +27,7 @@ fn identify_two_segment_family_from_the_uniform_loop() {
         let mut differs = 0;
         while d1 > 0.1 + 1e-12 {
             d1 = (d1 * 0.9).max(0.1);
-            let st = Stiffness::Tanh {
-                d0: 1.0,
-                d1,
-                s0: 0.3,
-                s1: 0.8,
-                gamma: 200.0,
-            };
+            let st = Stiffness::paper_sec5(d1);
             let eq = solve_cells(
                 1.0,
                 lbar,

@@ -166,13 +166,7 @@ fn robust_solve_reaches_a_state_by_continuation_in_lbar() {
     // 0.001. The family solved at L̄ = 1.5 is followed down in L̄ instead.
     use rodloop_solver::identify::identify_equilibrium;
     use rodloop_solver::{solve_robust, Accuracy, Strategy};
-    let st = Stiffness::Tanh {
-        d0: 1.0,
-        d1: 0.001,
-        s0: 0.3,
-        s1: 0.8,
-        gamma: 200.0,
-    };
+    let st = Stiffness::paper_sec5(0.001);
     let start = StartShape::Euler { l: 1 };
     let opts = SolveOptions::default();
     let (acc, strategy) =
@@ -203,13 +197,7 @@ fn robust_solve_in_separate_passes_gives_the_same_outcome() {
     // (the same state, bit for bit), else the homotopies' outcome, and a refusal names the
     // same reasons.
     use rodloop_solver::{solve_robust, solve_robust_with, Accuracy, Fallbacks};
-    let st = Stiffness::Tanh {
-        d0: 1.0,
-        d1: 0.001,
-        s0: 0.3,
-        s1: 0.8,
-        gamma: 200.0,
-    };
+    let st = Stiffness::paper_sec5(0.001);
     let start = StartShape::Euler { l: 2 };
     let opts = SolveOptions::default();
     let whole = solve_robust(1.0, 1.5, &st, &start, Accuracy::Fast, Some(2), &opts);
@@ -271,13 +259,7 @@ fn nearly_uniform_rods_solve_and_follow_first_order_perturbation_theory() {
     let start = StartShape::Euler { l: 2 };
     let opts = SolveOptions::default();
     let energy = |d1: f64| {
-        let st = Stiffness::Tanh {
-            d0: 1.0,
-            d1,
-            s0: 0.3,
-            s1: 0.8,
-            gamma: 200.0,
-        };
+        let st = Stiffness::paper_sec5(d1);
         let (acc, _) = solve_robust(1.0, lbar, &st, &start, Accuracy::Default, Some(2), &opts)
             .unwrap_or_else(|e| panic!("D1/D0 = {d1}: {e}"));
         (acc.energy.total, acc.energy_error)

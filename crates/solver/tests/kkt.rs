@@ -15,13 +15,7 @@ fn lcg(seed: &mut u64) -> f64 {
 }
 
 fn sharp() -> Stiffness {
-    Stiffness::Tanh {
-        d0: 1.0,
-        d1: 0.5,
-        s0: 0.3,
-        s1: 0.8,
-        gamma: 200.0,
-    }
+    Stiffness::paper_sec5(0.5)
 }
 
 /// A KKT state near an Euler start, perturbed, with a random multiplier.

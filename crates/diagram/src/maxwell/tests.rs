@@ -116,13 +116,7 @@ fn bordered_factorisation_agrees_with_dense_lu() {
 fn crossing_slope_is_the_derivative_of_the_energy_gap_along_the_equilibria() {
     // At equilibria the Schur complement is d(E_a − E_b)/dL̄ with both states re-solved:
     // compare with central differences of re-solved energies.
-    let st = Stiffness::Tanh {
-        d0: 1.0,
-        d1: 0.9,
-        s0: 0.3,
-        s1: 0.8,
-        gamma: 200.0,
-    };
+    let st = Stiffness::paper_sec5(0.9);
     let opts = SolveOptions::default();
     let a = crate::phase::lowest_placement(1.0, 1.4, 2, 112, &st, &opts).unwrap();
     let b = crate::phase::lowest_placement(1.0, 1.4, 1, 84, &st, &opts).unwrap();

@@ -306,13 +306,7 @@ mod tests {
     use rodloop_exact::eta_of_branch;
 
     fn scene(d1: f64) -> Stiffness {
-        Stiffness::Tanh {
-            d0: 1.0,
-            d1,
-            s0: 0.3,
-            s1: 0.8,
-            gamma: 200.0,
-        }
+        Stiffness::paper_sec5(d1)
     }
 
     fn settings(d1: f64, target: f64, at: Vec<f64>) -> PhaseSettings {

@@ -8,13 +8,7 @@ use rodloop_diagram::{compute, BranchEnd, CriticalKind, DiagramOptions, Label, N
 use rodloop_solver::{solve_robust, Accuracy, SolveOptions, StartShape, Stiffness};
 
 fn paper_rod() -> Stiffness {
-    Stiffness::Tanh {
-        d0: 1.0,
-        d1: 0.5,
-        s0: 0.3,
-        s1: 0.8,
-        gamma: 200.0,
-    }
+    Stiffness::paper_sec5(0.5)
 }
 
 fn diagram() -> &'static NumericDiagram {
@@ -219,13 +213,7 @@ fn special_points_agree_with_the_high_accuracy_ones() {
 /// through located crossings.
 #[test]
 fn very_soft_rod_lowest_state_is_no_higher_than_solve() {
-    let rod = Stiffness::Tanh {
-        d0: 1.0,
-        d1: 0.001,
-        s0: 0.3,
-        s1: 0.8,
-        gamma: 200.0,
-    };
+    let rod = Stiffness::paper_sec5(0.001);
     let opts = DiagramOptions {
         stiffness: rod.clone(),
         lbar_min: 1.0,
@@ -245,13 +233,7 @@ fn very_soft_rod_lowest_state_is_no_higher_than_solve() {
 
 /// The very soft rod of the paper (D1/D0 = 0.001).
 fn very_soft_rod() -> Stiffness {
-    Stiffness::Tanh {
-        d0: 1.0,
-        d1: 0.001,
-        s0: 0.3,
-        s1: 0.8,
-        gamma: 200.0,
-    }
+    Stiffness::paper_sec5(0.001)
 }
 
 /// The state of a sheet at `lbar`: linear interpolation of its traced states.

@@ -19,13 +19,7 @@ fn fd_check(p: &StiffnessProfile, sigma: f64) {
 
 #[test]
 fn tanh_matches_eq51_and_derivatives() {
-    let st = Stiffness::Tanh {
-        d0: 1.0,
-        d1: 0.5,
-        s0: 0.3,
-        s1: 0.8,
-        gamma: 200.0,
-    };
+    let st = Stiffness::paper_sec5(0.5);
     let p = st.validate().unwrap();
     for &sigma in &[0.0f64, 0.1, 0.29, 0.3, 0.31, 0.5, 0.79, 0.8, 0.95] {
         let eq51 = 1.0 - 0.25 * ((200.0 * (sigma - 0.3)).tanh() - (200.0 * (sigma - 0.8)).tanh());

@@ -1,0 +1,119 @@
+//! The commands that run on either engine (`diagram`, `report`, `solve`, `compare --scene`),
+//! dispatched once: [`load`] turns the scene's engine kind (`crate::engine`) into a
+//! [`SceneEngine`], and the entry points here call its method for the command. `main` calls
+//! these entry points; the commands themselves never ask which engine they run on, and
+//! nothing below imports this module back.
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::{bail, Result};
+use rodloop_scene::Scene;
+
+use crate::engine::EngineKind;
+
+/// What each command does with a scene of one engine.
+trait SceneEngine {
+    /// `rodloop diagram` in `L̄`.
+    fn diagram(&self, args: &crate::diagram::Args, scene: &Scene) -> Result<()>;
+    /// `rodloop report` (`t_start`: when the command started, for its timing line).
+    fn report(&self, args: &crate::report::Args, scene: &Scene, t_start: Instant) -> Result<()>;
+    /// `rodloop solve`.
+    fn solve(&self, args: &crate::solve::Args, scene: &Scene) -> Result<()>;
+    /// `rodloop compare --scene <file>` (`scene_arg` as given, `out` the output directory).
+    fn compare(&self, scene_arg: &str, scene: &Scene, out: &Path) -> Result<()>;
+}
+
+/// Loops on the sphere.
+struct Surface;
+
+/// Loops in the ball.
+struct Enclosed;
+
+impl SceneEngine for Surface {
+    fn diagram(&self, args: &crate::diagram::Args, scene: &Scene) -> Result<()> {
+        crate::diagram::run_surface(args, scene)
+    }
+    fn report(&self, args: &crate::report::Args, scene: &Scene, t_start: Instant) -> Result<()> {
+        crate::report::run_surface(args, scene, t_start)
+    }
+    fn solve(&self, args: &crate::solve::Args, scene: &Scene) -> Result<()> {
+        crate::solve::run_surface(args, scene.clone())
+    }
+    fn compare(&self, scene_arg: &str, scene: &Scene, out: &Path) -> Result<()> {
+        // A two-segment rod on the sphere: the paper's statements of Sec. 5.
+        if !scene.stiffness.is_uniform() {
+            return crate::compare_segments::run(scene, out);
+        }
+        crate::enclosed::run_compare(scene_arg, out)
+    }
+}
+
+impl SceneEngine for Enclosed {
+    fn diagram(&self, args: &crate::diagram::Args, scene: &Scene) -> Result<()> {
+        if args.relative {
+            bail!("--relative applies to surface diagrams; draw an enclosed diagram's branches.csv with `rodloop draw --relative` instead");
+        }
+        crate::diagram::enclosed::run(args, scene)
+    }
+    fn report(&self, args: &crate::report::Args, scene: &Scene, _t_start: Instant) -> Result<()> {
+        crate::report::run_enclosed(args, scene)
+    }
+    fn solve(&self, args: &crate::solve::Args, scene: &Scene) -> Result<()> {
+        crate::enclosed::run_solve(args, scene)
+    }
+    fn compare(&self, scene_arg: &str, _scene: &Scene, out: &Path) -> Result<()> {
+        crate::enclosed::run_compare(scene_arg, out)
+    }
+}
+
+/// The engine of a kind: the one place the commands branch on the model.
+fn of_kind(kind: EngineKind) -> &'static dyn SceneEngine {
+    match kind {
+        EngineKind::Surface => &Surface,
+        EngineKind::Enclosed => &Enclosed,
+    }
+}
+
+/// The scene of `--scene` (the default surface scene without one) and its engine.
+fn load(path: Option<&Path>) -> Result<(Scene, &'static dyn SceneEngine)> {
+    let (scene, kind) = crate::engine::load(path)?;
+    Ok((scene, of_kind(kind)))
+}
+
+/// `rodloop diagram`: `--param` on the surface model, else the diagram in `L̄` of the scene's
+/// engine.
+pub fn diagram(args: &crate::diagram::Args) -> Result<()> {
+    if crate::diagram::param_or_checked(args)? {
+        return Ok(());
+    }
+    let (scene, engine) = load(args.scene.as_deref())?;
+    engine.diagram(args, &scene)
+}
+
+/// `rodloop report` on the scene's engine.
+pub fn report(args: &crate::report::Args) -> Result<()> {
+    let t_start = Instant::now();
+    let (scene, engine) = load(args.scene.as_deref())?;
+    engine.report(args, &scene, t_start)
+}
+
+/// `rodloop solve` on the scene's engine.
+pub fn solve(args: &crate::solve::Args) -> Result<()> {
+    let (scene, engine) = load(args.scene.as_deref())?;
+    engine.solve(args, &scene)
+}
+
+/// `rodloop compare`: a scene file on its engine, `enclosed` (the built-in homogeneous
+/// enclosed scene), or without `--scene` the default scene against the exact layer and the
+/// paper.
+pub fn compare(args: &crate::compare::Args) -> Result<()> {
+    match args.scene.as_deref() {
+        Some("enclosed") => crate::enclosed::run_compare("enclosed", &args.out),
+        Some(s) => {
+            let scene = Scene::from_file(Path::new(s))?;
+            of_kind(crate::engine::kind_of(&scene)).compare(s, &scene, &args.out)
+        }
+        None => crate::compare::run(args),
+    }
+}

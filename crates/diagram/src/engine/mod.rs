@@ -1,0 +1,91 @@
+//! One interface for every diagram engine, and the one translation of each engine's result
+//! into the result schema ([`rodloop_schema::Diagram`]).
+//!
+//! Every engine runs the same pipeline, in these steps:
+//!
+//! 1. **seed**: starting states of every branch from the scene's own features (surface: the
+//!    Euler rotation curve and, for a rod without the shift symmetry, its placements and
+//!    families; enclosed: the exact or surface loops; exact: the closed-form closure);
+//! 2. **trace**: continuation in the parameter (pseudo-arclength through folds on the surface,
+//!    natural-parameter steps of the lifted-off parts in the ball, the closure curve of the
+//!    exact layer);
+//! 3. **locate** the special points (folds, branch points, index changes; lift-off, landing
+//!    and detachment events);
+//! 4. **exchanges**: the critical lengths where the lowest state changes, on re-solved
+//!    equilibria;
+//! 5. **label** every state (stable / metastable / unstable from the Hessian index).
+//!
+//! [`Engine::run`] performs them and returns the engine's own result (which keeps the states
+//! themselves, for `states/`, the atlas and the report); [`Engine::schema`] turns that into
+//! the one result schema that the writer, the figures and the report read. Whether a surface
+//! rod is uniform or two-segment is a property of its stiffness (the shift symmetry), decided
+//! inside [`SurfaceEngine`], not by its caller.
+//!
+//! | file | holds |
+//! |---|---|
+//! | `mod.rs` | the [`Engine`] interface and the schema helpers the engines share |
+//! | `surface.rs` | [`SurfaceEngine`] and its schema ([`surface_schema`]) |
+//! | `enclosed.rs` | [`EnclosedEngine`] and its schema ([`lowest_lifted_off`]) |
+//! | `exact.rs` | [`ExactEngine`] and its window of the exact diagram ([`exact_window`]) |
+
+mod enclosed;
+mod exact;
+mod surface;
+
+pub use enclosed::{lowest_lifted_off, EnclosedEngine};
+pub use exact::{etas_in, exact_window, ExactEngine, ExactOutput};
+pub use surface::{surface_schema, SurfaceEngine};
+
+use rodloop_schema::{Axis, Critical, Diagram};
+use serde::Serialize;
+
+use crate::DiagramError;
+
+/// Units of the diagram outputs.
+pub const UNITS: &str =
+    "lengths lbar = L/(2 pi R); energy E R/(pi D0) (D0 = D for a uniform rod); lambda R^3/D0";
+
+/// A diagram engine: one model's pipeline (seed → trace → locate → exchanges → label).
+pub trait Engine {
+    /// The engine's own result (the schema names its states by file; the states live here).
+    type Output;
+    /// Progress events of [`Engine::run`].
+    type Progress;
+    /// `model` in `summary.json`.
+    fn model(&self) -> &'static str;
+    /// Run the pipeline.
+    fn run(
+        &mut self,
+        progress: &mut dyn FnMut(Self::Progress),
+    ) -> Result<Self::Output, DiagramError>;
+    /// The result in the schema, for scene `scene` (state files not yet named).
+    fn schema(&self, out: &Self::Output, scene: &str) -> Result<Diagram, DiagramError>;
+}
+
+/// The lbar axis of a branch diagram.
+pub(super) fn lbar_axis(min: f64, max: f64) -> Vec<Axis> {
+    vec![Axis {
+        name: "lbar".into(),
+        min,
+        max,
+    }]
+}
+
+/// An engine's record of a critical length in the schema: the common fields, the rest kept as
+/// the engine wrote them.
+pub fn critical_of<T: Serialize>(c: &T) -> Result<Critical, DiagramError> {
+    rodloop_schema::check_finite(c).map_err(|m| schema_err("critical", m))?;
+    let v = serde_json::to_value(c).map_err(|e| schema_err("critical", e.to_string()))?;
+    serde_json::from_value(v).map_err(|e| schema_err("critical", e.to_string()))
+}
+
+fn schema_err(what: &str, message: String) -> DiagramError {
+    DiagramError::Schema(rodloop_schema::SchemaError::NotFiniteValue {
+        key: what.into(),
+        message,
+    })
+}
+
+pub(super) fn columns(names: &[&str]) -> Vec<String> {
+    names.iter().map(|s| s.to_string()).collect()
+}
