@@ -6,6 +6,7 @@ use rodloop_solver::{Param, ParamProblem, SurfaceSolve};
 use super::images::Images;
 use super::{Curve, SAME_STATE};
 use crate::march::MarchPoint;
+use crate::parallel::run_parallel;
 use crate::states::finish_point;
 use crate::types::{BranchEnd, BranchTimings, IndexChange, PointSource, TracedBranch};
 use crate::DiagramOptions;
@@ -28,11 +29,27 @@ pub(super) fn make_sheets<M: SurfaceSolve>(
 ) -> Vec<TracedBranch> {
     let mut sheets: Vec<TracedBranch> = Vec::new();
     let mut kept_states: Vec<(usize, Vec<f64>, f64)> = Vec::new();
+    // Every state is finished independently of the others: all of them on the crate's
+    // thread pool, then the curves are cut in order.
+    let raw: Vec<(usize, &MarchPoint)> = curves
+        .iter()
+        .enumerate()
+        .flat_map(|(ci, c)| thinned(images, &c.points).into_iter().map(move |r| (ci, r)))
+        .collect();
+    let mut done = run_parallel(
+        opts.worker_threads(),
+        raw,
+        &mut |_| {},
+        &mut |_| {},
+        |(ci, r), _| (ci, finish_point(opts, problem, r).map(|p| (p, r.source))),
+    )
+    .into_iter()
+    .peekable();
     for (ci, curve) in curves.iter().enumerate() {
-        let finished: Vec<_> = thinned(images, &curve.points)
-            .into_iter()
-            .filter_map(|r| finish_point(opts, problem, r).map(|p| (p, r.source)))
-            .collect();
+        let mut finished = Vec::new();
+        while let Some((_, f)) = done.next_if(|(c, _)| *c == ci) {
+            finished.extend(f);
+        }
         let mut pieces = split_monotone(&finished);
         let count = pieces.len();
         for (k, piece) in pieces.drain(..).enumerate() {
