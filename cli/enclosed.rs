@@ -13,7 +13,7 @@ use rodloop_diagram::detached::{detachments, BranchDetachment};
 use rodloop_diagram::enclosed_state::{self, EnclosedResult, TOUCH};
 use rodloop_exact::{branch_of_eta, eta_of_branch};
 use rodloop_scene::Scene;
-use rodloop_solver::enclosed::SavedShape;
+use rodloop_solver::enclosed::{SavedShape, Wall};
 use rodloop_solver::{Accuracy, Stiffness};
 
 use crate::output::{checked_json, Cell, OutputRun, Table};
@@ -21,7 +21,8 @@ use crate::output::{checked_json, Cell, OutputRun, Table};
 const UNITS: &str = "lengths (s, x, y, z, gap = R - |r|) in units of R; kappa in 1/R; energy E R/(pi D0); lambda R^3/D0 (force per unit length); D/D0; eigenvalues mass-normalised in units of D0/R^3";
 
 /// Solve branch `branch` of an enclosed scene at `lbar`
-/// ([`rodloop_diagram::enclosed_state::solve_state`] in the scene's ball and stiffness).
+/// ([`rodloop_diagram::enclosed_state::solve_state`] inside the scene's wall, with its
+/// stiffness).
 pub fn solve_state(
     scene: &Scene,
     stiffness: &Stiffness,
@@ -30,7 +31,7 @@ pub fn solve_state(
     accuracy: Accuracy,
 ) -> Result<EnclosedResult> {
     Ok(enclosed_state::solve_state(
-        scene.radius,
+        crate::engine::wall_of(scene),
         stiffness,
         lbar,
         branch,
@@ -141,9 +142,10 @@ pub fn run_solve(args: &crate::args::SolveArgs, scene: &Scene) -> Result<()> {
         None => None,
     };
     let run = OutputRun::begin(&args.out)?;
+    let wall = crate::engine::wall_of(scene);
     let res = match (&shape, branch) {
         (Some(sh), _) => enclosed_state::solve_from_shape(
-            scene.radius,
+            &wall,
             &stiffness,
             args.lbar,
             sh,
@@ -152,7 +154,7 @@ pub fn run_solve(args: &crate::args::SolveArgs, scene: &Scene) -> Result<()> {
             args.keep_saddle,
         )?,
         (None, Some(b)) => enclosed_state::solve_state_with(
-            scene.radius,
+            &wall,
             &stiffness,
             args.lbar,
             b,
@@ -181,6 +183,7 @@ pub fn run_solve(args: &crate::args::SolveArgs, scene: &Scene) -> Result<()> {
         "eta": eta,
         "identified_eta": check.identified_eta,
         "radius": scene.radius,
+        "wall": wall_summary(wall.as_ref()),
         "accuracy": format!("{accuracy:?}").to_lowercase(),
         "energy": res.energy.0,
         "error_estimate": res.energy.1,
@@ -258,6 +261,17 @@ pub fn run_solve(args: &crate::args::SolveArgs, scene: &Scene) -> Result<()> {
         args.out.display()
     );
     Ok(())
+}
+
+/// The wall as `summary.json` names it: its shape and the semi-axes of its outline in units
+/// of `R` ([`Wall::outline`]).
+fn wall_summary(wall: &dyn Wall) -> serde_json::Value {
+    let (shape, axes) = wall.outline();
+    let r = wall.radius();
+    serde_json::json!({
+        "shape": shape,
+        "semi_axes": [axes[0] / r, axes[1] / r, axes[2] / r],
+    })
 }
 
 /// `rodloop compare --scene enclosed`: per branch 1–3 over `1 ≤ L̄ ≤ 3` (homogeneous

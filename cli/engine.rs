@@ -1,12 +1,16 @@
 //! The one place the CLI chooses the engine of a scene: the surface engine (any stiffness;
 //! whether the rod has the shift symmetry of a uniform one is decided inside it), the enclosed
 //! engine (`confinement = "enclosed"`), and the exact layer on request (`diagram --model
-//! exact`, homogeneous surface scenes). Every command that runs a model asks [`kind_of`].
+//! exact`, homogeneous surface scenes). Every command that runs a model asks [`kind_of`];
+//! the enclosed engine and `solve` receive the scene's wall from [`wall_of`], the one place a
+//! scene's [`WallSpec`] becomes the solver's [`Wall`].
 
 use std::path::Path;
+use std::sync::Arc;
 
 use anyhow::Result;
-use rodloop_scene::{Confinement, Scene};
+use rodloop_scene::{Confinement, Scene, WallSpec};
+use rodloop_solver::enclosed::{SphereWall, Wall};
 
 /// The engine that answers a scene.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -33,4 +37,13 @@ pub fn load(path: Option<&Path>) -> Result<(Scene, EngineKind)> {
     };
     let kind = kind_of(&scene);
     Ok((scene, kind))
+}
+
+/// The wall of an enclosed scene (its `[wall]` table, in the scene's length units).
+pub fn wall_of(scene: &Scene) -> Arc<dyn Wall> {
+    match scene.wall {
+        WallSpec::Sphere => Arc::new(SphereWall {
+            radius: scene.radius,
+        }),
+    }
 }

@@ -229,6 +229,8 @@ fn every_documented_scene_loads() {
         "stiffness.s1",
         "stiffness.gamma",
         "stiffness.s",
+        "[wall]",
+        "wall.shape",
     ] {
         assert!(
             table.contains(&format!("`{key}`")),

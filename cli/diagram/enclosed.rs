@@ -39,7 +39,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     }
     let accuracy = crate::args::accuracy_of(scene, args.accuracy.as_deref())?;
     let mut opts = EnclosedDiagramOptions::new(
-        scene.radius,
+        crate::engine::wall_of(scene),
         crate::args::stiffness_of(&scene.stiffness),
         lbar_min,
         lbar_max,

@@ -9,6 +9,8 @@
 //! model re-solves it as a check. Where `λ < 0` somewhere, the 3-D model's semismooth
 //! Newton finds the lift-off.
 
+use std::sync::Arc;
+
 use rodloop_exact::{eta_of_branch, paper_branch_loop};
 use rodloop_solver::enclosed::branch::BranchSolve;
 use rodloop_solver::enclosed::descent::{
@@ -18,6 +20,7 @@ use rodloop_solver::enclosed::{
     enclosed_cells, enclosed_solve_cells, free_circle, solve_branch, solve_enclosed, solve_levels,
     start_from_shape, EnclosedOptions, EnclosedState, SavedShape, SurfaceSource,
 };
+use rodloop_solver::enclosed::{IntoWall, Wall};
 use rodloop_solver::{solve_robust, Accuracy, SolveOptions, StartShape, Stiffness};
 
 use crate::DiagramError;
@@ -206,25 +209,27 @@ fn solve_cells(stiffness: &Stiffness, accuracy: Accuracy, eta: u32) -> usize {
 /// reference value `D0`) at `lbar`, descending from a saddle to the local minimum of the
 /// branch below it ([`solve_state_with`]).
 pub fn solve_state(
-    r: f64,
+    wall: impl IntoWall,
     stiffness: &Stiffness,
     lbar: f64,
     branch: u32,
     accuracy: Accuracy,
 ) -> Result<EnclosedResult, DiagramError> {
-    solve_state_with(r, stiffness, lbar, branch, accuracy, false)
+    solve_state_with(wall, stiffness, lbar, branch, accuracy, false)
 }
 
 /// [`solve_state`]; `keep_saddle`: return the state Newton converges to even where it is a
 /// saddle.
 pub fn solve_state_with(
-    r: f64,
+    wall: impl IntoWall,
     stiffness: &Stiffness,
     lbar: f64,
     branch: u32,
     accuracy: Accuracy,
     keep_saddle: bool,
 ) -> Result<EnclosedResult, DiagramError> {
+    let wall = wall.into_wall();
+    let r = wall.radius();
     let opts = EnclosedOptions::default();
     if branch == 0 {
         if lbar > 1.0 {
@@ -241,9 +246,9 @@ pub fn solve_state_with(
             },
             1,
         );
-        let (model, z0) = free_circle(r, lbar, cells, stiffness).map_err(passed)?;
+        let (model, z0) = free_circle(&wall, lbar, cells, stiffness).map_err(passed)?;
         let state = solve_enclosed(&model, z0, &opts).map_err(context("the free circle"))?;
-        let (cm, cz) = free_circle(r, lbar, cells / 2, stiffness).map_err(passed)?;
+        let (cm, cz) = free_circle(&wall, lbar, cells / 2, stiffness).map_err(passed)?;
         let comp = solve_enclosed(&cm, cz, &opts).map_err(passed)?;
         let e = state.energy();
         let est = rodloop_solver::richardson_error(e, comp.energy());
@@ -298,7 +303,8 @@ pub fn solve_state_with(
     };
     let e_surf = source.energy().map_err(passed)?;
     let lam_min = source.lambda_min(r, d0);
-    let attached = lam_min >= 0.0;
+    // Only on the sphere is a surface loop with `λ ≥ 0` an enclosed state.
+    let attached = wall.sphere().is_some() && lam_min >= 0.0;
     // An attached loop's energy is the surface one; the 3-D re-solve is a check, at the
     // fast resolution.
     let acc = if attached { Accuracy::Fast } else { accuracy };
@@ -308,7 +314,8 @@ pub fn solve_state_with(
     // surface loop (continuation in the stiffness from the uniform rod's loop).
     let mut lower_minimum = false;
     let (b, descent, given_up) = if keep_saddle {
-        let b = solve_branch(r, lbar, stiffness, &source, cells, &opts).map_err(context(what()))?;
+        let b =
+            solve_branch(&wall, lbar, stiffness, &source, cells, &opts).map_err(context(what()))?;
         (b, None, Vec::new())
     } else {
         // Two-segment rods: where the mesh of this accuracy does not end at a local minimum,
@@ -322,13 +329,14 @@ pub fn solve_state_with(
             ladder.retain(|&n| n >= cells);
             ladder.dedup();
         }
-        let (out, replaced) = solve_branch_lowest(r, lbar, eta, stiffness, &source, &ladder, &opts)
-            .map_err(context(what()))?;
+        let (out, replaced) =
+            solve_branch_lowest(&wall, lbar, eta, stiffness, &source, &ladder, &opts)
+                .map_err(context(what()))?;
         lower_minimum = replaced;
         if stiffness.is_uniform() {
             out
         } else {
-            lowest_over_surface_starts(r, lbar, eta, stiffness, accuracy, &ladder, &opts, out)
+            lowest_over_surface_starts(&wall, lbar, eta, stiffness, accuracy, &ladder, &opts, out)
         }
     };
     let cells = b.fine.model.cells();
@@ -400,7 +408,7 @@ pub fn solve_state_with(
 /// the lowest saddle reported is the same state at every accuracy.
 #[allow(clippy::too_many_arguments)]
 fn lowest_over_surface_starts(
-    r: f64,
+    wall: &Arc<dyn Wall>,
     lbar: f64,
     eta: u32,
     stiffness: &Stiffness,
@@ -431,7 +439,7 @@ fn lowest_over_surface_starts(
             continue;
         }
         let Ok((surface, _)) = solve_robust(
-            r,
+            wall.radius(),
             lbar,
             stiffness,
             &StartShape::Euler { l: eta },
@@ -443,7 +451,7 @@ fn lowest_over_surface_starts(
         };
         let source = SurfaceSource::Numeric(Box::new(surface.equilibrium));
         let Ok((b, d, mut notes)) =
-            solve_branch_descended(r, lbar, stiffness, &source, ladder, opts)
+            solve_branch_descended(wall, lbar, stiffness, &source, ladder, opts)
         else {
             continue;
         };
@@ -485,7 +493,7 @@ fn describe_descent(
 /// [`start_from_shape`], start the cascade at `N/4` (`N = 32(1 + η)` with the branch's `η`
 /// when given, else `η = 2`).
 pub fn solve_from_shape(
-    r: f64,
+    wall: impl IntoWall,
     stiffness: &Stiffness,
     lbar: f64,
     shape: &SavedShape,
@@ -495,7 +503,7 @@ pub fn solve_from_shape(
 ) -> Result<EnclosedResult, DiagramError> {
     let eta = branch.filter(|&b| b > 0).map_or(2, eta_of_branch);
     let cells = solve_cells(stiffness, accuracy, eta);
-    let (model, z0) = start_from_shape(r, lbar, cells / 4, stiffness, shape).map_err(passed)?;
+    let (model, z0) = start_from_shape(wall, lbar, cells / 4, stiffness, shape).map_err(passed)?;
     let opts = EnclosedOptions::default();
     let b = solve_levels(&model, z0, None, &opts)
         .map_err(context("the enclosed loop from the saved shape"))?;

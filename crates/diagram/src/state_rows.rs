@@ -84,8 +84,8 @@ pub fn sphere_rows(rows: &[[f64; 7]], length: f64, r: f64, d0: f64) -> Vec<[f64;
         .collect()
 }
 
-/// The enclosed rows of a 3-D state ([`ENCLOSED_COLUMNS`], ball radius `r`): every node and
-/// the two Gauss points of each cell ([`rodloop_solver::enclosed_profile`]). The contact
+/// The enclosed rows of a 3-D state ([`ENCLOSED_COLUMNS`], length unit `r`; `gap` the wall's
+/// clearance): every node and the two Gauss points of each cell ([`rodloop_solver::enclosed_profile`]). The contact
 /// force `λ` is nodal (the wall is imposed at the nodes); a Gauss row holds it interpolated
 /// linearly between its cell's nodes.
 pub fn model_rows(st: &EnclosedState, r: f64, d0: f64) -> Result<Vec<[f64; 12]>, DiagramError> {
@@ -105,13 +105,13 @@ pub fn model_rows(st: &EnclosedState, r: f64, d0: f64) -> Result<Vec<[f64; 12]>,
                 lam[c] + t * (lam[(c + 1) % n] - lam[c])
             };
             let (k1, k2) = p.kappa;
-            let rad = (p.r[0] * p.r[0] + p.r[1] * p.r[1] + p.r[2] * p.r[2]).sqrt();
+            let gap = m.wall().clearance(&nalgebra::Vector3::from(p.r));
             [
                 p.s / r,
                 p.r[0] / r,
                 p.r[1] / r,
                 p.r[2] / r,
-                (r - rad) / r,
+                gap / r,
                 (k1 * k1 + k2 * k2).sqrt() * r,
                 k1 * r,
                 k2 * r,

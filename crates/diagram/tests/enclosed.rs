@@ -200,3 +200,38 @@ fn bad_options_are_refused() {
     let err = enclosed_diagram(&EnclosedDiagramOptions::new(1.0, tanh, 0.5, 3.0)).unwrap_err();
     assert!(err.to_string().contains("starts at lbar = 1"), "{err}");
 }
+
+/// A wall that is not the sphere: the unit ball's gap, named otherwise.
+#[derive(Debug)]
+struct NotASphere;
+
+impl rodloop_solver::enclosed::Wall for NotASphere {
+    fn radius(&self) -> f64 {
+        1.0
+    }
+    fn gap(&self, r: &nalgebra::Vector3<f64>) -> f64 {
+        1.0 - r.norm_squared()
+    }
+    fn gradient(&self, r: &nalgebra::Vector3<f64>) -> nalgebra::Vector3<f64> {
+        r * -2.0
+    }
+    fn hessian(&self, _r: &nalgebra::Vector3<f64>) -> nalgebra::Matrix3<f64> {
+        nalgebra::Matrix3::identity() * -2.0
+    }
+    fn clearance(&self, r: &nalgebra::Vector3<f64>) -> f64 {
+        1.0 - r.norm()
+    }
+    fn outline(&self) -> (&'static str, [f64; 3]) {
+        ("test wall", [1.0; 3])
+    }
+}
+
+/// The diagram's tracers start from the sphere's surface loops: another wall is refused with
+/// its name, not traced as the sphere.
+#[test]
+fn a_wall_other_than_the_sphere_is_refused() {
+    let wall: std::sync::Arc<dyn rodloop_solver::enclosed::Wall> = std::sync::Arc::new(NotASphere);
+    let err =
+        enclosed_diagram(&EnclosedDiagramOptions::new(wall, uniform(), 1.0, 3.0)).unwrap_err();
+    assert!(err.to_string().contains("test wall"), "{err}");
+}

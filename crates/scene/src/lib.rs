@@ -22,6 +22,10 @@
 //! d = 1.0
 //! ```
 //!
+//! An enclosed scene may name its wall in a `[wall]` table: `shape = "sphere"` (the default,
+//! the sphere of `radius`) is the one shape. The wall's shape is the scene's
+//! [`WallSpec`]; the binary maps it to the solver's wall in one place.
+//!
 //! The two-segment profile of Eq. (51) is `kind = "tanh"` with `d0, d1, s0, s1, gamma`
 //! (`s0`, `s1` as fractions of L); a table is `kind = "table"` with arrays `s` (fractions of
 //! L in `[0, 1)`, increasing) and `d`.
@@ -83,6 +87,35 @@ pub enum Confinement {
     Surface,
     /// Inside the sphere, `|r| ≤ R` (`solve`, `diagram`, `report` and `compare --scene enclosed`).
     Enclosed,
+}
+
+/// The wall of an enclosed scene (the `[wall]` table), in the scene's length units.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub enum WallSpec {
+    /// The sphere of radius `radius` about the origin (paper Sec. 3.2).
+    #[default]
+    Sphere,
+}
+
+/// The `[wall]` table as written (flat, so that an unknown key keeps its line).
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawWall {
+    shape: Option<String>,
+}
+
+impl RawWall {
+    fn resolve(self, origin: &str) -> Result<WallSpec, SceneError> {
+        match self.shape.as_deref().unwrap_or("sphere") {
+            "sphere" => Ok(WallSpec::Sphere),
+            other => Err(SceneError::Invalid {
+                path: origin.to_string(),
+                key: "wall.shape".into(),
+                value: format!("{:?}", truncate(other, 80)),
+                reason: "must be \"sphere\"".into(),
+            }),
+        }
+    }
 }
 
 /// Accuracy level: a speed-for-accuracy dial.
@@ -150,6 +183,7 @@ struct RawScene {
     #[serde(default)]
     accuracy: Accuracy,
     stiffness: Option<RawStiffness>,
+    wall: Option<RawWall>,
 }
 
 impl RawStiffness {
@@ -385,6 +419,8 @@ pub struct Scene {
     pub accuracy: Accuracy,
     /// Stiffness profile.
     pub stiffness: StiffnessSpec,
+    /// The wall of an enclosed scene (`[wall]`; the sphere of [`Scene::radius`] by default).
+    pub wall: WallSpec,
 }
 
 fn default_name() -> String {
@@ -406,6 +442,7 @@ impl Default for Scene {
             lbar_max: 5.0,
             accuracy: Accuracy::Default,
             stiffness: StiffnessSpec::Uniform { d: 1.0 },
+            wall: WallSpec::Sphere,
         }
     }
 }
@@ -437,6 +474,17 @@ impl Scene {
             message: one_line_toml_error(text, &e),
         })?;
         let stiffness = raw.stiffness.unwrap_or_default().resolve(origin)?;
+        if raw.wall.is_some() && raw.confinement != Confinement::Enclosed {
+            return Err(SceneError::Invalid {
+                path: origin.to_string(),
+                key: "wall".into(),
+                value: String::new(),
+                reason:
+                    "names the wall of confinement = \"enclosed\"; this scene is on the surface"
+                        .into(),
+            });
+        }
+        let wall = raw.wall.unwrap_or_default().resolve(origin)?;
         let scene = Scene {
             name: raw.name,
             radius: raw.radius,
@@ -445,6 +493,7 @@ impl Scene {
             lbar_max: raw.lbar_max,
             accuracy: raw.accuracy,
             stiffness,
+            wall,
         };
         scene.validate(origin)?;
         Ok(scene)

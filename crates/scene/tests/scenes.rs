@@ -1,6 +1,6 @@
 //! Scene parsing: the shipped scenes load, bad files are rejected with the key and line.
 
-use rodloop_scene::{Accuracy, Confinement, Scene, SceneError, StiffnessSpec};
+use rodloop_scene::{Accuracy, Confinement, Scene, SceneError, StiffnessSpec, WallSpec};
 
 #[test]
 fn shipped_scenes_parse() {
@@ -202,4 +202,27 @@ fn long_arrays_are_not_echoed_whole() {
     );
     let msg = Scene::from_toml(&text, "t.toml").unwrap_err().to_string();
     assert!(msg.len() < 1000, "{} bytes: {msg}", msg.len());
+}
+
+/// The `[wall]` table of an enclosed scene: the sphere by default and by name; another
+/// shape, a key the table does not know, or a wall on a surface scene is an error naming it.
+#[test]
+fn wall_table_names_the_enclosed_wall() {
+    let enclosed = "confinement = \"enclosed\"\n";
+    let s = Scene::from_toml(enclosed, "e.toml").unwrap();
+    assert_eq!(s.wall, WallSpec::Sphere);
+    let s = Scene::from_toml(&format!("{enclosed}[wall]\nshape = \"sphere\"\n"), "e.toml").unwrap();
+    assert_eq!(s.wall, WallSpec::Sphere);
+    let msg = Scene::from_toml(&format!("{enclosed}[wall]\nshape = \"cube\"\n"), "e.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("wall.shape") && msg.contains("cube"), "{msg}");
+    let msg = Scene::from_toml(&format!("{enclosed}[wall]\nsemi_axis = 2\n"), "e.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("semi_axis") && msg.contains("line 3"), "{msg}");
+    let msg = Scene::from_toml("[wall]\nshape = \"sphere\"\n", "s.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("wall") && msg.contains("enclosed"), "{msg}");
 }

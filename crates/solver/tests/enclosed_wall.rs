@@ -7,7 +7,10 @@ use std::sync::Arc;
 
 use nalgebra::{Matrix3, Vector3};
 use rodloop_exact::paper_branch_loop;
-use rodloop_solver::enclosed::{start_from_surface, EnclosedModel, Wall};
+use rodloop_solver::enclosed::{
+    solve_branch, start_from_surface, EnclosedModel, EnclosedOptions, SphereWall, SurfaceSource,
+    Wall,
+};
 use rodloop_solver::Stiffness;
 
 /// `g = R² − rᵀAr` (`A` symmetric positive definite).
@@ -32,6 +35,9 @@ impl Wall for Quadric {
     }
     fn clearance(&self, r: &Vector3<f64>) -> f64 {
         self.gap(r) / self.gradient(r).norm().max(self.radius)
+    }
+    fn outline(&self) -> (&'static str, [f64; 3]) {
+        ("quadric", [self.radius; 3])
     }
 }
 
@@ -133,4 +139,50 @@ fn the_wall_enters_the_residual_and_survives_a_rebuild() {
     let r = Vector3::new(0.3, -0.2, 0.9);
     assert_eq!(again.wall().gap(&r), m.wall().gap(&r));
     assert_ne!(again.wall().gap(&r), sphere.wall().gap(&r));
+}
+
+/// The contact force `λ_j |∇g(r_j)|/w_j` is the sphere's `2Rλ_j/w_j` on states solved in the
+/// sphere (the figure-eight at `L̄ = 1.4`, lifted off in places: touching nodes lie on the
+/// wall to the solve's tolerance, free ones carry `λ_j = 0`), given as a radius or as the
+/// wall, in two radii.
+#[test]
+fn contact_force_on_the_sphere_is_two_r_lambda_over_w() {
+    let stiff = Stiffness::uniform(1.0);
+    for radius in [1.0, 2.5] {
+        let l = paper_branch_loop(1, 1.4).unwrap();
+        let src = SurfaceSource::Exact(l);
+        let opts = EnclosedOptions::default();
+        let by_radius = solve_branch(radius, 1.4, &stiff, &src, 64, &opts).unwrap();
+        let wall: Arc<dyn Wall> = Arc::new(SphereWall { radius });
+        let by_wall = solve_branch(&wall, 1.4, &stiff, &src, 64, &opts).unwrap();
+        assert_eq!(by_radius.energy, by_wall.energy);
+        let (m, z) = (&by_wall.fine.model, &by_wall.fine.z);
+        let force = m.contact_force(z);
+        let lo = m.lambda_offset();
+        let gaps = m.gaps(z).unwrap();
+        let peak = force.iter().fold(0.0f64, |a, f| a.max(f.abs()));
+        let (mut touching, mut free) = (0, 0);
+        for (j, f) in force.iter().enumerate() {
+            // `|∇g| = 2|r_j| = 2(R − gap_j)`: the two differ by the node's gap, which the
+            // semismooth Newton closes to its tolerance where the loop touches.
+            let sphere = 2.0 * radius * z[lo + j] / m.node_weight(j);
+            assert!(
+                (f - sphere * (1.0 - gaps[j] / radius)).abs() <= 1e-14 * peak,
+                "R = {radius}, node {j}: {f} vs 2(R - gap) lambda/w"
+            );
+            assert!(
+                (f - sphere).abs() <= 1e-10 * peak,
+                "R = {radius}, node {j}: {f} vs 2R lambda/w = {sphere}"
+            );
+            if gaps[j] <= 1e-9 * radius {
+                touching += 1;
+            } else {
+                free += 1;
+            }
+        }
+        assert!(
+            touching > 0 && free > 0,
+            "R = {radius}: {touching} touching, {free} free"
+        );
+    }
 }

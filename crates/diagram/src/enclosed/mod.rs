@@ -51,13 +51,14 @@
 
 #![allow(clippy::needless_range_loop)]
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use rodloop_exact::diagram::{compute, Critical, CriticalKind, DiagramSettings};
 use rodloop_exact::ExactLoop;
 use rodloop_exact::{branch_of_eta, eta_of_branch};
 use rodloop_solver::enclosed::stats::{self, SolveStats, Stage, StageCounts};
-use rodloop_solver::enclosed::{enclosed_cells, EnclosedState};
+use rodloop_solver::enclosed::{enclosed_cells, EnclosedState, IntoWall, Wall};
 use rodloop_solver::{Accuracy, Equilibrium, SolverError, Stiffness};
 use serde::Serialize;
 
@@ -86,8 +87,10 @@ pub const TOUCH: f64 = 1e-9;
 /// What to compute.
 #[derive(Clone, Debug)]
 pub struct EnclosedDiagramOptions {
-    /// Ball radius.
+    /// The wall's length scale `R` ([`Wall::radius`]).
     pub radius: f64,
+    /// The wall (the diagram traces inside the sphere: [`Wall::sphere`]).
+    pub wall: Arc<dyn Wall>,
     /// Stiffness (uniform or non-uniform).
     pub stiffness: Stiffness,
     /// Smallest `L̄`.
@@ -105,9 +108,11 @@ pub struct EnclosedDiagramOptions {
 
 impl EnclosedDiagramOptions {
     /// Defaults for the range `[lbar_min, lbar_max]` of a uniform rod of stiffness `d`.
-    pub fn new(radius: f64, stiffness: Stiffness, lbar_min: f64, lbar_max: f64) -> Self {
+    pub fn new(wall: impl IntoWall, stiffness: Stiffness, lbar_min: f64, lbar_max: f64) -> Self {
+        let wall = wall.into_wall();
         Self {
-            radius,
+            radius: wall.radius(),
+            wall,
             stiffness,
             lbar_min,
             lbar_max,
@@ -121,6 +126,12 @@ impl EnclosedDiagramOptions {
         let bad = |m: String| Err(DiagramError::InvalidOptions(m));
         if !(self.radius.is_finite() && self.radius > 0.0) {
             return bad(format!("radius must be positive (got {})", self.radius));
+        }
+        if self.wall.sphere().is_none() {
+            return bad(format!(
+                "the enclosed diagram traces inside the sphere; the wall is a {}",
+                self.wall.outline().0
+            ));
         }
         if !(self.lbar_min.is_finite()
             && self.lbar_max.is_finite()

@@ -8,6 +8,7 @@ use super::solve::{
     solve_by_pull_homotopy, solve_enclosed, start_from_curvature, start_from_surface,
     transfer_multipliers, EnclosedOptions, EnclosedState,
 };
+use super::wall::IntoWall;
 pub use crate::accuracy::three_level_estimate;
 use crate::solve::Equilibrium;
 use crate::stiffness::Stiffness;
@@ -91,13 +92,15 @@ pub struct BranchSolve {
 /// stalled at 128 cells on the figure-eight at `L̄ = 1.4` and needed the pull homotopy),
 /// and the `cells/8` level enters the error estimate ([`four_level_estimate`]).
 pub fn solve_branch(
-    radius: f64,
+    wall: impl IntoWall,
     lbar: f64,
     stiffness: &Stiffness,
     source: &SurfaceSource,
     cells: usize,
     opts: &EnclosedOptions,
 ) -> Result<BranchSolve, SolverError> {
+    let wall = wall.into_wall();
+    let radius = wall.radius();
     if cells < 32 || cells % 4 != 0 {
         return Err(SolverError::InvalidInput(format!(
             "enclosed solves need a multiple of 4 cells, at least 32 (got {cells})"
@@ -115,7 +118,7 @@ pub fn solve_branch(
         (cells / 4, 2)
     };
     let probe = super::model::EnclosedModel::new(
-        radius,
+        &wall,
         lbar,
         n0,
         stiffness,
@@ -131,7 +134,7 @@ pub fn solve_branch(
         let g = sig.iter().position(|&x| (x - s).abs() < 1e-15).unwrap_or(0);
         kg[g]
     };
-    let (model, z0) = start_from_surface(radius, lbar, n0, stiffness, lookup)?;
+    let (model, z0) = start_from_surface(wall, lbar, n0, stiffness, lookup)?;
     let lmin = source.lambda_min(radius, stiffness.reference());
     solve_ladder(&model, z0, Some(lmin), opts, refinements)
 }
@@ -218,7 +221,7 @@ pub fn resample_state(
     let r0 = m.start_point(&state.z);
     let stiff = m.stiffness().kind().clone();
     let (model, mut z) = start_from_curvature(
-        m.radius(),
+        m.wall(),
         m.lbar(),
         cells,
         &stiff,

@@ -174,7 +174,7 @@ pub fn shifted_start(
         slope: None,
         pin: None,
     };
-    let probe = EnclosedModel::with_bounds(m.radius(), m.lbar(), bounds.clone(), &stiff, zero)?;
+    let probe = EnclosedModel::with_bounds(m.wall(), m.lbar(), bounds.clone(), &stiff, zero)?;
     let reference = probe.sample_gauss(kappa);
     let d = 1e-5;
     let mut slope = probe.sample_gauss(|s| {
@@ -193,7 +193,7 @@ pub fn shifted_start(
         slope: Some(slope),
         pin: None,
     };
-    let model = EnclosedModel::with_bounds(m.radius(), m.lbar(), bounds, &stiff, gauge)?;
+    let model = EnclosedModel::with_bounds(m.wall(), m.lbar(), bounds, &stiff, gauge)?;
     let mut z = vec![0.0; model.dim()];
     z[..4 * cells].copy_from_slice(&reference);
     z[4 * cells..4 * cells + 3].copy_from_slice(&[r0[0], r0[1], r0[2]]);
@@ -201,7 +201,7 @@ pub fn shifted_start(
         least_squares_multipliers(&model, &mut z)?;
     } else {
         let (cm, cz) = start_from_curvature(
-            m.radius(),
+            m.wall(),
             m.lbar(),
             LEAST_SQUARES_MAX_CELLS,
             &stiff,

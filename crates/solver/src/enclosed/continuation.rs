@@ -302,7 +302,7 @@ pub fn with_stiffness(
     let m = &state.model;
     let r0 = m.start_point(&state.z);
     let (model, mut z) = start_from_curvature(
-        m.radius(),
+        m.wall(),
         m.lbar(),
         m.cells(),
         stiffness,

@@ -18,6 +18,7 @@ use super::branch::{
     resample_state, solve_branch, solve_levels, solve_levels_from_fine, BranchSolve, SurfaceSource,
 };
 use super::solve::{solve_enclosed, EnclosedOptions, EnclosedState};
+use super::wall::IntoWall;
 use crate::descend::{descend as descend_saddle, Descent, DescentSettings, SaddleModel};
 use crate::identify::Periods;
 use crate::SolverError;
@@ -273,7 +274,7 @@ pub type DescendedSolve = (BranchSolve, Option<Descent<EnclosedState>>, Vec<Stri
 /// index 0), its descent, and one line per mesh given up, saying why. Errors only when no
 /// mesh of the ladder converges.
 pub fn solve_branch_descended(
-    radius: f64,
+    wall: impl IntoWall,
     lbar: f64,
     stiffness: &crate::Stiffness,
     source: &SurfaceSource,
@@ -288,6 +289,7 @@ pub fn solve_branch_descended(
     let mut start: Option<EnclosedState> = None;
     let mut last: Option<(BranchSolve, Option<Descent<EnclosedState>>)> = None;
     let mut first_error = None;
+    let wall = wall.into_wall();
     for &cells in ladder {
         let attempt = match &start {
             Some(s) => {
@@ -297,7 +299,7 @@ pub fn solve_branch_descended(
                 ));
                 resample_state(s, cells / 4).and_then(|(m, z)| solve_levels(&m, z, None, opts))
             }
-            None => solve_branch(radius, lbar, stiffness, source, cells, opts),
+            None => solve_branch(&wall, lbar, stiffness, source, cells, opts),
         };
         let b = match attempt {
             Ok(b) => b,
@@ -433,7 +435,7 @@ pub fn homotopy_shifts(
 /// within `1e-9` relative). Where the uniform rod's loop is attached, its continuation may
 /// still lift off along the path.
 pub fn stiffness_homotopy_states(
-    radius: f64,
+    wall: impl IntoWall,
     lbar: f64,
     eta: u32,
     stiffness: &crate::Stiffness,
@@ -441,7 +443,7 @@ pub fn stiffness_homotopy_states(
     opts: &EnclosedOptions,
 ) -> Result<Vec<EnclosedState>, SolverError> {
     Ok(
-        stiffness_homotopy_starts(radius, lbar, eta, stiffness, cells, opts)?
+        stiffness_homotopy_starts(wall, lbar, eta, stiffness, cells, opts)?
             .into_iter()
             .map(|(_, s)| s)
             .collect(),
@@ -451,13 +453,15 @@ pub fn stiffness_homotopy_states(
 /// [`stiffness_homotopy_states`] with the shift `φ` (fraction of the length) of the uniform
 /// rod's loop each state comes from: the start a `solve` names.
 pub fn stiffness_homotopy_starts(
-    radius: f64,
+    wall: impl IntoWall,
     lbar: f64,
     eta: u32,
     stiffness: &crate::Stiffness,
     cells: usize,
     opts: &EnclosedOptions,
 ) -> Result<Vec<(f64, EnclosedState)>, SolverError> {
+    let wall = wall.into_wall();
+    let radius = wall.radius();
     let l = rodloop_exact::paper_branch_loop(eta, lbar)?;
     let uniform = crate::Stiffness::Uniform {
         d: stiffness.reference(),
@@ -470,8 +474,7 @@ pub fn stiffness_homotopy_starts(
             l.point((s + phi).rem_euclid(1.0) * len)
                 .map_or(0.0, |p| p.kappa_g / radius)
         };
-        let Ok((m, z0)) = super::solve::start_from_surface(radius, lbar, cells, &uniform, kg)
-        else {
+        let Ok((m, z0)) = super::solve::start_from_surface(&wall, lbar, cells, &uniform, kg) else {
             continue;
         };
         let start = match solve_enclosed(&m, z0.clone(), opts) {
@@ -542,7 +545,7 @@ pub type LowestSolve = (DescendedSolve, bool);
 /// lowest of those is returned. The semismooth Newton from the surface loop stops at the
 /// equilibrium next to it, which need not be the lowest minimum of the branch.
 pub fn solve_branch_lowest(
-    radius: f64,
+    wall: impl IntoWall,
     lbar: f64,
     eta: u32,
     stiffness: &crate::Stiffness,
@@ -550,7 +553,8 @@ pub fn solve_branch_lowest(
     ladder: &[usize],
     opts: &EnclosedOptions,
 ) -> Result<LowestSolve, SolverError> {
-    let base = solve_branch_descended(radius, lbar, stiffness, source, ladder, opts);
+    let wall = wall.into_wall();
+    let base = solve_branch_descended(&wall, lbar, stiffness, source, ladder, opts);
     if stiffness.is_uniform() {
         return base.map(|b| (b, false));
     }
@@ -571,8 +575,8 @@ pub fn solve_branch_lowest(
         // level of the diagram's default mesh, `8(2 + η)` cells), so that every accuracy
         // follows the same path; its end is carried to this ladder's `N/4`.
         let search = (8 * (2 + eta as usize)).min(cells / 4);
-        for (phi, s) in stiffness_homotopy_starts(radius, lbar, eta, stiffness, search, opts)
-            .unwrap_or_default()
+        for (phi, s) in
+            stiffness_homotopy_starts(&wall, lbar, eta, stiffness, search, opts).unwrap_or_default()
         {
             let Some(b) = carry_to_ladder(&s, cells, opts) else {
                 continue;

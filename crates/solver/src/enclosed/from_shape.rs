@@ -12,6 +12,7 @@ use nalgebra::{Matrix3, Vector3};
 
 use super::model::EnclosedModel;
 use super::solve::start_from_curvature;
+use super::wall::IntoWall;
 use crate::stiffness::Stiffness;
 use crate::SolverError;
 
@@ -93,15 +94,16 @@ impl SavedShape {
 /// The model at `lbar` with `cells` cells and its start vector from `shape` (see the
 /// module docs).
 pub fn start_from_shape(
-    radius: f64,
+    wall: impl IntoWall,
     lbar: f64,
     cells: usize,
     stiffness: &Stiffness,
     shape: &SavedShape,
 ) -> Result<(EnclosedModel, Vec<f64>), SolverError> {
     shape.validate()?;
+    let wall = wall.into_wall();
     let kappa = |s: f64| shape.kappa_at(s);
-    let (probe, z) = start_from_curvature(radius, lbar, cells, stiffness, kappa, [0.0; 3])?;
+    let (probe, z) = start_from_curvature(&wall, lbar, cells, stiffness, kappa, [0.0; 3])?;
     let p = probe.positions(&z)?;
     let x: Vec<Vector3<f64>> = probe.bounds()[..cells]
         .iter()
@@ -128,5 +130,5 @@ pub fn start_from_shape(
     let q = v * Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, d)) * u.transpose();
     let c = xc - q * pc;
     let r0 = q.transpose() * c;
-    start_from_curvature(radius, lbar, cells, stiffness, kappa, [r0[0], r0[1], r0[2]])
+    start_from_curvature(wall, lbar, cells, stiffness, kappa, [r0[0], r0[1], r0[2]])
 }

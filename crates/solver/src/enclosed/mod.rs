@@ -52,4 +52,4 @@ pub use seam::EnclosedFactor;
 pub use solve::{
     free_circle, solve_enclosed, start_from_surface, Contact, EnclosedOptions, EnclosedState,
 };
-pub use wall::{SphereWall, Wall};
+pub use wall::{IntoWall, SphereWall, Wall};

@@ -53,7 +53,7 @@ use std::sync::Arc;
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix4, Vector3};
 
 use super::jet::{cell_exp, cell_grad, cell_jet};
-use super::wall::{SphereWall, Wall};
+use super::wall::{IntoWall, Wall};
 use crate::mesh::MeshMap;
 use crate::model::GAUSS_OFFSETS;
 use crate::periodic::TrigInterpolant;
@@ -161,15 +161,18 @@ pub(super) fn translation(m: &M4) -> V3 {
 }
 
 impl EnclosedModel {
-    /// A loop of normalised length `lbar` in a ball of radius `radius`, `cells` cells,
-    /// stiffness `stiffness`, with the gauge `gauge` (reference of length `4·cells`).
+    /// A loop of normalised length `lbar` inside `wall` (a radius: the ball of that radius,
+    /// [`IntoWall`]), `cells` cells, stiffness `stiffness`, with the gauge `gauge`
+    /// (reference of length `4·cells`).
     pub fn new(
-        radius: f64,
+        wall: impl IntoWall,
         lbar: f64,
         cells: usize,
         stiffness: &Stiffness,
         gauge: Gauge,
     ) -> Result<Self, SolverError> {
+        let wall = wall.into_wall();
+        let radius = wall.radius();
         crate::model::check_loop_inputs(radius, lbar, cells, 8)?;
         if gauge.reference.len() != 4 * cells {
             return Err(SolverError::WrongLength {
@@ -191,7 +194,7 @@ impl EnclosedModel {
         let bounds = map.bounds(cells)?;
         let mut m = Self {
             radius,
-            wall: Arc::new(SphereWall { radius }),
+            wall,
             lbar,
             cells,
             stiffness: profile,
@@ -207,8 +210,7 @@ impl EnclosedModel {
         Ok(m)
     }
 
-    /// A model of the same wall with another length, mesh, stiffness or gauge ([`Self::new`]
-    /// then [`Self::with_wall`]).
+    /// A model of the same wall with another length, mesh, stiffness or gauge.
     pub fn rebuilt(
         &self,
         lbar: f64,
@@ -216,14 +218,14 @@ impl EnclosedModel {
         stiffness: &Stiffness,
         gauge: Gauge,
     ) -> Result<Self, SolverError> {
-        Self::new(self.radius, lbar, cells, stiffness, gauge)?.with_wall(self.wall.clone())
+        Self::new(&self.wall, lbar, cells, stiffness, gauge)
     }
 
     /// [`Self::new`] on given cell boundaries `bounds` in `σ` (`0 = σ_0 < … < σ_N = 1`)
     /// instead of the stiffness profile's mesh map: nodes placed at the ends of point
     /// contacts ([`super::centre`]).
     pub fn with_bounds(
-        radius: f64,
+        wall: impl IntoWall,
         lbar: f64,
         bounds: Vec<f64>,
         stiffness: &Stiffness,
@@ -238,7 +240,7 @@ impl EnclosedModel {
                 "cell boundaries must increase from 0 to 1".into(),
             ));
         }
-        let mut m = Self::new(radius, lbar, cells, stiffness, gauge)?;
+        let mut m = Self::new(wall, lbar, cells, stiffness, gauge)?;
         m.uniform_mesh = false;
         m.bounds = bounds;
         m.d_gauss = (0..2 * cells)
@@ -273,7 +275,7 @@ impl EnclosedModel {
         self.radius
     }
 
-    /// The confining wall (a [`SphereWall`] of [`Self::radius`] from [`Self::new`]).
+    /// The confining wall.
     pub fn wall(&self) -> &Arc<dyn Wall> {
         &self.wall
     }
@@ -501,12 +503,25 @@ impl EnclosedModel {
         Ok(self.energy_raw(z) * self.radius / (PI * self.stiffness.kind().reference()))
     }
 
-    /// Contact force per unit length at the nodes, `λ(s_j) = 2Rλ_j/w_j`.
+    /// Contact force per unit length at the nodes, `λ(s_j) = λ_j |∇g(r_j)|/w_j` (the line
+    /// load `q = λ_j ∇g/w_j` of the module docs; `2Rλ_j/w_j` on the sphere's wall). Empty
+    /// for a `z` too short to hold the nodes.
     pub fn contact_force(&self, z: &[f64]) -> Vec<f64> {
         let o = self.lambda_offset();
-        (0..self.cells)
-            .map(|j| 2.0 * self.radius * z[o + j] / self.node_weight(j))
+        self.wall_gradient_norms(z)
+            .iter()
+            .enumerate()
+            .map(|(j, g)| z[o + j] * g / self.node_weight(j))
             .collect()
+    }
+
+    /// `|∇g(r_j)|` at the nodes: what turns a wall impulse `λ_j` into the force density
+    /// `λ_j |∇g|/w_j` ([`Self::contact_force`]). Empty for a `z` too short to hold the nodes.
+    pub fn wall_gradient_norms(&self, z: &[f64]) -> Vec<f64> {
+        self.positions(z).map_or_else(
+            |_| Vec::new(),
+            |pos| pos.iter().map(|r| self.wall.gradient(r).norm()).collect(),
+        )
     }
 
     pub(super) fn gauge_rows(&self) -> Vec<(Vec<f64>, Option<usize>)> {

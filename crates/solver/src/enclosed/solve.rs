@@ -21,6 +21,7 @@
 #![allow(clippy::needless_range_loop)] // index arithmetic over cells, nodes and unknowns
 
 use std::f64::consts::PI;
+use std::sync::Arc;
 use std::time::Instant;
 
 use nalgebra::{DMatrix, DVector, Vector3};
@@ -28,6 +29,7 @@ use rodloop_continuation::natural::NaturalSettings;
 
 use super::model::{phase_slope, EnclosedModel, Gauge};
 use super::stats::{self, Outcome};
+use super::wall::{IntoWall, Wall};
 use crate::stiffness::Stiffness;
 use crate::SolverError;
 
@@ -351,14 +353,16 @@ pub fn solve_by_pull_homotopy(
 /// least squares. The gauge takes this shape as reference; uniform rods get the arclength
 /// phase condition.
 pub fn start_from_surface<F: Fn(f64) -> f64>(
-    radius: f64,
+    wall: impl IntoWall,
     lbar: f64,
     cells: usize,
     stiffness: &Stiffness,
     kappa_g: F,
 ) -> Result<(EnclosedModel, Vec<f64>), SolverError> {
+    let wall = wall.into_wall();
+    let radius = wall.radius();
     start_from_curvature(
-        radius,
+        wall,
         lbar,
         cells,
         stiffness,
@@ -371,21 +375,22 @@ pub fn start_from_surface<F: Fn(f64) -> f64>(
 /// (frame at `s = 0` the identity), multipliers by least squares; the gauge takes this
 /// shape as reference (with the arclength phase condition for uniform rods).
 pub fn start_from_curvature<F: Fn(f64) -> (f64, f64)>(
-    radius: f64,
+    wall: impl IntoWall,
     lbar: f64,
     cells: usize,
     stiffness: &Stiffness,
     kappa: F,
     r0: [f64; 3],
 ) -> Result<(EnclosedModel, Vec<f64>), SolverError> {
-    let (model, mut z) = model_from_curvature(radius, lbar, cells, stiffness, &kappa, r0)?;
+    let (model, mut z) =
+        model_from_curvature(wall.into_wall(), lbar, cells, stiffness, &kappa, r0)?;
     start_multipliers(&model, &mut z, &kappa)?;
     Ok((model, z))
 }
 
 /// The model and shape of [`start_from_curvature`] with all multipliers 0.
 fn model_from_curvature<F: Fn(f64) -> (f64, f64)>(
-    radius: f64,
+    wall: Arc<dyn Wall>,
     lbar: f64,
     cells: usize,
     stiffness: &Stiffness,
@@ -393,7 +398,7 @@ fn model_from_curvature<F: Fn(f64) -> (f64, f64)>(
     r0: [f64; 3],
 ) -> Result<(EnclosedModel, Vec<f64>), SolverError> {
     let probe = EnclosedModel::new(
-        radius,
+        &wall,
         lbar,
         cells,
         stiffness,
@@ -410,7 +415,7 @@ fn model_from_curvature<F: Fn(f64) -> (f64, f64)>(
         None
     };
     let model = EnclosedModel::new(
-        radius,
+        wall,
         lbar,
         cells,
         stiffness,
@@ -446,7 +451,7 @@ fn start_multipliers<F: Fn(f64) -> (f64, f64)>(
     let r0 = model.start_point(z);
     let stiff = model.stiffness().kind().clone();
     let (cm, mut cz) = model_from_curvature(
-        model.radius(),
+        model.wall().clone(),
         model.lbar(),
         LEAST_SQUARES_MAX_CELLS,
         &stiff,
@@ -471,6 +476,7 @@ pub fn transfer_multipliers(from: &EnclosedModel, zf: &[f64], to: &EnclosedModel
     let nf = from.cells();
     let bf = from.bounds();
     let lo = to.lambda_offset();
+    let grad = to.wall_gradient_norms(zt);
     for j in 0..to.cells() {
         let s = to.bounds()[j];
         // Coarse interval [bf[k], bf[k+1]) holding s.
@@ -478,7 +484,11 @@ pub fn transfer_multipliers(from: &EnclosedModel, zf: &[f64], to: &EnclosedModel
         let (a, b) = (bf[k], bf[k + 1]);
         let t = if b > a { (s - a) / (b - a) } else { 0.0 };
         let d = (1.0 - t) * dens[k] + t * dens[(k + 1) % nf];
-        zt[lo + j] = d * to.node_weight(j) / (2.0 * to.radius());
+        zt[lo + j] = if grad[j] > 0.0 {
+            d * to.node_weight(j) / grad[j]
+        } else {
+            0.0
+        };
     }
 }
 
@@ -486,11 +496,13 @@ pub fn transfer_multipliers(from: &EnclosedModel, zf: &[f64], to: &EnclosedModel
 /// `L̄ < 1` (start point pinned: a free loop can translate), touching everywhere at `L̄ = 1`.
 /// Exact in the discrete model (constant curvature: every Magnus step is an exact arc).
 pub fn free_circle(
-    radius: f64,
+    wall: impl IntoWall,
     lbar: f64,
     cells: usize,
     stiffness: &Stiffness,
 ) -> Result<(EnclosedModel, Vec<f64>), SolverError> {
+    let wall = wall.into_wall();
+    let radius = wall.radius();
     if lbar > 1.0 + 1e-12 {
         return Err(SolverError::InvalidInput(format!(
             "the planar circle (branch 0) fits in the ball only for lbar <= 1 (got {lbar})"
@@ -499,7 +511,7 @@ pub fn free_circle(
     let rho = radius * lbar;
     let reference: Vec<f64> = (0..2 * cells).flat_map(|_| [0.0, -1.0 / rho]).collect();
     let model = EnclosedModel::new(
-        radius,
+        &wall,
         lbar,
         cells,
         stiffness,
@@ -515,7 +527,7 @@ pub fn free_circle(
     if cells <= LEAST_SQUARES_MAX_CELLS {
         least_squares_multipliers(&model, &mut z)?;
     } else {
-        let (cm, cz) = free_circle(radius, lbar, LEAST_SQUARES_MAX_CELLS, stiffness)?;
+        let (cm, cz) = free_circle(&wall, lbar, LEAST_SQUARES_MAX_CELLS, stiffness)?;
         transfer_multipliers(&cm, &cz, &model, &mut z);
     }
     Ok((model, z))
@@ -806,7 +818,7 @@ impl EnclosedState {
         let r0 = m.start_point(&self.z);
         let stiff = m.stiffness().kind().clone();
         let (fine, mut z) = model_from_curvature(
-            m.radius(),
+            m.wall().clone(),
             m.lbar(),
             2 * n,
             &stiff,

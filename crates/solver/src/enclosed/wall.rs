@@ -13,6 +13,7 @@
 //! is one more implementation.
 
 use std::fmt::Debug;
+use std::sync::Arc;
 
 use nalgebra::{Matrix3, SMatrix, Vector3};
 
@@ -59,6 +60,18 @@ pub trait Wall: Debug + Send + Sync {
     /// the touch tests read.
     fn clearance(&self, r: &V3) -> f64;
 
+    /// The wall as state files name it and pictures draw it: its shape and the semi-axes
+    /// along `x, y, z` of the ellipsoid about the origin drawn as its outline (the sphere:
+    /// `("sphere", [R, R, R])`).
+    fn outline(&self) -> (&'static str, [f64; 3]);
+
+    /// `Some(R)` when the wall is the sphere of radius `R` about the origin, where the
+    /// paper's surface loops with `λ ≥ 0` are enclosed states (Sec. 3.2); `None` for any
+    /// other wall.
+    fn sphere(&self) -> Option<f64> {
+        None
+    }
+
     /// `true` when `r` lies inside the wall up to `slack` (a fraction of [`Self::radius`]).
     fn contains(&self, r: &V3, slack: f64) -> bool {
         self.clearance(r) >= -slack * self.radius()
@@ -97,6 +110,39 @@ pub trait Wall: Debug + Send + Sync {
     }
 }
 
+/// What the enclosed model and its starts are built from: a wall, or a radius for the paper's
+/// sphere of that radius ([`SphereWall`]), so that a caller with a wall hands it on and a
+/// caller in the ball writes its radius.
+pub trait IntoWall {
+    /// The wall.
+    fn into_wall(self) -> Arc<dyn Wall>;
+}
+
+impl IntoWall for Arc<dyn Wall> {
+    fn into_wall(self) -> Arc<dyn Wall> {
+        self
+    }
+}
+
+impl IntoWall for &Arc<dyn Wall> {
+    fn into_wall(self) -> Arc<dyn Wall> {
+        self.clone()
+    }
+}
+
+impl IntoWall for SphereWall {
+    fn into_wall(self) -> Arc<dyn Wall> {
+        Arc::new(self)
+    }
+}
+
+/// The sphere of radius `self`.
+impl IntoWall for f64 {
+    fn into_wall(self) -> Arc<dyn Wall> {
+        Arc::new(SphereWall { radius: self })
+    }
+}
+
 /// The paper's wall: the sphere of radius `R` about the origin, `g = R² − |r|²`,
 /// `∇g = −2r`, `∇²g = −2I`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -128,6 +174,14 @@ impl Wall for SphereWall {
     /// `R − |r|`.
     fn clearance(&self, r: &V3) -> f64 {
         self.radius - r.norm()
+    }
+
+    fn outline(&self) -> (&'static str, [f64; 3]) {
+        ("sphere", [self.radius; 3])
+    }
+
+    fn sphere(&self) -> Option<f64> {
+        Some(self.radius)
     }
 
     /// The closed form of [`Wall::node_pairing`] for `∇²g = −2I`: with `r − p = r0`,
@@ -197,6 +251,9 @@ mod tests {
         }
         fn clearance(&self, r: &V3) -> f64 {
             self.0.clearance(r)
+        }
+        fn outline(&self) -> (&'static str, [f64; 3]) {
+            self.0.outline()
         }
     }
 
