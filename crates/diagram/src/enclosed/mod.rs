@@ -66,6 +66,7 @@ use crate::parallel::run_parallel;
 use crate::DiagramError;
 
 mod critical;
+mod locate;
 mod nonuniform;
 mod nonuniform_descent;
 mod nonuniform_exchange;
