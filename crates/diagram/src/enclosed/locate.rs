@@ -107,14 +107,14 @@ fn walk_to(
     }
 }
 
-/// Eigenvalue `k` (ascending) on the tangent space, and the index.
-fn eigen(s: &EnclosedState, k: usize) -> Result<(f64, usize), SolverError> {
-    let (i, vals) = s.stability(ACTIVE)?;
+/// Eigenvalue `k` (ascending) on the tangent space.
+fn eigen(s: &EnclosedState, k: usize) -> Result<f64, SolverError> {
+    let (_, vals) = s.stability(ACTIVE)?;
     let v = vals
         .get(k)
         .copied()
         .ok_or_else(|| SolverError::InvalidInput("too few eigenvalues".into()))?;
-    Ok((v, i))
+    Ok(v)
 }
 
 /// The root on one level between `from` (at `xa`, the family the bracket is taken on) and
@@ -131,12 +131,12 @@ pub(super) fn locate_on_level(
     let ia = from.index(ACTIVE)?;
     let ib = to.index(ACTIVE)?;
     let k = if ia != ib { ia.min(ib) } else { ia };
-    let mut solved: Vec<(f64, EnclosedState, f64, usize)> = Vec::new();
-    let (fa, _) = eigen(from, k)?;
-    solved.push((xa, from.clone(), fa, ia));
+    let mut solved: Vec<(f64, EnclosedState, f64)> = Vec::new();
+    let fa = eigen(from, k)?;
+    solved.push((xa, from.clone(), fa));
     if ia != ib {
-        let (fb, _) = eigen(to, k)?;
-        solved.push((xb, to.clone(), fb, ib));
+        let fb = eigen(to, k)?;
+        solved.push((xb, to.clone(), fb));
     }
     let mut f = |x: f64| -> Result<f64, SolverError> {
         if let Some(p) = solved.iter().find(|p| p.0 == x) {
@@ -147,8 +147,8 @@ pub(super) fn locate_on_level(
             .min_by(|u, v| (u.0 - x).abs().total_cmp(&(v.0 - x).abs()))
             .expect("the bracket's first end");
         let s = walk_to(&near.1, near.0, x, opts)?;
-        let (v, i) = eigen(&s, k)?;
-        solved.push((x, s, v, i));
+        let v = eigen(&s, k)?;
+        solved.push((x, s, v));
         Ok(v)
     };
     let root = match brent(&mut f, xa, xb, XTOL, MAX_ITER) {
@@ -181,7 +181,6 @@ pub(super) fn locate_on_level(
         ));
     };
     let (lo, hi) = if p.0 < q.0 { (p, q) } else { (q, p) };
-    let _ = (lo.3, hi.3);
     // A branch point is a zero eigenvalue: across the final bracket the eigenvalue is
     // continuous (`|f| ≈ |f'|·width`, far below the bracket ends' values). Where it jumps
     // instead, the contact set changes there (a contact force reaching 0 takes a constraint
@@ -316,7 +315,6 @@ mod tests {
             assert_eq!(above.index(ACTIVE).unwrap(), ib, "N = {n}");
             roots.push(r.x);
         }
-        eprintln!("roots {roots:?}");
         // The location converges as the mesh is refined (differences falling at least
         // 2x per doubling), near L̄ = 0.84.
         let (d1, d2) = ((roots[1] - roots[0]).abs(), (roots[2] - roots[1]).abs());
