@@ -37,6 +37,15 @@ const ACTIVE: f64 = 1e-6;
 /// continuous crossing (see [`locate_on_level`]).
 const JUMP: f64 = 1e-4;
 
+/// How the error of a root where the eigenvalue jumps begins ([`is_jump`]).
+const JUMPS: &str = "the eigenvalue jumps";
+
+/// `true` for the error of [`locate`] where the eigenvalue jumps at the root: a change of
+/// the contact set, not a branch point.
+pub(super) fn is_jump(e: &SolverError) -> bool {
+    matches!(e, SolverError::InvalidInput(m) if m.starts_with(JUMPS))
+}
+
 /// Brent's relative bracket tolerance and iteration budget.
 const XTOL: f64 = 1e-10;
 const MAX_ITER: usize = 40;
@@ -188,7 +197,7 @@ pub(super) fn locate_on_level(
     let scale = solved[0].2.abs().max(solved[1].2.abs());
     if lo.2.abs().max(hi.2.abs()) > JUMP * scale {
         return Err(SolverError::InvalidInput(format!(
-            "the eigenvalue jumps from {:.3e} to {:.3e} at lbar = {x:.9} (the active set changes there; no eigenvalue crosses zero)",
+            "{JUMPS} from {:.3e} to {:.3e} at lbar = {x:.9} (the active set changes there; no eigenvalue crosses zero)",
             lo.2, hi.2
         )));
     }

@@ -405,6 +405,7 @@ fn uniform_diagram(
     let t0 = Instant::now();
     let (lo, hi) = (opts.lbar_min, opts.lbar_max);
     let mut warnings = Vec::new();
+    let mut notes = Vec::new();
     let mut points: Vec<EnclosedPoint> = Vec::new();
     let mut events: Vec<EnclosedEvent> = Vec::new();
     let mut cells = Vec::new();
@@ -455,6 +456,7 @@ fn uniform_diagram(
         points.extend(o.points);
         events.extend(o.events);
         warnings.extend(o.warnings);
+        notes.extend(o.notes);
         timings.attached += o.attached_s;
         timings.lifted_off += o.lifted_s;
         cells.push((branch_of_eta(eta), enclosed_cells(opts.accuracy, eta)));
@@ -561,7 +563,7 @@ fn uniform_diagram(
         events,
         critical,
         warnings,
-        notes: Vec::new(),
+        notes,
         cells,
         seconds: timings,
         solves: Vec::new(),

@@ -18,7 +18,7 @@ use rodloop_solver::enclosed::{
 };
 use rodloop_solver::{Accuracy, SolverError, Stiffness};
 
-use super::locate::locate;
+use super::locate::{is_jump, locate};
 use super::{
     BranchFrom, EnclosedDiagramOptions, EnclosedEvent, EnclosedPoint, EventKind, PointShape,
     PointSource, TOUCH,
@@ -594,6 +594,8 @@ pub(super) struct BranchOut {
     pub(super) events: Vec<EnclosedEvent>,
     pub(super) levels: Vec<Levels>,
     pub(super) warnings: Vec<String>,
+    /// Index changes explained as changes of the contact set (`locate.rs`).
+    pub(super) notes: Vec<String>,
     pub(super) attached_s: f64,
     pub(super) lifted_s: f64,
 }
@@ -686,8 +688,9 @@ pub(super) fn trace_branch(
                 )),
             }
         }
-        let (bps, bp_warnings) = locate_branch_points(&tr, branch, &sopts_locate());
+        let (bps, bp_notes, bp_warnings) = locate_branch_points(&tr, branch, &sopts_locate());
         out.events.extend(bps);
+        out.notes.extend(bp_notes);
         out.warnings.extend(bp_warnings);
         for lv in &tr {
             let mut pt = lv.point(branch, eta)?;
@@ -721,13 +724,14 @@ fn sopts_locate() -> EnclosedOptions {
 /// Branch points between consecutive states of a trace `tr` of a uniform rod's branch
 /// (both on the wall, or both free) where the index (on the coarsest level, as the traces
 /// take it) changes ([`super::locate`]; located on the levels `N/2` and `N`). Returns the
-/// events and warnings for changes that were not located.
+/// events, notes for changes at a change of the contact set (the eigenvalue jumps) and
+/// warnings for changes that were not located.
 fn locate_branch_points(
     tr: &[Levels],
     branch: u32,
     sopts: &EnclosedOptions,
-) -> (Vec<EnclosedEvent>, Vec<String>) {
-    let (mut events, mut warnings) = (Vec::new(), Vec::new());
+) -> (Vec<EnclosedEvent>, Vec<String>, Vec<String>) {
+    let (mut events, mut notes, mut warnings) = (Vec::new(), Vec::new(), Vec::new());
     let refs: Vec<&Levels> = tr.iter().collect();
     for (j, w) in tr.windows(2).enumerate() {
         let (a, b) = (&w[0], &w[1]);
@@ -751,13 +755,17 @@ fn locate_branch_points(
                 index_before: p.index_below,
                 index_after: p.index_above,
             }),
+            Err(e) if is_jump(&e) => notes.push(format!(
+                "branch {branch}: the index changes from {ia} to {ib} between lbar = {:.6} and {:.6} at a change of the contact set, not at a branch point ({e})",
+                a.lbar, b.lbar
+            )),
             Err(e) => warnings.push(format!(
                 "branch {branch}: the index changes from {ia} to {ib} between lbar = {:.6} and {:.6}, but the branch point was not located ({e})",
                 a.lbar, b.lbar
             )),
         }
     }
-    (events, warnings)
+    (events, notes, warnings)
 }
 
 /// Newton options of the continuation steps: a step that needs more than 30 iterations is
