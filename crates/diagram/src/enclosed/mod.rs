@@ -67,6 +67,7 @@ use crate::parallel::run_parallel;
 use crate::DiagramError;
 
 mod critical;
+mod locate;
 mod nonuniform;
 mod nonuniform_descent;
 mod nonuniform_exchange;
@@ -415,6 +416,7 @@ fn uniform_diagram(
     let t0 = Instant::now();
     let (lo, hi) = (opts.lbar_min, opts.lbar_max);
     let mut warnings = Vec::new();
+    let mut notes = Vec::new();
     let mut points: Vec<EnclosedPoint> = Vec::new();
     let mut events: Vec<EnclosedEvent> = Vec::new();
     let mut cells = Vec::new();
@@ -465,6 +467,7 @@ fn uniform_diagram(
         points.extend(o.points);
         events.extend(o.events);
         warnings.extend(o.warnings);
+        notes.extend(o.notes);
         timings.attached += o.attached_s;
         timings.lifted_off += o.lifted_s;
         cells.push((branch_of_eta(eta), enclosed_cells(opts.accuracy, eta)));
@@ -571,7 +574,7 @@ fn uniform_diagram(
         events,
         critical,
         warnings,
-        notes: Vec::new(),
+        notes,
         cells,
         seconds: timings,
         solves: Vec::new(),

@@ -18,6 +18,7 @@ use rodloop_solver::enclosed::{
 };
 use rodloop_solver::{Accuracy, SolverError, Stiffness};
 
+use super::locate::{is_jump, locate};
 use super::{
     BranchFrom, EnclosedDiagramOptions, EnclosedEvent, EnclosedPoint, EventKind, PointShape,
     PointSource, TOUCH,
@@ -322,8 +323,9 @@ pub(super) fn grid(opts: &EnclosedDiagramOptions, a: f64, b: f64) -> Vec<f64> {
 }
 
 /// Trace a lifted-off interval `(a, b)` of branch `eta` at the sample lengths `xs`: seed in
-/// the middle from the surface loop, then natural-parameter steps both ways (halving a
-/// failed step up to 6 times).
+/// the middle from the surface loop (or, where that fails, at the sample nearest the middle
+/// where it converges), then natural-parameter steps both ways (halving a failed step up to
+/// 6 times).
 pub(super) fn trace_detached(
     opts: &EnclosedDiagramOptions,
     eta: u32,
@@ -335,24 +337,42 @@ pub(super) fn trace_detached(
     }
     let n = enclosed_cells(opts.accuracy, eta);
     let sopts = EnclosedOptions::default();
-    let mid = xs.len() / 2;
+    // Seeded in the middle; where Newton from the surface loop fails there (a loop far off
+    // the wall: with `--lbar-max 1.2` the figure-eight at `L̄ = 1.1` reaches 0.25 R inside),
+    // at the next sample outwards, the nearer samples first.
+    let mut order: Vec<usize> = (0..xs.len()).collect();
+    let centre = xs.len() / 2;
+    order.sort_by_key(|&k| (k.abs_diff(centre), k < centre));
+    let mut first_error = None;
+    let mut seeded = None;
+    for k in order {
+        let at = xs[k];
+        let l = exact(eta, at)?;
+        let tried = stats::stage(Stage::Seed, || {
+            solve_branch(
+                opts.radius,
+                at,
+                &opts.stiffness,
+                &SurfaceSource::Exact(l),
+                n,
+                &sopts,
+            )
+        });
+        match tried {
+            Ok(s) => {
+                seeded = Some((k, s));
+                break;
+            }
+            Err(e) => {
+                first_error.get_or_insert((at, e));
+            }
+        }
+    }
+    let Some((mid, seed)) = seeded else {
+        let (lbar, source) = first_error.expect("xs is not empty");
+        return Err(DiagramError::Seed { eta, lbar, source });
+    };
     let seed_at = xs[mid];
-    let l = exact(eta, seed_at)?;
-    let seed = stats::stage(Stage::Seed, || {
-        solve_branch(
-            opts.radius,
-            seed_at,
-            &opts.stiffness,
-            &SurfaceSource::Exact(l),
-            n,
-            &sopts,
-        )
-    })
-    .map_err(|source| DiagramError::Seed {
-        eta,
-        lbar: seed_at,
-        source,
-    })?;
     let first = Levels {
         lbar: seed_at,
         states: [seed.quarter, seed.coarse, seed.fine],
@@ -574,6 +594,8 @@ pub(super) struct BranchOut {
     pub(super) events: Vec<EnclosedEvent>,
     pub(super) levels: Vec<Levels>,
     pub(super) warnings: Vec<String>,
+    /// Index changes explained as changes of the contact set (`locate.rs`).
+    pub(super) notes: Vec<String>,
     pub(super) attached_s: f64,
     pub(super) lifted_s: f64,
 }
@@ -666,6 +688,10 @@ pub(super) fn trace_branch(
                 )),
             }
         }
+        let (bps, bp_notes, bp_warnings) = locate_branch_points(&tr, branch, &sopts_locate());
+        out.events.extend(bps);
+        out.notes.extend(bp_notes);
+        out.warnings.extend(bp_warnings);
         for lv in &tr {
             let mut pt = lv.point(branch, eta)?;
             pt.surface_energy = Some(exact(eta, lv.lbar)?.energy().map_err(SolverError::from)?);
@@ -675,7 +701,11 @@ pub(super) fn trace_branch(
     }
     branch_points.sort_by(|u, v| u.lbar.total_cmp(&v.lbar));
     // Index before/after each event from the neighbouring samples.
-    for ev in out.events.iter_mut() {
+    for ev in out
+        .events
+        .iter_mut()
+        .filter(|e| e.kind != EventKind::BranchPoint)
+    {
         let before = branch_points.iter().rev().find(|p| p.lbar < ev.lbar - 1e-9);
         let after = branch_points.iter().find(|p| p.lbar > ev.lbar + 1e-9);
         ev.index_before = before.map_or(0, |p| p.index);
@@ -683,6 +713,59 @@ pub(super) fn trace_branch(
     }
     out.points = branch_points;
     Ok(out)
+}
+
+/// Newton options of the re-solves that locate a branch point (the default budget: next to
+/// the singular point Newton converges linearly).
+fn sopts_locate() -> EnclosedOptions {
+    EnclosedOptions::default()
+}
+
+/// Branch points between consecutive states of a trace `tr` of a uniform rod's branch
+/// (both on the wall, or both free) where the index (on the coarsest level, as the traces
+/// take it) changes ([`super::locate`]; located on the levels `N/2` and `N`). Returns the
+/// events, notes for changes at a change of the contact set (the eigenvalue jumps) and
+/// warnings for changes that were not located.
+fn locate_branch_points(
+    tr: &[Levels],
+    branch: u32,
+    sopts: &EnclosedOptions,
+) -> (Vec<EnclosedEvent>, Vec<String>, Vec<String>) {
+    let (mut events, mut notes, mut warnings) = (Vec::new(), Vec::new(), Vec::new());
+    let refs: Vec<&Levels> = tr.iter().collect();
+    for (j, w) in tr.windows(2).enumerate() {
+        let (a, b) = (&w[0], &w[1]);
+        if a.free() != b.free() {
+            continue;
+        }
+        let (Ok(ia), Ok(ib)) = (a.states[0].index(1e-6), b.states[0].index(1e-6)) else {
+            continue;
+        };
+        if ia == ib {
+            continue;
+        }
+        match locate(&refs, j, [1, 2], sopts) {
+            Ok(p) => events.push(EnclosedEvent {
+                kind: EventKind::BranchPoint,
+                branch,
+                family: 0,
+                lbar: p.lbar,
+                error_estimate: p.error_estimate,
+                energy: p.energy,
+                index_before: p.index_below,
+                index_after: p.index_above,
+            }),
+            Err(e) if is_jump(&e) => notes.push(format!(
+                "branch {branch}: the index changes from {ia} to {ib} between lbar = {:.6} and {:.6} at a change of the contact set, not at a branch point ({e})",
+                a.lbar, b.lbar
+            )),
+            Err(e) => warnings.push(format!(
+                "branch {branch}: the index changes from {ia} to {ib} between lbar = {:.6} and {:.6}, but the branch point was not located ({e})",
+                a.lbar, b.lbar
+            )),
+        }
+    }
+    (events, notes, warnings)
 }
 
 /// Newton options of the continuation steps: a step that needs more than 30 iterations is

@@ -1,0 +1,334 @@
+//! Branch points of traced enclosed families, located on re-solved states.
+//!
+//! A branch point of a family of constrained equilibria is where an eigenvalue of the
+//! Hessian of the Lagrangian on the tangent space of the closure, the gauges and the strongly
+//! active wall constraints crosses zero (second-order optimality, Sec. 3.2; the index is the
+//! KKT inertia, [`EnclosedState::index`]). Between two traced states it is bracketed in
+//! either of two ways:
+//!
+//! * the index differs: the eigenvalue at position `min(i_a, i_b)` (ascending) changes sign
+//!   along the family;
+//! * the point group differs ([`family_symmetry`]): a family keeps its symmetry along a smooth
+//!   path, so the trace has passed a symmetry-breaking pitchfork and continued on the
+//!   other family that meets there (the family with fewer symmetries exists on one side of
+//!   the point only). The eigenvalue that crosses zero is the symmetric family's, at
+//!   position `i` (its index) on the side it is traced from: continued in its invariant
+//!   subspace (Newton from a symmetric state keeps the symmetry) it changes sign at the point.
+//!
+//! The root of that eigenvalue is located by Brent's method
+//! ([`rodloop_continuation::roots::brent`]) on states re-solved at each trial `L̄`, each by
+//! natural-parameter steps from the nearest state already re-solved on the family (a failed
+//! step halved), so that every trial state lies on the family the bracket is taken on. This is done on two mesh
+//! levels of the trace; the value is the finer level's root and its estimate the final
+//! bracket plus the distance between the two levels' roots (the discretisation error of the
+//! coarser one, which bounds the finer one's where the location converges at order ≥ 1).
+
+use rodloop_continuation::roots::brent;
+use rodloop_continuation::RootError;
+use rodloop_solver::enclosed::{EnclosedOptions, EnclosedState};
+use rodloop_solver::SolverError;
+
+use super::trace::Levels;
+
+/// Relative threshold of the strongly active wall constraints, as for the traces' index.
+const ACTIVE: f64 = 1e-6;
+
+/// Largest `|f|` at the final bracket's states, relative to the larger bracket end's, of a
+/// continuous crossing (see [`locate_on_level`]).
+const JUMP: f64 = 1e-4;
+
+/// How the error of a root where the eigenvalue jumps begins ([`is_jump`]).
+const JUMPS: &str = "the eigenvalue jumps";
+
+/// `true` for the error of [`locate`] where the eigenvalue jumps at the root: a change of
+/// the contact set, not a branch point.
+pub(super) fn is_jump(e: &SolverError) -> bool {
+    matches!(e, SolverError::InvalidInput(m) if m.starts_with(JUMPS))
+}
+
+/// Brent's relative bracket tolerance and iteration budget.
+const XTOL: f64 = 1e-10;
+const MAX_ITER: usize = 40;
+
+/// A located branch point.
+#[derive(Clone, Debug)]
+pub(super) struct Located {
+    /// `L̄` of the point (the finer level's root).
+    pub(super) lbar: f64,
+    /// Its estimate: final bracket plus the distance between the two levels' roots.
+    pub(super) error_estimate: f64,
+    /// Energy of the re-solved state next to the root (finer level).
+    pub(super) energy: f64,
+    /// Index below and above the point (of the bracket's ends on the finer level; the states
+    /// at the final bracket, 1e-10 from the root, count the crossing eigenvalue as zero).
+    pub(super) index_below: usize,
+    /// See `index_below`.
+    pub(super) index_above: usize,
+}
+
+/// The root on one level.
+#[derive(Clone, Debug)]
+pub(super) struct LevelRoot {
+    pub(super) x: f64,
+    pub(super) width: f64,
+    pub(super) energy: f64,
+    pub(super) index_below: usize,
+    pub(super) index_above: usize,
+}
+
+/// Newton at `x` from `s` (pinned translations kept for a free loop).
+fn step(s: &EnclosedState, x: f64, opts: &EnclosedOptions) -> Result<EnclosedState, SolverError> {
+    if s.model.gauge().pin.is_some() {
+        s.step_free(x, opts)
+    } else {
+        s.step_to(x, opts)
+    }
+}
+
+/// Halvings of a failed re-solve step in [`walk_to`].
+const HALVINGS: usize = 5;
+
+/// Newton steps from `s` (at `from`) to `x`: the whole way first, a failed step halved up to
+/// [`HALVINGS`] times and the walk resumed from the state reached with the remaining way.
+fn walk_to(
+    s: &EnclosedState,
+    from: f64,
+    x: f64,
+    opts: &EnclosedOptions,
+) -> Result<EnclosedState, SolverError> {
+    let (mut cur, mut at, mut h) = (s.clone(), from, x - from);
+    let mut halvings = 0;
+    loop {
+        let to = if (x - at).abs() <= h.abs() { x } else { at + h };
+        match step(&cur, to, opts) {
+            Ok(t) => {
+                (cur, at) = (t, to);
+                if to == x {
+                    return Ok(cur);
+                }
+            }
+            Err(e) if halvings >= HALVINGS => return Err(e),
+            Err(_) => {
+                halvings += 1;
+                h *= 0.5;
+            }
+        }
+    }
+}
+
+/// Eigenvalue `k` (ascending) on the tangent space.
+fn eigen(s: &EnclosedState, k: usize) -> Result<f64, SolverError> {
+    let (_, vals) = s.stability(ACTIVE)?;
+    let v = vals
+        .get(k)
+        .copied()
+        .ok_or_else(|| SolverError::InvalidInput("too few eigenvalues".into()))?;
+    Ok(v)
+}
+
+/// The root on one level between `from` (at `xa`, the family the bracket is taken on) and
+/// `to` (at `xb`): `to` is used as the far end where its index differs from `from`'s (the
+/// same family on the other side of the point); otherwise (a change of symmetry) the far
+/// end is `from` re-solved at `xb`.
+pub(super) fn locate_on_level(
+    from: &EnclosedState,
+    xa: f64,
+    to: &EnclosedState,
+    xb: f64,
+    opts: &EnclosedOptions,
+) -> Result<LevelRoot, SolverError> {
+    let ia = from.index(ACTIVE)?;
+    let ib = to.index(ACTIVE)?;
+    let k = if ia != ib { ia.min(ib) } else { ia };
+    let mut solved: Vec<(f64, EnclosedState, f64)> = Vec::new();
+    let fa = eigen(from, k)?;
+    solved.push((xa, from.clone(), fa));
+    if ia != ib {
+        let fb = eigen(to, k)?;
+        solved.push((xb, to.clone(), fb));
+    }
+    let mut f = |x: f64| -> Result<f64, SolverError> {
+        if let Some(p) = solved.iter().find(|p| p.0 == x) {
+            return Ok(p.2);
+        }
+        let near = solved
+            .iter()
+            .min_by(|u, v| (u.0 - x).abs().total_cmp(&(v.0 - x).abs()))
+            .expect("the bracket's first end");
+        let s = walk_to(&near.1, near.0, x, opts)?;
+        let v = eigen(&s, k)?;
+        solved.push((x, s, v));
+        Ok(v)
+    };
+    let root = match brent(&mut f, xa, xb, XTOL, MAX_ITER) {
+        Ok(r) => r,
+        Err(RootError::Function(e)) => return Err(e),
+        Err(e) => {
+            return Err(SolverError::InvalidInput(format!(
+                "the crossing eigenvalue was not bracketed: {e}"
+            )))
+        }
+    };
+    if !root.converged() {
+        return Err(SolverError::InvalidInput(format!(
+            "Brent's method did not converge in {MAX_ITER} re-solves (bracket {:.1e})",
+            root.width
+        )));
+    }
+    // The re-solved states nearest the root with the eigenvalue of either sign: the two
+    // sides of the point.
+    let x = root.x;
+    let nearest = |positive: bool| {
+        solved
+            .iter()
+            .filter(|p| (p.2 > 0.0) == positive)
+            .min_by(|u, v| (u.0 - x).abs().total_cmp(&(v.0 - x).abs()))
+    };
+    let (Some(p), Some(q)) = (nearest(true), nearest(false)) else {
+        return Err(SolverError::InvalidInput(
+            "no re-solved state on one side of the root".into(),
+        ));
+    };
+    let (lo, hi) = if p.0 < q.0 { (p, q) } else { (q, p) };
+    // A branch point is a zero eigenvalue: across the final bracket the eigenvalue is
+    // continuous (`|f| ≈ |f'|·width`, far below the bracket ends' values). Where it jumps
+    // instead, the contact set changes there (a contact force reaching 0 takes a constraint
+    // off the tangent space) and no eigenvalue crosses zero.
+    let scale = solved[0].2.abs().max(solved[1].2.abs());
+    if lo.2.abs().max(hi.2.abs()) > JUMP * scale {
+        return Err(SolverError::InvalidInput(format!(
+            "{JUMPS} from {:.3e} to {:.3e} at lbar = {x:.9} (the active set changes there; no eigenvalue crosses zero)",
+            lo.2, hi.2
+        )));
+    }
+    Ok(LevelRoot {
+        x,
+        width: (hi.0 - lo.0).abs().max(root.width),
+        energy: if (x - lo.0).abs() < (hi.0 - x).abs() {
+            lo.1.energy()
+        } else {
+            hi.1.energy()
+        },
+        index_below: if xa < xb { ia } else { ib },
+        index_above: if xa < xb { ib } else { ia },
+    })
+}
+
+/// The branch point where the index of a traced family changes between its states `j` and
+/// `j + 1` (`tr` in increasing `L̄`), located on the two mesh levels `levels` (coarser
+/// first). The index may change between other neighbouring states on another level (the
+/// discretisation moves the point): on each level the bracket is the window nearest to
+/// `j`, within one state, where that level's index changes.
+pub(super) fn locate(
+    tr: &[&Levels],
+    j: usize,
+    levels: [usize; 2],
+    opts: &EnclosedOptions,
+) -> Result<Located, SolverError> {
+    let mut r = Vec::with_capacity(2);
+    for lvl in levels {
+        let lo = j.saturating_sub(1);
+        let hi = (j + 2).min(tr.len() - 1);
+        let idx: Vec<usize> = (lo..=hi)
+            .map(|i| tr[i].states[lvl].index(ACTIVE))
+            .collect::<Result<_, _>>()?;
+        let window = [j, j.wrapping_sub(1), j + 1]
+            .into_iter()
+            .find(|&w| w >= lo && w < hi && idx[w - lo] != idx[w + 1 - lo])
+            .ok_or_else(|| {
+                SolverError::InvalidInput(format!(
+                    "the index on level {lvl} does not change next to lbar = {:.6}",
+                    tr[j].lbar
+                ))
+            })?;
+        let (a, b) = (tr[window], tr[window + 1]);
+        r.push(locate_on_level(
+            &a.states[lvl],
+            a.lbar,
+            &b.states[lvl],
+            b.lbar,
+            opts,
+        )?);
+    }
+    let (c, f) = (&r[0], &r[1]);
+    Ok(Located {
+        lbar: f.x,
+        error_estimate: f.width + (f.x - c.x).abs(),
+        energy: f.energy,
+        index_below: f.index_below,
+        index_above: f.index_above,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    //! The symmetry-breaking pitchfork of the uniform rod's planar figure-eight held by the
+    //! wall at its two lobe tips (branch 2, near `L̄ = 0.84`): the planar family, continued
+    //! past the point in its invariant subspace, gains a negative eigenvalue there.
+
+    use super::*;
+    use rodloop_exact::paper_branch_loop;
+    use rodloop_solver::enclosed::{solve_branch, SurfaceSource};
+    use rodloop_solver::Stiffness;
+
+    /// The planar figure-eight at `xa` on 32, 64 and 128 cells (from the surface loop on 32,
+    /// each finer mesh from the coarser state prolonged), and the same family stepped to
+    /// `xb`.
+    fn brackets(xa: f64, xb: f64) -> Vec<(EnclosedState, EnclosedState)> {
+        let opts = EnclosedOptions::default();
+        let l = paper_branch_loop(1, xa).unwrap();
+        let uniform = Stiffness::uniform(1.0);
+        let mut s = solve_branch(1.0, xa, &uniform, &SurfaceSource::Exact(l), 32, &opts)
+            .unwrap()
+            .fine;
+        let mut out = Vec::new();
+        for level in 0..3 {
+            if level > 0 {
+                let (m, z) = s.refine().unwrap();
+                s = rodloop_solver::enclosed::solve_enclosed(&m, z, &opts).unwrap();
+            }
+            // Steps of 2e-3; one that fails next to the singular point (where Newton
+            // converges only linearly) is skipped, the next taken from the last state.
+            let mut t = s.clone();
+            for k in 1..=10 {
+                let x = xa + (xb - xa) * f64::from(k) / 10.0;
+                match t.step_to(x, &opts) {
+                    Ok(u) => t = u,
+                    Err(e) => assert!(k < 10, "level {level}: {e}"),
+                }
+            }
+            out.push((s.clone(), t));
+        }
+        out
+    }
+
+    #[test]
+    fn planar_figure_eight_pitchfork_located_on_three_meshes() {
+        let (xa, xb) = (0.835, 0.846);
+        let opts = EnclosedOptions::default();
+        let mut roots = Vec::new();
+        for ((a, b), n) in brackets(xa, xb).into_iter().zip([32, 64, 128]) {
+            let (ia, ib) = (a.index(ACTIVE).unwrap(), b.index(ACTIVE).unwrap());
+            assert_eq!(
+                ib,
+                ia + 1,
+                "N = {n}: the planar family gains a negative eigenvalue"
+            );
+            let r = locate_on_level(&a, xa, &b, xb, &opts).unwrap();
+            assert!(r.width < 1e-8, "N = {n}: bracket {}", r.width);
+            assert_eq!((r.index_below, r.index_above), (ia, ib));
+            // Independent re-solves 1e-3 on either side, stepped from the far ends.
+            let below = walk_to(&a, xa, r.x - 1e-3, &opts).unwrap();
+            let above = walk_to(&b, xb, r.x + 1e-3, &opts).unwrap();
+            assert_eq!(below.index(ACTIVE).unwrap(), ia, "N = {n}");
+            assert_eq!(above.index(ACTIVE).unwrap(), ib, "N = {n}");
+            roots.push(r.x);
+        }
+        // The location converges as the mesh is refined (differences falling at least
+        // 2x per doubling), near L̄ = 0.84.
+        let (d1, d2) = ((roots[1] - roots[0]).abs(), (roots[2] - roots[1]).abs());
+        assert!(d2 < 0.5 * d1, "roots {roots:?}");
+        assert!(d2 < 1e-4, "roots {roots:?}");
+        assert!((roots[2] - 0.841).abs() < 2e-3, "roots {roots:?}");
+    }
+}
