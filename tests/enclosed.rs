@@ -420,7 +420,6 @@ fn column<'a>(text: &'a str, name: &str) -> Vec<&'a str> {
 /// to their row's energy within the two error estimates, and the free circle's file is the
 /// circle of radius `L̄ R`.
 #[test]
-#[ignore = "every file exists, closes and lies in the ball (nodes; Gauss points within 1e-4 R), the circle file is the circle; left: the uniform figure-eight at lbar = 1.2 re-solved with --from its file gives 2.7452871416 +- 1.5e-7 against the row 2.7452851793 +- 1.7e-6, a gap of 1.96e-6 = 1.08 times the two estimates: at the diagram's N = 64 (levels 16, 32, 64) the two contact points near each lobe tip share a node, and twice the order-1 rule over three levels is short"]
 fn enclosed_diagram_writes_states() {
     let dir = out("enclosed-diagram-states");
     let sc = scene();

@@ -272,9 +272,12 @@ fn the_exchange_of_the_lowest_branch_agrees_with_independent_solves() {
 
 /// The sharp rod's branch 2 at `L̄ = 0.9`, where every state of the branch that the routes of
 /// `solve` find is a saddle (docs/src/enclosed.md): solved from `rodloop solve`'s surface loop
-/// of the default level on 128 cells (the mesh of `--accuracy high`), the enclosed state's
-/// `N/4` level is a saddle of index ≥ 2. Along its unstable directions the descent reaches a
-/// lower equilibrium of the same branch, first-order optimal, with a smaller index.
+/// of the default level on 128 cells (the mesh of `--accuracy high`) by the min-function's
+/// semismooth Newton alone (`hand_over = false`), the enclosed state's `N/4` level is a
+/// saddle of index ≥ 2. Along its unstable directions the descent reaches a lower
+/// equilibrium of the same branch, first-order optimal, with a smaller index: the state the
+/// default solve (handed over to Fischer–Burmeister where the min-function crawls) reaches
+/// from the same start directly.
 #[test]
 fn the_unstable_figure_eight_descends_to_a_lower_state_of_its_branch() {
     let eta = 1;
@@ -290,7 +293,10 @@ fn the_unstable_figure_eight_descends_to_a_lower_state_of_its_branch() {
     )
     .unwrap();
     let src = SurfaceSource::Numeric(Box::new(res.equilibrium));
-    let opts = EnclosedOptions::default();
+    let opts = EnclosedOptions {
+        hand_over: false,
+        ..EnclosedOptions::default()
+    };
     let b = solve_branch(1.0, lbar, &sharp(), &src, 128, &opts).unwrap();
     let saddle = EnclosedSaddle {
         opts: opts.clone(),
@@ -319,7 +325,19 @@ fn the_unstable_figure_eight_descends_to_a_lower_state_of_its_branch() {
     assert_eq!(enclosed_periods(lower).unwrap().eta, eta);
     let (lmin, gmin, comp, stat) = lower.optimality().unwrap();
     assert!(lmin >= -1e-8 && gmin >= -1e-10 && comp <= 1e-9 && stat <= 1e-8);
-    assert!(lower.stability(1e-6).unwrap().0 < start);
+    let index = lower.stability(1e-6).unwrap().0;
+    assert!(index < start);
+    // The default solve from the same surface loop: the same lower state, directly.
+    let direct = solve_branch(1.0, lbar, &sharp(), &src, 128, &EnclosedOptions::default())
+        .unwrap()
+        .quarter;
+    assert!(
+        (direct.energy() - lower.energy()).abs() < 1e-9,
+        "direct {} against descended {}",
+        direct.energy(),
+        lower.energy()
+    );
+    assert_eq!(direct.stability(1e-6).unwrap().0, index);
 }
 
 #[test]

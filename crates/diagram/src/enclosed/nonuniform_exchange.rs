@@ -7,9 +7,10 @@
 //! on the ladder of meshes of the uniform rod's exchanges ([`Ladder`]: the finest level
 //! prolonged and re-solved once more per accuracy step, the last four levels kept) where
 //! every lifted-off state re-solves on it. Where one does not (the far lifted-off
-//! figure-eight of `D1/D0 = 0.5`: its point contacts fall between nodes and the prolonged
-//! contact set is the wrong one, so Newton stalls from `2N` up), or where the ladder's root
-//! lies outside the levels' estimate, the levels' result stands.
+//! figure-eight of `D1/D0 = 0.5` has point contacts between nodes, so its prolonged contact
+//! set is the wrong one: Newton converges there through the Fischer–Burmeister form of the
+//! complementarity, [`rodloop_solver::enclosed::Complementarity`]), or where the ladder's
+//! root lies outside the levels' estimate, the levels' result stands.
 
 use rodloop_solver::SolverError;
 

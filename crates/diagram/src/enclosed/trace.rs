@@ -13,8 +13,9 @@ use rodloop_continuation::natural::{walk, NaturalSettings};
 use rodloop_exact::{branch_of_eta, paper_branch_loop, ExactLoop};
 use rodloop_solver::enclosed::stats::{self, Stage};
 use rodloop_solver::enclosed::{
-    detached_intervals, enclosed_cells, solve_branch, solve_enclosed, start_from_surface,
-    three_level_estimate, EnclosedOptions, EnclosedState, SurfaceSource, LIFTED_OFF_MAX_ORDER,
+    detached_intervals, enclosed_cells, point_like_contact, solve_branch, solve_enclosed,
+    start_from_surface, three_level_estimate, EnclosedOptions, EnclosedState, SurfaceSource,
+    LIFTED_OFF_MAX_ORDER,
 };
 use rodloop_solver::{Accuracy, SolverError, Stiffness};
 
@@ -45,13 +46,18 @@ impl Levels {
             self.states[1].energy(),
             self.states[2].energy(),
         ];
-        // Fourth order where no contact end lies between nodes: fully attached, or free.
-        let max_order = match self.states[2].contact(TOUCH) {
-            Ok(c) if c.fraction >= 1.0 || c.fraction == 0.0 => 4.0,
-            _ => LIFTED_OFF_MAX_ORDER,
+        // Fourth order where no contact end lies between nodes: fully attached, or free;
+        // point-like contact at order 1 with `solve_branch`'s safety factor
+        // (`POINT_CONTACT_SAFETY`: its contact points move between nodes as `N` doubles).
+        let (max_order, safety) = match self.states[2].contact(TOUCH) {
+            Ok(c) if c.fraction >= 1.0 || c.fraction == 0.0 => (4.0, 1.0),
+            Ok(c) if point_like_contact(&self.states[2], &c) => {
+                (1.0, rodloop_solver::enclosed::branch::POINT_CONTACT_SAFETY)
+            }
+            _ => (LIFTED_OFF_MAX_ORDER, 1.0),
         };
         let (err, _) = three_level_estimate(e[0], e[1], e[2], max_order);
-        (e[2], err)
+        (e[2], safety * err)
     }
 
     /// `true` when the levels are traced with the translations pinned (a loop off the wall).

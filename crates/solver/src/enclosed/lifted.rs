@@ -650,8 +650,14 @@ impl EnclosedModel {
         let lam = &z[lo..lo + n];
         let sigma = self.wall_scale();
         let wall = self.wall();
-        let active: Vec<bool> = (0..n)
-            .map(|j| sigma * wall.gap(&r[j]) <= lam[j] + self.pull_impulse(j))
+        // The complementarity row's slopes in `λ_j` and `σ g_j` ([`super::model::Complementarity::eval`]).
+        let slopes: Vec<(f64, f64)> = (0..n)
+            .map(|j| {
+                let (_, da, db) = self
+                    .complementarity()
+                    .eval(lam[j] + self.pull_impulse(j), sigma * wall.gap(&r[j]));
+                (da, db)
+            })
             .collect();
         let mu = self.closure_multipliers(z);
         let kmu = Self::closure_functional(&mu);
@@ -725,16 +731,14 @@ impl EnclosedModel {
                 }
                 // Wall row of node j.
                 rhs.blocks[c][L0] = -f[lo + j];
-                if active[j] {
-                    for k in 0..6 {
-                        d[(L0, X0 + k)] = sigma * u[k];
-                    }
-                    for l in 0..3 {
-                        sys.bcol[c][(L0, gr0 + l)] = sigma * gj[l];
-                    }
-                } else {
-                    d[(L0, L0)] = 1.0;
+                let (da, db) = slopes[j];
+                for k in 0..6 {
+                    d[(L0, X0 + k)] = db * sigma * u[k];
                 }
+                for l in 0..3 {
+                    sys.bcol[c][(L0, gr0 + l)] = db * sigma * gj[l];
+                }
+                d[(L0, L0)] = da;
                 // r0 stationarity: −Σ_j δλ_j ∇g_j + λ_j ∇²g_j (δr0 + δp_j), δp_j = −hat(p_j)ω + v.
                 for k in 0..3 {
                     sys.brow[c][(gr0 + k, L0)] = -gj[k];
@@ -808,13 +812,11 @@ impl EnclosedModel {
         for k in g..G {
             sys.corner[(k, k)] = 1.0;
         }
-        if active[0] {
-            for l in 0..3 {
-                sys.corner[(gl0, gr0 + l)] = sigma * g0[l];
-            }
-        } else {
-            sys.corner[(gl0, gl0)] = 1.0;
+        let (da0, db0) = slopes[0];
+        for l in 0..3 {
+            sys.corner[(gl0, gr0 + l)] = db0 * sigma * g0[l];
         }
+        sys.corner[(gl0, gl0)] = da0;
     }
 }
 

@@ -47,7 +47,7 @@ pub use branch::{
     BranchSolve, SurfaceSource, LIFTED_OFF_MAX_ORDER, POINT_CONTACT_CELLS,
 };
 pub use from_shape::{start_from_shape, SavedShape};
-pub use model::{EnclosedModel, Gauge};
+pub use model::{Complementarity, EnclosedModel, Gauge};
 pub use seam::EnclosedFactor;
 pub use solve::{
     free_circle, solve_enclosed, start_from_surface, Contact, EnclosedOptions, EnclosedState,

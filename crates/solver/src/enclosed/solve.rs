@@ -27,7 +27,7 @@ use std::time::Instant;
 use nalgebra::{DMatrix, DVector, Vector3};
 use rodloop_continuation::natural::NaturalSettings;
 
-use super::model::{phase_slope, EnclosedModel, Gauge};
+use super::model::{phase_slope, Complementarity, EnclosedModel, Gauge};
 use super::stats::{self, Outcome};
 use super::wall::{IntoWall, Wall};
 use crate::stiffness::Stiffness;
@@ -55,6 +55,11 @@ pub struct EnclosedOptions {
     /// never). For continuation steps, where a failed step is retried shorter: a start
     /// whose contact set is far off is then shed node by node at nearly constant residual.
     pub stall_window: usize,
+    /// Hand a crawling or failing min-function solve to the Fischer–Burmeister form
+    /// (`true`, default; see [`solve_enclosed`]). Both forms have the same solutions, but from one
+    /// start they may end at different ones: `false` runs the min-function's semismooth
+    /// Newton alone, as far as it goes.
+    pub hand_over: bool,
 }
 
 /// Iterations a watchdog step ([`EnclosedOptions::watchdog`]) has to bring the residual
@@ -69,6 +74,7 @@ impl Default for EnclosedOptions {
             max_backtracks: 40,
             watchdog: 0,
             stall_window: 0,
+            hand_over: true,
         }
     }
 }
@@ -143,8 +149,9 @@ struct Ended {
     dense: usize,
 }
 
-/// Semismooth Newton from `z0` (see the module docs). Counted in [`super::stats`] when the
-/// thread has a scope open.
+/// Semismooth Newton from `z0` (see the module docs): on the min-function, handed over to the
+/// Fischer–Burmeister form where it crawls or fails ([`EnclosedOptions::hand_over`]).
+/// Counted in [`super::stats`] when the thread has a scope open.
 pub fn solve_enclosed(
     model: &EnclosedModel,
     z0: Vec<f64>,
@@ -169,12 +176,94 @@ pub fn solve_enclosed(
     out
 }
 
+/// Iterations in a row that do not halve the residual before semismooth Newton on the
+/// min-function hands over to Fischer–Burmeister ([`newton`]).
+pub const CRAWL_WINDOW: usize = 10;
+
 /// [`solve_enclosed`]'s iteration; `ended` says where it stopped.
+///
+/// Semismooth Newton on the min-function first. Where its contact set cycles — a contact
+/// point between two nodes: each full step moves the contact onto the other node, the
+/// residual grows, and the line search takes short steps that change the set node by node —
+/// the monotone search crawls ([`CRAWL_WINDOW`] iterations without halving the residual), hits
+/// the iteration cap or fails. There (unless the caller gives up early,
+/// [`EnclosedOptions::stall_window`]) Newton goes on from the best iterate on the
+/// Fischer–Burmeister form ([`Complementarity::FischerBurmeister`]), whose squared residual is
+/// continuously differentiable so that the backtracking search on it cannot stall at a kink;
+/// it is run to `tolerance/1.75`, which puts the min-function's residual below `tolerance`
+/// (`|min(a, b)| ≤ |φ_FB(a, b)|/(2 − √2)`), and the state is returned with the residual of the
+/// min-function. Both forms have the same solutions. Where that fails after a crawl, the
+/// min-function runs again from the start without the crawl stop (some crawls end in
+/// convergence).
 fn newton(
     model: &EnclosedModel,
     z0: Vec<f64>,
     opts: &EnclosedOptions,
     ended: &mut Ended,
+) -> Result<EnclosedState, SolverError> {
+    let mut best: (Vec<f64>, f64) = (z0.clone(), f64::INFINITY);
+    let start = z0.clone();
+    let mut crawled = false;
+    if !opts.hand_over {
+        return newton_min(model, z0, opts, ended, &mut best, None);
+    }
+    let out = newton_min(model, z0, opts, ended, &mut best, Some(&mut crawled));
+    let rescue = model.complementarity() == Complementarity::Min
+        && opts.stall_window == 0
+        && best.1.is_finite()
+        && matches!(out, Err(SolverError::NewtonNotConverged { .. }));
+    if !rescue {
+        return out;
+    }
+    let fb = model
+        .clone()
+        .with_complementarity(Complementarity::FischerBurmeister);
+    let fopts = EnclosedOptions {
+        tolerance: opts.tolerance / 1.75,
+        watchdog: 0,
+        ..opts.clone()
+    };
+    let mut inner = Ended {
+        outcome: Outcome::Other,
+        iterations: 0,
+        dense: 0,
+    };
+    let before = ended.iterations;
+    let mut fbest = (best.0.clone(), f64::INFINITY);
+    let res = newton_min(&fb, best.0, &fopts, &mut inner, &mut fbest, None);
+    ended.iterations = before + inner.iterations;
+    ended.dense += inner.dense;
+    ended.outcome = inner.outcome;
+    match res {
+        Ok(st) => {
+            let residual = model.residual_norm(&model.residual(&st.z)?);
+            Ok(EnclosedState {
+                model: model.clone(),
+                z: st.z,
+                iterations: ended.iterations,
+                residual,
+            })
+        }
+        // Where the crawl stopped the min-function early, it runs again without the stop
+        // (some crawls end in convergence).
+        Err(_) if crawled => {
+            let mut again = (start.clone(), f64::INFINITY);
+            newton_min(model, start, opts, ended, &mut again, None)
+        }
+        Err(_) => out,
+    }
+}
+
+/// Damped semismooth Newton on `model`'s residual (its [`Complementarity`]); `best` keeps the
+/// iterate of the lowest residual seen; with `crawl`, the iteration stops where it crawls (see
+/// [`newton`]) and sets it.
+fn newton_min(
+    model: &EnclosedModel,
+    z0: Vec<f64>,
+    opts: &EnclosedOptions,
+    ended: &mut Ended,
+    best: &mut (Vec<f64>, f64),
+    mut crawl: Option<&mut bool>,
 ) -> Result<EnclosedState, SolverError> {
     let mut z = z0;
     let mut norm = f64::INFINITY;
@@ -211,6 +300,9 @@ fn newton(
             },
         };
         norm = model.residual_norm(&residual);
+        if norm < best.1 {
+            *best = (z.clone(), norm);
+        }
         // The watchdog step paid off, or it is time to go back to where it was taken.
         let mut step = step;
         if let Some((_, wnorm, _, deadline)) = &watch {
@@ -244,6 +336,20 @@ fn newton(
             && history.len() > w
             && norm > 0.5 * history[history.len() - 1 - w]
         {
+            ended.outcome = Outcome::Stall;
+            break;
+        }
+        // The line search crawls (see [`newton`]).
+        if w == 0
+            && crawl.is_some()
+            && model.complementarity() == Complementarity::Min
+            && watch.is_none()
+            && history.len() > CRAWL_WINDOW
+            && norm > 0.5 * history[history.len() - 1 - CRAWL_WINDOW]
+        {
+            if let Some(c) = crawl.as_deref_mut() {
+                *c = true;
+            }
             ended.outcome = Outcome::Stall;
             break;
         }
