@@ -1,11 +1,10 @@
-//! Arguments and their resolution shared by the commands: the scene of `--scene` (with the
-//! check that a surface-only command gets a surface scene), the accuracy level of
+//! Arguments and their resolution shared by the commands: the accuracy level of
 //! `--accuracy`, the stiffness profile of a scene; and the arguments of `solve`, which the
 //! surface and the enclosed solve share.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 use rodloop_scene::{Scene, StiffnessSpec};
 use rodloop_solver::{Accuracy, Stiffness};
 
@@ -67,21 +66,6 @@ pub fn stiffness_of(spec: &StiffnessSpec) -> Stiffness {
             d: d.clone(),
         },
     }
-}
-
-/// Load the scene (or the default) and check that the model covers it.
-pub fn load_scene(path: Option<&Path>) -> Result<Scene> {
-    let scene = match path {
-        Some(p) => Scene::from_file(p)?,
-        None => Scene::default(),
-    };
-    if crate::engine::kind_of(&scene) == crate::engine::EngineKind::Enclosed {
-        bail!(
-            "scene {}: confinement = \"enclosed\" is handled by `rodloop solve`, `rodloop diagram`, `rodloop report` and `rodloop compare --scene enclosed`; this command runs the surface model only (converge and phase are built on the surface model's O(N) factorisation and its diagram; the enclosed model is dense and has its own diagram). See the README, Enclosed loops",
-            scene.name
-        );
-    }
-    Ok(scene)
 }
 
 /// The choices of `--accuracy` (clap checks them: an invalid one is a usage error, exit 2).

@@ -6,11 +6,11 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use rodloop_exact::eta_of_branch;
-use rodloop_scene::StiffnessSpec;
+use rodloop_scene::{Scene, StiffnessSpec};
 use rodloop_solver::{solve_cells, Accuracy, SolveOptions, StartShape};
 use serde_json::json;
 
-use crate::args::{load_scene, stiffness_of};
+use crate::args::stiffness_of;
 use crate::output::{Cell, OutputRun, Table};
 
 /// Arguments of `rodloop converge`.
@@ -152,15 +152,14 @@ fn solve_ladder(
     Ok((rungs, prev))
 }
 
-/// Run the subcommand.
-pub fn run(args: &Args) -> Result<()> {
-    let scene = load_scene(args.scene.as_deref())?;
+/// Run the subcommand on a surface scene.
+pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     let eta = checked_eta(args)?;
     let stiffness = stiffness_of(&scene.stiffness);
     let start = StartShape::Euler { l: eta };
     let default_cells = Accuracy::Default.cells(eta as usize, &stiffness);
     let base = ladder_base(args, default_cells)?;
-    let (rungs, prev) = solve_ladder(args, &scene, &stiffness, &start, base)?;
+    let (rungs, prev) = solve_ladder(args, scene, &stiffness, &start, base)?;
     let exact = match (&scene.stiffness, scene.radius) {
         (StiffnessSpec::Uniform { .. }, _) => rodloop_exact::paper_branch_loop(eta, args.lbar)
             .ok()

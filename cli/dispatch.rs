@@ -1,13 +1,15 @@
-//! The commands that run on either engine (`diagram`, `report`, `solve`, `compare --scene`),
-//! dispatched once: [`load`] turns the scene's engine kind (`crate::engine`) into a
-//! [`SceneEngine`], and the entry points here call its method for the command. `main` calls
-//! these entry points; the commands themselves never ask which engine they run on, and
-//! nothing below imports this module back.
+//! The commands that read a scene (`diagram` with or without `--param`, `report`, `solve`,
+//! `compare --scene`, `converge`, `phase`), dispatched once: [`load`] turns the scene's engine
+//! kind (`crate::engine`) into a [`SceneEngine`], and the entry points here call its method
+//! for the command. `main` calls these entry points; the commands themselves never ask which
+//! engine they run on, and nothing below imports this module back. `converge`, `phase` and
+//! `diagram --param` are built on the surface model's O(N) factorisation and its diagram: the
+//! enclosed engine answers them with [`surface_only`].
 
 use std::path::Path;
 use std::time::Instant;
 
-use anyhow::{bail, Result};
+use anyhow::{anyhow, bail, Result};
 use rodloop_scene::Scene;
 
 use crate::engine::EngineKind;
@@ -22,6 +24,17 @@ trait SceneEngine {
     fn solve(&self, args: &crate::solve::Args, scene: &Scene) -> Result<()>;
     /// `rodloop compare --scene <file>` (`scene_arg` as given, `out` the output directory).
     fn compare(&self, scene_arg: &str, scene: &Scene, out: &Path) -> Result<()>;
+    /// `rodloop diagram --param` (its arguments checked before the scene is read).
+    fn diagram_param(
+        &self,
+        args: &crate::diagram::Args,
+        checked: crate::diagram::param::Checked,
+        scene: &Scene,
+    ) -> Result<()>;
+    /// `rodloop converge`.
+    fn converge(&self, args: &crate::converge::Args, scene: &Scene) -> Result<()>;
+    /// `rodloop phase` (`t_start`: when the command started, for its timing line).
+    fn phase(&self, args: &crate::phase::Args, scene: &Scene, t_start: Instant) -> Result<()>;
 }
 
 /// Loops on the sphere.
@@ -47,6 +60,20 @@ impl SceneEngine for Surface {
         }
         crate::enclosed::run_compare(scene_arg, out)
     }
+    fn diagram_param(
+        &self,
+        args: &crate::diagram::Args,
+        checked: crate::diagram::param::Checked,
+        scene: &Scene,
+    ) -> Result<()> {
+        crate::diagram::param::run(args, checked, scene)
+    }
+    fn converge(&self, args: &crate::converge::Args, scene: &Scene) -> Result<()> {
+        crate::converge::run(args, scene)
+    }
+    fn phase(&self, args: &crate::phase::Args, scene: &Scene, t_start: Instant) -> Result<()> {
+        crate::phase::run(args, scene, t_start)
+    }
 }
 
 impl SceneEngine for Enclosed {
@@ -65,6 +92,28 @@ impl SceneEngine for Enclosed {
     fn compare(&self, scene_arg: &str, _scene: &Scene, out: &Path) -> Result<()> {
         crate::enclosed::run_compare(scene_arg, out)
     }
+    fn diagram_param(
+        &self,
+        _args: &crate::diagram::Args,
+        _checked: crate::diagram::param::Checked,
+        scene: &Scene,
+    ) -> Result<()> {
+        Err(surface_only(scene))
+    }
+    fn converge(&self, _args: &crate::converge::Args, scene: &Scene) -> Result<()> {
+        Err(surface_only(scene))
+    }
+    fn phase(&self, _args: &crate::phase::Args, scene: &Scene, _t_start: Instant) -> Result<()> {
+        Err(surface_only(scene))
+    }
+}
+
+/// The one-line error of a command that runs the surface model only, on an enclosed scene.
+fn surface_only(scene: &Scene) -> anyhow::Error {
+    anyhow!(
+        "scene {}: confinement = \"enclosed\" is handled by `rodloop solve`, `rodloop diagram`, `rodloop report` and `rodloop compare --scene enclosed`; this command runs the surface model only (converge and phase are built on the surface model's O(N) factorisation and its diagram; the enclosed model is dense and has its own diagram). See the README, Enclosed loops",
+        scene.name
+    )
 }
 
 /// The engine of a kind: the one place the commands branch on the model.
@@ -81,14 +130,28 @@ fn load(path: Option<&Path>) -> Result<(Scene, &'static dyn SceneEngine)> {
     Ok((scene, of_kind(kind)))
 }
 
-/// `rodloop diagram`: `--param` on the surface model, else the diagram in `L̄` of the scene's
-/// engine.
+/// `rodloop diagram` on the scene's engine: `--param` (a sweep at a fixed length), else the
+/// diagram in `L̄`.
 pub fn diagram(args: &crate::diagram::Args) -> Result<()> {
-    if crate::diagram::param_or_checked(args)? {
-        return Ok(());
-    }
+    let param = crate::diagram::param_or_checked(args)?;
     let (scene, engine) = load(args.scene.as_deref())?;
-    engine.diagram(args, &scene)
+    match param {
+        Some(checked) => engine.diagram_param(args, checked, &scene),
+        None => engine.diagram(args, &scene),
+    }
+}
+
+/// `rodloop converge` on the scene's engine.
+pub fn converge(args: &crate::converge::Args) -> Result<()> {
+    let (scene, engine) = load(args.scene.as_deref())?;
+    engine.converge(args, &scene)
+}
+
+/// `rodloop phase` on the scene's engine.
+pub fn phase(args: &crate::phase::Args) -> Result<()> {
+    let t_start = Instant::now();
+    let (scene, engine) = load(Some(&args.scene))?;
+    engine.phase(args, &scene, t_start)
 }
 
 /// `rodloop report` on the scene's engine.

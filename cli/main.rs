@@ -114,10 +114,10 @@ fn main() -> ExitCode {
         Command::Euler(a) => euler::run(&a),
         Command::Diagram(a) => dispatch::diagram(&a),
         Command::Compare(a) => dispatch::compare(&a),
-        Command::Converge(a) => converge::run(&a),
+        Command::Converge(a) => dispatch::converge(&a),
         Command::Draw(a) => draw::run(&a),
         Command::Report(a) => dispatch::report(&a),
-        Command::Phase(a) => phase::run(&a),
+        Command::Phase(a) => dispatch::phase(&a),
         Command::Export(a) => export::run(&a),
     };
     match result {

@@ -7,9 +7,10 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use rodloop_diagram::phase::{trace_phase, PhaseDiagram, PhaseSettings, RowSource, RowStates};
 use rodloop_figures::raster::svg_to_png;
+use rodloop_scene::Scene;
 use rodloop_solver::{Param, SolveOptions};
 
-use crate::args::{accuracy_of, load_scene, stiffness_of};
+use crate::args::{accuracy_of, stiffness_of};
 use crate::output::{Cell, OutputRun, Table};
 use crate::phase_figure::{phase_svg, stopped_short};
 
@@ -36,10 +37,8 @@ pub struct Args {
     pub out: PathBuf,
 }
 
-/// Run `rodloop phase`.
-pub fn run(args: &Args) -> Result<()> {
-    let t0 = Instant::now();
-    let scene = load_scene(Some(&args.scene))?;
+/// Run `rodloop phase` on a surface scene (`t0`: when the command started).
+pub fn run(args: &Args, scene: &Scene, t0: Instant) -> Result<()> {
     let param: Param = args.param.parse()?;
     if param == Param::Lbar {
         bail!("--param lbar: the critical length is the unknown; choose d1, gamma, s0 or s1");
@@ -50,7 +49,7 @@ pub fn run(args: &Args) -> Result<()> {
     if let Some(v) = args.at.iter().find(|v| !v.is_finite()) {
         bail!("--at values must be finite numbers (got {v})");
     }
-    let accuracy = accuracy_of(&scene, args.accuracy.as_deref())?;
+    let accuracy = accuracy_of(scene, args.accuracy.as_deref())?;
     let stiffness = stiffness_of(&scene.stiffness);
     // The scene's own value always gets a row (an exact Newton solve there), as --at values do.
     let mut at = args.at.clone();

@@ -78,20 +78,20 @@ fn selected_branches(args: &Args, lbar_min: f64, lbar_max: f64) -> Result<Option
     Ok(Some(out))
 }
 
-/// The part of the subcommand that needs no engine: `--param` (run here; `true`) and the
-/// checks of the arguments of a diagram in `L̄` (`false`: the scene's engine draws it).
-pub fn param_or_checked(args: &Args) -> Result<bool> {
+/// The part of the subcommand that needs no scene: the checks of the arguments of `--param`
+/// (`Some`: the scene's engine sweeps it) or of a diagram in `L̄` (`None`: the scene's engine
+/// draws it).
+pub fn param_or_checked(args: &Args) -> Result<Option<param::Checked>> {
     if args.relative && args.param.is_some() {
         bail!("--relative draws the diagram in L̄ relative to its stable states; it does not apply to --param");
     }
     if let Some(p) = &args.param {
-        param::run(args, p)?;
-        return Ok(true);
+        return param::check(args, p).map(Some);
     }
     if args.lbar.is_some() || args.to.is_some() {
         bail!("--lbar and --to belong to --param (the equilibria at a fixed length against a parameter); the diagram in L̄ takes --lbar-min and --lbar-max");
     }
-    Ok(false)
+    Ok(None)
 }
 
 /// The diagram in `L̄` of a surface scene (numeric or exact model).

@@ -10,14 +10,22 @@ use rodloop_diagram::Label;
 use rodloop_figures::plot::{LegendItem, Mark, Plot, Series, Shape};
 use rodloop_figures::raster::svg_to_png;
 use rodloop_figures::svg::Svg;
+use rodloop_scene::Scene;
 use rodloop_solver::{Param, SolveOptions};
 
 use super::args::{Args, Model};
-use crate::args::{accuracy_of, load_scene, stiffness_of};
+use crate::args::{accuracy_of, stiffness_of};
 use crate::output::{Cell, OutputRun, Table};
 
-/// Run `diagram --param`.
-pub fn run(args: &Args, param: &str) -> Result<()> {
+/// The arguments of `diagram --param`, checked before the scene is read.
+pub struct Checked {
+    t0: Instant,
+    param: Param,
+    lbar: f64,
+}
+
+/// Check the arguments of `diagram --param` that need no scene.
+pub fn check(args: &Args, param: &str) -> Result<Checked> {
     let t0 = Instant::now();
     let param: Param = param.parse()?;
     if args.model == Model::Exact {
@@ -39,7 +47,12 @@ pub fn run(args: &Args, param: &str) -> Result<()> {
     if args.shapes > 0 {
         bail!("--shapes draws the atlas of the diagram in L̄; --param writes its states to states/ (draw one with `rodloop draw`)");
     }
-    let scene = load_scene(args.scene.as_deref())?;
+    Ok(Checked { t0, param, lbar })
+}
+
+/// Run `diagram --param` on a surface scene.
+pub fn run(args: &Args, checked: Checked, scene: &Scene) -> Result<()> {
+    let Checked { t0, param, lbar } = checked;
     let stiffness = stiffness_of(&scene.stiffness);
     let target = match (args.to, param) {
         (Some(v), _) => v,
@@ -54,7 +67,7 @@ pub fn run(args: &Args, param: &str) -> Result<()> {
         stiffness,
         param,
         target,
-        accuracy: accuracy_of(&scene, args.accuracy.as_deref())?,
+        accuracy: accuracy_of(scene, args.accuracy.as_deref())?,
         branches: args.branch.iter().map(|&b| b as u32).collect(),
         solve: SolveOptions::default(),
     };
