@@ -22,8 +22,8 @@ trait SceneEngine {
     fn report(&self, args: &crate::report::Args, scene: &Scene, t_start: Instant) -> Result<()>;
     /// `rodloop solve`.
     fn solve(&self, args: &crate::solve::Args, scene: &Scene) -> Result<()>;
-    /// `rodloop compare --scene <file>` (`scene_arg` as given, `out` the output directory).
-    fn compare(&self, scene_arg: &str, scene: &Scene, out: &Path) -> Result<()>;
+    /// `rodloop compare --scene <file>` (`out` the output directory).
+    fn compare(&self, scene: &Scene, out: &Path) -> Result<()>;
     /// `rodloop diagram --param` (its arguments checked before the scene is read).
     fn diagram_param(
         &self,
@@ -53,12 +53,15 @@ impl SceneEngine for Surface {
     fn solve(&self, args: &crate::solve::Args, scene: &Scene) -> Result<()> {
         crate::solve::run_surface(args, scene.clone())
     }
-    fn compare(&self, scene_arg: &str, scene: &Scene, out: &Path) -> Result<()> {
+    fn compare(&self, scene: &Scene, out: &Path) -> Result<()> {
         // A two-segment rod on the sphere: the paper's statements of Sec. 5.
         if !scene.stiffness.is_uniform() {
             return crate::compare_segments::run(scene, out);
         }
-        crate::enclosed::run_compare(scene_arg, out)
+        bail!(
+            "compare --scene needs an enclosed scene (confinement = \"enclosed\"); {} is not",
+            scene.name
+        )
     }
     fn diagram_param(
         &self,
@@ -89,8 +92,8 @@ impl SceneEngine for Enclosed {
     fn solve(&self, args: &crate::solve::Args, scene: &Scene) -> Result<()> {
         crate::enclosed::run_solve(args, scene)
     }
-    fn compare(&self, scene_arg: &str, _scene: &Scene, out: &Path) -> Result<()> {
-        crate::enclosed::run_compare(scene_arg, out)
+    fn compare(&self, scene: &Scene, out: &Path) -> Result<()> {
+        crate::enclosed::run_compare(scene, out)
     }
     fn diagram_param(
         &self,
@@ -172,10 +175,12 @@ pub fn solve(args: &crate::solve::Args) -> Result<()> {
 /// paper.
 pub fn compare(args: &crate::compare::Args) -> Result<()> {
     match args.scene.as_deref() {
-        Some("enclosed") => crate::enclosed::run_compare("enclosed", &args.out),
+        Some("enclosed") => {
+            crate::enclosed::run_compare(&crate::enclosed::builtin_enclosed()?, &args.out)
+        }
         Some(s) => {
             let scene = Scene::from_file(Path::new(s))?;
-            of_kind(crate::engine::kind_of(&scene)).compare(s, &scene, &args.out)
+            of_kind(crate::engine::kind_of(&scene)).compare(&scene, &args.out)
         }
         None => crate::compare::run(args),
     }

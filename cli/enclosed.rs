@@ -274,23 +274,19 @@ fn wall_summary(wall: &dyn Wall) -> serde_json::Value {
     })
 }
 
+/// The built-in homogeneous enclosed scene of `rodloop compare --scene enclosed`: the
+/// shipped `data/scenes/homogeneous-enclosed.toml`, else the same scene compiled in.
+pub fn builtin_enclosed() -> Result<Scene> {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/scenes/homogeneous-enclosed.toml");
+    Ok(Scene::from_file(&p)
+        .or_else(|_| Scene::from_toml(DEFAULT_ENCLOSED, "built-in enclosed scene"))?)
+}
+
 /// `rodloop compare --scene enclosed`: per branch 1–3 over `1 ≤ L̄ ≤ 3` (homogeneous
 /// rods), the detached intervals (exact lift-off/landing lengths), the largest gap and
 /// energy drop found on a scan, and whether the stable surface loop is detached there.
-pub fn run_compare(scene_arg: &str, out: &Path) -> Result<()> {
-    let scene = if scene_arg == "enclosed" {
-        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/scenes/homogeneous-enclosed.toml");
-        Scene::from_file(&p)
-            .or_else(|_| Scene::from_toml(DEFAULT_ENCLOSED, "built-in enclosed scene"))?
-    } else {
-        Scene::from_file(Path::new(scene_arg))?
-    };
-    if crate::engine::kind_of(&scene) != crate::engine::EngineKind::Enclosed {
-        bail!(
-            "compare --scene needs an enclosed scene (confinement = \"enclosed\"); {} is not",
-            scene.name
-        );
-    }
+/// The dispatcher hands it enclosed scenes only.
+pub fn run_compare(scene: &Scene, out: &Path) -> Result<()> {
     if !scene.stiffness.is_uniform() {
         bail!("compare --scene supports homogeneous enclosed scenes (the lift-off lengths come from the exact layer); {} is not homogeneous", scene.name);
     }

@@ -1523,3 +1523,29 @@ fn usage_mistakes_are_one_line() {
     assert!(o.status.success());
     assert!(String::from_utf8_lossy(&o.stdout).contains("--lbar"));
 }
+
+/// The surface-only commands refuse an enclosed scene with one line that names the scene and
+/// the commands that handle it, exit non-zero, and write no output directory.
+#[test]
+fn surface_only_commands_refuse_an_enclosed_scene() {
+    let scene = "data/scenes/homogeneous-enclosed.toml";
+    let cases: [&[&str]; 3] = [
+        &["converge", "--lbar", "1.2", "--branch", "1"],
+        &["phase", "--to", "0.5"],
+        &["diagram", "--param", "d1", "--lbar", "1.2"],
+    ];
+    for (i, case) in cases.iter().enumerate() {
+        let out = tmp(&format!("surface-only-{i}"));
+        let mut args = case.to_vec();
+        args.extend(["--scene", scene, "--out", out.to_str().unwrap()]);
+        let o = rodloop(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
+        assert!(
+            err.contains("homogeneous-enclosed") && err.contains("surface model only"),
+            "{args:?}: {err}"
+        );
+        assert!(!out.exists(), "{args:?} wrote {}", out.display());
+    }
+}
