@@ -38,8 +38,15 @@ pub fn main() -> Result<(), Box<dyn std::error::Error>> {
     assert!((sol.energy.total - e_exact).abs() <= 2.0 * sol.energy_error);
     assert_eq!(index, 0, "the saddle loop is a local minimum");
 
-    // A two-segment rod (Eq. (51)): soft segment 0.3 < s/L < 0.8 with D1/D0 = 0.5.
-    let rod = Stiffness::paper_sec5(0.5);
+    // A two-segment rod (Eq. (51)): soft segment 0.3 < s/L < 0.8 with D1/D0 = 0.5, written
+    // out as a user writes their own profile (`Stiffness::paper_sec5(0.5)` is the same rod).
+    let rod = Stiffness::Tanh {
+        d0: 1.0,
+        d1: 0.5,
+        s0: 0.3,
+        s1: 0.8,
+        gamma: 200.0,
+    };
     let (two, strategy) = solve_robust(
         radius,
         lbar,

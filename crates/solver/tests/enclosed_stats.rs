@@ -22,8 +22,11 @@ fn solves_are_counted_by_stage_with_their_iterations_and_failures() {
     assert!(counters.snapshot().is_empty());
     let (ok, capped) = stats::scope(&counters, Stage::Trace, || {
         let ok = a.step_to(1.41, &opts).unwrap();
+        // The min-function alone: with the hand-over, a failed solve also runs the
+        // Fischer–Burmeister form, one more capped iteration.
         let one = EnclosedOptions {
             max_iterations: 1,
+            hand_over: false,
             ..EnclosedOptions::default()
         };
         let capped = stats::stage(Stage::Creep, || a.step_to(1.45, &one));
@@ -49,4 +52,25 @@ fn solves_are_counted_by_stage_with_their_iterations_and_failures() {
         (1, 0, 1)
     );
     assert_eq!(creep.failed_iterations, 1);
+}
+
+/// A capped solve that hands over to the Fischer–Burmeister form counts the iterations of
+/// both forms, each capped (`EnclosedOptions::max_iterations` applies to each).
+#[test]
+fn a_capped_hand_over_counts_both_forms() {
+    let a = figure_eight(1.40);
+    let counters = SolveStats::new();
+    let one = EnclosedOptions {
+        max_iterations: 1,
+        ..EnclosedOptions::default()
+    };
+    assert!(one.hand_over);
+    let capped = stats::scope(&counters, Stage::Creep, || a.step_to(1.45, &one));
+    assert!(capped.is_err(), "one iteration per form from 0.05 away");
+    let snap = counters.snapshot();
+    assert_eq!(snap.len(), 1, "{snap:?}");
+    let (stage, creep) = snap[0];
+    assert_eq!(stage, Stage::Creep);
+    assert_eq!((creep.attempted, creep.converged), (1, 0));
+    assert_eq!(creep.failed_iterations, 2);
 }

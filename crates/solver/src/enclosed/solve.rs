@@ -36,7 +36,9 @@ use crate::SolverError;
 /// Options of [`solve_enclosed`].
 #[derive(Clone, Debug)]
 pub struct EnclosedOptions {
-    /// Newton iterations allowed.
+    /// Newton iterations allowed to each form of the complementarity: the min-function's
+    /// solve and, where it hands over ([`EnclosedOptions::hand_over`]), the
+    /// Fischer–Burmeister solve after it (a failed solve runs at most twice this many).
     pub max_iterations: usize,
     /// Tolerance on [`EnclosedModel::residual_norm`].
     pub tolerance: f64,
@@ -582,7 +584,13 @@ pub fn transfer_multipliers(from: &EnclosedModel, zf: &[f64], to: &EnclosedModel
     let nf = from.cells();
     let bf = from.bounds();
     let lo = to.lambda_offset();
-    let grad = to.wall_gradient_norms(zt);
+    // The impulse that gives the interpolated density on the wall: `|∇g|` on the wall. A
+    // prolonged node lies off the wall by its interpolation error; on the sphere the value on
+    // the wall is `2R` everywhere, elsewhere the node's own `|∇g|` stands in for it.
+    let grad = match to.wall().sphere() {
+        Some(r) => vec![2.0 * r; to.cells()],
+        None => to.wall_gradient_norms(zt),
+    };
     for j in 0..to.cells() {
         let s = to.bounds()[j];
         // Coarse interval [bf[k], bf[k+1]) holding s.
