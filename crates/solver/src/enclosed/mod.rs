@@ -14,8 +14,11 @@
 //! * [`model`]: [`EnclosedModel`] (energy, closure, wall, KKT residual and exact Jacobian).
 //! * [`wall`]: the confining wall `g(r) ≥ 0` with its derivatives ([`SphereWall`]).
 //! * [`lifted`]: the Newton step in `O(N)` from a block-tridiagonal form of that Jacobian.
-//! * [`solve`](mod@solve): semismooth Newton, starts (surface loop, free circle), contact
-//!   summary, the spectrum on the active constraints' tangent space.
+//! * [`solve`](mod@solve): semismooth Newton (min-function, handed over to
+//!   Fischer–Burmeister where it crawls), starts (surface loop, free circle).
+//! * [`state`]: a converged [`EnclosedState`]: energy, contact summary and forces, the
+//!   spectrum on the active constraints' tangent space, the two-resolution estimate, steps
+//!   to a nearby length.
 //! * [`from_shape`]: a start from a saved shape (`solve --from`).
 //! * [`inertia`]: the stability index from the inertia of the bordered KKT matrix.
 //! * [`descent`]: leaving a saddle along its unstable direction; the enclosed side of the
@@ -38,6 +41,7 @@ pub mod lifted;
 pub mod model;
 pub mod seam;
 pub mod solve;
+pub mod state;
 pub mod stats;
 pub mod wall;
 
