@@ -738,15 +738,35 @@ pub(super) fn nonuniform_diagram(
         .copied()
         .filter(|&m| m > opts.lbar_min + CIRCLE && m < opts.lbar_max - CIRCLE)
         .collect();
-    for w in grid.windows(2) {
-        let (Some(a), Some(b)) = (lowest_at(&outs, w[0]), lowest_at(&outs, w[1])) else {
-            continue;
-        };
-        if a == b || outs[a].eta == outs[b].eta {
-            continue;
-        }
+    // Brackets where the lowest sampled state changes branch: `(x0, x1, a, b, overlap)`.
+    let changes: Vec<(f64, f64, usize, usize, bool)> = grid
+        .windows(2)
+        .filter_map(|w| {
+            let (a, b) = (lowest_at(&outs, w[0])?, lowest_at(&outs, w[1])?);
+            if a == b || outs[a].eta == outs[b].eta {
+                return None;
+            }
+            let overlap = interp(&outs[a], w[1]).is_some() && interp(&outs[b], w[0]).is_some();
+            Some((w[0], w[1], a, b, overlap))
+        })
+        .collect();
+    // The exchanges are independent re-solves: located on the pool, recorded in order.
+    let jobs: Vec<usize> = (0..changes.len()).filter(|&j| changes[j].4).collect();
+    let mut located: Vec<Option<_>> =
+        run_parallel(threads, jobs.clone(), &mut |_| {}, &mut |_| {}, |j, _| {
+            let (x0, x1, a, b, _) = changes[j];
+            stats::within(&scope, || {
+                stats::stage(Stage::Exchange, || {
+                    locate_crossing(&dopts, [&outs[a], &outs[b]], [surf[a], surf[b]], x0, x1)
+                })
+            })
+        })
+        .into_iter()
+        .map(Some)
+        .collect();
+    for (j, &(x0, x1, a, b, overlap)) in changes.iter().enumerate() {
+        let w = [x0, x1];
         let (sa, sb) = (&outs[a], &outs[b]);
-        let overlap = interp(sa, w[1]).is_some() && interp(sb, w[0]).is_some();
         let base = Critical {
             index: 0,
             lbar_cr: f64::NAN,
@@ -757,10 +777,10 @@ pub(super) fn nonuniform_diagram(
             error_estimate: f64::NAN,
         };
         if overlap {
-            let located = stats::stage(Stage::Exchange, || {
-                locate_crossing(&dopts, [sa, sb], [surf[a], surf[b]], w[0], w[1])
-            });
-            match located {
+            let k = jobs
+                .binary_search(&j)
+                .expect("an overlapping bracket is a job");
+            match located[k].take().expect("each exchange is recorded once") {
                 Ok((x, err, e, xs, method)) => {
                     brackets.push((w[0], w[1], a, b));
                     critical.push(EnclosedCritical {
