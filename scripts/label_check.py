@@ -8,7 +8,10 @@ that assigns the labels. A sheet is one traced curve: the rows of one branch, fa
 sheet (`arc // 10**6` in surface diagrams, the `sheet` column in enclosed ones), by L̄. At
 the L̄ of a row another sheet's energy is interpolated (quadratic through its three nearest
 rows; the interpolation's uncertainty is its distance from the linear one) and counts as a
-local minimum there when its rows on both sides have index 0. Two energies are *tied*
+local minimum there when its rows on both sides have index 0; a row that is a located
+index change of its family (`index_changes` in the diagram's `branches/` files: the row
+carries one side's index only) counts with the change's index on the stretch's side
+(`above` after it, `below` before it). Two energies are *tied*
 when they differ by no more than the sum of their error estimates (`energy_error`; a row
 without one takes the largest of its sheet) and the interpolation uncertainty.
 
@@ -29,6 +32,7 @@ Checks (each failure is one line; the exit status is 1 if there is any):
 """
 
 import csv
+import glob
 import json
 import math
 import re
@@ -36,9 +40,31 @@ import sys
 from collections import defaultdict
 
 
+def index_changes(d):
+    """(branch, family, lbar) -> (below, above) of the located index changes in d/branches/."""
+    out = {}
+
+    def walk(o):
+        if isinstance(o, dict):
+            if "index_changes" in o and "branch" in o:
+                for c in o["index_changes"] or []:
+                    out[(o["branch"], o.get("family", 0), c["lbar"])] = (c["below"], c["above"])
+            for v in o.values():
+                walk(v)
+        elif isinstance(o, list):
+            for v in o:
+                walk(v)
+
+    for f in sorted(glob.glob(f"{d}/branches/*.json")):
+        with open(f) as fh:
+            walk(json.load(fh))
+    return out
+
+
 def read_rows(d):
     with open(f"{d}/branches.csv") as f:
         rows = list(csv.DictReader(f))
+    changes = index_changes(d)
     out = []
     for r in rows:
         label = r.get("stability") or r.get("label")
@@ -58,9 +84,19 @@ def read_rows(d):
                 label=label,
                 index=int(r["index"]),
                 source=r.get("source", ""),
+                change=changes.get(
+                    (int(r["branch"]), int(r.get("family") or 0), float(r["lbar"]))
+                ),
             )
         )
     return out
+
+
+def stretch_index0(a, b):
+    """Whether the stretch between consecutive rows a and b of a sheet has index 0."""
+    after_a = a["change"][1] if a["change"] else a["index"]
+    before_b = b["change"][0] if b["change"] else b["index"]
+    return after_a == 0 and before_b == 0
 
 
 def sheets_of(rows):
@@ -109,7 +145,7 @@ def at(s, l):
     return (
         e,
         unc,
-        a["index"] == 0 and b["index"] == 0,
+        stretch_index0(a, b),
         a["label"] == "stable" or b["label"] == "stable",
     )
 

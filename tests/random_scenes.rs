@@ -1,7 +1,7 @@
 //! Two-segment scenes a user might write, through the binary: randomly generated profiles
 //! (own generator, fixed seed) and the profile `d1 = 0.3, s0 = 0.2, s1 = 0.4, gamma = 100`.
 //! For each diagram: every state file closes, lies on the sphere, has the branch of its row
-//! (dominant harmonic of `κ_g`, or a family with states of that harmonic) and the energy of
+//! (dominant harmonic of its moment `D κ_g`, or a family with states of that harmonic) and the energy of
 //! its row; the completeness certificate leaves nothing unexplained; labels agree with the traced
 //! energies (the lowest index-0 state is "stable", other index-0 states "metastable",
 //! index > 0 "unstable", energies within their error estimates tied; one state listed twice
@@ -94,6 +94,43 @@ struct Row {
     /// The error estimate the label checks give the row: its own, or for a row without
     /// one the largest of its sheet (set by [`sheets`]).
     tie: f64,
+    /// The indices `(below, above)` where the row is a located index change of its family
+    /// (`index_changes` of the diagram's `branches/` files): the row's own index is one
+    /// side's only.
+    change: Option<(usize, usize)>,
+}
+
+/// Whether the stretch of a sheet between consecutive rows `p` and `q` (`p.lbar < q.lbar`)
+/// has index 0: both rows' indices, a located index change on either end taking its index
+/// on the stretch's side.
+fn stretch_index0(p: &Row, q: &Row) -> bool {
+    let after_p = p.change.map_or(p.index, |c| c.1);
+    let before_q = q.change.map_or(q.index, |c| c.0);
+    after_p == 0 && before_q == 0
+}
+
+/// The located index changes of the diagram in `dir`, `(branch, family, L̄, below, above)`,
+/// from its `branches/` files.
+fn index_changes(dir: &Path) -> Vec<(u32, u32, f64, usize, usize)> {
+    let Ok(entries) = std::fs::read_dir(dir.join("branches")) else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    for e in entries.flatten() {
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(e.path()).unwrap()).unwrap();
+        let (Some(b), Some(f)) = (v["branch"].as_u64(), v["family"].as_u64()) else {
+            continue;
+        };
+        for c in v["index_changes"].as_array().into_iter().flatten() {
+            if let (Some(l), Some(lo), Some(hi)) =
+                (c["lbar"].as_f64(), c["below"].as_u64(), c["above"].as_u64())
+            {
+                out.push((b as u32, f as u32, l, lo as usize, hi as usize));
+            }
+        }
+    }
+    out
 }
 
 /// The warnings a run's `summary.json` lists (none when it has no `warnings`).
@@ -124,6 +161,7 @@ fn rows(dir: &Path) -> Vec<Row> {
         col("index"),
         col("state_file"),
     );
+    let changes = index_changes(dir);
     r.records()
         .map(|x| {
             let x = x.unwrap();
@@ -139,7 +177,15 @@ fn rows(dir: &Path) -> Vec<Row> {
                 index: x[ix].parse().unwrap(),
                 file: x[sf].to_string(),
                 tie: 0.0,
+                change: None,
             }
+        })
+        .map(|mut row: Row| {
+            row.change = changes
+                .iter()
+                .find(|c| (c.0, c.1) == (row.branch, row.family) && (c.2 - row.lbar).abs() < 1e-12)
+                .map(|c| (c.3, c.4));
+            row
         })
         .collect()
 }
@@ -210,7 +256,7 @@ fn sheet_state(s: &[Row], l: f64) -> Option<SheetAt> {
     Some(SheetAt {
         energy,
         uncertainty: p.tie.max(q.tie) + (energy - linear).abs(),
-        index0: p.index == 0 && q.index == 0,
+        index0: stretch_index0(p, q),
         stable_side: p.stability == "stable" || q.stability == "stable",
     })
 }
@@ -368,7 +414,7 @@ fn sheet_at(s: &[Row], l: f64) -> Option<(f64, bool)> {
         return None;
     }
     let k = s.partition_point(|r| r.lbar < l).clamp(1, s.len() - 1);
-    let min0 = s[k - 1].index == 0 && s[k].index == 0;
+    let min0 = stretch_index0(&s[k - 1], &s[k]);
     if s.len() == 2 {
         let t = (l - s[0].lbar) / (s[1].lbar - s[0].lbar).max(1e-300);
         return Some((s[0].energy + t * (s[1].energy - s[0].energy), min0));
@@ -386,7 +432,8 @@ fn sheet_at(s: &[Row], l: f64) -> Option<(f64, bool)> {
     Some((e, min0))
 }
 
-/// A state file: `(s, x, y, z, κ, κ_g, D)` columns.
+/// A state file's `(s, x, y, z, κ² D, D κ_g)`: arclength, position, bending energy density
+/// and the bending moment about the surface normal.
 fn state(path: &Path) -> Vec<[f64; 6]> {
     let mut r = csv::Reader::from_path(path).expect("state file");
     let h = r.headers().unwrap().clone();
@@ -397,26 +444,33 @@ fn state(path: &Path) -> Vec<[f64; 6]> {
         .map(|x| {
             let x = x.unwrap();
             let v = |i: usize| x[i].parse::<f64>().unwrap();
-            // s, x, y, z, κ² D, κ_g
+            // s, x, y, z, κ² D, D κ_g
             [
                 v(c[0]),
                 v(c[1]),
                 v(c[2]),
                 v(c[3]),
                 v(c[4]) * v(c[4]) * v(c[5]),
-                v(kg),
+                v(c[5]) * v(kg),
             ]
         })
         .collect()
 }
 
-/// The dominant harmonic of `κ_g` over the loop (uniform samples).
-fn dominant_harmonic(kg: &[f64]) -> u32 {
-    let n = kg.len();
+/// The dominant harmonic of a signal over the loop (uniform samples) about its mean.
+///
+/// The branch count `η` is a count of the bending moment `D κ_g` (see the README), not of
+/// `κ_g`: on a soft segment `κ_g = M/D` carries the profile's own shape, and on
+/// `D1/D0 ≈ 0.04–0.09` near the 2-fold great circle the dominant harmonic of `κ_g` of a
+/// branch-3 loop is 4 where that of its moment is 3.
+fn dominant_harmonic(signal: &[f64]) -> u32 {
+    let n = signal.len();
+    let mean = signal.iter().sum::<f64>() / n as f64;
+    let dev: Vec<f64> = signal.iter().map(|v| v - mean).collect();
     (1..=12u32)
         .map(|k| {
             let (mut c, mut s) = (0.0, 0.0);
-            for (j, v) in kg.iter().enumerate() {
+            for (j, v) in dev.iter().enumerate() {
                 let t = 2.0 * std::f64::consts::PI * f64::from(k) * j as f64 / n as f64;
                 c += v * t.cos();
                 s += v * t.sin();
@@ -488,10 +542,10 @@ fn check_diagram(dir: &Path, scene_file: &Path, lo: f64, hi: f64, what: &str) ->
                 r.file, r.energy, r.error
             ));
         }
-        let kg: Vec<f64> = st.iter().map(|p| p[5]).collect();
-        harmonics.push(dominant_harmonic(&kg));
+        let moment: Vec<f64> = st.iter().map(|p| p[5]).collect();
+        harmonics.push(dominant_harmonic(&moment));
     }
-    // Branch identity: a state's dominant harmonic of `κ_g` is its row's `η`, or, where a
+    // Branch identity: a state's dominant harmonic of its moment `D κ_g` is its row's `η`, or, where a
     // soft segment bends the loop so that another harmonic dominates, the state lies on a
     // family (one curve followed by continuation from its seed) that has states of `η`
     // periods: its branch is the seed's, by continuation.
@@ -502,7 +556,7 @@ fn check_diagram(dir: &Path, scene_file: &Path, lo: f64, hi: f64, what: &str) ->
             .any(|(o, &ho)| (o.branch, o.family) == (r.branch, r.family) && ho == r.eta);
         if h != r.eta && !family_has_eta {
             bad.push(format!(
-                "{what}: {} (row of branch {}, η = {}) has {h} periods of κ_g, and no state of \
+                "{what}: {} (row of branch {}, η = {}) has {h} periods of D κ_g, and no state of \
                  its family has {}",
                 r.file, r.branch, r.eta, r.eta
             ));

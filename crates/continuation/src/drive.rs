@@ -185,6 +185,44 @@ mod tests {
     }
 
     #[test]
+    fn a_step_over_a_fold_beyond_the_range_stops_at_the_boundary() {
+        // Steps of 0.6 on the circle: the third runs from p = 0.88 over the fold at p = 1
+        // and back to p = 0.9988, inside the range [-2, 0.9995]; the drive ends on the
+        // boundary instead of turning, and no point or fold lies outside the range.
+        let c = Circle { fail: Cell::new(0) };
+        let s = settings()
+            .with_range(-2.0, 0.9995)
+            .and_then(|s| s.with_ds(0.6))
+            .and_then(|s| s.with_ds_bounds(0.01, 0.6))
+            .and_then(|s| s.with_max_turn(1.0))
+            .unwrap();
+        let cont = Continuation::new(&c, s);
+        let mut st = cont.start(&DVector::from_element(1, 1.0), 0.0).unwrap();
+        let mut seen = Vec::new();
+        let mut folds = 0;
+        let end: Driven<()> = st.drive(OnError::Fail, |_, step| {
+            let pt = step.point.expect("visited steps carry a point");
+            assert!((pt.x[0] * pt.x[0] + pt.p * pt.p - 1.0).abs() < 1e-9);
+            seen.push(pt.p);
+            folds += step
+                .special
+                .iter()
+                .filter(|s| s.kind == SpecialKind::Fold)
+                .count();
+            Flow::Go
+        });
+        match end {
+            Driven::Stopped { reason, .. } => {
+                assert_eq!(reason, StopReason::LeftRange { boundary: 0.9995 })
+            }
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(folds, 0, "{seen:?}");
+        assert_eq!(*seen.last().unwrap(), 0.9995);
+        assert!(seen.windows(2).all(|w| w[1] > w[0]), "{seen:?}");
+    }
+
+    #[test]
     fn the_visitor_ends_the_drive_with_its_value() {
         // Through the fold at p = 1 (range widened): the visitor stops at the fold.
         let c = Circle { fail: Cell::new(0) };

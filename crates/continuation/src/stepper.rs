@@ -222,12 +222,29 @@ impl<'c, 'a, P: Problem + ?Sized> Stepper<'c, 'a, P> {
             let (mut y1, mut tan1) = (y1, tan1);
             let mut stop = None;
             let p1 = y1[n];
-            if p1 > st.p_max || p1 < st.p_min {
+            // Where the step leaves the range: at its end, or inside it when it turns back
+            // (a fold of the parameter beyond the boundary, between two points inside).
+            let exit = if p1 > st.p_max || p1 < st.p_min {
                 let pb = if p1 > st.p_max { st.p_max } else { st.p_min };
                 let (xk, pk) = ev.split(&last.y);
                 let (x1, _) = ev.split(&y1);
                 let th = (pb - pk) / (p1 - pk);
-                let guess = &xk + (x1 - &xk) * th;
+                Some((pb, &xk + (x1 - &xk) * th))
+            } else {
+                let h = last.t.dot(&(&y1 - &last.y));
+                range_exit(
+                    (last.y[n], last.t[n]),
+                    (p1, tan1.t[n]),
+                    h,
+                    (st.p_min, st.p_max),
+                )
+                .map(|(pb, sigma)| {
+                    let (xk, _) = ev.split(&last.y);
+                    let (tx, _) = ev.split(&last.t);
+                    (pb, xk + tx * sigma)
+                })
+            };
+            if let Some((pb, guess)) = exit {
                 match newton_fixed(&ev, guess, pb, st.tol, st.max_iterations) {
                     Ok((xb, _)) => {
                         y1 = ev.join(&xb, pb);
@@ -528,4 +545,44 @@ fn node_point<P: Problem + ?Sized>(ev: &Evaluator<'_, P>, nd: &Node) -> Point {
         s: nd.s,
         index: nd.index,
     }
+}
+
+/// Where the step from `(p0, ṗ0)` to `(p1, ṗ1)` (arclength `h`, both ends inside
+/// `[p_min, p_max]`) leaves the range on the way: the cubic Hermite interpolant of `p` over
+/// the step exceeds a bound when the parameter turns (a fold) beyond it. Returns the bound
+/// and the arclength of the first crossing, or `None` when the interpolant stays inside.
+fn range_exit(
+    (p0, dp0): (f64, f64),
+    (p1, dp1): (f64, f64),
+    h: f64,
+    (p_min, p_max): (f64, f64),
+) -> Option<(f64, f64)> {
+    if h.is_nan() || h <= 0.0 || (p_min.is_infinite() && p_max.is_infinite()) {
+        return None;
+    }
+    let p = |t: f64| {
+        let (t2, t3) = (t * t, t * t * t);
+        (2.0 * t3 - 3.0 * t2 + 1.0) * p0
+            + (t3 - 2.0 * t2 + t) * h * dp0
+            + (-2.0 * t3 + 3.0 * t2) * p1
+            + (t3 - t2) * h * dp1
+    };
+    const SAMPLES: usize = 64;
+    let outside = |v: f64| v > p_max || v < p_min;
+    let k = (1..SAMPLES).find(|&k| outside(p(k as f64 / SAMPLES as f64)))?;
+    let pb = if p(k as f64 / SAMPLES as f64) > p_max {
+        p_max
+    } else {
+        p_min
+    };
+    let (mut a, mut b) = ((k - 1) as f64 / SAMPLES as f64, k as f64 / SAMPLES as f64);
+    for _ in 0..60 {
+        let m = 0.5 * (a + b);
+        if outside(p(m)) {
+            b = m;
+        } else {
+            a = m;
+        }
+    }
+    Some((pb, 0.5 * (a + b) * h))
 }

@@ -52,8 +52,8 @@ impl<'a, P: Problem + ?Sized> Continuation<'a, P> {
     /// The first step goes from `bp` along `±τ` ([`Continuation::secondary_tangent`],
     /// the sign given by `direction`) with the bordered corrector on the hyperplane
     /// `τᵀ (y − y* − ds τ) = 0`; the step is accepted if the corrected point lies
-    /// closer to the direction `τ` than to the current branch's tangent (otherwise the
-    /// step is halved, down to `ds_min`). The continuation then proceeds as in
+    /// closer to the direction `τ` than to the current branch's tangent and inside the
+    /// parameter range (otherwise the step is shortened, down to `ds_min`). The continuation then proceeds as in
     /// [`Continuation::run`], with the same settings and monitors. The returned branch
     /// starts at `bp` (first point, tangent `±τ`); no detection is done on its first
     /// step, where test functions are not reliable.
@@ -103,7 +103,10 @@ impl<'a, P: Problem + ?Sized> Continuation<'a, P> {
                 correct_bordered(&ev, pred, &tau, c, self.corrector_tol())?
             {
                 let d = &y - &y_bp;
-                if d.dot(t1).abs() < d.dot(&tau) {
+                // Off the primary branch, and inside the range (a first point beyond it
+                // would start the stepper outside: the step is shortened instead).
+                let inside = (st.p_min..=st.p_max).contains(&y[ev.n]);
+                if inside && d.dot(t1).abs() < d.dot(&tau) {
                     let tan = linalg::tangent(&ev, &y, &tau)?;
                     if tan.t.dot(&tau) >= cos_max {
                         break (y, tan);

@@ -121,3 +121,46 @@ fn switch_at_sheared_pitchfork_leaves_the_primary_branch() {
         }
     }
 }
+
+/// The secondary branch rises like `p ≈ u₁²`: a first step of `0.04` off the branch point
+/// lands at `p ≈ 1.6e-3`, beyond a range ending at `5e-4`. The first point is inside the
+/// range (the step shortened), and the run on the secondary branch ends on its boundary.
+#[test]
+fn the_first_point_off_a_branch_point_lies_inside_the_range() {
+    let problem = ShearedPitchfork::new();
+    let p_max = 5e-4;
+    let settings = PseudoArclength::new()
+        .with_ds(0.04)
+        .and_then(|s| s.with_locate_tol(1e-10))
+        .and_then(|s| s.with_range(-0.3, p_max))
+        .unwrap();
+    let cont = Continuation::new(&problem, settings);
+    let p0 = -0.25;
+    let x0 = problem.s * Vector2::new(0.0, ShearedPitchfork::g(p0));
+    let primary = cont
+        .run(&DVector::from_column_slice(x0.as_slice()), p0)
+        .unwrap();
+    let bp = primary
+        .branch_points()
+        .next()
+        .expect("the branch point at p = 0");
+    for direction in [Direction::Forward, Direction::Backward] {
+        let stepper = cont.start_switch(bp, direction).unwrap();
+        let first = stepper.current();
+        assert!(
+            first.p <= p_max && first.p >= -0.3,
+            "{direction:?}: first point at p = {}",
+            first.p
+        );
+        assert!(
+            problem.u_of(&first.x)[0].abs() > 1e-3,
+            "on the primary branch"
+        );
+        let branch = cont.switch_branch(bp, direction).unwrap();
+        assert!(
+            branch.points.iter().all(|q| q.p <= p_max),
+            "{direction:?}: {:?}",
+            branch.points.iter().map(|q| q.p).collect::<Vec<_>>()
+        );
+    }
+}

@@ -150,16 +150,26 @@ fn error_at(b: &TracedBranch, lbar: f64, energy: f64) -> f64 {
 }
 
 /// Whether sheet `b` has stability index 0 at `lbar`: at a traced state, that state's
-/// index; between two, both neighbours' (`None` outside the traced span).
+/// index; between two, both neighbours' (`None` outside the traced span). A located index
+/// change ([`TracedBranch::index_changes`], its own state or a branch point where the index
+/// changes) bounds the stretch it begins or ends: its state carries the index of one side
+/// only, so the stretch takes the change's index on its side (`above` after it, `below`
+/// before it).
 fn index0_at(b: &TracedBranch, lbar: f64) -> Option<bool> {
     if !b.covers(lbar) {
         return None;
     }
     let k = b.points.partition_point(|p| p.value < lbar);
     let at = |i: usize| b.points.get(i);
+    let change_at = |p: &crate::TracedPoint| b.index_changes.iter().find(|c| c.value == p.value);
     match (k.checked_sub(1).and_then(at), at(k)) {
         (_, Some(p)) if p.value == lbar => Some(p.index == 0),
-        (Some(a), Some(c)) => Some(a.index == 0 && c.index == 0),
+        (Some(a), Some(c)) => Some(match (change_at(a), change_at(c)) {
+            (Some(x), Some(y)) => x.above == 0 && y.below == 0,
+            (Some(x), None) => x.above == 0 && c.index == 0,
+            (None, Some(y)) => a.index == 0 && y.below == 0,
+            (None, None) => a.index == 0 && c.index == 0,
+        }),
         (None, Some(c)) => Some(c.index == 0),
         (Some(a), None) => Some(a.index == 0),
         _ => None,
@@ -369,6 +379,27 @@ mod tests {
         assert_eq!(labels[1], vec![S, S, S, U, U]);
         assert!(stable_sheets(&branches, &critical, 1.35).is_empty());
         assert_eq!(stable_sheets(&branches, &critical, 1.15), vec![1]);
+    }
+
+    /// A located index change at `L̄ = 1.1` (index 1 below, 0 above) whose state carries the
+    /// index below: the stretch after it is a local minimum, so the lower sheet is stable
+    /// there, not the higher minimum beside it; before it the higher one is.
+    #[test]
+    fn the_stretch_after_a_located_index_change_takes_its_index() {
+        let mut low = sheet(1, 1.0, 0.0, &[1, 1, 0, 0, 0]);
+        low.points[1].source = PointSource::IndexChange;
+        low.index_changes.push(crate::types::IndexChange {
+            value: low.points[1].value,
+            below: 1,
+            above: 0,
+        });
+        let high = sheet(2, 1.5, 0.0, &[0, 0, 0, 0, 0]);
+        let branches = vec![low, high];
+        assert_eq!(stable_sheets(&branches, &[], 1.15), vec![0]);
+        assert_eq!(stable_sheets(&branches, &[], 1.05), vec![1]);
+        assert_eq!(index0_at(&branches[0], 1.15), Some(true));
+        assert_eq!(index0_at(&branches[0], 1.05), Some(false));
+        assert_eq!(index0_at(&branches[0], 1.1), Some(false));
     }
 
     /// `b` with every state's energy raised by `shift` and given the error estimate `err`.
