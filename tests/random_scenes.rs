@@ -98,27 +98,71 @@ struct Row {
     /// (`index_changes` of the diagram's `branches/` files): the row's own index is one
     /// side's only.
     change: Option<(usize, usize)>,
+    /// Whether the row is a fold or branch point of its family (an eigenvalue of the
+    /// Hessian passes through zero there: its index is that of neither side).
+    singular: bool,
 }
 
 /// Whether the stretch of a sheet between consecutive rows `p` and `q` (`p.lbar < q.lbar`)
-/// has index 0: both rows' indices, a located index change on either end taking its index
-/// on the stretch's side.
+/// has index 0: both rows' indices, where a located index change on either end takes its
+/// index on the stretch's side, and a fold or branch point (an eigenvalue passes through
+/// zero there) leaves the stretch the other row's index.
 fn stretch_index0(p: &Row, q: &Row) -> bool {
-    let after_p = p.change.map_or(p.index, |c| c.1);
-    let before_q = q.change.map_or(q.index, |c| c.0);
-    after_p == 0 && before_q == 0
+    let after_p = p.change.map(|c| c.1).or((!p.singular).then_some(p.index));
+    let before_q = q.change.map(|c| c.0).or((!q.singular).then_some(q.index));
+    match (after_p, before_q) {
+        (Some(a), Some(b)) => a == 0 && b == 0,
+        (Some(a), None) => a == 0,
+        (None, Some(b)) => b == 0,
+        (None, None) => p.index == 0 && q.index == 0,
+    }
+}
+
+/// The folds and branch points of the diagram in `dir`, `(branch, family, L̄)`, from the
+/// sources of the states in its `branches/` files.
+fn singular_points(dir: &Path) -> Vec<(u32, u32, f64)> {
+    let mut out = Vec::new();
+    for v in branch_files(dir) {
+        let (Some(b), Some(f)) = (v["branch"].as_u64(), v["family"].as_u64()) else {
+            continue;
+        };
+        for p in v["points"].as_array().into_iter().flatten() {
+            let singular = matches!(p["source"].as_str(), Some("fold" | "branch_point"));
+            if let (true, Some(l)) = (singular, p["lbar"].as_f64()) {
+                out.push((b as u32, f as u32, l));
+            }
+        }
+    }
+    out
+}
+
+/// Every traced sheet in the diagram's `branches/` files (one sheet per file, or the
+/// `sheets` of a family's file).
+fn branch_files(dir: &Path) -> Vec<serde_json::Value> {
+    fn walk(v: serde_json::Value, out: &mut Vec<serde_json::Value>) {
+        match v {
+            serde_json::Value::Object(ref m) if m.contains_key("points") => out.push(v),
+            serde_json::Value::Object(m) => m.into_iter().for_each(|(_, x)| walk(x, out)),
+            serde_json::Value::Array(a) => a.into_iter().for_each(|x| walk(x, out)),
+            _ => {}
+        }
+    }
+    let mut out = Vec::new();
+    let Ok(entries) = std::fs::read_dir(dir.join("branches")) else {
+        return out;
+    };
+    for e in entries.flatten() {
+        let text = std::fs::read_to_string(e.path()).unwrap();
+        walk(serde_json::from_str(&text).unwrap(), &mut out);
+    }
+    out
 }
 
 /// The located index changes of the diagram in `dir`, `(branch, family, L̄, below, above)`,
 /// from its `branches/` files.
 fn index_changes(dir: &Path) -> Vec<(u32, u32, f64, usize, usize)> {
-    let Ok(entries) = std::fs::read_dir(dir.join("branches")) else {
-        return Vec::new();
-    };
     let mut out = Vec::new();
-    for e in entries.flatten() {
-        let v: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(e.path()).unwrap()).unwrap();
+    for v in branch_files(dir) {
         let (Some(b), Some(f)) = (v["branch"].as_u64(), v["family"].as_u64()) else {
             continue;
         };
@@ -130,6 +174,8 @@ fn index_changes(dir: &Path) -> Vec<(u32, u32, f64, usize, usize)> {
             }
         }
     }
+    out.sort_by(|x, y| x.partial_cmp(y).unwrap());
+    out.dedup();
     out
 }
 
@@ -162,6 +208,7 @@ fn rows(dir: &Path) -> Vec<Row> {
         col("state_file"),
     );
     let changes = index_changes(dir);
+    let singular = singular_points(dir);
     r.records()
         .map(|x| {
             let x = x.unwrap();
@@ -178,6 +225,7 @@ fn rows(dir: &Path) -> Vec<Row> {
                 file: x[sf].to_string(),
                 tie: 0.0,
                 change: None,
+                singular: false,
             }
         })
         .map(|mut row: Row| {
@@ -185,6 +233,9 @@ fn rows(dir: &Path) -> Vec<Row> {
                 .iter()
                 .find(|c| (c.0, c.1) == (row.branch, row.family) && (c.2 - row.lbar).abs() < 1e-12)
                 .map(|c| (c.3, c.4));
+            row.singular = singular
+                .iter()
+                .any(|c| (c.0, c.1) == (row.branch, row.family) && (c.2 - row.lbar).abs() < 1e-12);
             row
         })
         .collect()
