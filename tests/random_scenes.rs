@@ -101,6 +101,8 @@ struct Row {
     /// Whether the row is a fold or branch point of its family (an eigenvalue of the
     /// Hessian passes through zero there: its index is that of neither side).
     singular: bool,
+    /// `dE/dL̄` of the traced state (its `branches/` file), where it is there.
+    slope: Option<f64>,
 }
 
 /// Whether the stretch of a sheet between consecutive rows `p` and `q` (`p.lbar < q.lbar`)
@@ -130,6 +132,23 @@ fn singular_points(dir: &Path) -> Vec<(u32, u32, f64)> {
             let singular = matches!(p["source"].as_str(), Some("fold" | "branch_point"));
             if let (true, Some(l)) = (singular, p["lbar"].as_f64()) {
                 out.push((b as u32, f as u32, l));
+            }
+        }
+    }
+    out
+}
+
+/// The slopes `dE/dL̄` of the traced states of the diagram in `dir`, `(branch, family, L̄,
+/// slope)`, from its `branches/` files.
+fn slopes(dir: &Path) -> Vec<(u32, u32, f64, f64)> {
+    let mut out = Vec::new();
+    for v in branch_files(dir) {
+        let (Some(b), Some(f)) = (v["branch"].as_u64(), v["family"].as_u64()) else {
+            continue;
+        };
+        for p in v["points"].as_array().into_iter().flatten() {
+            if let (Some(l), Some(d)) = (p["lbar"].as_f64(), p["slope"].as_f64()) {
+                out.push((b as u32, f as u32, l, d));
             }
         }
     }
@@ -209,6 +228,7 @@ fn rows(dir: &Path) -> Vec<Row> {
     );
     let changes = index_changes(dir);
     let singular = singular_points(dir);
+    let slopes = slopes(dir);
     r.records()
         .map(|x| {
             let x = x.unwrap();
@@ -226,6 +246,7 @@ fn rows(dir: &Path) -> Vec<Row> {
                 tie: 0.0,
                 change: None,
                 singular: false,
+                slope: None,
             }
         })
         .map(|mut row: Row| {
@@ -233,6 +254,10 @@ fn rows(dir: &Path) -> Vec<Row> {
                 .iter()
                 .find(|c| (c.0, c.1) == (row.branch, row.family) && (c.2 - row.lbar).abs() < 1e-12)
                 .map(|c| (c.3, c.4));
+            row.slope = slopes
+                .iter()
+                .find(|c| (c.0, c.1) == (row.branch, row.family) && (c.2 - row.lbar).abs() < 1e-12)
+                .map(|c| c.3);
             row.singular = singular
                 .iter()
                 .any(|c| (c.0, c.1) == (row.branch, row.family) && (c.2 - row.lbar).abs() < 1e-12);
@@ -303,10 +328,24 @@ fn sheet_state(s: &[Row], l: f64) -> Option<SheetAt> {
     let (p, q) = (&s[k - 1], &s[k]);
     let t = (l - p.lbar) / (q.lbar - p.lbar);
     let linear = p.energy + t * (q.energy - p.energy);
-    let (energy, _) = sheet_at(s, l)?;
+    let (quadratic, _) = sheet_at(s, l)?;
+    // With both rows' slopes `dE/dL̄` (the `branches/` files), the cubic Hermite
+    // interpolant, uncertain by its distance from the quadratic; else the quadratic,
+    // uncertain by its distance from the linear one.
+    let (energy, spread) = match (p.slope, q.slope) {
+        (Some(dp), Some(dq)) => {
+            let h = q.lbar - p.lbar;
+            let hermite = (1.0 + 2.0 * t) * (1.0 - t) * (1.0 - t) * p.energy
+                + t * (1.0 - t) * (1.0 - t) * h * dp
+                + t * t * (3.0 - 2.0 * t) * q.energy
+                + t * t * (t - 1.0) * h * dq;
+            (hermite, (hermite - quadratic).abs())
+        }
+        _ => (quadratic, (quadratic - linear).abs()),
+    };
     Some(SheetAt {
         energy,
-        uncertainty: p.tie.max(q.tie) + (energy - linear).abs(),
+        uncertainty: p.tie.max(q.tie) + spread,
         index0: stretch_index0(p, q),
         stable_side: p.stability == "stable" || q.stability == "stable",
     })
