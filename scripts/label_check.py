@@ -11,7 +11,8 @@ rows; the interpolation's uncertainty is its distance from the linear one) and c
 local minimum there when its rows on both sides have index 0; a row that is a located
 index change of its family (`index_changes` in the diagram's `branches/` files: the row
 carries one side's index only) counts with the change's index on the stretch's side
-(`above` after it, `below` before it). Two energies are *tied*
+(`above` after it, `below` before it), and a fold or branch point with none (the stretch
+takes the other row's index). Two energies are *tied*
 when they differ by no more than the sum of their error estimates (`energy_error`; a row
 without one takes the largest of its sheet) and the interpolation uncertainty.
 
@@ -41,14 +42,20 @@ from collections import defaultdict
 
 
 def index_changes(d):
-    """(branch, family, lbar) -> (below, above) of the located index changes in d/branches/."""
+    """(branch, family, lbar) -> (below, above) of the located index changes in d/branches/,
+    and the set of (branch, family, lbar) of its folds and branch points."""
     out = {}
+    singular = set()
 
     def walk(o):
         if isinstance(o, dict):
             if "index_changes" in o and "branch" in o:
+                key = (o["branch"], o.get("family", 0))
                 for c in o["index_changes"] or []:
-                    out[(o["branch"], o.get("family", 0), c["lbar"])] = (c["below"], c["above"])
+                    out[key + (c["lbar"],)] = (c["below"], c["above"])
+                for p in o.get("points") or []:
+                    if p.get("source") in ("fold", "branch_point"):
+                        singular.add(key + (p["lbar"],))
             for v in o.values():
                 walk(v)
         elif isinstance(o, list):
@@ -58,13 +65,13 @@ def index_changes(d):
     for f in sorted(glob.glob(f"{d}/branches/*.json")):
         with open(f) as fh:
             walk(json.load(fh))
-    return out
+    return out, singular
 
 
 def read_rows(d):
     with open(f"{d}/branches.csv") as f:
         rows = list(csv.DictReader(f))
-    changes = index_changes(d)
+    changes, singular = index_changes(d)
     out = []
     for r in rows:
         label = r.get("stability") or r.get("label")
@@ -87,16 +94,27 @@ def read_rows(d):
                 change=changes.get(
                     (int(r["branch"]), int(r.get("family") or 0), float(r["lbar"]))
                 ),
+                singular=(int(r["branch"]), int(r.get("family") or 0), float(r["lbar"]))
+                in singular,
             )
         )
     return out
 
 
 def stretch_index0(a, b):
-    """Whether the stretch between consecutive rows a and b of a sheet has index 0."""
-    after_a = a["change"][1] if a["change"] else a["index"]
-    before_b = b["change"][0] if b["change"] else b["index"]
-    return after_a == 0 and before_b == 0
+    """Whether the stretch between consecutive rows a and b of a sheet has index 0: a located
+    index change counts with its index on the stretch's side, a fold or branch point (an
+    eigenvalue passes through zero there) with none."""
+
+    def side(r, after):
+        if r["change"]:
+            return r["change"][1] if after else r["change"][0]
+        return None if r["singular"] else r["index"]
+
+    x, y = side(a, True), side(b, False)
+    if x is None and y is None:
+        return a["index"] == 0 and b["index"] == 0
+    return all(v == 0 for v in (x, y) if v is not None)
 
 
 def sheets_of(rows):

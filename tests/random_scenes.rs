@@ -98,27 +98,90 @@ struct Row {
     /// (`index_changes` of the diagram's `branches/` files): the row's own index is one
     /// side's only.
     change: Option<(usize, usize)>,
+    /// Whether the row is a fold or branch point of its family (an eigenvalue of the
+    /// Hessian passes through zero there: its index is that of neither side).
+    singular: bool,
+    /// `dE/dL̄` of the traced state (its `branches/` file), where it is there.
+    slope: Option<f64>,
 }
 
 /// Whether the stretch of a sheet between consecutive rows `p` and `q` (`p.lbar < q.lbar`)
-/// has index 0: both rows' indices, a located index change on either end taking its index
-/// on the stretch's side.
+/// has index 0: both rows' indices, where a located index change on either end takes its
+/// index on the stretch's side, and a fold or branch point (an eigenvalue passes through
+/// zero there) leaves the stretch the other row's index.
 fn stretch_index0(p: &Row, q: &Row) -> bool {
-    let after_p = p.change.map_or(p.index, |c| c.1);
-    let before_q = q.change.map_or(q.index, |c| c.0);
-    after_p == 0 && before_q == 0
+    let after_p = p.change.map(|c| c.1).or((!p.singular).then_some(p.index));
+    let before_q = q.change.map(|c| c.0).or((!q.singular).then_some(q.index));
+    match (after_p, before_q) {
+        (Some(a), Some(b)) => a == 0 && b == 0,
+        (Some(a), None) => a == 0,
+        (None, Some(b)) => b == 0,
+        (None, None) => p.index == 0 && q.index == 0,
+    }
+}
+
+/// The folds and branch points of the diagram in `dir`, `(branch, family, L̄)`, from the
+/// sources of the states in its `branches/` files.
+fn singular_points(dir: &Path) -> Vec<(u32, u32, f64)> {
+    let mut out = Vec::new();
+    for v in branch_files(dir) {
+        let (Some(b), Some(f)) = (v["branch"].as_u64(), v["family"].as_u64()) else {
+            continue;
+        };
+        for p in v["points"].as_array().into_iter().flatten() {
+            let singular = matches!(p["source"].as_str(), Some("fold" | "branch_point"));
+            if let (true, Some(l)) = (singular, p["lbar"].as_f64()) {
+                out.push((b as u32, f as u32, l));
+            }
+        }
+    }
+    out
+}
+
+/// The slopes `dE/dL̄` of the traced states of the diagram in `dir`, `(branch, family, L̄,
+/// slope)`, from its `branches/` files.
+fn slopes(dir: &Path) -> Vec<(u32, u32, f64, f64)> {
+    let mut out = Vec::new();
+    for v in branch_files(dir) {
+        let (Some(b), Some(f)) = (v["branch"].as_u64(), v["family"].as_u64()) else {
+            continue;
+        };
+        for p in v["points"].as_array().into_iter().flatten() {
+            if let (Some(l), Some(d)) = (p["lbar"].as_f64(), p["slope"].as_f64()) {
+                out.push((b as u32, f as u32, l, d));
+            }
+        }
+    }
+    out
+}
+
+/// Every traced sheet in the diagram's `branches/` files (one sheet per file, or the
+/// `sheets` of a family's file).
+fn branch_files(dir: &Path) -> Vec<serde_json::Value> {
+    fn walk(v: serde_json::Value, out: &mut Vec<serde_json::Value>) {
+        match v {
+            serde_json::Value::Object(ref m) if m.contains_key("points") => out.push(v),
+            serde_json::Value::Object(m) => m.into_iter().for_each(|(_, x)| walk(x, out)),
+            serde_json::Value::Array(a) => a.into_iter().for_each(|x| walk(x, out)),
+            _ => {}
+        }
+    }
+    let mut out = Vec::new();
+    let Ok(entries) = std::fs::read_dir(dir.join("branches")) else {
+        return out;
+    };
+    for e in entries.flatten() {
+        let text = std::fs::read_to_string(e.path()).unwrap();
+        walk(serde_json::from_str(&text).unwrap(), &mut out);
+    }
+    out
 }
 
 /// The located index changes of the diagram in `dir`, `(branch, family, L̄, below, above)`,
 /// from its `branches/` files.
 fn index_changes(dir: &Path) -> Vec<(u32, u32, f64, usize, usize)> {
-    let Ok(entries) = std::fs::read_dir(dir.join("branches")) else {
-        return Vec::new();
-    };
     let mut out = Vec::new();
-    for e in entries.flatten() {
-        let v: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(e.path()).unwrap()).unwrap();
+    for v in branch_files(dir) {
         let (Some(b), Some(f)) = (v["branch"].as_u64(), v["family"].as_u64()) else {
             continue;
         };
@@ -130,6 +193,8 @@ fn index_changes(dir: &Path) -> Vec<(u32, u32, f64, usize, usize)> {
             }
         }
     }
+    out.sort_by(|x, y| x.partial_cmp(y).unwrap());
+    out.dedup();
     out
 }
 
@@ -162,6 +227,8 @@ fn rows(dir: &Path) -> Vec<Row> {
         col("state_file"),
     );
     let changes = index_changes(dir);
+    let singular = singular_points(dir);
+    let slopes = slopes(dir);
     r.records()
         .map(|x| {
             let x = x.unwrap();
@@ -178,6 +245,8 @@ fn rows(dir: &Path) -> Vec<Row> {
                 file: x[sf].to_string(),
                 tie: 0.0,
                 change: None,
+                singular: false,
+                slope: None,
             }
         })
         .map(|mut row: Row| {
@@ -185,6 +254,13 @@ fn rows(dir: &Path) -> Vec<Row> {
                 .iter()
                 .find(|c| (c.0, c.1) == (row.branch, row.family) && (c.2 - row.lbar).abs() < 1e-12)
                 .map(|c| (c.3, c.4));
+            row.slope = slopes
+                .iter()
+                .find(|c| (c.0, c.1) == (row.branch, row.family) && (c.2 - row.lbar).abs() < 1e-12)
+                .map(|c| c.3);
+            row.singular = singular
+                .iter()
+                .any(|c| (c.0, c.1) == (row.branch, row.family) && (c.2 - row.lbar).abs() < 1e-12);
             row
         })
         .collect()
@@ -252,10 +328,24 @@ fn sheet_state(s: &[Row], l: f64) -> Option<SheetAt> {
     let (p, q) = (&s[k - 1], &s[k]);
     let t = (l - p.lbar) / (q.lbar - p.lbar);
     let linear = p.energy + t * (q.energy - p.energy);
-    let (energy, _) = sheet_at(s, l)?;
+    let (quadratic, _) = sheet_at(s, l)?;
+    // With both rows' slopes `dE/dL̄` (the `branches/` files), the cubic Hermite
+    // interpolant, uncertain by its distance from the quadratic; else the quadratic,
+    // uncertain by its distance from the linear one.
+    let (energy, spread) = match (p.slope, q.slope) {
+        (Some(dp), Some(dq)) => {
+            let h = q.lbar - p.lbar;
+            let hermite = (1.0 + 2.0 * t) * (1.0 - t) * (1.0 - t) * p.energy
+                + t * (1.0 - t) * (1.0 - t) * h * dp
+                + t * t * (3.0 - 2.0 * t) * q.energy
+                + t * t * (t - 1.0) * h * dq;
+            (hermite, (hermite - quadratic).abs())
+        }
+        _ => (quadratic, (quadratic - linear).abs()),
+    };
     Some(SheetAt {
         energy,
-        uncertainty: p.tie.max(q.tie) + (energy - linear).abs(),
+        uncertainty: p.tie.max(q.tie) + spread,
         index0: stretch_index0(p, q),
         stable_side: p.stability == "stable" || q.stability == "stable",
     })

@@ -4,7 +4,7 @@ use rodloop_continuation::exchange::{self, Ranked, Standing};
 use serde::{Deserialize, Serialize};
 
 use crate::critical::{lowest_interpolated, CriticalKind, CriticalLength};
-use crate::types::TracedBranch;
+use crate::types::{PointSource, TracedBranch, TracedPoint};
 
 /// Stability label of an equilibrium (GUIDE §1, paper Sec. 3.1).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -150,24 +150,35 @@ fn error_at(b: &TracedBranch, lbar: f64, energy: f64) -> f64 {
 }
 
 /// Whether sheet `b` has stability index 0 at `lbar`: at a traced state, that state's
-/// index; between two, both neighbours' (`None` outside the traced span). A located index
-/// change ([`TracedBranch::index_changes`], its own state or a branch point where the index
-/// changes) bounds the stretch it begins or ends: its state carries the index of one side
-/// only, so the stretch takes the change's index on its side (`above` after it, `below`
-/// before it).
+/// index; between two, both neighbours' (`None` outside the traced span). A neighbour that
+/// bounds the stretch carries its index on the stretch's side only where it is known there:
+/// a located index change ([`TracedBranch::index_changes`], its own state or a branch point
+/// where the index changes) counts with the change's index on that side (`above` after it,
+/// `below` before it); a fold or branch point without one, where an eigenvalue of the
+/// Hessian passes through zero, counts with none, and the stretch takes the other
+/// neighbour's index (along a sheet the index is constant up to its singular end).
 fn index0_at(b: &TracedBranch, lbar: f64) -> Option<bool> {
     if !b.covers(lbar) {
         return None;
     }
     let k = b.points.partition_point(|p| p.value < lbar);
     let at = |i: usize| b.points.get(i);
-    let change_at = |p: &crate::TracedPoint| b.index_changes.iter().find(|c| c.value == p.value);
+    // The index of the stretch beside `p` as `p` knows it: `after` the stretch above it.
+    let side = |p: &TracedPoint, after: bool| -> Option<usize> {
+        if let Some(c) = b.index_changes.iter().find(|c| c.value == p.value) {
+            return Some(if after { c.above } else { c.below });
+        }
+        match p.source {
+            PointSource::Fold | PointSource::BranchPoint => None,
+            _ => Some(p.index),
+        }
+    };
     match (k.checked_sub(1).and_then(at), at(k)) {
         (_, Some(p)) if p.value == lbar => Some(p.index == 0),
-        (Some(a), Some(c)) => Some(match (change_at(a), change_at(c)) {
-            (Some(x), Some(y)) => x.above == 0 && y.below == 0,
-            (Some(x), None) => x.above == 0 && c.index == 0,
-            (None, Some(y)) => a.index == 0 && y.below == 0,
+        (Some(a), Some(c)) => Some(match (side(a, true), side(c, false)) {
+            (Some(x), Some(y)) => x == 0 && y == 0,
+            (Some(x), None) => x == 0,
+            (None, Some(y)) => y == 0,
             (None, None) => a.index == 0 && c.index == 0,
         }),
         (None, Some(c)) => Some(c.index == 0),
@@ -276,7 +287,7 @@ pub(crate) fn label_all(branches: &[TracedBranch], critical: &[CriticalLength]) 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::types::{BranchEnd, BranchTimings, PointSource, TracedPoint};
+    use crate::types::{BranchEnd, BranchTimings};
 
     /// A sheet of branch 1 (η = 2) with energy `e0 + slope (L̄ − 1)` and the given indices at
     /// `L̄ = 1.0, 1.1, …`.
@@ -400,6 +411,25 @@ mod tests {
         assert_eq!(index0_at(&branches[0], 1.15), Some(true));
         assert_eq!(index0_at(&branches[0], 1.05), Some(false));
         assert_eq!(index0_at(&branches[0], 1.1), Some(false));
+    }
+
+    /// A sheet that ends at a branch point whose own state counts index 1 (an eigenvalue
+    /// passes through zero there): the stretch before it keeps the index of the sheet, 0,
+    /// so the sheet is stable there below the higher minimum.
+    #[test]
+    fn the_stretch_before_a_singular_end_keeps_the_sheet_index() {
+        let mut low = sheet(1, 1.0, 0.0, &[0, 0, 1]);
+        low.points[2].source = PointSource::BranchPoint;
+        let high = sheet(2, 1.5, 0.0, &[0, 0, 0]);
+        let branches = vec![low, high];
+        assert_eq!(index0_at(&branches[0], 1.15), Some(true));
+        assert_eq!(stable_sheets(&branches, &[], 1.15), vec![0]);
+        // An ordinary state of index 1 there is a located saddle: the stretch is not a
+        // minimum.
+        let mut plain = branches.clone();
+        plain[0].points[2].source = PointSource::Continuation;
+        assert_eq!(index0_at(&plain[0], 1.15), Some(false));
+        assert_eq!(stable_sheets(&plain, &[], 1.15), vec![1]);
     }
 
     /// `b` with every state's energy raised by `shift` and given the error estimate `err`.

@@ -186,12 +186,19 @@ fn fill_corrections(pts: &mut [(crate::TracedPoint, PointSource)]) {
     }
 }
 
-/// Index changes between consecutive states of a sheet (increasing `L̄`), placed midway.
+/// Index changes between consecutive states of a sheet (increasing `L̄`): at the later state
+/// where it is a located index change, or a fold or branch point after a regular state (an
+/// eigenvalue of the Hessian passes through zero there, so the index changes there and that
+/// state's own index is one side's); otherwise at the earlier state. Between two singular
+/// states (a sheet from a branch point to a fold) neither index is the sheet's, and no
+/// change is recorded.
 fn index_changes_of(pts: &[(crate::TracedPoint, PointSource)]) -> Vec<IndexChange> {
+    let singular = |s: PointSource| matches!(s, PointSource::Fold | PointSource::BranchPoint);
     pts.windows(2)
-        .filter(|w| w[0].0.index != w[1].0.index)
+        .filter(|w| w[0].0.index != w[1].0.index && !(singular(w[0].1) && singular(w[1].1)))
         .map(|w| IndexChange {
-            value: if w[1].1 == PointSource::IndexChange {
+            value: if w[1].1 == PointSource::IndexChange || (singular(w[1].1) && !singular(w[0].1))
+            {
                 w[1].0.value
             } else {
                 w[0].0.value
