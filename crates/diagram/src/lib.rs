@@ -114,7 +114,10 @@ pub use diagram::{
     assemble, BranchSummary, DiagramRow, DiagramSummary, NumericDiagram, SpecialKind, SpecialPoint,
     Timings,
 };
-pub use engine::{EnclosedEngine, Engine, ExactEngine, ExactOutput, SurfaceEngine};
+pub use engine::{
+    EnclosedEngine, Engine, ExactEngine, ExactOutput, PhaseEngine, SurfaceEngine, SweepEngine,
+    VerifiedSweep,
+};
 pub use error::DiagramError;
 pub use labels::Label;
 pub use march::{
