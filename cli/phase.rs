@@ -228,8 +228,6 @@ struct StoppedShort<'a> {
     kind: &'a str,
 }
 
-/// A curve of `summary.json`: its exchange, how it was traced and why it ends.
-
 /// Longest message line: a longer explanation is cut at its first clause (the whole text is in
 /// `summary.json`).
 const BRIEF: usize = 200;

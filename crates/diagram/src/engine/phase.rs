@@ -38,7 +38,7 @@ impl Engine for PhaseEngine {
     }
 }
 
-/// The summary of one curve in the schema (`curves`).
+/// A curve of `summary.json`: its exchange, how it was traced and why it ends.
 #[derive(serde::Serialize)]
 struct CurveSummary<'a> {
     exchange: &'a Exchange,
@@ -53,9 +53,11 @@ struct CurveSummary<'a> {
     notes: &'a [String],
 }
 
-/// The schema of the phase diagram `d` of scene `scene` at accuracy `accuracy` (as the
-/// level's name): every row of every curve a critical record (`kind` "crossing"), with the
-/// parameter value, the row's source, curve, arm, index change, slope and energy estimate.
+/// The phase diagram `d` of scene `scene` at accuracy `accuracy` (the level's name) in the
+/// result schema: every row of `phase.csv` is a critical length of the schema (`index` its
+/// row, from 1; the parameter value, the row's source, curve, arm, indices, slope and
+/// energy error beside it), the curves and the parameter's range are the engine's own keys;
+/// the caller adds the run's.
 pub fn phase_schema(
     d: &PhaseDiagram,
     scene: &str,
