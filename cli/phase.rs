@@ -5,7 +5,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
-use rodloop_diagram::phase::{trace_phase, PhaseDiagram, PhaseSettings, RowSource, RowStates};
+use rodloop_diagram::phase::{PhaseDiagram, PhaseSettings, RowSource, RowStates};
+use rodloop_diagram::{Engine, PhaseEngine};
 use rodloop_figures::raster::svg_to_png;
 use rodloop_scene::Scene;
 use rodloop_solver::{Param, SolveOptions};
@@ -70,8 +71,11 @@ pub fn run(args: &Args, scene: &Scene, t0: Instant) -> Result<()> {
         solve: SolveOptions::default(),
     };
     let run = OutputRun::begin(&args.out)?;
-    let mut diagram =
-        trace_phase(&settings).with_context(|| format!("phase diagram of scene {}", scene.name))?;
+    let mut engine = PhaseEngine { settings };
+    let mut diagram = engine
+        .run(&mut |_| {})
+        .with_context(|| format!("phase diagram of scene {}", scene.name))?;
+    let settings = &engine.settings;
     // Rows whose states fail their verification are left out of every output.
     let (unverified, mut state_warnings) = drop_unverified(&mut diagram);
     let (state_files, write_warnings) =
@@ -167,7 +171,7 @@ pub fn run(args: &Args, scene: &Scene, t0: Instant) -> Result<()> {
     outln!("time {seconds:.2} s");
     let short = stopped_short(&diagram);
 
-    let mut summary = phase_summary(&diagram, &scene.name, &format!("{accuracy:?}"))?;
+    let mut summary = engine.schema(&diagram, &scene.name)?;
     summary.put("command", "phase")?;
     summary.put("at", &args.at)?;
     summary.put("time_seconds", &seconds)?;
@@ -223,82 +227,6 @@ struct StoppedShort<'a> {
     value: f64,
     kind: &'a str,
 }
-
-/// A curve of `summary.json`: its exchange, how it was traced and why it ends.
-#[derive(serde::Serialize)]
-struct CurveSummary<'a> {
-    exchange: &'a rodloop_diagram::phase::Exchange,
-    rows: usize,
-    steps: usize,
-    cells: (usize, usize),
-    ends: &'a [rodloop_diagram::phase::CurveEnd],
-    uniform: &'a Option<rodloop_diagram::phase::UniformCheck>,
-    turns: &'a [String],
-    switches: &'a [String],
-    checks: &'a [f64],
-    notes: &'a [String],
-}
-
-/// The phase diagram in the result schema (written by its one writer): every row of
-/// `phase.csv` is a critical length of the schema (`index` its row, from 1; the parameter
-/// value, the row's source, curve, arm, indices, slope and energy error beside it), the
-/// curves and the parameter's range are the engine's own keys; the caller adds the run's.
-fn phase_summary(d: &PhaseDiagram, scene: &str, accuracy: &str) -> Result<rodloop_schema::Diagram> {
-    let mut s = rodloop_schema::Diagram::new("numeric", scene, Vec::new(), PHASE_UNITS);
-    s.accuracy = Some(accuracy.to_lowercase());
-    for (k, c) in d.curves.iter().enumerate() {
-        for r in &c.rows {
-            let extra = serde_json::json!({
-                "param": d.param.name(),
-                "value": r.value,
-                "source": r.source.name(),
-                "curve": k + 1,
-                "arm": r.arm,
-                "index_from": r.index.0,
-                "index_to": r.index.1,
-                "slope": r.slope,
-                "energy_error": r.energy_error,
-            });
-            crate::output::check_finite("phase row", &[r.value, r.slope, r.energy_error])?;
-            s.critical.push(rodloop_schema::Critical {
-                index: s.critical.len() + 1,
-                lbar_cr: r.lbar_cr,
-                kind: "crossing".into(),
-                from_branch: r.from_branch,
-                to_branch: r.to_branch,
-                energy: r.energy,
-                error_estimate: r.error_estimate,
-                extra: serde_json::from_value(extra)?,
-            });
-        }
-    }
-    s.put("param", &d.param)?;
-    s.put("scene_value", &d.scene_value)?;
-    s.put("target", &d.target)?;
-    s.put(
-        "curves",
-        &d.curves
-            .iter()
-            .map(|c| CurveSummary {
-                exchange: &c.exchange,
-                rows: c.rows.len(),
-                steps: c.steps,
-                cells: c.cells,
-                ends: &c.ends,
-                uniform: &c.uniform,
-                turns: &c.turns,
-                switches: &c.switches,
-                checks: &c.checks,
-                notes: &c.notes,
-            })
-            .collect::<Vec<_>>(),
-    )?;
-    Ok(s)
-}
-
-/// `units` of the phase summary.
-const PHASE_UNITS: &str =
-    "lbar = L/(2 pi R); energy E R/(pi D0); value: d1 = D1/D0, gamma, or s0, s1 as fractions of L";
 
 /// Longest message line: a longer explanation is cut at its first clause (the whole text is in
 /// `summary.json`).

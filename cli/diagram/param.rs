@@ -5,8 +5,9 @@
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
-use rodloop_diagram::param_sweep::{sweep_param, verify_sweep, ParamSweep, SweepSettings};
+use rodloop_diagram::param_sweep::{ParamSweep, SweepSettings};
 use rodloop_diagram::Label;
+use rodloop_diagram::{Engine, SweepEngine};
 use rodloop_figures::plot::{LegendItem, Mark, Plot, Series, Shape};
 use rodloop_figures::raster::svg_to_png;
 use rodloop_figures::svg::Svg;
@@ -72,18 +73,20 @@ pub fn run(args: &Args, checked: Checked, scene: &Scene) -> Result<()> {
         solve: SolveOptions::default(),
     };
     let run = OutputRun::begin(&args.out)?;
-    let mut sweep = sweep_param(&settings)
-        .with_context(|| format!("diagram of scene {} against {param}", scene.name))?;
-    // Every traced state verified as its file holds it; those that fail are left out.
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let checked = verify_sweep(&settings, &sweep, threads);
-    let (states, unverified, state_warnings) = keep_verified(&mut sweep, checked);
+    let mut engine = SweepEngine { settings, threads };
+    let out = engine
+        .run(&mut |_| {})
+        .with_context(|| format!("diagram of scene {} against {param}", scene.name))?;
+    let settings = &engine.settings;
+    let (sweep, states) = (&out.sweep, &out.states);
+    let (unverified, state_warnings) = (out.unverified, &out.warnings);
     // States whose written κ_g has another dominant harmonic than their branch's η (a very
     // soft segment: the branch is the family's, by continuation from its seed).
     let other_eta: usize = sweep
         .families
         .iter()
-        .zip(&states)
+        .zip(states)
         .map(|(f, v)| {
             v.iter()
                 .filter(|(_, file)| file.counted_other_eta(f.eta))
@@ -91,15 +94,15 @@ pub fn run(args: &Args, checked: Checked, scene: &Scene) -> Result<()> {
         })
         .sum();
     let state_files = write_sweep_states(
-        &sweep,
-        &states,
+        sweep,
+        states,
         scene.radius,
         settings.stiffness.reference(),
         &run,
     )?;
     let seconds = t0.elapsed().as_secs_f64();
 
-    let svg = figure(&sweep, &scene.name, args.width as f64, args.height as f64);
+    let svg = figure(sweep, &scene.name, args.width as f64, args.height as f64);
     let png = svg_to_png(&svg, 1.0).context("rendering diagram.png")?;
     for f in &sweep.families {
         let seed = match f.seed_energy {
@@ -130,12 +133,15 @@ pub fn run(args: &Args, checked: Checked, scene: &Scene) -> Result<()> {
                 .unwrap_or_default()
         );
     }
-    for w in sweep.warnings.iter().chain(&state_warnings) {
+    for w in sweep.warnings.iter().chain(state_warnings) {
         eprintln!("warning: {w}");
     }
     outln!("time {seconds:.2} s");
 
-    let mut d = sweep_schema(&sweep, &scene.name, &states, &state_files)?;
+    let mut d = engine.schema(&out, &scene.name)?;
+    for (p, name) in d.points.iter_mut().zip(state_files.iter().flatten()) {
+        p.state_file = Some(name.clone());
+    }
     d.put("command", "diagram --param")?;
     d.put("param", &param)?;
     d.put("scene_value", &sweep.scene_value)?;
@@ -175,7 +181,7 @@ pub fn run(args: &Args, checked: Checked, scene: &Scene) -> Result<()> {
         ],
     )?;
     run.write_bytes("branches.csv", &d.branches_csv()?)?;
-    run.write_table(&special_table(&sweep)?)?;
+    run.write_table(&special_table(sweep)?)?;
     run.write_bytes("diagram.svg", svg.as_bytes())?;
     run.write_bytes("diagram.png", &png)?;
     crate::output::write_summary(&run, &mut d)?;
@@ -184,54 +190,12 @@ pub fn run(args: &Args, checked: Checked, scene: &Scene) -> Result<()> {
     Ok(())
 }
 
-/// The error estimate of each kept state's energy and its verified file
-/// ([`rodloop_diagram::param_sweep::SweepState`]), by family and point.
-type Verified = Vec<Vec<(f64, rodloop_diagram::StateFile)>>;
-
-/// Keep the states of `sweep` that passed their verification (`checked[f][k]` for
-/// `sweep.families[f].points[k]`), drop the others (renumbering `arc`): the kept states'
-/// estimates and files, the number left out, and a warning for each.
-fn keep_verified(
-    sweep: &mut ParamSweep,
-    checked: Vec<Vec<rodloop_diagram::param_sweep::SweepState>>,
-) -> (Verified, usize, Vec<String>) {
-    let param = sweep.param;
-    let mut kept = Vec::new();
-    let mut count = 0;
-    let mut warnings = Vec::new();
-    for (f, results) in sweep.families.iter_mut().zip(checked) {
-        let mut files = Vec::new();
-        let mut points = Vec::new();
-        for (p, r) in std::mem::take(&mut f.points).into_iter().zip(results) {
-            match r {
-                Ok(v) => {
-                    files.push(v);
-                    points.push(p);
-                }
-                Err(why) => {
-                    count += 1;
-                    warnings.push(format!(
-                        "UNVERIFIED STATE LEFT OUT: branch {} family {} at {param} = {}: {why}",
-                        f.branch, f.family, p.value
-                    ));
-                }
-            }
-        }
-        for (i, p) in points.iter_mut().enumerate() {
-            p.arc = i;
-        }
-        f.points = points;
-        kept.push(files);
-    }
-    (kept, count, warnings)
-}
-
 /// Write every kept state into the run's `states/` directory
 /// (`states/branch-B-family-F-KKK.csv`, `KKK` its position along the family): the file of
 /// each point, by family (empty where a file could not be written; the error says which).
 fn write_sweep_states(
     s: &ParamSweep,
-    states: &Verified,
+    states: &rodloop_diagram::engine::VerifiedStates,
     r: f64,
     d0: f64,
     run: &OutputRun,
@@ -264,109 +228,6 @@ struct FamilySummary<'a> {
     notes: &'a [String],
     states: usize,
     end: &'a str,
-}
-
-/// The sweep in the result schema, for its one writer: one point per traced state, the
-/// continued parameter (`param`, `value`) and the fixed length (`lbar`) as the two axes of
-/// every point, with the error estimate of its energy and its state file (`branches.csv`);
-/// the special points at the fixed length with the parameter's `value` and the
-/// `energy_error` beside them (indices only where an index change was located), the
-/// sweep's warnings and state folder. The caller adds the run's own keys.
-fn sweep_schema(
-    s: &ParamSweep,
-    scene: &str,
-    states: &Verified,
-    files: &[Vec<String>],
-) -> Result<rodloop_schema::Diagram> {
-    use rodloop_schema::{Axis, Cell as Value, Diagram, Point, SpecialPoint};
-    let axes = vec![
-        Axis {
-            name: "value".into(),
-            min: s.scene_value.min(s.target),
-            max: s.scene_value.max(s.target),
-        },
-        Axis {
-            name: "lbar".into(),
-            min: s.lbar,
-            max: s.lbar,
-        },
-    ];
-    let mut d = Diagram::new(
-        "numeric",
-        scene,
-        axes,
-        "energy E R/(pi D0); lbar = L/(2 pi R)",
-    );
-    d.columns = [
-        "branch",
-        "eta",
-        "family",
-        "param",
-        "value",
-        "lbar",
-        "energy",
-        "energy_error",
-        "index",
-        "stability",
-        "arc",
-        "state_file",
-    ]
-    .iter()
-    .map(|c| c.to_string())
-    .collect();
-    for ((f, verified), names) in s.families.iter().zip(states).zip(files) {
-        for ((p, (est, _)), name) in f.points.iter().zip(verified).zip(names) {
-            d.points.push(Point {
-                branch: f.branch,
-                eta: f.eta,
-                family: Some(f.family as u32),
-                coords: vec![p.value, s.lbar],
-                energy: p.energy,
-                energy_error: Some(*est),
-                state_file: Some(name.clone()),
-                index: Some(p.index),
-                label: Some(p.label.as_str().into()),
-                extra: [
-                    ("param".to_string(), Value::S(s.param.name().into())),
-                    ("arc".to_string(), Value::I(p.arc as i64)),
-                ]
-                .into_iter()
-                .collect(),
-                ..Point::default()
-            });
-        }
-    }
-    for p in &s.special {
-        // Checked on their typed form: JSON has no NaN (it would become `null`).
-        crate::output::check_finite("special point", &[p.value, p.energy_error])?;
-    }
-    d.special = Some(
-        s.special
-            .iter()
-            .map(|p| SpecialPoint {
-                kind: p.kind.clone(),
-                lbar: s.lbar,
-                energy: p.energy,
-                error_estimate: None,
-                branch: p.branch,
-                family: p.family as u32,
-                index_before: p.index.map(|i| i.0),
-                index_after: p.index.map(|i| i.1),
-                extra: [
-                    ("value".to_string(), serde_json::json!(p.value)),
-                    (
-                        "energy_error".to_string(),
-                        serde_json::json!(p.energy_error),
-                    ),
-                ]
-                .into_iter()
-                .collect(),
-            })
-            .collect(),
-    );
-    d.warnings = Some(s.warnings.clone());
-    d.states_dir = Some("states".into());
-    Ok(d)
 }
 
 fn special_table(s: &ParamSweep) -> Result<Table> {

@@ -95,10 +95,12 @@ mod progress;
 pub mod refine;
 pub mod reported;
 pub mod representative;
+mod resolve;
 pub mod sampling;
 mod seed;
 pub mod shapes;
 mod special;
+mod state_file;
 pub mod state_rows;
 mod states;
 pub mod trace;
@@ -112,7 +114,10 @@ pub use diagram::{
     assemble, BranchSummary, DiagramRow, DiagramSummary, NumericDiagram, SpecialKind, SpecialPoint,
     Timings,
 };
-pub use engine::{EnclosedEngine, Engine, ExactEngine, ExactOutput, SurfaceEngine};
+pub use engine::{
+    EnclosedEngine, Engine, ExactEngine, ExactOutput, PhaseEngine, SurfaceEngine, SweepEngine,
+    VerifiedSweep,
+};
 pub use error::DiagramError;
 pub use labels::Label;
 pub use march::{
@@ -124,7 +129,7 @@ pub use options::{DiagramOptions, TraceControls};
 pub use progress::Progress;
 /// The error type a [`BranchHook`] returns.
 pub use rodloop_continuation::BoxError;
-pub use states::{
+pub use state_file::{
     branch_identification, BranchIdentification, StateFile, ESTIMATES, MAX_REFINEMENT,
     MAX_STATE_POINTS, NO_ESTIMATE_TOLERANCE, STATE_POINTS,
 };

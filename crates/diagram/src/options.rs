@@ -116,6 +116,13 @@ impl Default for DiagramOptions {
     }
 }
 
+/// The confinement model of the surface diagram: the one name of the concrete model in the
+/// diagram's options, its data types and its state verification. Everything else works
+/// through the model seam ([`rodloop_solver::Confinement`], with the surface solvers of
+/// [`rodloop_solver::SurfaceSolve`]) or takes the model from [`DiagramOptions::model`] and
+/// the equilibria it returns.
+pub(crate) type Model = rodloop_solver::SurfaceModel;
+
 /// A model at `lbar` with `cells` cells and, for uniform stiffness, the phase condition of
 /// the reference `kappa` (Gauss values).
 pub(crate) fn model_with_phase(
@@ -123,7 +130,7 @@ pub(crate) fn model_with_phase(
     lbar: f64,
     cells: usize,
     kappa: &[f64],
-) -> Result<rodloop_solver::SurfaceModel, SolverError> {
+) -> Result<Model, SolverError> {
     let model = opts.model(lbar, cells)?;
     if opts.stiffness.is_uniform() {
         model.with_phase(rodloop_solver::Phase::from_gauss_values(kappa, cells)?)
@@ -141,17 +148,13 @@ pub(crate) fn surface_model(
     lbar: f64,
     cells: usize,
     stiffness: &Stiffness,
-) -> Result<rodloop_solver::SurfaceModel, SolverError> {
-    rodloop_solver::SurfaceModel::new(radius, lbar, cells, stiffness)
+) -> Result<Model, SolverError> {
+    Model::new(radius, lbar, cells, stiffness)
 }
 
 impl DiagramOptions {
     /// The scene's model at length `lbar` with `cells` cells ([`surface_model`]).
-    pub fn model(
-        &self,
-        lbar: f64,
-        cells: usize,
-    ) -> Result<rodloop_solver::SurfaceModel, SolverError> {
+    pub fn model(&self, lbar: f64, cells: usize) -> Result<Model, SolverError> {
         surface_model(self.radius, lbar, cells, &self.stiffness)
     }
 

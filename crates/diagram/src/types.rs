@@ -162,7 +162,7 @@ impl FinerRun {
     /// ([`rodloop_solver::NewtonRun::resume_keeping`]).
     pub(crate) fn resume_keeping(
         &self,
-        model: &rodloop_solver::SurfaceModel,
+        model: &crate::options::Model,
         start: &[f64],
         opts: &rodloop_solver::SolveOptions,
     ) -> Option<(

@@ -27,14 +27,20 @@
 //! | `surface.rs` | [`SurfaceEngine`] and its schema ([`surface_schema`]) |
 //! | `enclosed.rs` | [`EnclosedEngine`] and its schema ([`lowest_lifted_off`]) |
 //! | `exact.rs` | [`ExactEngine`] and its window of the exact diagram ([`exact_window`]) |
+//! | `sweep.rs` | [`SweepEngine`] (states at a fixed length against a stiffness parameter) and its schema ([`sweep_schema`]) |
+//! | `phase.rs` | [`PhaseEngine`] (critical lengths followed in a stiffness parameter) and its schema ([`phase_schema`]) |
 
 mod enclosed;
 mod exact;
+mod phase;
 mod surface;
+mod sweep;
 
 pub use enclosed::{lowest_lifted_off, EnclosedEngine};
 pub use exact::{etas_in, exact_window, ExactEngine, ExactOutput};
+pub use phase::{phase_schema, PhaseEngine, PHASE_UNITS};
 pub use surface::{surface_schema, SurfaceEngine};
+pub use sweep::{sweep_schema, SweepEngine, VerifiedStates, VerifiedSweep};
 
 use rodloop_schema::{Axis, Critical, Diagram};
 use serde::Serialize;
@@ -79,7 +85,7 @@ pub fn critical_of<T: Serialize>(c: &T) -> Result<Critical, DiagramError> {
     serde_json::from_value(v).map_err(|e| schema_err("critical", e.to_string()))
 }
 
-fn schema_err(what: &str, message: String) -> DiagramError {
+pub(super) fn schema_err(what: &str, message: String) -> DiagramError {
     DiagramError::Schema(rodloop_schema::SchemaError::NotFiniteValue {
         key: what.into(),
         message,

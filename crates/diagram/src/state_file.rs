@@ -1,0 +1,468 @@
+//! A traced state as its file holds it: the profile sampled uniformly in arclength, checked
+//! against its row (closure, on the sphere, energy recomputed from the samples), and the
+//! one refinement ladder every written state goes through when that check fails (re-solves
+//! at `2N`, `4N`, … by [`crate::resolve`], the row re-estimated where the refined states
+//! converge and disagree with it); plus how the branches of the files are identified.
+
+use std::f64::consts::PI;
+
+use rodloop_solver::{Claim, Equilibrium, SolverError};
+
+use crate::resolve::resolved_from;
+use crate::types::{FinerRun, TracedBranch};
+use crate::DiagramOptions;
+
+/// Points per state file (uniform in arclength), at least; more when the state's resolution
+/// has more cells, and doubled until the samples hold the state (see
+/// [`TracedBranch::verified_state`]).
+pub const STATE_POINTS: usize = 128;
+
+/// Most points per state file.
+pub const MAX_STATE_POINTS: usize = 16_384;
+
+/// Multiple of a row's error estimate within which the energy recomputed from its file must
+/// lie (the estimate is that of the Richardson-extrapolated energy, which the file's single
+/// resolution approaches like `h⁴`; see [`TracedBranch::verified_state`]).
+pub const ESTIMATES: f64 = 5.0;
+
+/// Relative tolerance of the file's energy for a row without an error estimate (its
+/// half-resolution partner failed, so its discretisation error is not known; measured up to
+/// 3e-5 relative on random two-segment scenes, `cargo test --release --test random_scenes`).
+pub const NO_ESTIMATE_TOLERANCE: f64 = 1e-4;
+
+/// Largest refinement of a state file's resolution over the tracing resolution
+/// ([`TracedBranch::verified_state`]): three doublings reduce an `O(h⁴)` error 4096-fold.
+pub const MAX_REFINEMENT: usize = 8;
+
+/// A traced state as its file holds it, verified against its row.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StateFile {
+    /// The profile at points uniform in arclength (dimensional, the model's `R` and `D`).
+    pub profile: Vec<rodloop_solver::ProfilePoint>,
+    /// What was measured on it ([`rodloop_solver::verify_state`]).
+    pub verification: rodloop_solver::Verification,
+    /// Cells of the equilibrium the file samples (the tracing resolution, or a multiple of it
+    /// where that resolution's profile does not reproduce the row's energy).
+    pub cells: usize,
+    /// The row's energy and error estimate re-estimated from refined resolutions, where the
+    /// row's own disagreed with them beyond both estimates (see
+    /// [`TracedBranch::verified_state`]).
+    pub row: Option<(f64, f64)>,
+}
+
+impl StateFile {
+    /// Whether the dominant harmonic of the written `κ_g` differs from the branch's `η`
+    /// (the state is of its branch by continuation, see [`TracedBranch::verified_state`]).
+    pub fn counted_other_eta(&self, eta: u32) -> bool {
+        self.verification.eta != eta
+    }
+}
+
+/// `E R/(π D0)` of the trigonometric interpolant of `κ_g` of `eq` at `m` points uniform in
+/// arclength (what a state file of `m` points gives, without building its other columns).
+fn sampled_energy(
+    eq: &Equilibrium,
+    kg: &rodloop_solver::periodic::TrigInterpolant,
+    m: usize,
+    d0: f64,
+) -> f64 {
+    let model = eq.model();
+    let (r, length) = (model.radius(), model.length());
+    let map = model.mesh();
+    let h = length / m as f64;
+    let us = map.u_of_sigmas((0..m).map(|j| j as f64 / m as f64));
+    let e: f64 = (0..m)
+        .map(|j| {
+            let sigma = j as f64 / m as f64;
+            let k = kg.eval(us[j]);
+            let d = model.stiffness().eval(sigma).per_arclength(length).0;
+            0.5 * d * (k * k + 1.0 / (r * r)) * h
+        })
+        .sum();
+    e * r / (PI * d0)
+}
+
+/// The profile of `eq` at `m ≥ min_points` points uniform in arclength, `m` doubled (up to
+/// [`MAX_STATE_POINTS`]) until the energy of the samples settles (changes by less than a
+/// thousandth of `tol` on doubling) or lies within `tol` of `target`: uniform samples of a
+/// graded mesh miss narrow features (a very soft segment bent sharply, a steep stiffness
+/// step).
+pub(crate) fn uniform_profile(
+    eq: &Equilibrium,
+    min_points: usize,
+    target: f64,
+    tol: f64,
+    d0: f64,
+) -> Result<Vec<rodloop_solver::ProfilePoint>, SolverError> {
+    let kg = rodloop_solver::periodic::TrigInterpolant::new(
+        &eq.profile().iter().map(|p| p.kappa_g).collect::<Vec<_>>(),
+    )?;
+    let mut m = min_points.max(8);
+    let mut e_m = sampled_energy(eq, &kg, m, d0);
+    while m < MAX_STATE_POINTS && (e_m - target).abs() > tol {
+        let e_2m = sampled_energy(eq, &kg, 2 * m, d0);
+        m *= 2;
+        let settled = (e_2m - e_m).abs() <= 1e-3 * tol;
+        e_m = e_2m;
+        if settled {
+            break;
+        }
+    }
+    eq.profile_uniform(m)
+}
+
+impl TracedBranch {
+    /// Traced state `k` as its state file holds it, verified against its row
+    /// ([`rodloop_solver::verify_state`]): the loop closes (holonomy and written points),
+    /// lies on the sphere, and the energy
+    /// recomputed from the written samples (`½ ∮ D κ² ds`, Eq. (2)) equals the row's within
+    /// [`ESTIMATES`] times the row's error estimate (or [`NO_ESTIMATE_TOLERANCE`] without
+    /// one) plus the quadrature's own error.
+    ///
+    /// The row's energy is Richardson-extrapolated from the tracing resolution `N` and
+    /// `N/2`; a file samples one resolution, whose profile (`κ_g = 𝓜·n/D`, Eq. (41), at the
+    /// cell boundaries) carries that resolution's `O(h⁴)` discretisation error. Where that
+    /// error exceeds the row's estimate (a very soft segment: on `D1/D0 = 0.001`, branch 2
+    /// near `L̄ = 1`, the profile at the tracing resolution is 1e-3 relative off while the
+    /// estimate is 6e-6), the state is re-solved at `2N`, `4N`, … (Newton from its resampled
+    /// profile at the same `L̄`), up to [`MAX_REFINEMENT`]` N`, and the file samples the
+    /// finest state needed.
+    ///
+    /// The refined states also test the row: where the pair `(N, N/2)` is not yet in the
+    /// asymptotic range its estimate is too small (the same states: row 4.7e-5 above the
+    /// converged energy with an estimate of 5.9e-6). When the Richardson value of two
+    /// refined resolutions `(E_{2^j N}, E_{2^{j−1} N})`, whose differences decrease at least
+    /// fourfold per doubling (so that the refined states are the traced state converging,
+    /// not a neighbouring sheet), disagrees with the row beyond both estimates, the row is
+    /// re-estimated from that pair ([`StateFile::row`]).
+    ///
+    /// The branch of a traced state is its family's: the family is traced by continuation
+    /// from a seed whose periods were counted. The periods of the state's own `κ_g`
+    /// ([`rodloop_solver::Verification::eta`]) are counted too; near the great circles
+    /// (`L̄` at an integer, `κ_g` nearly constant) and on soft segments the dominant harmonic
+    /// can differ from the family's `η` ([`StateFile::counted_other_eta`]).
+    ///
+    /// Errors: [`SolverError::Unverified`] naming why no resolution up to the limit passes
+    /// (see [`verify_refining`]); the state's own errors when it cannot be re-evaluated.
+    pub fn verified_state(
+        &self,
+        opts: &DiagramOptions,
+        k: usize,
+    ) -> Result<StateFile, SolverError> {
+        let eq = self.equilibrium_of(opts, k)?;
+        let p = &self.points[k];
+        verify_refining_from(
+            &eq,
+            p.energy,
+            sheet_estimate(&self.points, k),
+            Ladder::ReEstimate,
+            &p.finer,
+        )
+    }
+}
+
+/// What the refinement ladder of [`verify_refining`] may do with the reported energy.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Ladder {
+    /// The claim stays the reported energy and estimate (`phase`, `--param`, `converge`).
+    Keep,
+    /// The claim is re-estimated from two refined resolutions when they converge and
+    /// disagree with it (the traced states of the `L̄` diagrams: [`StateFile::row`]).
+    ReEstimate,
+}
+
+/// The one verification loop of every state written to a file (the diagrams' traced states
+/// through [`TracedBranch::verified_state`], and the states `phase`, `--param` and `converge`
+/// report): `eq` (`N` cells) checked as its file holds it against `energy` within [`ESTIMATES`] times `energy_error` (or
+/// [`NO_ESTIMATE_TOLERANCE`] times `max(|energy|, 1)` without one); where the check fails,
+/// re-solved at `2N`, `4N`, … ([`crate::resolve::resolved`]) up to [`MAX_REFINEMENT`]` N`, the file sampling
+/// the finest state needed.
+///
+/// With [`Ladder::ReEstimate`], from the third resolution on: when the differences of the
+/// ladder `(E_{2^{j−2} N}, E_{2^{j−1} N}, E_{2^j N})` decrease at least fourfold (the refined
+/// states are this state converging, not a neighbouring sheet) and the Richardson value of
+/// the last two disagrees with the claim beyond both estimates, the claim becomes that
+/// value with its estimate ([`StateFile::row`]).
+///
+/// A state that still fails is left out with the cause named: where Newton finds no
+/// equilibrium at the next resolution, the check that fails at its own, whether its cells
+/// resolve its bends (the largest turning of its tangent in one cell against
+/// [`UNRESOLVED_TURNING`]), its own error estimate, and how Newton ended; where the refined
+/// states do not converge like `h⁴`, that the finer resolutions hold another state than the
+/// row's, with the ladder's energies.
+pub(crate) fn verify_refining(
+    eq: &Equilibrium,
+    energy: f64,
+    energy_error: Option<f64>,
+    ladder: Ladder,
+) -> Result<StateFile, SolverError> {
+    verify_refining_from(eq, energy, energy_error, ladder, &FinerRun::default())
+}
+
+/// [`verify_refining`] whose re-solve at `2N` goes on from `finer` where that is a run of
+/// the same model from the same start ([`crate::resolve::resolved_from`]): the same result without repeating
+/// the run.
+fn verify_refining_from(
+    eq: &Equilibrium,
+    energy: f64,
+    energy_error: Option<f64>,
+    ladder: Ladder,
+    finer: &FinerRun,
+) -> Result<StateFile, SolverError> {
+    let d0 = eq.model().stiffness().kind().reference();
+    let scale = energy.abs().max(1.0);
+    let mut claim = Claim {
+        energy,
+        energy_error: match energy_error {
+            Some(e) => ESTIMATES * e,
+            None => NO_ESTIMATE_TOLERANCE * scale,
+        },
+        profile_error: 0.0,
+        eta: None,
+    };
+    let mut row: Option<(f64, f64)> = None;
+    let first = eq.model().cells();
+    let mut refined: Option<Equilibrium> = None;
+    // Discrete energies of the resolutions so far (the state's own first).
+    let mut energies = vec![eq.energy().total];
+    // The check that fails at the state's own resolution.
+    let mut first_why: Option<String> = None;
+    loop {
+        let at = refined.as_ref().unwrap_or(eq);
+        let cells = at.model().cells();
+        if ladder == Ladder::ReEstimate && energies.len() >= 3 {
+            let n = energies.len();
+            let (e2, e1, e0) = (energies[n - 1], energies[n - 2], energies[n - 3]);
+            let converging = (e2 - e1).abs() <= 0.25 * (e1 - e0).abs();
+            let (rich, est) = (
+                rodloop_solver::richardson(e2, e1),
+                rodloop_solver::richardson_error(e2, e1) + 8.0 * f64::EPSILON * scale,
+            );
+            if converging && (rich - claim.energy).abs() > claim.energy_error + ESTIMATES * est {
+                row = Some((rich, est));
+                claim.energy = rich;
+                claim.energy_error = ESTIMATES * est;
+            }
+        }
+        let profile = uniform_profile(
+            at,
+            STATE_POINTS.max(cells),
+            claim.energy,
+            claim.energy_error,
+            d0,
+        )?;
+        match rodloop_solver::verify_state(at, &profile, &claim) {
+            Ok(verification) => {
+                return Ok(StateFile {
+                    profile,
+                    verification,
+                    cells,
+                    row,
+                })
+            }
+            Err(why) => {
+                let why = match why {
+                    SolverError::Unverified(m) => m,
+                    e => e.to_string(),
+                };
+                if first_why.is_none() {
+                    first_why = Some(why.clone());
+                }
+                let own = || {
+                    format!(
+                        "at the {first} cells of its file {}",
+                        first_why.as_deref().unwrap_or_default()
+                    )
+                };
+                if 2 * cells > MAX_REFINEMENT * first {
+                    return Err(SolverError::Unverified(format!(
+                        "{}; {}",
+                        own(),
+                        ladder_reason(first, &energies, &why)
+                    )));
+                }
+                let next = resolved_from(at, 2 * cells, finer).map_err(|e| {
+                    let turning = turning_per_cell(at);
+                    let estimate = energy_error.map_or("none".into(), |e| format!("{e:.1e}"));
+                    let cause = if turning > UNRESOLVED_TURNING {
+                        format!(
+                            "it is not resolved at {cells} cells (its tangent turns by up to \
+                             {turning:.2} rad in one cell; its own error estimate is {estimate})"
+                        )
+                    } else {
+                        format!(
+                            "its resolutions disagree beyond its own error estimate, \
+                             {estimate}, although its tangent turns by at most {turning:.2} \
+                             rad in one of its {cells} cells"
+                        )
+                    };
+                    SolverError::Unverified(format!(
+                        "{}: {cause}, and at {} cells Newton from its resampled profile finds \
+                         no equilibrium within reach ({e})",
+                        own(),
+                        2 * cells
+                    ))
+                })?;
+                energies.push(next.energy().total);
+                refined = Some(next);
+            }
+        }
+    }
+}
+
+/// Turning of the tangent within one cell (radians) above which a state's cells do not
+/// resolve its bends: the scheme's error terms, powers of `κ h` from `(κ h)⁴` on, are no
+/// longer small (`0.5⁴ ≈ 0.06`).
+const UNRESOLVED_TURNING: f64 = 0.5;
+
+/// The largest turning of the tangent within one cell of `eq`, `max |κ_g| h` over its cell
+/// boundaries (radians): the state's own scale of resolution (of order 1 where the cells do
+/// not resolve its bends).
+fn turning_per_cell(eq: &Equilibrium) -> f64 {
+    let p = eq.profile();
+    let length = eq.model().length();
+    let n = p.len();
+    (0..n)
+        .map(|j| {
+            let ds = if j + 1 < n {
+                p[j + 1].s - p[j].s
+            } else {
+                length + p[0].s - p[j].s
+            };
+            let k = p[j].kappa_g.abs().max(p[(j + 1) % n].kappa_g.abs());
+            k * ds
+        })
+        .fold(0.0, f64::max)
+}
+
+/// Why the finest resolution of the ladder `energies` (`E_N, E_{2N}, …` from `first = N`
+/// cells) still fails (`why`): the refined states either converge like `h⁴` (their
+/// differences fall at least fourfold per doubling) to a value the file's samples miss, or
+/// they do not, and then the finer resolutions hold another state than the row's.
+fn ladder_reason(first: usize, energies: &[f64], why: &str) -> String {
+    let cells: Vec<String> = (0..energies.len())
+        .map(|j| format!("{}", first << j))
+        .collect();
+    let values: Vec<String> = energies.iter().map(|e| format!("{e:.10}")).collect();
+    let diffs: Vec<f64> = energies.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
+    let converging = diffs.len() >= 2 && diffs.windows(2).all(|d| d[1] <= 0.25 * d[0]);
+    let finest = first << (energies.len() - 1);
+    if converging {
+        format!(
+            "re-solved at {} cells its energies {} converge like h⁴, and at {finest} cells {why}",
+            cells.join(", "),
+            values.join(", ")
+        )
+    } else {
+        format!(
+            "re-solved from its own profile at {} cells its energies are {}, which do not \
+             converge like h⁴ (differences {}): the finer resolutions hold another state \
+             than its row's, so no file holds the row's state (at {finest} cells {why})",
+            cells.join(", "),
+            values.join(", "),
+            diffs
+                .iter()
+                .map(|d| format!("{d:.1e}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    }
+}
+
+/// Every traced state of `branches` verified as its file holds it
+/// ([`TracedBranch::verified_state`], in parallel on `threads` threads): `files[i][k]` for
+/// `branches[i].points[k]` (`None` where the state fails, with a warning that says why).
+/// Rows re-estimated by the verification get the re-estimated energy and error (and
+/// `E_g` moved by the same amount: `E − E_g` depends on the length and stiffness only).
+pub(crate) fn verify_all(
+    opts: &DiagramOptions,
+    branches: &mut [TracedBranch],
+    threads: usize,
+) -> (Vec<Vec<Option<StateFile>>>, Vec<String>) {
+    let jobs: Vec<(usize, usize)> = branches
+        .iter()
+        .enumerate()
+        .flat_map(|(i, b)| (0..b.points.len()).map(move |k| (i, k)))
+        .collect();
+    let shared: &[TracedBranch] = branches;
+    let results = crate::parallel::run_parallel(
+        threads,
+        jobs.clone(),
+        &mut |_| {},
+        &mut |_| {},
+        |(i, k), _| shared[i].verified_state(opts, k),
+    );
+    let mut files: Vec<Vec<Option<StateFile>>> = branches
+        .iter()
+        .map(|b| vec![None; b.points.len()])
+        .collect();
+    let mut warnings = Vec::new();
+    for ((i, k), r) in jobs.into_iter().zip(results) {
+        let b = &mut branches[i];
+        match r {
+            Ok(f) => {
+                if let Some((e, err)) = f.row {
+                    let p = &mut b.points[k];
+                    p.energy_g += e - p.energy;
+                    p.energy = e;
+                    p.energy_error = Some(err);
+                }
+                files[i][k] = Some(f);
+            }
+            Err(e) => warnings.push(format!(
+                "UNVERIFIED STATE LEFT WITHOUT A FILE: branch {} family {} sheet {} at L̄ = {}: {e}",
+                b.branch, b.family, b.sheet, b.points[k].value
+            )),
+        }
+    }
+    (files, warnings)
+}
+
+/// The energy estimate of row `k` of a sheet: the largest of its own and its neighbours'. A
+/// two-level estimate `|E_N − E_{N/2}|/15` passes through zero where the discretisation
+/// error changes sign along a sheet, although the error of the row does not vanish there.
+pub(crate) fn sheet_estimate(points: &[crate::TracedPoint], k: usize) -> Option<f64> {
+    let own = points[k].energy_error?;
+    Some(
+        points[k.saturating_sub(1)..(k + 2).min(points.len())]
+            .iter()
+            .filter_map(|p| p.energy_error)
+            .fold(own, f64::max),
+    )
+}
+
+/// How the branches of a diagram's state files are identified (`branch_identification` in
+/// `summary.json`; docs/src/methods.md, "How the branch of a state is identified"): every
+/// row carries the branch of the family it is traced on, continued from a seed whose periods
+/// were counted; the periods of each file's own bending moment are counted too.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct BranchIdentification {
+    /// Files whose bending moment has the periods of their row's branch: named by the state
+    /// itself.
+    pub by_own_periods: usize,
+    /// Files whose bending moment has no resolved periods (a very soft segment leaves the
+    /// stiff one a geodesic arc to within the noise): named by their family's continuation
+    /// from its seed only.
+    pub by_continuation_no_periods: usize,
+    /// Files whose bending moment counts another number of periods than their row's branch:
+    /// named by their family's continuation from its seed, which their own count contradicts.
+    pub by_continuation_other_periods: usize,
+}
+
+/// [`BranchIdentification`] of the files `files[i][k]` of `branches[i].points[k]`.
+pub fn branch_identification(
+    branches: &[TracedBranch],
+    files: &[Vec<Option<StateFile>>],
+) -> BranchIdentification {
+    let mut out = BranchIdentification::default();
+    for (b, fs) in branches.iter().zip(files) {
+        for f in fs.iter().flatten() {
+            match f.verification.eta {
+                0 => out.by_continuation_no_periods += 1,
+                e if e == b.eta => out.by_own_periods += 1,
+                _ => out.by_continuation_other_periods += 1,
+            }
+        }
+    }
+    out
+}
