@@ -169,8 +169,8 @@ pub const CRAWL_WINDOW: usize = 10;
 /// it is run to `tolerance/1.75`, which puts the min-function's residual below `tolerance`
 /// (`|min(a, b)| ≤ |φ_FB(a, b)|/(2 − √2)`), and the state is returned with the residual of the
 /// min-function. Both forms have the same solutions. Where that fails after a crawl, the
-/// min-function runs again from the start without the crawl stop (some crawls end in
-/// convergence).
+/// min-function goes on from where the crawl stopped it, without the stop (some crawls end
+/// in convergence).
 fn newton(
     model: &EnclosedModel,
     z0: Vec<f64>,
@@ -178,12 +178,11 @@ fn newton(
     ended: &mut Ended,
 ) -> Result<EnclosedState, SolverError> {
     let mut best: (Vec<f64>, f64) = (z0.clone(), f64::INFINITY);
-    let start = z0.clone();
-    let mut crawled = false;
+    let mut crawled: Option<Paused> = None;
     if !opts.hand_over {
-        return newton_min(model, z0, opts, ended, &mut best, None);
+        return newton_min(model, z0, opts, ended, &mut best, None, None);
     }
-    let out = newton_min(model, z0, opts, ended, &mut best, Some(&mut crawled));
+    let out = newton_min(model, z0, opts, ended, &mut best, Some(&mut crawled), None);
     let rescue = model.complementarity() == Complementarity::Min
         && opts.stall_window == 0
         && best.1.is_finite()
@@ -206,7 +205,7 @@ fn newton(
     };
     let before = ended.iterations;
     let mut fbest = (best.0.clone(), f64::INFINITY);
-    let res = newton_min(&fb, best.0, &fopts, &mut inner, &mut fbest, None);
+    let res = newton_min(&fb, best.0, &fopts, &mut inner, &mut fbest, None, None);
     ended.iterations = before + inner.iterations;
     ended.dense += inner.dense;
     ended.outcome = inner.outcome;
@@ -220,33 +219,57 @@ fn newton(
                 residual,
             })
         }
-        // Where the crawl stopped the min-function early, it runs again without the stop
-        // (some crawls end in convergence).
-        Err(_) if crawled => {
-            let mut again = (start.clone(), f64::INFINITY);
-            newton_min(model, start, opts, ended, &mut again, None)
+        // Where the crawl stopped the min-function early, it goes on from where it stopped
+        // without the stop (some crawls end in convergence): the same iterates as a run
+        // from the start without the stop, whose first iterations it does not repeat.
+        Err(_) if crawled.is_some() => {
+            let paused = crawled.take().expect("crawl state");
+            let mut again = (paused.z.clone(), f64::INFINITY);
+            newton_min(
+                model,
+                Vec::new(),
+                opts,
+                ended,
+                &mut again,
+                None,
+                Some(paused),
+            )
         }
         Err(_) => out,
     }
 }
 
+/// Where [`newton_min`] stopped at a crawl: the iterate, the iteration, the residual norms
+/// before it and the watchdog steps left (no watchdog step is pending at a crawl stop), so
+/// that the iteration can go on from there as if it had not stopped.
+struct Paused {
+    z: Vec<f64>,
+    iteration: usize,
+    history: Vec<f64>,
+    watch_left: usize,
+}
+
 /// Damped semismooth Newton on `model`'s residual (its [`Complementarity`]); `best` keeps the
 /// iterate of the lowest residual seen; with `crawl`, the iteration stops where it crawls (see
-/// [`newton`]) and sets it.
+/// [`newton`]) and leaves there its state; with `paused`, it goes on from such a state
+/// (`z0` unused).
 fn newton_min(
     model: &EnclosedModel,
     z0: Vec<f64>,
     opts: &EnclosedOptions,
     ended: &mut Ended,
     best: &mut (Vec<f64>, f64),
-    mut crawl: Option<&mut bool>,
+    mut crawl: Option<&mut Option<Paused>>,
+    paused: Option<Paused>,
 ) -> Result<EnclosedState, SolverError> {
-    let mut z = z0;
+    let (mut z, first, mut history, mut watch_left) = match paused {
+        Some(p) => (p.z, p.iteration, p.history, p.watch_left),
+        None => (z0, 0, Vec::new(), opts.watchdog),
+    };
     let mut norm = f64::INFINITY;
     // Watchdog: (iterate, residual norm and Newton step before the nonmonotone step, the
     // iteration by which the residual must have dropped below that norm).
     let mut watch: Option<(Vec<f64>, f64, DVector<f64>, usize)> = None;
-    let mut watch_left = opts.watchdog;
     let done = |z: Vec<f64>, iterations: usize, residual: f64| EnclosedState {
         model: model.clone(),
         z,
@@ -255,8 +278,7 @@ fn newton_min(
     };
     // After a failed watchdog step: the Newton step at the restored iterate.
     let mut resume: Option<DVector<f64>> = None;
-    let mut history: Vec<f64> = Vec::new();
-    for it in 0..=opts.max_iterations {
+    for it in first..=opts.max_iterations {
         ended.iterations = it;
         let (residual, step) = match resume.take() {
             Some(dz) => (model.residual(&z)?, Err(dz)),
@@ -324,7 +346,13 @@ fn newton_min(
             && norm > 0.5 * history[history.len() - 1 - CRAWL_WINDOW]
         {
             if let Some(c) = crawl.as_deref_mut() {
-                *c = true;
+                history.pop();
+                *c = Some(Paused {
+                    z: z.clone(),
+                    iteration: it,
+                    history: std::mem::take(&mut history),
+                    watch_left,
+                });
             }
             ended.outcome = Outcome::Stall;
             break;
