@@ -9,7 +9,8 @@ use rodloop_solver::enclosed::{
 };
 use rodloop_solver::{Accuracy, SolverError};
 
-use super::trace::{exact, Levels};
+use super::levels::Levels;
+use super::trace::exact;
 use super::{EnclosedCritical, EnclosedPoint};
 
 /// Is the surface loop of `eta` at `lbar` lifted off (`λ_min < 0`)?

@@ -28,7 +28,7 @@ use rodloop_continuation::RootError;
 use rodloop_solver::enclosed::{EnclosedOptions, EnclosedState};
 use rodloop_solver::SolverError;
 
-use super::trace::Levels;
+use super::levels::Levels;
 
 /// Relative threshold of the strongly active wall constraints, as for the traces' index.
 const ACTIVE: f64 = 1e-6;

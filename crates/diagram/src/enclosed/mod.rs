@@ -67,6 +67,7 @@ use crate::parallel::run_parallel;
 use crate::DiagramError;
 
 mod critical;
+mod levels;
 mod locate;
 mod nonuniform;
 mod nonuniform_descent;
@@ -80,7 +81,8 @@ mod verify;
 pub use rodloop_solver::enclosed::nonuniform_cells;
 
 use critical::{detached_at, enclosed_crossing, exchange_doublings, label};
-use trace::{circle_point, grid, trace_branch, BranchOut, Levels};
+use levels::Levels;
+use trace::{circle_point, grid, trace_branch, BranchOut};
 
 /// Gap (units of `R`) below which a node touches the wall.
 pub const TOUCH: f64 = 1e-9;

@@ -58,7 +58,8 @@ use super::nonuniform_seeds::seed_from_stiffness_path;
 use super::nonuniform_sheet::{surface_at, surface_energy, SheetOut};
 use super::nonuniform_special::{branch_points, classify_stops};
 use super::trace::step_options;
-use super::trace::{follow, Levels};
+use super::levels::Levels;
+use super::trace::follow;
 use super::{
     BranchFrom, EnclosedCritical, EnclosedDiagram, EnclosedDiagramOptions, EnclosedEvent,
     EnclosedPoint, EnclosedProgress, EnclosedTimings, EventKind, PointShape, PointSource,

@@ -19,7 +19,8 @@ use rodloop_solver::enclosed::{solve_levels, EnclosedOptions};
 use super::nonuniform_exchange::{interp, lowest_near_circle};
 use super::nonuniform_sheet::SheetOut;
 use super::trace::step_options;
-use super::trace::{follow, Levels, TraceStop};
+use super::levels::Levels;
+use super::trace::{follow, TraceStop};
 use super::PointSource;
 use crate::parallel::run_parallel;
 

@@ -18,7 +18,7 @@ use rodloop_continuation::exchange::ExchangeSettings;
 
 use super::critical::{exchange_doublings, locate_from, EnclosedPair, Ladder};
 use super::nonuniform_sheet::{surface_energy, walk, SheetOut};
-use super::trace::Levels;
+use super::levels::Levels;
 use super::{EnclosedDiagramOptions, PointSource};
 use crate::types::TracedBranch;
 use crate::DiagramOptions;

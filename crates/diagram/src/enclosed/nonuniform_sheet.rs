@@ -7,7 +7,8 @@ use rodloop_continuation::natural::{self, Halted, StepSettings};
 use rodloop_solver::enclosed::EnclosedOptions;
 use rodloop_solver::{solve_from_state, Equilibrium, SolverError};
 
-use super::trace::{step_options, Levels, TraceStop};
+use super::levels::Levels;
+use super::trace::{step_options, TraceStop};
 use super::{EnclosedEvent, EnclosedPoint};
 use crate::states::{half_resolution, newton_options};
 use crate::types::TracedBranch;

@@ -24,7 +24,8 @@ use rodloop_solver::SolverError;
 
 use super::locate::locate;
 use super::nonuniform_sheet::SheetOut;
-use super::trace::{step_options, Levels};
+use super::levels::Levels;
+use super::trace::step_options;
 use super::{EnclosedEvent, EventKind, PointSource};
 
 /// Eigenvalue `k` (ascending) on the tangent space of the active constraints, level `lvl`.
