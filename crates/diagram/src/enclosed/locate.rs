@@ -126,6 +126,73 @@ fn eigen(s: &EnclosedState, k: usize) -> Result<f64, SolverError> {
     Ok(v)
 }
 
+/// Width of a sign-changing bracket, relative to the first one, below which a jump is
+/// decided ([`jump_found`]).
+const JUMP_WIDTH: f64 = 1e-2;
+
+/// Factor by which `|f|` at both ends of a bracket exceeds the local slope times its width
+/// where the eigenvalue jumps ([`jump_found`]).
+const JUMP_SLOPE: f64 = 100.0;
+
+/// The error of a jump where the re-solved values `solved` (`(L̄, state, eigenvalue)`, the
+/// bracket's ends first) already show one, so that Brent's method stops there instead of
+/// bisecting it down to its tolerance. The tightest sign-changing bracket `[lo, hi]` holds a
+/// jump when it is narrower than [`JUMP_WIDTH`] of the first bracket `width0` and the
+/// eigenvalue at both of its ends exceeds [`JUMP_SLOPE`] times the local slope (the secant
+/// to the nearest re-solved value on the same side, the larger of the two sides) times its
+/// width, and [`JUMP`] of the first bracket's values: a continuous crossing has
+/// `|f(lo)| + |f(hi)| ≈ |f'|·width`.
+fn jump_found(solved: &[(f64, EnclosedState, f64)], width0: f64) -> Option<SolverError> {
+    let neg = |p: &&(f64, EnclosedState, f64)| p.2 < 0.0;
+    let pos = |p: &&(f64, EnclosedState, f64)| p.2 > 0.0;
+    // The sign-changing bracket of the latest value with the nearest value of the other sign.
+    let last = solved.last()?;
+    let other = solved
+        .iter()
+        .filter(|p| if last.2 > 0.0 { neg(p) } else { pos(p) })
+        .min_by(|u, v| (u.0 - last.0).abs().total_cmp(&(v.0 - last.0).abs()))?;
+    let width = (last.0 - other.0).abs();
+    if width >= JUMP_WIDTH * width0 {
+        return None;
+    }
+    // No value of either sign between them (the tightest bracket).
+    if solved
+        .iter()
+        .any(|p| (p.0 - last.0) * (p.0 - other.0) < 0.0)
+    {
+        return None;
+    }
+    let slope = |end: &(f64, EnclosedState, f64)| {
+        solved
+            .iter()
+            .filter(|p| p.0 != end.0 && (p.2 > 0.0) == (end.2 > 0.0))
+            .filter(|p| (p.0 - end.0) * (end.0 - last.0 - other.0 + end.0) >= 0.0)
+            .min_by(|u, v| (u.0 - end.0).abs().total_cmp(&(v.0 - end.0).abs()))
+            .map(|p| ((p.2 - end.2) / (p.0 - end.0)).abs())
+    };
+    let s = slope(last)?.max(slope(other)?);
+    let small = last.2.abs().min(other.2.abs());
+    let scale = solved[0]
+        .2
+        .abs()
+        .max(solved.get(1).map_or(0.0, |p| p.2.abs()));
+    if small > JUMP_SLOPE * s * width && small > JUMP * scale {
+        let (lo, hi) = if last.0 < other.0 {
+            (last, other)
+        } else {
+            (other, last)
+        };
+        return Some(SolverError::InvalidInput(format!(
+            "{JUMPS} from {:.3e} to {:.3e} at lbar = {:.6} ± {:.0e} (the active set changes there; no eigenvalue crosses zero)",
+            lo.2,
+            hi.2,
+            0.5 * (lo.0 + hi.0),
+            0.5 * width
+        )));
+    }
+    None
+}
+
 /// The root on one level between `from` (at `xa`, the family the bracket is taken on) and
 /// `to` (at `xb`): `to` is used as the far end where its index differs from `from`'s (the
 /// same family on the other side of the point); otherwise (a change of symmetry) the far
@@ -158,6 +225,9 @@ pub(super) fn locate_on_level(
         let s = walk_to(&near.1, near.0, x, opts)?;
         let v = eigen(&s, k)?;
         solved.push((x, s, v));
+        if let Some(e) = jump_found(&solved, (xb - xa).abs()) {
+            return Err(e);
+        }
         Ok(v)
     };
     let root = match brent(&mut f, xa, xb, XTOL, MAX_ITER) {
