@@ -52,14 +52,14 @@ use rodloop_solver::enclosed::stats::{self, Stage};
 use rodloop_solver::enclosed::{nonuniform_cells, solve_branch, EnclosedOptions, SurfaceSource};
 use rodloop_solver::{solve_from_state, SolverError};
 
+use super::levels::Levels;
 use super::nonuniform_descent::descend_unstable;
 use super::nonuniform_exchange::{interp, locate_crossing, lowest_at, mean_stiffness, CIRCLE};
 use super::nonuniform_seeds::seed_from_stiffness_path;
 use super::nonuniform_sheet::{surface_at, surface_energy, SheetOut};
 use super::nonuniform_special::{branch_points, classify_stops};
-use super::trace::step_options;
-use super::levels::Levels;
 use super::trace::follow;
+use super::trace::step_options;
 use super::{
     BranchFrom, EnclosedCritical, EnclosedDiagram, EnclosedDiagramOptions, EnclosedEvent,
     EnclosedPoint, EnclosedProgress, EnclosedTimings, EventKind, PointShape, PointSource,

@@ -16,10 +16,10 @@ use rodloop_solver::enclosed::descent::descend;
 use rodloop_solver::enclosed::stats::{self, Stage};
 use rodloop_solver::enclosed::{solve_levels, EnclosedOptions};
 
+use super::levels::Levels;
 use super::nonuniform_exchange::{interp, lowest_near_circle};
 use super::nonuniform_sheet::SheetOut;
 use super::trace::step_options;
-use super::levels::Levels;
 use super::trace::{follow, TraceStop};
 use super::PointSource;
 use crate::parallel::run_parallel;

@@ -17,8 +17,8 @@ use rodloop_solver::SolverError;
 use rodloop_continuation::exchange::ExchangeSettings;
 
 use super::critical::{exchange_doublings, locate_from, EnclosedPair, Ladder};
-use super::nonuniform_sheet::{surface_energy, walk, SheetOut};
 use super::levels::Levels;
+use super::nonuniform_sheet::{surface_energy, walk, SheetOut};
 use super::{EnclosedDiagramOptions, PointSource};
 use crate::types::TracedBranch;
 use crate::DiagramOptions;

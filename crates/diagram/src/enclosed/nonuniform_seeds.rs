@@ -16,11 +16,11 @@ use rodloop_solver::enclosed::descent::stiffness_homotopy_states;
 use rodloop_solver::enclosed::solve_levels;
 use rodloop_solver::enclosed::stats::{self, Stage};
 
+use super::levels::Levels;
 use super::nonuniform_exchange::interp;
 use super::nonuniform_sheet::SheetOut;
-use super::trace::step_options;
-use super::levels::Levels;
 use super::trace::follow;
+use super::trace::step_options;
 use super::EnclosedDiagramOptions;
 use crate::parallel::run_parallel;
 use rodloop_solver::enclosed::nonuniform_cells;

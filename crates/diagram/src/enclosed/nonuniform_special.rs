@@ -22,9 +22,9 @@
 
 use rodloop_solver::SolverError;
 
+use super::levels::Levels;
 use super::locate::locate;
 use super::nonuniform_sheet::SheetOut;
-use super::levels::Levels;
 use super::trace::step_options;
 use super::{EnclosedEvent, EventKind, PointSource};
 

@@ -31,6 +31,7 @@
 //! * [`stats`]: counters of the Newton solves by stage of a caller.
 
 pub mod branch;
+mod carry;
 pub mod centre;
 pub mod continuation;
 pub mod descent;

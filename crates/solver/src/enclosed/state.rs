@@ -8,8 +8,8 @@
 
 use nalgebra::{DMatrix, Vector3};
 
+use super::carry::{model_from_curvature, transfer_multipliers};
 use super::model::EnclosedModel;
-use super::solve::{model_from_curvature, transfer_multipliers};
 use crate::SolverError;
 
 /// A converged enclosed state.
