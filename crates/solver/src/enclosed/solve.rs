@@ -1,7 +1,6 @@
 //! Semismooth Newton on the enclosed KKT system and its starting shapes (surface loop,
 //! curvature profile, free circle; the multipliers carried between meshes are in
-//! [`super::carry`]); what is read off a
-//! converged state is in [`super::state`].
+//! [`super::carry`]); what is read off a converged state is in [`super::state`].
 //!
 //! # Solver choice
 //!
