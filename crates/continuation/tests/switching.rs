@@ -4,7 +4,7 @@
 use std::convert::Infallible;
 
 use nalgebra::{DMatrix, DVector, Matrix2, Vector2};
-use rodloop_continuation::{Continuation, Direction, Problem, PseudoArclength};
+use rodloop_continuation::{Branch, Continuation, Direction, Problem, PseudoArclength};
 
 /// `G(u, p) = (u₁ (p − u₁² − u₂²), u₂ − g(p))` with `g(p) = p/2 + p²`, in the sheared
 /// unknowns `x = S u` and with mixed equations `F = M G(S⁻¹ x, p)`.
@@ -38,6 +38,13 @@ impl ShearedPitchfork {
     }
     fn u_of(&self, x: &DVector<f64>) -> Vector2<f64> {
         self.s_inv * Vector2::new(x[0], x[1])
+    }
+    /// The primary branch traced by `cont` from `p = −0.25`.
+    fn primary(&self, cont: &Continuation<'_, Self>) -> Branch {
+        let p0 = -0.25;
+        let x0 = self.s * Vector2::new(0.0, Self::g(p0));
+        cont.run(&DVector::from_column_slice(x0.as_slice()), p0)
+            .unwrap()
     }
 }
 
@@ -81,11 +88,7 @@ fn switch_at_sheared_pitchfork_leaves_the_primary_branch() {
             .with_range(-0.3, 0.3)
             .unwrap();
         let cont = Continuation::new(&problem, settings);
-        let p0 = -0.25;
-        let x0 = problem.s * Vector2::new(0.0, ShearedPitchfork::g(p0));
-        let primary = cont
-            .run(&DVector::from_column_slice(x0.as_slice()), p0)
-            .unwrap();
+        let primary = problem.primary(&cont);
         let bps: Vec<_> = primary.branch_points().collect();
         assert_eq!(bps.len(), 1, "{:?}", primary.special);
         let bp = bps[0];
@@ -135,11 +138,7 @@ fn the_first_point_off_a_branch_point_lies_inside_the_range() {
         .and_then(|s| s.with_range(-0.3, p_max))
         .unwrap();
     let cont = Continuation::new(&problem, settings);
-    let p0 = -0.25;
-    let x0 = problem.s * Vector2::new(0.0, ShearedPitchfork::g(p0));
-    let primary = cont
-        .run(&DVector::from_column_slice(x0.as_slice()), p0)
-        .unwrap();
+    let primary = problem.primary(&cont);
     let bp = primary
         .branch_points()
         .next()
