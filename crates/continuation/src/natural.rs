@@ -13,6 +13,8 @@
 //!   the caller keeps its predictors and fallbacks.
 //! * [`walk_steps`]: the same loop with a fixed step that every step tries first (and a
 //!   budget of halvings per step), for a coordinate in which equal steps are natural.
+//! * [`walk_adaptive`]: steps that grow after a success and halve after a failure, with
+//!   the caller's rescue where the step would fall below its minimum (a fold).
 //! * [`natural_branch`]: the same loop for a [`Problem`], with the secant predictor
 //!   through the last two points and Newton's method as corrector.
 //!
@@ -136,6 +138,76 @@ where
         steps,
         halvings,
     })
+}
+
+/// Settings of a [`walk_adaptive`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AdaptiveSettings {
+    /// Largest step (also the first).
+    pub max_step: f64,
+    /// A failed step is halved while it stays at least this long; below it the walk asks
+    /// the caller's rescue.
+    pub min_step: f64,
+    /// An accepted step grows the next one by this factor (up to `max_step`).
+    pub growth: f64,
+    /// Rescues the walk may use before it gives up.
+    pub max_rescues: usize,
+    /// The step after a rescue.
+    pub restart_step: f64,
+}
+
+/// Walks from `start` at the parameter `p0` up to `target > p0` with steps that adapt:
+/// `step(current, to)` gives the state at `to`; an accepted step grows the next by
+/// `settings.growth` (up to `max_step`), a failed one is halved and retried from the same
+/// state. Where the step would fall below `min_step` (a fold of the path, where a natural
+/// parameter cannot go on), `rescue(current, p, error)` may carry the walk past it: it
+/// returns a state and the parameter it lies at (e.g. a snap-through to a lower state
+/// beyond the fold), after which the walk goes on with `restart_step`; at most
+/// `max_rescues` times.
+///
+/// # Errors
+/// The failed step's error when the halvings and rescues are spent, or the rescue's
+/// error.
+pub fn walk_adaptive<S, E, F, R>(
+    start: S,
+    p0: f64,
+    target: f64,
+    settings: &AdaptiveSettings,
+    mut step: F,
+    mut rescue: R,
+) -> Result<S, E>
+where
+    F: FnMut(&S, f64) -> Result<S, E>,
+    R: FnMut(&S, f64, E) -> Result<(S, f64), E>,
+{
+    let mut cur = start;
+    let (mut t, mut h) = (p0, settings.max_step);
+    let mut rescues = 0;
+    while t < target {
+        let tn = (t + h).min(target);
+        match step(&cur, tn) {
+            Ok(s) => {
+                cur = s;
+                t = tn;
+                h = (settings.growth * h).min(settings.max_step);
+            }
+            Err(e) => {
+                h *= 0.5;
+                if h >= settings.min_step {
+                    continue;
+                }
+                if rescues == settings.max_rescues {
+                    return Err(e);
+                }
+                rescues += 1;
+                let (s, tn) = rescue(&cur, t, e)?;
+                cur = s;
+                t = tn;
+                h = settings.restart_step;
+            }
+        }
+    }
+    Ok(cur)
 }
 
 /// Settings of a [`walk_steps`]: every step tries the full step first.
@@ -351,6 +423,65 @@ mod tests {
 
     fn grid(a: f64, b: f64, n: usize) -> Vec<f64> {
         (1..=n).map(|k| a + (b - a) * k as f64 / n as f64).collect()
+    }
+
+    /// A path whose state (here its parameter) cannot be continued from below `0.5` past
+    /// it: steps there fail until they fall below the minimum, the rescue carries the walk
+    /// to `0.55`, and it goes on to the target with the restart step and growth.
+    #[test]
+    fn adaptive_walk_grows_halves_and_is_rescued_past_a_fold() {
+        let settings = AdaptiveSettings {
+            max_step: 0.25,
+            min_step: 1.0 / 64.0,
+            growth: 1.5,
+            max_rescues: 1,
+            restart_step: 1.0 / 32.0,
+        };
+        let mut tried = Vec::new();
+        let step = |cur: &f64, to: f64| {
+            tried.push(to);
+            if *cur <= 0.5 && to > 0.5 {
+                Err("fold")
+            } else {
+                Ok(to)
+            }
+        };
+        let mut rescued = Vec::new();
+        let rescue = |cur: &f64, t: f64, e: &'static str| {
+            rescued.push((*cur, t, e));
+            Ok((0.55, 0.55))
+        };
+        let last = walk_adaptive(0.0, 0.0, 1.0, &settings, step, rescue).unwrap();
+        assert_eq!(last, 1.0);
+        assert_eq!(rescued, vec![(0.5, 0.5, "fold")]);
+        // 0.25, 0.5 accepted; 0.75, 0.625, 0.5625, 0.53125, 0.515625 fail (the next half,
+        // 1/128, is below the minimum); then 0.55 + 1/32, growing by half up to 0.25.
+        assert_eq!(
+            tried[..7],
+            [0.25, 0.5, 0.75, 0.625, 0.5625, 0.53125, 0.515625]
+        );
+        assert_eq!(tried[7], 0.55 + 1.0 / 32.0);
+        assert_eq!(*tried.last().unwrap(), 1.0);
+        // Without rescues left, the failed step's error comes back.
+        let none = AdaptiveSettings {
+            max_rescues: 0,
+            ..settings
+        };
+        let stuck = walk_adaptive(
+            0.0,
+            0.0,
+            1.0,
+            &none,
+            |cur: &f64, to: f64| {
+                if *cur <= 0.5 && to > 0.5 {
+                    Err("fold")
+                } else {
+                    Ok(to)
+                }
+            },
+            |_: &f64, _, e| Err(e),
+        );
+        assert_eq!(stuck, Err("fold"));
     }
 
     #[test]

@@ -14,6 +14,7 @@
 
 use super::model::{phase_slope, rotation, translation, EnclosedModel, Gauge};
 use nalgebra::{DMatrix, DVector};
+use rodloop_continuation::natural::{walk_adaptive, AdaptiveSettings};
 
 use super::solve::{
     solve_enclosed, start_from_curvature, transfer_multipliers, EnclosedOptions, EnclosedState,
@@ -343,8 +344,9 @@ const SNAP_AMPLITUDES: [f64; 4] = [0.05, 0.15, 0.3, 0.5];
 
 /// Natural-parameter continuation of an enclosed state of the uniform rod (or of any
 /// stiffness) to the stiffness `target` along [`blended_stiffness`], `t` from 0 to 1, at
-/// fixed `L̄` and mesh size: steps of `t` of at most `1/4`, halved on a failed Newton solve
-/// down to `1/512`, grown by half after a success. Where the steps fail at a fold of the
+/// fixed `L̄` and mesh size, walked by the continuation crate's
+/// [`walk_adaptive`]: steps of `t` of at most `1/4`, halved on a failed Newton solve down to
+/// `1/512`, grown by half after a success. Where the steps fail at a fold of the
 /// path (the state ceases to exist as `t` grows), the loop snaps through as a quasi-static
 /// loading would: just past the fold, Newton from the last state displaced along its
 /// [`softest_direction`] (amplitudes [`SNAP_AMPLITUDES`], both signs), and the lowest
@@ -356,66 +358,49 @@ pub fn continue_in_stiffness(
     target: &Stiffness,
     opts: &EnclosedOptions,
 ) -> Result<EnclosedState, SolverError> {
-    const MAX_STEP: f64 = 0.25;
     const MIN_STEP: f64 = 1.0 / 512.0;
-    /// Folds snapped through at most (each one lowers the energy).
-    const MAX_SNAPS: usize = 4;
-    let mut cur = start.clone();
-    let (mut t, mut h) = (0.0f64, MAX_STEP);
-    let mut snaps = 0;
-    while t < 1.0 {
-        let tn = (t + h).min(1.0);
+    let settings = AdaptiveSettings {
+        max_step: 0.25,
+        min_step: MIN_STEP,
+        growth: 1.5,
+        // Folds snapped through at most (each one lowers the energy).
+        max_rescues: 4,
+        restart_step: 4.0 * MIN_STEP,
+    };
+    let step = |cur: &EnclosedState, tn: f64| {
         let st = blended_stiffness(target, tn);
-        let step = with_stiffness(&cur, &st).and_then(|(m, z)| solve_enclosed(&m, z, opts));
-        match step {
-            Ok(s) => {
-                cur = s;
-                t = tn;
-                h = (1.5 * h).min(MAX_STEP);
-            }
-            Err(e) => {
-                h *= 0.5;
-                if h >= MIN_STEP {
+        with_stiffness(cur, &st).and_then(|(m, z)| solve_enclosed(&m, z, opts))
+    };
+    // Past a fold: the lowest state reached along the softest direction, a little further
+    // along the blend.
+    let snap = |cur: &EnclosedState, t: f64, e: SolverError| {
+        let tn = (t + 4.0 * MIN_STEP).min(1.0);
+        let st = blended_stiffness(target, tn);
+        let (_, v) = softest_direction(cur)?;
+        let e0 = cur.energy();
+        let mut best: Option<EnclosedState> = None;
+        for amp in SNAP_AMPLITUDES {
+            for sign in [1.0, -1.0] {
+                let mut z = cur.z.clone();
+                for (zi, vi) in z.iter_mut().zip(&v) {
+                    *zi += sign * amp * vi;
+                }
+                let moved = EnclosedState { z, ..cur.clone() };
+                let Ok(s) =
+                    with_stiffness(&moved, &st).and_then(|(m, z)| solve_enclosed(&m, z, opts))
+                else {
                     continue;
+                };
+                let es = s.energy();
+                if es < e0 - 1e-6 * e0.abs() && best.as_ref().is_none_or(|b| es < b.energy()) {
+                    best = Some(s);
                 }
-                if snaps == MAX_SNAPS {
-                    return Err(e);
-                }
-                snaps += 1;
-                let tn = (t + 4.0 * MIN_STEP).min(1.0);
-                let st = blended_stiffness(target, tn);
-                let (_, v) = softest_direction(&cur)?;
-                let e0 = cur.energy();
-                let mut best: Option<EnclosedState> = None;
-                for amp in SNAP_AMPLITUDES {
-                    for sign in [1.0, -1.0] {
-                        let mut z = cur.z.clone();
-                        for (zi, vi) in z.iter_mut().zip(&v) {
-                            *zi += sign * amp * vi;
-                        }
-                        let moved = EnclosedState { z, ..cur.clone() };
-                        let Ok(s) = with_stiffness(&moved, &st)
-                            .and_then(|(m, z)| solve_enclosed(&m, z, opts))
-                        else {
-                            continue;
-                        };
-                        let es = s.energy();
-                        if es < e0 - 1e-6 * e0.abs()
-                            && best.as_ref().is_none_or(|b| es < b.energy())
-                        {
-                            best = Some(s);
-                        }
-                    }
-                    if best.is_some() {
-                        break;
-                    }
-                }
-                let Some(b) = best else { return Err(e) };
-                cur = b;
-                t = tn;
-                h = 4.0 * MIN_STEP;
+            }
+            if best.is_some() {
+                break;
             }
         }
-    }
-    Ok(cur)
+        best.map(|b| (b, tn)).ok_or(e)
+    };
+    walk_adaptive(start.clone(), 0.0, 1.0, &settings, step, snap)
 }
