@@ -120,11 +120,11 @@ fn stretch_index0(p: &Row, q: &Row) -> bool {
     }
 }
 
-/// The folds and branch points of the diagram in `dir`, `(branch, family, L̄)`, from the
-/// sources of the states in its `branches/` files.
-fn singular_points(dir: &Path) -> Vec<(u32, u32, f64)> {
+/// The folds and branch points among the traced `sheets` ([`branch_files`]),
+/// `(branch, family, L̄)`, from the sources of their states.
+fn singular_points(sheets: &[serde_json::Value]) -> Vec<(u32, u32, f64)> {
     let mut out = Vec::new();
-    for v in branch_files(dir) {
+    for v in sheets {
         let (Some(b), Some(f)) = (v["branch"].as_u64(), v["family"].as_u64()) else {
             continue;
         };
@@ -138,11 +138,11 @@ fn singular_points(dir: &Path) -> Vec<(u32, u32, f64)> {
     out
 }
 
-/// The slopes `dE/dL̄` of the traced states of the diagram in `dir`, `(branch, family, L̄,
-/// slope)`, from its `branches/` files.
-fn slopes(dir: &Path) -> Vec<(u32, u32, f64, f64)> {
+/// The slopes `dE/dL̄` of the states of the traced `sheets` ([`branch_files`]),
+/// `(branch, family, L̄, slope)`.
+fn slopes(sheets: &[serde_json::Value]) -> Vec<(u32, u32, f64, f64)> {
     let mut out = Vec::new();
-    for v in branch_files(dir) {
+    for v in sheets {
         let (Some(b), Some(f)) = (v["branch"].as_u64(), v["family"].as_u64()) else {
             continue;
         };
@@ -177,11 +177,11 @@ fn branch_files(dir: &Path) -> Vec<serde_json::Value> {
     out
 }
 
-/// The located index changes of the diagram in `dir`, `(branch, family, L̄, below, above)`,
-/// from its `branches/` files.
-fn index_changes(dir: &Path) -> Vec<(u32, u32, f64, usize, usize)> {
+/// The located index changes of the traced `sheets` ([`branch_files`]),
+/// `(branch, family, L̄, below, above)`.
+fn index_changes(sheets: &[serde_json::Value]) -> Vec<(u32, u32, f64, usize, usize)> {
     let mut out = Vec::new();
-    for v in branch_files(dir) {
+    for v in sheets {
         let (Some(b), Some(f)) = (v["branch"].as_u64(), v["family"].as_u64()) else {
             continue;
         };
@@ -226,9 +226,10 @@ fn rows(dir: &Path) -> Vec<Row> {
         col("index"),
         col("state_file"),
     );
-    let changes = index_changes(dir);
-    let singular = singular_points(dir);
-    let slopes = slopes(dir);
+    let sheets = branch_files(dir);
+    let changes = index_changes(&sheets);
+    let singular = singular_points(&sheets);
+    let slopes = slopes(&sheets);
     r.records()
         .map(|x| {
             let x = x.unwrap();
