@@ -240,13 +240,6 @@ fn dominant_frequency(v: &DVector<f64>, cells: usize) -> u32 {
     best.0 as u32
 }
 
-/// Coarsest of the resolutions `(N, 2N, 4N)` of the buckling loads of the m-fold circle:
-/// `N = c (m + 2)` with `c` = 4, 8, 16 for fast, default, high.
-fn load_cells(opts: &DiagramOptions, m: u32) -> usize {
-    let base = opts.accuracy.pick(rodloop_solver::accuracy::LOAD_CELLS) * (m as usize + 2);
-    base.div_ceil(2) * 2
-}
-
 /// The great circles analysed for the options: `m = ⌈lbar_min⌉ … ⌊lbar_max⌋` for a uniform
 /// rod, none otherwise.
 pub fn circles(opts: &DiagramOptions) -> Vec<u32> {
@@ -304,7 +297,7 @@ pub(crate) fn analyse_circle(
     m: u32,
     branches: &[TracedBranch],
 ) -> Result<(Vec<Buckling>, Vec<Switching>), SolverError> {
-    let n1 = load_cells(opts, m);
+    let n1 = rodloop_solver::accuracy::load_cells(opts.accuracy, m);
     let coarse = circle_modes(opts, m, n1, true)?;
     let fine = circle_modes(opts, m, 2 * n1, true)?;
     let finest = circle_modes(opts, m, 4 * n1, false)?;

@@ -12,13 +12,14 @@
 use std::sync::Arc;
 
 use rodloop_exact::{eta_of_branch, paper_branch_loop};
+use rodloop_solver::accuracy::enclosed_scene_cells;
 use rodloop_solver::enclosed::branch::BranchSolve;
 use rodloop_solver::enclosed::descent::{
     descend_branch, enclosed_periods, solve_branch_descended, solve_branch_lowest, DescendedSolve,
 };
 use rodloop_solver::enclosed::{
-    enclosed_cells, enclosed_solve_cells, free_circle, solve_branch, solve_enclosed, solve_levels,
-    start_from_shape, EnclosedOptions, EnclosedState, SavedShape, SurfaceSource,
+    enclosed_cells, free_circle, solve_branch, solve_enclosed, solve_levels, start_from_shape,
+    EnclosedOptions, EnclosedState, SavedShape, SurfaceSource,
 };
 use rodloop_solver::enclosed::{IntoWall, Wall};
 use rodloop_solver::{solve_robust, Accuracy, SolveOptions, StartShape, Stiffness};
@@ -192,19 +193,6 @@ where
     DiagramError::Passed(Box::new(e))
 }
 
-/// Cells `N` of the finest level of a solve of branch `eta`. Uniform rods: the fine mesh of
-/// the O(N) step. Two-segment rods keep the diagram's mesh (observed order 1.0–1.4 there; the
-/// cascade started at N/4 = 96 cells from the surface loop of branch 3 at lbar = 2.2 does not
-/// converge), at least `32 (2 + η)`: sharp profiles (Eq. (51), gamma = 200) need the coarsest
-/// level of the cascade (N/4) to resolve the transitions on the graded mesh.
-fn solve_cells(stiffness: &Stiffness, accuracy: Accuracy, eta: u32) -> usize {
-    if stiffness.is_uniform() {
-        enclosed_solve_cells(accuracy, eta)
-    } else {
-        enclosed_cells(accuracy, eta).max(32 * (2 + eta as usize))
-    }
-}
-
 /// Solve branch `branch` of an enclosed scene (ball radius `r`, the rod's `stiffness`, its
 /// reference value `D0`) at `lbar`, descending from a saddle to the local minimum of the
 /// branch below it ([`solve_state_with`]).
@@ -308,7 +296,7 @@ pub fn solve_state_with(
     // An attached loop's energy is the surface one; the 3-D re-solve is a check, at the
     // fast resolution.
     let acc = if attached { Accuracy::Fast } else { accuracy };
-    let cells = solve_cells(stiffness, acc, eta);
+    let cells = enclosed_scene_cells(stiffness, acc, eta);
     let what = || format!("the enclosed loop of branch {branch} at lbar = {lbar}");
     // Set where the state reported is a lower local minimum than the one reached from the
     // surface loop (continuation in the stiffness from the uniform rod's loop).
@@ -366,7 +354,7 @@ pub fn solve_state_with(
         )
     };
     let attached_loop = (attached && !moved).then(|| {
-        let points = crate::STATE_POINTS.max(3 * solve_cells(stiffness, accuracy, eta));
+        let points = crate::STATE_POINTS.max(3 * enclosed_scene_cells(stiffness, accuracy, eta));
         let points = match &source {
             SurfaceSource::Numeric(eq) => points.max(eq.model().cells()),
             SurfaceSource::Exact(_) => points,
@@ -502,7 +490,7 @@ pub fn solve_from_shape(
     keep_saddle: bool,
 ) -> Result<EnclosedResult, DiagramError> {
     let eta = branch.filter(|&b| b > 0).map_or(2, eta_of_branch);
-    let cells = solve_cells(stiffness, accuracy, eta);
+    let cells = enclosed_scene_cells(stiffness, accuracy, eta);
     let (model, z0) = start_from_shape(wall, lbar, cells / 4, stiffness, shape).map_err(passed)?;
     let opts = EnclosedOptions::default();
     let b = solve_levels(&model, z0, None, &opts)

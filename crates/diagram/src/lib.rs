@@ -46,7 +46,6 @@
 //! |---|---|
 //! | `error.rs` | [`DiagramError`], the crate's one error type |
 //! | `options.rs` | [`DiagramOptions`], [`TraceControls`], their validation and the scene's surface model |
-//! | `cells.rs` | cell counts a stiffness profile implies (transitions, bending length) |
 //! | `progress.rs` | the [`Progress`] events |
 //! | `types.rs` | the serialisable [`TracedBranch`], [`TracedPoint`], [`BranchEnd`], [`IndexChange`] |
 //! | `seed.rs` | seeding a branch from the Euler rotation curve |
@@ -69,7 +68,6 @@
 #![warn(missing_docs)]
 
 pub mod buckling;
-mod cells;
 pub mod certificate;
 pub mod compare;
 mod compute;
@@ -107,7 +105,6 @@ pub mod trace;
 pub mod types;
 
 pub use buckling::{Buckling, BucklingReport, Switching};
-pub(crate) use cells::{bending_factor, profile_cells};
 pub use compute::{compute, BranchHook, Origin, Resume};
 pub use critical::{CriticalKind, CriticalLength};
 pub use diagram::{
@@ -129,6 +126,7 @@ pub use options::{DiagramOptions, TraceControls};
 pub use progress::Progress;
 /// The error type a [`BranchHook`] returns.
 pub use rodloop_continuation::BoxError;
+pub(crate) use rodloop_solver::accuracy::profile_cells;
 pub use state_file::{
     branch_identification, BranchIdentification, StateFile, ESTIMATES, MAX_REFINEMENT,
     MAX_STATE_POINTS, NO_ESTIMATE_TOLERANCE, STATE_POINTS,

@@ -4,7 +4,6 @@
 //! branch must match), and the scene's surface model built from them ([`surface_model`], the
 //! one place the surface diagram chooses its confinement model).
 
-use crate::cells::{bending_scaled, profile_cells};
 use crate::DiagramError;
 use rodloop_solver::{Accuracy, Param, SolverError, Stiffness};
 
@@ -235,26 +234,15 @@ impl DiagramOptions {
             .unwrap_or(self.accuracy.pick(rodloop_solver::accuracy::TRACE_CELLS))
     }
 
-    /// Number of cells of the tracing resolution of branch `eta`:
-    /// `c (η + 1)` with `c` = [`Self::trace_cells_per_period`], at least what the stiffness
-    /// profile needs (`γ` cells for Eq. (51), one per table point; twice that for modest
-    /// profiles (`≤ 64` cells) except at the fast level, so that the half-resolution partner
-    /// of the energy extrapolation resolves the profile too; sharp profiles are traced
-    /// without that partner, the reporting resolution resolves them), raised by the scene's
-    /// bending factor ([`bending_factor`]: a very soft segment bends sharply; at
-    /// `D1/D0 = 0.001` the transitions' 80 cells miss a family of branch 2 that 120 and 160
-    /// cells both find, with the same refined exchanges), and 8, rounded up to a multiple
-    /// of 4. The count grows continuously as `D1/D0` falls: no threshold on the contrast.
+    /// Number of cells of the tracing resolution of branch `eta`: the accuracy policy's
+    /// rule ([`rodloop_solver::accuracy::trace_cells`]) with [`Self::trace_cells_per_period`].
     pub fn trace_cells(&self, eta: u32) -> usize {
-        let base = self.trace_cells_per_period() * (eta as usize + 1);
-        let profile = profile_cells(&self.stiffness);
-        let factor = if self.accuracy == Accuracy::Fast || profile > 64 {
-            1
-        } else {
-            2
-        };
-        let resolved = bending_scaled(factor * profile, &self.stiffness);
-        base.max(resolved).max(8).div_ceil(4) * 4
+        rodloop_solver::accuracy::trace_cells(
+            self.accuracy,
+            self.trace_cells_per_period(),
+            &self.stiffness,
+            eta,
+        )
     }
 
     /// Worker threads actually used.

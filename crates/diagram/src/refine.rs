@@ -14,39 +14,17 @@
 //!
 //! (plus what the stiffness profile needs, see [`rodloop_solver::Accuracy::cells`]).
 
-use rodloop_solver::{solve, solve_from_state, Accuracy, Equilibrium, SolverError};
+use rodloop_solver::{solve, solve_from_state, Equilibrium, SolverError};
 
 use crate::states::{energy_slope, model_with_phase, newton_options};
 use crate::types::TracedBranch;
 use crate::DiagramOptions;
 
-/// `(N_f, N_c)`: the two reporting resolutions (cells) of branch `eta` (see the table above).
-///
-/// Every count is raised by the scene's bending factor ([`crate::bending_factor`]: the
-/// soft segment's bending length against the transitions' width; rounded up to a multiple
-/// of 8 where it exceeds 1): a very soft segment bends sharply, and at the table's counts
-/// the exchanges of the D1/D0 = 0.001 scene (factor 1.49) carry error estimates of
-/// 1–3·10⁻⁷.
+/// `(N_f, N_c)`: the two reporting resolutions (cells) of branch `eta` (see the table above):
+/// the accuracy policy's rule ([`rodloop_solver::accuracy::reporting_cells`]), which also
+/// raises every count by the scene's bending factor.
 pub fn reporting_cells(opts: &DiagramOptions, eta: u32) -> (usize, usize) {
-    let periods = eta.max(1) as usize;
-    let factor = crate::bending_factor(&opts.stiffness);
-    let scale = |n: usize| {
-        if factor > 1.0 {
-            ((n as f64 * factor).ceil() as usize).div_ceil(8) * 8
-        } else {
-            n
-        }
-    };
-    match opts.accuracy {
-        Accuracy::Fast | Accuracy::Default => {
-            let n = scale(opts.accuracy.cells(periods, &opts.stiffness));
-            (n, n / 2)
-        }
-        Accuracy::High => {
-            let n = scale(Accuracy::Default.cells(periods, &opts.stiffness));
-            (2 * n, n)
-        }
-    }
+    rodloop_solver::accuracy::reporting_cells(opts.accuracy, &opts.stiffness, eta)
 }
 
 /// Extrapolated values of a branch at one length.
@@ -141,53 +119,4 @@ pub(crate) fn resolve(
     let kappa = eq.resample(cells)?;
     let model = model_with_phase(opts, eq.lbar(), cells, &kappa)?;
     solve(&model, &kappa, &newton_options())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use rodloop_solver::Stiffness;
-
-    /// The tracing and reporting resolutions of a two-segment rod follow its contrast without
-    /// a threshold: as `D1/D0` falls by 2 % steps from 0.9 to 1e-4 (for transitions from
-    /// smooth to sharp) the counts never fall and never jump by more than the rounding to
-    /// 4 or 8 cells plus 3 % (a contrast-independent cut would jump by half the count).
-    #[test]
-    fn resolutions_follow_the_contrast_without_a_threshold() {
-        for gamma in [25.0, 60.0, 200.0, 300.0] {
-            for accuracy in [Accuracy::Fast, Accuracy::Default, Accuracy::High] {
-                let counts = |c: f64| {
-                    let opts = DiagramOptions {
-                        stiffness: Stiffness::Tanh {
-                            d0: 1.0,
-                            d1: c,
-                            s0: 0.3,
-                            s1: 0.8,
-                            gamma,
-                        },
-                        accuracy,
-                        ..DiagramOptions::default()
-                    };
-                    (1..=3)
-                        .map(|eta| (opts.trace_cells(eta), reporting_cells(&opts, eta).0))
-                        .collect::<Vec<_>>()
-                };
-                let mut c = 0.9;
-                let mut prev = counts(c);
-                while c > 1e-4 {
-                    c *= 0.98;
-                    let next = counts(c);
-                    for ((t0, r0), (t1, r1)) in prev.iter().zip(&next) {
-                        for (a, b, step) in [(t0, t1, 4), (r0, r1, 8)] {
-                            assert!(
-                                b >= a && b - a <= step + a.div_ceil(33),
-                                "γ = {gamma}, {accuracy:?}, D1/D0 = {c}: {a} → {b} cells"
-                            );
-                        }
-                    }
-                    prev = next;
-                }
-            }
-        }
-    }
 }

@@ -13,14 +13,6 @@ use crate::maxwell::MaxwellProblem;
 use crate::reported::{half_resolution_estimate, verify_reported};
 use crate::DiagramError;
 
-/// The resolution pair of an accuracy level: `Some(cells factor)` of the companion.
-pub(super) fn companion_cells(accuracy: Accuracy, n: usize) -> usize {
-    match accuracy {
-        Accuracy::High => 2 * n,
-        _ => (n / 2).div_ceil(2) * 2,
-    }
-}
-
 /// Newton on the augmented system at fixed `p` from `x`.
 pub(super) fn fixed<M: SurfaceSolve>(
     problem: &MaxwellProblem<M>,
@@ -86,8 +78,8 @@ impl<'a, M: SurfaceSolve> RowMaker<'a, M> {
             // The companion of the accuracy level; if it does not converge (a sharp profile
             // at few cells), twice the main resolution, as `finish_with_accuracy` does.
             let mut pairs = vec![(
-                companion_cells(self.accuracy, ma.cells()),
-                companion_cells(self.accuracy, mb.cells()),
+                rodloop_solver::accuracy::companion_cells(self.accuracy, ma.cells()),
+                rodloop_solver::accuracy::companion_cells(self.accuracy, mb.cells()),
             )];
             if self.accuracy != Accuracy::High {
                 pairs.push((2 * ma.cells(), 2 * mb.cells()));

@@ -431,31 +431,6 @@ pub fn four_level_estimate(e: [f64; 4], max_order: f64) -> (f64, f64) {
 /// understated the error at `N = 256` by 1.3× (against `N = 512`). The cap is 2.5.
 pub const LIFTED_OFF_MAX_ORDER: f64 = 2.5;
 
-/// Cells of an enclosed solve for a branch with `eta` periods: `c (1 + η)` with `c = 16`
-/// (fast), `32` (default) or `64` (high), at least 32: the enclosed diagram's levels.
-pub fn enclosed_cells(accuracy: crate::Accuracy, eta: u32) -> usize {
-    let c = accuracy.pick(crate::accuracy::ENCLOSED_TRACE_CELLS);
-    (c * (1 + eta as usize)).max(32)
-}
-
-/// Cells `N` of the lifted-off traces of a non-uniform rod's branch `eta` (levels `N/4,
-/// N/2, N`): [`enclosed_cells`] but at least `32(2+η)`, so that `N/4` resolves the profile.
-pub fn nonuniform_cells(accuracy: crate::Accuracy, eta: u32) -> usize {
-    enclosed_cells(accuracy, eta).max(32 * (2 + eta as usize))
-}
-
-/// Cells of a single enclosed `solve` for a branch with `eta` periods: `c (1 + η)` with
-/// `c = 16` (fast), `192` (default) or `256` (high). The Newton step is `O(N)`
-/// ([`super::lifted`]), so one state affords the mesh the `≤ 1e-8` target needs with an
-/// estimate that bounds the error: the figure-eight at `L̄ = 1.4` is estimated at 3.5e-9
-/// relative at `N = 384` (1.25e-8 at 256, where the error against `N = 1024` is 3.9e-9). (The enclosed diagram
-/// keeps [`enclosed_cells`]: its natural-parameter tracer stalls on the point contacts of
-/// the figure-eight below `L̄ ≈ 1.3` at `N = 256`.)
-pub fn enclosed_solve_cells(accuracy: crate::Accuracy, eta: u32) -> usize {
-    let c = accuracy.pick(crate::accuracy::ENCLOSED_SOLVE_CELLS);
-    (c * (1 + eta as usize)).max(32)
-}
-
 /// The `L̄` intervals (within `(lo, hi)`) where the paper's homogeneous branch with `eta`
 /// periods needs a pulling wall somewhere, `λ_min < 0`, and so lifts off in the ball. For
 /// the wave family Eq. (38) gives `λ_min R³/D = c²(1 − 2k²)`: the loop detaches exactly

@@ -46,10 +46,10 @@ pub mod state;
 pub mod stats;
 pub mod wall;
 
+pub use crate::accuracy::{enclosed_cells, enclosed_solve_cells, nonuniform_cells};
 pub use branch::{
-    detached_intervals, enclosed_cells, enclosed_solve_cells, four_level_estimate,
-    nonuniform_cells, point_like_contact, solve_branch, solve_levels, three_level_estimate,
-    BranchSolve, SurfaceSource, LIFTED_OFF_MAX_ORDER, POINT_CONTACT_CELLS,
+    detached_intervals, four_level_estimate, point_like_contact, solve_branch, solve_levels,
+    three_level_estimate, BranchSolve, SurfaceSource, LIFTED_OFF_MAX_ORDER, POINT_CONTACT_CELLS,
 };
 pub use from_shape::{start_from_shape, SavedShape};
 pub use model::{Complementarity, EnclosedModel, Gauge};

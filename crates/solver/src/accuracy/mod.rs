@@ -11,6 +11,12 @@
 //!   `X* = X_2N + (X_2N − X_N)/15` of the energies and of `λ_min, λ_max`; the estimate is
 //!   `|X_2N − X_N|/15` (the error of `X_2N`, a conservative bound for `X*`). Profiles are
 //!   those of the `2N` solution.
+//!
+//! Every rule that turns a level and a scene into a number of cells, whatever it is used
+//! for (solve, tracing, reporting pair, buckling loads, enclosed levels), is in [`cells`]
+//! with the resolution table it reads.
+
+mod cells;
 
 use crate::model::{Phase, SurfaceModel};
 use crate::solve::{solve, EnergyReport, Equilibrium, SolveOptions};
@@ -45,68 +51,7 @@ impl std::str::FromStr for Accuracy {
     }
 }
 
-/// Cells per period of `κ_g` (plus one) at the default accuracy.
-pub const DEFAULT_CELLS_PER_PERIOD: usize = 56;
-/// Cells per period of `κ_g` (plus one) at the fast accuracy.
-pub const FAST_CELLS_PER_PERIOD: usize = 20;
-
-/// The resolution table: cells per period of `κ_g` at the levels `[fast, default, high]`
-/// for each use (each count is then multiplied by the use's number of periods, see the
-/// functions named). One place for every level-to-cells rule of the workspace.
-///
-/// Surface solve, [`Accuracy::cells`]: `N = c (1 + η)` (plus `c` on a graded mesh).
-pub const SOLVE_CELLS: [usize; 3] = [
-    FAST_CELLS_PER_PERIOD,
-    DEFAULT_CELLS_PER_PERIOD,
-    DEFAULT_CELLS_PER_PERIOD,
-];
-/// Surface tracing resolution of the diagram (`rodloop_diagram::DiagramOptions::trace_cells`):
-/// `c (η + 1)`.
-pub const TRACE_CELLS: [usize; 3] = [8, 12, 16];
-/// Buckling loads of the m-fold great circle (`rodloop_diagram`'s `load_cells`): `c (m + 2)`.
-pub const LOAD_CELLS: [usize; 3] = [4, 8, 16];
-/// Enclosed diagram levels ([`crate::enclosed::enclosed_cells`]): `c (1 + η)`, at least 32.
-pub const ENCLOSED_TRACE_CELLS: [usize; 3] = [16, 32, 64];
-/// A single enclosed solve ([`crate::enclosed::enclosed_solve_cells`]): `c (1 + η)`.
-pub const ENCLOSED_SOLVE_CELLS: [usize; 3] = [16, 192, 256];
-
-impl Accuracy {
-    /// The entry of a `[fast, default, high]` row (e.g. of the resolution table above).
-    pub fn pick<T: Copy>(self, row: [T; 3]) -> T {
-        match self {
-            Accuracy::Fast => row[0],
-            Accuracy::Default => row[1],
-            Accuracy::High => row[2],
-        }
-    }
-
-    /// Number of cells of the main solve for a loop whose geodesic curvature has `periods`
-    /// oscillation periods (`η` of the branch; see [`StartShape::periods`]):
-    /// `N = c (1 + η)` with `c = 56` (default, high) or `20` (fast). The discretisation error
-    /// grows with the number of oscillations, not with `L̄`; `c = 56` keeps the energy error
-    /// of the homogeneous branches η = 1..4 below 1e-7 relative (`tests/convergence.rs`,
-    /// `rodloop converge`). Sharp profiles (Eq. (51) with `γ > 20`) are resolved by the
-    /// graded mesh ([`crate::MeshMap::for_profile`]) with `N = c (2 + η)` cells, whatever
-    /// `γ` (measured: energy error ≤ 1e-7 relative for η = 1, 2 at `D1/D0 = 0.5`); smooth
-    /// ones get at least `2γ` cells (`γ` for `Fast`), tables two per point. Rounded up to a
-    /// multiple of 4. For `High` this is the coarse one of the pair `(N, 2N)`.
-    pub fn cells(self, periods: usize, stiffness: &Stiffness) -> usize {
-        let per = self.pick(SOLVE_CELLS);
-        let mut n = per * (1 + periods.max(1));
-        let factor = if self == Accuracy::Fast { 1.0 } else { 2.0 };
-        if !crate::MeshMap::for_profile(stiffness).is_uniform() {
-            n += per;
-        }
-        match stiffness {
-            Stiffness::Tanh { gamma, .. } if *gamma <= 20.0 => {
-                n = n.max((factor * gamma).ceil() as usize);
-            }
-            Stiffness::Table { s, .. } => n = n.max(s.len() * factor as usize),
-            _ => {}
-        }
-        n.div_ceil(4) * 4
-    }
-}
+pub use cells::*;
 
 /// Order `p` of the scheme's discretisation error in the cell length `h` (energies and
 /// `λ`; see the module docs): halving `h` divides the error by `2^p = 16`.
