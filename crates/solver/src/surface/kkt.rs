@@ -53,7 +53,7 @@
 //! above; splitting them would spread that layout over several files.
 
 use nalgebra::{
-    DMatrix, DVector, Matrix2, Matrix3, SMatrix, SVector, Vector2, Vector3, LU, U2, U8, U9,
+    DMatrix, DVector, Matrix2, Matrix3, SMatrix, SVector, Vector2, Vector3, LU, U2, U9,
 };
 
 use crate::model::{tr_prod, vee_skew, Chain, Closure, SurfaceModel};
@@ -148,7 +148,7 @@ impl CellTerms {
     }
 }
 
-type M8 = SMatrix<f64, 8, 8>;
+type M23 = SMatrix<f64, 2, 3>;
 type M9 = SMatrix<f64, 9, 9>;
 type V8 = SVector<f64, 8>;
 type V9 = SVector<f64, 9>;
@@ -162,12 +162,40 @@ struct FirstBlock {
     lu: LU<f64, U2, U2>,
 }
 
-/// A middle block `(η_c, ξ_c, δκ_c)`, `0 < c < N` (8×8), stored on the stack.
+/// A middle block `(η_c, ξ_c, δκ_c)`, `0 < c < N`: the 8×8 pivot block
+/// `D_c = [[−S, −I, 0], [−I, 0, Bᵀ], [0, B, Q]]` kept by its parts. Its pair
+/// `P = [[−S, −I], [−I, 0]]` has the exact inverse `[[0, −I], [−I, S]]` and `det P = −1`,
+/// so `D_c` is factorised by eliminating the pair exactly onto the 2×2 Schur complement
+/// `Σ = Q − B S Bᵀ` ([`MidBlock::solve`]): `det D_c = −det Σ`, and `D_c` is singular
+/// exactly where `Σ` is.
 struct MidBlock {
-    /// The pivot block `D_c` (symmetric), kept for the inertia.
-    d: M8,
-    lu: LU<f64, U8, U8>,
+    /// `S` (3×3, symmetric): minus the `(η, η)` part, the update from the block before.
+    s: M3,
+    /// `B` (2×3): the `(δκ, ξ)` coupling.
+    b: M23,
+    /// `Σ = Q − B S Bᵀ` (2×2, symmetric), kept for the inertia.
+    sigma: Matrix2<f64>,
+    lu: LU<f64, U2, U2>,
     g: Gc,
+}
+
+impl MidBlock {
+    /// `D_c x = r` for `K` right-hand sides (rows `η, ξ, δκ`): with `r = (r_η, r_ξ, r_κ)`,
+    /// `x_κ = Σ⁻¹ (r_κ + B (r_η − S r_ξ))`, `x_η = Bᵀ x_κ − r_ξ`,
+    /// `x_ξ = S (r_ξ − Bᵀ x_κ) − r_η`; `None` if `Σ` is singular.
+    fn solve<const K: usize>(&self, r: &SMatrix<f64, 8, K>) -> Option<SMatrix<f64, 8, K>> {
+        let re = r.fixed_rows::<3>(0);
+        let rx = r.fixed_rows::<3>(3);
+        let rk = r.fixed_rows::<2>(6);
+        let xk = self.lu.solve(&(rk + self.b * (re - self.s * rx)))?;
+        let btxk = self.b.tr_mul(&xk);
+        let mut x = SMatrix::<f64, 8, K>::zeros();
+        x.fixed_rows_mut::<3>(0).copy_from(&(btxk - rx));
+        x.fixed_rows_mut::<3>(3)
+            .copy_from(&(self.s * (rx - btxk) - re));
+        x.fixed_rows_mut::<2>(6).copy_from(&xk);
+        Some(x)
+    }
 }
 
 /// The last block `(η_N, ξ_N, δμ)` (9×9).
@@ -276,7 +304,7 @@ fn det_parts(perm_sign: f64, diag: &[f64]) -> (f64, f64) {
 #[derive(Clone, Copy)]
 enum Prev<'a> {
     First(&'a LU<f64, U2, U2>),
-    Mid(&'a LU<f64, U8, U8>),
+    Mid(&'a MidBlock),
 }
 
 /// `G_c = D_{c−1}⁻¹ C_cᵀ` (its three nonzero columns) and the update `C_c G_c` of the
@@ -292,12 +320,12 @@ fn coupling(prev: Prev<'_>, e: &M3, a: &[V3; 2]) -> Option<(Gc, M3)> {
             g.fixed_rows_mut::<2>(0).copy_from(&g2);
             Some((g, upd))
         }
-        Prev::Mid(lu) => {
+        Prev::Mid(block) => {
             let mut ct = Gc::zeros();
             ct.fixed_rows_mut::<3>(3).copy_from(&e.transpose());
             ct.set_row(6, &a[0].transpose());
             ct.set_row(7, &a[1].transpose());
-            let g = lu.solve(&ct)?;
+            let g = block.solve(&ct)?;
             let upd = ct.tr_mul(&g);
             Some((g, upd))
         }
@@ -358,38 +386,30 @@ impl KktFactor {
         // Blocks 1..N: (η_c, ξ_c, δκ_c).
         let mut mid: Vec<MidBlock> = Vec::with_capacity(n.saturating_sub(1));
         for c in 1..n {
-            let mut k = M8::zeros();
-            pair_couplings(&mut k);
             let sw = shift * d0 * model.cell_weight(c);
             let [q11, q12, q22] = t.q[c];
-            k[(6, 6)] = q11 - sw;
-            k[(6, 7)] = q12;
-            k[(7, 6)] = q12;
-            k[(7, 7)] = q22 - sw;
-            for i in 0..2 {
-                for j in 0..3 {
-                    k[(6 + i, 3 + j)] = t.b[c][i][j];
-                    k[(3 + j, 6 + i)] = t.b[c][i][j];
-                }
-            }
+            let q = Matrix2::new(q11 - sw, q12, q12, q22 - sw);
+            let b = M23::from_rows(&[t.b[c][0].transpose(), t.b[c][1].transpose()]);
             let prev = if c == 1 {
                 Prev::First(&first.lu)
             } else {
-                Prev::Mid(&mid[c - 2].lu)
+                Prev::Mid(&mid[c - 2])
             };
             let (g, upd) = coupling(prev, &t.e[c - 1], &t.a[c - 1]).ok_or_else(singular)?;
-            let mut ee = k.fixed_view_mut::<3, 3>(0, 0);
-            ee -= upd;
-            let d = (k + k.transpose()) * 0.5;
-            let lu = d.lu();
+            let s = (upd + upd.transpose()) * 0.5;
+            let bsb = b * s * b.transpose();
+            let sigma = q - (bsb + bsb.transpose()) * 0.5;
+            let lu = sigma.lu();
             let diag = lu.u().diagonal();
-            if pivot_ratio(diag.as_slice()) <= PIVOT_RATIO {
+            // The pair's pivots are ±1: the ratio of the whole block's pivots.
+            if pivot_ratio(&[1.0, diag[0], diag[1]]) <= PIVOT_RATIO {
                 return Err(singular());
             }
-            let (s, l) = det_parts(lu.p().determinant::<f64>(), diag.as_slice());
-            det_sign *= s;
+            // det D_c = det P · det Σ with det P = −1.
+            let (sg, l) = det_parts(lu.p().determinant::<f64>(), diag.as_slice());
+            det_sign *= -sg;
             log_abs_det += l;
-            mid.push(MidBlock { d, lu, g });
+            mid.push(MidBlock { s, b, sigma, lu, g });
         }
         // Block N: (η_N, ξ_N, δμ).
         let last = {
@@ -405,7 +425,7 @@ impl KktFactor {
             let prev = if n == 1 {
                 Prev::First(&first.lu)
             } else {
-                Prev::Mid(&mid[n - 2].lu)
+                Prev::Mid(&mid[n - 2])
             };
             let (g, upd) = coupling(prev, &t.e[n - 1], &t.a[n - 1]).ok_or_else(singular)?;
             let mut ee = k.fixed_view_mut::<3, 3>(0, 0);
@@ -497,8 +517,10 @@ impl KktFactor {
         let ok = self.first.lu.solve_mut(&mut x0);
         nan_if(ok, &mut x0);
         for (v, bl) in xm.iter_mut().zip(&self.mid) {
-            let ok = bl.lu.solve_mut(v);
-            nan_if(ok, v);
+            match bl.solve(v) {
+                Some(x) => *v = x,
+                None => v.fill(f64::NAN),
+            }
         }
         let ok = self.last.lu.solve_mut(&mut xl);
         nan_if(ok, &mut xl);
@@ -589,17 +611,9 @@ impl KktFactor {
     pub fn negative_eigenvalues(&self) -> usize {
         let d = &self.first.d;
         let mut neg = negatives_2x2(d[(0, 0)], d[(0, 1)], d[(1, 1)]);
-        // S = −D[η, η]; Σ = D[κκ] + D[κξ] D[ηη] D[ξκ] (κ: rows 6.., ξ: 3..6, η: 0..3).
         for b in &self.mid {
-            let d = &b.d;
-            let dee = d.fixed_view::<3, 3>(0, 0);
-            let dkx = d.fixed_view::<2, 3>(6, 3);
-            let sigma = d.fixed_view::<2, 2>(6, 6) + dkx * dee * dkx.transpose();
-            neg += 3 + negatives_2x2(
-                sigma[(0, 0)],
-                0.5 * (sigma[(0, 1)] + sigma[(1, 0)]),
-                sigma[(1, 1)],
-            );
+            let sigma = &b.sigma;
+            neg += 3 + negatives_2x2(sigma[(0, 0)], sigma[(0, 1)], sigma[(1, 1)]);
         }
         neg += last_block_negatives(&self.last.d);
         if let Some((_, _, s)) = &self.border {
