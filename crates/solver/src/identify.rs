@@ -218,16 +218,16 @@ pub fn identify_periods(s: &[f64], signal: &[f64], length: f64) -> Result<Period
     }
     // Harmonics up to a quarter of the samples (higher ones are not resolved).
     let k_max = (n / 4).max(1);
-    let mut amps = Vec::with_capacity(k_max);
-    for k in 1..=k_max {
-        let (mut re, mut im) = (0.0, 0.0);
-        for j in 0..n {
-            let (si, co) = (2.0 * PI * k as f64 * s[j] / length).sin_cos();
-            re += w[j] * dev[j] * co;
-            im += w[j] * dev[j] * si;
-        }
-        amps.push(re.hypot(im));
+    // One pass over the samples, the harmonics of each by angle addition.
+    let (mut re, mut im) = (vec![0.0; k_max], vec![0.0; k_max]);
+    for j in 0..n {
+        let wd = w[j] * dev[j];
+        crate::periodic::harmonics(2.0 * PI * s[j] / length, k_max, |k, co, si| {
+            re[k] += wd * co;
+            im[k] += wd * si;
+        });
     }
+    let amps: Vec<f64> = re.iter().zip(&im).map(|(r, i)| r.hypot(*i)).collect();
     let (best, &a_best) = amps
         .iter()
         .enumerate()

@@ -236,7 +236,7 @@ impl TrigColumns {
 /// [`TrigInterpolant::eval`], [`TrigInterpolant::eval_all`] and
 /// [`TrigInterpolant::eval_columns`] agree bit for bit).
 #[inline]
-fn harmonics(x: f64, count: usize, mut f: impl FnMut(usize, f64, f64)) {
+pub(crate) fn harmonics(x: f64, count: usize, mut f: impl FnMut(usize, f64, f64)) {
     let (s1, c1) = x.sin_cos();
     let (mut s, mut c) = (s1, c1);
     for k in 0..count {
