@@ -2,7 +2,9 @@
 
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use rodloop_continuation::{fd_dparam, fd_jacobian, Problem};
-use rodloop_solver::frame::{exp_jet, expm_skew, hat, integrate, rodrigues_coefficients};
+use rodloop_solver::frame::{
+    exp_jet, exp_jet_last, expm_skew, hat, integrate, rodrigues_coefficients,
+};
 use rodloop_solver::{LbarProblem, Phase, StartShape, Stiffness, SurfaceModel};
 
 /// Small deterministic pseudo-random numbers in [-1, 1].
@@ -80,6 +82,35 @@ fn exp_jet_matches_finite_differences() {
             };
             let fd2 = (dj(xp) - dj(xm)) / (2.0 * h);
             assert!((fd2 - dd[i][j]).norm() < 1e-8, "second derivative {i}{j}");
+        }
+    }
+}
+
+/// The jet of the mixed derivatives in the last variable is the full jet's last column, bit
+/// for bit, and leaves the other second derivatives zero.
+#[test]
+fn exp_jet_last_is_the_last_column_of_the_full_jet() {
+    let w = Vector3::new(0.3, -0.7, 0.2);
+    let wi = [
+        Vector3::new(0.1, 0.4, -0.3),
+        Vector3::new(-0.5, 0.2, 0.6),
+        Vector3::new(0.25, -0.15, 0.05),
+    ];
+    let u = Vector3::new(0.2, 0.1, -0.1);
+    let z = Vector3::zeros();
+    let wij = [[z, z, u], [z, z, u * -0.5], [u, u * -0.5, u * 0.3]];
+    let (e, d, dd) = exp_jet::<3>(&w, &wi, &wij);
+    let (el, dl, ddl) = exp_jet_last::<3>(&w, &wi, &wij);
+    assert_eq!(e, el);
+    assert_eq!(d, dl);
+    for i in 0..3 {
+        for j in i..3 {
+            if j == 2 {
+                assert_eq!(dd[i][j], ddl[i][j], "∂{i}∂{j}");
+                assert!(dd[i][j].norm() > 0.0);
+            } else {
+                assert_eq!(ddl[i][j], Matrix3::zeros(), "∂{i}∂{j} left zero");
+            }
         }
     }
 }

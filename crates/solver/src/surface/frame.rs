@@ -124,13 +124,24 @@ pub fn exp_jet<const K: usize>(
     wi: &[Vector3<f64>; K],
     wij: &[[Vector3<f64>; K]; K],
 ) -> ExpJet<K> {
-    jet(w, wi, Some(wij))
+    jet(w, wi, Some(wij), false)
+}
+
+/// [`exp_jet`] with only the second derivatives in the last variable, `∂_i∂_{K−1}` for every
+/// `i` (the other entries are left zero): the mixed derivatives that `∂F/∂L̄` needs with the
+/// cell length as the last variable, at half the cost of the full jet for `K = 3`.
+pub fn exp_jet_last<const K: usize>(
+    w: &Vector3<f64>,
+    wi: &[Vector3<f64>; K],
+    wij: &[[Vector3<f64>; K]; K],
+) -> ExpJet<K> {
+    jet(w, wi, Some(wij), true)
 }
 
 /// [`exp_jet`] for `ω` affine in the variables (`∂²ω/∂x_i∂x_j = 0`), as for a cell
 /// propagator in its two curvature unknowns: the terms in `W_ij` are skipped.
 pub fn exp_jet_affine<const K: usize>(w: &Vector3<f64>, wi: &[Vector3<f64>; K]) -> ExpJet<K> {
-    jet(w, wi, None)
+    jet(w, wi, None, false)
 }
 
 /// `exp(hat(ω))` and its first derivatives only (see [`exp_jet`]).
@@ -156,6 +167,7 @@ fn jet<const K: usize>(
     w: &Vector3<f64>,
     wi: &[Vector3<f64>; K],
     wij: Option<&[[Vector3<f64>; K]; K]>,
+    only_last: bool,
 ) -> ExpJet<K> {
     let q = w.norm_squared();
     let [a, a1, a2, b, b1, b2] = rodrigues_coefficients(q);
@@ -175,6 +187,9 @@ fn jet<const K: usize>(
     }
     for i in 0..K {
         for j in i..K {
+            if only_last && j + 1 != K {
+                continue;
+            }
             let (ai, aj) = (a1 * qi[i], a1 * qi[j]);
             let (bi, bj) = (b1 * qi[i], b1 * qi[j]);
             let mut qij = 2.0 * wi[i].dot(&wi[j]);

@@ -123,7 +123,7 @@ impl SurfaceModel {
             let whh = cvec * (2.0 * MAGNUS_C * (k2 - k1));
             let z3 = V3::zeros();
             let wij = [[z3, z3, w1h], [z3, z3, w2h], [w1h, w2h, whh]];
-            let (ec, d, dd) = exp_jet::<3>(&w, &[v1, v2, wh], &wij);
+            let (ec, d, dd) = exp_jet_last::<3>(&w, &[v1, v2, wh], &wij);
             e.push(ec);
             dk.push([d[0], d[1]]);
             dh.push(d[2] * dh_dlbar);
