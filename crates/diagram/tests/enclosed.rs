@@ -11,7 +11,9 @@ use rodloop_diagram::enclosed::{
 use rodloop_diagram::Label;
 use rodloop_exact::diagram::{compute, CriticalKind, DiagramSettings};
 use rodloop_exact::{eta_of_branch, paper_branch_loop};
-use rodloop_solver::enclosed::{solve_branch, EnclosedOptions, SurfaceSource};
+use rodloop_solver::enclosed::{
+    solve_branch, solve_enclosed, start_from_surface, EnclosedOptions, SurfaceSource,
+};
 use rodloop_solver::Stiffness;
 
 fn uniform() -> Stiffness {
@@ -62,6 +64,48 @@ fn every_state_is_first_order_optimal() {
             assert!(p.max_gap > 1e-12, "{p:?}");
         }
     }
+}
+
+/// The index of every attached sample (read from the surface model, the wall being strictly
+/// active there) is the index of the 3-D model itself: the exact loop re-solved by the
+/// semismooth Newton method at two resolutions, its inertia counted on the tangent space of
+/// the closure, the gauges and the active wall. (On `[1, 3]` every attached sample of the
+/// uniform rod is a minimum in both models: the check is that the 3-D model, which may also
+/// lift the loop off, finds no descent direction the surface model misses, up to the
+/// samples next to a lift-off.)
+#[test]
+fn attached_indices_are_those_of_the_3d_model() {
+    let d = diagram();
+    let attached: Vec<_> = d
+        .points
+        .iter()
+        .filter(|p| p.source == PointSource::Exact && p.eta > 0)
+        .collect();
+    assert!(attached.len() > 20, "{} attached samples", attached.len());
+    let mut checked = 0;
+    for p in attached {
+        let l = paper_branch_loop(p.eta, p.lbar).unwrap();
+        if l.lambda_range().0 <= 0.0 {
+            continue;
+        }
+        let len = l.length();
+        for cells in [24 * (1 + p.eta as usize), 48 * (1 + p.eta as usize)] {
+            let (model, z0) = start_from_surface(1.0, p.lbar, cells, &uniform(), |s| {
+                l.point(s * len).map(|q| q.kappa_g).unwrap_or(f64::NAN)
+            })
+            .unwrap();
+            let st = solve_enclosed(&model, z0, &EnclosedOptions::default()).unwrap();
+            assert_eq!(
+                st.index(1e-6).unwrap(),
+                p.index,
+                "branch {} at lbar = {}, N = {cells}",
+                p.branch,
+                p.lbar
+            );
+        }
+        checked += 1;
+    }
+    assert!(checked > 20, "{checked} samples checked");
 }
 
 #[test]

@@ -365,7 +365,7 @@ pub struct EnclosedDiagram {
 pub struct EnclosedTimings {
     /// Everything.
     pub total: f64,
-    /// Attached samples (exact layer, index from the 3-D model), summed over the branch
+    /// Attached samples (exact layer, index from the surface model), summed over the branch
     /// threads.
     pub attached: f64,
     /// Lifted-off traces, summed over the branch threads.

@@ -1,5 +1,5 @@
 //! Sampling of the enclosed diagram's branches: attached samples from the exact layer (index
-//! from the 3-D model), lift-off/landing events, lifted-off parts traced by natural-parameter
+//! from the surface model, the wall being strictly active), lift-off/landing events, lifted-off parts traced by natural-parameter
 //! steps at three resolutions (see the parent module's docs).
 //!
 //! It is one file because the attached samples, the events and the lifted-off traces share the
@@ -13,10 +13,13 @@ use rodloop_continuation::natural::{walk, NaturalSettings};
 use rodloop_exact::{branch_of_eta, paper_branch_loop, ExactLoop};
 use rodloop_solver::enclosed::stats::{self, Stage};
 use rodloop_solver::enclosed::{
-    detached_intervals, enclosed_cells, solve_branch, solve_enclosed, start_from_surface,
-    three_level_estimate, EnclosedOptions, SurfaceSource,
+    detached_intervals, enclosed_cells, solve_branch, three_level_estimate, EnclosedOptions,
+    SurfaceSource,
 };
-use rodloop_solver::{Accuracy, SolverError, Stiffness};
+use rodloop_solver::{
+    solve_cells, Accuracy, Confinement, Globalization, SolveOptions, SolverError, StartShape,
+    Stiffness,
+};
 
 use super::levels::Levels;
 use super::locate::{is_jump, locate};
@@ -69,26 +72,25 @@ pub(super) fn exact(eta: u32, lbar: f64) -> Result<ExactLoop, SolverError> {
     Ok(paper_branch_loop(eta, lbar)?)
 }
 
-/// Index of an attached loop: the 3-D model re-solved from the exact loop at half the
-/// fast resolution (`8(1+η)` cells, at least 16), stability on the tangent space of the
-/// closure, gauges and the (strictly active) wall. (On `[1, 3]` the indices at 48 and 24
-/// cells for `η = 2` agree at every sample; the coarser one costs a fifth.)
+/// Index of an attached loop. Where the loop presses on the wall everywhere (`λ > 0`, which
+/// is what makes it attached), the wall constraint is strictly active at every node, so the
+/// second-order conditions of the 3-D model live on the tangent space of the sphere: its
+/// index is that of the surface model, the constrained Hessian's inertia read from the KKT
+/// factorisation at the fast surface resolution ([`Accuracy::cells`]), Newton from the exact
+/// loop.
 pub(super) fn attached_index(
     radius: f64,
     stiffness: &Stiffness,
     l: &ExactLoop,
 ) -> Result<usize, SolverError> {
-    let n = (enclosed_cells(Accuracy::Fast, l.eta) / 2).max(16);
-    let len = l.length();
-    let (model, z0) = start_from_surface(radius, l.lbar, n, stiffness, |s| {
-        l.point(s * len)
-            .map(|p| p.kappa_g / radius)
-            .unwrap_or(f64::NAN)
-    })?;
-    let st = stats::stage(Stage::Attached, || {
-        solve_enclosed(&model, z0, &EnclosedOptions::default())
-    })?;
-    st.index(1e-6)
+    let start = StartShape::Exact { eta: l.eta };
+    let n = Accuracy::Fast.cells(l.eta as usize, stiffness);
+    let newton = SolveOptions {
+        globalization: Globalization::Newton,
+        ..SolveOptions::default()
+    };
+    let eq = solve_cells(radius, l.lbar, n, stiffness, &start, None, &newton)?;
+    eq.model().index(&eq.state(), 1e-6)
 }
 
 pub(super) fn exact_point(

@@ -36,8 +36,6 @@ pub enum Stage {
     Exchange,
     /// Lift-off and landing events.
     Event,
-    /// Attached samples (the index of an exact loop by the 3-D model).
-    Attached,
     /// States solved after the diagram (certificate, atlas).
     After,
 }
@@ -55,7 +53,6 @@ impl Stage {
             Stage::Descent => "descent",
             Stage::Exchange => "exchange",
             Stage::Event => "event",
-            Stage::Attached => "attached",
             Stage::After => "after",
         }
     }
