@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use crate::{column, Axis, Cell, Diagram, Field, Point, SchemaError, VERSION};
+use crate::{column, Axis, Cell, Diagram, Field, Parameter, Point, SchemaError, VERSION};
 
 impl Diagram {
     /// Read a diagram directory written by [`Diagram::write`] (or by `rodloop diagram`).
@@ -45,6 +45,22 @@ impl Diagram {
         let units = typed(take("units"), "units", &src)?.unwrap_or_default();
         let states_dir = typed(take("states_dir"), "states_dir", &src)?;
         let run_id = typed(take("run_id"), "run_id", &src)?;
+        let parameter = match (take("param"), take("scene_value"), take("target")) {
+            (Some(name), Some(scene_value), Some(target)) => Some(Parameter {
+                name: typed(Some(name), "param", &src)?.unwrap_or_default(),
+                scene_value: typed(Some(scene_value), "scene_value", &src)?.unwrap_or(0.0),
+                target: typed(Some(target), "target", &src)?.unwrap_or(0.0),
+            }),
+            (None, None, None) => None,
+            _ => {
+                return Err(SchemaError::Parse {
+                    path: src.clone(),
+                    message: "param, scene_value and target come together (the parameter of a diagram against a parameter)".into(),
+                })
+            }
+        };
+        let exchange_curves = typed(take("curves"), "curves", &src)?;
+        let families = typed(take("families"), "families", &src)?;
         // The sheets of a traced diagram are a list; the exact layer writes a count there.
         let curves = match take("branches") {
             Some(v @ serde_json::Value::Array(_)) => typed(Some(v), "branches", &src)?.unwrap(),
@@ -89,6 +105,9 @@ impl Diagram {
             units,
             states_dir,
             run_id,
+            parameter,
+            exchange_curves,
+            families,
             extra: map.into_iter().collect(),
         })
     }

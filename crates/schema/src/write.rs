@@ -26,6 +26,11 @@ const OWN_KEYS: &[&str] = &[
     "units",
     "states_dir",
     "run_id",
+    "param",
+    "scene_value",
+    "target",
+    "curves",
+    "families",
 ];
 
 impl Diagram {
@@ -48,6 +53,9 @@ impl Diagram {
             units: units.into(),
             states_dir: None,
             run_id: None,
+            parameter: None,
+            exchange_curves: None,
+            families: None,
             extra: BTreeMap::new(),
         }
     }
@@ -257,6 +265,17 @@ impl Diagram {
         }
         if let Some(r) = &self.run_id {
             put("run_id", r.clone().into());
+        }
+        if let Some(p) = &self.parameter {
+            put("param", p.name.clone().into());
+            put("scene_value", checked_value("scene_value", &p.scene_value)?);
+            put("target", checked_value("target", &p.target)?);
+        }
+        if let Some(c) = &self.exchange_curves {
+            put("curves", checked_value("curves", c)?);
+        }
+        if let Some(f) = &self.families {
+            put("families", checked_value("families", f)?);
         }
         for (k, v) in &self.extra {
             if map.contains_key(k) || OWN_KEYS.contains(&k.as_str()) || self.is_axis_key(k) {
