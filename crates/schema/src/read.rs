@@ -5,7 +5,8 @@ use std::path::Path;
 use crate::{column, Axis, Cell, Diagram, Field, Parameter, Point, SchemaError, VERSION};
 
 impl Diagram {
-    /// Read a diagram directory written by [`Diagram::write`] (or by `rodloop diagram`).
+    /// Read a diagram directory written by [`Diagram::write`] (or by `rodloop diagram`,
+    /// `rodloop diagram --param`, `rodloop phase`: its `summary.json`).
     pub fn read(dir: &Path) -> Result<Self, SchemaError> {
         let spath = dir.join("summary.json");
         let text = read_file(&spath)?;
@@ -87,7 +88,13 @@ impl Diagram {
             let max = typed(map.remove(&format!("{n}_max")), "axis", &src)?.unwrap_or(0.0);
             axes.push(Axis { name: n, min, max });
         }
-        let (columns, points) = read_points(&dir.join("branches.csv"), &axes)?;
+        // A diagram over no axes (the phase diagram) may have no branches.csv.
+        let branches = dir.join("branches.csv");
+        let (columns, points) = if axes.is_empty() && !branches.exists() {
+            (Vec::new(), Vec::new())
+        } else {
+            read_points(&branches, &axes)?
+        };
         Ok(Diagram {
             version,
             model,

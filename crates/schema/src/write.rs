@@ -294,10 +294,13 @@ impl Diagram {
 
     /// Every file of the diagram directory, `summary.json` last: `(name, bytes)`.
     pub fn files(&self) -> Result<Vec<(String, Vec<u8>)>, SchemaError> {
-        let mut out = vec![
-            ("branches.csv".to_string(), self.branches_csv()?),
-            ("critical.csv".to_string(), self.critical_csv()?),
-        ];
+        let mut out = Vec::new();
+        // A diagram without points or columns (the phase diagram: its critical lengths only)
+        // has no branches.csv.
+        if !(self.columns.is_empty() && self.points.is_empty()) {
+            out.push(("branches.csv".to_string(), self.branches_csv()?));
+        }
+        out.push(("critical.csv".to_string(), self.critical_csv()?));
         if let Some(s) = self.special_csv()? {
             out.push(("special_points.csv".into(), s));
         }

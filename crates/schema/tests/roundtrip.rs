@@ -389,9 +389,12 @@ fn parameter_diagrams_read_back_equal() {
     );
     assert_eq!(s["critical"][1]["source"], "fixed");
     assert_eq!(s["curves"][0]["cells"], serde_json::json!([64, 80]));
+    assert!(!dir.join("branches.csv").exists());
     let back = Diagram::read(&dir).unwrap();
     assert_eq!(back, d);
     assert_eq!(back.critical[1].curve_row().unwrap().arm, 1);
+    // A critical length of a diagram in L̄ is on no curve.
+    assert_eq!(sample().critical[0].curve_row(), None);
     std::fs::remove_dir_all(&dir).unwrap();
 
     // Against the parameter at a fixed length: axes value and lbar.
