@@ -96,10 +96,11 @@ pub(crate) fn run_surface(
     let t = Instant::now();
     let uniform = scene.stiffness.is_uniform();
     let exact = if uniform {
-        Some(crate::diagram::exact_window(
+        Some(crate::diagram::exact_window_schema(
             opts.lbar_min,
             opts.lbar_max,
             0.01,
+            &scene.name,
         )?)
     } else {
         None

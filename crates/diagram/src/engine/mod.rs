@@ -28,7 +28,7 @@
 //! | `mod.rs` | the [`Engine`] interface and the schema helpers the engines share |
 //! | `surface.rs` | [`SurfaceEngine`] and its schema ([`surface_schema`]) |
 //! | `enclosed.rs` | [`EnclosedEngine`] and its schema ([`lowest_lifted_off`]) |
-//! | `exact.rs` | [`ExactEngine`] and its window of the exact diagram ([`exact_window`]) |
+//! | `exact.rs` | [`ExactEngine`], its window of the exact diagram ([`exact_window`], in the schema: [`exact_window_schema`]) and the exact counterpart of a critical length ([`exact_counterpart`]) |
 //! | `sweep.rs` | [`SweepEngine`] (states at a fixed length against a stiffness parameter) and its schema ([`sweep_schema`]) |
 //! | `phase.rs` | [`PhaseEngine`] (critical lengths followed in a stiffness parameter, rows whose states fail left out: [`VerifiedPhase`]) and its schema ([`phase_schema`]) |
 
@@ -39,7 +39,9 @@ mod surface;
 mod sweep;
 
 pub use enclosed::{lowest_lifted_off, EnclosedEngine};
-pub use exact::{etas_in, exact_window, ExactEngine, ExactOutput};
+pub use exact::{
+    etas_in, exact_counterpart, exact_window, exact_window_schema, ExactEngine, ExactOutput,
+};
 pub use phase::{phase_schema, PhaseEngine, VerifiedPhase, PHASE_UNITS};
 pub use surface::{surface_schema, SurfaceEngine};
 pub use sweep::{sweep_schema, SweepEngine, VerifiedStates, VerifiedSweep};
