@@ -16,7 +16,7 @@ pub mod surface;
 
 pub use args::{Args, Model, FIGURE_SIZE};
 
-pub use rodloop_diagram::engine::{etas_in, exact_counterpart, exact_window_schema};
+pub use rodloop_diagram::engine::{etas_in, exact_counterpart};
 
 /// The figures of `draw_diagram` (diagram, diagram_split, diagram_lambda, and diagram_g for
 /// the exact model; SVG and PNG), drawn from the staged tables into the run's staging
@@ -255,11 +255,9 @@ fn run_numeric(
     run.commit()?;
     // For homogeneous scenes, show the exact layer's critical lengths next to the numeric ones:
     // the same critical length (same kind, same branches) of the exact diagram of this window.
-    let exact = if scene.stiffness.is_uniform() {
-        exact_window_schema(lbar_min, lbar_max, 0.01, &scene.name).ok()
-    } else {
-        None
-    };
+    let exact = crate::engine::exact_layer(scene, lbar_min, lbar_max)
+        .ok()
+        .flatten();
     outln!(
         "Critical lengths (numeric model, scene {}, accuracy {:?}):",
         scene.name,
