@@ -257,7 +257,7 @@ pub(crate) fn brief(text: &str) -> String {
 
 /// The rows of every curve of a phase diagram in the schema: its critical lengths with their
 /// places on their curves ([`CurveRow`]).
-pub(crate) struct PhaseCurves<'a> {
+pub(crate) struct PhaseRows<'a> {
     /// The parameter.
     pub parameter: Parameter,
     /// The curves, in order.
@@ -274,7 +274,7 @@ pub(crate) struct CurveRows<'a> {
 
 /// The curves of the phase diagram `d` (the schema of `phase`), every critical length placed
 /// on its curve.
-pub(crate) fn curves_of(d: &Diagram) -> Result<PhaseCurves<'_>> {
+pub(crate) fn curves_of(d: &Diagram) -> Result<PhaseRows<'_>> {
     let (Some(parameter), Some(curves)) = (&d.parameter, &d.exchange_curves) else {
         bail!("internal error: the phase diagram's schema has no parameter or curves");
     };
@@ -302,7 +302,7 @@ pub(crate) fn curves_of(d: &Diagram) -> Result<PhaseCurves<'_>> {
         };
         curve.rows.push((c, at));
     }
-    Ok(PhaseCurves {
+    Ok(PhaseRows {
         parameter: parameter.clone(),
         curves: out,
     })
@@ -318,7 +318,7 @@ type RowFiles = Vec<[String; 2]>;
 /// `B` the state's branch): the file names of each row in the order of its `from_branch` and
 /// `to_branch` (empty for the limit row, or where a file could not be written: warnings).
 fn write_row_states(
-    d: &PhaseCurves,
+    d: &PhaseRows,
     states: &[Vec<&StateFile>],
     r: f64,
     d0: f64,

@@ -8,7 +8,7 @@
 use rodloop_figures::plot::{LegendItem, Mark, Plot, Series, Shape};
 use rodloop_figures::svg::{Anchor, Svg};
 
-use crate::phase::{CurveRows, PhaseCurves};
+use crate::phase::{CurveRows, PhaseRows};
 
 const COLORS: [&str; 4] = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd"];
 
@@ -36,7 +36,7 @@ fn curve_at(c: &CurveRows, x: f64, xv: &dyn Fn(f64) -> f64) -> Option<(f64, u32,
 }
 
 /// The figure; `lbar_range` is the scene's length range (the vertical axis).
-pub fn phase_svg(d: &PhaseCurves, scene: &str, lbar_range: (f64, f64)) -> String {
+pub fn phase_svg(d: &PhaseRows, scene: &str, lbar_range: (f64, f64)) -> String {
     let param = &d.parameter;
     let log = param.is_log();
     let xv = |v: f64| if log { v.log10() } else { v };
@@ -240,7 +240,7 @@ pub(crate) struct Short {
 
 /// The curve ends that stop between the scene's value and `--to` (not `reached`, not the
 /// uniform-rod `limit`).
-pub(crate) fn stopped_short(d: &PhaseCurves) -> Vec<Short> {
+pub(crate) fn stopped_short(d: &PhaseRows) -> Vec<Short> {
     d.curves
         .iter()
         .flat_map(|c| {
