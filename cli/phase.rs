@@ -82,7 +82,7 @@ pub fn run(args: &Args, scene: &Scene, t0: Instant) -> Result<()> {
     let (unverified, mut state_warnings) = (out.unverified, out.warnings.clone());
     let curves = curves_of(&summary)?;
     let (state_files, write_warnings) = write_row_states(
-        &curves,
+        &summary,
         &out.record_states(),
         scene.radius,
         settings.stiffness.reference(),
@@ -318,37 +318,48 @@ type RowFiles = Vec<[String; 2]>;
 /// `B` the state's branch): the file names of each row in the order of its `from_branch` and
 /// `to_branch` (empty for the limit row, or where a file could not be written: warnings).
 fn write_row_states(
-    d: &PhaseRows,
+    d: &Diagram,
     states: &[Vec<&StateFile>],
     r: f64,
     d0: f64,
     run: &OutputRun,
 ) -> Result<(RowFiles, Vec<String>)> {
     let dir = run.subdir("states")?;
+    let curves = d.exchange_curves.as_deref().unwrap_or_default();
     let mut names = Vec::new();
     let mut warnings = Vec::new();
-    let mut states = states.iter();
-    for (k, c) in d.curves.iter().enumerate() {
-        let ex = c.curve.exchange;
-        for (j, (row, _)) in c.rows.iter().enumerate() {
-            let mut pair = [String::new(), String::new()];
-            let files = states.next().map_or(&[][..], |v| &v[..]);
-            if !files.is_empty() {
-                let branches = [ex.from_branch, ex.to_branch];
-                for ((slot, f), b) in pair.iter_mut().zip(files).zip(branches) {
-                    let name = format!("states/curve-{}-row-{j:03}-branch-{b}.csv", k + 1);
-                    match crate::states::write_state_file(&dir, &name, f, r, d0) {
-                        Ok(()) => *slot = name,
-                        Err(e) => warnings.push(format!("{name} could not be written: {e:#}")),
-                    }
-                }
-                // In the order of the row's own from_branch and to_branch.
-                if row.from_branch != ex.from_branch {
-                    pair.swap(0, 1);
+    // Rows of each curve so far.
+    let mut count = vec![0usize; curves.len()];
+    for (i, row) in d.critical.iter().enumerate() {
+        let k = row.curve_row().map_or(0, |at| at.curve);
+        let (Some(curve), Some(j)) = (
+            k.checked_sub(1).and_then(|k| curves.get(k)),
+            k.checked_sub(1).and_then(|k| count.get_mut(k)),
+        ) else {
+            bail!(
+                "internal error: critical length {} of the phase diagram is on no curve",
+                row.index
+            );
+        };
+        let ex = curve.exchange;
+        let mut pair = [String::new(), String::new()];
+        let files = states.get(i).map_or(&[][..], |v| &v[..]);
+        if !files.is_empty() {
+            let branches = [ex.from_branch, ex.to_branch];
+            for ((slot, f), b) in pair.iter_mut().zip(files).zip(branches) {
+                let name = format!("states/curve-{k}-row-{j:03}-branch-{b}.csv");
+                match crate::states::write_state_file(&dir, &name, f, r, d0) {
+                    Ok(()) => *slot = name,
+                    Err(e) => warnings.push(format!("{name} could not be written: {e:#}")),
                 }
             }
-            names.push(pair);
+            // In the order of the row's own from_branch and to_branch.
+            if row.from_branch != ex.from_branch {
+                pair.swap(0, 1);
+            }
         }
+        *j += 1;
+        names.push(pair);
     }
     Ok((names, warnings))
 }
