@@ -7,6 +7,11 @@
 //! state changes ([`Critical`]), the special points (folds, branch points, lift-off and
 //! landing events: [`SpecialPoint`]), the completeness certificate, warnings and timings.
 //!
+//! A diagram against a stiffness parameter (the phase diagram, the diagram at a fixed length
+//! against the parameter) names its [`Parameter`]; the phase diagram's curves are
+//! [`ExchangeCurve`]s whose rows are its critical lengths ([`Critical::curve_row`]), the
+//! diagram against the parameter records its families ([`FamilyTrace`]).
+//!
 //! [`Diagram::critical_table`] is the one printed table of its critical lengths.
 //!
 //! [`Diagram::files`] turns it into the files a diagram directory holds (`branches.csv`,
