@@ -3,7 +3,9 @@
 //! engine (`confinement = "enclosed"`), and the exact layer on request (`diagram --model
 //! exact`, homogeneous surface scenes). Every command that runs a model asks [`kind_of`];
 //! the enclosed engine and `solve` receive the scene's wall from [`wall_of`], the one place a
-//! scene's [`WallSpec`] becomes the solver's [`Wall`].
+//! scene's [`WallSpec`] becomes the solver's [`Wall`]; [`exact_layer`] is the one place that
+//! decides whether a scene's diagram has exact values beside it (a homogeneous rod on the
+//! sphere).
 
 use std::path::Path;
 use std::sync::Arc;
@@ -46,4 +48,23 @@ pub fn wall_of(scene: &Scene) -> Arc<dyn Wall> {
             radius: scene.radius,
         }),
     }
+}
+
+/// The exact diagram of `[lbar_min, lbar_max]` in the schema (without shapes), the exact
+/// values a numeric diagram of `scene` is shown beside: `None` unless the rod is homogeneous
+/// (the exact layer's closed-form loops are those of a uniform rod on the sphere).
+pub fn exact_layer(
+    scene: &Scene,
+    lbar_min: f64,
+    lbar_max: f64,
+) -> Result<Option<rodloop_schema::Diagram>> {
+    if !scene.stiffness.is_uniform() {
+        return Ok(None);
+    }
+    Ok(Some(rodloop_diagram::engine::exact_window_schema(
+        lbar_min,
+        lbar_max,
+        0.01,
+        &scene.name,
+    )?))
 }

@@ -5,10 +5,11 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
-use rodloop_diagram::phase::{PhaseDiagram, PhaseSettings, RowSource, RowStates};
-use rodloop_diagram::{Engine, PhaseEngine};
+use rodloop_diagram::phase::PhaseSettings;
+use rodloop_diagram::{Engine, PhaseEngine, RecordStates, StateFile};
 use rodloop_figures::raster::svg_to_png;
 use rodloop_scene::Scene;
+use rodloop_schema::{Critical, CurveRow, Diagram, ExchangeCurve, Parameter};
 use rodloop_solver::{Param, SolveOptions};
 
 use crate::args::{accuracy_of, stiffness_of};
@@ -72,48 +73,52 @@ pub fn run(args: &Args, scene: &Scene, t0: Instant) -> Result<()> {
     };
     let run = OutputRun::begin(&args.out)?;
     let mut engine = PhaseEngine { settings };
-    let mut diagram = engine
+    // Rows whose states fail their verification are left out by the engine.
+    let out = engine
         .run(&mut |_| {})
         .with_context(|| format!("phase diagram of scene {}", scene.name))?;
+    let mut summary = engine.schema(&out, &scene.name)?;
     let settings = &engine.settings;
-    // Rows whose states fail their verification are left out of every output.
-    let (unverified, mut state_warnings) = drop_unverified(&mut diagram);
-    let (state_files, write_warnings) =
-        write_row_states(&diagram, scene.radius, settings.stiffness.reference(), &run)?;
+    let (unverified, mut state_warnings) = (out.unverified, out.warnings.clone());
+    let curves = curves_of(&summary)?;
+    let (state_files, write_warnings) = write_row_states(
+        &summary,
+        &out.record_states(),
+        scene.radius,
+        settings.stiffness.reference(),
+        &run,
+    )?;
     state_warnings.extend(write_warnings);
     for w in &state_warnings {
         eprintln!("warning: {w}");
     }
     let seconds = t0.elapsed().as_secs_f64();
 
-    let table = phase_table(&diagram, &state_files)?;
-    let svg = phase_svg(&diagram, &scene.name, (scene.lbar_min, scene.lbar_max));
+    let param = &curves.parameter;
+    let table = phase_table(&summary, param, &state_files)?;
+    let svg = phase_svg(&curves, &scene.name, (scene.lbar_min, scene.lbar_max));
     let png = svg_to_png(&svg, 1.0).context("rendering phase.png")?;
 
     // People: the limit check, the ends and notes of each curve.
-    for c in &diagram.curves {
-        let ex = c.exchange;
+    for v in &curves.curves {
+        let (c, ex) = (v.curve, v.curve.exchange);
         outln!(
             "exchange {} -> {} (uniform rod: L̄_cr = {:.10}): {} rows, {} continuation steps",
             ex.from_branch,
             ex.to_branch,
             ex.lbar_uniform,
-            c.rows.len(),
+            c.rows,
             c.steps
         );
-        for r in c
-            .rows
-            .iter()
-            .filter(|r| r.source != RowSource::Continuation)
-        {
+        for (r, at) in v.rows.iter().filter(|(_, at)| at.source != "continuation") {
             outln!(
                 "  {} = {:<10.6} L̄_cr = {:.10} ± {:.1e}  E R/(pi D0) = {:.8}  ({}, lowest {} -> {})",
-                diagram.param,
-                r.value,
+                param.name,
+                at.value,
                 r.lbar_cr,
                 r.error_estimate,
                 r.energy,
-                r.source.name(),
+                at.source,
                 r.from_branch,
                 r.to_branch
             );
@@ -132,7 +137,7 @@ pub fn run(args: &Args, scene: &Scene, t0: Instant) -> Result<()> {
                 "phase: exchange {} -> {}: the curve ends at {} = {:.6} ({}): {}",
                 ex.from_branch,
                 ex.to_branch,
-                diagram.param,
+                param.name,
                 e.value,
                 e.kind,
                 brief(&e.reason)
@@ -151,7 +156,7 @@ pub fn run(args: &Args, scene: &Scene, t0: Instant) -> Result<()> {
                 "phase: exchange {} -> {}: no lower state of either branch at its length at {} = {} (searched by minimisation from shifted exact loops and the followed states)",
                 ex.from_branch,
                 ex.to_branch,
-                diagram.param,
+                param.name,
                 c.checks
                     .iter()
                     .map(|v| format!("{v:.6}"))
@@ -169,9 +174,10 @@ pub fn run(args: &Args, scene: &Scene, t0: Instant) -> Result<()> {
         }
     }
     outln!("time {seconds:.2} s");
-    let short = stopped_short(&diagram);
+    let short = stopped_short(&curves);
+    let param_name = param.name.clone();
+    drop(curves);
 
-    let mut summary = engine.schema(&diagram, &scene.name)?;
     summary.put("command", "phase")?;
     summary.put("at", &args.at)?;
     summary.put("time_seconds", &seconds)?;
@@ -210,7 +216,7 @@ pub fn run(args: &Args, scene: &Scene, t0: Instant) -> Result<()> {
                 .iter()
                 .map(|s| format!(
                     "exchange {} -> {} at {} = {:.6} ({})",
-                    s.from, s.to, diagram.param, s.value, s.kind
+                    s.from, s.to, param_name, s.value, s.kind
                 ))
                 .collect::<Vec<_>>()
                 .join(", "),
@@ -249,73 +255,118 @@ pub(crate) fn brief(text: &str) -> String {
     format!("{} … (full text in summary.json)", limit[..cut].trim_end())
 }
 
-/// Leave out the rows of `d` whose states failed their verification ([`RowStates`]):
-/// returns the number of states left out (both of each such row) and a warning for each row.
-fn drop_unverified(d: &mut PhaseDiagram) -> (usize, Vec<String>) {
-    let param = d.param;
-    let mut count = 0;
-    let mut warnings = Vec::new();
-    for c in &mut d.curves {
-        let ex = c.exchange;
-        c.rows.retain(|r| match &r.states {
-            RowStates::Unverified(why) => {
-                count += 2;
-                warnings.push(format!(
-                    "UNVERIFIED STATES LEFT OUT: exchange {} -> {} at {param} = {} (L̄_cr = {}): {why}",
-                    ex.from_branch, ex.to_branch, r.value, r.lbar_cr
-                ));
-                false
-            }
-            _ => true,
-        });
-    }
-    (count, warnings)
+/// The rows of every curve of a phase diagram in the schema: its critical lengths with their
+/// places on their curves ([`CurveRow`]).
+pub(crate) struct PhaseRows<'a> {
+    /// The parameter.
+    pub parameter: Parameter,
+    /// The curves, in order.
+    pub curves: Vec<CurveRows<'a>>,
 }
 
-/// The state files of each row, by curve (see [`write_row_states`]).
-type RowFiles = Vec<Vec<[String; 2]>>;
+/// A curve of a phase diagram and its rows (in the order of the schema's critical lengths).
+pub(crate) struct CurveRows<'a> {
+    /// The curve.
+    pub curve: &'a ExchangeCurve,
+    /// Its rows.
+    pub rows: Vec<(&'a Critical, CurveRow)>,
+}
 
-/// Write the two states of every row into the run's `states/` directory
+/// The curves of the phase diagram `d` (the schema of `phase`), every critical length placed
+/// on its curve.
+pub(crate) fn curves_of(d: &Diagram) -> Result<PhaseRows<'_>> {
+    let (Some(parameter), Some(curves)) = (&d.parameter, &d.exchange_curves) else {
+        bail!("internal error: the phase diagram's schema has no parameter or curves");
+    };
+    let mut out: Vec<CurveRows> = curves
+        .iter()
+        .map(|curve| CurveRows {
+            curve,
+            rows: Vec::new(),
+        })
+        .collect();
+    for c in &d.critical {
+        let Some(at) = c.curve_row() else {
+            bail!(
+                "internal error: critical length {} of the phase diagram is on no curve",
+                c.index
+            );
+        };
+        let Some(curve) = at.curve.checked_sub(1).and_then(|k| out.get_mut(k)) else {
+            bail!(
+                "internal error: critical length {} names curve {}, of {}",
+                c.index,
+                at.curve,
+                curves.len()
+            );
+        };
+        curve.rows.push((c, at));
+    }
+    Ok(PhaseRows {
+        parameter: parameter.clone(),
+        curves: out,
+    })
+}
+
+/// The state files of each row, in the order of the schema's critical lengths (see
+/// [`write_row_states`]).
+type RowFiles = Vec<[String; 2]>;
+
+/// Write the two states of every row (`states[i]` those of the schema's critical length `i`,
+/// [`rodloop_diagram::RecordStates`]) into the run's `states/` directory
 /// (`states/curve-C-row-RRR-branch-B.csv`, `RRR` counting the curve's rows of `phase.csv`,
 /// `B` the state's branch): the file names of each row in the order of its `from_branch` and
 /// `to_branch` (empty for the limit row, or where a file could not be written: warnings).
 fn write_row_states(
-    d: &PhaseDiagram,
+    d: &Diagram,
+    states: &[Vec<&StateFile>],
     r: f64,
     d0: f64,
     run: &OutputRun,
 ) -> Result<(RowFiles, Vec<String>)> {
     let dir = run.subdir("states")?;
+    let curves = d.exchange_curves.as_deref().unwrap_or_default();
     let mut names = Vec::new();
     let mut warnings = Vec::new();
-    for (k, c) in d.curves.iter().enumerate() {
-        let mut curve = Vec::new();
-        for (j, row) in c.rows.iter().enumerate() {
-            let mut pair = [String::new(), String::new()];
-            if let RowStates::Verified(files) = &row.states {
-                let branches = [c.exchange.from_branch, c.exchange.to_branch];
-                for ((slot, f), b) in pair.iter_mut().zip(files).zip(branches) {
-                    let name = format!("states/curve-{}-row-{j:03}-branch-{b}.csv", k + 1);
-                    match crate::states::write_state_file(&dir, &name, f, r, d0) {
-                        Ok(()) => *slot = name,
-                        Err(e) => warnings.push(format!("{name} could not be written: {e:#}")),
-                    }
-                }
-                // In the order of the row's own from_branch and to_branch.
-                if row.from_branch != c.exchange.from_branch {
-                    pair.swap(0, 1);
+    // Rows of each curve so far.
+    let mut count = vec![0usize; curves.len()];
+    for (i, row) in d.critical.iter().enumerate() {
+        let k = row.curve_row().map_or(0, |at| at.curve);
+        let (Some(curve), Some(j)) = (
+            k.checked_sub(1).and_then(|k| curves.get(k)),
+            k.checked_sub(1).and_then(|k| count.get_mut(k)),
+        ) else {
+            bail!(
+                "internal error: critical length {} of the phase diagram is on no curve",
+                row.index
+            );
+        };
+        let ex = curve.exchange;
+        let mut pair = [String::new(), String::new()];
+        let files = states.get(i).map_or(&[][..], |v| &v[..]);
+        if !files.is_empty() {
+            let branches = [ex.from_branch, ex.to_branch];
+            for ((slot, f), b) in pair.iter_mut().zip(files).zip(branches) {
+                let name = format!("states/curve-{k}-row-{j:03}-branch-{b}.csv");
+                match crate::states::write_state_file(&dir, &name, f, r, d0) {
+                    Ok(()) => *slot = name,
+                    Err(e) => warnings.push(format!("{name} could not be written: {e:#}")),
                 }
             }
-            curve.push(pair);
+            // In the order of the row's own from_branch and to_branch.
+            if row.from_branch != ex.from_branch {
+                pair.swap(0, 1);
+            }
         }
-        names.push(curve);
+        *j += 1;
+        names.push(pair);
     }
     Ok((names, warnings))
 }
 
-/// `phase.csv`: one row per Maxwell point, with the files of its two states (`files[c][r]`,
-/// [`write_row_states`]).
-fn phase_table(d: &PhaseDiagram, files: &[Vec<[String; 2]>]) -> Result<Table> {
+/// `phase.csv`: one row per Maxwell point (the schema's critical lengths), with the files of
+/// its two states (`files[i]`, [`write_row_states`]).
+fn phase_table(d: &Diagram, param: &Parameter, files: &[[String; 2]]) -> Result<Table> {
     let mut t = Table::new(
         "phase.csv",
         &[
@@ -338,29 +389,32 @@ fn phase_table(d: &PhaseDiagram, files: &[Vec<[String; 2]>]) -> Result<Table> {
             "state_file_to",
         ],
     );
-    for (k, c) in d.curves.iter().enumerate() {
-        for (j, r) in c.rows.iter().enumerate() {
-            let [from, to] = files[k][j].clone();
-            t.push(vec![
-                Cell::S(d.param.name().into()),
-                Cell::F(r.value),
-                Cell::F(r.lbar_cr),
-                Cell::S("crossing".into()),
-                Cell::I(r.from_branch.into()),
-                Cell::I(r.to_branch.into()),
-                Cell::F(r.energy),
-                Cell::F(r.error_estimate),
-                Cell::S(r.source.name().into()),
-                Cell::I(k as i64 + 1),
-                Cell::I(r.arm as i64),
-                Cell::I(r.index.0 as i64),
-                Cell::I(r.index.1 as i64),
-                Cell::F(r.slope),
-                Cell::F(r.energy_error),
-                Cell::S(from),
-                Cell::S(to),
-            ])?;
-        }
+    for (r, [from, to]) in d.critical.iter().zip(files) {
+        let Some(at) = r.curve_row() else {
+            bail!(
+                "internal error: critical length {} of the phase diagram is on no curve",
+                r.index
+            );
+        };
+        t.push(vec![
+            Cell::S(param.name.clone()),
+            Cell::F(at.value),
+            Cell::F(r.lbar_cr),
+            Cell::S(r.kind.clone()),
+            Cell::I(r.from_branch.into()),
+            Cell::I(r.to_branch.into()),
+            Cell::F(r.energy),
+            Cell::F(r.error_estimate),
+            Cell::S(at.source),
+            Cell::I(at.curve as i64),
+            Cell::I(at.arm as i64),
+            Cell::I(at.index_from as i64),
+            Cell::I(at.index_to as i64),
+            Cell::F(at.slope),
+            Cell::F(at.energy_error),
+            Cell::S(from.clone()),
+            Cell::S(to.clone()),
+        ])?;
     }
     Ok(t)
 }

@@ -5,10 +5,10 @@
 //! that stop short of the requested range marked with their reason. The horizontal axis
 //! covers the whole requested range, from the scene's value to `--to`.
 
-use rodloop_diagram::phase::{PhaseCurve, PhaseDiagram, RowSource};
 use rodloop_figures::plot::{LegendItem, Mark, Plot, Series, Shape};
 use rodloop_figures::svg::{Anchor, Svg};
-use rodloop_solver::Param;
+
+use crate::phase::{CurveRows, PhaseRows};
 
 const COLORS: [&str; 4] = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd"];
 
@@ -17,8 +17,8 @@ const LEGEND_W: f64 = 330.0;
 
 /// `L̄_cr` and the lowest branches `(below, above)` of `curve` at `x` (plot coordinate),
 /// linearly interpolated between its rows of one arm; `None` outside the curve.
-fn curve_at(c: &PhaseCurve, x: f64, xv: &dyn Fn(f64) -> f64) -> Option<(f64, u32, u32)> {
-    let mut rows: Vec<_> = c.rows.iter().map(|r| (xv(r.value), r)).collect();
+fn curve_at(c: &CurveRows, x: f64, xv: &dyn Fn(f64) -> f64) -> Option<(f64, u32, u32)> {
+    let mut rows: Vec<_> = c.rows.iter().map(|(r, at)| (xv(at.value), *r)).collect();
     rows.sort_by(|a, b| a.0.total_cmp(&b.0));
     rows.windows(2).find_map(|w| {
         let ((xa, a), (xb, b)) = (w[0], w[1]);
@@ -36,15 +36,16 @@ fn curve_at(c: &PhaseCurve, x: f64, xv: &dyn Fn(f64) -> f64) -> Option<(f64, u32
 }
 
 /// The figure; `lbar_range` is the scene's length range (the vertical axis).
-pub fn phase_svg(d: &PhaseDiagram, scene: &str, lbar_range: (f64, f64)) -> String {
-    let log = d.param == Param::D1;
+pub fn phase_svg(d: &PhaseRows, scene: &str, lbar_range: (f64, f64)) -> String {
+    let param = &d.parameter;
+    let log = param.is_log();
     let xv = |v: f64| if log { v.log10() } else { v };
     let mut plot = Plot {
-        title: format!("Critical lengths of scene {scene} against {}", d.param),
+        title: format!("Critical lengths of scene {scene} against {}", param.name),
         xlabel: if log {
             "log₁₀(D1/D0)".into()
         } else {
-            d.param.name().into()
+            param.name.clone()
         },
         ylabel: "critical length L̄_cr = L/(2πR)".into(),
         // The legend beside the axes, where it cannot cover a curve.
@@ -53,20 +54,20 @@ pub fn phase_svg(d: &PhaseDiagram, scene: &str, lbar_range: (f64, f64)) -> Strin
     };
     // The requested range, from the scene's value to --to, whatever the curves reach.
     let (mut x0, mut x1) = (
-        xv(d.scene_value).min(xv(d.target)),
-        xv(d.scene_value).max(xv(d.target)),
+        xv(param.scene_value).min(xv(param.target)),
+        xv(param.scene_value).max(xv(param.target)),
     );
     let mut ends: Vec<(f64, f64, String)> = Vec::new();
     let (mut y0, mut y1) = lbar_range;
     for (k, c) in d.curves.iter().enumerate() {
         let color = COLORS[k % COLORS.len()];
-        let arms = c.rows.iter().map(|r| r.arm).max().unwrap_or(0);
+        let arms = c.rows.iter().map(|(_, at)| at.arm).max().unwrap_or(0);
         for arm in 0..=arms {
             let pts: Vec<(f64, f64)> = c
                 .rows
                 .iter()
-                .filter(|r| r.arm == arm)
-                .map(|r| (xv(r.value), r.lbar_cr))
+                .filter(|(_, at)| at.arm == arm)
+                .map(|(r, at)| (xv(at.value), r.lbar_cr))
                 .collect();
             for p in &pts {
                 (x0, x1, y0, y1) = (x0.min(p.0), x1.max(p.0), y0.min(p.1), y1.max(p.1));
@@ -78,40 +79,41 @@ pub fn phase_svg(d: &PhaseDiagram, scene: &str, lbar_range: (f64, f64)) -> Strin
                 points: pts,
             });
         }
-        for r in &c.rows {
-            let shape = match r.source {
-                RowSource::Switch => Shape::Diamond,
-                RowSource::Limit => Shape::Circle,
-                RowSource::Fixed if !(log && (r.value - 1.0).abs() < 0.01) => Shape::Square,
+        for (r, at) in &c.rows {
+            let shape = match at.source.as_str() {
+                "switch" => Shape::Diamond,
+                "limit" => Shape::Circle,
+                "fixed" if !(log && (at.value - 1.0).abs() < 0.01) => Shape::Square,
                 _ => continue,
             };
             plot.marks.push(Mark {
-                at: (xv(r.value), r.lbar_cr),
+                at: (xv(at.value), r.lbar_cr),
                 shape,
                 color: color.into(),
                 size: 4.5,
             });
         }
         // Ends short of the requested range: an open square with the reason's kind.
-        for e in curve_stopped_short(c, d.scene_value, d.target) {
-            if let Some(r) = c.rows.iter().min_by(|a, b| {
+        for e in c.curve.stopped_short(param.range()) {
+            if let Some((r, at)) = c.rows.iter().min_by(|(_, a), (_, b)| {
                 (a.value - e.value)
                     .abs()
                     .total_cmp(&(b.value - e.value).abs())
             }) {
                 plot.marks.push(Mark {
-                    at: (xv(r.value), r.lbar_cr),
+                    at: (xv(at.value), r.lbar_cr),
                     shape: Shape::OpenSquare,
                     color: color.into(),
                     size: 6.0,
                 });
-                ends.push((xv(r.value), r.lbar_cr, e.kind.replace('_', " ")));
+                ends.push((xv(at.value), r.lbar_cr, e.kind.replace('_', " ")));
             }
         }
+        let ex = c.curve.exchange;
         plot.legend.push(LegendItem::Line {
             label: format!(
                 "exchange {} → {} (uniform rod: {:.4})",
-                c.exchange.from_branch, c.exchange.to_branch, c.exchange.lbar_uniform
+                ex.from_branch, ex.to_branch, ex.lbar_uniform
             ),
             color: color.into(),
             width: 2.0,
@@ -159,7 +161,7 @@ pub fn phase_svg(d: &PhaseDiagram, scene: &str, lbar_range: (f64, f64)) -> Strin
         );
     }
     // The scene's value.
-    let xs = xv(d.scene_value);
+    let xs = xv(param.scene_value);
     if xs >= range.0 && xs <= range.1 {
         svg.line(sx(xs), py, sx(xs), py + ph, "#555", 1.0, "2 3");
         svg.text(sx(xs) - 4.0, py + ph - 6.0, 11.0, Anchor::End, "scene");
@@ -238,29 +240,19 @@ pub(crate) struct Short {
 
 /// The curve ends that stop between the scene's value and `--to` (not `reached`, not the
 /// uniform-rod `limit`).
-pub(crate) fn stopped_short(d: &PhaseDiagram) -> Vec<Short> {
+pub(crate) fn stopped_short(d: &PhaseRows) -> Vec<Short> {
     d.curves
         .iter()
-        .flat_map(|c| curve_stopped_short(c, d.scene_value, d.target))
-        .collect()
-}
-
-/// [`stopped_short`] for one curve.
-pub(crate) fn curve_stopped_short(
-    c: &rodloop_diagram::phase::PhaseCurve,
-    scene_value: f64,
-    target: f64,
-) -> Vec<Short> {
-    let (lo, hi) = (scene_value.min(target), scene_value.max(target));
-    c.ends
-        .iter()
-        .filter(|e| e.kind != "reached" && e.kind != "limit")
-        .filter(|e| e.value > lo && e.value < hi)
-        .map(|e| Short {
-            from: c.exchange.from_branch,
-            to: c.exchange.to_branch,
-            value: e.value,
-            kind: e.kind.clone(),
+        .flat_map(|c| {
+            let ex = c.curve.exchange;
+            c.curve
+                .stopped_short(d.parameter.range())
+                .map(move |e| Short {
+                    from: ex.from_branch,
+                    to: ex.to_branch,
+                    value: e.value,
+                    kind: e.kind.clone(),
+                })
         })
         .collect()
 }

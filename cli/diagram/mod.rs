@@ -5,8 +5,7 @@
 
 use anyhow::{bail, Result};
 use rodloop_diagram::{Engine, ExactEngine};
-use rodloop_exact::diagram::Diagram;
-use rodloop_schema::SideColumn;
+use rodloop_schema::{Cell, Diagram, SideColumn};
 
 use crate::output::OutputRun;
 
@@ -17,8 +16,7 @@ pub mod surface;
 
 pub use args::{Args, Model, FIGURE_SIZE};
 
-pub use rodloop_diagram::critical::exact_match;
-pub use rodloop_diagram::engine::{etas_in, exact_window};
+pub use rodloop_diagram::engine::{etas_in, exact_counterpart};
 
 /// The figures of `draw_diagram` (diagram, diagram_split, diagram_lambda, and diagram_g for
 /// the exact model; SVG and PNG), drawn from the staged tables into the run's staging
@@ -33,19 +31,30 @@ fn draw_figures(args: &Args, run: &OutputRun) -> Result<()> {
     Ok(())
 }
 
-/// `k²` of every exact loop of `d` against `L̄`, with Eq. (B.4) (paper Fig. 11; SVG).
+/// `k²` of every loop of the exact diagram `d` (its columns `p` and `k`) against `L̄`, with
+/// Eq. (B.4) (paper Fig. 11; SVG).
 pub fn k2_figure(d: &Diagram, width: f64, height: f64) -> Result<String> {
-    let k2: Vec<rodloop_figures::k2::K2Point> = d
+    let k2 = d
         .points
         .iter()
-        .map(|p| rodloop_figures::k2::K2Point {
-            branch: p.branch,
-            eta: p.eta,
-            p: p.p,
-            lbar: p.lbar,
-            k2: p.k * p.k,
-        })
-        .collect();
+        .map(
+            |p| match (p.extra.get("p"), p.extra.get("k"), p.coords.first()) {
+                (Some(Cell::I(period)), Some(Cell::F(k)), Some(&lbar)) => {
+                    Ok(rodloop_figures::k2::K2Point {
+                        branch: p.branch,
+                        eta: p.eta,
+                        p: i32::try_from(*period)?,
+                        lbar,
+                        k2: k * k,
+                    })
+                }
+                _ => bail!(
+                    "the k² figure needs the exact diagram's columns p and k (branch {} has none)",
+                    p.branch
+                ),
+            },
+        )
+        .collect::<Result<Vec<_>>>()?;
     Ok(rodloop_figures::k2::k2_figure(&k2, width, height)?)
 }
 
@@ -169,7 +178,7 @@ pub(crate) fn run_surface(args: &Args, scene: &rodloop_scene::Scene) -> Result<(
     crate::output::write_diagram(&run, &mut schema)?;
     let d = &out.diagram;
     // Fig. 11: k² against L̄ with Eq. (B.4).
-    let k2_svg = k2_figure(d, f64::from(args.width), f64::from(args.height))?;
+    let k2_svg = k2_figure(&schema, f64::from(args.width), f64::from(args.height))?;
     run.write_bytes("diagram_k2.svg", k2_svg.as_bytes())?;
     run.write_bytes(
         "diagram_k2.png",
@@ -246,11 +255,9 @@ fn run_numeric(
     run.commit()?;
     // For homogeneous scenes, show the exact layer's critical lengths next to the numeric ones:
     // the same critical length (same kind, same branches) of the exact diagram of this window.
-    let exact = if scene.stiffness.is_uniform() {
-        exact_window(lbar_min, lbar_max, 0.01).ok()
-    } else {
-        None
-    };
+    let exact = crate::engine::exact_layer(scene, lbar_min, lbar_max)
+        .ok()
+        .flatten();
     outln!(
         "Critical lengths (numeric model, scene {}, accuracy {:?}):",
         scene.name,
@@ -263,10 +270,9 @@ fn run_numeric(
             .critical
             .iter()
             .map(|c| {
-                exact_match(&c.kind, (c.from_branch, c.to_branch), c.lbar_cr, e)
-                    .map_or("no exact match".into(), |x| {
-                        format!("{:.1e}", c.lbar_cr - x.lbar_cr)
-                    })
+                exact_counterpart(c, e).map_or("no exact match".into(), |x| {
+                    format!("{:.1e}", c.lbar_cr - x.lbar_cr)
+                })
             })
             .collect(),
     });

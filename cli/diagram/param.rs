@@ -4,14 +4,16 @@
 
 use std::time::Instant;
 
+use std::collections::BTreeMap;
+
 use anyhow::{bail, Context, Result};
-use rodloop_diagram::param_sweep::{ParamSweep, SweepSettings};
-use rodloop_diagram::Label;
-use rodloop_diagram::{Engine, SweepEngine};
+use rodloop_diagram::param_sweep::SweepSettings;
+use rodloop_diagram::{Engine, RecordStates, StateFile, SweepEngine};
 use rodloop_figures::plot::{LegendItem, Mark, Plot, Series, Shape};
 use rodloop_figures::raster::svg_to_png;
 use rodloop_figures::svg::Svg;
 use rodloop_scene::Scene;
+use rodloop_schema::{Diagram, FamilyTrace, Point};
 use rodloop_solver::{Param, SolveOptions};
 
 use super::args::{Args, Model};
@@ -78,94 +80,75 @@ pub fn run(args: &Args, checked: Checked, scene: &Scene) -> Result<()> {
     let out = engine
         .run(&mut |_| {})
         .with_context(|| format!("diagram of scene {} against {param}", scene.name))?;
+    let mut d = engine.schema(&out, &scene.name)?;
     let settings = &engine.settings;
-    let (sweep, states) = (&out.sweep, &out.states);
+    let states = out.record_states();
     let (unverified, state_warnings) = (out.unverified, &out.warnings);
     // States whose written κ_g has another dominant harmonic than their branch's η (a very
     // soft segment: the branch is the family's, by continuation from its seed).
-    let other_eta: usize = sweep
-        .families
+    let other_eta: usize = d
+        .points
         .iter()
-        .zip(states)
-        .map(|(f, v)| {
-            v.iter()
-                .filter(|(_, file)| file.counted_other_eta(f.eta))
-                .count()
-        })
-        .sum();
+        .zip(&states)
+        .filter(|(p, files)| files.iter().any(|f| f.counted_other_eta(p.eta)))
+        .count();
     let state_files = write_sweep_states(
-        sweep,
-        states,
+        &d,
+        &states,
         scene.radius,
         settings.stiffness.reference(),
         &run,
     )?;
     let seconds = t0.elapsed().as_secs_f64();
 
-    let svg = figure(sweep, &scene.name, args.width as f64, args.height as f64);
+    let (Some(parameter), Some(families), Some(special)) = (&d.parameter, &d.families, &d.special)
+    else {
+        bail!("internal error: the schema of a diagram against {param} has no parameter, families or special points");
+    };
+    let svg = figure(&d, &scene.name, args.width as f64, args.height as f64);
     let png = svg_to_png(&svg, 1.0).context("rendering diagram.png")?;
-    for f in &sweep.families {
-        let seed = match f.seed_energy {
-            Some((v, e, est)) => format!("E R/(pi D0) = {e:.10} ± {est:.1e} at {param} = {v}"),
-            None => f.notes.first().cloned().unwrap_or_default(),
+    for f in families {
+        let seed = match (f.seed_value, f.seed_energy, f.seed_energy_error) {
+            (Some(v), Some(e), Some(est)) => {
+                format!("E R/(pi D0) = {e:.10} ± {est:.1e} at {param} = {v}")
+            }
+            _ => f.notes.first().cloned().unwrap_or_default(),
         };
-        let last = f
-            .points
+        let last = family_points(&d, f)
             .last()
-            .map(|p| p.value)
-            .unwrap_or(sweep.scene_value);
+            .map(|p| p.coords[0])
+            .unwrap_or(parameter.scene_value);
         outln!(
             "branch {} (eta = {}) family {}: {seed} ({} cells), traced to {param} = {last:.6} over {} states; {}",
-            f.branch, f.eta, f.family, f.cells, f.points.len(), f.end
+            f.branch, f.eta, f.family, f.cells, f.states, f.end
         );
     }
-    for p in &sweep.special {
+    for p in special {
         outln!(
             "  {} of branch {} family {} at {param} = {:.8}: E R/(pi D0) = {:.10} ± {:.1e}{}",
             p.kind,
             p.branch,
             p.family,
-            p.value,
+            p.value.unwrap_or(f64::NAN),
             p.energy,
-            p.energy_error,
-            p.index
+            p.energy_error.unwrap_or(f64::NAN),
+            p.index_before
+                .zip(p.index_after)
                 .map(|(a, b)| format!(" (index {a} -> {b})"))
                 .unwrap_or_default()
         );
     }
-    for w in sweep.warnings.iter().chain(state_warnings) {
+    for w in d.warnings.iter().flatten().chain(state_warnings) {
         eprintln!("warning: {w}");
     }
     outln!("time {seconds:.2} s");
+    let special = special_table(&d)?;
 
-    let mut d = engine.schema(&out, &scene.name)?;
-    for (p, name) in d.points.iter_mut().zip(state_files.iter().flatten()) {
-        p.state_file = Some(name.clone());
+    for (p, name) in d.points.iter_mut().zip(state_files) {
+        p.state_file = Some(name);
     }
     d.put("command", "diagram --param")?;
-    d.put("param", &param)?;
-    d.put("scene_value", &sweep.scene_value)?;
-    d.put("target", &sweep.target)?;
     d.put("lbar", &lbar)?;
-    d.put(
-        "families",
-        &sweep
-            .families
-            .iter()
-            .map(|f| FamilySummary {
-                branch: f.branch,
-                eta: f.eta,
-                family: f.family,
-                cells: f.cells,
-                seed_value: f.seed_energy.map(|e| e.0),
-                seed_energy: f.seed_energy.map(|e| e.1),
-                seed_energy_error: f.seed_energy.map(|e| e.2),
-                notes: &f.notes,
-                states: f.points.len(),
-                end: &f.end,
-            })
-            .collect::<Vec<_>>(),
-    )?;
     d.put("unverified_states", &unverified)?;
     d.put("states_counted_other_eta", &other_eta)?;
     d.put("state_warnings", &state_warnings)?;
@@ -181,7 +164,7 @@ pub fn run(args: &Args, checked: Checked, scene: &Scene) -> Result<()> {
         ],
     )?;
     run.write_bytes("branches.csv", &d.branches_csv()?)?;
-    run.write_table(&special_table(sweep)?)?;
+    run.write_table(&special)?;
     run.write_bytes("diagram.svg", svg.as_bytes())?;
     run.write_bytes("diagram.png", &png)?;
     crate::output::write_summary(&run, &mut d)?;
@@ -190,47 +173,52 @@ pub fn run(args: &Args, checked: Checked, scene: &Scene) -> Result<()> {
     Ok(())
 }
 
-/// Write every kept state into the run's `states/` directory
+/// The points of family `f` of the diagram `d` against a parameter, in tracing order.
+fn family_points<'a>(d: &'a Diagram, f: &FamilyTrace) -> Vec<&'a Point> {
+    d.points
+        .iter()
+        .filter(|p| p.branch == f.branch && p.family == Some(f.family as u32))
+        .collect()
+}
+
+/// Write the state of every point (`states[i]` that of the schema's point `i`,
+/// [`rodloop_diagram::RecordStates`]) into the run's `states/` directory
 /// (`states/branch-B-family-F-KKK.csv`, `KKK` its position along the family): the file of
-/// each point, by family (empty where a file could not be written; the error says which).
+/// each point, in the schema's order.
 fn write_sweep_states(
-    s: &ParamSweep,
-    states: &rodloop_diagram::engine::VerifiedStates,
+    d: &Diagram,
+    states: &[Vec<&StateFile>],
     r: f64,
     d0: f64,
     run: &OutputRun,
-) -> Result<Vec<Vec<String>>> {
+) -> Result<Vec<String>> {
     let dir = run.subdir("states")?;
     let mut names = Vec::new();
-    for (f, files) in s.families.iter().zip(states) {
-        let mut fam = Vec::new();
-        for (k, (_, file)) in files.iter().enumerate() {
-            let name = format!("states/branch-{}-family-{}-{k:03}.csv", f.branch, f.family);
-            crate::states::write_state_file(&dir, &name, file, r, d0)
-                .with_context(|| format!("writing {name}"))?;
-            fam.push(name);
-        }
-        names.push(fam);
+    let mut along: BTreeMap<(u32, Option<u32>), usize> = BTreeMap::new();
+    for (p, files) in d.points.iter().zip(states) {
+        let k = along.entry((p.branch, p.family)).or_default();
+        let name = format!(
+            "states/branch-{}-family-{}-{k:03}.csv",
+            p.branch,
+            p.family.unwrap_or_default()
+        );
+        *k += 1;
+        let [file] = files[..] else {
+            bail!(
+                "internal error: {name}: a point of the diagram holds {} states, not one",
+                files.len()
+            );
+        };
+        crate::states::write_state_file(&dir, &name, file, r, d0)
+            .with_context(|| format!("writing {name}"))?;
+        names.push(name);
     }
     Ok(names)
 }
 
-/// A family of `summary.json`: how it was seeded, traced and where it ends.
-#[derive(serde::Serialize)]
-struct FamilySummary<'a> {
-    branch: u32,
-    eta: u32,
-    family: usize,
-    cells: usize,
-    seed_value: Option<f64>,
-    seed_energy: Option<f64>,
-    seed_energy_error: Option<f64>,
-    notes: &'a [String],
-    states: usize,
-    end: &'a str,
-}
-
-fn special_table(s: &ParamSweep) -> Result<Table> {
+/// `special_points.csv` of the diagram against a parameter: its special points at the fixed
+/// length, with the parameter's value.
+fn special_table(d: &Diagram) -> Result<Table> {
     let mut t = Table::new(
         "special_points.csv",
         &[
@@ -246,20 +234,22 @@ fn special_table(s: &ParamSweep) -> Result<Table> {
             "index_after",
         ],
     );
-    for p in &s.special {
+    let param = d.parameter.as_ref().map_or("", |p| p.name.as_str());
+    for p in d.special.iter().flatten() {
         let (a, b) = p
-            .index
+            .index_before
+            .zip(p.index_after)
             .map(|(a, b)| (a as i64, b as i64))
             .unwrap_or((-1, -1));
         t.push(vec![
             Cell::S(p.kind.clone()),
-            Cell::S(s.param.name().into()),
-            Cell::F(p.value),
-            Cell::F(s.lbar),
+            Cell::S(param.into()),
+            Cell::F(p.value.unwrap_or(f64::NAN)),
+            Cell::F(p.lbar),
             Cell::F(p.energy),
-            Cell::F(p.energy_error),
+            Cell::F(p.energy_error.unwrap_or(f64::NAN)),
             Cell::I(p.branch.into()),
-            Cell::I(p.family as i64),
+            Cell::I(p.family.into()),
             Cell::I(a),
             Cell::I(b),
         ])?;
@@ -269,54 +259,65 @@ fn special_table(s: &ParamSweep) -> Result<Table> {
 
 const COLORS: [&str; 5] = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e"];
 
+/// Line style of a stability label: dash pattern and width.
+fn style(label: &str) -> (&'static str, f64) {
+    match label {
+        "stable" => ("", 2.4),
+        "metastable" => ("7 4", 1.6),
+        _ => ("2 3", 1.2),
+    }
+}
+
 /// Energy against the parameter (`log₁₀` for `d1`): each family one colour per branch, the
 /// line style by its label, special points marked.
-fn figure(s: &ParamSweep, scene: &str, w: f64, h: f64) -> String {
-    let log = s.param == Param::D1;
+fn figure(d: &Diagram, scene: &str, w: f64, h: f64) -> String {
+    let param = d.parameter.as_ref();
+    let name = param.map_or("", |p| p.name.as_str());
+    let log = param.is_some_and(|p| p.is_log());
     let xv = |v: f64| if log { v.log10() } else { v };
-    let style = |l: Label| match l {
-        Label::Stable => ("", 2.4),
-        Label::Metastable => ("7 4", 1.6),
-        Label::Unstable => ("2 3", 1.2),
-    };
+    let lbar = d
+        .axes
+        .iter()
+        .find(|a| a.name == "lbar")
+        .map_or(0.0, |a| a.min);
     let mut plot = Plot {
-        title: format!(
-            "Equilibria of scene {scene} at L̄ = {} against {}",
-            s.lbar, s.param
-        ),
+        title: format!("Equilibria of scene {scene} at L̄ = {lbar} against {name}"),
         xlabel: if log {
             "log₁₀(D1/D0)".into()
         } else {
-            s.param.name().into()
+            name.into()
         },
         ylabel: "energy E R/(π D0)".into(),
         // The legend beside the axes, where it cannot cover a curve.
         legend_width: 190.0,
         ..Default::default()
     };
-    let mut branches: Vec<u32> = s.families.iter().map(|f| f.branch).collect();
+    let families = d.families.as_deref().unwrap_or_default();
+    let mut branches: Vec<u32> = families.iter().map(|f| f.branch).collect();
     branches.dedup();
     let color_of = |b: u32| {
         let k = branches.iter().position(|&x| x == b).unwrap_or(0);
         COLORS[k % COLORS.len()]
     };
-    for f in &s.families {
+    let label = |p: &Point| p.label.clone().unwrap_or_default();
+    for f in families {
+        let points = family_points(d, f);
         // One series per run of equal labels (the boundary point shared).
         let mut start = 0;
-        while start + 1 < f.points.len() {
-            let l = f.points[start + 1].label;
+        while start + 1 < points.len() {
+            let l = label(points[start + 1]);
             let mut end = start + 1;
-            while end + 1 < f.points.len() && f.points[end + 1].label == l {
+            while end + 1 < points.len() && label(points[end + 1]) == l {
                 end += 1;
             }
-            let (dash, width) = style(l);
+            let (dash, width) = style(&l);
             plot.series.push(Series {
                 color: color_of(f.branch).into(),
                 width,
                 dash: dash.into(),
-                points: f.points[start..=end]
+                points: points[start..=end]
                     .iter()
-                    .map(|p| (xv(p.value), p.energy))
+                    .map(|p| (xv(p.coords[0]), p.energy))
                     .collect(),
             });
             start = end;
@@ -330,24 +331,25 @@ fn figure(s: &ParamSweep, scene: &str, w: f64, h: f64) -> String {
             dash: String::new(),
         });
     }
-    for l in [Label::Stable, Label::Metastable, Label::Unstable] {
+    for l in ["stable", "metastable", "unstable"] {
         let (dash, width) = style(l);
         plot.legend.push(LegendItem::Line {
-            label: l.as_str().into(),
+            label: l.into(),
             color: "#555".into(),
             width,
             dash: dash.into(),
         });
     }
+    let special = d.special.as_deref().unwrap_or_default();
     for (kind, shape) in [
         ("fold", Shape::Triangle),
         ("branch_point", Shape::Diamond),
         ("index_change", Shape::OpenSquare),
     ] {
-        let pts: Vec<_> = s.special.iter().filter(|p| p.kind == kind).collect();
+        let pts: Vec<_> = special.iter().filter(|p| p.kind == kind).collect();
         for p in &pts {
             plot.marks.push(Mark {
-                at: (xv(p.value), p.energy),
+                at: (xv(p.value.unwrap_or(f64::NAN)), p.energy),
                 shape,
                 color: color_of(p.branch).into(),
                 size: 4.5,

@@ -94,16 +94,8 @@ pub(crate) fn run_surface(
 
     // 3. Exact critical lengths (homogeneous scenes) and the paper's values.
     let t = Instant::now();
-    let uniform = scene.stiffness.is_uniform();
-    let exact = if uniform {
-        Some(crate::diagram::exact_window(
-            opts.lbar_min,
-            opts.lbar_max,
-            0.01,
-        )?)
-    } else {
-        None
-    };
+    let exact = crate::engine::exact_layer(scene, opts.lbar_min, opts.lbar_max)?;
+    let uniform = exact.is_some();
     let compare = crate::compare::compare_rows(uniform.then_some(&d))?;
     // Fig. 11 from the exact layer (homogeneous scenes).
     let fig_k2 = match &exact {

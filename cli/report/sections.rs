@@ -60,7 +60,7 @@ pub(super) fn energy(page: &mut Page, figs: [&str; 3], fig_k2: Option<&str>, uni
 pub(super) fn critical(
     page: &mut Page,
     dir: &rodloop_schema::Diagram,
-    exact: Option<&rodloop_exact::diagram::Diagram>,
+    exact: Option<&rodloop_schema::Diagram>,
     d: &NumericDiagram,
 ) {
     page.h.push_str("<section id=\"critical\">\n<h2>2. Critical lengths</h2>\n<p>Where the globally stable branch changes: crossings solve E<sub>a</sub>(L̄) = E<sub>b</sub>(L̄) on re-solved, Richardson-extrapolated equilibria; collapses are the lengths L̄ = m where the lowest branch ends on the m-fold great circle. Branch 0 is the planar circle below L̄ = 1. The error estimate is that of L̄<sub>cr</sub> itself.");

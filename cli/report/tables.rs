@@ -4,7 +4,6 @@
 
 use std::fmt::Write as _;
 
-use rodloop_exact::diagram::Diagram;
 use rodloop_figures::svg::esc;
 use rodloop_schema::{Critical, SpecialPoint};
 
@@ -101,8 +100,8 @@ pub fn critical_html(
 
 /// The cells of the exact layer's value of critical length `c` and the difference to it, or
 /// one cell saying there is no exact match.
-pub fn exact_cells(c: &Critical, exact: &Diagram) -> Vec<String> {
-    match crate::diagram::exact_match(&c.kind, (c.from_branch, c.to_branch), c.lbar_cr, exact) {
+pub fn exact_cells(c: &Critical, exact: &rodloop_schema::Diagram) -> Vec<String> {
+    match crate::diagram::exact_counterpart(c, exact) {
         Some(x) => vec![
             num(format!("{:.12}", x.lbar_cr)),
             num(sci(c.lbar_cr - x.lbar_cr)),

@@ -484,28 +484,3 @@ pub(crate) fn great_circle_energy(opts: &DiagramOptions, m: f64) -> f64 {
         .map(|e| e.0)
         .unwrap_or(m)
 }
-
-/// The exact layer's counterpart of a critical length of kind `kind` (`crossing`,
-/// `collapse`) between the branches `from → to` at `lbar_cr`: the same kind between the same
-/// branches, within 0.05 in `L̄`, the nearest one.
-pub fn exact_match<'a>(
-    kind: &str,
-    (from, to): (u32, u32),
-    lbar_cr: f64,
-    exact: &'a rodloop_exact::diagram::Diagram,
-) -> Option<&'a rodloop_exact::diagram::Critical> {
-    exact
-        .critical
-        .iter()
-        .filter(|x| {
-            x.kind.to_string() == kind
-                && x.from_branch == from
-                && x.to_branch == to
-                && (x.lbar_cr - lbar_cr).abs() < 0.05
-        })
-        .min_by(|a, b| {
-            (a.lbar_cr - lbar_cr)
-                .abs()
-                .total_cmp(&(b.lbar_cr - lbar_cr).abs())
-        })
-}

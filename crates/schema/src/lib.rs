@@ -7,6 +7,11 @@
 //! state changes ([`Critical`]), the special points (folds, branch points, lift-off and
 //! landing events: [`SpecialPoint`]), the completeness certificate, warnings and timings.
 //!
+//! A diagram against a stiffness parameter (the phase diagram, the diagram at a fixed length
+//! against the parameter) names its [`Parameter`]; the phase diagram's curves are
+//! [`ExchangeCurve`]s whose rows are its critical lengths ([`Critical::curve_row`]), the
+//! diagram against the parameter records its families ([`FamilyTrace`]).
+//!
 //! [`Diagram::critical_table`] is the one printed table of its critical lengths.
 //!
 //! [`Diagram::files`] turns it into the files a diagram directory holds (`branches.csv`,
@@ -35,12 +40,16 @@ use serde::{Deserialize, Serialize};
 
 mod columns;
 mod finite;
+mod parameter;
 mod print;
 mod read;
 mod write;
 
 pub use columns::{column, ColumnSpec, Field, COLUMNS, CRITICAL_COLUMNS, SPECIAL_COLUMNS};
 pub use finite::check_finite;
+pub use parameter::{
+    CurveEnd, CurveRow, Exchange, ExchangeCurve, FamilyTrace, Parameter, UniformLimit,
+};
 pub use print::SideColumn;
 pub use write::strip_nulls;
 
@@ -236,8 +245,14 @@ pub struct SpecialPoint {
     /// Stability index on the other side.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub index_after: Option<usize>,
-    /// What the engine adds (a diagram against a parameter: the parameter's `value` there
-    /// and the `energy_error`), kept in `summary.json`.
+    /// The parameter's value there (a diagram against a parameter, whose special points lie
+    /// at its fixed length).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub value: Option<f64>,
+    /// Estimated error of `energy` (a diagram against a parameter).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub energy_error: Option<f64>,
+    /// What the engine adds, kept in `summary.json`.
     #[serde(flatten)]
     pub extra: BTreeMap<String, serde_json::Value>,
 }
@@ -277,6 +292,13 @@ pub struct Diagram {
     pub states_dir: Option<String>,
     /// Identifier of the run that wrote the files.
     pub run_id: Option<String>,
+    /// The stiffness parameter of a diagram against a parameter (`param`, `scene_value`,
+    /// `target` in `summary.json`).
+    pub parameter: Option<Parameter>,
+    /// The curves of a phase diagram (`curves` in `summary.json`).
+    pub exchange_curves: Option<Vec<ExchangeCurve>>,
+    /// The families of a diagram against a parameter (`families` in `summary.json`).
+    pub families: Option<Vec<FamilyTrace>>,
     /// The engine's own `summary.json` keys.
     pub extra: BTreeMap<String, serde_json::Value>,
 }

@@ -2,10 +2,11 @@
 
 use std::path::Path;
 
-use crate::{column, Axis, Cell, Diagram, Field, Point, SchemaError, VERSION};
+use crate::{column, Axis, Cell, Diagram, Field, Parameter, Point, SchemaError, VERSION};
 
 impl Diagram {
-    /// Read a diagram directory written by [`Diagram::write`] (or by `rodloop diagram`).
+    /// Read a diagram directory written by [`Diagram::write`] (or by `rodloop diagram`,
+    /// `rodloop diagram --param`, `rodloop phase`: its `summary.json`).
     pub fn read(dir: &Path) -> Result<Self, SchemaError> {
         let spath = dir.join("summary.json");
         let text = read_file(&spath)?;
@@ -45,6 +46,22 @@ impl Diagram {
         let units = typed(take("units"), "units", &src)?.unwrap_or_default();
         let states_dir = typed(take("states_dir"), "states_dir", &src)?;
         let run_id = typed(take("run_id"), "run_id", &src)?;
+        let parameter = match (take("param"), take("scene_value"), take("target")) {
+            (Some(name), Some(scene_value), Some(target)) => Some(Parameter {
+                name: typed(Some(name), "param", &src)?.unwrap_or_default(),
+                scene_value: typed(Some(scene_value), "scene_value", &src)?.unwrap_or(0.0),
+                target: typed(Some(target), "target", &src)?.unwrap_or(0.0),
+            }),
+            (None, None, None) => None,
+            _ => {
+                return Err(SchemaError::Parse {
+                    path: src.clone(),
+                    message: "param, scene_value and target come together (the parameter of a diagram against a parameter)".into(),
+                })
+            }
+        };
+        let exchange_curves = typed(take("curves"), "curves", &src)?;
+        let families = typed(take("families"), "families", &src)?;
         // The sheets of a traced diagram are a list; the exact layer writes a count there.
         let curves = match take("branches") {
             Some(v @ serde_json::Value::Array(_)) => typed(Some(v), "branches", &src)?.unwrap(),
@@ -71,7 +88,13 @@ impl Diagram {
             let max = typed(map.remove(&format!("{n}_max")), "axis", &src)?.unwrap_or(0.0);
             axes.push(Axis { name: n, min, max });
         }
-        let (columns, points) = read_points(&dir.join("branches.csv"), &axes)?;
+        // A diagram over no axes (the phase diagram) may have no branches.csv.
+        let branches = dir.join("branches.csv");
+        let (columns, points) = if axes.is_empty() && !branches.exists() {
+            (Vec::new(), Vec::new())
+        } else {
+            read_points(&branches, &axes)?
+        };
         Ok(Diagram {
             version,
             model,
@@ -89,6 +112,9 @@ impl Diagram {
             units,
             states_dir,
             run_id,
+            parameter,
+            exchange_curves,
+            families,
             extra: map.into_iter().collect(),
         })
     }

@@ -26,6 +26,11 @@ const OWN_KEYS: &[&str] = &[
     "units",
     "states_dir",
     "run_id",
+    "param",
+    "scene_value",
+    "target",
+    "curves",
+    "families",
 ];
 
 impl Diagram {
@@ -48,6 +53,9 @@ impl Diagram {
             units: units.into(),
             states_dir: None,
             run_id: None,
+            parameter: None,
+            exchange_curves: None,
+            families: None,
             extra: BTreeMap::new(),
         }
     }
@@ -258,6 +266,17 @@ impl Diagram {
         if let Some(r) = &self.run_id {
             put("run_id", r.clone().into());
         }
+        if let Some(p) = &self.parameter {
+            put("param", p.name.clone().into());
+            put("scene_value", checked_value("scene_value", &p.scene_value)?);
+            put("target", checked_value("target", &p.target)?);
+        }
+        if let Some(c) = &self.exchange_curves {
+            put("curves", checked_value("curves", c)?);
+        }
+        if let Some(f) = &self.families {
+            put("families", checked_value("families", f)?);
+        }
         for (k, v) in &self.extra {
             if map.contains_key(k) || OWN_KEYS.contains(&k.as_str()) || self.is_axis_key(k) {
                 return Err(SchemaError::KeyClash(k.clone()));
@@ -275,10 +294,13 @@ impl Diagram {
 
     /// Every file of the diagram directory, `summary.json` last: `(name, bytes)`.
     pub fn files(&self) -> Result<Vec<(String, Vec<u8>)>, SchemaError> {
-        let mut out = vec![
-            ("branches.csv".to_string(), self.branches_csv()?),
-            ("critical.csv".to_string(), self.critical_csv()?),
-        ];
+        let mut out = Vec::new();
+        // A diagram without points or columns (the phase diagram: its critical lengths only)
+        // has no branches.csv.
+        if !(self.columns.is_empty() && self.points.is_empty()) {
+            out.push(("branches.csv".to_string(), self.branches_csv()?));
+        }
+        out.push(("critical.csv".to_string(), self.critical_csv()?));
         if let Some(s) = self.special_csv()? {
             out.push(("special_points.csv".into(), s));
         }

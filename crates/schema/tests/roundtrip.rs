@@ -111,6 +111,8 @@ fn sample() -> Diagram {
             family: 1,
             index_before: Some(0),
             index_after: Some(1),
+            value: None,
+            energy_error: None,
             extra: BTreeMap::new(),
         },
         SpecialPoint {
@@ -122,7 +124,9 @@ fn sample() -> Diagram {
             family: 0,
             index_before: None,
             index_after: None,
-            extra: BTreeMap::from([("value".into(), serde_json::json!(0.25))]),
+            value: Some(0.25),
+            energy_error: None,
+            extra: BTreeMap::from([("method".into(), serde_json::json!("bisection"))]),
         },
     ]);
     d.set_certificate(&serde_json::json!({"checks": 3, "below": false}))
@@ -207,6 +211,8 @@ fn summary_has_no_null() {
     assert_eq!(s["special_points"][0]["index_after"], 1);
     assert!(s["special_points"][1].get("index_before").is_none());
     assert_eq!(s["special_points"][1]["value"], 0.25);
+    assert!(s["special_points"][0].get("value").is_none());
+    assert_eq!(s["special_points"][1]["method"], "bisection");
     assert_eq!(s["schema_version"], rodloop_schema::VERSION);
 }
 
@@ -303,5 +309,180 @@ fn two_axes_read_back_in_their_order() {
     let csv = std::fs::read_to_string(dir.join("branches.csv")).unwrap();
     assert_eq!(csv.lines().nth(3), Some("1,2,d1,0.001,1.2,1.8"));
     assert_eq!(Diagram::read(&dir).unwrap(), d);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A phase diagram (critical lengths on curves in a parameter) and a diagram against a
+/// parameter (families, special points at a parameter value) read back equal, with their
+/// parameter, curves, rows and families typed.
+#[test]
+fn parameter_diagrams_read_back_equal() {
+    use rodloop_schema::{
+        CurveEnd, CurveRow, Exchange, ExchangeCurve, FamilyTrace, Parameter, UniformLimit,
+    };
+    let parameter = Parameter {
+        name: "d1".into(),
+        scene_value: 0.5,
+        target: 1e-3,
+    };
+    // Phase: no axes, no points; two rows of one curve.
+    let dir = scratch("phase");
+    let mut d = Diagram::new("numeric", "two-segment", Vec::new(), "u");
+    d.parameter = Some(parameter.clone());
+    for (k, (value, source)) in [(0.5, "seed"), (0.1, "fixed")].into_iter().enumerate() {
+        let mut c = Critical {
+            index: k + 1,
+            lbar_cr: 1.37 - 0.01 * k as f64,
+            kind: "crossing".into(),
+            from_branch: 1,
+            to_branch: 2,
+            energy: 0.9,
+            error_estimate: 1e-8,
+            extra: BTreeMap::new(),
+        };
+        let row = CurveRow {
+            param: "d1".into(),
+            value,
+            source: source.into(),
+            curve: 1,
+            arm: k,
+            index_from: 0,
+            index_to: 1,
+            slope: -0.75,
+            energy_error: 2e-9,
+        };
+        c.set_curve_row(&row).unwrap();
+        assert_eq!(c.curve_row(), Some(row));
+        d.critical.push(c);
+    }
+    d.exchange_curves = Some(vec![ExchangeCurve {
+        exchange: Exchange {
+            from_branch: 1,
+            to_branch: 2,
+            lbar_uniform: 1.4,
+        },
+        rows: 2,
+        steps: 7,
+        cells: (64, 80),
+        ends: vec![CurveEnd {
+            value: 0.05,
+            kind: "fold".into(),
+            reason: "the Maxwell point turns back".into(),
+        }],
+        uniform: Some(UniformLimit {
+            lbar_cr: 1.4 + 1e-9,
+            error_estimate: 2e-9,
+            exact: 1.4,
+            deviation: 1e-9,
+        }),
+        turns: Vec::new(),
+        switches: vec!["onto 2 -> 3".into()],
+        checks: vec![0.1],
+        notes: Vec::new(),
+    }]);
+    d.put("at", &[0.1]).unwrap();
+    d.write(&dir).unwrap();
+    let s = d.summary().unwrap();
+    assert_eq!(
+        (s["param"].as_str(), s["target"].as_f64()),
+        (Some("d1"), Some(1e-3))
+    );
+    assert_eq!(s["critical"][1]["source"], "fixed");
+    assert_eq!(s["curves"][0]["cells"], serde_json::json!([64, 80]));
+    assert!(!dir.join("branches.csv").exists());
+    let back = Diagram::read(&dir).unwrap();
+    assert_eq!(back, d);
+    assert_eq!(back.critical[1].curve_row().unwrap().arm, 1);
+    // A critical length of a diagram in L̄ is on no curve.
+    assert_eq!(sample().critical[0].curve_row(), None);
+    std::fs::remove_dir_all(&dir).unwrap();
+
+    // Against the parameter at a fixed length: axes value and lbar.
+    let dir = scratch("sweep");
+    let mut d = Diagram::new(
+        "numeric",
+        "two-segment",
+        vec![
+            Axis {
+                name: "value".into(),
+                min: 1e-3,
+                max: 0.5,
+            },
+            Axis {
+                name: "lbar".into(),
+                min: 1.5,
+                max: 1.5,
+            },
+        ],
+        "u",
+    );
+    d.parameter = Some(parameter);
+    d.columns = [
+        "branch", "eta", "family", "param", "value", "lbar", "energy",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    d.points.push(Point {
+        branch: 2,
+        eta: 3,
+        family: Some(0),
+        coords: vec![0.25, 1.5],
+        energy: 1.25,
+        extra: BTreeMap::from([("param".into(), Cell::S("d1".into()))]),
+        ..Point::default()
+    });
+    d.special = Some(vec![SpecialPoint {
+        kind: "fold".into(),
+        lbar: 1.5,
+        energy: 1.3,
+        error_estimate: None,
+        branch: 2,
+        family: 0,
+        index_before: None,
+        index_after: None,
+        value: Some(0.125),
+        energy_error: Some(3e-10),
+        extra: BTreeMap::new(),
+    }]);
+    d.families = Some(vec![
+        FamilyTrace {
+            branch: 2,
+            eta: 3,
+            family: 0,
+            cells: 96,
+            seed_value: Some(0.5),
+            seed_energy: Some(1.2),
+            seed_energy_error: Some(1e-10),
+            notes: Vec::new(),
+            states: 1,
+            end: "reached".into(),
+        },
+        FamilyTrace {
+            branch: 3,
+            eta: 4,
+            family: 0,
+            cells: 96,
+            seed_value: None,
+            seed_energy: None,
+            seed_energy_error: None,
+            notes: vec!["no seed".into()],
+            states: 0,
+            end: "not seeded".into(),
+        },
+    ]);
+    d.write(&dir).unwrap();
+    let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+    assert!(!text.contains("null"), "{text}");
+    assert_eq!(Diagram::read(&dir).unwrap(), d);
+    // The schema writes these keys itself: an engine's own key may not replace them.
+    assert!(matches!(
+        {
+            let mut e = d.clone();
+            e.put("families", &1).unwrap();
+            e.summary()
+        },
+        Err(SchemaError::KeyClash(k)) if k == "families"
+    ));
     std::fs::remove_dir_all(&dir).unwrap();
 }

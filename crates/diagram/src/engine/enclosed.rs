@@ -128,6 +128,8 @@ impl Engine for EnclosedEngine {
                     family: e.family,
                     index_before: Some(e.index_before),
                     index_after: Some(e.index_after),
+                    value: None,
+                    energy_error: None,
                     extra: BTreeMap::new(),
                 })
                 .collect(),

@@ -1,9 +1,11 @@
 //! The exact engine ([`ExactEngine`]): the closed-form loops of a homogeneous rod on the
-//! sphere in a window of lengths ([`exact_window`]), and their result in the schema.
+//! sphere in a window of lengths ([`exact_window`]), and their result in the schema (also
+//! without shape descriptors, the exact values a numeric diagram is compared with:
+//! [`exact_window_schema`], [`exact_counterpart`]).
 
 use std::collections::BTreeMap;
 
-use rodloop_schema::{Cell, Diagram, Point};
+use rodloop_schema::{Cell, Critical, Diagram, Point};
 
 use super::{columns, critical_of, lbar_axis, Engine, UNITS};
 use crate::DiagramError;
@@ -34,6 +36,111 @@ pub struct ExactOutput {
     pub seconds: f64,
     /// Seconds of the shape descriptors.
     pub seconds_shapes: f64,
+}
+
+/// The exact diagram `d` of the window `lbar` in the schema: its loops as points (with the
+/// shape descriptors of each, `shapes` in order, where they were computed) and its critical
+/// lengths.
+fn exact_schema(
+    d: &rodloop_exact::diagram::Diagram,
+    shapes: Option<&[rodloop_exact::shape::LoopShape]>,
+    (lbar_min, lbar_max): (f64, f64),
+    scene: &str,
+) -> Result<Diagram, DiagramError> {
+    let mut s = Diagram::new("exact", scene, lbar_axis(lbar_min, lbar_max), UNITS);
+    let mut names = vec![
+        "branch",
+        "eta",
+        "lbar",
+        "energy",
+        "energy_g",
+        "lambda_min",
+        "lambda_max",
+        "p",
+        "k",
+        "c",
+        "closure_residual",
+        "lowest",
+    ];
+    if shapes.is_some() {
+        names.extend(["point_group", "self_intersections"]);
+    }
+    s.columns = columns(&names);
+    s.points = d
+        .points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let mut extra = BTreeMap::from([
+                ("energy_g".into(), Cell::F(p.energy_g)),
+                ("lambda_min".into(), Cell::F(p.lambda_min)),
+                ("lambda_max".into(), Cell::F(p.lambda_max)),
+                ("p".into(), Cell::I(p.p.into())),
+                ("k".into(), Cell::F(p.k)),
+                ("c".into(), Cell::F(p.c)),
+                ("closure_residual".into(), Cell::F(p.closure_residual)),
+                ("lowest".into(), Cell::I(p.lowest.into())),
+            ]);
+            if let Some(sh) = shapes.and_then(|s| s.get(i)) {
+                extra.insert("point_group".into(), Cell::S(sh.point_group.clone()));
+                extra.insert(
+                    "self_intersections".into(),
+                    Cell::S(sh.self_intersections_label()),
+                );
+            }
+            Point {
+                branch: p.branch,
+                eta: p.eta,
+                coords: vec![p.lbar],
+                energy: p.energy,
+                extra,
+                ..Point::default()
+            }
+        })
+        .collect();
+    s.critical = d
+        .critical
+        .iter()
+        .map(critical_of)
+        .collect::<Result<_, _>>()?;
+    Ok(s)
+}
+
+/// The exact diagram of the window `[lbar_min, lbar_max]` ([`exact_window`], sampled every
+/// `step`) in the schema, without shape descriptors: the exact values a numeric diagram of a
+/// homogeneous scene is compared with ([`exact_counterpart`]), and the loops of the exact
+/// layer's figures.
+pub fn exact_window_schema(
+    lbar_min: f64,
+    lbar_max: f64,
+    step: f64,
+    scene: &str,
+) -> Result<Diagram, DiagramError> {
+    let d = exact_window(lbar_min, lbar_max, step)
+        .map_err(|e| DiagramError::InvalidOptions(e.to_string()))?;
+    let mut s = exact_schema(&d, None, (lbar_min, lbar_max), scene)?;
+    s.put("step", &step)?;
+    Ok(s)
+}
+
+/// The exact layer's counterpart of the critical length `c` in the exact diagram `exact`:
+/// the same kind (`crossing`, `collapse`) between the same branches, within 0.05 in `L̄`,
+/// the nearest one.
+pub fn exact_counterpart<'a>(c: &Critical, exact: &'a Diagram) -> Option<&'a Critical> {
+    exact
+        .critical
+        .iter()
+        .filter(|x| {
+            x.kind == c.kind
+                && x.from_branch == c.from_branch
+                && x.to_branch == c.to_branch
+                && (x.lbar_cr - c.lbar_cr).abs() < 0.05
+        })
+        .min_by(|a, b| {
+            (a.lbar_cr - c.lbar_cr)
+                .abs()
+                .total_cmp(&(b.lbar_cr - c.lbar_cr).abs())
+        })
 }
 
 /// The branches `η` that meet the open length window `(lbar_min, lbar_max)`: branch `η`
@@ -125,60 +232,7 @@ impl Engine for ExactEngine {
 
     fn schema(&self, out: &ExactOutput, scene: &str) -> Result<Diagram, DiagramError> {
         let d = &out.diagram;
-        let mut s = Diagram::new(
-            "exact",
-            scene,
-            lbar_axis(self.lbar_min, self.lbar_max),
-            UNITS,
-        );
-        s.columns = columns(&[
-            "branch",
-            "eta",
-            "lbar",
-            "energy",
-            "energy_g",
-            "lambda_min",
-            "lambda_max",
-            "p",
-            "k",
-            "c",
-            "closure_residual",
-            "lowest",
-            "point_group",
-            "self_intersections",
-        ]);
-        s.points = d
-            .points
-            .iter()
-            .zip(&out.shapes)
-            .map(|(p, sh)| Point {
-                branch: p.branch,
-                eta: p.eta,
-                coords: vec![p.lbar],
-                energy: p.energy,
-                extra: BTreeMap::from([
-                    ("energy_g".into(), Cell::F(p.energy_g)),
-                    ("lambda_min".into(), Cell::F(p.lambda_min)),
-                    ("lambda_max".into(), Cell::F(p.lambda_max)),
-                    ("p".into(), Cell::I(p.p.into())),
-                    ("k".into(), Cell::F(p.k)),
-                    ("c".into(), Cell::F(p.c)),
-                    ("closure_residual".into(), Cell::F(p.closure_residual)),
-                    ("lowest".into(), Cell::I(p.lowest.into())),
-                    ("point_group".into(), Cell::S(sh.point_group.clone())),
-                    (
-                        "self_intersections".into(),
-                        Cell::S(sh.self_intersections_label()),
-                    ),
-                ]),
-                ..Point::default()
-            })
-            .collect();
-        s.critical = d
-            .critical
-            .iter()
-            .map(critical_of)
-            .collect::<Result<_, _>>()?;
+        let mut s = exact_schema(d, Some(&out.shapes), (self.lbar_min, self.lbar_max), scene)?;
         let branch_count = d
             .points
             .iter()

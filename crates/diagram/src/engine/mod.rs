@@ -17,7 +17,9 @@
 //!
 //! [`Engine::run`] performs them and returns the engine's own result (which keeps the states
 //! themselves, for `states/`, the atlas and the report); [`Engine::schema`] turns that into
-//! the one result schema that the writer, the figures and the report read. Whether a surface
+//! the one result schema that the writer, the figures and the report read; the states of the
+//! results against a stiffness parameter reach `states/` through [`RecordStates`], by record
+//! of the schema. Whether a surface
 //! rod is uniform or two-segment is a property of its stiffness (the shift symmetry), decided
 //! inside [`SurfaceEngine`], not by its caller.
 //!
@@ -26,9 +28,9 @@
 //! | `mod.rs` | the [`Engine`] interface and the schema helpers the engines share |
 //! | `surface.rs` | [`SurfaceEngine`] and its schema ([`surface_schema`]) |
 //! | `enclosed.rs` | [`EnclosedEngine`] and its schema ([`lowest_lifted_off`]) |
-//! | `exact.rs` | [`ExactEngine`] and its window of the exact diagram ([`exact_window`]) |
+//! | `exact.rs` | [`ExactEngine`], its window of the exact diagram ([`exact_window`], in the schema: [`exact_window_schema`]) and the exact counterpart of a critical length ([`exact_counterpart`]) |
 //! | `sweep.rs` | [`SweepEngine`] (states at a fixed length against a stiffness parameter) and its schema ([`sweep_schema`]) |
-//! | `phase.rs` | [`PhaseEngine`] (critical lengths followed in a stiffness parameter) and its schema ([`phase_schema`]) |
+//! | `phase.rs` | [`PhaseEngine`] (critical lengths followed in a stiffness parameter, rows whose states fail left out: [`VerifiedPhase`]) and its schema ([`phase_schema`]) |
 
 mod enclosed;
 mod exact;
@@ -37,8 +39,10 @@ mod surface;
 mod sweep;
 
 pub use enclosed::{lowest_lifted_off, EnclosedEngine};
-pub use exact::{etas_in, exact_window, ExactEngine, ExactOutput};
-pub use phase::{phase_schema, PhaseEngine, PHASE_UNITS};
+pub use exact::{
+    etas_in, exact_counterpart, exact_window, exact_window_schema, ExactEngine, ExactOutput,
+};
+pub use phase::{phase_schema, PhaseEngine, VerifiedPhase, PHASE_UNITS};
 pub use surface::{surface_schema, SurfaceEngine};
 pub use sweep::{sweep_schema, SweepEngine, VerifiedStates, VerifiedSweep};
 
@@ -66,6 +70,15 @@ pub trait Engine {
     ) -> Result<Self::Output, DiagramError>;
     /// The result in the schema, for scene `scene` (state files not yet named).
     fn schema(&self, out: &Self::Output, scene: &str) -> Result<Diagram, DiagramError>;
+}
+
+/// The verified states an engine's result holds, by record of its schema: what the files of
+/// `states/` are written from, each named from its record (the schema holds no states).
+pub trait RecordStates {
+    /// The states of each record, in the schema's order: of each point of a diagram against a
+    /// parameter (one state), of each critical length of a phase diagram (the states of its
+    /// curve's `from_branch` and `to_branch`; none for the extrapolated limit row).
+    fn record_states(&self) -> Vec<Vec<&crate::StateFile>>;
 }
 
 /// The lbar axis of a branch diagram.

@@ -136,6 +136,8 @@ pub fn surface_schema(
                 family: p.family,
                 index_before: Some(p.index_before),
                 index_after: Some(p.index_after),
+                value: None,
+                energy_error: None,
                 extra: BTreeMap::new(),
             })
             .collect(),

@@ -3,9 +3,9 @@
 //! verified as its file holds it and those that fail left out, and its result in the schema
 //! ([`sweep_schema`]).
 
-use rodloop_schema::{Axis, Cell as Value, Diagram, Point, SpecialPoint};
+use rodloop_schema::{Axis, Cell as Value, Diagram, FamilyTrace, Parameter, Point, SpecialPoint};
 
-use super::{schema_err, Engine};
+use super::{schema_err, Engine, RecordStates};
 use crate::param_sweep::{sweep_param, verify_sweep, ParamSweep, SweepSettings, SweepState};
 use crate::{DiagramError, StateFile};
 
@@ -52,6 +52,17 @@ impl Engine for SweepEngine {
 
     fn schema(&self, out: &VerifiedSweep, scene: &str) -> Result<Diagram, DiagramError> {
         sweep_schema(&out.sweep, scene, &out.states)
+    }
+}
+
+impl RecordStates for VerifiedSweep {
+    /// The state of each point, in the order of the schema's points.
+    fn record_states(&self) -> Vec<Vec<&StateFile>> {
+        self.states
+            .iter()
+            .flatten()
+            .map(|(_, file)| vec![file])
+            .collect()
     }
 }
 
@@ -182,19 +193,35 @@ pub fn sweep_schema(
                 family: p.family as u32,
                 index_before: p.index.map(|i| i.0),
                 index_after: p.index.map(|i| i.1),
-                extra: [
-                    ("value".to_string(), serde_json::json!(p.value)),
-                    (
-                        "energy_error".to_string(),
-                        serde_json::json!(p.energy_error),
-                    ),
-                ]
-                .into_iter()
-                .collect(),
+                value: Some(p.value),
+                energy_error: Some(p.energy_error),
+                extra: Default::default(),
             })
             .collect(),
     );
     d.warnings = Some(s.warnings.clone());
     d.states_dir = Some("states".into());
+    d.parameter = Some(Parameter {
+        name: s.param.name().into(),
+        scene_value: s.scene_value,
+        target: s.target,
+    });
+    d.families = Some(
+        s.families
+            .iter()
+            .map(|f| FamilyTrace {
+                branch: f.branch,
+                eta: f.eta,
+                family: f.family,
+                cells: f.cells,
+                seed_value: f.seed_energy.map(|e| e.0),
+                seed_energy: f.seed_energy.map(|e| e.1),
+                seed_energy_error: f.seed_energy.map(|e| e.2),
+                notes: f.notes.clone(),
+                states: f.points.len(),
+                end: f.end.clone(),
+            })
+            .collect(),
+    );
     Ok(d)
 }
