@@ -3,6 +3,7 @@
 //! states), and the lowest-branch labels (see the parent module's docs).
 
 use rodloop_continuation::exchange::{self, Energies, EnergyPair, ExchangeSettings, Ranked, Start};
+use rodloop_solver::enclosed::stats;
 use rodloop_solver::enclosed::{
     four_level_estimate, point_like_contact, solve_enclosed, three_level_estimate, EnclosedOptions,
     EnclosedState, LIFTED_OFF_MAX_ORDER,
@@ -139,14 +140,28 @@ impl Ladder {
         Ok(Self { states })
     }
 
-    /// Newton at `lbar` from this ladder, level by level.
+    /// Newton at `lbar` from this ladder, each level from its own state: the finest (which
+    /// costs about as much as all the others together, the cells doubling from level to
+    /// level) on a thread of its own beside the others.
     pub(super) fn step_to(&self, lbar: f64) -> Result<Self, SolverError> {
         let opts = EnclosedOptions::default();
-        let states = self
-            .states
-            .iter()
-            .map(|s| s.step_to(lbar, &opts))
-            .collect::<Result<Vec<_>, _>>()?;
+        let Some((finest, rest)) = self.states.split_last() else {
+            return Ok(Self { states: Vec::new() });
+        };
+        let scope = stats::current();
+        let (last, states) = std::thread::scope(|sc| {
+            let last = sc.spawn(|| stats::within(&scope, || finest.step_to(lbar, &opts)));
+            let states = rest
+                .iter()
+                .map(|s| s.step_to(lbar, &opts))
+                .collect::<Result<Vec<_>, _>>();
+            (last.join(), states)
+        });
+        // The first level that fails names the error, as in order.
+        let mut states = states?;
+        states.push(last.map_err(|_| {
+            SolverError::InvalidInput("the finest level's solve panicked".into())
+        })??);
         Ok(Self { states })
     }
 
