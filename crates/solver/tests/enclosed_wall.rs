@@ -186,3 +186,22 @@ fn contact_force_on_the_sphere_is_two_r_lambda_over_w() {
         );
     }
 }
+
+/// `|∇g|` at the nearest wall point: the sphere's `2R` is the norm of its gradient at the
+/// radial projection of any point; a wall without its own rule (the quadric) gives the
+/// point's own `|∇g|`.
+#[test]
+fn gradient_norm_on_the_wall() {
+    let sphere = SphereWall { radius: 1.3 };
+    let q = quadric();
+    for r in [
+        Vector3::new(0.2, -0.9, 0.4),
+        Vector3::new(1.1, 0.3, -0.5),
+        Vector3::new(-0.05, 0.02, 1.2),
+    ] {
+        let on = r * (sphere.radius / r.norm());
+        let want = sphere.gradient(&on).norm();
+        assert!((sphere.gradient_norm_on_wall(&r) - want).abs() <= 1e-14 * want);
+        assert_eq!(q.gradient_norm_on_wall(&r), q.gradient(&r).norm());
+    }
+}

@@ -66,13 +66,13 @@ pub fn transfer_multipliers(from: &EnclosedModel, zf: &[f64], to: &EnclosedModel
     let nf = from.cells();
     let bf = from.bounds();
     let lo = to.lambda_offset();
-    // The impulse that gives the interpolated density on the wall: `|∇g|` on the wall. A
-    // prolonged node lies off the wall by its interpolation error; on the sphere the value on
-    // the wall is `2R` everywhere, elsewhere the node's own `|∇g|` stands in for it.
-    let grad = match to.wall().sphere() {
-        Some(r) => vec![2.0 * r; to.cells()],
-        None => to.wall_gradient_norms(zt),
-    };
+    // The impulse that gives the interpolated density on the wall: `|∇g|` at the wall point
+    // nearest each node (a prolonged node lies off the wall by its interpolation error).
+    let wall = to.wall();
+    let grad: Vec<f64> = to.positions(zt).map_or_else(
+        |_| Vec::new(),
+        |pos| pos.iter().map(|r| wall.gradient_norm_on_wall(r)).collect(),
+    );
     for j in 0..to.cells() {
         let s = to.bounds()[j];
         // Coarse interval [bf[k], bf[k+1]) holding s.
@@ -80,8 +80,9 @@ pub fn transfer_multipliers(from: &EnclosedModel, zf: &[f64], to: &EnclosedModel
         let (a, b) = (bf[k], bf[k + 1]);
         let t = if b > a { (s - a) / (b - a) } else { 0.0 };
         let d = (1.0 - t) * dens[k] + t * dens[(k + 1) % nf];
-        zt[lo + j] = if grad[j] > 0.0 {
-            d * to.node_weight(j) / grad[j]
+        let g = grad.get(j).copied().unwrap_or(0.0);
+        zt[lo + j] = if g > 0.0 {
+            d * to.node_weight(j) / g
         } else {
             0.0
         };

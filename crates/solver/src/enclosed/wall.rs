@@ -72,6 +72,14 @@ pub trait Wall: Debug + Send + Sync {
         None
     }
 
+    /// `|∇g|` at the point of the wall nearest `r`: what turns a wall impulse at a node into
+    /// the contact force density it stands for (`λ_j |∇g| / w_j`) when the node lies off the
+    /// wall by an interpolation error, as a prolonged node does. The default is the node's own
+    /// `|∇g(r)|`, exact on the wall.
+    fn gradient_norm_on_wall(&self, r: &V3) -> f64 {
+        self.gradient(r).norm()
+    }
+
     /// `true` when `r` lies inside the wall up to `slack` (a fraction of [`Self::radius`]).
     fn contains(&self, r: &V3, slack: f64) -> bool {
         self.clearance(r) >= -slack * self.radius()
@@ -182,6 +190,11 @@ impl Wall for SphereWall {
 
     fn sphere(&self) -> Option<f64> {
         Some(self.radius)
+    }
+
+    /// `2R`: `|∇g| = 2|r|` is `2R` everywhere on the sphere.
+    fn gradient_norm_on_wall(&self, _r: &V3) -> f64 {
+        2.0 * self.radius
     }
 
     /// The closed form of [`Wall::node_pairing`] for `∇²g = −2I`: with `r − p = r0`,
