@@ -371,14 +371,15 @@ fn ladder_reason(first: usize, energies: &[f64], why: &str) -> String {
 
 /// Every traced state of `branches` verified as its file holds it
 /// ([`TracedBranch::verified_state`], in parallel on `threads` threads): `files[i][k]` for
-/// `branches[i].points[k]` (`None` where the state fails, with a warning that says why).
+/// `branches[i].points[k]` (`None` where the state fails, with a warning that says why), the
+/// warnings, and how many states fail.
 /// Rows re-estimated by the verification get the re-estimated energy and error (and
 /// `E_g` moved by the same amount: `E − E_g` depends on the length and stiffness only).
 pub(crate) fn verify_all(
     opts: &DiagramOptions,
     branches: &mut [TracedBranch],
     threads: usize,
-) -> (Vec<Vec<Option<StateFile>>>, Vec<String>) {
+) -> (Vec<Vec<Option<StateFile>>>, Vec<String>, usize) {
     let jobs: Vec<(usize, usize)> = branches
         .iter()
         .enumerate()
@@ -396,7 +397,8 @@ pub(crate) fn verify_all(
         .iter()
         .map(|b| vec![None; b.points.len()])
         .collect();
-    let mut warnings = Vec::new();
+    // The failures of each sheet, in the order of its states.
+    let mut failed: Vec<Vec<(f64, String)>> = vec![Vec::new(); branches.len()];
     for ((i, k), r) in jobs.into_iter().zip(results) {
         let b = &mut branches[i];
         match r {
@@ -409,13 +411,58 @@ pub(crate) fn verify_all(
                 }
                 files[i][k] = Some(f);
             }
-            Err(e) => warnings.push(format!(
-                "UNVERIFIED STATE LEFT WITHOUT A FILE: branch {} family {} sheet {} at L̄ = {}: {e}",
-                b.branch, b.family, b.sheet, b.points[k].value
-            )),
+            Err(e) => failed[i].push((b.points[k].value, e.to_string())),
         }
     }
-    (files, warnings)
+    let unverified = failed.iter().map(Vec::len).sum();
+    let warnings = branches
+        .iter()
+        .zip(&failed)
+        .flat_map(|(b, f)| unverified_warnings((b.branch, b.family, b.sheet), f))
+        .collect();
+    (files, warnings, unverified)
+}
+
+/// The warnings of a sheet's states that fail verification (`(L̄, why)` each): the states
+/// whose reasons are the same check failing with numbers of their own (equal with the numbers
+/// left out) share one warning, the first one's reason in full and the lengths of the others;
+/// a reason of its own gets its own warning.
+fn unverified_warnings(b: (u32, u32, u32), failed: &[(f64, String)]) -> Vec<String> {
+    let (branch, family, sheet) = b;
+    let shape = |why: &str| -> String {
+        why.chars()
+            .filter(|c| !(c.is_ascii_digit() || matches!(c, '.' | '-' | '+' | 'e')))
+            .collect()
+    };
+    // Groups of equal shape, in the order of their first state.
+    let mut groups: Vec<(String, Vec<&(f64, String)>)> = Vec::new();
+    for f in failed {
+        let sh = shape(&f.1);
+        match groups.iter_mut().find(|(s, _)| *s == sh) {
+            Some((_, g)) => g.push(f),
+            None => groups.push((sh, vec![f])),
+        }
+    }
+    groups
+        .into_iter()
+        .map(|(_, g)| {
+            let (first, why) = g[0];
+            if g.len() == 1 {
+                return format!(
+                    "UNVERIFIED STATE LEFT WITHOUT A FILE: branch {branch} family {family} sheet \
+                     {sheet} at L̄ = {first}: {why}"
+                );
+            }
+            let others: Vec<String> = g[1..].iter().map(|(l, _)| format!("{l:.6}")).collect();
+            format!(
+                "UNVERIFIED STATES LEFT WITHOUT A FILE: {} states of branch {branch} family \
+                 {family} sheet {sheet} (their rows leave the table); at L̄ = {first}: {why}; the \
+                 same check fails, with numbers of their own, at L̄ = {}",
+                g.len(),
+                others.join(", ")
+            )
+        })
+        .collect()
 }
 
 /// The energy estimate of row `k` of a sheet: the largest of its own and its neighbours'. A
@@ -465,4 +512,38 @@ pub fn branch_identification(
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::unverified_warnings;
+
+    /// States failing the same check with their own numbers share one warning that names
+    /// them all; a state failing another check keeps its own.
+    #[test]
+    fn failures_of_one_check_share_a_warning() {
+        let why = |cells: usize, turn: f64| {
+            format!(
+                "it is not resolved at {cells} cells (its tangent turns by up to {turn:.2} rad)"
+            )
+        };
+        let failed = vec![
+            (1.0, why(116, 2.15)),
+            (1.01, why(116, 2.1)),
+            (
+                1.02,
+                "its resolutions disagree beyond its own error estimate".to_string(),
+            ),
+            (1.03, why(232, 1.02)),
+        ];
+        let w = unverified_warnings((2, 7, 0), &failed);
+        assert_eq!(w.len(), 2, "{w:?}");
+        assert!(w[0].starts_with(
+            "UNVERIFIED STATES LEFT WITHOUT A FILE: 3 states of branch 2 family 7 sheet 0"
+        ));
+        assert!(w[0].contains("at L̄ = 1: it is not resolved at 116 cells"));
+        assert!(w[0].ends_with("at L̄ = 1.010000, 1.030000"), "{}", w[0]);
+        assert!(w[1].starts_with("UNVERIFIED STATE LEFT WITHOUT A FILE: branch 2 family 7 sheet 0 at L̄ = 1.02: its resolutions"));
+        assert!(unverified_warnings((1, 1, 0), &[]).is_empty());
+    }
 }

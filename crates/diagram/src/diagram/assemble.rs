@@ -302,8 +302,8 @@ fn keep_verified(
     let threads = opts.worker_threads();
     // A state that fails is not reported: its row leaves the table (the warning says why),
     // so every row of `branches.csv` has a verified file.
-    let (mut state_files, state_warnings) = crate::states::verify_all(opts, branches, threads);
-    let unverified_states = state_warnings.len();
+    let (mut state_files, state_warnings, unverified_states) =
+        crate::states::verify_all(opts, branches, threads);
     warnings.extend(state_warnings);
     for (b, files) in branches.iter_mut().zip(state_files.iter_mut()) {
         let mut keep = files.iter().map(Option::is_some);
