@@ -343,7 +343,7 @@ pub fn solve_state_with(
             format!(
                 "3-D enclosed model, N = {cells} cells (semismooth Newton from {}, lambda_min = {lam_min:.6}); {}",
                 if lower_minimum {
-                    "the uniform rod's loop continued in the stiffness"
+                    "the start of the route named below"
                 } else if b.homotopy {
                     "the surface loop by the pull homotopy"
                 } else {
@@ -371,7 +371,7 @@ pub fn solve_state_with(
             if stiffness.is_uniform() {
                 "from the surface loop"
             } else {
-                "from the surface loops of the three accuracy levels, from the uniform rod's loop continued in the stiffness"
+                "from the surface loops of the three accuracy levels, from the uniform rod's loop continued in the stiffness, from local minima at other lengths continued in lbar"
             }
         ));
     }

@@ -117,26 +117,56 @@ pub fn solve_branch(
     } else {
         (cells / 4, 2)
     };
+    let (model, z0) = surface_start(&wall, lbar, n0, stiffness, source)?;
+    let lmin = source.lambda_min(radius, stiffness.reference());
+    solve_ladder(&model, z0, Some(lmin), opts, refinements)
+}
+
+/// The start of an enclosed solve on `cells` cells from the surface loop `source`
+/// ([`start_from_surface`] with `κ_g` sampled at the model's Gauss points).
+fn surface_start(
+    wall: &std::sync::Arc<dyn super::wall::Wall>,
+    lbar: f64,
+    cells: usize,
+    stiffness: &Stiffness,
+    source: &SurfaceSource,
+) -> Result<(super::model::EnclosedModel, Vec<f64>), SolverError> {
     let probe = super::model::EnclosedModel::new(
-        &wall,
+        wall,
         lbar,
-        n0,
+        cells,
         stiffness,
         super::model::Gauge {
-            reference: vec![0.0; 4 * n0],
+            reference: vec![0.0; 4 * cells],
             slope: None,
             pin: None,
         },
     )?;
-    let sig: Vec<f64> = (0..2 * n0).map(|g| probe.gauss_sigma(g)).collect();
-    let kg = source.kappa_g(radius, &sig)?;
+    let sig: Vec<f64> = (0..2 * cells).map(|g| probe.gauss_sigma(g)).collect();
+    let kg = source.kappa_g(wall.radius(), &sig)?;
     let lookup = |s: f64| -> f64 {
         let g = sig.iter().position(|&x| (x - s).abs() < 1e-15).unwrap_or(0);
         kg[g]
     };
-    let (model, z0) = start_from_surface(wall, lbar, n0, stiffness, lookup)?;
-    let lmin = source.lambda_min(radius, stiffness.reference());
-    solve_ladder(&model, z0, Some(lmin), opts, refinements)
+    start_from_surface(wall, lbar, cells, stiffness, lookup)
+}
+
+/// The enclosed state on `cells` cells (one level) started from the surface loop `source`:
+/// semismooth Newton, where it fails the pull homotopy ([`solve_by_pull_homotopy`]).
+pub fn solve_from_surface(
+    wall: impl IntoWall,
+    lbar: f64,
+    stiffness: &Stiffness,
+    source: &SurfaceSource,
+    cells: usize,
+    opts: &EnclosedOptions,
+) -> Result<EnclosedState, SolverError> {
+    let wall = wall.into_wall();
+    let (model, z0) = surface_start(&wall, lbar, cells, stiffness, source)?;
+    solve_enclosed(&model, z0.clone(), opts).or_else(|plain| {
+        let lmin = source.lambda_min(wall.radius(), stiffness.reference());
+        solve_by_pull_homotopy(&model, z0, lmin, opts).map_err(|_| plain)
+    })
 }
 
 /// The cascade of [`solve_branch`] from a start at `N/4` cells (`model`, `z0`): Newton

@@ -541,6 +541,10 @@ pub type LowestSolve = (DescendedSolve, bool);
 /// the states reached by continuation in the stiffness from the uniform rod's loop
 /// ([`stiffness_homotopy_states`], on `8(2 + η)` cells and carried to `N/4` of the first
 /// mesh of `ladder`), each cascaded to `N/2, N` ([`solve_levels`]) and descended where it is a saddle ([`descend_branch`]).
+/// Where none of these is a local minimum, the local minima of the branch found at the
+/// nearest other lengths are continued in `L̄` to `lbar` on the same coarse mesh
+/// ([`super::length_path`]) and cascaded and descended in the same way (the enclosed
+/// diagram follows a stable family through the branch's range likewise).
 /// Of the states of branch `eta`, an index-0 one goes before any with index > 0, and the
 /// lowest of those is returned. The semismooth Newton from the surface loop stops at the
 /// equilibrium next to it, which need not be the lowest minimum of the branch.
@@ -569,12 +573,24 @@ pub fn solve_branch_lowest(
         same.then_some((usize::from(index > 0), b.energy))
     };
     let better = |x: (usize, f64), y: (usize, f64)| x.0 < y.0 || (x.0 == y.0 && x.1 < y.1);
-    let mut best: Option<(BranchSolve, Option<Descent<EnclosedState>>, f64)> = None;
+    // The best state of the other routes, with the route that reaches it.
+    type Found = Option<(BranchSolve, Option<Descent<EnclosedState>>, String)>;
+    let mut best: Found = None;
+    let offer = |best: &mut Found, b: BranchSolve, d: Option<Descent<EnclosedState>>, route| {
+        let Some(r) = rank(&b) else { return };
+        if best
+            .as_ref()
+            .and_then(|(o, _, _)| rank(o))
+            .is_none_or(|o| better(r, o))
+        {
+            *best = Some((b, d, route));
+        }
+    };
+    // The path is followed on the coarsest mesh that resolves the profile (the `N/4` level
+    // of the diagram's default mesh, `8(2 + η)` cells), so that every accuracy follows the
+    // same path; its end is carried to this ladder's `N/4`.
+    let search = (8 * (2 + eta as usize)).min(cells / 4);
     if cells >= 32 && cells % 4 == 0 {
-        // The path is followed on the coarsest mesh that resolves the profile (the `N/4`
-        // level of the diagram's default mesh, `8(2 + η)` cells), so that every accuracy
-        // follows the same path; its end is carried to this ladder's `N/4`.
-        let search = (8 * (2 + eta as usize)).min(cells / 4);
         for (phi, s) in
             stiffness_homotopy_starts(&wall, lbar, eta, stiffness, search, opts).unwrap_or_default()
         {
@@ -584,18 +600,47 @@ pub fn solve_branch_lowest(
             let Ok((b, d)) = descend_branch(b, opts) else {
                 continue;
             };
-            let Some(r) = rank(&b) else { continue };
-            if best
-                .as_ref()
-                .and_then(|(o, _, _)| rank(o))
-                .is_none_or(|o| better(r, o))
-            {
-                best = Some((b, d, phi));
-            }
+            offer(&mut best, b, d, format!("continuation in the stiffness from the uniform rod's loop with its arclength origin shifted by {phi:.4} L"));
+        }
+    }
+    // No local minimum yet: one reached at other lengths of the branch, continued in L̄.
+    let stable = |b: &BranchSolve| rank(b).is_some_and(|r| r.0 == 0);
+    let found_minimum = base.as_ref().is_ok_and(|b| stable(&b.0))
+        || best.as_ref().is_some_and(|(b, _, _)| stable(b));
+    if !found_minimum && cells >= 32 && cells % 4 == 0 {
+        let radius = wall.radius();
+        let surface = |x: f64| {
+            crate::solve_robust(
+                radius,
+                x,
+                stiffness,
+                &crate::StartShape::Euler { l: eta },
+                crate::Accuracy::Fast,
+                Some(eta),
+                &crate::SolveOptions::default(),
+            )
+            .ok()
+            .map(|(r, _)| SurfaceSource::Numeric(Box::new(r.equilibrium)))
+        };
+        for (x, s) in super::length_path::states_by_length_continuation(
+            &wall, lbar, eta, stiffness, search, opts, surface,
+        ) {
+            let Some(b) = carry_to_ladder(&s, cells, opts) else {
+                continue;
+            };
+            let Ok((b, d)) = descend_branch(b, opts) else {
+                continue;
+            };
+            offer(
+                &mut best,
+                b,
+                d,
+                format!("continuation in lbar from a local minimum of the branch at lbar = {x:.4}"),
+            );
         }
     }
     match (base, best) {
-        (Ok(base), Some((b, d, phi))) => {
+        (Ok(base), Some((b, d, route))) => {
             let replace = match (rank(&base.0), rank(&b)) {
                 (Some(x), Some(y)) => better(y, x),
                 (None, Some(_)) => true,
@@ -606,17 +651,17 @@ pub fn solve_branch_lowest(
             }
             let mut notes = base.2;
             notes.push(format!(
-                "the state reached from the surface loop (E R/(pi D0) = {:.10}) is not the lowest local minimum found: continuation in the stiffness from the uniform rod's loop with its arclength origin shifted by {phi:.4} L reaches this one",
+                "the state reached from the surface loop (E R/(pi D0) = {:.10}) is not the lowest local minimum found: {route} reaches this one",
                 base.0.energy
             ));
             Ok(((b, d, notes), true))
         }
         (Ok(base), None) => Ok((base, false)),
-        (Err(_), Some((b, d, phi))) => Ok((
+        (Err(_), Some((b, d, route))) => Ok((
             (
                 b,
                 d,
-                vec![format!("the solve from the surface loop did not converge; the state comes from continuation in the stiffness from the uniform rod's loop with its arclength origin shifted by {phi:.4} L")],
+                vec![format!("the solve from the surface loop did not converge; the state comes from {route}")],
             ),
             true,
         )),

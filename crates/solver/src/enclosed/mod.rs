@@ -25,6 +25,7 @@
 //!   one descent routine ([`crate::descend`]) and an enclosed solve that ends at a local
 //!   minimum.
 //! * [`continuation`]: natural-parameter steps in `L̄` (the enclosed diagram's tracer).
+//! * [`length_path`]: local minima of a branch continued in `L̄` from other lengths.
 //! * [`seam`]: the model behind [`crate::Confinement`] (continuation through the seam).
 //! * [`centre`]: point contacts moved onto nodes (the origin shifted to a contact point).
 //! * [`branch`]: a paper branch in an enclosed scene with the two-resolution error estimate.
@@ -38,6 +39,7 @@ pub mod descent;
 pub mod from_shape;
 pub mod inertia;
 pub mod jet;
+pub mod length_path;
 pub mod lifted;
 pub mod model;
 pub mod seam;
