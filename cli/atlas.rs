@@ -312,32 +312,35 @@ fn record_in_summary(run: &OutputRun, note: &AtlasNote) -> Result<()> {
 pub fn enclosed_rows(
     scene: &rodloop_scene::Scene,
     accuracy: rodloop_solver::Accuracy,
-    d: &rodloop_diagram::enclosed::EnclosedDiagram,
+    d: &rodloop_schema::Diagram,
     k: usize,
     states: Option<&Path>,
 ) -> Result<(Vec<AtlasRow>, AtlasNote, Vec<String>)> {
     check_shapes(k)?;
     let stiffness = crate::args::stiffness_of(&scene.stiffness);
-    let mut groups: BTreeMap<u32, Vec<&rodloop_diagram::enclosed::EnclosedPoint>> = BTreeMap::new();
+    // The sampled points of each branch: (L̄, the point).
+    let mut groups: BTreeMap<u32, Vec<(f64, &rodloop_schema::Point)>> = BTreeMap::new();
     for p in &d.points {
-        groups.entry(p.branch).or_default().push(p);
+        if let Some(&lbar) = p.coords.first() {
+            groups.entry(p.branch).or_default().push((lbar, p));
+        }
     }
     let mut jobs = Vec::new();
     for (&branch, g) in groups.iter_mut() {
-        g.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
+        g.sort_by(|a, b| a.0.total_cmp(&b.0));
         // The free planar circle (branch 0) is free only below L̄ = 1; at L̄ = 1 it is the
         // great circle on the wall, where the free-circle solve is singular: not a state of it.
         if branch == 0 {
-            g.retain(|p| p.lbar < 1.0 - 1e-9);
+            g.retain(|p| p.0 < 1.0 - 1e-9);
         }
-        let pos: Vec<f64> = g.iter().map(|p| p.lbar).collect();
+        let pos: Vec<f64> = g.iter().map(|p| p.0).collect();
         for (j, i) in spread(&pos, k).into_iter().enumerate() {
             jobs.push((branch, j, g[i]));
         }
     }
-    let solved = crate::states::parallel_map(&jobs, |&(branch, j, p)| {
+    let solved = crate::states::parallel_map(&jobs, |&(branch, j, (lbar, _))| {
         let one = || -> Result<(LoopData, String)> {
-            let res = crate::enclosed::solve_state(scene, &stiffness, p.lbar, branch, accuracy)?;
+            let res = crate::enclosed::solve_state(scene, &stiffness, lbar, branch, accuracy)?;
             let table =
                 crate::states::result_table(&res, scene.radius, scene.stiffness.reference())?;
             let bytes = table.to_bytes()?;
@@ -355,7 +358,7 @@ pub fn enclosed_rows(
                 },
             ))
         };
-        one().map_err(|e| format!("branch {branch} at L̄ = {}: {e:#}", p.lbar))
+        one().map_err(|e| format!("branch {branch} at L̄ = {lbar}: {e:#}"))
     });
     let mut rows: Vec<AtlasRow> = Vec::new();
     let mut note = AtlasNote {
@@ -363,7 +366,7 @@ pub fn enclosed_rows(
         files: Vec::new(),
     };
     let mut failed = Vec::new();
-    for ((branch, _, p), res) in jobs.iter().zip(solved) {
+    for ((branch, _, (lbar, p)), res) in jobs.iter().zip(solved) {
         let (data, file) = match res {
             Ok(x) => x,
             Err(e) => {
@@ -401,14 +404,14 @@ pub fn enclosed_rows(
                 points: data.points(),
                 stiffness: data.column("D").map(<[f64]>::to_vec),
                 off_wall,
-                lbar: p.lbar,
+                lbar: *lbar,
                 energy: p.energy,
-                stability: p.label.as_str().to_string(),
+                stability: p.label.clone().unwrap_or_default(),
             });
             if !file.is_empty() {
                 note.files.push(file.clone());
             }
-            n.2.push((p.lbar, file));
+            n.2.push((*lbar, file));
         }
     }
     if rows.is_empty() {
@@ -428,7 +431,7 @@ pub fn write_enclosed_atlas(
     k: usize,
     scene: &rodloop_scene::Scene,
     accuracy: rodloop_solver::Accuracy,
-    d: &rodloop_diagram::enclosed::EnclosedDiagram,
+    d: &rodloop_schema::Diagram,
 ) -> Result<AtlasNote> {
     let states = run.subdir("states")?;
     let (rows, note, failed) = enclosed_rows(scene, accuracy, d, k, Some(&states))?;

@@ -245,8 +245,15 @@ fn run_numeric(
     opts.validate()?;
     let run = OutputRun::begin(&args.out)?;
     run.keep_branch_files();
-    let d = surface::run_numeric(&opts, &args.out, args.resume, args.quiet, selection)?;
-    let schema = surface::write_outputs(&d, &opts, &scene.name, &run)?;
+    let (d, schema) = surface::run_numeric(
+        &opts,
+        &args.out,
+        args.resume,
+        args.quiet,
+        selection,
+        &scene.name,
+    )?;
+    let schema = surface::write_outputs(&d, schema, &opts, &run)?;
     let atlas = match args.shapes {
         0 => None,
         k => Some(crate::atlas::write_atlas(&run, k, &scene.name)?),

@@ -10,8 +10,8 @@ use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 use rodloop_diagram::{
-    BranchHook, DiagramOptions, Engine, NumericDiagram, Origin, Progress, SurfaceEngine,
-    TracedBranch,
+    BranchHook, DiagramOptions, Engine, NumericDiagram, Origin, PointStates, Progress,
+    SurfaceEngine, TracedBranch,
 };
 use rodloop_exact::branch_of_eta;
 
@@ -180,13 +180,15 @@ fn branch_line(branch: u32, sheets: &[TracedBranch]) -> String {
 
 /// Trace every branch with [`rodloop_diagram::compute`] (in parallel), writing each branch
 /// file when it is done, resuming from the files already there with `resume`; then assemble.
+/// Returns the engine's result (its states, [`PointStates`]) and its schema for `scene`.
 pub fn run_numeric(
     opts: &DiagramOptions,
     out: &Path,
     resume: bool,
     quiet: bool,
     selection: Option<&[u32]>,
-) -> Result<NumericDiagram> {
+    scene: &str,
+) -> Result<(NumericDiagram, rodloop_schema::Diagram)> {
     let dir = out.join("branches");
     let previous = if resume {
         load_resume(out)?
@@ -275,24 +277,27 @@ pub fn run_numeric(
         ));
         b.finish();
     }
-    Ok(d)
+    let schema = engine.schema(&d, scene)?;
+    Ok((d, schema))
 }
 
 /// Write states/ and the diagram's files in the result schema (branches.csv, critical.csv,
 /// special_points.csv, summary.json); the figures are drawn from these files by
 /// [`crate::draw::draw_diagram`]. Returns the schema written.
 pub fn write_outputs(
-    d: &NumericDiagram,
+    d: &(impl PointStates + ?Sized),
+    mut schema: rodloop_schema::Diagram,
     opts: &DiagramOptions,
-    scene: &str,
     run: &OutputRun,
 ) -> Result<rodloop_schema::Diagram> {
-    let mut schema = rodloop_diagram::engine::surface_schema(d, opts, scene)?;
     // Every traced state's shape in states/ (cli/states.rs), named in the last column.
-    let (state_files, state_warnings) = crate::states::write_states(d, opts, run)?;
-    for (p, file) in schema.points.iter_mut().zip(state_files) {
-        p.state_file = Some(file);
-    }
+    let state_warnings = crate::states::write_point_states(
+        d,
+        &mut schema,
+        opts.radius,
+        opts.stiffness.reference(),
+        run,
+    )?;
     schema
         .warnings
         .get_or_insert_with(Vec::new)

@@ -70,8 +70,15 @@ pub(crate) fn run_surface(
 
     // 1. The numeric diagram (branch files go to the staging directory and vanish with it).
     let t = Instant::now();
-    let d = crate::diagram::surface::run_numeric(&opts, run.stage_dir(), false, args.quiet, None)?;
-    crate::diagram::surface::write_outputs(&d, &opts, &scene.name, &run)?;
+    let (d, schema) = crate::diagram::surface::run_numeric(
+        &opts,
+        run.stage_dir(),
+        false,
+        args.quiet,
+        None,
+        &scene.name,
+    )?;
+    crate::diagram::surface::write_outputs(&d, schema, &opts, &run)?;
     // The page's tables from the diagram directory as the schema reads it back.
     let dir = rodloop_schema::Diagram::read(run.stage_dir())?;
     let t_diagram = t.elapsed().as_secs_f64();

@@ -11,7 +11,6 @@ use rodloop_solver::{
     solve_with_accuracy, Accuracy, AccurateEquilibrium, SolveOptions, SolverError, StartShape,
 };
 
-use crate::enclosed::EnclosedDiagram;
 use crate::{DiagramError, DiagramOptions, DiagramRow, Label, NumericDiagram};
 
 /// An error and its causes on one line, `error: cause: cause`.
@@ -232,15 +231,16 @@ pub fn surface_choices(d: &NumericDiagram) -> Vec<Choice> {
         .collect()
 }
 
-/// One length per branch of an enclosed diagram, in increasing branch number: the middle of a
-/// stretch of `lifted` (the lengths where the lowest state has lifted off the wall,
-/// [`crate::engine::lowest_lifted_off`]) where the branch is the lowest state and off the
-/// wall, else of its first stable stretch, else of its sampled range. A branch sampled at one
-/// length only has none.
-pub fn enclosed_choices(d: &EnclosedDiagram, lifted: &[(f64, f64)]) -> Vec<Choice> {
+/// One length per branch of an enclosed diagram (its schema `d`), in increasing branch
+/// number: the middle of a stretch of `d.lowest_lifted_off` (the lengths where the lowest
+/// state has lifted off the wall, [`crate::engine::lowest_lifted_off`]) where the branch is
+/// the lowest state and off the wall, else of its first stable stretch, else of its sampled
+/// range. A branch sampled at one length only has none.
+pub fn enclosed_choices(d: &rodloop_schema::Diagram) -> Vec<Choice> {
     let mut branches: Vec<(u32, u32)> = d.points.iter().map(|p| (p.branch, p.eta)).collect();
     branches.sort_unstable();
     branches.dedup();
+    let lifted = d.lowest_lifted_off.as_deref().unwrap_or_default();
     branches
         .into_iter()
         .filter_map(|(branch, eta)| {
@@ -256,13 +256,34 @@ pub fn enclosed_choices(d: &EnclosedDiagram, lifted: &[(f64, f64)]) -> Vec<Choic
         .collect()
 }
 
+/// A sampled state of an enclosed diagram's schema, as [`enclosed_pick`] reads it.
+struct Sample {
+    lbar: f64,
+    lowest: bool,
+    attached: bool,
+    stable: bool,
+}
+
 /// The length of [`enclosed_choices`] for branch `b`, why, and whether it is the lowest.
 fn enclosed_pick(
-    d: &EnclosedDiagram,
+    d: &rodloop_schema::Diagram,
     b: u32,
     lifted: &[(f64, f64)],
 ) -> Option<(f64, String, bool)> {
-    let mut pts: Vec<_> = d.points.iter().filter(|p| p.branch == b).collect();
+    let flag = |p: &rodloop_schema::Point, key: &str| matches!(p.extra.get(key), Some(rodloop_schema::Cell::I(v)) if *v != 0);
+    let mut pts: Vec<Sample> = d
+        .points
+        .iter()
+        .filter(|p| p.branch == b)
+        .filter_map(|p| {
+            Some(Sample {
+                lbar: *p.coords.first()?,
+                lowest: flag(p, "lowest"),
+                attached: flag(p, "attached"),
+                stable: p.label.as_deref() == Some(Label::Stable.as_str()),
+            })
+        })
+        .collect();
     pts.sort_by(|a, c| a.lbar.total_cmp(&c.lbar));
     let (lo, hi) = (pts.first()?.lbar, pts.last()?.lbar);
     if hi <= lo {
@@ -278,11 +299,8 @@ fn enclosed_pick(
             ));
         }
     }
-    if let Some(start) = pts.iter().position(|p| p.label == Label::Stable) {
-        let len = pts[start..]
-            .iter()
-            .take_while(|p| p.label == Label::Stable)
-            .count();
+    if let Some(start) = pts.iter().position(|p| p.stable) {
+        let len = pts[start..].iter().take_while(|p| p.stable).count();
         let (a, c) = (pts[start].lbar, pts[start + len - 1].lbar);
         let at = if c > a { middle(a, c) } else { a };
         return Some((
