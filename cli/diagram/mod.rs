@@ -253,7 +253,7 @@ fn run_numeric(
         selection,
         &scene.name,
     )?;
-    let schema = surface::write_outputs(&d, schema, &opts, &run)?;
+    let (schema, state_warnings) = surface::write_outputs(&d, schema, &opts, &run)?;
     let atlas = match args.shapes {
         0 => None,
         k => Some(crate::atlas::write_atlas(&run, k, &scene.name)?),
@@ -286,7 +286,7 @@ fn run_numeric(
     for line in schema.critical_table(side.as_ref()) {
         outln!("{line}");
     }
-    if let Some(gc) = &d.great_circles {
+    if let Some(gc) = schema.get::<rodloop_diagram::BucklingReport>("great_circles") {
         for l in &gc.loads {
             if let (Some(f), Some(eq)) = (l.lambda_formula, &l.equation) {
                 outln!(
@@ -300,15 +300,15 @@ fn run_numeric(
             }
         }
     }
-    for w in &d.warnings {
+    for w in surface::engine_warnings(&schema, state_warnings) {
         eprintln!("warning: {w}");
     }
     outln!(
         "{} on {} in {:.2} s (tracing {:.2} s); wrote branches.csv, critical.csv, diagram.svg/.png, diagram_split.svg/.png, diagram_lambda.svg/.png, summary.json to {}",
-        crate::output::plural(d.rows().len() as u64, "state"),
-        surface::branch_count(&d.branches),
-        d.timings.total,
-        d.timings.tracing,
+        crate::output::plural(schema.points.len() as u64, "state"),
+        surface::branch_count(&schema.curves),
+        surface::seconds(&schema, "total"),
+        surface::seconds(&schema, "tracing"),
         args.out.display()
     );
     outln!(

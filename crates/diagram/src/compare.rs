@@ -134,24 +134,32 @@ fn exact_symmetry(pv: &PaperValue) -> Result<String, DiagramError> {
 /// buckling loads from its great-circle analysis (Eq. 33 rows: the mode with m + 1 periods,
 /// Eq. 34 rows: m − 1). Winding numbers and symmetries are compared on the exact layer only.
 /// Critical lengths outside the diagram's length range have no numeric value.
-fn numeric_value(pv: &PaperValue, nd: &NumericDiagram) -> Option<f64> {
+fn numeric_value(pv: &PaperValue, nd: &rodloop_schema::Diagram) -> Option<f64> {
     match pv.kind.as_str() {
         "critical_length" => {
             // Only a printed length inside the diagram's range has a numeric counterpart
             // (a diagram of a sub-range must not be matched to a neighbour outside it).
             let target: f64 = pv.value.parse().ok()?;
-            let (lo, hi) = nd.range;
-            if target < lo - 1e-9 || target > hi + 1e-9 {
+            let axis = nd.axes.first()?;
+            if target < axis.min - 1e-9 || target > axis.max + 1e-9 {
                 return None;
             }
-            nearest_critical(pv, target, nd.critical.iter().map(|c| (c.kind, c.lbar_cr)))
+            let kinds = nd.critical.iter().filter_map(|c| {
+                serde_json::from_value::<CriticalKind>(serde_json::Value::String(c.kind.clone()))
+                    .ok()
+                    .map(|k| (k, c.lbar_cr))
+            });
+            nearest_critical(pv, target, kinds)
         }
         "buckling_load" => {
             let m = pv.lbar? as u32;
             let eq = if pv.side == "above" { "33" } else { "34" };
-            nd.great_circles.as_ref()?.loads.iter().find_map(|l| {
-                (l.m == m && l.equation.as_deref() == Some(eq)).then_some(l.lambda_numeric)
-            })
+            nd.get::<crate::BucklingReport>("great_circles")?
+                .loads
+                .iter()
+                .find_map(|l| {
+                    (l.m == m && l.equation.as_deref() == Some(eq)).then_some(l.lambda_numeric)
+                })
         }
         _ => None,
     }
@@ -218,10 +226,10 @@ impl CompareRow {
 }
 
 /// Every paper value of `data/reference/paper_values.csv` next to the exact layer's value
-/// and, when `nd` is given, the numeric diagram's (critical lengths inside the diagram's
+/// and, when `nd` is given, the numeric diagram's in the schema (critical lengths inside its
 /// length range, buckling loads of its great-circle analysis), with deviations and
 /// agreement within the printed resolution.
-pub fn compare_rows(nd: Option<&NumericDiagram>) -> Result<Vec<CompareRow>, DiagramError> {
+pub fn compare_rows(nd: Option<&rodloop_schema::Diagram>) -> Result<Vec<CompareRow>, DiagramError> {
     let values = paper_values()?;
     if values.is_empty() {
         return Err(DiagramError::InvalidOptions(

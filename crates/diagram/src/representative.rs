@@ -97,6 +97,39 @@ pub fn solve_on_branch(
     }
 }
 
+/// A surface diagram's representative states, reached through its traced branches: where the
+/// report shows each branch ([`surface_choices`]) and the branch solved accurately there
+/// ([`solve_on_branch`]). Implemented by the surface engine's result, so that the report holds
+/// that result without naming it.
+pub trait Representatives: Sync {
+    /// One length per traced branch ([`surface_choices`]).
+    fn choices(&self) -> Vec<Choice>;
+    /// Branch `eta` solved at `lbar` and `accuracy` ([`solve_on_branch`]).
+    fn solve_on_branch(
+        &self,
+        opts: &DiagramOptions,
+        accuracy: Accuracy,
+        eta: u32,
+        lbar: f64,
+    ) -> Result<(AccurateEquilibrium, String), DiagramError>;
+}
+
+impl Representatives for NumericDiagram {
+    fn choices(&self) -> Vec<Choice> {
+        surface_choices(self)
+    }
+
+    fn solve_on_branch(
+        &self,
+        opts: &DiagramOptions,
+        accuracy: Accuracy,
+        eta: u32,
+        lbar: f64,
+    ) -> Result<(AccurateEquilibrium, String), DiagramError> {
+        solve_on_branch(self, opts, accuracy, eta, lbar)
+    }
+}
+
 /// Where one branch of a diagram is shown: the length, why that length, and whether the
 /// diagram finds the branch the lowest there.
 #[derive(Clone, Debug, PartialEq)]

@@ -28,17 +28,20 @@
 //! |---|---|
 //! | `mod.rs` | the [`Engine`] interface and the schema helpers the engines share |
 //! | `surface.rs` | [`SurfaceEngine`] and its schema ([`surface_schema`]) |
-//! | `enclosed.rs` | [`EnclosedEngine`] and its schema ([`lowest_lifted_off`]) |
+//! | `branch_files.rs` | [`BranchFiles`]: the surface engine's branches saved to and resumed from their files |
+//! | `enclosed.rs` | [`EnclosedEngine`], its schema ([`lowest_lifted_off`]) and its completeness certificate ([`EnclosedEngine::certificate`]) |
 //! | `exact.rs` | [`ExactEngine`], its window of the exact diagram ([`exact_window`], in the schema: [`exact_window_schema`]) and the exact counterpart of a critical length ([`exact_counterpart`]) |
 //! | `sweep.rs` | [`SweepEngine`] (states at a fixed length against a stiffness parameter) and its schema ([`sweep_schema`]) |
 //! | `phase.rs` | [`PhaseEngine`] (critical lengths followed in a stiffness parameter, rows whose states fail left out: [`VerifiedPhase`]) and its schema ([`phase_schema`]) |
 
+mod branch_files;
 mod enclosed;
 mod exact;
 mod phase;
 mod surface;
 mod sweep;
 
+pub use branch_files::{BranchFileEvent, BranchFiles};
 pub use enclosed::{lowest_lifted_off, CertificateCheck, EnclosedEngine};
 pub use exact::{
     etas_in, exact_counterpart, exact_window, exact_window_schema, ExactEngine, ExactOutput,
