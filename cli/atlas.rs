@@ -303,8 +303,8 @@ fn record_in_summary(run: &OutputRun, note: &AtlasNote) -> Result<()> {
     run.write_json("summary.json", &summary)
 }
 
-/// The atlas of an enclosed diagram (which keeps no states): per branch, `k` of its sampled
-/// lengths spread over its range, each solved again as `rodloop solve` solves it
+/// The atlas of an enclosed diagram, read from its schema `d` (whose points keep no states
+/// fit for the atlas' resolution): per branch, `k` of its sampled lengths spread over its range, each solved again as `rodloop solve` solves it
 /// ([`crate::enclosed::solve_state`]; attached: the exact surface loop re-solved by the 3-D
 /// model, lifted off: the 3-D model), written to `states/branch-B-NN.csv` in the columns of
 /// the enclosed `config.csv` when `states` is given, and drawn with the parts off the wall

@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
-use rodloop_diagram::enclosed::{EnclosedDiagramOptions, EnclosedProgress};
+use rodloop_diagram::enclosed::EnclosedProgress;
 use rodloop_diagram::engine::CertificateCheck;
 use rodloop_diagram::{EnclosedEngine, Engine, PointStates};
 use rodloop_figures::raster::svg_to_png;
@@ -38,12 +38,13 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
         bail!("need 0 < --lbar-min < --lbar-max <= 20 for an enclosed diagram (got {lbar_min} and {lbar_max})");
     }
     let accuracy = crate::args::accuracy_of(scene, args.accuracy.as_deref())?;
-    let mut opts = EnclosedDiagramOptions::new(
+    let mut engine = EnclosedEngine::new(
         crate::engine::wall_of(scene),
         crate::args::stiffness_of(&scene.stiffness),
         lbar_min,
         lbar_max,
     );
+    let opts = &mut engine.opts;
     opts.accuracy = accuracy;
     if let Some(step) = args.step {
         opts.step = step;
@@ -69,7 +70,6 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     // Progress on stderr (cli/progress.rs): a bar on a terminal, one line per task otherwise.
     let bar = crate::progress::Progress::new(0, "enclosed", args.quiet);
     let mut planned = 0u64;
-    let mut engine = EnclosedEngine { opts };
     let d = engine
         .run(&mut |p| match p {
             EnclosedProgress::Planned(n) => {
@@ -80,18 +80,17 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
         })
         .context("the enclosed diagram")?;
     bar.finish();
-    let opts = &engine.opts;
     // The completeness certificate (the same search `solve` runs) goes into summary.json.
     let cert = engine.certificate(&d);
     let mut schema = engine.schema(&d, &scene.name)?;
     schema.set_certificate(&cert)?;
-    let state_warnings = write_outputs(&mut schema, &d, opts, &run, args.width, args.height)?;
+    let state_warnings = write_outputs(&mut schema, &d, &engine, &run, args.width, args.height)?;
     if args.shapes > 0 {
         // The branch atlas (cli/atlas.rs): states re-solved along each branch, in states/.
         crate::atlas::write_enclosed_atlas(&run, args.shapes, scene, accuracy, &schema)?;
     }
     run.commit()?;
-    print(&schema, state_warnings, scene, opts, &args.out);
+    print(&schema, state_warnings, scene, &engine, &args.out);
     print_certificate(&cert);
     Ok(())
 }
@@ -132,14 +131,19 @@ fn print_certificate(cert: &[CertificateCheck]) {
 pub(crate) fn write_outputs(
     schema: &mut rodloop_schema::Diagram,
     d: &(impl PointStates + ?Sized),
-    opts: &EnclosedDiagramOptions,
+    engine: &EnclosedEngine,
     run: &OutputRun,
     width: u32,
     height: u32,
 ) -> Result<usize> {
     // Every point's loop in states/ (cli/states.rs), named in the last column.
-    let state_warnings =
-        crate::states::write_point_states(d, schema, opts.radius, opts.stiffness.reference(), run)?;
+    let state_warnings = crate::states::write_point_states(
+        d,
+        schema,
+        engine.opts.radius,
+        engine.opts.stiffness.reference(),
+        run,
+    )?;
     for w in &state_warnings {
         eprintln!("warning: {w}");
     }
@@ -172,13 +176,13 @@ fn print(
     d: &rodloop_schema::Diagram,
     state_warnings: usize,
     scene: &Scene,
-    opts: &EnclosedDiagramOptions,
+    engine: &EnclosedEngine,
     out: &Path,
 ) {
     outln!(
         "Critical lengths (enclosed scene {}, accuracy {:?}):",
         scene.name,
-        opts.accuracy
+        engine.opts.accuracy
     );
     let side = rodloop_schema::SideColumn {
         header: "surface lbar_cr".into(),

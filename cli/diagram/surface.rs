@@ -3,8 +3,9 @@
 //! labels from the Hessian index, great-circle buckling loads.
 //!
 //! Each branch is written to `DIR/branches/branch-B.json` (B the paper's branch number) as
-//! soon as it is traced, so that an interrupted run continues with `--resume` from the
-//! branches already there (files of older versions, `eta-N.json`, are read too).
+//! soon as it is traced ([`rodloop_diagram::BranchFiles`]), so that an interrupted run
+//! continues with `--resume` from the branches already there; this module prints its events
+//! as progress lines.
 
 use std::path::Path;
 

@@ -13,7 +13,6 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use rodloop_diagram::enclosed::EnclosedDiagramOptions;
 use rodloop_diagram::representative::{enclosed_choices, Choice};
 use rodloop_diagram::{EnclosedEngine, Engine};
 use rodloop_figures::atlas::atlas_figure;
@@ -159,13 +158,14 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
         None => None,
     };
     let accuracy = crate::args::accuracy_of(scene, args.accuracy.as_deref())?;
-    let mut opts = EnclosedDiagramOptions::new(
+    let mut engine = EnclosedEngine::new(
         crate::engine::wall_of(scene),
         crate::args::stiffness_of(&scene.stiffness),
         scene.lbar_min,
         scene.lbar_max,
     );
-    opts.accuracy = accuracy;
+    engine.opts.accuracy = accuracy;
+    let opts = engine.opts.clone();
     let run = OutputRun::begin(&args.out)?;
 
     // 1. The enclosed diagram, written as `rodloop diagram` writes it.
@@ -176,13 +176,11 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
             opts.lbar_min, opts.lbar_max
         );
     }
-    let mut engine = EnclosedEngine { opts };
     let d = engine.run(&mut |_| {}).context("the enclosed diagram")?;
-    let opts = engine.opts.clone();
     let mut schema = engine.schema(&d, &scene.name)?;
     let (w, h) = crate::diagram::FIGURE_SIZE;
     let state_warnings =
-        crate::diagram::enclosed::write_outputs(&mut schema, &d, &opts, &run, w, h)?;
+        crate::diagram::enclosed::write_outputs(&mut schema, &d, &engine, &run, w, h)?;
     // The page's tables from the diagram directory as the schema reads it back.
     let dir = rodloop_schema::Diagram::read(run.stage_dir())?;
     let lifted = schema.lowest_lifted_off.clone().unwrap_or_default();

@@ -22,6 +22,22 @@ pub struct EnclosedEngine {
     pub opts: EnclosedDiagramOptions,
 }
 
+impl EnclosedEngine {
+    /// The engine for the diagram of `stiffness` inside `wall` over `lbar_min ≤ L̄ ≤ lbar_max`
+    /// with the default settings of [`EnclosedDiagramOptions::new`] (set the others on
+    /// `opts`).
+    pub fn new(
+        wall: impl rodloop_solver::enclosed::IntoWall,
+        stiffness: rodloop_solver::Stiffness,
+        lbar_min: f64,
+        lbar_max: f64,
+    ) -> Self {
+        Self {
+            opts: EnclosedDiagramOptions::new(wall, stiffness, lbar_min, lbar_max),
+        }
+    }
+}
+
 impl Engine for EnclosedEngine {
     type Output = EnclosedDiagram;
     type Progress = EnclosedProgress;
