@@ -184,12 +184,15 @@ fn check_shapes(k: usize) -> Result<()> {
 pub fn write_exact_atlas(
     run: &OutputRun,
     k: usize,
-    points: &[rodloop_exact::diagram::BranchPoint],
+    d: &rodloop_schema::Diagram,
 ) -> Result<AtlasNote> {
     check_shapes(k)?;
-    let mut groups: BTreeMap<u32, Vec<&rodloop_exact::diagram::BranchPoint>> = BTreeMap::new();
-    for p in points {
-        groups.entry(p.branch).or_default().push(p);
+    // The sampled points of each branch: (L̄, the point).
+    let mut groups: BTreeMap<u32, Vec<(f64, &rodloop_schema::Point)>> = BTreeMap::new();
+    for p in &d.points {
+        if let Some(&lbar) = p.coords.first() {
+            groups.entry(p.branch).or_default().push((lbar, p));
+        }
     }
     let mut rows = Vec::new();
     let mut note = AtlasNote {
@@ -197,15 +200,17 @@ pub fn write_exact_atlas(
         files: Vec::new(),
     };
     for (branch, mut g) in groups {
-        g.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
-        let pos: Vec<f64> = g.iter().map(|p| p.lbar).collect();
+        g.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let pos: Vec<f64> = g.iter().map(|p| p.0).collect();
         let mut cells = Vec::new();
         let mut picked = Vec::new();
         for i in spread(&pos, k) {
-            let p = g[i];
-            let lp = rodloop_exact::paper_branch_loop(p.eta, p.lbar)
-                .with_context(|| format!("exact loop of branch {branch} at L̄ = {}", p.lbar))?;
+            let (lbar, p) = g[i];
+            let lp = rodloop_exact::paper_branch_loop(p.eta, lbar)
+                .with_context(|| format!("exact loop of branch {branch} at L̄ = {lbar}"))?;
             let pts = lp.sample(256)?;
+            let lowest =
+                matches!(p.extra.get("lowest"), Some(rodloop_schema::Cell::I(v)) if *v != 0);
             cells.push(AtlasCell {
                 points: pts
                     .iter()
@@ -213,15 +218,15 @@ pub fn write_exact_atlas(
                     .collect(),
                 stiffness: None,
                 off_wall: None,
-                lbar: p.lbar,
+                lbar,
                 energy: p.energy,
-                stability: if p.lowest { "lowest" } else { "higher" }.into(),
+                stability: if lowest { "lowest" } else { "higher" }.into(),
             });
-            picked.push((p.lbar, String::new()));
+            picked.push((lbar, String::new()));
         }
         rows.push(AtlasRow {
             title: format!("branch {branch}"),
-            subtitle: format!("η = {}", g[0].eta),
+            subtitle: format!("η = {}", g[0].1.eta),
             color: branch_color(branch).to_string(),
             cells,
         });
