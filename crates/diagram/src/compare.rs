@@ -7,8 +7,9 @@
 use rodloop_exact::diagram::{compute, CriticalKind, DiagramSettings};
 use rodloop_exact::{eta_of_branch, paper_branch_loop};
 
-use crate::representative::{middle_of_first_stable, stable_near_half_integers};
-use crate::{DiagramError, NumericDiagram};
+use crate::representative::{middle_of_first_stable, stable_near_half_integers, StableRow};
+use crate::DiagramError;
+use crate::Label;
 
 const PAPER_VALUES: &str = include_str!("../../../data/reference/paper_values.csv");
 
@@ -327,15 +328,25 @@ pub struct SegmentRow {
 /// - the saddle-like states of branch 1 keep only a mirror plane (`Cs`; Fig. 10), in the
 ///   middle of its first stable stretch.
 pub fn segment_rows(
-    d: &NumericDiagram,
+    d: &rodloop_schema::Diagram,
     ratio: f64,
     (s0, s1): (f64, f64),
     (lbar_min, lbar_max): (f64, f64),
 ) -> Vec<SegmentRow> {
-    let rows = d.rows();
+    let rows: Vec<SchemaRow> = d
+        .points
+        .iter()
+        .filter_map(|p| {
+            Some(SchemaRow {
+                lbar: *p.coords.first()?,
+                point: p,
+            })
+        })
+        .collect();
     let stiff = 1.0 - (s1 - s0);
     let mut out = Vec::new();
-    for r in stable_near_half_integers(&rows, lbar_min, lbar_max) {
+    for row in stable_near_half_integers(&rows, lbar_min, lbar_max) {
+        let r = Row::of(row);
         let estimate = stiff * r.lbar;
         let dev = (r.energy - estimate) / estimate;
         let judged = ratio <= SOFT_LIMIT;
@@ -356,8 +367,12 @@ pub fn segment_rows(
             source: "Sec. 5 (Fig. 9): E ≈ D0 ℓ_stiff/(2R²) for an extremely soft segment; stable state of the diagram",
         });
     }
-    if let Some(r) = middle_of_first_stable(&rows, 1) {
-        let group = r.shape.point_group.clone().unwrap_or_else(|| "?".into());
+    if let Some(row) = middle_of_first_stable(&rows, 1) {
+        let r = Row::of(row);
+        let group = match row.point.extra.get("point_group") {
+            Some(rodloop_schema::Cell::S(g)) if !g.is_empty() => g.clone(),
+            _ => "?".into(),
+        };
         out.push(SegmentRow {
             id: "sym_branch1".into(),
             lbar: Some(r.lbar),
@@ -370,4 +385,40 @@ pub fn segment_rows(
         });
     }
     out
+}
+
+/// A point of a surface diagram's schema with its length, as the stable-stretch helpers read
+/// it.
+struct SchemaRow<'a> {
+    lbar: f64,
+    point: &'a rodloop_schema::Point,
+}
+
+impl StableRow for SchemaRow<'_> {
+    fn branch(&self) -> u32 {
+        self.point.branch
+    }
+    fn lbar(&self) -> f64 {
+        self.lbar
+    }
+    fn stable(&self) -> bool {
+        self.point.label.as_deref() == Some(Label::Stable.as_str())
+    }
+}
+
+/// The numbers [`segment_rows`] prints of a row.
+struct Row {
+    lbar: f64,
+    energy: f64,
+    energy_error: Option<f64>,
+}
+
+impl Row {
+    fn of(r: &SchemaRow<'_>) -> Self {
+        Self {
+            lbar: r.lbar,
+            energy: r.point.energy,
+            energy_error: r.point.energy_error,
+        }
+    }
 }

@@ -170,26 +170,46 @@ pub fn middle(a: f64, b: f64) -> f64 {
     }
 }
 
+/// A row of a diagram as the stable-stretch helpers read it: its branch, its length and
+/// whether it is labelled stable (a traced [`DiagramRow`], or a point of the result schema).
+pub trait StableRow {
+    /// Paper branch.
+    fn branch(&self) -> u32;
+    /// `L̄`.
+    fn lbar(&self) -> f64;
+    /// Labelled stable.
+    fn stable(&self) -> bool;
+}
+
+impl StableRow for DiagramRow {
+    fn branch(&self) -> u32 {
+        self.branch
+    }
+    fn lbar(&self) -> f64 {
+        self.lbar
+    }
+    fn stable(&self) -> bool {
+        self.stability == Label::Stable
+    }
+}
+
 /// The stretches of lengths over which the diagram labels branch `branch` stable, in
 /// increasing `L̄`: the stable rows of every branch in increasing `L̄`, split where another
 /// branch's stable row comes between (a non-uniform rod's branch has several families, so the
 /// rows of the branch alone interleave); the lengths of the first and last row of each run.
-pub fn stable_stretches(rows: &[DiagramRow], branch: u32) -> Vec<(f64, f64)> {
-    let mut stable: Vec<&DiagramRow> = rows
-        .iter()
-        .filter(|r| r.stability == Label::Stable)
-        .collect();
-    stable.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
+pub fn stable_stretches<R: StableRow>(rows: &[R], branch: u32) -> Vec<(f64, f64)> {
+    let mut stable: Vec<&R> = rows.iter().filter(|r| r.stable()).collect();
+    stable.sort_by(|a, b| a.lbar().total_cmp(&b.lbar()));
     stable
-        .chunk_by(|a, b| (a.branch == branch) == (b.branch == branch))
-        .filter(|run| run[0].branch == branch)
-        .map(|run| (run[0].lbar, run[run.len() - 1].lbar))
+        .chunk_by(|a, b| (a.branch() == branch) == (b.branch() == branch))
+        .filter(|run| run[0].branch() == branch)
+        .map(|run| (run[0].lbar(), run[run.len() - 1].lbar()))
         .collect()
 }
 
 /// The stable row nearest each half-integer length `m + ½` strictly inside `(lo, hi)` (of any
 /// branch), in increasing `m + ½`; none where the diagram has no stable row.
-pub fn stable_near_half_integers(rows: &[DiagramRow], lo: f64, hi: f64) -> Vec<&DiagramRow> {
+pub fn stable_near_half_integers<R: StableRow>(rows: &[R], lo: f64, hi: f64) -> Vec<&R> {
     let mut out = Vec::new();
     let mut t = lo.floor() + 0.5;
     while t < hi {
@@ -205,18 +225,18 @@ pub fn stable_near_half_integers(rows: &[DiagramRow], lo: f64, hi: f64) -> Vec<&
 
 /// The stable row of branch `branch` nearest the middle of its first stable stretch
 /// ([`stable_stretches`]).
-pub fn middle_of_first_stable(rows: &[DiagramRow], branch: u32) -> Option<&DiagramRow> {
+pub fn middle_of_first_stable<R: StableRow>(rows: &[R], branch: u32) -> Option<&R> {
     let &(a, b) = stable_stretches(rows, branch).first()?;
-    nearest_stable(rows.iter().filter(|r| r.branch == branch), 0.5 * (a + b))
+    nearest_stable(rows.iter().filter(|r| r.branch() == branch), 0.5 * (a + b))
 }
 
 /// The stable row of `rows` nearest `lbar`.
-fn nearest_stable<'a>(
-    rows: impl Iterator<Item = &'a DiagramRow>,
+fn nearest_stable<'a, R: StableRow + 'a>(
+    rows: impl Iterator<Item = &'a R>,
     lbar: f64,
-) -> Option<&'a DiagramRow> {
-    rows.filter(|r| r.stability == Label::Stable)
-        .min_by(|a, b| (a.lbar - lbar).abs().total_cmp(&(b.lbar - lbar).abs()))
+) -> Option<&'a R> {
+    rows.filter(|r| r.stable())
+        .min_by(|a, b| (a.lbar() - lbar).abs().total_cmp(&(b.lbar() - lbar).abs()))
 }
 
 /// One length per traced branch of a surface diagram, in increasing branch number: the
