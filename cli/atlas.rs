@@ -184,12 +184,15 @@ fn check_shapes(k: usize) -> Result<()> {
 pub fn write_exact_atlas(
     run: &OutputRun,
     k: usize,
-    points: &[rodloop_exact::diagram::BranchPoint],
+    d: &rodloop_schema::Diagram,
 ) -> Result<AtlasNote> {
     check_shapes(k)?;
-    let mut groups: BTreeMap<u32, Vec<&rodloop_exact::diagram::BranchPoint>> = BTreeMap::new();
-    for p in points {
-        groups.entry(p.branch).or_default().push(p);
+    // The sampled points of each branch: (L̄, the point).
+    let mut groups: BTreeMap<u32, Vec<(f64, &rodloop_schema::Point)>> = BTreeMap::new();
+    for p in &d.points {
+        if let Some(&lbar) = p.coords.first() {
+            groups.entry(p.branch).or_default().push((lbar, p));
+        }
     }
     let mut rows = Vec::new();
     let mut note = AtlasNote {
@@ -197,15 +200,17 @@ pub fn write_exact_atlas(
         files: Vec::new(),
     };
     for (branch, mut g) in groups {
-        g.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
-        let pos: Vec<f64> = g.iter().map(|p| p.lbar).collect();
+        g.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let pos: Vec<f64> = g.iter().map(|p| p.0).collect();
         let mut cells = Vec::new();
         let mut picked = Vec::new();
         for i in spread(&pos, k) {
-            let p = g[i];
-            let lp = rodloop_exact::paper_branch_loop(p.eta, p.lbar)
-                .with_context(|| format!("exact loop of branch {branch} at L̄ = {}", p.lbar))?;
+            let (lbar, p) = g[i];
+            let lp = rodloop_exact::paper_branch_loop(p.eta, lbar)
+                .with_context(|| format!("exact loop of branch {branch} at L̄ = {lbar}"))?;
             let pts = lp.sample(256)?;
+            let lowest =
+                matches!(p.extra.get("lowest"), Some(rodloop_schema::Cell::I(v)) if *v != 0);
             cells.push(AtlasCell {
                 points: pts
                     .iter()
@@ -213,15 +218,15 @@ pub fn write_exact_atlas(
                     .collect(),
                 stiffness: None,
                 off_wall: None,
-                lbar: p.lbar,
+                lbar,
                 energy: p.energy,
-                stability: if p.lowest { "lowest" } else { "higher" }.into(),
+                stability: if lowest { "lowest" } else { "higher" }.into(),
             });
-            picked.push((p.lbar, String::new()));
+            picked.push((lbar, String::new()));
         }
         rows.push(AtlasRow {
             title: format!("branch {branch}"),
-            subtitle: format!("η = {}", g[0].eta),
+            subtitle: format!("η = {}", g[0].1.eta),
             color: branch_color(branch).to_string(),
             cells,
         });
@@ -303,8 +308,8 @@ fn record_in_summary(run: &OutputRun, note: &AtlasNote) -> Result<()> {
     run.write_json("summary.json", &summary)
 }
 
-/// The atlas of an enclosed diagram (which keeps no states): per branch, `k` of its sampled
-/// lengths spread over its range, each solved again as `rodloop solve` solves it
+/// The atlas of an enclosed diagram, read from its schema `d` (whose points keep no states
+/// fit for the atlas' resolution): per branch, `k` of its sampled lengths spread over its range, each solved again as `rodloop solve` solves it
 /// ([`crate::enclosed::solve_state`]; attached: the exact surface loop re-solved by the 3-D
 /// model, lifted off: the 3-D model), written to `states/branch-B-NN.csv` in the columns of
 /// the enclosed `config.csv` when `states` is given, and drawn with the parts off the wall
@@ -312,32 +317,35 @@ fn record_in_summary(run: &OutputRun, note: &AtlasNote) -> Result<()> {
 pub fn enclosed_rows(
     scene: &rodloop_scene::Scene,
     accuracy: rodloop_solver::Accuracy,
-    d: &rodloop_diagram::enclosed::EnclosedDiagram,
+    d: &rodloop_schema::Diagram,
     k: usize,
     states: Option<&Path>,
 ) -> Result<(Vec<AtlasRow>, AtlasNote, Vec<String>)> {
     check_shapes(k)?;
     let stiffness = crate::args::stiffness_of(&scene.stiffness);
-    let mut groups: BTreeMap<u32, Vec<&rodloop_diagram::enclosed::EnclosedPoint>> = BTreeMap::new();
+    // The sampled points of each branch: (L̄, the point).
+    let mut groups: BTreeMap<u32, Vec<(f64, &rodloop_schema::Point)>> = BTreeMap::new();
     for p in &d.points {
-        groups.entry(p.branch).or_default().push(p);
+        if let Some(&lbar) = p.coords.first() {
+            groups.entry(p.branch).or_default().push((lbar, p));
+        }
     }
     let mut jobs = Vec::new();
     for (&branch, g) in groups.iter_mut() {
-        g.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
+        g.sort_by(|a, b| a.0.total_cmp(&b.0));
         // The free planar circle (branch 0) is free only below L̄ = 1; at L̄ = 1 it is the
         // great circle on the wall, where the free-circle solve is singular: not a state of it.
         if branch == 0 {
-            g.retain(|p| p.lbar < 1.0 - 1e-9);
+            g.retain(|p| p.0 < 1.0 - 1e-9);
         }
-        let pos: Vec<f64> = g.iter().map(|p| p.lbar).collect();
+        let pos: Vec<f64> = g.iter().map(|p| p.0).collect();
         for (j, i) in spread(&pos, k).into_iter().enumerate() {
             jobs.push((branch, j, g[i]));
         }
     }
-    let solved = crate::states::parallel_map(&jobs, |&(branch, j, p)| {
+    let solved = crate::states::parallel_map(&jobs, |&(branch, j, (lbar, _))| {
         let one = || -> Result<(LoopData, String)> {
-            let res = crate::enclosed::solve_state(scene, &stiffness, p.lbar, branch, accuracy)?;
+            let res = crate::enclosed::solve_state(scene, &stiffness, lbar, branch, accuracy)?;
             let table =
                 crate::states::result_table(&res, scene.radius, scene.stiffness.reference())?;
             let bytes = table.to_bytes()?;
@@ -355,7 +363,7 @@ pub fn enclosed_rows(
                 },
             ))
         };
-        one().map_err(|e| format!("branch {branch} at L̄ = {}: {e:#}", p.lbar))
+        one().map_err(|e| format!("branch {branch} at L̄ = {lbar}: {e:#}"))
     });
     let mut rows: Vec<AtlasRow> = Vec::new();
     let mut note = AtlasNote {
@@ -363,7 +371,7 @@ pub fn enclosed_rows(
         files: Vec::new(),
     };
     let mut failed = Vec::new();
-    for ((branch, _, p), res) in jobs.iter().zip(solved) {
+    for ((branch, _, (lbar, p)), res) in jobs.iter().zip(solved) {
         let (data, file) = match res {
             Ok(x) => x,
             Err(e) => {
@@ -401,14 +409,14 @@ pub fn enclosed_rows(
                 points: data.points(),
                 stiffness: data.column("D").map(<[f64]>::to_vec),
                 off_wall,
-                lbar: p.lbar,
+                lbar: *lbar,
                 energy: p.energy,
-                stability: p.label.as_str().to_string(),
+                stability: p.label.clone().unwrap_or_default(),
             });
             if !file.is_empty() {
                 note.files.push(file.clone());
             }
-            n.2.push((p.lbar, file));
+            n.2.push((*lbar, file));
         }
     }
     if rows.is_empty() {
@@ -428,7 +436,7 @@ pub fn write_enclosed_atlas(
     k: usize,
     scene: &rodloop_scene::Scene,
     accuracy: rodloop_solver::Accuracy,
-    d: &rodloop_diagram::enclosed::EnclosedDiagram,
+    d: &rodloop_schema::Diagram,
 ) -> Result<AtlasNote> {
     let states = run.subdir("states")?;
     let (rows, note, failed) = enclosed_rows(scene, accuracy, d, k, Some(&states))?;

@@ -8,6 +8,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 pub use rodloop_diagram::compare::{compare_rows, CompareRow};
+use rodloop_diagram::Engine;
 
 use crate::output::{checked_json, Cell, OutputRun, Table};
 
@@ -27,13 +28,14 @@ pub struct Args {
 /// Run the subcommand without `--scene`: the default scene's numeric diagram against the
 /// exact layer and the paper's printed values.
 pub fn run(args: &Args) -> Result<()> {
-    let nd = rodloop_diagram::compute(
-        &rodloop_diagram::DiagramOptions::default(),
-        &mut (),
-        &mut |_| {},
-    )
-    .context("numeric diagram of the default scene")?;
-    let values = compare_rows(Some(&nd))?;
+    let mut engine = rodloop_diagram::SurfaceEngine {
+        opts: rodloop_diagram::DiagramOptions::default(),
+        hook: &mut (),
+    };
+    let nd = engine
+        .run(&mut |_| {})
+        .context("numeric diagram of the default scene")?;
+    let values = compare_rows(Some(&engine.schema(&nd, "")?))?;
     let mut table = Table::new(
         "compare.csv",
         &[

@@ -10,6 +10,7 @@ use std::path::Path;
 use anyhow::{bail, Context, Result};
 use rodloop_diagram::compare::{segment_rows, ENERGY_TOLERANCE, SOFT_LIMIT};
 use rodloop_diagram::DiagramOptions;
+use rodloop_diagram::Engine;
 use rodloop_scene::{Scene, StiffnessSpec};
 
 use crate::output::{checked_json, Cell, OutputRun, Table};
@@ -31,10 +32,16 @@ pub fn run(scene: &Scene, out: &Path) -> Result<()> {
         ..Default::default()
     };
     opts.validate()?;
-    let d = rodloop_diagram::compute(&opts, &mut (), &mut |_| {})
+    let mut engine = rodloop_diagram::SurfaceEngine {
+        opts,
+        hook: &mut (),
+    };
+    let d = engine
+        .run(&mut |_| {})
         .with_context(|| format!("numeric diagram of scene {}", scene.name))?;
+    let schema = engine.schema(&d, &scene.name)?;
     let ratio = d1 / d0;
-    let out_rows = segment_rows(&d, ratio, (s0, s1), (scene.lbar_min, scene.lbar_max));
+    let out_rows = segment_rows(&schema, ratio, (s0, s1), (scene.lbar_min, scene.lbar_max));
     if out_rows.is_empty() {
         bail!(
             "compare --scene {}: the diagram has no stable state to compare (range {} to {})",

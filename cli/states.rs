@@ -2,60 +2,96 @@
 //! columns of `solve`'s `config.csv`: any point of a diagram can be re-solved
 //! (`solve --from OUT/states/FILE`) or drawn (`draw OUT/states/FILE`). The row of
 //! `branches.csv` names its file in the column `state_file`. The rows come from
-//! [`rodloop_diagram::state_rows`]; this module names and writes the files.
+//! [`rodloop_diagram::state_rows`], the files are named by the engine's result
+//! ([`rodloop_diagram::PointStates`]); this module writes them.
 
 use anyhow::Result;
 use rodloop_diagram::state_rows::{
-    point_rows, result_rows, surface_rows, ENCLOSED_COLUMNS, NODE_COLUMN, SURFACE_COLUMNS,
+    result_rows, surface_rows, ENCLOSED_COLUMNS, NODE_COLUMN, SURFACE_COLUMNS,
 };
-use rodloop_diagram::{DiagramOptions, NumericDiagram, TracedBranch};
+use rodloop_diagram::{PointStates, StateTable};
 
 use crate::output::{Cell, OutputRun, Table};
 
-/// The file of traced state `k` of `b`, relative to the diagram directory:
-/// `states/branch-B-KKK.csv`, or `states/branch-B-family-F-sheet-S-KKK.csv` for a family of
-/// a non-uniform rod (`k` counts the sheet's states in increasing `L̄`).
-pub fn file_name(b: &TracedBranch, k: usize) -> String {
-    if b.family == 0 {
-        format!("states/branch-{}-{k:03}.csv", b.branch)
-    } else {
-        format!(
-            "states/branch-{}-family-{}-sheet-{}-{k:03}.csv",
-            b.branch, b.family, b.sheet
-        )
+/// Write the state of every point of `schema` that `states` keeps into the run's `states/`
+/// directory (in parallel), in the columns of `solve`'s `config.csv` (units of the scene's `r`
+/// and `d0`), and name each file in its point's `state_file` (empty where the point has no
+/// verified state or its file could not be written). Returns the warnings for those that
+/// could not be written.
+pub fn write_point_states(
+    states: &(impl PointStates + ?Sized),
+    schema: &mut rodloop_schema::Diagram,
+    r: f64,
+    d0: f64,
+    run: &OutputRun,
+) -> Result<Vec<String>> {
+    let dir = run.subdir("states")?;
+    let points = states.point_states();
+    let results = parallel_map(&points, |state| {
+        let Some(state) = state else {
+            return Ok(String::new());
+        };
+        let table = state
+            .table(r, d0)
+            .map_err(|e| StateError::Rows(format!("{e:#}")))?;
+        let write = || -> Result<()> {
+            let bytes = state_table(&table)?.to_bytes()?;
+            crate::output::write_atomic(&dir, state.name.trim_start_matches("states/"), &bytes)?;
+            Ok(())
+        };
+        write().map_err(|e| {
+            StateError::Write(format!("{} could not be written: {e:#}", state.name))
+        })?;
+        Ok(state.name.clone())
+    });
+    let mut warnings = Vec::new();
+    for (p, res) in schema.points.iter_mut().zip(results) {
+        p.state_file = Some(match res {
+            Ok(name) => name,
+            Err(StateError::Rows(e)) => {
+                warnings.push(format!(
+                    "the state of branch {} family {} at L̄ = {} has no state file: {e}",
+                    p.branch,
+                    p.family.unwrap_or(0),
+                    p.coords.first().map_or(String::new(), f64::to_string)
+                ));
+                String::new()
+            }
+            Err(StateError::Write(w)) => {
+                warnings.push(w);
+                String::new()
+            }
+        });
     }
+    Ok(warnings)
 }
 
-/// Write the state files into the run's `states/` directory: the states as the diagram
-/// verified them ([`NumericDiagram::state_files`]). Returns the file of every row of
-/// [`NumericDiagram::rows`], in that order (empty where a state failed the verification,
-/// which the diagram's warnings name), and the warnings of files that could not be written.
-pub fn write_states(
-    d: &NumericDiagram,
-    opts: &DiagramOptions,
-    run: &OutputRun,
-) -> Result<(Vec<String>, Vec<String>)> {
-    let dir = run.subdir("states")?;
-    let (r, d0) = (opts.radius, opts.stiffness.reference());
-    let mut names = Vec::new();
-    let mut warnings = Vec::new();
-    for (b, files) in d.branches.iter().zip(&d.state_files) {
-        for (k, f) in files.iter().enumerate() {
-            let Some(f) = f else {
-                names.push(String::new());
-                continue;
-            };
-            let name = file_name(b, k);
-            match write_state_file(&dir, &name, f, r, d0) {
-                Ok(_) => names.push(name),
-                Err(e) => {
-                    names.push(String::new());
-                    warnings.push(format!("{name} could not be written: {e:#}"));
-                }
-            }
-        }
+/// Why a state has no file.
+enum StateError {
+    /// Its rows could not be made.
+    Rows(String),
+    /// Its file could not be written.
+    Write(String),
+}
+
+/// The `config.csv` table of a state ([`StateTable`]; its integer column as integers).
+fn state_table(t: &StateTable) -> Result<Table> {
+    let mut table = Table::new("config.csv", t.columns);
+    for row in &t.rows {
+        table.push(
+            row.iter()
+                .enumerate()
+                .map(|(i, &x)| {
+                    if Some(i) == t.integer_column {
+                        Cell::I(x as i64)
+                    } else {
+                        Cell::F(x)
+                    }
+                })
+                .collect(),
+        )?;
     }
-    Ok((names, warnings))
+    Ok(table)
 }
 
 /// Write the verified state `f` as `name` (relative to the run's directory, `states/…`) into
@@ -160,20 +196,6 @@ pub fn files_in(dir: &std::path::Path) -> Result<Vec<String>> {
     Ok(out)
 }
 
-/// The file of point `k` of an enclosed diagram (`k` counts the points of its branch, family
-/// and sheet in increasing `L̄`): `states/enclosed-branch-B-KKK.csv`, or
-/// `states/enclosed-branch-B-family-F-sheet-S-KKK.csv` for a family of a non-uniform rod.
-pub fn enclosed_file_name(p: &rodloop_diagram::enclosed::EnclosedPoint, k: usize) -> String {
-    if p.family == 0 {
-        format!("states/enclosed-branch-{}-{k:03}.csv", p.branch)
-    } else {
-        format!(
-            "states/enclosed-branch-{}-family-{}-sheet-{}-{k:03}.csv",
-            p.branch, p.family, p.sheet
-        )
-    }
-}
-
 /// The enclosed `config.csv` table of a solve's result ([`result_rows`]).
 pub fn result_table(
     res: &rodloop_diagram::enclosed_state::EnclosedResult,
@@ -181,58 +203,4 @@ pub fn result_table(
     d0: f64,
 ) -> Result<Table> {
     enclosed_rows_table(&result_rows(res, r, d0)?)
-}
-
-/// Write every point of an enclosed diagram into the run's `states/` directory (in
-/// parallel): the lifted-off 3-D states as they are, attached ones as their surface loop.
-/// Returns the file of every point of `d.points`, in that order (empty where none was
-/// written), and the warnings for those.
-pub fn write_enclosed_states(
-    d: &rodloop_diagram::enclosed::EnclosedDiagram,
-    radius: f64,
-    d0: f64,
-    run: &OutputRun,
-) -> Result<(Vec<String>, Vec<String>)> {
-    let dir = run.subdir("states")?;
-    // Number the points of each (branch, family, sheet) in increasing L̄.
-    let mut order: Vec<usize> = (0..d.points.len()).collect();
-    let key = |i: usize| {
-        let p = &d.points[i];
-        (p.branch, p.family, p.sheet)
-    };
-    order.sort_by(|&a, &b| {
-        key(a)
-            .cmp(&key(b))
-            .then(d.points[a].lbar.total_cmp(&d.points[b].lbar))
-    });
-    let mut names = vec![String::new(); d.points.len()];
-    let mut count = 0;
-    for (pos, &i) in order.iter().enumerate() {
-        if pos > 0 && key(order[pos - 1]) != key(i) {
-            count = 0;
-        }
-        names[i] = enclosed_file_name(&d.points[i], count);
-        count += 1;
-    }
-    let jobs: Vec<usize> = (0..d.points.len()).collect();
-    let results = parallel_map(&jobs, |&i| {
-        let rows = point_rows(&d.points[i], radius, d0).map_err(|e| format!("{e:#}"))?;
-        let table = enclosed_rows_table(&rows).map_err(|e| format!("{e:#}"))?;
-        let bytes = table.to_bytes().map_err(|e| format!("{e:#}"))?;
-        let file = names[i].trim_start_matches("states/");
-        crate::output::write_atomic(&dir, file, &bytes).map_err(|e| format!("{e:#}"))?;
-        Ok::<(), String>(())
-    });
-    let mut warnings = Vec::new();
-    for (i, res) in results.into_iter().enumerate() {
-        if let Err(e) = res {
-            let p = &d.points[i];
-            warnings.push(format!(
-                "the state of branch {} family {} at L̄ = {} has no state file: {e}",
-                p.branch, p.family, p.lbar
-            ));
-            names[i].clear();
-        }
-    }
-    Ok((names, warnings))
 }

@@ -6,9 +6,9 @@
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
-use rodloop_diagram::enclosed::{EnclosedDiagram, EnclosedDiagramOptions, EnclosedProgress};
-use rodloop_diagram::engine::lowest_lifted_off;
-use rodloop_diagram::{EnclosedEngine, Engine};
+use rodloop_diagram::enclosed::EnclosedProgress;
+use rodloop_diagram::engine::CertificateCheck;
+use rodloop_diagram::{EnclosedEngine, Engine, PointStates};
 use rodloop_figures::raster::svg_to_png;
 use rodloop_scene::Scene;
 
@@ -38,12 +38,13 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
         bail!("need 0 < --lbar-min < --lbar-max <= 20 for an enclosed diagram (got {lbar_min} and {lbar_max})");
     }
     let accuracy = crate::args::accuracy_of(scene, args.accuracy.as_deref())?;
-    let mut opts = EnclosedDiagramOptions::new(
+    let mut engine = EnclosedEngine::new(
         crate::engine::wall_of(scene),
         crate::args::stiffness_of(&scene.stiffness),
         lbar_min,
         lbar_max,
     );
+    let opts = &mut engine.opts;
     opts.accuracy = accuracy;
     if let Some(step) = args.step {
         opts.step = step;
@@ -69,7 +70,6 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     // Progress on stderr (cli/progress.rs): a bar on a terminal, one line per task otherwise.
     let bar = crate::progress::Progress::new(0, "enclosed", args.quiet);
     let mut planned = 0u64;
-    let mut engine = EnclosedEngine { opts };
     let d = engine
         .run(&mut |p| match p {
             EnclosedProgress::Planned(n) => {
@@ -80,109 +80,19 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
         })
         .context("the enclosed diagram")?;
     bar.finish();
-    let opts = &engine.opts;
     // The completeness certificate (the same search `solve` runs) goes into summary.json.
-    let cert = certificate(&d, scene, opts);
+    let cert = engine.certificate(&d);
     let mut schema = engine.schema(&d, &scene.name)?;
     schema.set_certificate(&cert)?;
-    write_outputs(&mut schema, &d, opts, &run, args.width, args.height)?;
+    let state_warnings = write_outputs(&mut schema, &d, &engine, &run, args.width, args.height)?;
     if args.shapes > 0 {
         // The branch atlas (cli/atlas.rs): states re-solved along each branch, in states/.
-        crate::atlas::write_enclosed_atlas(&run, args.shapes, scene, accuracy, &d)?;
+        crate::atlas::write_enclosed_atlas(&run, args.shapes, scene, accuracy, &schema)?;
     }
     run.commit()?;
-    print(&schema, &d, scene, opts, &args.out);
+    print(&schema, state_warnings, scene, &engine, &args.out);
     print_certificate(&cert);
     Ok(())
-}
-
-/// One check of the completeness certificate: `solve`'s state of a branch at the length
-/// of a lowest state of the diagram.
-#[derive(Clone, Debug, serde::Serialize)]
-pub(crate) struct CertificateCheck {
-    /// `L̄` (that of the diagram's lowest state).
-    lbar: f64,
-    /// The branch `solve` was asked for.
-    branch: u32,
-    /// `solve`'s energy and error estimate (`None` where it found no state).
-    solve_energy: Option<(f64, f64)>,
-    /// The diagram's lowest state there: branch, family, energy, error estimate.
-    lowest: (u32, u32, f64, f64),
-    /// `solve`'s state lies below the lowest state by more than the two estimates.
-    below: bool,
-    /// Why `solve` found no state (empty otherwise).
-    note: String,
-}
-
-/// Lowest states at which the certificate runs `solve`: three, spread over the range.
-const CERTIFICATE_SAMPLES: usize = 3;
-
-/// The completeness certificate of a non-uniform rod's diagram: at the lengths of
-/// [`CERTIFICATE_SAMPLES`] lowest states of the diagram spread over its range, `solve`'s
-/// search (surface loop of each branch that exists there, then the enclosed loop from it,
-/// cli/enclosed.rs) for every selected branch; a state of `solve` below the diagram's lowest
-/// one by more than the two error estimates is a state the diagram missed. (A uniform rod's
-/// diagram and `solve` start from the same exact surface loops: no check there.)
-fn certificate(
-    d: &EnclosedDiagram,
-    scene: &Scene,
-    opts: &EnclosedDiagramOptions,
-) -> Vec<CertificateCheck> {
-    if opts.stiffness.is_uniform() {
-        return Vec::new();
-    }
-    let mut lowest: Vec<_> = d
-        .points
-        .iter()
-        .filter(|p| p.lowest && p.branch > 0)
-        .collect();
-    lowest.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
-    if lowest.is_empty() {
-        return Vec::new();
-    }
-    let n = lowest.len();
-    let mut picks: Vec<usize> = (0..CERTIFICATE_SAMPLES)
-        .map(|i| ((2 * i + 1) * n / (2 * CERTIFICATE_SAMPLES)).min(n - 1))
-        .collect();
-    picks.dedup();
-    let wanted = |b: u32| opts.branches.as_ref().is_none_or(|s| s.contains(&b));
-    let mut jobs = Vec::new();
-    for &i in &picks {
-        let p = lowest[i];
-        let top = p.lbar.floor() as u32 + 1;
-        for eta in 1..=top {
-            let e = f64::from(eta);
-            let branch = rodloop_exact::branch_of_eta(eta);
-            if p.lbar > e - 1.0 && p.lbar < e + 1.0 && wanted(branch) {
-                jobs.push((p, branch));
-            }
-        }
-    }
-    let stiffness = opts.stiffness.clone();
-    crate::states::parallel_map(&jobs, |&(p, branch)| {
-        let lowest = (p.branch, p.family, p.energy, p.energy_error);
-        match crate::enclosed::solve_state(scene, &stiffness, p.lbar, branch, opts.accuracy) {
-            Ok(res) => {
-                let (e, err) = res.energy;
-                CertificateCheck {
-                    lbar: p.lbar,
-                    branch,
-                    solve_energy: Some((e, err)),
-                    lowest,
-                    below: e + err < p.energy - p.energy_error,
-                    note: String::new(),
-                }
-            }
-            Err(e) => CertificateCheck {
-                lbar: p.lbar,
-                branch,
-                solve_energy: None,
-                lowest,
-                below: false,
-                note: format!("{e:#}"),
-            },
-        }
-    })
 }
 
 /// One line per length of the certificate, a warning per state below the diagram's.
@@ -215,26 +125,35 @@ fn print_certificate(cert: &[CertificateCheck]) {
 }
 
 /// Write states/, the diagram's files in the result schema (branches.csv, critical.csv,
-/// special_points.csv, summary.json) and diagram.svg/.png drawn from the staged tables.
+/// special_points.csv, summary.json) and diagram.svg/.png drawn from the staged tables; the
+/// warnings of states without a file are printed and added to the schema's (their number is
+/// returned).
 pub(crate) fn write_outputs(
     schema: &mut rodloop_schema::Diagram,
-    d: &EnclosedDiagram,
-    opts: &EnclosedDiagramOptions,
+    d: &(impl PointStates + ?Sized),
+    engine: &EnclosedEngine,
     run: &OutputRun,
     width: u32,
     height: u32,
-) -> Result<()> {
+) -> Result<usize> {
     // Every point's loop in states/ (cli/states.rs), named in the last column.
-    let (state_files, state_warnings) =
-        crate::states::write_enclosed_states(d, opts.radius, opts.stiffness.reference(), run)?;
+    let state_warnings = crate::states::write_point_states(
+        d,
+        schema,
+        engine.opts.radius,
+        engine.opts.stiffness.reference(),
+        run,
+    )?;
     for w in &state_warnings {
         eprintln!("warning: {w}");
     }
-    let unverified = state_files.iter().filter(|f| f.is_empty()).count();
+    let written = state_warnings.len();
+    let unverified = schema
+        .points
+        .iter()
+        .filter(|p| p.state_file.as_deref().is_none_or(str::is_empty))
+        .count();
     schema.put("unverified_states", &unverified)?;
-    for (p, file) in schema.points.iter_mut().zip(state_files) {
-        p.state_file = Some(file);
-    }
     schema
         .warnings
         .get_or_insert_with(Vec::new)
@@ -247,67 +166,75 @@ pub(crate) fn write_outputs(
     run.write_bytes("diagram.svg", text.as_bytes())?;
     let png = svg_to_png(&text, 1.0).context("rendering diagram.png")?;
     run.write_bytes("diagram.png", &png)?;
-    Ok(())
+    Ok(written)
 }
 
+/// The printed result, every number from the schema `d` as written (whose last
+/// `state_warnings` warnings, those of states without a file, were printed when the states
+/// were written).
 fn print(
-    schema: &rodloop_schema::Diagram,
-    d: &EnclosedDiagram,
+    d: &rodloop_schema::Diagram,
+    state_warnings: usize,
     scene: &Scene,
-    opts: &EnclosedDiagramOptions,
+    engine: &EnclosedEngine,
     out: &Path,
 ) {
     outln!(
         "Critical lengths (enclosed scene {}, accuracy {:?}):",
         scene.name,
-        opts.accuracy
+        engine.opts.accuracy
     );
-    let surface: Vec<f64> = d.critical.iter().map(|e| e.surface_lbar_cr).collect();
-    let side = rodloop_schema::SideColumn::fixed("surface lbar_cr", 18, 12, &surface);
-    for line in schema.critical_table(Some(&side)) {
+    let side = rodloop_schema::SideColumn {
+        header: "surface lbar_cr".into(),
+        width: 18,
+        cells: d
+            .critical
+            .iter()
+            .map(|c| {
+                c.surface_lbar_cr()
+                    .map_or(String::new(), |x| format!("{x:.12}"))
+            })
+            .collect(),
+    };
+    for line in d.critical_table(Some(&side)) {
         outln!("{line}");
     }
-    for e in &d.events {
-        use rodloop_diagram::enclosed::EventKind;
-        let what = match e.kind {
-            EventKind::Detachment => {
-                "the last contact force is 0; below it the loop is free".to_string()
-            }
-            EventKind::BranchPoint => format!(
+    for e in d.special.iter().flatten() {
+        let what = match e.kind.as_str() {
+            "detachment" => "the last contact force is 0; below it the loop is free".to_string(),
+            "branch_point" => format!(
                 "family {}: the index changes {} -> {}",
-                e.family, e.index_before, e.index_after
+                e.family,
+                e.index_before.unwrap_or_default(),
+                e.index_after.unwrap_or_default()
             ),
             _ => "lambda_min = 0".to_string(),
         };
         outln!(
             "  {} of branch {} at lbar = {:.12} ± {:.0e} ({what}; E R/(pi D) = {:.10})",
-            e.kind.as_str(),
+            e.kind,
             e.branch,
             e.lbar,
-            e.error_estimate,
+            e.error_estimate.unwrap_or_default(),
             e.energy
         );
     }
-    let verdict = if opts.branches.is_none() {
-        lowest_lifted_off(d)
-    } else {
-        Vec::new()
-    };
-    for (a, b) in verdict {
+    for &(a, b) in d.lowest_lifted_off.iter().flatten() {
         outln!(
             "  the lowest state has lifted off the wall for {a:.9} < lbar < {b:.9} (the Sec. 3.2 hypothesis fails there)"
         );
     }
-    for n in &d.notes {
+    for n in d.notes.iter().flatten() {
         eprintln!("note: {n}");
     }
-    for w in &d.warnings {
+    let warnings = d.warnings.as_deref().unwrap_or_default();
+    for w in &warnings[..warnings.len().saturating_sub(state_warnings)] {
         eprintln!("warning: {w}");
     }
     outln!(
         "{} in {:.2} s; wrote branches.csv, critical.csv, special_points.csv, diagram.svg/.png, summary.json to {}",
         crate::output::plural(d.points.len() as u64, "state"),
-        d.seconds.total,
+        d.timings.as_ref().and_then(|t| t.get("total")).copied().unwrap_or_default(),
         out.display()
     );
 }

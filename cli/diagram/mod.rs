@@ -176,7 +176,6 @@ pub(crate) fn run_surface(args: &Args, scene: &rodloop_scene::Scene) -> Result<(
     let out = engine.run(&mut |()| {})?;
     let mut schema = engine.schema(&out, &scene.name)?;
     crate::output::write_diagram(&run, &mut schema)?;
-    let d = &out.diagram;
     // Fig. 11: k² against L̄ with Eq. (B.4).
     let k2_svg = k2_figure(&schema, f64::from(args.width), f64::from(args.height))?;
     run.write_bytes("diagram_k2.svg", k2_svg.as_bytes())?;
@@ -184,15 +183,9 @@ pub(crate) fn run_surface(args: &Args, scene: &rodloop_scene::Scene) -> Result<(
         "diagram_k2.png",
         &rodloop_figures::raster::svg_to_png(&k2_svg, 1.0)?,
     )?;
-    let branch_count = d
-        .points
-        .iter()
-        .map(|p| p.branch)
-        .collect::<std::collections::BTreeSet<_>>()
-        .len();
     let atlas = match args.shapes {
         0 => None,
-        k => Some(crate::atlas::write_exact_atlas(&run, k, &d.points)?),
+        k => Some(crate::atlas::write_exact_atlas(&run, k, &schema)?),
     };
     draw_figures(args, &run)?;
     run.commit()?;
@@ -203,10 +196,15 @@ pub(crate) fn run_surface(args: &Args, scene: &rodloop_scene::Scene) -> Result<(
     }
     outln!(
         "{} on {}, {} continuation points, computed in {:.3} s; wrote branches.csv, critical.csv, diagram.svg/.png, diagram_g.svg/.png, diagram_split.svg/.png, diagram_lambda.svg/.png, diagram_k2.svg/.png (Fig. 11), summary.json to {}",
-        crate::output::plural(d.points.len() as u64, "state"),
-        crate::output::plural(branch_count as u64, "branch"),
-        d.continuation_steps,
-        out.seconds,
+        crate::output::plural(schema.points.len() as u64, "state"),
+        crate::output::plural(
+            schema.get::<u64>("branches").unwrap_or_default(),
+            "branch"
+        ),
+        schema
+            .get::<usize>("continuation_points")
+            .unwrap_or_default(),
+        schema.get::<f64>("seconds").unwrap_or_default(),
         args.out.display()
     );
     if let Some(a) = atlas {
@@ -245,8 +243,15 @@ fn run_numeric(
     opts.validate()?;
     let run = OutputRun::begin(&args.out)?;
     run.keep_branch_files();
-    let d = surface::run_numeric(&opts, &args.out, args.resume, args.quiet, selection)?;
-    let schema = surface::write_outputs(&d, &opts, &scene.name, &run)?;
+    let (d, schema) = surface::run_numeric(
+        &opts,
+        &args.out,
+        args.resume,
+        args.quiet,
+        selection,
+        &scene.name,
+    )?;
+    let (schema, state_warnings) = surface::write_outputs(&d, schema, &opts, &run)?;
     let atlas = match args.shapes {
         0 => None,
         k => Some(crate::atlas::write_atlas(&run, k, &scene.name)?),
@@ -279,7 +284,7 @@ fn run_numeric(
     for line in schema.critical_table(side.as_ref()) {
         outln!("{line}");
     }
-    if let Some(gc) = &d.great_circles {
+    if let Some(gc) = schema.get::<rodloop_diagram::BucklingReport>("great_circles") {
         for l in &gc.loads {
             if let (Some(f), Some(eq)) = (l.lambda_formula, &l.equation) {
                 outln!(
@@ -293,15 +298,15 @@ fn run_numeric(
             }
         }
     }
-    for w in &d.warnings {
+    for w in surface::engine_warnings(&schema, state_warnings) {
         eprintln!("warning: {w}");
     }
     outln!(
         "{} on {} in {:.2} s (tracing {:.2} s); wrote branches.csv, critical.csv, diagram.svg/.png, diagram_split.svg/.png, diagram_lambda.svg/.png, summary.json to {}",
-        crate::output::plural(d.rows().len() as u64, "state"),
-        surface::branch_count(&d.branches),
-        d.timings.total,
-        d.timings.tracing,
+        crate::output::plural(schema.points.len() as u64, "state"),
+        surface::branch_count(&schema.curves),
+        surface::seconds(&schema, "total"),
+        surface::seconds(&schema, "tracing"),
         args.out.display()
     );
     outln!(

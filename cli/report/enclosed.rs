@@ -13,7 +13,6 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use rodloop_diagram::enclosed::EnclosedDiagramOptions;
 use rodloop_diagram::representative::{enclosed_choices, Choice};
 use rodloop_diagram::{EnclosedEngine, Engine};
 use rodloop_figures::atlas::atlas_figure;
@@ -159,13 +158,14 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
         None => None,
     };
     let accuracy = crate::args::accuracy_of(scene, args.accuracy.as_deref())?;
-    let mut opts = EnclosedDiagramOptions::new(
+    let mut engine = EnclosedEngine::new(
         crate::engine::wall_of(scene),
         crate::args::stiffness_of(&scene.stiffness),
         scene.lbar_min,
         scene.lbar_max,
     );
-    opts.accuracy = accuracy;
+    engine.opts.accuracy = accuracy;
+    let opts = engine.opts.clone();
     let run = OutputRun::begin(&args.out)?;
 
     // 1. The enclosed diagram, written as `rodloop diagram` writes it.
@@ -176,15 +176,14 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
             opts.lbar_min, opts.lbar_max
         );
     }
-    let mut engine = EnclosedEngine { opts };
     let d = engine.run(&mut |_| {}).context("the enclosed diagram")?;
-    let opts = engine.opts.clone();
     let mut schema = engine.schema(&d, &scene.name)?;
     let (w, h) = crate::diagram::FIGURE_SIZE;
-    crate::diagram::enclosed::write_outputs(&mut schema, &d, &opts, &run, w, h)?;
+    let state_warnings =
+        crate::diagram::enclosed::write_outputs(&mut schema, &d, &engine, &run, w, h)?;
     // The page's tables from the diagram directory as the schema reads it back.
     let dir = rodloop_schema::Diagram::read(run.stage_dir())?;
-    let lifted = rodloop_diagram::engine::lowest_lifted_off(&d);
+    let lifted = schema.lowest_lifted_off.clone().unwrap_or_default();
     let t_diagram = t.elapsed().as_secs_f64();
 
     // 2. The diagram figure, from the staged CSV files as `rodloop draw` reads them.
@@ -196,23 +195,22 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     // 3. The atlas: states re-solved along each branch (into states/).
     let t = Instant::now();
     let states_dir = run.subdir("states")?;
-    let atlas = crate::atlas::enclosed_rows(scene, accuracy, &d, ATLAS_SHAPES, Some(&states_dir))
-        .and_then(|(rows, note, failed)| {
-            let svg = atlas_figure(
-                &rows,
-                crate::atlas::CELL,
-                &format!("Branch atlas ({}): shapes along each branch", scene.name),
-            )?;
-            Ok((svg, note, failed))
-        })
-        .map_err(|e| format!("{e:#}"));
+    let atlas =
+        crate::atlas::enclosed_rows(scene, accuracy, &schema, ATLAS_SHAPES, Some(&states_dir))
+            .and_then(|(rows, note, failed)| {
+                let svg = atlas_figure(
+                    &rows,
+                    crate::atlas::CELL,
+                    &format!("Branch atlas ({}): shapes along each branch", scene.name),
+                )?;
+                Ok((svg, note, failed))
+            })
+            .map_err(|e| format!("{e:#}"));
     let t_atlas = t.elapsed().as_secs_f64();
 
     // 4. One state per branch.
     let t = Instant::now();
-    let states = Entry::solve_all(enclosed_choices(&d, &lifted), |c| {
-        solve_one(scene, accuracy, c)
-    });
+    let states = Entry::solve_all(enclosed_choices(&schema), |c| solve_one(scene, accuracy, c));
     let t_states = t.elapsed().as_secs_f64();
 
     // 5. The page.
@@ -227,7 +225,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
             nstates = dir.points.len(),
             nbranches = dir.points.iter().map(|p| p.branch).collect::<std::collections::BTreeSet<_>>().len(),
             ncrit = dir.critical.len(),
-            nev = crate::output::plural(d.events.len() as u64, "special point"),
+            nev = crate::output::plural(schema.special.as_ref().map_or(0, Vec::len) as u64, "special point"),
         ),
         &[
             ("diagram", "Diagram"),
@@ -238,8 +236,14 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
             ("timings", "Timings"),
         ],
     );
-    page.notes("warning", &d.warnings);
-    page.notes("note", &d.notes);
+    // The engine's warnings (those of states without a file were printed as they were
+    // written).
+    let warnings = schema.warnings.as_deref().unwrap_or_default();
+    page.notes(
+        "warning",
+        &warnings[..warnings.len().saturating_sub(state_warnings)],
+    );
+    page.notes("note", schema.notes.as_deref().unwrap_or_default());
     page.h
         .push_str("<section id=\"diagram\">\n<h2>1. Energy against length</h2>\n");
     page.fig(
@@ -296,7 +300,9 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
             ),
             (
                 "cells of the lifted-off traces",
-                d.cells
+                schema
+                    .get::<Vec<(u32, usize)>>("cells")
+                    .unwrap_or_default()
                     .iter()
                     .map(|(b, n)| format!("branch {b}: N = {n}"))
                     .collect::<Vec<_>>()

@@ -27,6 +27,7 @@ use rodloop_diagram::DiagramOptions;
 use rodloop_figures::diagram::{energy_figure, energy_split_figure, lambda_figure, DiagramData};
 use rodloop_figures::svg::esc;
 
+use crate::diagram::surface::seconds;
 use crate::output::{checked_json, OutputRun};
 mod args;
 mod enclosed;
@@ -70,8 +71,16 @@ pub(crate) fn run_surface(
 
     // 1. The numeric diagram (branch files go to the staging directory and vanish with it).
     let t = Instant::now();
-    let d = crate::diagram::surface::run_numeric(&opts, run.stage_dir(), false, args.quiet, None)?;
-    crate::diagram::surface::write_outputs(&d, &opts, &scene.name, &run)?;
+    let (d, schema) = crate::diagram::surface::run_numeric(
+        &opts,
+        run.stage_dir(),
+        false,
+        args.quiet,
+        None,
+        &scene.name,
+    )?;
+    let (schema, state_warnings) = crate::diagram::surface::write_outputs(&d, schema, &opts, &run)?;
+    let description = schema.get::<String>("description").unwrap_or_default();
     // The page's tables from the diagram directory as the schema reads it back.
     let dir = rodloop_schema::Diagram::read(run.stage_dir())?;
     let t_diagram = t.elapsed().as_secs_f64();
@@ -96,7 +105,7 @@ pub(crate) fn run_surface(
     let t = Instant::now();
     let exact = crate::engine::exact_layer(scene, opts.lbar_min, opts.lbar_max)?;
     let uniform = exact.is_some();
-    let compare = crate::compare::compare_rows(uniform.then_some(&d))?;
+    let compare = crate::compare::compare_rows(uniform.then_some(&schema))?;
     // Fig. 11 from the exact layer (homogeneous scenes).
     let fig_k2 = match &exact {
         Some(e) => Some(crate::diagram::k2_figure(e, FIG_W, 480.0)?),
@@ -115,12 +124,12 @@ pub(crate) fn run_surface(
         &scene.name,
         &format!(
             "{desc}. Numeric branch diagram for {lo} ≤ L̄ ≤ {hi} at accuracy <b>{acc}</b>: {nstates} traced states on {nbranches}, {ncrit} critical lengths.",
-            desc = esc(&d.scene),
+            desc = esc(&description),
             lo = opts.lbar_min,
             hi = opts.lbar_max,
             acc = format!("{accuracy:?}").to_lowercase(),
             nstates = dir.points.len(),
-            nbranches = crate::diagram::surface::branch_count(&d.branches),
+            nbranches = crate::diagram::surface::branch_count(&schema.curves),
             ncrit = dir.critical.len(),
         ),
         &[
@@ -133,7 +142,10 @@ pub(crate) fn run_surface(
             ("timings", "Timings"),
         ],
     );
-    page.notes("warning", &d.warnings);
+    page.notes(
+        "warning",
+        crate::diagram::surface::engine_warnings(&schema, state_warnings),
+    );
 
     sections::energy(
         &mut page,
@@ -141,7 +153,8 @@ pub(crate) fn run_surface(
         fig_k2.as_deref(),
         uniform,
     );
-    sections::critical(&mut page, &dir, exact.as_ref(), &d);
+    let great_circles = schema.get::<rodloop_diagram::BucklingReport>("great_circles");
+    sections::critical(&mut page, &dir, exact.as_ref(), great_circles.as_ref());
     sections::atlas(&mut page, &fig_atlas);
     sections::states(&mut page, &states);
     sections::paper(&mut page, &compare, uniform);
@@ -153,7 +166,7 @@ pub(crate) fn run_surface(
         scene_name: &scene.name,
         scene_file: args.scene.as_deref(),
         extra: vec![
-            ("description", esc(&d.scene)),
+            ("description", esc(&description)),
             ("sphere radius R", scene.radius.to_string()),
             (
                 "length range",
@@ -165,9 +178,9 @@ pub(crate) fn run_surface(
         scene_text: scene_text.as_deref(),
     };
     let stages = [
-        ("diagram: tracing the branches", d.timings.tracing),
-        ("diagram: critical lengths", d.timings.critical),
-        ("diagram: great circles", d.timings.great_circles),
+        ("diagram: tracing the branches", seconds(&schema, "tracing")),
+        ("diagram: critical lengths", seconds(&schema, "critical")),
+        ("diagram: great circles", seconds(&schema, "great_circles")),
         ("diagram total (with writing the CSV files)", t_diagram),
         ("diagram figures", t_diagram_figures),
         ("branch atlas", t_atlas),

@@ -5,7 +5,7 @@
 
 use std::fmt::Write as _;
 
-use rodloop_diagram::NumericDiagram;
+use rodloop_diagram::BucklingReport;
 use rodloop_figures::svg::esc;
 
 use super::args::ATLAS_SHAPES;
@@ -56,12 +56,13 @@ pub(super) fn energy(page: &mut Page, figs: [&str; 3], fig_k2: Option<&str>, uni
 }
 
 /// Section 2: the critical lengths of the diagram directory `dir` (with the exact values
-/// where the scene is homogeneous) and the great circles' buckling loads of `d`.
+/// where the scene is homogeneous) and the great circles' buckling loads `great_circles`
+/// (the diagram's schema, `great_circles`).
 pub(super) fn critical(
     page: &mut Page,
     dir: &rodloop_schema::Diagram,
     exact: Option<&rodloop_schema::Diagram>,
-    d: &NumericDiagram,
+    great_circles: Option<&BucklingReport>,
 ) {
     page.h.push_str("<section id=\"critical\">\n<h2>2. Critical lengths</h2>\n<p>Where the globally stable branch changes: crossings solve E<sub>a</sub>(L̄) = E<sub>b</sub>(L̄) on re-solved, Richardson-extrapolated equilibria; collapses are the lengths L̄ = m where the lowest branch ends on the m-fold great circle. Branch 0 is the planar circle below L̄ = 1. The error estimate is that of L̄<sub>cr</sub> itself.");
     if exact.is_some() {
@@ -78,7 +79,7 @@ pub(super) fn critical(
         .push_str(&critical_html(&dir.critical, exact_heads, |c| {
             exact.map_or(Vec::new(), |e| exact_cells(c, e))
         }));
-    if let Some(gc) = &d.great_circles {
+    if let Some(gc) = great_circles {
         let loads: Vec<_> = gc
             .loads
             .iter()

@@ -5,8 +5,8 @@
 use std::time::Instant;
 
 use anyhow::Result;
-use rodloop_diagram::representative::{surface_choices, Choice};
-use rodloop_diagram::{DiagramOptions, NumericDiagram};
+use rodloop_diagram::representative::{Choice, Representatives};
+use rodloop_diagram::DiagramOptions;
 use rodloop_figures::color::branch_color;
 use rodloop_figures::data::LoopData;
 use rodloop_figures::loops::{loop_picture, point_group, LoopPictureOptions};
@@ -72,13 +72,12 @@ fn solve_state(
     scene: &Scene,
     accuracy: Accuracy,
     opts: &DiagramOptions,
-    d: &NumericDiagram,
+    d: &(impl Representatives + ?Sized),
     choice: &Choice,
 ) -> Result<SolvedState> {
     let t0 = Instant::now();
     let (branch, eta, lbar) = (choice.branch, choice.eta, choice.lbar);
-    let (res, start) =
-        rodloop_diagram::representative::solve_on_branch(d, opts, accuracy, eta, lbar)?;
+    let (res, start) = d.solve_on_branch(opts, accuracy, eta, lbar)?;
     let eq = &res.equilibrium;
     let index = eq.stability()?.index;
     let label = choice.label(index);
@@ -141,16 +140,14 @@ fn solve_state(
 }
 
 /// One representative state per traced branch, where
-/// [`rodloop_diagram::representative::surface_choices`] shows it; the solves run in parallel.
+/// [`Representatives::choices`] shows it; the solves run in parallel.
 pub(super) fn representative_states(
     scene: &Scene,
     accuracy: Accuracy,
     opts: &DiagramOptions,
-    d: &NumericDiagram,
+    d: &(impl Representatives + ?Sized),
 ) -> Vec<Entry<SolvedState>> {
-    Entry::solve_all(surface_choices(d), |c| {
-        solve_state(scene, accuracy, opts, d, c)
-    })
+    Entry::solve_all(d.choices(), |c| solve_state(scene, accuracy, opts, d, c))
 }
 
 /// The contact force `λR³/D0` against `s/L` along one state (the paper's Fig. 6), closed at

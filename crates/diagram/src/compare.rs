@@ -7,8 +7,9 @@
 use rodloop_exact::diagram::{compute, CriticalKind, DiagramSettings};
 use rodloop_exact::{eta_of_branch, paper_branch_loop};
 
-use crate::representative::{middle_of_first_stable, stable_near_half_integers};
-use crate::{DiagramError, NumericDiagram};
+use crate::representative::{middle_of_first_stable, stable_near_half_integers, StableRow};
+use crate::DiagramError;
+use crate::Label;
 
 const PAPER_VALUES: &str = include_str!("../../../data/reference/paper_values.csv");
 
@@ -134,24 +135,32 @@ fn exact_symmetry(pv: &PaperValue) -> Result<String, DiagramError> {
 /// buckling loads from its great-circle analysis (Eq. 33 rows: the mode with m + 1 periods,
 /// Eq. 34 rows: m − 1). Winding numbers and symmetries are compared on the exact layer only.
 /// Critical lengths outside the diagram's length range have no numeric value.
-fn numeric_value(pv: &PaperValue, nd: &NumericDiagram) -> Option<f64> {
+fn numeric_value(pv: &PaperValue, nd: &rodloop_schema::Diagram) -> Option<f64> {
     match pv.kind.as_str() {
         "critical_length" => {
             // Only a printed length inside the diagram's range has a numeric counterpart
             // (a diagram of a sub-range must not be matched to a neighbour outside it).
             let target: f64 = pv.value.parse().ok()?;
-            let (lo, hi) = nd.range;
-            if target < lo - 1e-9 || target > hi + 1e-9 {
+            let axis = nd.axes.first()?;
+            if target < axis.min - 1e-9 || target > axis.max + 1e-9 {
                 return None;
             }
-            nearest_critical(pv, target, nd.critical.iter().map(|c| (c.kind, c.lbar_cr)))
+            let kinds = nd.critical.iter().filter_map(|c| {
+                serde_json::from_value::<CriticalKind>(serde_json::Value::String(c.kind.clone()))
+                    .ok()
+                    .map(|k| (k, c.lbar_cr))
+            });
+            nearest_critical(pv, target, kinds)
         }
         "buckling_load" => {
             let m = pv.lbar? as u32;
             let eq = if pv.side == "above" { "33" } else { "34" };
-            nd.great_circles.as_ref()?.loads.iter().find_map(|l| {
-                (l.m == m && l.equation.as_deref() == Some(eq)).then_some(l.lambda_numeric)
-            })
+            nd.get::<crate::BucklingReport>("great_circles")?
+                .loads
+                .iter()
+                .find_map(|l| {
+                    (l.m == m && l.equation.as_deref() == Some(eq)).then_some(l.lambda_numeric)
+                })
         }
         _ => None,
     }
@@ -218,10 +227,10 @@ impl CompareRow {
 }
 
 /// Every paper value of `data/reference/paper_values.csv` next to the exact layer's value
-/// and, when `nd` is given, the numeric diagram's (critical lengths inside the diagram's
+/// and, when `nd` is given, the numeric diagram's in the schema (critical lengths inside its
 /// length range, buckling loads of its great-circle analysis), with deviations and
 /// agreement within the printed resolution.
-pub fn compare_rows(nd: Option<&NumericDiagram>) -> Result<Vec<CompareRow>, DiagramError> {
+pub fn compare_rows(nd: Option<&rodloop_schema::Diagram>) -> Result<Vec<CompareRow>, DiagramError> {
     let values = paper_values()?;
     if values.is_empty() {
         return Err(DiagramError::InvalidOptions(
@@ -319,15 +328,25 @@ pub struct SegmentRow {
 /// - the saddle-like states of branch 1 keep only a mirror plane (`Cs`; Fig. 10), in the
 ///   middle of its first stable stretch.
 pub fn segment_rows(
-    d: &NumericDiagram,
+    d: &rodloop_schema::Diagram,
     ratio: f64,
     (s0, s1): (f64, f64),
     (lbar_min, lbar_max): (f64, f64),
 ) -> Vec<SegmentRow> {
-    let rows = d.rows();
+    let rows: Vec<SchemaRow> = d
+        .points
+        .iter()
+        .filter_map(|p| {
+            Some(SchemaRow {
+                lbar: *p.coords.first()?,
+                point: p,
+            })
+        })
+        .collect();
     let stiff = 1.0 - (s1 - s0);
     let mut out = Vec::new();
-    for r in stable_near_half_integers(&rows, lbar_min, lbar_max) {
+    for row in stable_near_half_integers(&rows, lbar_min, lbar_max) {
+        let r = Row::of(row);
         let estimate = stiff * r.lbar;
         let dev = (r.energy - estimate) / estimate;
         let judged = ratio <= SOFT_LIMIT;
@@ -348,8 +367,12 @@ pub fn segment_rows(
             source: "Sec. 5 (Fig. 9): E ≈ D0 ℓ_stiff/(2R²) for an extremely soft segment; stable state of the diagram",
         });
     }
-    if let Some(r) = middle_of_first_stable(&rows, 1) {
-        let group = r.shape.point_group.clone().unwrap_or_else(|| "?".into());
+    if let Some(row) = middle_of_first_stable(&rows, 1) {
+        let r = Row::of(row);
+        let group = match row.point.extra.get("point_group") {
+            Some(rodloop_schema::Cell::S(g)) if !g.is_empty() => g.clone(),
+            _ => "?".into(),
+        };
         out.push(SegmentRow {
             id: "sym_branch1".into(),
             lbar: Some(r.lbar),
@@ -362,4 +385,40 @@ pub fn segment_rows(
         });
     }
     out
+}
+
+/// A point of a surface diagram's schema with its length, as the stable-stretch helpers read
+/// it.
+struct SchemaRow<'a> {
+    lbar: f64,
+    point: &'a rodloop_schema::Point,
+}
+
+impl StableRow for SchemaRow<'_> {
+    fn branch(&self) -> u32 {
+        self.point.branch
+    }
+    fn lbar(&self) -> f64 {
+        self.lbar
+    }
+    fn stable(&self) -> bool {
+        self.point.label.as_deref() == Some(Label::Stable.as_str())
+    }
+}
+
+/// The numbers [`segment_rows`] prints of a row.
+struct Row {
+    lbar: f64,
+    energy: f64,
+    energy_error: Option<f64>,
+}
+
+impl Row {
+    fn of(r: &SchemaRow<'_>) -> Self {
+        Self {
+            lbar: r.lbar,
+            energy: r.point.energy,
+            energy_error: r.point.energy_error,
+        }
+    }
 }

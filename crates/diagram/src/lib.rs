@@ -112,8 +112,9 @@ pub use diagram::{
     Timings,
 };
 pub use engine::{
-    EnclosedEngine, Engine, ExactEngine, ExactOutput, PhaseEngine, RecordStates, SurfaceEngine,
-    SweepEngine, VerifiedPhase, VerifiedSweep,
+    BranchFileEvent, BranchFiles, EnclosedEngine, Engine, ExactEngine, ExactOutput, PhaseEngine,
+    PointState, PointStates, RecordStates, StateTable, SurfaceEngine, SweepEngine, VerifiedPhase,
+    VerifiedSweep,
 };
 pub use error::DiagramError;
 pub use labels::Label;

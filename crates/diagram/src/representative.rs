@@ -11,7 +11,6 @@ use rodloop_solver::{
     solve_with_accuracy, Accuracy, AccurateEquilibrium, SolveOptions, SolverError, StartShape,
 };
 
-use crate::enclosed::EnclosedDiagram;
 use crate::{DiagramError, DiagramOptions, DiagramRow, Label, NumericDiagram};
 
 /// An error and its causes on one line, `error: cause: cause`.
@@ -98,6 +97,39 @@ pub fn solve_on_branch(
     }
 }
 
+/// A surface diagram's representative states, reached through its traced branches: where the
+/// report shows each branch ([`surface_choices`]) and the branch solved accurately there
+/// ([`solve_on_branch`]). Implemented by the surface engine's result, so that the report holds
+/// that result without naming it.
+pub trait Representatives: Sync {
+    /// One length per traced branch ([`surface_choices`]).
+    fn choices(&self) -> Vec<Choice>;
+    /// Branch `eta` solved at `lbar` and `accuracy` ([`solve_on_branch`]).
+    fn solve_on_branch(
+        &self,
+        opts: &DiagramOptions,
+        accuracy: Accuracy,
+        eta: u32,
+        lbar: f64,
+    ) -> Result<(AccurateEquilibrium, String), DiagramError>;
+}
+
+impl Representatives for NumericDiagram {
+    fn choices(&self) -> Vec<Choice> {
+        surface_choices(self)
+    }
+
+    fn solve_on_branch(
+        &self,
+        opts: &DiagramOptions,
+        accuracy: Accuracy,
+        eta: u32,
+        lbar: f64,
+    ) -> Result<(AccurateEquilibrium, String), DiagramError> {
+        solve_on_branch(self, opts, accuracy, eta, lbar)
+    }
+}
+
 /// Where one branch of a diagram is shown: the length, why that length, and whether the
 /// diagram finds the branch the lowest there.
 #[derive(Clone, Debug, PartialEq)]
@@ -138,26 +170,46 @@ pub fn middle(a: f64, b: f64) -> f64 {
     }
 }
 
+/// A row of a diagram as the stable-stretch helpers read it: its branch, its length and
+/// whether it is labelled stable (a traced [`DiagramRow`], or a point of the result schema).
+pub trait StableRow {
+    /// Paper branch.
+    fn branch(&self) -> u32;
+    /// `L̄`.
+    fn lbar(&self) -> f64;
+    /// Labelled stable.
+    fn stable(&self) -> bool;
+}
+
+impl StableRow for DiagramRow {
+    fn branch(&self) -> u32 {
+        self.branch
+    }
+    fn lbar(&self) -> f64 {
+        self.lbar
+    }
+    fn stable(&self) -> bool {
+        self.stability == Label::Stable
+    }
+}
+
 /// The stretches of lengths over which the diagram labels branch `branch` stable, in
 /// increasing `L̄`: the stable rows of every branch in increasing `L̄`, split where another
 /// branch's stable row comes between (a non-uniform rod's branch has several families, so the
 /// rows of the branch alone interleave); the lengths of the first and last row of each run.
-pub fn stable_stretches(rows: &[DiagramRow], branch: u32) -> Vec<(f64, f64)> {
-    let mut stable: Vec<&DiagramRow> = rows
-        .iter()
-        .filter(|r| r.stability == Label::Stable)
-        .collect();
-    stable.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
+pub fn stable_stretches<R: StableRow>(rows: &[R], branch: u32) -> Vec<(f64, f64)> {
+    let mut stable: Vec<&R> = rows.iter().filter(|r| r.stable()).collect();
+    stable.sort_by(|a, b| a.lbar().total_cmp(&b.lbar()));
     stable
-        .chunk_by(|a, b| (a.branch == branch) == (b.branch == branch))
-        .filter(|run| run[0].branch == branch)
-        .map(|run| (run[0].lbar, run[run.len() - 1].lbar))
+        .chunk_by(|a, b| (a.branch() == branch) == (b.branch() == branch))
+        .filter(|run| run[0].branch() == branch)
+        .map(|run| (run[0].lbar(), run[run.len() - 1].lbar()))
         .collect()
 }
 
 /// The stable row nearest each half-integer length `m + ½` strictly inside `(lo, hi)` (of any
 /// branch), in increasing `m + ½`; none where the diagram has no stable row.
-pub fn stable_near_half_integers(rows: &[DiagramRow], lo: f64, hi: f64) -> Vec<&DiagramRow> {
+pub fn stable_near_half_integers<R: StableRow>(rows: &[R], lo: f64, hi: f64) -> Vec<&R> {
     let mut out = Vec::new();
     let mut t = lo.floor() + 0.5;
     while t < hi {
@@ -173,18 +225,18 @@ pub fn stable_near_half_integers(rows: &[DiagramRow], lo: f64, hi: f64) -> Vec<&
 
 /// The stable row of branch `branch` nearest the middle of its first stable stretch
 /// ([`stable_stretches`]).
-pub fn middle_of_first_stable(rows: &[DiagramRow], branch: u32) -> Option<&DiagramRow> {
+pub fn middle_of_first_stable<R: StableRow>(rows: &[R], branch: u32) -> Option<&R> {
     let &(a, b) = stable_stretches(rows, branch).first()?;
-    nearest_stable(rows.iter().filter(|r| r.branch == branch), 0.5 * (a + b))
+    nearest_stable(rows.iter().filter(|r| r.branch() == branch), 0.5 * (a + b))
 }
 
 /// The stable row of `rows` nearest `lbar`.
-fn nearest_stable<'a>(
-    rows: impl Iterator<Item = &'a DiagramRow>,
+fn nearest_stable<'a, R: StableRow + 'a>(
+    rows: impl Iterator<Item = &'a R>,
     lbar: f64,
-) -> Option<&'a DiagramRow> {
-    rows.filter(|r| r.stability == Label::Stable)
-        .min_by(|a, b| (a.lbar - lbar).abs().total_cmp(&(b.lbar - lbar).abs()))
+) -> Option<&'a R> {
+    rows.filter(|r| r.stable())
+        .min_by(|a, b| (a.lbar() - lbar).abs().total_cmp(&(b.lbar() - lbar).abs()))
 }
 
 /// One length per traced branch of a surface diagram, in increasing branch number: the
@@ -232,15 +284,16 @@ pub fn surface_choices(d: &NumericDiagram) -> Vec<Choice> {
         .collect()
 }
 
-/// One length per branch of an enclosed diagram, in increasing branch number: the middle of a
-/// stretch of `lifted` (the lengths where the lowest state has lifted off the wall,
-/// [`crate::engine::lowest_lifted_off`]) where the branch is the lowest state and off the
-/// wall, else of its first stable stretch, else of its sampled range. A branch sampled at one
-/// length only has none.
-pub fn enclosed_choices(d: &EnclosedDiagram, lifted: &[(f64, f64)]) -> Vec<Choice> {
+/// One length per branch of an enclosed diagram (its schema `d`), in increasing branch
+/// number: the middle of a stretch of `d.lowest_lifted_off` (the lengths where the lowest
+/// state has lifted off the wall, [`crate::engine::lowest_lifted_off`]) where the branch is
+/// the lowest state and off the wall, else of its first stable stretch, else of its sampled
+/// range. A branch sampled at one length only has none.
+pub fn enclosed_choices(d: &rodloop_schema::Diagram) -> Vec<Choice> {
     let mut branches: Vec<(u32, u32)> = d.points.iter().map(|p| (p.branch, p.eta)).collect();
     branches.sort_unstable();
     branches.dedup();
+    let lifted = d.lowest_lifted_off.as_deref().unwrap_or_default();
     branches
         .into_iter()
         .filter_map(|(branch, eta)| {
@@ -256,13 +309,34 @@ pub fn enclosed_choices(d: &EnclosedDiagram, lifted: &[(f64, f64)]) -> Vec<Choic
         .collect()
 }
 
+/// A sampled state of an enclosed diagram's schema, as [`enclosed_pick`] reads it.
+struct Sample {
+    lbar: f64,
+    lowest: bool,
+    attached: bool,
+    stable: bool,
+}
+
 /// The length of [`enclosed_choices`] for branch `b`, why, and whether it is the lowest.
 fn enclosed_pick(
-    d: &EnclosedDiagram,
+    d: &rodloop_schema::Diagram,
     b: u32,
     lifted: &[(f64, f64)],
 ) -> Option<(f64, String, bool)> {
-    let mut pts: Vec<_> = d.points.iter().filter(|p| p.branch == b).collect();
+    let flag = |p: &rodloop_schema::Point, key: &str| matches!(p.extra.get(key), Some(rodloop_schema::Cell::I(v)) if *v != 0);
+    let mut pts: Vec<Sample> = d
+        .points
+        .iter()
+        .filter(|p| p.branch == b)
+        .filter_map(|p| {
+            Some(Sample {
+                lbar: *p.coords.first()?,
+                lowest: flag(p, "lowest"),
+                attached: flag(p, "attached"),
+                stable: p.label.as_deref() == Some(Label::Stable.as_str()),
+            })
+        })
+        .collect();
     pts.sort_by(|a, c| a.lbar.total_cmp(&c.lbar));
     let (lo, hi) = (pts.first()?.lbar, pts.last()?.lbar);
     if hi <= lo {
@@ -278,11 +352,8 @@ fn enclosed_pick(
             ));
         }
     }
-    if let Some(start) = pts.iter().position(|p| p.label == Label::Stable) {
-        let len = pts[start..]
-            .iter()
-            .take_while(|p| p.label == Label::Stable)
-            .count();
+    if let Some(start) = pts.iter().position(|p| p.stable) {
+        let len = pts[start..].iter().take_while(|p| p.stable).count();
         let (a, c) = (pts[start].lbar, pts[start + len - 1].lbar);
         let at = if c > a { middle(a, c) } else { a };
         return Some((

@@ -221,6 +221,16 @@ pub struct Critical {
     pub extra: BTreeMap<String, serde_json::Value>,
 }
 
+impl Critical {
+    /// The surface model's value of this critical length (`surface_lbar_cr`, which an enclosed
+    /// diagram records beside its own; `None` for the other models).
+    pub fn surface_lbar_cr(&self) -> Option<f64> {
+        self.extra
+            .get("surface_lbar_cr")
+            .and_then(serde_json::Value::as_f64)
+    }
+}
+
 /// A special point of a branch: fold, branch point, crossing, collapse, lift-off, landing,
 /// detachment.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -299,6 +309,13 @@ pub struct Diagram {
     pub exchange_curves: Option<Vec<ExchangeCurve>>,
     /// The families of a diagram against a parameter (`families` in `summary.json`).
     pub families: Option<Vec<FamilyTrace>>,
+    /// Notes of the run: what the model did besides the plan, not a fault (`notes` in
+    /// `summary.json`; `None`: the model writes none).
+    pub notes: Option<Vec<String>>,
+    /// The `L̄` intervals `(a, b)` where the lowest state has lifted off the wall (an enclosed
+    /// diagram over every branch; `lowest_lifted_off` in `summary.json`; `None`: no verdict,
+    /// as for a diagram of selected branches or on the surface).
+    pub lowest_lifted_off: Option<Vec<(f64, f64)>>,
     /// The engine's own `summary.json` keys.
     pub extra: BTreeMap<String, serde_json::Value>,
 }

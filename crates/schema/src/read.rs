@@ -62,6 +62,8 @@ impl Diagram {
         };
         let exchange_curves = typed(take("curves"), "curves", &src)?;
         let families = typed(take("families"), "families", &src)?;
+        let notes = typed(take("notes"), "notes", &src)?;
+        let lowest_lifted_off = typed(take("lowest_lifted_off"), "lowest_lifted_off", &src)?;
         // The sheets of a traced diagram are a list; the exact layer writes a count there.
         let curves = match take("branches") {
             Some(v @ serde_json::Value::Array(_)) => typed(Some(v), "branches", &src)?.unwrap(),
@@ -115,6 +117,8 @@ impl Diagram {
             parameter,
             exchange_curves,
             families,
+            notes,
+            lowest_lifted_off,
             extra: map.into_iter().collect(),
         })
     }

@@ -31,6 +31,8 @@ const OWN_KEYS: &[&str] = &[
     "target",
     "curves",
     "families",
+    "notes",
+    "lowest_lifted_off",
 ];
 
 impl Diagram {
@@ -56,6 +58,8 @@ impl Diagram {
             parameter: None,
             exchange_curves: None,
             families: None,
+            notes: None,
+            lowest_lifted_off: None,
             extra: BTreeMap::new(),
         }
     }
@@ -66,6 +70,13 @@ impl Diagram {
         let v = checked_value(key, value)?;
         self.extra.insert(key.into(), v);
         Ok(())
+    }
+
+    /// An engine's own summary key as a typed value (`None`: absent or not of that type).
+    pub fn get<T: serde::de::DeserializeOwned>(&self, key: &str) -> Option<T> {
+        self.extra
+            .get(key)
+            .and_then(|v| serde_json::from_value(v.clone()).ok())
     }
 
     /// Set the certificate from a typed value (checked like [`Diagram::put`]).
@@ -276,6 +287,12 @@ impl Diagram {
         }
         if let Some(f) = &self.families {
             put("families", checked_value("families", f)?);
+        }
+        if let Some(n) = &self.notes {
+            put("notes", checked_value("notes", n)?);
+        }
+        if let Some(l) = &self.lowest_lifted_off {
+            put("lowest_lifted_off", checked_value("lowest_lifted_off", l)?);
         }
         for (k, v) in &self.extra {
             if map.contains_key(k) || OWN_KEYS.contains(&k.as_str()) || self.is_axis_key(k) {

@@ -139,7 +139,36 @@ fn sample() -> Diagram {
     d.states_dir = Some("states".into());
     d.run_id = Some("abc-1".into());
     d.put("great_circles", &vec![(1u32, 8.0f64)]).unwrap();
+    d.notes = Some(vec!["one note".into()]);
+    d.lowest_lifted_off = Some(vec![(1.5, 1.75), (2.25, 2.5)]);
     d
+}
+
+#[test]
+fn typed_keys_are_written_under_their_names() {
+    let mut d = sample();
+    let s = d.summary().unwrap();
+    assert_eq!(s["notes"][0], "one note");
+    assert_eq!(s["lowest_lifted_off"][1][0], 2.25);
+    // No verdict: no key.
+    d.lowest_lifted_off = None;
+    assert!(d.summary().unwrap().get("lowest_lifted_off").is_none());
+    // An engine's own key may not stand in for them.
+    d.put("notes", &vec!["other"]).unwrap();
+    assert!(matches!(d.summary(), Err(SchemaError::KeyClash(k)) if k == "notes"));
+    // A non-finite interval end is refused, not written as null.
+    let mut d = sample();
+    d.lowest_lifted_off = Some(vec![(1.5, f64::NAN)]);
+    assert!(d.summary().is_err());
+}
+
+#[test]
+fn surface_value_of_an_enclosed_critical_length() {
+    let mut c = sample().critical[0].clone();
+    assert_eq!(c.surface_lbar_cr(), None);
+    c.extra
+        .insert("surface_lbar_cr".into(), serde_json::json!(1.25));
+    assert_eq!(c.surface_lbar_cr(), Some(1.25));
 }
 
 #[test]
@@ -194,8 +223,7 @@ fn exact_layer_shape_reads_back_equal() {
 #[test]
 fn summary_has_no_null() {
     let mut d = sample();
-    d.put("lowest_lifted_off", &None::<Vec<(f64, f64)>>)
-        .unwrap();
+    d.put("absent", &None::<Vec<(f64, f64)>>).unwrap();
     d.put(
         "nested",
         &serde_json::json!({"a": null, "b": [1, {"c": null}]}),

@@ -1,11 +1,14 @@
 //! The enclosed engine ([`EnclosedEngine`], `|r| ≤ R`, paper Sec. 3.2) and its result in the
-//! schema, with the stretches where the lowest state has lifted off ([`lowest_lifted_off`]).
+//! schema, with the stretches where the lowest state has lifted off ([`lowest_lifted_off`])
+//! and the completeness certificate of a non-uniform rod's diagram
+//! ([`EnclosedEngine::certificate`]: `solve`'s search at a few lowest states).
 
 use std::collections::BTreeMap;
 
 use rodloop_schema::{Cell, Diagram, Point, SpecialPoint};
+use serde::Serialize;
 
-use super::{columns, critical_of, lbar_axis, Engine, UNITS};
+use super::{columns, critical_of, lbar_axis, Engine, PointState, PointStates, StateSource, UNITS};
 use crate::enclosed::{
     enclosed_diagram_with, EnclosedDiagram, EnclosedDiagramOptions, EnclosedProgress,
 };
@@ -17,6 +20,22 @@ use crate::DiagramError;
 pub struct EnclosedEngine {
     /// What to compute.
     pub opts: EnclosedDiagramOptions,
+}
+
+impl EnclosedEngine {
+    /// The engine for the diagram of `stiffness` inside `wall` over `lbar_min ≤ L̄ ≤ lbar_max`
+    /// with the default settings of [`EnclosedDiagramOptions::new`] (set the others on
+    /// `opts`).
+    pub fn new(
+        wall: impl rodloop_solver::enclosed::IntoWall,
+        stiffness: rodloop_solver::Stiffness,
+        lbar_min: f64,
+        lbar_max: f64,
+    ) -> Self {
+        Self {
+            opts: EnclosedDiagramOptions::new(wall, stiffness, lbar_min, lbar_max),
+        }
+    }
 }
 
 impl Engine for EnclosedEngine {
@@ -144,13 +163,144 @@ impl Engine for EnclosedEngine {
         out.put("states", &d.points.len())?;
         // With a branch selection, "lowest" is among the selected branches only: no
         // hypothesis verdict.
-        out.put(
-            "lowest_lifted_off",
-            &opts.branches.is_none().then(|| lowest_lifted_off(d)),
-        )?;
+        out.lowest_lifted_off = opts.branches.is_none().then(|| lowest_lifted_off(d));
         out.put("cells", &d.cells)?;
-        out.put("notes", &d.notes)?;
+        out.notes = Some(d.notes.clone());
         Ok(out)
+    }
+}
+
+/// The states of an enclosed diagram by point (the schema's points): every point, the
+/// lifted-off 3-D states as they are and attached ones as their surface loop, in
+/// `states/enclosed-branch-B-KKK.csv`, or `states/enclosed-branch-B-family-F-sheet-S-KKK.csv`
+/// for a family of a non-uniform rod (`k` counts the points of the branch, family and sheet
+/// in increasing `L̄`).
+impl PointStates for EnclosedDiagram {
+    fn point_states(&self) -> Vec<Option<PointState<'_>>> {
+        let points = &self.points;
+        let key = |i: usize| (points[i].branch, points[i].family, points[i].sheet);
+        let mut order: Vec<usize> = (0..points.len()).collect();
+        order.sort_by(|&a, &b| {
+            key(a)
+                .cmp(&key(b))
+                .then(points[a].lbar.total_cmp(&points[b].lbar))
+        });
+        let mut out: Vec<Option<PointState<'_>>> = points.iter().map(|_| None).collect();
+        let mut count = 0;
+        for (pos, &i) in order.iter().enumerate() {
+            if pos > 0 && key(order[pos - 1]) != key(i) {
+                count = 0;
+            }
+            let p = &points[i];
+            out[i] = Some(PointState {
+                name: if p.family == 0 {
+                    format!("states/enclosed-branch-{}-{count:03}.csv", p.branch)
+                } else {
+                    format!(
+                        "states/enclosed-branch-{}-family-{}-sheet-{}-{count:03}.csv",
+                        p.branch, p.family, p.sheet
+                    )
+                },
+                source: StateSource::Enclosed(p),
+            });
+            count += 1;
+        }
+        out
+    }
+}
+
+/// One check of the enclosed completeness certificate: `solve`'s state of a branch at the
+/// length of a lowest state of the diagram.
+#[derive(Clone, Debug, Serialize)]
+pub struct CertificateCheck {
+    /// `L̄` (that of the diagram's lowest state).
+    pub lbar: f64,
+    /// The branch `solve` was asked for.
+    pub branch: u32,
+    /// `solve`'s energy and error estimate (`None` where it found no state).
+    pub solve_energy: Option<(f64, f64)>,
+    /// The diagram's lowest state there: branch, family, energy, error estimate.
+    pub lowest: (u32, u32, f64, f64),
+    /// `solve`'s state lies below the lowest state by more than the two estimates.
+    pub below: bool,
+    /// Why `solve` found no state (empty otherwise).
+    pub note: String,
+}
+
+/// Lowest states at which the certificate runs `solve`: three, spread over the range.
+const CERTIFICATE_SAMPLES: usize = 3;
+
+impl EnclosedEngine {
+    /// The completeness certificate of a non-uniform rod's diagram `d`: at the lengths of
+    /// [`CERTIFICATE_SAMPLES`] lowest states of the diagram spread over its range, `solve`'s
+    /// search ([`crate::enclosed_state::solve_state`]: the surface loop of each branch that
+    /// exists there, then the enclosed loop from it) for every selected branch, in parallel; a
+    /// state of `solve` below the diagram's lowest one by more than the two error estimates is
+    /// a state the diagram missed. A uniform rod's diagram and `solve` start from the same
+    /// exact surface loops: no check there (empty).
+    pub fn certificate(&self, d: &EnclosedDiagram) -> Vec<CertificateCheck> {
+        let opts = &self.opts;
+        if opts.stiffness.is_uniform() {
+            return Vec::new();
+        }
+        let mut lowest: Vec<_> = d
+            .points
+            .iter()
+            .filter(|p| p.lowest && p.branch > 0)
+            .collect();
+        lowest.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
+        if lowest.is_empty() {
+            return Vec::new();
+        }
+        let n = lowest.len();
+        let mut picks: Vec<usize> = (0..CERTIFICATE_SAMPLES)
+            .map(|i| ((2 * i + 1) * n / (2 * CERTIFICATE_SAMPLES)).min(n - 1))
+            .collect();
+        picks.dedup();
+        let wanted = |b: u32| opts.branches.as_ref().is_none_or(|s| s.contains(&b));
+        let mut jobs = Vec::new();
+        for &i in &picks {
+            let p = lowest[i];
+            let top = p.lbar.floor() as u32 + 1;
+            for eta in 1..=top {
+                let e = f64::from(eta);
+                let branch = rodloop_exact::branch_of_eta(eta);
+                if p.lbar > e - 1.0 && p.lbar < e + 1.0 && wanted(branch) {
+                    jobs.push((p, branch));
+                }
+            }
+        }
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+        crate::parallel::run_parallel(threads, jobs, &mut |_| {}, &mut |_| {}, |(p, branch), _| {
+            let lowest = (p.branch, p.family, p.energy, p.energy_error);
+            match crate::enclosed_state::solve_state(
+                &opts.wall,
+                &opts.stiffness,
+                p.lbar,
+                branch,
+                opts.accuracy,
+            ) {
+                Ok(res) => {
+                    let (e, err) = res.energy;
+                    CertificateCheck {
+                        lbar: p.lbar,
+                        branch,
+                        solve_energy: Some((e, err)),
+                        lowest,
+                        below: e + err < p.energy - p.energy_error,
+                        note: String::new(),
+                    }
+                }
+                Err(e) => CertificateCheck {
+                    lbar: p.lbar,
+                    branch,
+                    solve_energy: None,
+                    lowest,
+                    below: false,
+                    note: error_chain(&e),
+                },
+            }
+        })
     }
 }
 
@@ -198,6 +348,18 @@ pub fn lowest_lifted_off(d: &EnclosedDiagram) -> Vec<(f64, f64)> {
                 _ => out.push((w[0], w[1])),
             }
         }
+    }
+    out
+}
+
+/// An error and its sources, `: `-separated (as `anyhow` prints a chain with `{:#}`).
+fn error_chain(e: &dyn std::error::Error) -> String {
+    let mut out = e.to_string();
+    let mut source = e.source();
+    while let Some(s) = source {
+        out.push_str(": ");
+        out.push_str(&s.to_string());
+        source = s.source();
     }
     out
 }

@@ -19,7 +19,8 @@
 //! themselves, for `states/`, the atlas and the report); [`Engine::schema`] turns that into
 //! the one result schema that the writer, the figures and the report read; the states of the
 //! results against a stiffness parameter reach `states/` through [`RecordStates`], by record
-//! of the schema. Whether a surface
+//! of the schema, those of the `L̄` diagrams (surface and enclosed) through [`PointStates`], by
+//! point of the schema. Whether a surface
 //! rod is uniform or two-segment is a property of its stiffness (the shift symmetry), decided
 //! inside [`SurfaceEngine`], not by its caller.
 //!
@@ -27,18 +28,21 @@
 //! |---|---|
 //! | `mod.rs` | the [`Engine`] interface and the schema helpers the engines share |
 //! | `surface.rs` | [`SurfaceEngine`] and its schema ([`surface_schema`]) |
-//! | `enclosed.rs` | [`EnclosedEngine`] and its schema ([`lowest_lifted_off`]) |
+//! | `branch_files.rs` | [`BranchFiles`]: the surface engine's branches saved to and resumed from their files |
+//! | `enclosed.rs` | [`EnclosedEngine`], its schema ([`lowest_lifted_off`]) and its completeness certificate ([`EnclosedEngine::certificate`]) |
 //! | `exact.rs` | [`ExactEngine`], its window of the exact diagram ([`exact_window`], in the schema: [`exact_window_schema`]) and the exact counterpart of a critical length ([`exact_counterpart`]) |
 //! | `sweep.rs` | [`SweepEngine`] (states at a fixed length against a stiffness parameter) and its schema ([`sweep_schema`]) |
 //! | `phase.rs` | [`PhaseEngine`] (critical lengths followed in a stiffness parameter, rows whose states fail left out: [`VerifiedPhase`]) and its schema ([`phase_schema`]) |
 
+mod branch_files;
 mod enclosed;
 mod exact;
 mod phase;
 mod surface;
 mod sweep;
 
-pub use enclosed::{lowest_lifted_off, EnclosedEngine};
+pub use branch_files::{BranchFileEvent, BranchFiles};
+pub use enclosed::{lowest_lifted_off, CertificateCheck, EnclosedEngine};
 pub use exact::{
     etas_in, exact_counterpart, exact_window, exact_window_schema, ExactEngine, ExactOutput,
 };
@@ -79,6 +83,61 @@ pub trait RecordStates {
     /// parameter (one state), of each critical length of a phase diagram (the states of its
     /// curve's `from_branch` and `to_branch`; none for the extrapolated limit row).
     fn record_states(&self) -> Vec<Vec<&crate::StateFile>>;
+}
+
+/// The state of one point of a diagram, as `states/` holds it: its file name and where its
+/// rows come from ([`PointState::table`]).
+pub struct PointState<'a> {
+    /// File, relative to the diagram directory (`states/…`).
+    pub name: String,
+    source: StateSource<'a>,
+}
+
+/// Where the rows of a [`PointState`] come from.
+enum StateSource<'a> {
+    /// A verified surface state.
+    Surface(&'a crate::StateFile),
+    /// A point of the enclosed diagram (its 3-D state, or its surface loop when attached).
+    Enclosed(&'a crate::enclosed::EnclosedPoint),
+}
+
+/// The rows of a state file in the columns of `solve`'s `config.csv`.
+pub struct StateTable {
+    /// The columns ([`crate::state_rows::SURFACE_COLUMNS`] or
+    /// [`crate::state_rows::ENCLOSED_COLUMNS`]).
+    pub columns: &'static [&'static str; 12],
+    /// The column that holds integers (the enclosed `node`), if any.
+    pub integer_column: Option<usize>,
+    /// The rows.
+    pub rows: Vec<[f64; 12]>,
+}
+
+impl PointState<'_> {
+    /// The rows in units of the scene's `r` and `d0`.
+    pub fn table(&self, r: f64, d0: f64) -> Result<StateTable, DiagramError> {
+        use crate::state_rows::{
+            point_rows, surface_rows, ENCLOSED_COLUMNS, NODE_COLUMN, SURFACE_COLUMNS,
+        };
+        Ok(match self.source {
+            StateSource::Surface(f) => StateTable {
+                columns: &SURFACE_COLUMNS,
+                integer_column: None,
+                rows: surface_rows(&f.profile, r, d0),
+            },
+            StateSource::Enclosed(p) => StateTable {
+                columns: &ENCLOSED_COLUMNS,
+                integer_column: Some(NODE_COLUMN),
+                rows: point_rows(p, r, d0)?,
+            },
+        })
+    }
+}
+
+/// The states an engine's result keeps, by point of its schema ([`Engine::schema`]'s
+/// `points`, in their order): what `states/` is written from, each point naming its file.
+pub trait PointStates {
+    /// The state of every point (`None`: no verified state, no file).
+    fn point_states(&self) -> Vec<Option<PointState<'_>>>;
 }
 
 /// The lbar axis of a branch diagram.

@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 
 use rodloop_schema::{Cell, Diagram, Point, SpecialPoint};
 
-use super::{columns, critical_of, lbar_axis, Engine, UNITS};
+use super::{columns, critical_of, lbar_axis, Engine, PointState, PointStates, StateSource, UNITS};
 use crate::{BranchHook, DiagramError, DiagramOptions, NumericDiagram, Progress};
 
 /// The surface engine: any stiffness profile on the sphere (uniform rods by one family per
@@ -155,4 +155,30 @@ pub fn surface_schema(
     out.put("great_circles", &d.great_circles)?;
     out.put("shape_tolerance", &d.shape_tolerance)?;
     Ok(out)
+}
+
+/// The states of a surface diagram by row ([`NumericDiagram::rows`], the schema's points): the
+/// verified state of each, `states/branch-B-KKK.csv`, or
+/// `states/branch-B-family-F-sheet-S-KKK.csv` for a family of a non-uniform rod (`k` counts
+/// the sheet's states in increasing `L̄`).
+impl PointStates for NumericDiagram {
+    fn point_states(&self) -> Vec<Option<PointState<'_>>> {
+        let mut out = Vec::new();
+        for (b, files) in self.branches.iter().zip(&self.state_files) {
+            for (k, f) in files.iter().enumerate() {
+                out.push(f.as_ref().map(|f| PointState {
+                    name: if b.family == 0 {
+                        format!("states/branch-{}-{k:03}.csv", b.branch)
+                    } else {
+                        format!(
+                            "states/branch-{}-family-{}-sheet-{}-{k:03}.csv",
+                            b.branch, b.family, b.sheet
+                        )
+                    },
+                    source: StateSource::Surface(f),
+                }));
+            }
+        }
+        out
+    }
 }
