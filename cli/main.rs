@@ -29,6 +29,7 @@ mod export;
 mod output;
 mod phase;
 mod phase_figure;
+mod phase_rows;
 mod progress;
 mod report;
 mod solve;

@@ -9,12 +9,13 @@ use rodloop_diagram::phase::PhaseSettings;
 use rodloop_diagram::{Engine, PhaseEngine, RecordStates, StateFile};
 use rodloop_figures::raster::svg_to_png;
 use rodloop_scene::Scene;
-use rodloop_schema::{Critical, CurveRow, Diagram, ExchangeCurve, Parameter};
+use rodloop_schema::{Diagram, Parameter};
 use rodloop_solver::{Param, SolveOptions};
 
 use crate::args::{accuracy_of, stiffness_of};
 use crate::output::{Cell, OutputRun, Table};
 use crate::phase_figure::{phase_svg, stopped_short};
+use crate::phase_rows::curves_of;
 
 /// Arguments of `rodloop phase`.
 #[derive(clap::Args, Debug)]
@@ -253,59 +254,6 @@ pub(crate) fn brief(text: &str) -> String {
         .next()
         .unwrap_or(limit.len());
     format!("{} … (full text in summary.json)", limit[..cut].trim_end())
-}
-
-/// The rows of every curve of a phase diagram in the schema: its critical lengths with their
-/// places on their curves ([`CurveRow`]).
-pub(crate) struct PhaseRows<'a> {
-    /// The parameter.
-    pub parameter: Parameter,
-    /// The curves, in order.
-    pub curves: Vec<CurveRows<'a>>,
-}
-
-/// A curve of a phase diagram and its rows (in the order of the schema's critical lengths).
-pub(crate) struct CurveRows<'a> {
-    /// The curve.
-    pub curve: &'a ExchangeCurve,
-    /// Its rows.
-    pub rows: Vec<(&'a Critical, CurveRow)>,
-}
-
-/// The curves of the phase diagram `d` (the schema of `phase`), every critical length placed
-/// on its curve.
-pub(crate) fn curves_of(d: &Diagram) -> Result<PhaseRows<'_>> {
-    let (Some(parameter), Some(curves)) = (&d.parameter, &d.exchange_curves) else {
-        bail!("internal error: the phase diagram's schema has no parameter or curves");
-    };
-    let mut out: Vec<CurveRows> = curves
-        .iter()
-        .map(|curve| CurveRows {
-            curve,
-            rows: Vec::new(),
-        })
-        .collect();
-    for c in &d.critical {
-        let Some(at) = c.curve_row() else {
-            bail!(
-                "internal error: critical length {} of the phase diagram is on no curve",
-                c.index
-            );
-        };
-        let Some(curve) = at.curve.checked_sub(1).and_then(|k| out.get_mut(k)) else {
-            bail!(
-                "internal error: critical length {} names curve {}, of {}",
-                c.index,
-                at.curve,
-                curves.len()
-            );
-        };
-        curve.rows.push((c, at));
-    }
-    Ok(PhaseRows {
-        parameter: parameter.clone(),
-        curves: out,
-    })
 }
 
 /// The state files of each row, in the order of the schema's critical lengths (see

@@ -8,7 +8,7 @@
 use rodloop_figures::plot::{LegendItem, Mark, Plot, Series, Shape};
 use rodloop_figures::svg::{Anchor, Svg};
 
-use crate::phase::{CurveRows, PhaseRows};
+use crate::phase_rows::{CurveRows, PhaseRows};
 
 const COLORS: [&str; 4] = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd"];
 

@@ -5,8 +5,10 @@
 //! where its lowest traced state is unstable, so that a lower state must exist).
 //!
 //! It is one file because every route to the lowest state of an enclosed branch (descent from a
-//! saddle, homotopy starts in the stiffness) ends in `solve_branch_lowest`, which compares them
-//! with one period count.
+//! saddle, homotopy starts in the stiffness, minima of other lengths continued in `L̄`) ends in
+//! `solve_branch_lowest`, which compares them with one period count; the steps of the last
+//! route that need none of these (its lengths, the continuation) are in
+//! [`super::length_path`].
 //!
 //! [`EnclosedSaddle`] is the enclosed model's side of the one descent routine
 //! ([`crate::descend::descend`]): the same unstable directions and Newton solves, with the
@@ -15,8 +17,10 @@
 use nalgebra::SymmetricEigen;
 
 use super::branch::{
-    resample_state, solve_branch, solve_levels, solve_levels_from_fine, BranchSolve, SurfaceSource,
+    resample_state, solve_branch, solve_from_surface, solve_levels, solve_levels_from_fine,
+    BranchSolve, SurfaceSource,
 };
+use super::length_path::{continue_in_length, probe_lengths};
 use super::solve::{solve_enclosed, EnclosedOptions, EnclosedState};
 use super::wall::IntoWall;
 use crate::descend::{descend as descend_saddle, Descent, DescentSettings, SaddleModel};
@@ -622,9 +626,9 @@ pub fn solve_branch_lowest(
             .ok()
             .map(|(r, _)| SurfaceSource::Numeric(Box::new(r.equilibrium)))
         };
-        for (x, s) in super::length_path::states_by_length_continuation(
-            &wall, lbar, eta, stiffness, search, opts, surface,
-        ) {
+        for (x, s) in
+            states_by_length_continuation(&wall, lbar, eta, stiffness, search, opts, surface)
+        {
             let Some(b) = carry_to_ladder(&s, cells, opts) else {
                 continue;
             };
@@ -667,6 +671,92 @@ pub fn solve_branch_lowest(
         )),
         (Err(e), None) => Err(e),
     }
+}
+
+/// Amplitudes of the descents of [`local_minima`] (as [`descend_branch`]).
+const AMPLITUDES: [f64; 5] = [0.02, 0.05, 0.15, 0.3, 0.5];
+
+/// Local minima (index 0) of branch `eta` at `lbar` on `cells` cells reached from `starts`,
+/// each descended where it is a saddle ([`crate::descend::descend`]). Lowest first.
+fn local_minima(
+    starts: Vec<EnclosedState>,
+    eta: u32,
+    opts: &EnclosedOptions,
+) -> Vec<EnclosedState> {
+    let saddle = EnclosedSaddle {
+        opts: opts.clone(),
+        ..EnclosedSaddle::default()
+    };
+    let settings = DescentSettings {
+        amplitudes: AMPLITUDES.to_vec(),
+        ..DescentSettings::default()
+    };
+    let mut out: Vec<EnclosedState> = starts
+        .into_iter()
+        .filter_map(|s| descend_saddle(&saddle, s, &settings).ok())
+        .map(|d| d.state)
+        .filter(|s| saddle.index(s).ok() == Some(0))
+        .filter(|s| enclosed_periods(s).ok().map(|p| p.eta) == Some(eta))
+        .collect();
+    out.sort_by(|a, b| a.energy().total_cmp(&b.energy()));
+    out
+}
+
+/// Probe lengths ([`probe_lengths`], nearest first) at which the stiffness paths
+/// ([`stiffness_homotopy_states`], one continuation per shift: the costly start) are
+/// searched, after the surface loop has been tried at every probe length.
+pub const STIFFNESS_PROBES: usize = 2;
+
+/// Local minima of branch `eta` at one length of [`probe_lengths`], continued to `lbar`:
+/// the states at `lbar` on `cells` cells of branch `eta`, lowest first (their index may have
+/// changed on the way), each with the length it comes from. The starts at a probe length
+/// `x`: the enclosed state from the surface loop `surface(x)` (where one is solved) at every
+/// probe length in turn, then the stiffness paths at the [`STIFFNESS_PROBES`] nearest ones;
+/// each descended where it is a saddle. The first probe length that gives a state at
+/// `lbar` ends the search; empty when none does.
+pub fn states_by_length_continuation<F>(
+    wall: impl IntoWall,
+    lbar: f64,
+    eta: u32,
+    stiffness: &crate::Stiffness,
+    cells: usize,
+    opts: &EnclosedOptions,
+    surface: F,
+) -> Vec<(f64, EnclosedState)>
+where
+    F: Fn(f64) -> Option<SurfaceSource>,
+{
+    let wall = wall.into_wall();
+    let continued = |x: f64, minima: Vec<EnclosedState>| {
+        let mut out: Vec<(f64, EnclosedState)> = minima
+            .into_iter()
+            .filter_map(|s| continue_in_length(&s, lbar, opts).ok())
+            .filter(|s| enclosed_periods(s).ok().map(|p| p.eta) == Some(eta))
+            .map(|s| (x, s))
+            .collect();
+        out.sort_by(|a, b| a.1.energy().total_cmp(&b.1.energy()));
+        out
+    };
+    let lengths = probe_lengths(lbar, eta);
+    for &x in &lengths {
+        let Some(src) = surface(x) else { continue };
+        let Ok(s) = solve_from_surface(&wall, x, stiffness, &src, cells, opts) else {
+            continue;
+        };
+        let out = continued(x, local_minima(vec![s], eta, opts));
+        if !out.is_empty() {
+            return out;
+        }
+    }
+    for &x in lengths.iter().take(STIFFNESS_PROBES) {
+        let starts =
+            stiffness_homotopy_states(&wall, x, eta, stiffness, cells, opts).unwrap_or_default();
+        let out = continued(x, local_minima(starts, eta, opts));
+        if !out.is_empty() {
+            return out;
+        }
+    }
+    Vec::new()
 }
 
 #[cfg(test)]

@@ -1,5 +1,6 @@
 //! Local minima of an enclosed branch reached by continuation in `L̄` from other lengths of
-//! the branch (a route of [`super::descent::solve_branch_lowest`]).
+//! the branch (a route of [`super::descent::solve_branch_lowest`], which runs the search:
+//! [`super::descent::states_by_length_continuation`]).
 //!
 //! The semismooth Newton from the surface loop stops at the equilibrium next to it, and the
 //! descent from a saddle along its unstable directions ends at the equilibrium that Newton
@@ -10,22 +11,18 @@
 //! finds a local minimum of the branch on a coarse mesh (from the surface loop, else from the
 //! stiffness paths of [`stiffness_homotopy_states`], each descended where it is a saddle),
 //! and continues it in `L̄` to the length asked for ([`continue_in_length`]):
-//! [`states_by_length_continuation`].
+//! [`super::descent::states_by_length_continuation`].
 
 use rodloop_continuation::natural::{walk_adaptive, AdaptiveSettings};
 
-use super::branch::{solve_from_surface, SurfaceSource};
-use super::descent::{enclosed_periods, stiffness_homotopy_states, EnclosedSaddle};
 use super::solve::{EnclosedOptions, EnclosedState};
-use super::wall::IntoWall;
-use crate::descend::{descend, DescentSettings, SaddleModel};
 use crate::SolverError;
 
 /// Spacing in `L̄` of the lengths searched: a twentieth of a branch's range
 /// `η − 1 < L̄ < η + 1`.
 pub const LENGTH_STEP: f64 = 0.1;
 
-/// The lengths of branch `eta` at which [`states_by_length_continuation`] searches for a state to continue
+/// The lengths of branch `eta` at which [`super::descent::states_by_length_continuation`] searches for a state to continue
 /// to `lbar`: `lbar ∓ k·LENGTH_STEP`, `k = 1, 2, …`, nearest first (the shorter one first at
 /// equal distance), inside the branch's range and at least `LENGTH_STEP` from its ends
 /// (where the loop degenerates).
@@ -42,40 +39,6 @@ pub fn probe_lengths(lbar: f64, eta: u32) -> Vec<f64> {
     }
     out
 }
-
-/// Amplitudes of the descents of [`local_minima`] (as [`super::descent::descend_branch`]).
-const AMPLITUDES: [f64; 5] = [0.02, 0.05, 0.15, 0.3, 0.5];
-
-/// Local minima (index 0) of branch `eta` at `lbar` on `cells` cells reached from `starts`,
-/// each descended where it is a saddle ([`crate::descend::descend`]). Lowest first.
-fn local_minima(
-    starts: Vec<EnclosedState>,
-    eta: u32,
-    opts: &EnclosedOptions,
-) -> Vec<EnclosedState> {
-    let saddle = EnclosedSaddle {
-        opts: opts.clone(),
-        ..EnclosedSaddle::default()
-    };
-    let settings = DescentSettings {
-        amplitudes: AMPLITUDES.to_vec(),
-        ..DescentSettings::default()
-    };
-    let mut out: Vec<EnclosedState> = starts
-        .into_iter()
-        .filter_map(|s| descend(&saddle, s, &settings).ok())
-        .map(|d| d.state)
-        .filter(|s| saddle.index(s).ok() == Some(0))
-        .filter(|s| enclosed_periods(s).ok().map(|p| p.eta) == Some(eta))
-        .collect();
-    out.sort_by(|a, b| a.energy().total_cmp(&b.energy()));
-    out
-}
-
-/// Probe lengths ([`probe_lengths`], nearest first) at which the stiffness paths
-/// ([`stiffness_homotopy_states`], one continuation per shift: the costly start) are
-/// searched, after the surface loop has been tried at every probe length.
-pub const STIFFNESS_PROBES: usize = 2;
 
 /// `state` continued in `L̄` to `lbar` on its own mesh: natural-parameter steps
 /// ([`EnclosedState::step_to`]) walked by the continuation crate's [`walk_adaptive`], at most
@@ -109,58 +72,6 @@ pub fn continue_in_length(
         |cur: &EnclosedState, t| cur.step_to(at(t), opts),
         |_, _, e| Err(e),
     )
-}
-
-/// Local minima of branch `eta` at one length of [`probe_lengths`], continued to `lbar`:
-/// the states at `lbar` on `cells` cells of branch `eta`, lowest first (their index may have
-/// changed on the way), each with the length it comes from. The starts at a probe length
-/// `x`: the enclosed state from the surface loop `surface(x)` (where one is solved) at every
-/// probe length in turn, then the stiffness paths at the [`STIFFNESS_PROBES`] nearest ones;
-/// each descended where it is a saddle. The first probe length that gives a state at
-/// `lbar` ends the search; empty when none does.
-pub fn states_by_length_continuation<F>(
-    wall: impl IntoWall,
-    lbar: f64,
-    eta: u32,
-    stiffness: &crate::Stiffness,
-    cells: usize,
-    opts: &EnclosedOptions,
-    surface: F,
-) -> Vec<(f64, EnclosedState)>
-where
-    F: Fn(f64) -> Option<SurfaceSource>,
-{
-    let wall = wall.into_wall();
-    let continued = |x: f64, minima: Vec<EnclosedState>| {
-        let mut out: Vec<(f64, EnclosedState)> = minima
-            .into_iter()
-            .filter_map(|s| continue_in_length(&s, lbar, opts).ok())
-            .filter(|s| enclosed_periods(s).ok().map(|p| p.eta) == Some(eta))
-            .map(|s| (x, s))
-            .collect();
-        out.sort_by(|a, b| a.1.energy().total_cmp(&b.1.energy()));
-        out
-    };
-    let lengths = probe_lengths(lbar, eta);
-    for &x in &lengths {
-        let Some(src) = surface(x) else { continue };
-        let Ok(s) = solve_from_surface(&wall, x, stiffness, &src, cells, opts) else {
-            continue;
-        };
-        let out = continued(x, local_minima(vec![s], eta, opts));
-        if !out.is_empty() {
-            return out;
-        }
-    }
-    for &x in lengths.iter().take(STIFFNESS_PROBES) {
-        let starts =
-            stiffness_homotopy_states(&wall, x, eta, stiffness, cells, opts).unwrap_or_default();
-        let out = continued(x, local_minima(starts, eta, opts));
-        if !out.is_empty() {
-            return out;
-        }
-    }
-    Vec::new()
 }
 
 #[cfg(test)]
