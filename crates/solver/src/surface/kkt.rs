@@ -65,9 +65,6 @@ type V3 = Vector3<f64>;
 /// Pivot ratio below which a diagonal block counts as singular.
 const PIVOT_RATIO: f64 = 1e-13;
 
-/// Largest update `S` of a middle block (`1/√ε`): beyond it the block counts as singular.
-const S_LIMIT: f64 = 6.7e7;
-
 /// Per-cell coefficients of the lifted system (see the module docs).
 pub(crate) struct CellTerms {
     /// `E_c`.
@@ -404,10 +401,9 @@ impl KktFactor {
             let sigma = q - (bsb + bsb.transpose()) * 0.5;
             let lu = sigma.lu();
             let diag = lu.u().diagonal();
-            // The block's scale is that of its entries (the pair's ±1, `S`, `B`, `Q`); a pivot
-            // of `Σ` that small against it is a singular block, as is an update `S` grown
-            // past `1/√ε` (it comes from a nearly singular block before, and `Σ` would lose
-            // its digits to it).
+            // The block's scale is that of its entries (the pair's ±1, `S`, `B`, `Q`): a pivot
+            // of `Σ` that small against it makes a singular block, as the pivot ratio of the
+            // block's LU did.
             let scale = [
                 1.0,
                 s.amax(),
@@ -419,7 +415,7 @@ impl KktFactor {
             .into_iter()
             .fold(0.0f64, f64::max);
             let small = diag[0].abs().min(diag[1].abs());
-            if small.is_nan() || small <= PIVOT_RATIO * scale || s.amax() > S_LIMIT {
+            if small.is_nan() || small <= PIVOT_RATIO * scale {
                 return Err(singular());
             }
             // det D_c = det P · det Σ with det P = −1.
