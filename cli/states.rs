@@ -76,13 +76,19 @@ enum StateError {
 
 /// The `config.csv` table of a state ([`StateTable`]; its integer column as integers).
 fn state_table(t: &StateTable) -> Result<Table> {
-    let mut table = Table::new("config.csv", t.columns);
-    for row in &t.rows {
+    rows_table(t.columns, &t.rows, t.integer_column)
+}
+
+/// A `config.csv` table of `rows` in `columns`, the column `integer` (if any) as integers:
+/// the one builder of every state table.
+fn rows_table(columns: &[&str], rows: &[[f64; 12]], integer: Option<usize>) -> Result<Table> {
+    let mut table = Table::new("config.csv", columns);
+    for row in rows {
         table.push(
             row.iter()
                 .enumerate()
                 .map(|(i, &x)| {
-                    if Some(i) == t.integer_column {
+                    if Some(i) == integer {
                         Cell::I(x as i64)
                     } else {
                         Cell::F(x)
@@ -112,31 +118,7 @@ pub fn write_state_file(
 
 /// [`crate::solve::config_table`] for a sphere of radius `r` and reference stiffness `d0`.
 pub fn config_table_in(profile: &[rodloop_solver::ProfilePoint], r: f64, d0: f64) -> Result<Table> {
-    let mut table = Table::new("config.csv", &SURFACE_COLUMNS);
-    for row in surface_rows(profile, r, d0) {
-        table.push(row.iter().map(|&x| Cell::F(x)).collect())?;
-    }
-    Ok(table)
-}
-
-/// The enclosed `config.csv` table of `rows` ([`ENCLOSED_COLUMNS`]; `node` as an integer).
-fn enclosed_rows_table(rows: &[[f64; 12]]) -> Result<Table> {
-    let mut table = Table::new("config.csv", &ENCLOSED_COLUMNS);
-    for row in rows {
-        table.push(
-            row.iter()
-                .enumerate()
-                .map(|(i, &x)| {
-                    if i == NODE_COLUMN {
-                        Cell::I(x as i64)
-                    } else {
-                        Cell::F(x)
-                    }
-                })
-                .collect(),
-        )?;
-    }
-    Ok(table)
+    rows_table(&SURFACE_COLUMNS, &surface_rows(profile, r, d0), None)
 }
 
 /// `f` over `items` on the available cores, results in the order of `items`.
@@ -202,5 +184,9 @@ pub fn result_table(
     r: f64,
     d0: f64,
 ) -> Result<Table> {
-    enclosed_rows_table(&result_rows(res, r, d0)?)
+    rows_table(
+        &ENCLOSED_COLUMNS,
+        &result_rows(res, r, d0)?,
+        Some(NODE_COLUMN),
+    )
 }
