@@ -193,14 +193,7 @@ impl PointStates for EnclosedDiagram {
             }
             let p = &points[i];
             out[i] = Some(PointState {
-                name: if p.family == 0 {
-                    format!("states/enclosed-branch-{}-{count:03}.csv", p.branch)
-                } else {
-                    format!(
-                        "states/enclosed-branch-{}-family-{}-sheet-{}-{count:03}.csv",
-                        p.branch, p.family, p.sheet
-                    )
-                },
+                name: super::state_file_name("enclosed-branch", p.branch, p.family, p.sheet, count),
                 source: StateSource::Enclosed(p),
             });
             count += 1;

@@ -112,6 +112,23 @@ pub struct StateTable {
     pub rows: Vec<[f64; 12]>,
 }
 
+/// The name of the `k`-th state file of a sheet, relative to the run's directory:
+/// `states/{kind}-{branch}-{k:03}.csv` for a branch's one family (family 0), else
+/// `states/{kind}-{branch}-family-{family}-sheet-{sheet}-{k:03}.csv`.
+pub(crate) fn state_file_name(
+    kind: &str,
+    branch: u32,
+    family: u32,
+    sheet: u32,
+    k: usize,
+) -> String {
+    if family == 0 {
+        format!("states/{kind}-{branch}-{k:03}.csv")
+    } else {
+        format!("states/{kind}-{branch}-family-{family}-sheet-{sheet}-{k:03}.csv")
+    }
+}
+
 impl PointState<'_> {
     /// The rows in units of the scene's `r` and `d0`.
     pub fn table(&self, r: f64, d0: f64) -> Result<StateTable, DiagramError> {

@@ -167,14 +167,7 @@ impl PointStates for NumericDiagram {
         for (b, files) in self.branches.iter().zip(&self.state_files) {
             for (k, f) in files.iter().enumerate() {
                 out.push(f.as_ref().map(|f| PointState {
-                    name: if b.family == 0 {
-                        format!("states/branch-{}-{k:03}.csv", b.branch)
-                    } else {
-                        format!(
-                            "states/branch-{}-family-{}-sheet-{}-{k:03}.csv",
-                            b.branch, b.family, b.sheet
-                        )
-                    },
+                    name: super::state_file_name("branch", b.branch, b.family, b.sheet, k),
                     source: StateSource::Surface(f),
                 }));
             }
