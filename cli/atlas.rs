@@ -343,7 +343,7 @@ pub fn enclosed_rows(
             jobs.push((branch, j, g[i]));
         }
     }
-    let solved = crate::states::parallel_map(&jobs, |&(branch, j, (lbar, _))| {
+    let solved = rodloop_diagram::parallel_map(&jobs, |&(branch, j, (lbar, _))| {
         let one = || -> Result<(LoopData, String)> {
             let res = crate::enclosed::solve_state(scene, &stiffness, lbar, branch, accuracy)?;
             let table =

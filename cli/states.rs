@@ -27,7 +27,7 @@ pub fn write_point_states(
 ) -> Result<Vec<String>> {
     let dir = run.subdir("states")?;
     let points = states.point_states();
-    let results = parallel_map(&points, |state| {
+    let results = rodloop_diagram::parallel_map(&points, |state| {
         let Some(state) = state else {
             return Ok(String::new());
         };
@@ -119,39 +119,6 @@ pub fn write_state_file(
 /// [`crate::solve::config_table`] for a sphere of radius `r` and reference stiffness `d0`.
 pub fn config_table_in(profile: &[rodloop_solver::ProfilePoint], r: f64, d0: f64) -> Result<Table> {
     rows_table(&SURFACE_COLUMNS, &surface_rows(profile, r, d0), None)
-}
-
-/// `f` over `items` on the available cores, results in the order of `items`.
-pub fn parallel_map<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
-    let threads = std::thread::available_parallelism()
-        .map_or(1, |n| n.get())
-        .min(items.len().max(1));
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let slots: Vec<std::sync::Mutex<Option<R>>> =
-        items.iter().map(|_| std::sync::Mutex::new(None)).collect();
-    std::thread::scope(|scope| {
-        for _ in 0..threads {
-            scope.spawn(|| loop {
-                let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                let Some(item) = items.get(k) else {
-                    break;
-                };
-                let r = f(item);
-                if let Ok(mut slot) = slots[k].lock() {
-                    *slot = Some(r);
-                }
-            });
-        }
-    });
-    slots
-        .into_iter()
-        .map(|m| {
-            m.into_inner()
-                .ok()
-                .flatten()
-                .expect("every item was mapped by a worker")
-        })
-        .collect()
 }
 
 /// Every file under `dir` (recursively), as sorted paths relative to it with `/` separators:

@@ -35,7 +35,7 @@ impl<T: Send> Entry<T> {
         solve: impl Fn(&Choice) -> Result<T> + Sync,
     ) -> Vec<Self> {
         let solved =
-            crate::states::parallel_map(&choices, |c| solve(c).map_err(|e| format!("{e:#}")));
+            rodloop_diagram::parallel_map(&choices, |c| solve(c).map_err(|e| format!("{e:#}")));
         choices
             .into_iter()
             .zip(solved)

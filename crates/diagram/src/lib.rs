@@ -124,6 +124,7 @@ pub use march::{
 };
 pub(crate) use options::{model_with_phase, surface_model};
 pub use options::{DiagramOptions, TraceControls};
+pub use parallel::parallel_map;
 pub use progress::Progress;
 /// The error type a [`BranchHook`] returns.
 pub use rodloop_continuation::BoxError;

@@ -1,4 +1,6 @@
-//! The one thread pool of the crate: tracing the branches and the assembly's tasks.
+//! The one thread pool of the crate: tracing the branches and the assembly's tasks
+//! ([`run_parallel`]), and the plain map over a slice that the command-line tool uses for its
+//! own per-state work ([`parallel_map`]).
 
 use std::collections::VecDeque;
 use std::sync::{mpsc, Mutex};
@@ -71,4 +73,33 @@ where
     // Every item is popped by exactly one worker, which sends its result before taking the
     // next; a worker that panicked would have propagated out of the scope above.
     results.into_iter().flatten().collect()
+}
+
+/// `f` of every item of `items` on the available cores, in the order of `items` (the pool of
+/// [`run_parallel`] without progress events).
+pub fn parallel_map<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    run_parallel(
+        threads,
+        items.iter().collect(),
+        &mut |_| {},
+        &mut |_| {},
+        |item: &T, _| f(item),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parallel_map;
+
+    #[test]
+    fn parallel_map_keeps_the_order_of_its_items() {
+        let items: Vec<u64> = (0..257).collect();
+        // Uneven work so that the workers finish out of order.
+        let squares = parallel_map(&items, |&k| {
+            (0..(k % 7) * 1000).fold(k * k, |a, _| std::hint::black_box(a))
+        });
+        assert_eq!(squares, items.iter().map(|k| k * k).collect::<Vec<_>>());
+        assert!(parallel_map(&[] as &[u64], |&k| k).is_empty());
+    }
 }

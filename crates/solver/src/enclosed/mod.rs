@@ -21,9 +21,10 @@
 //!   to a nearby length.
 //! * [`from_shape`]: a start from a saved shape (`solve --from`).
 //! * [`inertia`]: the stability index from the inertia of the bordered KKT matrix.
-//! * [`descent`]: leaving a saddle along its unstable direction; the enclosed side of the
-//!   one descent routine ([`crate::descend`]) and an enclosed solve that ends at a local
-//!   minimum.
+//! * [`descent`]: the enclosed solve that ends at the branch's lowest local minimum, over
+//!   its routes: leaving a saddle along its unstable direction (the enclosed side of the one
+//!   descent routine, [`crate::descend`]), starts by continuation in the stiffness from the
+//!   uniform rod, minima of other lengths ([`length_path`]).
 //! * [`continuation`]: natural-parameter steps in `L̄` (the enclosed diagram's tracer).
 //! * [`length_path`]: local minima of a branch continued in `L̄` from other lengths.
 //! * [`seam`]: the model behind [`crate::Confinement`] (continuation through the seam).
