@@ -20,6 +20,9 @@
 //!
 //! Reference: E. L. Allgower & K. Georg, *Introduction to Numerical Continuation
 //! Methods*, SIAM 2003, ch. 2 (embedding and natural parametrisation).
+//!
+//! Over 40 % of the file is its unit tests (the four loops on problems with known branches,
+//! folds and failing correctors); the code is the four loops named above.
 
 use nalgebra::DVector;
 
