@@ -55,6 +55,7 @@ impl Direction {
 /// | `max_turn` | `0.5` rad | largest angle between consecutive tangents of an accepted step |
 /// | `locate_tol` | `1e-10` | arclength accuracy of located special points |
 /// | `detect_folds`, `detect_branch_points`, `detect_loops` | `true` | detections to run |
+/// | `branch_points_beside_folds` | `true` | a branch point is located in a step that has a fold too |
 /// | `hermite_location` | `false` | location correctors start from the bracket's Hermite interpolant |
 #[derive(Debug, Clone, PartialEq)]
 pub struct PseudoArclength {
@@ -76,6 +77,7 @@ pub struct PseudoArclength {
     pub(crate) detect_folds: bool,
     pub(crate) detect_branch_points: bool,
     pub(crate) detect_loops: bool,
+    pub(crate) branch_points_beside_folds: bool,
     pub(crate) hermite_location: bool,
 }
 
@@ -100,6 +102,7 @@ impl Default for PseudoArclength {
             detect_folds: true,
             detect_branch_points: true,
             detect_loops: true,
+            branch_points_beside_folds: true,
             hermite_location: false,
         }
     }
@@ -278,6 +281,16 @@ impl PseudoArclength {
     /// Whether to detect and locate simple branch points (default `true`).
     pub fn with_detect_branch_points(mut self, on: bool) -> Result<Self, ContinuationError> {
         self.detect_branch_points = on;
+        Ok(self)
+    }
+
+    /// Whether a branch point is located in a step in which a fold was located (default
+    /// `true`). Off, a step that turns reports only its fold: for a caller that ends at the
+    /// first turning point and keeps only the fold of that step, the branch point's location
+    /// (a sign change of the determinant, often many corrector solves next to a singular
+    /// Jacobian) would be work thrown away.
+    pub fn with_branch_points_beside_folds(mut self, on: bool) -> Result<Self, ContinuationError> {
+        self.branch_points_beside_folds = on;
         Ok(self)
     }
 

@@ -378,8 +378,13 @@ impl<'a, P: Problem + ?Sized> Continuation<'a, P> {
         }
 
         // Simple branch points: sign change of det [A; tᵀ]; the scaled determinant
-        // sign · exp(ln|det| − ln|det_a|) is continuous and free of overflow.
-        if st.detect_branch_points && seg.a.det_sign * seg.b.det_sign < 0.0 {
+        // sign · exp(ln|det| − ln|det_a|) is continuous and free of overflow. Not beside a
+        // fold of this step unless asked for (`branch_points_beside_folds`).
+        let fold_found = !out.is_empty();
+        if st.detect_branch_points
+            && (st.branch_points_beside_folds || !fold_found)
+            && seg.a.det_sign * seg.b.det_sign < 0.0
+        {
             let reference = seg.a.log_det;
             let scaled = move |e: &SegEval| {
                 if e.det_sign == 0.0 {

@@ -939,3 +939,40 @@ fn hermite_location_finds_the_known_folds_and_branch_point() {
         assert!(x.abs() < 1e-8 && p.abs() < 1e-8, "{what}: x = {x}, p = {p}");
     }
 }
+
+/// On the parabola `x² = p` of the pitchfork, followed through `x = 0`, the step that
+/// turns crosses both the fold and the branch point at `(0, 0)`: both are reported by
+/// default, only the fold without `branch_points_beside_folds`; the fold is the same.
+#[test]
+fn branch_point_beside_a_fold_is_located_only_when_asked() {
+    let problem = pitchfork();
+    let run = |beside: bool| {
+        let settings = PseudoArclength::new()
+            .with_ds(0.07)
+            .unwrap()
+            .with_ds_bounds(1e-8, 0.1)
+            .unwrap()
+            .with_range(-1.0, 0.3)
+            .unwrap()
+            .with_direction(Direction::Backward)
+            .unwrap()
+            .with_locate_tol(1e-9)
+            .unwrap()
+            .with_hermite_location(true)
+            .unwrap()
+            .with_branch_points_beside_folds(beside)
+            .unwrap();
+        Continuation::new(&problem, settings)
+            .run(&v1(0.5), 0.25)
+            .unwrap()
+    };
+    let (with, without) = (run(true), run(false));
+    assert_eq!(with.branch_points().count(), 1, "{:?}", with.special);
+    assert_eq!(without.branch_points().count(), 0, "{:?}", without.special);
+    let (f1, f0) = (
+        with.folds().next().expect("fold"),
+        without.folds().next().expect("fold"),
+    );
+    assert!(f0.x[0].abs() < 1e-8 && f0.p.abs() < 1e-8, "{f0:?}");
+    assert_eq!((f1.x[0], f1.p, f1.s), (f0.x[0], f0.p, f0.s));
+}

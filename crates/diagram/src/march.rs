@@ -320,6 +320,8 @@ fn continuation_settings(st: &MarchSettings, side: f64) -> Result<PseudoArclengt
         .and_then(|s| s.with_detect_folds(true))
         .and_then(|s| s.with_detect_branch_points(st.detect_branch_points))
         .and_then(|s| s.with_detect_loops(st.folds == FoldPolicy::Follow))
+        // A stopping march keeps only the fold of the step that turns.
+        .and_then(|s| s.with_branch_points_beside_folds(st.folds == FoldPolicy::Follow))
         .and_then(|s| s.with_hermite_location(st.hermite_location))
         .map_err(start_error)
 }

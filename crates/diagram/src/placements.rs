@@ -77,7 +77,8 @@ pub(crate) fn uniform_placements(
     let half = HALF_PERIOD_SAMPLES;
     let m = 2 * eta.max(1) as usize * half;
     let at = |j: usize| j as f64 / m as f64;
-    let k2: Vec<f64> = (0..m).map(|j| kg.eval(at(j)).powi(2)).collect();
+    let sigmas: Vec<f64> = (0..m).map(at).collect();
+    let k2: Vec<f64> = kg.eval_many(&sigmas).iter().map(|v| v.powi(2)).collect();
     let d: Vec<f64> = (0..m).map(|j| profile.eval(at(j)).d).collect();
     let f = placed_energies(&d, &k2, half);
     let mut out: Vec<f64> = critical_points(&f)

@@ -70,11 +70,11 @@ fn sampled_energy(
     let (r, length) = (model.radius(), model.length());
     let map = model.mesh();
     let h = length / m as f64;
-    let us = map.u_of_sigmas((0..m).map(|j| j as f64 / m as f64));
+    let ks = kg.eval_many(&map.u_of_sigmas((0..m).map(|j| j as f64 / m as f64)));
     let e: f64 = (0..m)
         .map(|j| {
             let sigma = j as f64 / m as f64;
-            let k = kg.eval(us[j]);
+            let k = ks[j];
             let d = model.stiffness().eval(sigma).per_arclength(length).0;
             0.5 * d * (k * k + 1.0 / (r * r)) * h
         })

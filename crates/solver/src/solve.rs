@@ -851,11 +851,7 @@ impl Equilibrium {
     pub fn sample_at(&self, sigma: &[f64]) -> Result<Vec<f64>, SolverError> {
         let t = self.kappa_g_interpolant()?;
         let map = self.model.mesh();
-        Ok(map
-            .u_of_sigmas(sigma.iter().copied())
-            .into_iter()
-            .map(|u| t.eval(u))
-            .collect())
+        Ok(t.eval_many(&map.u_of_sigmas(sigma.iter().copied())))
     }
 
     /// Extremes of the contact force `(λ_min, λ_max)`: the trigonometric interpolant of `λ`

@@ -91,9 +91,8 @@ impl StartShape {
         }
         let t = self.interpolant(lbar)?;
         let m = 2 * Self::samples(lbar);
-        let kg: Vec<f64> = (0..m)
-            .map(|j| t.eval(j as f64 / m as f64 + shift))
-            .collect();
+        let sigmas: Vec<f64> = (0..m).map(|j| j as f64 / m as f64 + shift).collect();
+        let kg = t.eval_many(&sigmas);
         Ok(StartShape::Profile(TrigInterpolant::new(&kg)?))
     }
 
@@ -135,7 +134,10 @@ impl StartShape {
     pub fn gauss_values(&self, model: &SurfaceModel) -> Result<Vec<f64>, SolverError> {
         let t = self.interpolant(model.lbar())?;
         let r = model.radius();
-        Ok(model.gauss_sigma().iter().map(|&s| t.eval(s) / r).collect())
+        Ok(t.eval_many(&model.gauss_sigma())
+            .iter()
+            .map(|&v| v / r)
+            .collect())
     }
 }
 

@@ -20,15 +20,17 @@ use rodloop_exact::shape::ShapeTolerances;
 enum Task {
     Circle(u32),
     Crossing(critical::Candidate),
-    /// A fold or branch point (index into the end points) at a sheet's end.
-    End(usize, usize, bool),
+    /// A fold or branch point (index into the end points) at a sheet's end (sheet, whether
+    /// the low end), located at the fine (`true`) or coarse reporting resolution.
+    End(usize, usize, bool, bool),
 }
 
 /// Result of a [`Task`] with its duration.
 enum Done {
     Circle(u32, buckling::CircleResult, f64),
     Crossing(Box<Result<CriticalLength, DiagramError>>, f64),
-    End(usize, Option<crate::special::Located>, f64),
+    /// The location `(L̄, E)` of end `k` at the fine (`true`) or coarse resolution.
+    End(usize, bool, Option<(f64, f64)>, f64),
 }
 
 /// Everything after tracing: critical lengths (located on re-solved equilibria), labels,
@@ -141,12 +143,21 @@ fn locate_in_parallel(
     let (mut ends, end_sources) = end_points(branches);
     let mut tasks: Vec<Task> = circles.into_iter().map(Task::Circle).collect();
     tasks.extend(candidates.into_iter().map(Task::Crossing));
-    tasks.extend(
-        end_sources
-            .iter()
-            .enumerate()
-            .map(|(k, &(sheet, at_low))| Task::End(k, sheet, at_low)),
-    );
+    // Each end at its two reporting resolutions as two tasks (the finer first: the threads
+    // share out the marches more evenly than whole ends).
+    let end_cells: Vec<(usize, usize)> = end_sources
+        .iter()
+        .map(|&(sheet, _)| crate::special::end_cells(opts, &branches[sheet]))
+        .collect();
+    for fine in [true, false] {
+        tasks.extend(
+            end_sources
+                .iter()
+                .enumerate()
+                .map(|(k, &(sheet, at_low))| Task::End(k, sheet, at_low, fine)),
+        );
+    }
+    let mut at_cells: Vec<[Option<(f64, f64)>; 2]> = vec![[None, None]; end_sources.len()];
     let results = run_parallel(
         opts.worker_threads(),
         tasks,
@@ -175,11 +186,12 @@ fn locate_in_parallel(
                     }
                     Done::Crossing(Box::new(r), t.elapsed().as_secs_f64())
                 }
-                Task::End(k, sheet, at_low) => Done::End(
-                    k,
-                    crate::special::locate_end(opts, &branches[sheet], at_low),
-                    t.elapsed().as_secs_f64(),
-                ),
+                Task::End(k, sheet, at_low, fine) => {
+                    let (nf, nc) = end_cells[k];
+                    let cells = if fine { nf } else { nc };
+                    let r = crate::special::locate_end_at(opts, &branches[sheet], at_low, cells);
+                    Done::End(k, fine, r, t.elapsed().as_secs_f64())
+                }
             }
         },
     );
@@ -191,13 +203,9 @@ fn locate_in_parallel(
                 timings.great_circles += secs;
                 circle_results.push((m, r));
             }
-            Done::End(k, located, secs) => {
+            Done::End(k, fine, located, secs) => {
                 timings.critical += secs;
-                if let Some(l) = located {
-                    ends[k].lbar = l.lbar;
-                    ends[k].energy = l.energy;
-                    ends[k].error_estimate = Some(l.error);
-                }
+                at_cells[k][usize::from(!fine)] = located;
             }
             Done::Crossing(r, secs) => {
                 timings.critical += secs;
@@ -208,6 +216,14 @@ fn locate_in_parallel(
                     Err(e) => warnings.push(format!("a crossing was not located: {e}")),
                 }
             }
+        }
+    }
+    for (k, at) in at_cells.into_iter().enumerate() {
+        if let [Some(f), Some(c)] = at {
+            let l = crate::special::extrapolate_end(end_cells[k], f, c);
+            ends[k].lbar = l.lbar;
+            ends[k].energy = l.energy;
+            ends[k].error_estimate = Some(l.error);
         }
     }
     Ok(Located {

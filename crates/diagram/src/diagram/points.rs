@@ -9,7 +9,7 @@ use crate::types::TracedBranch;
 
 /// Folds and branch points (the ends of sheets), one record per point, with the sheet and
 /// end (`true`: low) each was first seen at. Their lengths and energies are the traced ones
-/// until [`crate::special::locate_end`] refines them.
+/// until [`crate::special::locate_end_at`] and [`crate::special::extrapolate_end`] refine them.
 pub(super) fn end_points(branches: &[TracedBranch]) -> (Vec<SpecialPoint>, Vec<(usize, bool)>) {
     let mut out: Vec<SpecialPoint> = Vec::new();
     let mut sources = Vec::new();

@@ -47,21 +47,29 @@ impl TrigInterpolant {
         let a0 = samples.iter().sum::<f64>() / m as f64;
         let mut a = vec![0.0; k_max];
         let mut b = vec![0.0; k_max];
-        for k in 1..=k_max {
-            let (mut sa, mut sb) = (0.0, 0.0);
+        // [`EVAL_LANES`] harmonics summed side by side (independent sums, each in the order
+        // of the samples).
+        const L: usize = EVAL_LANES;
+        for k0 in (1..=k_max).step_by(L) {
+            let lanes = L.min(k_max + 1 - k0);
+            let (mut sa, mut sb) = ([0.0f64; L], [0.0f64; L]);
             // `at` runs through (k j) mod m without a division per sample.
-            let mut at = 0;
+            let mut at = [0usize; L];
             for y in samples {
-                let (s, c) = table[at];
-                sa += y * c;
-                sb += y * s;
-                at += k;
-                if at >= m {
-                    at -= m;
+                for l in 0..lanes {
+                    let (s, c) = table[at[l]];
+                    sa[l] += y * c;
+                    sb[l] += y * s;
+                    at[l] += k0 + l;
+                    if at[l] >= m {
+                        at[l] -= m;
+                    }
                 }
             }
-            a[k - 1] = 2.0 * sa / m as f64;
-            b[k - 1] = 2.0 * sb / m as f64;
+            for l in 0..lanes {
+                a[k0 + l - 1] = 2.0 * sa[l] / m as f64;
+                b[k0 + l - 1] = 2.0 * sb[l] / m as f64;
+            }
         }
         Ok(Self { offset, a0, a, b })
     }
@@ -89,6 +97,46 @@ impl TrigInterpolant {
             v += self.a[k] * c + self.b[k] * s;
         });
         v
+    }
+
+    /// Values at every `σ` of `sigmas`: those of [`TrigInterpolant::eval`], bit for bit
+    /// (each value sees the same operations in the same order). [`EVAL_LANES`] points are
+    /// evaluated side by side, so that their angle-addition recurrences, each a chain of
+    /// dependent products, overlap instead of waiting on each other.
+    pub fn eval_many(&self, sigmas: &[f64]) -> Vec<f64> {
+        const L: usize = EVAL_LANES;
+        let count = self.a.len();
+        let mut out = Vec::with_capacity(sigmas.len());
+        for chunk in sigmas.chunks(L) {
+            let n = chunk.len();
+            let mut x = [0.0f64; L];
+            let (mut s1, mut c1) = ([0.0f64; L], [1.0f64; L]);
+            for (l, &sigma) in chunk.iter().enumerate() {
+                x[l] = 2.0 * PI * (sigma - self.offset);
+                (s1[l], c1[l]) = x[l].sin_cos();
+            }
+            let (mut s, mut c) = (s1, c1);
+            let mut v = [self.a0; L];
+            for k in 0..count {
+                let (ak, bk) = (self.a[k], self.b[k]);
+                for l in 0..L {
+                    v[l] += ak * c[l] + bk * s[l];
+                }
+                if (k + 1) % 64 == 0 {
+                    for l in 0..L {
+                        (s[l], c[l]) = ((k + 2) as f64 * x[l]).sin_cos();
+                    }
+                } else {
+                    for l in 0..L {
+                        let cn = c[l] * c1[l] - s[l] * s1[l];
+                        s[l] = s[l] * c1[l] + c[l] * s1[l];
+                        c[l] = cn;
+                    }
+                }
+            }
+            out.extend_from_slice(&v[..n]);
+        }
+        out
     }
 
     /// Derivative `dy/dσ` at `σ`.
@@ -230,6 +278,9 @@ impl TrigColumns {
     }
 }
 
+/// Points evaluated side by side by [`TrigInterpolant::eval_many`].
+const EVAL_LANES: usize = 4;
+
 /// Calls `f(k, cos (k+1)x, sin (k+1)x)` for `k = 0..count`, by angle addition
 /// `(c, s) ← (c c1 − s s1, s c1 + c s1)`, re-seeded from `sin_cos` every 64 harmonics to keep
 /// the rounding drift at the level of a few ulps (one sequence for every evaluation, so that
@@ -256,6 +307,45 @@ pub(crate) fn harmonics(x: f64, count: usize, mut f: impl FnMut(usize, f64, f64)
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `eval_many` gives the values of `eval` bit for bit, past the re-seeding of the
+    /// harmonics (more than 64) and for a count of points that is not a multiple of the
+    /// lanes.
+    #[test]
+    fn coefficients_are_the_plain_sums_bit_for_bit() {
+        for m in [5, 8, 301] {
+            let samples: Vec<f64> = (0..m)
+                .map(|j| ((j * j) as f64 * 0.37).sin() + 0.1 * j as f64)
+                .collect();
+            let t = TrigInterpolant::new(&samples).unwrap();
+            for k in 1..=(m - 1) / 2 {
+                let (mut sa, mut sb) = (0.0, 0.0);
+                for (j, y) in samples.iter().enumerate() {
+                    let (s, c) = (2.0 * PI * ((k * j) % m) as f64 / m as f64).sin_cos();
+                    sa += y * c;
+                    sb += y * s;
+                }
+                assert_eq!(t.a[k - 1].to_bits(), (2.0 * sa / m as f64).to_bits());
+                assert_eq!(t.b[k - 1].to_bits(), (2.0 * sb / m as f64).to_bits());
+            }
+        }
+    }
+
+    #[test]
+    fn eval_many_matches_eval_bit_for_bit() {
+        let f = |s: f64| (2.0 * PI * s).sin().exp() + 0.3 * (14.0 * PI * s).cos();
+        for m in [7, 301] {
+            let samples: Vec<f64> = (0..m).map(|j| f(j as f64 / m as f64)).collect();
+            let t = TrigInterpolant::with_offset(&samples, 0.013).unwrap();
+            assert_eq!(t.a.len(), (m - 1) / 2);
+            let sigmas: Vec<f64> = (0..1003).map(|j| -0.4 + j as f64 * 0.0017).collect();
+            let many = t.eval_many(&sigmas);
+            assert_eq!(many.len(), sigmas.len());
+            for (&sg, &v) in sigmas.iter().zip(&many) {
+                assert_eq!(v.to_bits(), t.eval(sg).to_bits(), "m = {m}, σ = {sg}");
+            }
+        }
+    }
 
     #[test]
     fn interpolates_and_differentiates_smooth_periodic_data() {
