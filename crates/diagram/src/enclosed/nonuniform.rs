@@ -699,12 +699,13 @@ pub(super) fn nonuniform_diagram(
         threads,
         (0..outs.len()).collect(),
         &mut |_| {},
-        &mut |_: &(Vec<EnclosedEvent>, Vec<String>)| {},
+        &mut |_: &(Vec<EnclosedEvent>, Vec<String>, Vec<String>)| {},
         |i, _| branch_points(&outs[i]),
     );
     let mut special: Vec<EnclosedEvent> = Vec::new();
-    for (ev, w) in found {
+    for (ev, n, w) in found {
         special.extend(ev);
+        notes.extend(n);
         warnings.extend(w);
     }
     let (stop_notes, stop_warnings) = classify_stops(&outs, &special);

@@ -6,10 +6,13 @@
 //!   zero: a pitchfork (or a transcritical point) of the enclosed sheet, where another
 //!   family meets it. It is located as the root of that eigenvalue on re-solved states on
 //!   the levels `N/2` and `N` (`locate.rs`: Brent's method, the estimate the final bracket
-//!   plus the distance between the two levels' roots). Where that fails (a re-solve does
-//!   not converge next to the singular point, or a level's index does not change next to
-//!   the pair), the root of the eigenvalue interpolated linearly between the two states
-//!   stands, with half the bracket as its estimate, and a warning says why. (The re-solves
+//!   plus the distance between the two levels' roots). Where the eigenvalue jumps at the
+//!   root instead, the contact set changes there and no eigenvalue crosses zero: no branch
+//!   point is reported, and a note says where (as for uniform rods, `trace.rs`). Where the
+//!   location fails otherwise (a re-solve does not converge next to the singular point, or
+//!   a level's index does not change next to the pair), the root of the eigenvalue
+//!   interpolated linearly between the two states stands, with half the bracket as its
+//!   estimate, and a warning says why. (The re-solves
 //!   take the tracer's Newton budget: with the default 80 iterations, one of the fifteen
 //!   points of the two-segment scene is located and the diagram costs 8 % more.)
 //! * **Stops.** A trace that stops where Newton fails under step halving is explained when
@@ -23,7 +26,7 @@
 use rodloop_solver::SolverError;
 
 use super::levels::Levels;
-use super::locate::locate;
+use super::locate::{is_jump, locate};
 use super::nonuniform_sheet::SheetOut;
 use super::trace::step_options;
 use super::{EnclosedEvent, EventKind, PointSource};
@@ -36,11 +39,13 @@ fn eigenvalue(l: &Levels, lvl: usize, k: usize) -> Result<f64, SolverError> {
         .ok_or_else(|| SolverError::InvalidInput("too few eigenvalues".into()))
 }
 
-/// Branch points of a lifted-off sheet (see the module docs), and warnings for index
-/// changes that were not located.
-pub(super) fn branch_points(s: &SheetOut) -> (Vec<EnclosedEvent>, Vec<String>) {
+/// Branch points of a lifted-off sheet (see the module docs), notes for index changes at a
+/// change of the contact set (the eigenvalue jumps, no eigenvalue crosses zero: no branch
+/// point), and warnings for index changes that were not located.
+pub(super) fn branch_points(s: &SheetOut) -> (Vec<EnclosedEvent>, Vec<String>, Vec<String>) {
     let mut events = Vec::new();
     let mut warnings = Vec::new();
+    let mut notes = Vec::new();
     {
         let pts: Vec<_> = s
             .points
@@ -87,6 +92,13 @@ pub(super) fn branch_points(s: &SheetOut) -> (Vec<EnclosedEvent>, Vec<String>) {
             if let (Some(j), true) = (j, consecutive) {
                 let got = locate(&sorted, j, [1, 2], &step_options());
                 if let Err(e) = &got {
+                    if is_jump(e) {
+                        notes.push(format!(
+                            "branch {} (eta = {}) family {}: the index changes from {ip} to {iq} between lbar = {:.6} and {:.6} at a change of the contact set, not at a branch point ({e})",
+                            s.branch, s.eta, s.family, p.lbar, q.lbar
+                        ));
+                        continue;
+                    }
                     why = e.to_string();
                 }
                 if let Ok(v) = got {
@@ -137,7 +149,7 @@ pub(super) fn branch_points(s: &SheetOut) -> (Vec<EnclosedEvent>, Vec<String>) {
             }
         }
     }
-    (events, warnings)
+    (events, notes, warnings)
 }
 
 /// Distance within which a trace's stop is put down to a great circle `L̄ = m` ending its
