@@ -628,10 +628,15 @@ impl NewtonRun {
             let mut accepted = None;
             for _ in 0..=opts.max_backtracks {
                 let trial = z + &delta * alpha;
+                let bound = (1.0 - 1e-4 * alpha) * m;
+                if closure_merit_above(model, &scales, trial.as_slice(), bound) {
+                    alpha *= 0.5;
+                    continue;
+                }
                 match model.kkt_residual(trial.as_slice()) {
                     Ok(ft) => {
                         let mt = merit(&scales, &ft);
-                        if mt.is_finite() && mt <= (1.0 - 1e-4 * alpha) * m {
+                        if mt.is_finite() && mt <= bound {
                             accepted = Some(Ok((trial, ft, mt)));
                             break;
                         }
@@ -698,6 +703,27 @@ impl NewtonRun {
             report,
         })
     }
+}
+
+/// Whether the closure rows of the KKT residual at `z` alone
+/// ([`SurfaceModel::kkt_closure_residual`], equal to the bit to those of the whole residual)
+/// give a merit above `bound`: then the whole merit is above it too, and a line search
+/// rejects the trial without building the residual's stationarity rows (their derivatives
+/// and adjoint sweep, most of its cost). The merit sums its nonnegative terms in order, the
+/// closure rows after the stationarity rows, and rounded addition is monotone, so the whole
+/// sum is at least these rows' terms summed alone. `false` where the rows cannot be built
+/// (the whole residual then decides, with its own error) or are not finite.
+fn closure_merit_above(model: &SurfaceModel, scales: &[f64], z: &[f64], bound: f64) -> bool {
+    let n = model.n_kappa();
+    let Ok(rows) = model.kkt_closure_residual(z) else {
+        return false;
+    };
+    let part = scales[n..n + 3]
+        .iter()
+        .zip(rows.iter())
+        .map(|(s, v)| s * v * v)
+        .sum::<f64>();
+    part > bound
 }
 
 /// The weighted merit `Σ sᵢ Fᵢ²` ([`SurfaceModel::residual_scales`]).
