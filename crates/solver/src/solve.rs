@@ -435,11 +435,49 @@ pub fn solve_newton_keeping(
     opts: &SolveOptions,
     keep: f64,
 ) -> (Result<Equilibrium, SolverError>, Option<NewtonRun>) {
+    solve_newton_keeping_until(model, start, opts, keep, None)
+}
+
+/// Where a Newton run has stalled, for [`solve_newton_keeping_until`]: its last `passes`
+/// accepted steps were all at most `max_step` of the full Newton step. The residual along
+/// the Newton direction falls about in proportion to the step taken, so such a run moves
+/// its residual by a few per cent over the stretch; a run that is going to converge takes
+/// longer steps as it approaches its solution.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stall {
+    /// Passes in a row.
+    pub passes: usize,
+    /// Largest accepted step length (of the full Newton step) that counts as stalled.
+    pub max_step: f64,
+}
+
+impl Stall {
+    /// Whether the accepted step lengths `steps` (one per pass so far) end stalled.
+    fn holds(&self, steps: &[f64]) -> bool {
+        self.passes > 0
+            && steps.len() >= self.passes
+            && steps[steps.len() - self.passes..]
+                .iter()
+                .all(|a| *a <= self.max_step)
+    }
+}
+
+/// [`solve_newton_keeping`] whose run also ends, unconverged, where it has stalled
+/// (`stall`, see [`Stall`]); the kept run carries the rule, so a resumed run stops where
+/// one run from the start with the resumed options would.
+pub fn solve_newton_keeping_until(
+    model: &SurfaceModel,
+    start: &[f64],
+    opts: &SolveOptions,
+    keep: f64,
+    stall: Option<Stall>,
+) -> (Result<Equilibrium, SolverError>, Option<NewtonRun>) {
     let newton = SolveOptions {
         globalization: Globalization::Newton,
         ..opts.clone()
     };
     let run = newton_start(model, start).and_then(|(m, z0)| NewtonRun::start(m, z0));
+    let run = run.map(|r| NewtonRun { stall, ..r });
     match run {
         Ok(run) => {
             let mut kept = None;
@@ -513,6 +551,8 @@ pub struct NewtonRun {
     keep: f64,
     /// The line search's limit of the run so far.
     max_backtracks: usize,
+    /// Where the run ends unconverged before its iteration limit ([`Stall`]).
+    stall: Option<Stall>,
 }
 
 impl NewtonRun {
@@ -531,6 +571,7 @@ impl NewtonRun {
             steps: Vec::new(),
             keep: f64::INFINITY,
             max_backtracks: 0,
+            stall: None,
         })
     }
 
@@ -614,7 +655,9 @@ impl NewtonRun {
             if m.sqrt() <= opts.tolerance {
                 break Ok(true);
             }
-            if self.iterations >= opts.max_iterations {
+            if self.iterations >= opts.max_iterations
+                || self.stall.is_some_and(|st| st.holds(&self.steps))
+            {
                 break Ok(false);
             }
             self.iterations += 1;
