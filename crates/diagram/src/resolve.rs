@@ -88,18 +88,19 @@ const NEWTON_STRETCH: usize = 20;
 const STEADY_FALL: f64 = 2.0;
 
 /// Where the re-solves at a finer resolution ([`finer_resolution`], [`resolved`]) give up
-/// before their iteration limit: ten passes in a row whose line search accepts at most
-/// 1/512 of the Newton step ([`rodloop_solver::Stall`]). Such a run sits where Newton's
-/// model of the residual holds over a sliver of its step (on a very soft segment bent more
-/// sharply than the tracing resolution resolves, the resampled start lies far from any
-/// equilibrium of the finer mesh) and moves its residual by about 2 % per stretch. Runs that
-/// creep towards their equilibrium and converge take longer steps: on the `D1/D0 = 0.001`
-/// diagram they creep at 1/64 of the step for up to 28 passes (branch 3 at `L̄ = 2.805`,
-/// converging at pass 58), and no converging run there takes two passes in a row at 1/128
-/// or less.
+/// before their iteration limit: twenty passes in a row whose line search accepts at most
+/// 1/256 of the Newton step without lengthening it ([`rodloop_solver::Stall`]). Such a run
+/// sits where Newton's model of the residual holds over a sliver of its step (on a very
+/// soft segment bent more sharply than the tracing resolution resolves, the resampled start
+/// lies far from any equilibrium of the finer mesh) and moves its residual by about 8 % per
+/// stretch. Runs that creep towards their equilibrium and converge lengthen their steps: of
+/// every Newton solve of the `D1/D0 = 0.001` diagram, the longest creep at one short step
+/// is 13 passes at 1/1024 (a seed at 100 cells, which then lengthens its steps and
+/// converges at pass 55), and the re-solves at twice the tracing resolution creep at 1/64
+/// for up to 28 passes (branch 3 at `L̄ = 2.805`, converging at pass 58).
 const STALLED: Stall = Stall {
-    passes: 10,
-    max_step: 1.0 / 512.0,
+    passes: 20,
+    max_step: 1.0 / 256.0,
 };
 
 /// [`resolved`], going on from the kept run `finer` where it is a run of the same model

@@ -439,10 +439,11 @@ pub fn solve_newton_keeping(
 }
 
 /// Where a Newton run has stalled, for [`solve_newton_keeping_until`]: its last `passes`
-/// accepted steps were all at most `max_step` of the full Newton step. The residual along
-/// the Newton direction falls about in proportion to the step taken, so such a run moves
-/// its residual by a few per cent over the stretch; a run that is going to converge takes
-/// longer steps as it approaches its solution.
+/// accepted steps were all at most `max_step` of the full Newton step, and the line search
+/// did not lengthen its step over them (the last is no longer than the first). The
+/// residual along the Newton direction falls about in proportion to the step taken, so
+/// such a run moves its residual by a few per cent over the stretch; a run that creeps
+/// towards its solution lengthens its steps as it approaches it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Stall {
     /// Passes in a row.
@@ -454,11 +455,11 @@ pub struct Stall {
 impl Stall {
     /// Whether the accepted step lengths `steps` (one per pass so far) end stalled.
     fn holds(&self, steps: &[f64]) -> bool {
-        self.passes > 0
-            && steps.len() >= self.passes
-            && steps[steps.len() - self.passes..]
-                .iter()
-                .all(|a| *a <= self.max_step)
+        if self.passes == 0 || steps.len() < self.passes {
+            return false;
+        }
+        let last = &steps[steps.len() - self.passes..];
+        last.iter().all(|a| *a <= self.max_step) && last[last.len() - 1] <= last[0]
     }
 }
 
