@@ -3,6 +3,9 @@
 //! one refinement ladder every written state goes through when that check fails (re-solves
 //! at `2N`, `4N`, … by [`crate::resolve`], the row re-estimated where the refined states
 //! converge and disagree with it); plus how the branches of the files are identified.
+//!
+//! The file is over 600 lines with its tests (about 75): the check of a file, its samples and
+//! its ladder are one job, the verification of a written state.
 
 use std::f64::consts::PI;
 
