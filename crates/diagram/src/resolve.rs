@@ -4,8 +4,8 @@
 //! states of the verification ladder ([`crate::state_file`]).
 
 use rodloop_solver::{
-    solve, solve_newton_keeping, Equilibrium, Globalization, Phase, SolveOptions, SolverError,
-    SurfaceSolve,
+    solve, solve_newton_keeping_until, Equilibrium, Globalization, Phase, SolveOptions,
+    SolverError, Stall, SurfaceSolve,
 };
 
 use crate::options::model_with_phase;
@@ -53,7 +53,13 @@ pub(crate) fn finer_resolution(
     let Ok(model) = model_with_phase(opts, eq.lbar(), cells, &kappa) else {
         return none();
     };
-    let (r, run) = solve_newton_keeping(&model, &kappa, &newton_options(), RESOLVED_TOLERANCE);
+    let (r, run) = solve_newton_keeping_until(
+        &model,
+        &kappa,
+        &newton_options(),
+        RESOLVED_TOLERANCE,
+        Some(STALLED),
+    );
     (r.ok(), FinerRun::new(kappa, run))
 }
 
@@ -81,6 +87,22 @@ const NEWTON_STRETCH: usize = 20;
 /// stalled.
 const STEADY_FALL: f64 = 2.0;
 
+/// Where the re-solves at a finer resolution ([`finer_resolution`], [`resolved`]) give up
+/// before their iteration limit: twenty passes in a row whose line search accepts at most
+/// 1/256 of the Newton step without lengthening it ([`rodloop_solver::Stall`]). Such a run
+/// sits where Newton's model of the residual holds over a sliver of its step (on a very
+/// soft segment bent more sharply than the tracing resolution resolves, the resampled start
+/// lies far from any equilibrium of the finer mesh) and moves its residual by about 8 % per
+/// stretch. Runs that creep towards their equilibrium and converge lengthen their steps: of
+/// every Newton solve of the `D1/D0 = 0.001` diagram, the longest creep at one short step
+/// is 13 passes at 1/1024 (a seed at 100 cells, which then lengthens its steps and
+/// converges at pass 55), and the re-solves at twice the tracing resolution creep at 1/64
+/// for up to 28 passes (branch 3 at `L̄ = 2.805`, converging at pass 58).
+const STALLED: Stall = Stall {
+    passes: 20,
+    max_step: 1.0 / 256.0,
+};
+
 /// [`resolved`], going on from the kept run `finer` where it is a run of the same model
 /// from the same start ([`FinerRun::resume_keeping`]; the same iterates, so the same result).
 pub(crate) fn resolved_from(
@@ -101,8 +123,8 @@ pub(crate) fn resolved_from(
 /// Newton's method for `model` from `start` (curvature at the Gauss points) to
 /// [`RESOLVED_TOLERANCE`], its iteration limit following the run's own convergence: the run
 /// goes on by [`NEWTON_STRETCH`] passes at a time while its residual keeps falling at least
-/// [`STEADY_FALL`]-fold per stretch, and stops where it stalls (then the error of the last
-/// pass). The residual falls that much per stretch from a finite start to the tolerance, so
+/// [`STEADY_FALL`]-fold per stretch, and stops where it stalls, by that test or, earlier,
+/// by [`STALLED`] (then the error of the last pass). The residual falls that much per stretch from a finite start to the tolerance, so
 /// the run ends. Goes on from the kept run `finer` where that is a run of this model and
 /// start.
 fn newton_until_stall(
@@ -118,7 +140,13 @@ fn newton_until_stall(
     let (mut result, mut run) = match finer.resume_keeping(model, start, &newton) {
         Some(r) => r,
         None => {
-            let (r, run) = solve_newton_keeping(model, start, &newton, RESOLVED_TOLERANCE);
+            let (r, run) = solve_newton_keeping_until(
+                model,
+                start,
+                &newton,
+                RESOLVED_TOLERANCE,
+                Some(STALLED),
+            );
             (r, run)
         }
     };

@@ -3,6 +3,9 @@
 //! one refinement ladder every written state goes through when that check fails (re-solves
 //! at `2N`, `4N`, … by [`crate::resolve`], the row re-estimated where the refined states
 //! converge and disagree with it); plus how the branches of the files are identified.
+//!
+//! The file is over 600 lines with its tests (about 75): the check of a file, its samples and
+//! its ladder are one job, the verification of a written state.
 
 use std::f64::consts::PI;
 
@@ -59,27 +62,68 @@ impl StateFile {
 }
 
 /// `E R/(π D0)` of the trigonometric interpolant of `κ_g` of `eq` at `m` points uniform in
-/// arclength (what a state file of `m` points gives, without building its other columns).
-fn sampled_energy(
-    eq: &Equilibrium,
-    kg: &rodloop_solver::periodic::TrigInterpolant,
-    m: usize,
+/// arclength (what a state file of `m` points gives, without building its other columns),
+/// for `m` doubled from one call to the next: the energy density at the points of `m`
+/// (`σ_j = j/m`) is kept, and those of `2m` are its values at the even points (the same `σ`
+/// to the bit, `2j/2m = j/m` rounded once) and new ones at the odd points, summed in the
+/// order of the points, so every energy is the one of the `m` points evaluated afresh.
+struct SampledEnergy<'a> {
+    eq: &'a Equilibrium,
+    kg: rodloop_solver::periodic::TrigInterpolant,
     d0: f64,
-) -> f64 {
-    let model = eq.model();
-    let (r, length) = (model.radius(), model.length());
-    let map = model.mesh();
-    let h = length / m as f64;
-    let ks = kg.eval_many(&map.u_of_sigmas((0..m).map(|j| j as f64 / m as f64)));
-    let e: f64 = (0..m)
-        .map(|j| {
-            let sigma = j as f64 / m as f64;
-            let k = ks[j];
-            let d = model.stiffness().eval(sigma).per_arclength(length).0;
-            0.5 * d * (k * k + 1.0 / (r * r)) * h
+    /// `½ D (κ² + 1/R²)` at `σ_j = j/m`, `j = 0..m` (the last `m` asked for).
+    density: Vec<f64>,
+}
+
+impl<'a> SampledEnergy<'a> {
+    fn new(eq: &'a Equilibrium, d0: f64) -> Result<Self, SolverError> {
+        let kg = rodloop_solver::periodic::TrigInterpolant::new(
+            &eq.profile().iter().map(|p| p.kappa_g).collect::<Vec<_>>(),
+        )?;
+        Ok(Self {
+            eq,
+            kg,
+            d0,
+            density: Vec::new(),
         })
-        .sum();
-    e * r / (PI * d0)
+    }
+
+    /// The densities at `σ_j = j/m` for the given `j`.
+    fn densities(&self, m: usize, js: impl Iterator<Item = usize> + Clone) -> Vec<f64> {
+        let model = self.eq.model();
+        let (r, length) = (model.radius(), model.length());
+        let us = model
+            .mesh()
+            .u_of_sigmas(js.clone().map(|j| j as f64 / m as f64));
+        let ks = self.kg.eval_many(&us);
+        js.zip(ks)
+            .map(|(j, k)| {
+                let sigma = j as f64 / m as f64;
+                let d = model.stiffness().eval(sigma).per_arclength(length).0;
+                0.5 * d * (k * k + 1.0 / (r * r))
+            })
+            .collect()
+    }
+
+    /// The energy of the `m` points.
+    fn at(&mut self, m: usize) -> f64 {
+        let n = self.density.len();
+        self.density = if n > 0 && m == 2 * n {
+            let odd = self.densities(m, (1..m).step_by(2));
+            self.density
+                .iter()
+                .zip(&odd)
+                .flat_map(|(e, o)| [*e, *o])
+                .collect()
+        } else {
+            self.densities(m, 0..m)
+        };
+        let model = self.eq.model();
+        let (r, length) = (model.radius(), model.length());
+        let h = length / m as f64;
+        let e: f64 = self.density.iter().map(|p| p * h).sum();
+        e * r / (PI * self.d0)
+    }
 }
 
 /// The profile of `eq` at `m ≥ min_points` points uniform in arclength, `m` doubled (up to
@@ -94,13 +138,11 @@ pub(crate) fn uniform_profile(
     tol: f64,
     d0: f64,
 ) -> Result<Vec<rodloop_solver::ProfilePoint>, SolverError> {
-    let kg = rodloop_solver::periodic::TrigInterpolant::new(
-        &eq.profile().iter().map(|p| p.kappa_g).collect::<Vec<_>>(),
-    )?;
+    let mut sampled = SampledEnergy::new(eq, d0)?;
     let mut m = min_points.max(8);
-    let mut e_m = sampled_energy(eq, &kg, m, d0);
+    let mut e_m = sampled.at(m);
     while m < MAX_STATE_POINTS && (e_m - target).abs() > tol {
-        let e_2m = sampled_energy(eq, &kg, 2 * m, d0);
+        let e_2m = sampled.at(2 * m);
         m *= 2;
         let settled = (e_2m - e_m).abs() <= 1e-3 * tol;
         e_m = e_2m;
@@ -516,7 +558,53 @@ pub fn branch_identification(
 
 #[cfg(test)]
 mod tests {
-    use super::unverified_warnings;
+    use super::{unverified_warnings, SampledEnergy};
+
+    /// The energies of doubled samples, going on from the kept densities, are those of the
+    /// samples evaluated afresh, to the bit (the state files' point counts follow from
+    /// them), on a graded mesh (a two-segment rod); they converge to the discrete energy as
+    /// the samples resolve the profile.
+    #[test]
+    fn doubled_samples_reuse_their_points_to_the_bit() {
+        use rodloop_solver::{solve_cells, SolveOptions, StartShape, Stiffness};
+        let st = Stiffness::Tanh {
+            d0: 1.0,
+            d1: 0.1,
+            s0: 0.3,
+            s1: 0.8,
+            gamma: 200.0,
+        };
+        let eq = solve_cells(
+            1.0,
+            1.4,
+            80,
+            &st,
+            &StartShape::Euler { l: 2 },
+            None,
+            &SolveOptions::default(),
+        )
+        .unwrap();
+        assert!(!eq.model().mesh().is_uniform());
+        let mut going_on = SampledEnergy::new(&eq, 1.0).unwrap();
+        let mut last = going_on.at(64);
+        for m in [128, 256, 512, 1024] {
+            let e = going_on.at(m);
+            let fresh = SampledEnergy::new(&eq, 1.0).unwrap().at(m);
+            assert_eq!(e.to_bits(), fresh.to_bits(), "m = {m}");
+            last = e;
+        }
+        // Not a doubling: evaluated afresh.
+        let e = going_on.at(96);
+        assert_eq!(
+            e.to_bits(),
+            SampledEnergy::new(&eq, 1.0).unwrap().at(96).to_bits()
+        );
+        let discrete = eq.energy().total;
+        assert!(
+            (last - discrete).abs() < 1e-4 * discrete,
+            "{last} vs {discrete}"
+        );
+    }
 
     /// States failing the same check with their own numbers share one warning that names
     /// them all; a state failing another check keeps its own.

@@ -435,11 +435,50 @@ pub fn solve_newton_keeping(
     opts: &SolveOptions,
     keep: f64,
 ) -> (Result<Equilibrium, SolverError>, Option<NewtonRun>) {
+    solve_newton_keeping_until(model, start, opts, keep, None)
+}
+
+/// Where a Newton run has stalled, for [`solve_newton_keeping_until`]: its last `passes`
+/// accepted steps were all at most `max_step` of the full Newton step, and the line search
+/// did not lengthen its step over them (the last is no longer than the first). The
+/// residual along the Newton direction falls about in proportion to the step taken, so
+/// such a run moves its residual by a few per cent over the stretch; a run that creeps
+/// towards its solution lengthens its steps as it approaches it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stall {
+    /// Passes in a row.
+    pub passes: usize,
+    /// Largest accepted step length (of the full Newton step) that counts as stalled.
+    pub max_step: f64,
+}
+
+impl Stall {
+    /// Whether the accepted step lengths `steps` (one per pass so far) end stalled.
+    fn holds(&self, steps: &[f64]) -> bool {
+        if self.passes == 0 || steps.len() < self.passes {
+            return false;
+        }
+        let last = &steps[steps.len() - self.passes..];
+        last.iter().all(|a| *a <= self.max_step) && last[last.len() - 1] <= last[0]
+    }
+}
+
+/// [`solve_newton_keeping`] whose run also ends, unconverged, where it has stalled
+/// (`stall`, see [`Stall`]); the kept run carries the rule, so a resumed run stops where
+/// one run from the start with the resumed options would.
+pub fn solve_newton_keeping_until(
+    model: &SurfaceModel,
+    start: &[f64],
+    opts: &SolveOptions,
+    keep: f64,
+    stall: Option<Stall>,
+) -> (Result<Equilibrium, SolverError>, Option<NewtonRun>) {
     let newton = SolveOptions {
         globalization: Globalization::Newton,
         ..opts.clone()
     };
     let run = newton_start(model, start).and_then(|(m, z0)| NewtonRun::start(m, z0));
+    let run = run.map(|r| NewtonRun { stall, ..r });
     match run {
         Ok(run) => {
             let mut kept = None;
@@ -513,6 +552,8 @@ pub struct NewtonRun {
     keep: f64,
     /// The line search's limit of the run so far.
     max_backtracks: usize,
+    /// Where the run ends unconverged before its iteration limit ([`Stall`]).
+    stall: Option<Stall>,
 }
 
 impl NewtonRun {
@@ -531,6 +572,7 @@ impl NewtonRun {
             steps: Vec::new(),
             keep: f64::INFINITY,
             max_backtracks: 0,
+            stall: None,
         })
     }
 
@@ -614,7 +656,9 @@ impl NewtonRun {
             if m.sqrt() <= opts.tolerance {
                 break Ok(true);
             }
-            if self.iterations >= opts.max_iterations {
+            if self.iterations >= opts.max_iterations
+                || self.stall.is_some_and(|st| st.holds(&self.steps))
+            {
                 break Ok(false);
             }
             self.iterations += 1;
@@ -628,10 +672,15 @@ impl NewtonRun {
             let mut accepted = None;
             for _ in 0..=opts.max_backtracks {
                 let trial = z + &delta * alpha;
+                let bound = (1.0 - 1e-4 * alpha) * m;
+                if closure_merit_above(model, &scales, trial.as_slice(), bound) {
+                    alpha *= 0.5;
+                    continue;
+                }
                 match model.kkt_residual(trial.as_slice()) {
                     Ok(ft) => {
                         let mt = merit(&scales, &ft);
-                        if mt.is_finite() && mt <= (1.0 - 1e-4 * alpha) * m {
+                        if mt.is_finite() && mt <= bound {
                             accepted = Some(Ok((trial, ft, mt)));
                             break;
                         }
@@ -698,6 +747,27 @@ impl NewtonRun {
             report,
         })
     }
+}
+
+/// Whether the closure rows of the KKT residual at `z` alone
+/// ([`SurfaceModel::kkt_closure_residual`], equal to the bit to those of the whole residual)
+/// give a merit above `bound`: then the whole merit is above it too, and a line search
+/// rejects the trial without building the residual's stationarity rows (their derivatives
+/// and adjoint sweep, most of its cost). The merit sums its nonnegative terms in order, the
+/// closure rows after the stationarity rows, and rounded addition is monotone, so the whole
+/// sum is at least these rows' terms summed alone. `false` where the rows cannot be built
+/// (the whole residual then decides, with its own error) or are not finite.
+fn closure_merit_above(model: &SurfaceModel, scales: &[f64], z: &[f64], bound: f64) -> bool {
+    let n = model.n_kappa();
+    let Ok(rows) = model.kkt_closure_residual(z) else {
+        return false;
+    };
+    let part = scales[n..n + 3]
+        .iter()
+        .zip(rows.iter())
+        .map(|(s, v)| s * v * v)
+        .sum::<f64>();
+    part > bound
 }
 
 /// The weighted merit `Σ sᵢ Fᵢ²` ([`SurfaceModel::residual_scales`]).

@@ -209,3 +209,39 @@ fn a_nearly_singular_block_is_reported_or_solved_accurately() {
     }
     println!("{reported} of 21 factorisations reported singular");
 }
+
+/// The closure rows alone ([`SurfaceModel::kkt_closure_residual`]) are those of the whole
+/// KKT residual to the bit (a line search rejects a trial from them, which must be the
+/// decision the whole residual gives), on a graded and a uniform mesh with a phase border,
+/// at states near an Euler start and with large curvatures (rotation angles per cell past
+/// the switch of the Rodrigues coefficients); a non-finite curvature is refused like the
+/// whole residual refuses it.
+#[test]
+fn closure_rows_alone_are_the_residuals_to_the_bit() {
+    let mut seed = 23;
+    let uniform = SurfaceModel::new(1.0, 1.6, 20, &Stiffness::uniform(1.0)).unwrap();
+    let k0 = StartShape::Euler { l: 2 }.gauss_values(&uniform).unwrap();
+    let uniform = uniform
+        .with_phase(Phase::from_gauss_values(&k0, 20).unwrap())
+        .unwrap();
+    let graded = SurfaceModel::new(1.0, 1.3, 24, &sharp()).unwrap();
+    for m in [&uniform, &graded] {
+        let n = m.n_kappa();
+        for scale in [1.0, 30.0] {
+            let mut z = state(m, &mut seed);
+            for k in &mut z[..n] {
+                *k *= scale;
+            }
+            let f = m.kkt_residual(&z).unwrap();
+            let c = m.kkt_closure_residual(&z).unwrap();
+            assert!(c.iter().any(|v| *v != 0.0));
+            for k in 0..3 {
+                assert_eq!(c[k].to_bits(), f[n + k].to_bits(), "row {k}, scale {scale}");
+            }
+        }
+        let mut z = state(m, &mut seed);
+        z[3] = f64::NAN;
+        assert!(m.kkt_residual(&z).is_err() && m.kkt_closure_residual(&z).is_err());
+        assert!(m.kkt_closure_residual(&z[1..]).is_err());
+    }
+}

@@ -4,8 +4,8 @@
 //! convergence report.
 
 use rodloop_solver::{
-    solve, solve_newton_keeping, Equilibrium, Globalization, SolveOptions, SolverError, StartShape,
-    Stiffness, SurfaceModel,
+    solve, solve_newton_keeping, solve_newton_keeping_until, Equilibrium, Globalization,
+    SolveOptions, SolverError, Stall, StartShape, Stiffness, SurfaceModel,
 };
 
 /// A two-segment rod solved at 24 cells, its curvature resampled to 48: the start of a
@@ -132,4 +132,54 @@ fn run_resumed_pass_by_pass_equals_a_fresh_run() {
     }
     assert!(limit > 2, "converged after {limit} passes");
     assert!(result.is_ok());
+}
+
+/// A stall rule ([`Stall`]) ends a run unconverged at the first pass where its last accepted
+/// steps are all short enough, as a run limited to that pass ends; a rule no step meets
+/// leaves the run as it is; the kept run of a stalled run, resumed with a larger limit,
+/// stops at the same pass.
+#[test]
+fn a_stall_rule_ends_the_run_where_its_steps_meet_it() {
+    let (model, start) = refinement_start(0.1);
+    let fresh = solve(&model, &start, &newton(1e-10, 60));
+    let passes = fresh.as_ref().unwrap().report().iterations;
+    assert!(passes >= 3, "{passes}");
+    let never = Stall {
+        passes: 1,
+        max_step: 0.0,
+    };
+    let (run, _) =
+        solve_newton_keeping_until(&model, &start, &newton(1e-10, 60), 1e-8, Some(never));
+    assert_same(&run, &fresh);
+    // Every step is at most a full step, and one step is not longer than itself: the rule
+    // holds after the first pass.
+    let always = Stall {
+        passes: 1,
+        max_step: 1.0,
+    };
+    let (run, kept) =
+        solve_newton_keeping_until(&model, &start, &newton(1e-10, 60), 1e-8, Some(always));
+    assert!(matches!(
+        run,
+        Err(SolverError::NewtonNotConverged { iterations: 1, .. })
+    ));
+    assert_same(&run, &solve(&model, &start, &newton(1e-10, 1)));
+    let resumed = kept.unwrap().resume(&newton(1e-8, 60)).unwrap();
+    assert_same(&resumed, &solve(&model, &start, &newton(1e-8, 1)));
+    // Where the steps lengthen over the stretch, the rule does not hold: the first two
+    // steps of the run, if the second is the longer, let it go on.
+    let steps = &fresh.as_ref().unwrap().report().step_lengths;
+    let two = Stall {
+        passes: 2,
+        max_step: 1.0,
+    };
+    let (run, _) = solve_newton_keeping_until(&model, &start, &newton(1e-10, 60), 1e-8, Some(two));
+    if steps[1] > steps[0] {
+        assert!(!matches!(
+            run,
+            Err(SolverError::NewtonNotConverged { iterations: 2, .. })
+        ));
+    } else {
+        assert_same(&run, &solve(&model, &start, &newton(1e-10, 2)));
+    }
 }

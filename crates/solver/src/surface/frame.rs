@@ -52,6 +52,15 @@ pub fn expm_skew(w: &Matrix3<f64>) -> Matrix3<f64> {
 /// `a' = (cos θ − a)/(2q)`, `a'' = −(a/2 + 3a')/(2q)`, `b' = (a/2 − b)/q`,
 /// `b'' = (a'/2 − 2b')/q` are used, which have no cancellation problem there.
 pub fn rodrigues_coefficients(q: f64) -> [f64; 6] {
+    rodrigues::<true>(q)
+}
+
+/// [`rodrigues_coefficients`] with (`DERIVATIVES`) or without the derivatives (then left
+/// zero): `a` and `b` are summed by the same operations either way, so they agree to the
+/// bit, and the series stops at the same term (its test is on `a''`'s term, computed
+/// either way).
+#[inline(always)]
+fn rodrigues<const DERIVATIVES: bool>(q: f64) -> [f64; 6] {
     if q < 1.0 {
         // Term k: a += (−q)^k/(2k+1)!, a' += −k (−q)^{k−1}/(2k+1)!,
         // a'' += k(k−1) (−q)^{k−2}/(2k+1)! (same for b with (2k+2)!). For q < 1 the terms
@@ -65,15 +74,17 @@ pub fn rodrigues_coefficients(q: f64) -> [f64; 6] {
             let kf = k as f64;
             out[0] += pw[0] / fa;
             out[3] += pw[0] / fb;
-            if k >= 1 {
+            if DERIVATIVES && k >= 1 {
                 let d1 = -kf * pw[1];
                 out[1] += d1 / fa;
                 out[4] += d1 / fb;
             }
             if k >= 2 {
                 let d2 = kf * (kf - 1.0) * pw[2];
-                out[2] += d2 / fa;
-                out[5] += d2 / fb;
+                if DERIVATIVES {
+                    out[2] += d2 / fa;
+                    out[5] += d2 / fb;
+                }
                 if (d2 / fa).abs() < 1e-24 {
                     break;
                 }
@@ -92,12 +103,27 @@ pub fn rodrigues_coefficients(q: f64) -> [f64; 6] {
         let (s, c) = th.sin_cos();
         let a = s / th;
         let b = (1.0 - c) / q;
+        if !DERIVATIVES {
+            return [a, 0.0, 0.0, b, 0.0, 0.0];
+        }
         let a1 = (c - a) / (2.0 * q);
         let a2 = -(0.5 * a + 3.0 * a1) / (2.0 * q);
         let b1 = (0.5 * a - b) / q;
         let b2 = (0.5 * a1 - 2.0 * b1) / q;
         [a, a1, a2, b, b1, b2]
     }
+}
+
+/// `exp(hat(ω))` by Rodrigues' formula with the coefficients of [`rodrigues_coefficients`]:
+/// the same matrix, to the bit, as the value of [`exp_jet1`] (and of the other jets), at a
+/// fraction of their cost (no derivatives). [`crate::SurfaceModel`]'s closure residual
+/// alone ([`crate::SurfaceModel::kkt_closure_residual`]) is built from it.
+pub fn exp_value(w: &Vector3<f64>) -> Matrix3<f64> {
+    let q = w.norm_squared();
+    let [a, _, _, b, _, _] = rodrigues::<false>(q);
+    let wm = hat(w);
+    let w2 = wm * wm;
+    Matrix3::identity() + wm * a + w2 * b
 }
 
 /// Skew matrix `hat(w)` with `hat(w) v = w × v`.
@@ -311,6 +337,31 @@ mod tests {
             sum += term;
         }
         assert!((expm_skew(&w) - sum).norm() < 1e-15);
+    }
+
+    /// [`exp_value`] is the value of the jets to the bit (the closure residual built from it
+    /// must equal the KKT residual's closure rows exactly), over rotation angles from the
+    /// series' range (`q < 1`) to the closed forms', including the switch at `q = 1`.
+    #[test]
+    fn exp_value_is_the_jets_value_to_the_bit() {
+        let v1 = Vector3::new(0.013, -0.2, 0.71);
+        let v2 = Vector3::new(-0.4, 0.05, 0.3);
+        for (i, scale) in [
+            0.0, 1e-9, 1e-5, 1e-3, 0.1, 0.5, 0.999, 1.0, 1.0001, 2.0, 3.1,
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let w = Vector3::new(0.3, -0.8, 0.52 + 0.01 * i as f64).normalize() * scale;
+            let (e1, _) = exp_jet1::<2>(&w, &[v1, v2]);
+            let (ea, _, _) = exp_jet_affine::<2>(&w, &[v1, v2]);
+            let ev = exp_value(&w);
+            for k in 0..9 {
+                assert_eq!(ev[k].to_bits(), e1[k].to_bits(), "|w| = {scale}, entry {k}");
+                assert_eq!(ev[k].to_bits(), ea[k].to_bits(), "|w| = {scale}, entry {k}");
+            }
+            assert!((ev - expm_skew(&hat(&w))).norm() < 1e-14, "|w| = {scale}");
+        }
     }
 
     #[test]

@@ -24,6 +24,25 @@ impl SurfaceModel {
         Ok(self.kkt_residual_from(&ch, kappa, &V3::from(mu), nu))
     }
 
+    /// The closure rows of the KKT residual, `F_{n..n+3}(z) = −c(κ)` (`n` = [`Self::n_kappa`]),
+    /// equal to the bit to those of [`Self::kkt_residual`] (the same cell propagators,
+    /// [`crate::frame::exp_value`], multiplied in the same order), with the same errors, at a
+    /// fraction of its cost (no derivatives, no adjoint sweep): where these rows alone give a
+    /// merit above a bound, the whole residual does (a line search rejects its trial from
+    /// them, [`crate::solve`]).
+    pub fn kkt_closure_residual(&self, z: &[f64]) -> Result<[f64; 3], SolverError> {
+        let (kappa, _, _) = self.split(z)?;
+        self.check_kappa(kappa)?;
+        let mut acc = M3::identity();
+        for c in 0..self.cells {
+            let (w0, v1, v2) = self.cell_vectors(self.cell_length(c));
+            let w = w0 + v1 * kappa[2 * c] + v2 * kappa[2 * c + 1];
+            acc = exp_value(&w) * acc;
+        }
+        let v = Closure::of(&acc).value;
+        Ok([-v[0], -v[1], -v[2]])
+    }
+
     fn kkt_residual_from(&self, ch: &Chain, kappa: &[f64], mu: &V3, nu: f64) -> DVector<f64> {
         let n = self.n_kappa();
         let mut f = DVector::zeros(self.dim());
