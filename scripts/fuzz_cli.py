@@ -31,7 +31,9 @@ VALID = float(sys.argv[4]) if len(sys.argv) > 4 else 0.8
 # Fraction of runs that draw a diagram instead of solving one state.
 DIAGRAMS = float(sys.argv[5]) if len(sys.argv) > 5 else 0.05
 rng = random.Random(20261123)
-scenes = [open(p).read() for p in sorted(glob.glob("data/scenes/*.toml"))]
+# The shipped scenes, found beside this script whatever the working directory.
+SCENES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data", "scenes", "*.toml")
+scenes = [open(p).read() for p in sorted(glob.glob(SCENES))]
 NUMS = ["0", "-1", "1e-300", "1e300", "nan", "inf", "-inf", "0.5", "1", "2", "1e9", "1e-9",
         "200", "2000", "0.001", "3", "\"x\"", "[1, 2]", "true", "0.3", "0.8", "1.0e3"]
 KEYS = ["radius", "d", "d0", "d1", "s0", "s1", "gamma", "kind", "lbar_min", "lbar_max",

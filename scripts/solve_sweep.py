@@ -23,6 +23,8 @@ BIN = os.environ.get("BIN", sys.argv[2] if len(sys.argv) > 2 else "target/releas
 LIMIT = float(sys.argv[3]) if len(sys.argv) > 3 else 30.0
 JOBS = int(sys.argv[4]) if len(sys.argv) > 4 else 1
 rng = random.Random(20261127)
+# The shipped scenes, found beside this script whatever the working directory.
+SCENES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data", "scenes", "*.toml")
 
 
 def random_scene(i):
@@ -38,7 +40,7 @@ def random_scene(i):
 
 
 def jobs(tmp):
-    scenes = [(os.path.basename(p), open(p).read()) for p in sorted(glob.glob("data/scenes/*.toml"))]
+    scenes = [(os.path.basename(p), open(p).read()) for p in sorted(glob.glob(SCENES))]
     scenes += [(f"random-{i}", random_scene(i)) for i in range(COUNT)]
     out = []
     for name, text in scenes:
@@ -93,7 +95,7 @@ def main():
                     if k not in ("verified", "clean error") and len(examples[k]) < 4:
                         name, _, _, branch, lbar, acc = job
                         examples[k].append(f"{name} --lbar {lbar} --branch {branch} {' '.join(acc)} {err}")
-    print(f"{counts['runs']} solve runs over {len(glob.glob('data/scenes/*.toml'))} shipped + {COUNT} random scenes "
+    print(f"{counts['runs']} solve runs over {len(glob.glob(SCENES))} shipped + {COUNT} random scenes "
           f"({time.time() - t0:.0f} s, {LIMIT:.0f} s limit each):")
     for k in ["verified", "clean error", "open loop", "off the sphere", "energy mismatch",
               "branch contradiction", "unreadable", "unclear error", "panic or abort", "over time limit"]:
