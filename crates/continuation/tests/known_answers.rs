@@ -893,6 +893,24 @@ fn start_on_the_boundary_heading_out_adds_no_point() {
     assert_eq!(branch.points.len(), 1);
 }
 
+/// Settings that follow the pitchfork's parabola `x² = p` from `(0.5, 0.25)` backwards
+/// through its turn at `(0, 0)`, locating with the Hermite start.
+fn parabola_through_its_turn() -> PseudoArclength {
+    PseudoArclength::new()
+        .with_ds(0.07)
+        .unwrap()
+        .with_ds_bounds(1e-8, 0.1)
+        .unwrap()
+        .with_range(-1.0, 0.3)
+        .unwrap()
+        .with_direction(Direction::Backward)
+        .unwrap()
+        .with_locate_tol(1e-9)
+        .unwrap()
+        .with_hermite_location(true)
+        .unwrap()
+}
+
 /// The Hermite start of the location correctors finds the same folds as the chord start
 /// (the circle's, at `p = ±1`), and on the parabola `x² = p` of the pitchfork, followed
 /// through `x = 0`, the fold and the branch point there, both at `(0, 0)`.
@@ -916,20 +934,7 @@ fn hermite_location_finds_the_known_folds_and_branch_point() {
         assert!((folds[1].p + 1.0).abs() < 1e-8 && folds[1].x[0].abs() < 1e-8);
     }
     let problem = pitchfork();
-    let settings = PseudoArclength::new()
-        .with_ds(0.07)
-        .unwrap()
-        .with_ds_bounds(1e-8, 0.1)
-        .unwrap()
-        .with_range(-1.0, 0.3)
-        .unwrap()
-        .with_direction(Direction::Backward)
-        .unwrap()
-        .with_locate_tol(1e-9)
-        .unwrap()
-        .with_hermite_location(true)
-        .unwrap();
-    let branch = Continuation::new(&problem, settings)
+    let branch = Continuation::new(&problem, parabola_through_its_turn())
         .run(&v1(0.5), 0.25)
         .unwrap();
     let fold = branch.folds().next().expect("the parabola's fold");
@@ -947,19 +952,7 @@ fn hermite_location_finds_the_known_folds_and_branch_point() {
 fn branch_point_beside_a_fold_is_located_only_when_asked() {
     let problem = pitchfork();
     let run = |beside: bool| {
-        let settings = PseudoArclength::new()
-            .with_ds(0.07)
-            .unwrap()
-            .with_ds_bounds(1e-8, 0.1)
-            .unwrap()
-            .with_range(-1.0, 0.3)
-            .unwrap()
-            .with_direction(Direction::Backward)
-            .unwrap()
-            .with_locate_tol(1e-9)
-            .unwrap()
-            .with_hermite_location(true)
-            .unwrap()
+        let settings = parabola_through_its_turn()
             .with_branch_points_beside_folds(beside)
             .unwrap();
         Continuation::new(&problem, settings)

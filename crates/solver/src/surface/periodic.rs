@@ -308,9 +308,9 @@ pub(crate) fn harmonics(x: f64, count: usize, mut f: impl FnMut(usize, f64, f64)
 mod tests {
     use super::*;
 
-    /// `eval_many` gives the values of `eval` bit for bit, past the re-seeding of the
-    /// harmonics (more than 64) and for a count of points that is not a multiple of the
-    /// lanes.
+    /// The harmonics summed side by side give the coefficients of the plain sums, one
+    /// harmonic at a time in the order of the samples, bit for bit (fewer harmonics than
+    /// lanes, and a count that is not a multiple of them).
     #[test]
     fn coefficients_are_the_plain_sums_bit_for_bit() {
         for m in [5, 8, 301] {
@@ -331,6 +331,9 @@ mod tests {
         }
     }
 
+    /// `eval_many` gives the values of `eval` bit for bit, past the re-seeding of the
+    /// harmonics (more than 64) and for a count of points that is not a multiple of the
+    /// lanes.
     #[test]
     fn eval_many_matches_eval_bit_for_bit() {
         let f = |s: f64| (2.0 * PI * s).sin().exp() + 0.3 * (14.0 * PI * s).cos();
