@@ -82,7 +82,11 @@ impl Table {
                             self.rows.len() + 1
                         );
                     }
-                    format!("{v}")
+                    // Shortest round-trip form, as `format!("{v}")`, into a buffer sized for
+                    // it (no regrowth while it is written).
+                    let mut s = String::with_capacity(32);
+                    let _ = std::fmt::Write::write_fmt(&mut s, format_args!("{v}"));
+                    s
                 }
                 Cell::I(v) => v.to_string(),
                 Cell::S(s) => s,
