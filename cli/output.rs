@@ -34,11 +34,18 @@ pub fn write_atomic(dir: &Path, name: &str, bytes: &[u8]) -> Result<PathBuf> {
     result.map(|()| target)
 }
 
-/// A CSV table held in memory until it is complete and checked.
+/// A CSV table held in memory until it is complete and checked: its rows are encoded as
+/// they are pushed (each cell written once, no per-cell allocation), the header is put in
+/// front when the bytes are taken.
 pub struct Table {
     header: Vec<String>,
-    rows: Vec<Vec<String>>,
+    /// The CSV encoding of the rows pushed so far.
+    rows: csv::Writer<Vec<u8>>,
+    /// Rows pushed so far.
+    count: usize,
     name: String,
+    /// Buffer of the cell being written.
+    cell: String,
 }
 
 /// One cell of a CSV row.
@@ -56,13 +63,17 @@ impl Table {
     pub fn new(name: &str, header: &[&str]) -> Self {
         Self {
             header: header.iter().map(|s| s.to_string()).collect(),
-            rows: Vec::new(),
+            rows: csv::Writer::from_writer(Vec::new()),
+            count: 0,
             name: name.to_string(),
+            cell: String::with_capacity(32),
         }
     }
 
-    /// Append a row; fails on a non-finite number or a wrong column count.
+    /// Append a row; fails on a non-finite number or a wrong column count (and then leaves
+    /// the table as it was).
     pub fn push(&mut self, row: Vec<Cell>) -> Result<()> {
+        use std::fmt::Write as _;
         if row.len() != self.header.len() {
             bail!(
                 "internal error: {} row has {} cells, header has {}",
@@ -71,28 +82,38 @@ impl Table {
                 self.header.len()
             );
         }
-        let mut out = Vec::with_capacity(row.len());
-        for (cell, col) in row.into_iter().zip(&self.header) {
-            out.push(match cell {
-                Cell::F(v) => {
-                    if !v.is_finite() {
-                        bail!(
-                            "{}: column {col} would hold a non-finite value ({v}) in row {}; nothing was written",
-                            self.name,
-                            self.rows.len() + 1
-                        );
-                    }
-                    // Shortest round-trip form, as `format!("{v}")`, into a buffer sized for
-                    // it (no regrowth while it is written).
-                    let mut s = String::with_capacity(32);
-                    let _ = std::fmt::Write::write_fmt(&mut s, format_args!("{v}"));
-                    s
+        for (cell, col) in row.iter().zip(&self.header) {
+            if let Cell::F(v) = cell {
+                if !v.is_finite() {
+                    bail!(
+                        "{}: column {col} would hold a non-finite value ({v}) in row {}; nothing was written",
+                        self.name,
+                        self.count + 1
+                    );
                 }
-                Cell::I(v) => v.to_string(),
-                Cell::S(s) => s,
-            });
+            }
         }
-        self.rows.push(out);
+        for cell in &row {
+            // Numbers in their shortest round-trip form (`{}`), text as given.
+            let field: &str = match cell {
+                Cell::F(v) => {
+                    self.cell.clear();
+                    write!(self.cell, "{v}")?;
+                    &self.cell
+                }
+                Cell::I(v) => {
+                    self.cell.clear();
+                    write!(self.cell, "{v}")?;
+                    &self.cell
+                }
+                Cell::S(s) => s,
+            };
+            self.rows.write_field(field)?;
+        }
+        self.rows.write_record(None::<&[u8]>)?;
+        // Into the vector, so that `to_bytes` reads every row pushed.
+        self.rows.flush()?;
+        self.count += 1;
         Ok(())
     }
 
@@ -100,10 +121,9 @@ impl Table {
     pub fn to_bytes(&self) -> Result<Vec<u8>> {
         let mut w = csv::Writer::from_writer(Vec::new());
         w.write_record(&self.header)?;
-        for r in &self.rows {
-            w.write_record(r)?;
-        }
-        w.into_inner().context("csv buffer")
+        let mut out = w.into_inner().context("csv buffer")?;
+        out.extend_from_slice(self.rows.get_ref());
+        Ok(out)
     }
 }
 

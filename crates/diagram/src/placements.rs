@@ -126,7 +126,7 @@ impl<'a> PlacedProfile<'a> {
 
 /// Lanes of [`placed_energies`]: shifts summed side by side (independent sums, so that they
 /// do not wait on each other's additions).
-const LANES: usize = 8;
+const LANES: usize = 32;
 
 /// `f_k = Σ_j d_j κ²_{(j+k) mod m} / m` for the shifts `k = 0..half` (`m` = the samples of
 /// `d` and `k2`), each summed in the order of `j` from `0`. [`LANES`] shifts are summed side
