@@ -560,3 +560,40 @@ pub fn check_points(points: u64) -> Result<usize> {
     usize::try_from(points)
         .map_err(|_| anyhow::anyhow!("--points {points} does not fit this machine"))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::{Cell, Table};
+
+    /// A table's bytes are those of the `csv` crate writing its header and rows as the
+    /// strings `{}` makes of the cells (text quoted where CSV needs it); a row with a
+    /// non-finite number is refused and leaves the table as it was.
+    #[test]
+    fn table_bytes_are_the_csv_of_the_formatted_cells() {
+        let rows: Vec<(f64, i64, &str)> = vec![
+            (0.1 + 0.2, -3, "plain"),
+            (1.370818474960669e-8, 0, "a, b"),
+            (-2.5e300, i64::MAX, "say \"x\""),
+            (5e-324, 7, ""),
+        ];
+        let mut t = Table::new("t.csv", &["v", "k", "text"]);
+        for &(v, k, s) in &rows {
+            t.push(vec![Cell::F(v), Cell::I(k), Cell::S(s.into())])
+                .unwrap();
+        }
+        let err = t
+            .push(vec![Cell::F(f64::NAN), Cell::I(1), Cell::S("x".into())])
+            .unwrap_err();
+        assert!(err.to_string().contains("row 5"), "{err}");
+        assert!(t.push(vec![Cell::I(1)]).is_err());
+        let mut w = csv::Writer::from_writer(Vec::new());
+        w.write_record(["v", "k", "text"]).unwrap();
+        for &(v, k, s) in &rows {
+            w.write_record([v.to_string(), k.to_string(), s.to_string()])
+                .unwrap();
+        }
+        let want = w.into_inner().unwrap();
+        assert_eq!(t.to_bytes().unwrap(), want);
+        assert!(String::from_utf8(want).unwrap().contains("\"a, b\""));
+    }
+}
