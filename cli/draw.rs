@@ -444,33 +444,40 @@ pub fn draw_diagram(dir: &Path, set: &DrawSettings) -> Result<Vec<String>> {
     let w = f64::from(set.width.unwrap_or(960));
     let h = f64::from(set.height.unwrap_or(620));
     ensure_dir(&set.out)?;
-    let mut names = write_figure(&set.out, "diagram", &energy_figure(&d, w, h)?, set.format)?;
-    if !d.missing.is_empty() {
-        // An enclosed diagram has no energy split and no largest contact force.
-        return Ok(names);
+    // An enclosed diagram has no energy split and no largest contact force; only the exact
+    // model has the energy against `g`.
+    let mut figures: Vec<(&str, DiagramFigure)> = vec![("diagram", energy_figure)];
+    if d.missing.is_empty() {
+        if d.model == "exact" {
+            figures.push(("diagram_g", energy_g_figure));
+        }
+        figures.push(("diagram_split", energy_split_figure));
+        figures.push(("diagram_lambda", lambda_figure));
     }
-    if d.model == "exact" {
-        names.extend(write_figure(
-            &set.out,
-            "diagram_g",
-            &energy_g_figure(&d, w, h)?,
-            set.format,
-        )?);
+    // Each figure drawn, rendered and written on a thread of its own (the PNG rendering is
+    // most of the time); the names in the order of `figures`.
+    let written: Vec<Result<Vec<String>>> = std::thread::scope(|scope| {
+        let d = &d;
+        let handles: Vec<_> = figures
+            .iter()
+            .map(|&(stem, figure)| {
+                scope.spawn(move || write_figure(&set.out, stem, &figure(d, w, h)?, set.format))
+            })
+            .collect();
+        handles
+            .into_iter()
+            .map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
+            .collect()
+    });
+    let mut names = Vec::new();
+    for w in written {
+        names.extend(w?);
     }
-    names.extend(write_figure(
-        &set.out,
-        "diagram_split",
-        &energy_split_figure(&d, w, h)?,
-        set.format,
-    )?);
-    names.extend(write_figure(
-        &set.out,
-        "diagram_lambda",
-        &lambda_figure(&d, w, h)?,
-        set.format,
-    )?);
     Ok(names)
 }
+
+/// A figure of a diagram's tables at a width and height (SVG).
+type DiagramFigure = fn(&DiagramData, f64, f64) -> Result<String, rodloop_figures::FigureError>;
 
 /// Whether `dir` is the `states/` folder of a diagram (its parent holds the diagram's
 /// `branches.csv`).

@@ -34,11 +34,18 @@ pub fn write_atomic(dir: &Path, name: &str, bytes: &[u8]) -> Result<PathBuf> {
     result.map(|()| target)
 }
 
-/// A CSV table held in memory until it is complete and checked.
+/// A CSV table held in memory until it is complete and checked: its rows are encoded as
+/// they are pushed (each cell written once, no per-cell allocation), the header is put in
+/// front when the bytes are taken.
 pub struct Table {
     header: Vec<String>,
-    rows: Vec<Vec<String>>,
+    /// The CSV encoding of the rows pushed so far.
+    rows: csv::Writer<Vec<u8>>,
+    /// Rows pushed so far.
+    count: usize,
     name: String,
+    /// Buffer of the cell being written.
+    cell: String,
 }
 
 /// One cell of a CSV row.
@@ -56,13 +63,17 @@ impl Table {
     pub fn new(name: &str, header: &[&str]) -> Self {
         Self {
             header: header.iter().map(|s| s.to_string()).collect(),
-            rows: Vec::new(),
+            rows: csv::Writer::from_writer(Vec::new()),
+            count: 0,
             name: name.to_string(),
+            cell: String::with_capacity(32),
         }
     }
 
-    /// Append a row; fails on a non-finite number or a wrong column count.
+    /// Append a row; fails on a non-finite number or a wrong column count (and then leaves
+    /// the table as it was).
     pub fn push(&mut self, row: Vec<Cell>) -> Result<()> {
+        use std::fmt::Write as _;
         if row.len() != self.header.len() {
             bail!(
                 "internal error: {} row has {} cells, header has {}",
@@ -71,24 +82,38 @@ impl Table {
                 self.header.len()
             );
         }
-        let mut out = Vec::with_capacity(row.len());
-        for (cell, col) in row.into_iter().zip(&self.header) {
-            out.push(match cell {
-                Cell::F(v) => {
-                    if !v.is_finite() {
-                        bail!(
-                            "{}: column {col} would hold a non-finite value ({v}) in row {}; nothing was written",
-                            self.name,
-                            self.rows.len() + 1
-                        );
-                    }
-                    format!("{v}")
+        for (cell, col) in row.iter().zip(&self.header) {
+            if let Cell::F(v) = cell {
+                if !v.is_finite() {
+                    bail!(
+                        "{}: column {col} would hold a non-finite value ({v}) in row {}; nothing was written",
+                        self.name,
+                        self.count + 1
+                    );
                 }
-                Cell::I(v) => v.to_string(),
-                Cell::S(s) => s,
-            });
+            }
         }
-        self.rows.push(out);
+        for cell in &row {
+            // Numbers in their shortest round-trip form (`{}`), text as given.
+            let field: &str = match cell {
+                Cell::F(v) => {
+                    self.cell.clear();
+                    write!(self.cell, "{v}")?;
+                    &self.cell
+                }
+                Cell::I(v) => {
+                    self.cell.clear();
+                    write!(self.cell, "{v}")?;
+                    &self.cell
+                }
+                Cell::S(s) => s,
+            };
+            self.rows.write_field(field)?;
+        }
+        self.rows.write_record(None::<&[u8]>)?;
+        // Into the vector, so that `to_bytes` reads every row pushed.
+        self.rows.flush()?;
+        self.count += 1;
         Ok(())
     }
 
@@ -96,10 +121,9 @@ impl Table {
     pub fn to_bytes(&self) -> Result<Vec<u8>> {
         let mut w = csv::Writer::from_writer(Vec::new());
         w.write_record(&self.header)?;
-        for r in &self.rows {
-            w.write_record(r)?;
-        }
-        w.into_inner().context("csv buffer")
+        let mut out = w.into_inner().context("csv buffer")?;
+        out.extend_from_slice(self.rows.get_ref());
+        Ok(out)
     }
 }
 
@@ -535,4 +559,41 @@ pub fn check_points(points: u64) -> Result<usize> {
     }
     usize::try_from(points)
         .map_err(|_| anyhow::anyhow!("--points {points} does not fit this machine"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Cell, Table};
+
+    /// A table's bytes are those of the `csv` crate writing its header and rows as the
+    /// strings `{}` makes of the cells (text quoted where CSV needs it); a row with a
+    /// non-finite number is refused and leaves the table as it was.
+    #[test]
+    fn table_bytes_are_the_csv_of_the_formatted_cells() {
+        let rows: Vec<(f64, i64, &str)> = vec![
+            (0.1 + 0.2, -3, "plain"),
+            (1.370818474960669e-8, 0, "a, b"),
+            (-2.5e300, i64::MAX, "say \"x\""),
+            (5e-324, 7, ""),
+        ];
+        let mut t = Table::new("t.csv", &["v", "k", "text"]);
+        for &(v, k, s) in &rows {
+            t.push(vec![Cell::F(v), Cell::I(k), Cell::S(s.into())])
+                .unwrap();
+        }
+        let err = t
+            .push(vec![Cell::F(f64::NAN), Cell::I(1), Cell::S("x".into())])
+            .unwrap_err();
+        assert!(err.to_string().contains("row 5"), "{err}");
+        assert!(t.push(vec![Cell::I(1)]).is_err());
+        let mut w = csv::Writer::from_writer(Vec::new());
+        w.write_record(["v", "k", "text"]).unwrap();
+        for &(v, k, s) in &rows {
+            w.write_record([v.to_string(), k.to_string(), s.to_string()])
+                .unwrap();
+        }
+        let want = w.into_inner().unwrap();
+        assert_eq!(t.to_bytes().unwrap(), want);
+        assert!(String::from_utf8(want).unwrap().contains("\"a, b\""));
+    }
 }

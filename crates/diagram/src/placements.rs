@@ -3,7 +3,7 @@
 //! selects the state, so the starts are the exact loop of `η` periods shifted by
 //! `k/8 · 1/(2η)` of the length (`κ_g²` has period `1/(2η)`).
 //!
-//! [`uniform_placements`] gives the placements at which the families of a two-segment rod
+//! [`PlacedProfile::placements`] gives the placements at which the families of a two-segment rod
 //! leave the uniform rod's circle of loops as `D1/D0` departs from 1: the critical points of
 //! the energy of the uniform rod's exact loop laid on the scene's profile, as a function of
 //! its placement.
@@ -47,69 +47,86 @@ pub(crate) fn classify(eq: &Equilibrium, eta: u32, tol: f64) -> (bool, usize, f6
     (ok_eta, idx, eq.energy().total)
 }
 
-/// Samples per half period of `κ_g²` at which [`uniform_placements`] evaluates the energy
+/// Samples per half period of `κ_g²` at which [`PlacedProfile::placements`] evaluates the energy
 /// (a resolution: the critical points are refined between samples by a parabola).
 const HALF_PERIOD_SAMPLES: usize = 512;
 
-/// The placements (origin shifts, fractions of the length in `[0, 1/(2η))`, as
-/// [`StartShape::shifted`] takes them) of the exact loop of branch `eta` of the uniform rod
-/// at `lbar` from which the families of the profile `stiffness` leave the uniform rod's
-/// circle of loops.
-///
-/// At `D1/D0 = 1` every placement of the exact loop is an equilibrium (the arclength shift
-/// is a symmetry). For `D1/D0 = 1 − ε` the circle breaks (Lyapunov–Schmidt reduction onto
-/// the shift) into the critical points of the energy of the placed loop to first order in
-/// `ε`, `f(φ) = ½ ∫ D(σ) κ(σ + φ)² dσ` (paper Eq. (2) with the profile of Eq. (51); on the
-/// sphere `κ² = κ_g² + 1/R²`, and the constant part does not depend on `φ`): its maxima and
-/// minima over the half period `1/(2η)` of `κ_g²` (a shift by `1/(2η)` is the reflection
-/// `κ_g → −κ_g`). They follow from the profile's features (for Eq. (51), the soft segment's
-/// centre at an extreme or a zero of `κ_g`, and any asymmetric placements its length
-/// selects) and from the branch's period count. Where `f` is constant to rounding (a soft
-/// segment of a whole number of half periods: first order selects nothing) only the
-/// mirror-symmetric placements remain.
-pub(crate) fn uniform_placements(
-    stiffness: &Stiffness,
+/// The profile side of [`PlacedProfile::placements`] for one branch: the stiffness sampled where
+/// the placed loop's energy is summed, the same at every length (so that a search over many
+/// lengths samples it once).
+pub(crate) struct PlacedProfile<'a> {
+    stiffness: &'a Stiffness,
     eta: u32,
-    lbar: f64,
-) -> Result<Vec<f64>, SolverError> {
-    let profile = stiffness.validate()?;
-    let kg = StartShape::Exact { eta }.interpolant(lbar)?;
-    let half = HALF_PERIOD_SAMPLES;
-    let m = 2 * eta.max(1) as usize * half;
-    let at = |j: usize| j as f64 / m as f64;
-    let sigmas: Vec<f64> = (0..m).map(at).collect();
-    let k2: Vec<f64> = kg.eval_many(&sigmas).iter().map(|v| v.powi(2)).collect();
-    let d: Vec<f64> = (0..m).map(|j| profile.eval(at(j)).d).collect();
-    let f = placed_energies(&d, &k2, half);
-    let mut out: Vec<f64> = critical_points(&f)
-        .into_iter()
-        .map(|x| x / m as f64)
-        .collect();
-    // The mirror-symmetric placements are critical at every order (the energy is even about
-    // them): the soft segment's centre `c` at the extreme of `κ_g` at the loop's origin
-    // (shift `−c`) and at the zero a quarter period on (`1/(4η) − c`). They are the only
-    // placements where a soft segment of a whole number of half periods makes `f` constant.
-    if let Stiffness::Tanh { s0, s1, .. } = stiffness {
-        let hp = 0.5 / f64::from(eta.max(1));
-        let c = 0.5 * (s0 + s1);
-        for sh in [-c, 0.5 * hp - c] {
-            let sh = sh.rem_euclid(hp);
-            let dist = |o: f64| {
-                let d = (o - sh).rem_euclid(hp);
-                d.min(hp - d)
-            };
-            if out.iter().all(|&o| dist(o) > 1e-6 * hp) {
-                out.push(sh);
+    /// `D` at the `m = 2η ·` [`HALF_PERIOD_SAMPLES`] samples `j/m`.
+    d: Vec<f64>,
+}
+
+impl<'a> PlacedProfile<'a> {
+    /// The samples of `stiffness` for branch `eta`.
+    pub(crate) fn new(stiffness: &'a Stiffness, eta: u32) -> Result<Self, SolverError> {
+        let profile = stiffness.validate()?;
+        let m = 2 * eta.max(1) as usize * HALF_PERIOD_SAMPLES;
+        let d = (0..m)
+            .map(|j| profile.eval(j as f64 / m as f64).d)
+            .collect();
+        Ok(Self { stiffness, eta, d })
+    }
+
+    /// The placements (origin shifts, fractions of the length in `[0, 1/(2η))`, as
+    /// [`StartShape::shifted`] takes them) of the exact loop of branch `eta` of the uniform rod
+    /// at `lbar` from which the families of the profile `stiffness` leave the uniform rod's
+    /// circle of loops.
+    ///
+    /// At `D1/D0 = 1` every placement of the exact loop is an equilibrium (the arclength shift
+    /// is a symmetry). For `D1/D0 = 1 − ε` the circle breaks (Lyapunov–Schmidt reduction onto
+    /// the shift) into the critical points of the energy of the placed loop to first order in
+    /// `ε`, `f(φ) = ½ ∫ D(σ) κ(σ + φ)² dσ` (paper Eq. (2) with the profile of Eq. (51); on the
+    /// sphere `κ² = κ_g² + 1/R²`, and the constant part does not depend on `φ`): its maxima and
+    /// minima over the half period `1/(2η)` of `κ_g²` (a shift by `1/(2η)` is the reflection
+    /// `κ_g → −κ_g`). They follow from the profile's features (for Eq. (51), the soft segment's
+    /// centre at an extreme or a zero of `κ_g`, and any asymmetric placements its length
+    /// selects) and from the branch's period count. Where `f` is constant to rounding (a soft
+    /// segment of a whole number of half periods: first order selects nothing) only the
+    /// mirror-symmetric placements remain.
+    pub(crate) fn placements(&self, lbar: f64) -> Result<Vec<f64>, SolverError> {
+        let (stiffness, eta) = (self.stiffness, self.eta);
+        let kg = StartShape::Exact { eta }.interpolant(lbar)?;
+        let half = HALF_PERIOD_SAMPLES;
+        let m = self.d.len();
+        let sigmas: Vec<f64> = (0..m).map(|j| j as f64 / m as f64).collect();
+        let k2: Vec<f64> = kg.eval_many(&sigmas).iter().map(|v| v.powi(2)).collect();
+        let f = placed_energies(&self.d, &k2, half);
+        let mut out: Vec<f64> = critical_points(&f)
+            .into_iter()
+            .map(|x| x / m as f64)
+            .collect();
+        // The mirror-symmetric placements are critical at every order (the energy is even
+        // about them): the soft segment's centre `c` at the extreme of `κ_g` at the loop's
+        // origin (shift `−c`) and at the zero a quarter period on (`1/(4η) − c`). They are the
+        // only placements where a soft segment of a whole number of half periods makes `f`
+        // constant.
+        if let Stiffness::Tanh { s0, s1, .. } = stiffness {
+            let hp = 0.5 / f64::from(eta.max(1));
+            let c = 0.5 * (s0 + s1);
+            for sh in [-c, 0.5 * hp - c] {
+                let sh = sh.rem_euclid(hp);
+                let dist = |o: f64| {
+                    let d = (o - sh).rem_euclid(hp);
+                    d.min(hp - d)
+                };
+                if out.iter().all(|&o| dist(o) > 1e-6 * hp) {
+                    out.push(sh);
+                }
             }
         }
+        out.sort_by(f64::total_cmp);
+        Ok(out)
     }
-    out.sort_by(f64::total_cmp);
-    Ok(out)
 }
 
 /// Lanes of [`placed_energies`]: shifts summed side by side (independent sums, so that they
 /// do not wait on each other's additions).
-const LANES: usize = 8;
+const LANES: usize = 32;
 
 /// `f_k = Σ_j d_j κ²_{(j+k) mod m} / m` for the shifts `k = 0..half` (`m` = the samples of
 /// `d` and `k2`), each summed in the order of `j` from `0`. [`LANES`] shifts are summed side
@@ -257,7 +274,9 @@ mod tests {
         };
         let profile = st.validate().unwrap();
         for (eta, lbar) in [(1u32, 1.4), (2, 1.7), (3, 2.6)] {
-            let ps = uniform_placements(&st, eta, lbar).unwrap();
+            let ps = PlacedProfile::new(&st, eta)
+                .and_then(|p| p.placements(lbar))
+                .unwrap();
             assert!(ps.len() >= 2, "eta {eta}: {ps:?}");
             // The symmetric placements are among the critical points found from `f`: no
             // more than the critical points of `f` are returned for this (non-degenerate)

@@ -1,7 +1,7 @@
 //! Point group and self-intersections of every traced state (the `point_group` and
 //! `self_intersections` columns of `branches.csv`), from the state's unknowns by
 //! the surface model's `shape`: the positions are integrated from `κ_g`, no
-//! re-solve. The states of one branch are done by one worker of the crate's pool.
+//! re-solve. Each state is a task of the crate's pool.
 
 use rodloop_exact::shape::ShapeTolerances;
 use serde::Serialize;
@@ -44,27 +44,33 @@ pub(crate) fn state_shapes(
     } else {
         opts.threads
     };
-    let results = run_parallel(
+    // One task per state (the branches differ in size), regrouped by branch below.
+    let items: Vec<(&TracedBranch, usize)> = branches
+        .iter()
+        .flat_map(|b| (0..b.points.len()).map(move |k| (b, k)))
+        .collect();
+    let mut flat = run_parallel(
         threads,
-        branches.iter().collect(),
+        items,
         &mut |_| {},
         &mut |_| {},
-        |b: &TracedBranch, _| {
-            b.points
-                .iter()
-                .map(|p| {
-                    opts.model(p.value, b.cells)
-                        .and_then(|m| m.shape(&p.state, tol))
-                        .map_err(|e| {
-                            format!(
-                                "branch {} (η = {}) at L̄ = {}: no shape ({e})",
-                                b.branch, b.eta, p.value
-                            )
-                        })
+        |(b, k): (&TracedBranch, usize), _| {
+            let p = &b.points[k];
+            opts.model(p.value, b.cells)
+                .and_then(|m| m.shape(&p.state, tol))
+                .map_err(|e| {
+                    format!(
+                        "branch {} (η = {}) at L̄ = {}: no shape ({e})",
+                        b.branch, b.eta, p.value
+                    )
                 })
-                .collect::<Vec<_>>()
         },
-    );
+    )
+    .into_iter();
+    let results: Vec<Vec<_>> = branches
+        .iter()
+        .map(|b| flat.by_ref().take(b.points.len()).collect())
+        .collect();
     let mut warnings = Vec::new();
     let shapes = results
         .into_iter()

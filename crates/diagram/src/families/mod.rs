@@ -12,7 +12,7 @@
 //! 1. **Seeds** (`seeding.rs`): the uniform rod's exact loop of `η` periods at every
 //!    placement where a family leaves the uniform circle of loops as `D1/D0` departs from 1
 //!    (the critical points of the placed loop's energy on the scene's profile,
-//!    [`crate::placements::uniform_placements`]), continued in `ln(D1/D0)` from 0 to the
+//!    [`crate::placements::PlacedProfile::placements`]), continued in `ln(D1/D0)` from 0 to the
 //!    scene's contrast by pseudo-arclength; and the Euler rotation curve `l = η`
 //!    (Eqs. 4–8) with the stiffness change `s0*` at the phases `j/(8η)` (`j = 0…3`) of its
 //!    `κ_g`, solved directly. The range is cut into stretches over which the number of
@@ -68,7 +68,9 @@ use crate::types::{BranchEnd, BranchTimings, TracedBranch};
 use crate::{DiagramError, DiagramOptions, Progress};
 use following::{EndContext, Tracing};
 use images::Images;
-use seeding::{robust_seed, seed_jobs, seed_lengths, seed_state, uniform_seed, Seed};
+use seeding::{
+    euler_jobs, robust_seed, seed_lengths, seed_state, uniform_jobs, uniform_seed, Seed,
+};
 
 /// Most families (followed curves) per branch `η`.
 pub const MAX_FAMILIES: usize = 16;
@@ -148,8 +150,10 @@ pub fn compute_families(
     'stretches: for stretch in &stretches {
         let mut open: Option<Vec<usize>> = None;
         let mut euler_found = false;
-        for (li, &l) in stretch.iter().enumerate() {
-            let (uniform, euler) = seed_jobs(&opts.stiffness, eta, l);
+        for (li, (l, placements)) in stretch.iter().enumerate() {
+            let l = *l;
+            let uniform = uniform_jobs(l, placements);
+            let euler = euler_jobs(&opts.stiffness, eta, l);
             let idx: Vec<usize> = open
                 .clone()
                 .unwrap_or_else(|| (0..uniform.len()).collect())
@@ -201,11 +205,11 @@ pub fn compute_families(
         // The stretch's ends (where families are born in pairs, or cut by the range): the
         // Euler starts there.
         let ends = [
-            stretch.iter().copied().reduce(f64::min),
-            stretch.iter().copied().reduce(f64::max),
+            stretch.iter().map(|s| s.0).reduce(f64::min),
+            stretch.iter().map(|s| s.0).reduce(f64::max),
         ];
         for l in ends.into_iter().flatten() {
-            let (_, euler) = seed_jobs(&opts.stiffness, eta, l);
+            let euler = euler_jobs(&opts.stiffness, eta, l);
             seeds_tried += euler.len();
             let solved = run_parallel(
                 opts.worker_threads(),
@@ -223,7 +227,7 @@ pub fn compute_families(
     }
     let seed_lengths: Vec<f64> = stretches
         .iter()
-        .filter_map(|s| s.first().copied())
+        .filter_map(|s| s.first().map(|s| s.0))
         .collect();
     // Where no family of the uniform rod reaches the scene's contrast at the seed lengths,
     // the states `rodloop solve --branch` finds there: its direct and shifted starts, then
@@ -553,7 +557,9 @@ mod tests {
                     .sum::<f64>()
                     / n as f64
             };
-            let ps = crate::placements::uniform_placements(&st, eta, l).unwrap();
+            let ps = crate::placements::PlacedProfile::new(&st, eta)
+                .and_then(|p| p.placements(l))
+                .unwrap();
             let predicted: Vec<f64> = ps.iter().map(|&p| first_order(p)).collect();
             let spread = predicted.iter().copied().fold(f64::NEG_INFINITY, f64::max)
                 - predicted.iter().copied().fold(f64::INFINITY, f64::min);

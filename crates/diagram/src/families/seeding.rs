@@ -1,5 +1,5 @@
 //! The seeds of a branch's families: the uniform rod's exact loop at each placement from
-//! which a family leaves the uniform circle ([`crate::placements::uniform_placements`]),
+//! which a family leaves the uniform circle ([`crate::placements::PlacedProfile::placements`]),
 //! continued in `D1/D0` from 1 to the scene's contrast; `rodloop solve --branch` where none
 //! of these reaches the scene.
 
@@ -33,24 +33,20 @@ pub(super) enum Seed {
 /// A seed to solve: its length and how.
 pub(super) type Job = (f64, Seed);
 
-/// The seeds of branch `eta` at `l`: every placement of
-/// [`crate::placements::uniform_placements`] there (the critical points of the placed
-/// loop's energy and the mirror-symmetric placements) continued from the uniform rod; and,
-/// for where none of these converges (a family may fold away before the scene's contrast at
-/// this length, or reach it with another dominant harmonic), the Euler start `l = η` with
-/// the stiffness change `s0*` at the phases `j/(8η)`, `j = 0…3`, of its `κ_g`
-/// ([`crate::sampling::feature_shifts`]; half a period, a shift by half a period is the
-/// reflection `κ_g → −κ_g`, and the profile's mirror symmetry carries them to `s1*`),
-/// solved directly.
-pub(super) fn seed_jobs(stiffness: &Stiffness, eta: u32, l: f64) -> (Vec<Job>, Vec<Job>) {
-    let shifts = crate::placements::uniform_placements(stiffness, eta, l)
-        .map_err(|e| debug(|| format!("placements of eta {eta} at {l}: {e}")))
-        .unwrap_or_default();
-    debug(|| format!("eta {eta} at {l:.4}: placements {shifts:.4?}"));
-    let uniform = shifts
-        .into_iter()
-        .map(|sh| (l, Seed::Uniform(sh)))
-        .collect();
+/// The seeds of branch `eta` at `l` from the uniform rod: every placement `shifts` of
+/// [`crate::placements::PlacedProfile::placements`] there (the critical points of the placed
+/// loop's energy and the mirror-symmetric placements) continued from the uniform rod.
+pub(super) fn uniform_jobs(l: f64, shifts: &[f64]) -> Vec<Job> {
+    shifts.iter().map(|&sh| (l, Seed::Uniform(sh))).collect()
+}
+
+/// The seeds of branch `eta` at `l` for where none of the [`uniform_jobs`] converges (a
+/// family may fold away before the scene's contrast at this length, or reach it with
+/// another dominant harmonic): the Euler start `l = η` with the stiffness change `s0*` at
+/// the phases `j/(8η)`, `j = 0…3`, of its `κ_g` ([`crate::sampling::feature_shifts`]; half
+/// a period, a shift by half a period is the reflection `κ_g → −κ_g`, and the profile's
+/// mirror symmetry carries them to `s1*`), solved directly.
+pub(super) fn euler_jobs(stiffness: &Stiffness, eta: u32, l: f64) -> Vec<Job> {
     let mut shifts = crate::sampling::feature_shifts(stiffness, eta, &[0, 1, 2, 3], false);
     if shifts.is_empty() {
         // A profile without named stiffness changes (a table): the phases at the origin.
@@ -58,17 +54,20 @@ pub(super) fn seed_jobs(stiffness: &Stiffness, eta: u32, l: f64) -> (Vec<Job>, V
             .map(|j| f64::from(j) / (8.0 * f64::from(eta)))
             .collect();
     }
-    let euler = shifts
+    shifts
         .into_iter()
         .map(|sh| (l, Seed::Shifted(sh)))
-        .collect();
-    (uniform, euler)
+        .collect()
 }
 
-/// The lengths at which branch `eta` is seeded, by stretch: on the certificate's sample
-/// lengths of `range` (those at least `2 ×` [`SWITCH_DISTANCE`] from a great circle), the
-/// number of placements where families leave the uniform circle
-/// ([`crate::placements::uniform_placements`]) is counted; each run of consecutive lengths
+/// A seed length of [`seed_lengths`] with the placements
+/// ([`crate::placements::PlacedProfile::placements`]) there.
+pub(super) type SeedLength = (f64, Vec<f64>);
+
+/// The lengths at which branch `eta` is seeded, by stretch, each with its placements: on
+/// the certificate's sample lengths of `range` (those at least `2 ×` [`SWITCH_DISTANCE`]
+/// from a great circle), the placements where families leave the uniform circle
+/// ([`crate::placements::PlacedProfile::placements`]) are counted; each run of consecutive lengths
 /// with the same count is a stretch, its lengths ordered from its middle outwards. Where
 /// the count changes, families are born or end in pairs (a fold of the placed loop's
 /// energy), so every stretch of the range with a different set of families gets its own
@@ -78,9 +77,12 @@ pub(super) fn seed_lengths(
     eta: u32,
     range: (f64, f64),
     circles: &[f64],
-) -> Vec<Vec<f64>> {
+) -> Vec<Vec<SeedLength>> {
     let (grid, _) = crate::sampling::sample_lengths(range.0, range.1);
-    let counted: Vec<(f64, usize)> = grid
+    let placed = crate::placements::PlacedProfile::new(stiffness, eta)
+        .map_err(|e| debug(|| format!("placements of eta {eta}: {e}")))
+        .ok();
+    let counted: Vec<SeedLength> = grid
         .into_iter()
         .filter(|l| {
             circles
@@ -88,25 +90,30 @@ pub(super) fn seed_lengths(
                 .all(|m| (l - m).abs() > 2.0 * SWITCH_DISTANCE)
         })
         .filter_map(|l| {
-            crate::placements::uniform_placements(stiffness, eta, l)
-                .ok()
-                .map(|p| (l, p.len()))
+            let p = placed.as_ref()?.placements(l);
+            match &p {
+                Ok(p) => debug(|| format!("eta {eta} at {l:.4}: placements {p:.4?}")),
+                Err(e) => debug(|| format!("placements of eta {eta} at {l}: {e}")),
+            }
+            p.ok().map(|p| (l, p))
         })
         .collect();
     let mut out = Vec::new();
     let mut i = 0;
     while i < counted.len() {
         let j = (i..counted.len())
-            .find(|&j| counted[j].1 != counted[i].1)
+            .find(|&j| counted[j].1.len() != counted[i].1.len())
             .unwrap_or(counted.len());
         let mid = (i + j - 1) / 2;
         let mut order: Vec<usize> = (i..j).collect();
         order.sort_by_key(|&k| (k.abs_diff(mid), k));
-        out.push(order.into_iter().map(|k| counted[k].0).collect());
+        out.push(order.into_iter().map(|k| counted[k].clone()).collect());
         i = j;
     }
     if out.is_empty() {
-        out.push(vec![0.5 * (range.0 + range.1)]);
+        let mid = 0.5 * (range.0 + range.1);
+        let p = placed.and_then(|p| p.placements(mid).ok());
+        out.push(vec![(mid, p.unwrap_or_default())]);
     }
     out
 }
