@@ -33,6 +33,7 @@ mod phase_rows;
 mod progress;
 mod report;
 mod solve;
+mod staging;
 mod states;
 
 use std::process::ExitCode;

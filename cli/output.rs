@@ -1,11 +1,14 @@
 //! Output helpers: every file is written to a temporary name in the target directory and
-//! renamed into place, and no non-finite number is ever written.
+//! renamed into place (or, in a run's staging directory, written there and synced before the
+//! run moves it into place), and no non-finite number is ever written.
 
 use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
+
+use crate::staging::{Stager, Syncer};
 
 /// Create the output directory (and parents).
 pub fn ensure_dir(dir: &Path) -> Result<()> {
@@ -322,6 +325,8 @@ pub struct OutputRun {
     committed: bool,
     /// Whether this run created `dir` (an uncommitted run then removes it if it is empty).
     created: bool,
+    /// Syncs the files staged through [`OutputRun::stager`].
+    syncer: Syncer,
 }
 
 impl OutputRun {
@@ -388,6 +393,7 @@ impl OutputRun {
             keeps_branches: std::cell::Cell::new(false),
             committed: false,
             created,
+            syncer: Syncer::start(),
         };
         run.clean_leftovers();
         fs::create_dir(&run.stage)
@@ -412,6 +418,12 @@ impl OutputRun {
                 }
             }
         }
+    }
+
+    /// A writer of files into the staging directory (e.g. into a [`OutputRun::subdir`]) that
+    /// does not wait for the disk: [`OutputRun::commit`] waits for the files' syncs.
+    pub fn stager(&self) -> Stager<'_> {
+        self.syncer.stager()
     }
 
     /// Stage a file (staging the same name again replaces it).
@@ -486,6 +498,7 @@ impl OutputRun {
     /// `states/`), then the new subdirectories and files are renamed in, `summary.json` last,
     /// so that a complete-looking set is always one run's.
     pub fn commit(mut self) -> Result<()> {
+        self.syncer.finish();
         let mut names = self.written.borrow().clone();
         names.sort_by_key(|n| n == "summary.json");
         let _ = fs::remove_file(self.dir.join("summary.json"));
@@ -522,6 +535,7 @@ impl OutputRun {
 
 impl Drop for OutputRun {
     fn drop(&mut self) {
+        self.syncer.finish();
         let _ = fs::remove_dir_all(&self.stage);
         let ours = fs::read_to_string(&self.lock)
             .ok()

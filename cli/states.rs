@@ -27,6 +27,7 @@ pub fn write_point_states(
 ) -> Result<Vec<String>> {
     let dir = run.subdir("states")?;
     let points = states.point_states();
+    let stager = run.stager();
     let results = rodloop_diagram::parallel_map(&points, |state| {
         let Some(state) = state else {
             return Ok(String::new());
@@ -36,7 +37,7 @@ pub fn write_point_states(
             .map_err(|e| StateError::Rows(format!("{e:#}")))?;
         let write = || -> Result<()> {
             let bytes = state_table(&table)?.to_bytes()?;
-            crate::output::write_atomic(&dir, state.name.trim_start_matches("states/"), &bytes)?;
+            stager.write(&dir, state.name.trim_start_matches("states/"), &bytes)?;
             Ok(())
         };
         write().map_err(|e| {
