@@ -175,18 +175,45 @@ pub fn exp_jet1<const K: usize>(
     w: &Vector3<f64>,
     wi: &[Vector3<f64>; K],
 ) -> (Matrix3<f64>, [Matrix3<f64>; K]) {
+    let mut e = Matrix3::zeros();
+    let mut d = [Matrix3::zeros(); K];
+    exp_jet1_into(w, wi, &mut e, &mut d);
+    (e, d)
+}
+
+/// [`exp_jet1`] written into `e` and `d` (the same values to the bit): a cell chain fills
+/// its arrays in place, without moving the jet through a returned value.
+#[inline(always)]
+pub(crate) fn exp_jet1_into<const K: usize>(
+    w: &Vector3<f64>,
+    wi: &[Vector3<f64>; K],
+    e: &mut Matrix3<f64>,
+    d: &mut [Matrix3<f64>; K],
+) {
     let q = w.norm_squared();
     let [a, a1, _, b, b1, _] = rodrigues_coefficients(q);
     let wm = hat(w);
     let w2 = wm * wm;
-    let e = Matrix3::identity() + wm * a + w2 * b;
-    let mut d = [Matrix3::zeros(); K];
+    *e = Matrix3::identity() + wm * a + w2 * b;
     for i in 0..K {
         let wim = hat(&wi[i]);
         let qi = 2.0 * w.dot(&wi[i]);
         d[i] = wm * (a1 * qi) + wim * a + w2 * (b1 * qi) + (wim * wm + wm * wim) * b;
     }
-    (e, d)
+}
+
+/// [`exp_jet_affine`] for two variables written into `e`, `d` and the upper triangle
+/// `dd = [∂₁₁, ∂₁₂, ∂₂₂]` (the same values to the bit): what a cell propagator of the
+/// surface model needs in its two curvature unknowns, filled in place.
+#[inline(always)]
+pub(crate) fn exp_jet2_affine_into(
+    w: &Vector3<f64>,
+    wi: &[Vector3<f64>; 2],
+    e: &mut Matrix3<f64>,
+    d: &mut [Matrix3<f64>; 2],
+    dd: &mut [Matrix3<f64>; 3],
+) {
+    jet_into(w, wi, None, false, e, d, |i, j, m| dd[i + j] = m);
 }
 
 fn jet<const K: usize>(
@@ -195,13 +222,33 @@ fn jet<const K: usize>(
     wij: Option<&[[Vector3<f64>; K]; K]>,
     only_last: bool,
 ) -> ExpJet<K> {
+    let mut e = Matrix3::zeros();
+    let mut d = [Matrix3::zeros(); K];
+    let mut dd = [[Matrix3::zeros(); K]; K];
+    jet_into(w, wi, wij, only_last, &mut e, &mut d, |i, j, m| {
+        dd[i][j] = m
+    });
+    (e, d, dd)
+}
+
+/// The jet of [`exp_jet`]: the value into `e`, the first derivatives into `d`, and each
+/// second derivative `∂_i∂_j` (`i ≤ j`, only `j = K − 1` with `only_last`) handed to
+/// `put(i, j, ·)`.
+#[inline(always)]
+fn jet_into<const K: usize>(
+    w: &Vector3<f64>,
+    wi: &[Vector3<f64>; K],
+    wij: Option<&[[Vector3<f64>; K]; K]>,
+    only_last: bool,
+    e: &mut Matrix3<f64>,
+    d: &mut [Matrix3<f64>; K],
+    mut put: impl FnMut(usize, usize, Matrix3<f64>),
+) {
     let q = w.norm_squared();
     let [a, a1, a2, b, b1, b2] = rodrigues_coefficients(q);
     let wm = hat(w);
     let w2 = wm * wm;
-    let e = Matrix3::identity() + wm * a + w2 * b;
-    let mut d = [Matrix3::zeros(); K];
-    let mut dd = [[Matrix3::zeros(); K]; K];
+    *e = Matrix3::identity() + wm * a + w2 * b;
     let mut wim = [Matrix3::zeros(); K];
     let mut qi = [0.0; K];
     let mut sym = [Matrix3::zeros(); K]; // W_i W + W W_i
@@ -229,17 +276,20 @@ fn jet<const K: usize>(
             }
             let aij = a2 * qi[i] * qi[j] + a1 * qij;
             let bij = b2 * qi[i] * qi[j] + b1 * qij;
-            dd[i][j] = wm * aij
-                + wim[j] * ai
-                + wim[i] * aj
-                + lin
-                + w2 * bij
-                + sym[j] * bi
-                + sym[i] * bj
-                + pair * b;
+            put(
+                i,
+                j,
+                wm * aij
+                    + wim[j] * ai
+                    + wim[i] * aj
+                    + lin
+                    + w2 * bij
+                    + sym[j] * bi
+                    + sym[i] * bj
+                    + pair * b,
+            );
         }
     }
-    (e, d, dd)
 }
 
 /// Result of integrating the frame along a closed curve.
