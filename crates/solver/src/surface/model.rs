@@ -61,7 +61,9 @@ use std::f64::consts::PI;
 
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
-use crate::frame::{exp_jet1_into, exp_jet2_affine_into, exp_jet_last, exp_value, expm_skew, hat};
+use crate::frame::{
+    exp_jet1_into, exp_jet2_affine_into, exp_jet_last_into, exp_value, expm_skew, hat,
+};
 use crate::mesh::MeshMap;
 use crate::periodic::TrigInterpolant;
 use crate::stiffness::{Stiffness, StiffnessProfile};
