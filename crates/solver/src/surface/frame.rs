@@ -51,16 +51,41 @@ pub fn expm_skew(w: &Matrix3<f64>) -> Matrix3<f64> {
 /// (until the terms fall below 1e-24, at most 18 terms); otherwise the closed forms
 /// `a' = (cos θ − a)/(2q)`, `a'' = −(a/2 + 3a')/(2q)`, `b' = (a/2 − b)/q`,
 /// `b'' = (a'/2 − 2b')/q` are used, which have no cancellation problem there.
+///
+/// A Newton pass evaluates every cell at the same `q` several times (the closure rows of a
+/// trial, its residual, the next Newton matrix, `∂F/∂L̄`), so the coefficients are kept
+/// per thread in a small table addressed by the bits of `q`; as they are a function of `q`
+/// alone, a hit hands back the bits the computation gives.
 pub fn rodrigues_coefficients(q: f64) -> [f64; 6] {
-    rodrigues::<true>(q)
+    if !q.is_finite() {
+        return rodrigues(q);
+    }
+    let key = q.to_bits();
+    let slot = (key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> (64 - MEMO_BITS)) as usize;
+    MEMO.with(|m| {
+        let mut m = m.borrow_mut();
+        let (k, v) = &mut m[slot];
+        if *k != key {
+            *k = key;
+            *v = rodrigues(q);
+        }
+        *v
+    })
 }
 
-/// [`rodrigues_coefficients`] with (`DERIVATIVES`) or without the derivatives (then left
-/// zero): `a` and `b` are summed by the same operations either way, so they agree to the
-/// bit, and the series stops at the same term (its test is on `a''`'s term, computed
-/// either way).
-#[inline(always)]
-fn rodrigues<const DERIVATIVES: bool>(q: f64) -> [f64; 6] {
+/// `log₂` of the number of slots of the per-thread table of [`rodrigues_coefficients`]
+/// (of the order of the cells of the finest models, to hold a model's cells at once).
+const MEMO_BITS: u32 = 11;
+
+thread_local! {
+    /// `(q.to_bits(), coefficients)` per slot; the key of a non-finite `q` (never stored)
+    /// marks an empty slot.
+    static MEMO: std::cell::RefCell<Vec<(u64, [f64; 6])>> =
+        std::cell::RefCell::new(vec![(f64::NAN.to_bits(), [0.0; 6]); 1 << MEMO_BITS]);
+}
+
+/// The computation of [`rodrigues_coefficients`] (without its table).
+fn rodrigues(q: f64) -> [f64; 6] {
     if q < 1.0 {
         // Term k: a += (−q)^k/(2k+1)!, a' += −k (−q)^{k−1}/(2k+1)!,
         // a'' += k(k−1) (−q)^{k−2}/(2k+1)! (same for b with (2k+2)!). For q < 1 the terms
@@ -74,17 +99,15 @@ fn rodrigues<const DERIVATIVES: bool>(q: f64) -> [f64; 6] {
             let kf = k as f64;
             out[0] += pw[0] / fa;
             out[3] += pw[0] / fb;
-            if DERIVATIVES && k >= 1 {
+            if k >= 1 {
                 let d1 = -kf * pw[1];
                 out[1] += d1 / fa;
                 out[4] += d1 / fb;
             }
             if k >= 2 {
                 let d2 = kf * (kf - 1.0) * pw[2];
-                if DERIVATIVES {
-                    out[2] += d2 / fa;
-                    out[5] += d2 / fb;
-                }
+                out[2] += d2 / fa;
+                out[5] += d2 / fb;
                 if (d2 / fa).abs() < 1e-24 {
                     break;
                 }
@@ -103,9 +126,6 @@ fn rodrigues<const DERIVATIVES: bool>(q: f64) -> [f64; 6] {
         let (s, c) = th.sin_cos();
         let a = s / th;
         let b = (1.0 - c) / q;
-        if !DERIVATIVES {
-            return [a, 0.0, 0.0, b, 0.0, 0.0];
-        }
         let a1 = (c - a) / (2.0 * q);
         let a2 = -(0.5 * a + 3.0 * a1) / (2.0 * q);
         let b1 = (0.5 * a - b) / q;
@@ -116,11 +136,12 @@ fn rodrigues<const DERIVATIVES: bool>(q: f64) -> [f64; 6] {
 
 /// `exp(hat(ω))` by Rodrigues' formula with the coefficients of [`rodrigues_coefficients`]:
 /// the same matrix, to the bit, as the value of [`exp_jet1`] (and of the other jets), at a
-/// fraction of their cost (no derivatives). [`crate::SurfaceModel`]'s closure residual
-/// alone ([`crate::SurfaceModel::kkt_closure_residual`]) is built from it.
+/// fraction of their cost (no derivative matrices). [`crate::SurfaceModel`]'s closure
+/// residual alone ([`crate::SurfaceModel::kkt_closure_residual`]) is built from it; the
+/// coefficients it leaves in the table serve the jets at the same `ω`.
 pub fn exp_value(w: &Vector3<f64>) -> Matrix3<f64> {
     let q = w.norm_squared();
-    let [a, _, _, b, _, _] = rodrigues::<false>(q);
+    let [a, _, _, b, _, _] = rodrigues_coefficients(q);
     let wm = hat(w);
     let w2 = wm * wm;
     Matrix3::identity() + wm * a + w2 * b
@@ -175,18 +196,59 @@ pub fn exp_jet1<const K: usize>(
     w: &Vector3<f64>,
     wi: &[Vector3<f64>; K],
 ) -> (Matrix3<f64>, [Matrix3<f64>; K]) {
+    let mut e = Matrix3::zeros();
+    let mut d = [Matrix3::zeros(); K];
+    exp_jet1_into(w, wi, &mut e, &mut d);
+    (e, d)
+}
+
+/// [`exp_jet1`] written into `e` and `d` (the same values to the bit): a cell chain fills
+/// its arrays in place, without moving the jet through a returned value.
+#[inline(always)]
+pub(crate) fn exp_jet1_into<const K: usize>(
+    w: &Vector3<f64>,
+    wi: &[Vector3<f64>; K],
+    e: &mut Matrix3<f64>,
+    d: &mut [Matrix3<f64>; K],
+) {
     let q = w.norm_squared();
     let [a, a1, _, b, b1, _] = rodrigues_coefficients(q);
     let wm = hat(w);
     let w2 = wm * wm;
-    let e = Matrix3::identity() + wm * a + w2 * b;
-    let mut d = [Matrix3::zeros(); K];
+    *e = Matrix3::identity() + wm * a + w2 * b;
     for i in 0..K {
         let wim = hat(&wi[i]);
         let qi = 2.0 * w.dot(&wi[i]);
         d[i] = wm * (a1 * qi) + wim * a + w2 * (b1 * qi) + (wim * wm + wm * wim) * b;
     }
-    (e, d)
+}
+
+/// [`exp_jet_affine`] for two variables written into `e`, `d` and the upper triangle
+/// `dd = [∂₁₁, ∂₁₂, ∂₂₂]` (the same values to the bit): what a cell propagator of the
+/// surface model needs in its two curvature unknowns, filled in place.
+#[inline(always)]
+pub(crate) fn exp_jet2_affine_into(
+    w: &Vector3<f64>,
+    wi: &[Vector3<f64>; 2],
+    e: &mut Matrix3<f64>,
+    d: &mut [Matrix3<f64>; 2],
+    dd: &mut [Matrix3<f64>; 3],
+) {
+    jet_into(w, wi, None, false, e, d, |i, j, m| dd[i + j] = m);
+}
+
+/// [`exp_jet_last`] written into `e` and `d`, each `∂_i∂_{K−1}` handed to `put(i, ·)` (the
+/// same values to the bit, without the zero entries).
+#[inline(always)]
+pub(crate) fn exp_jet_last_into<const K: usize>(
+    w: &Vector3<f64>,
+    wi: &[Vector3<f64>; K],
+    wij: &[[Vector3<f64>; K]; K],
+    e: &mut Matrix3<f64>,
+    d: &mut [Matrix3<f64>; K],
+    mut put: impl FnMut(usize, Matrix3<f64>),
+) {
+    jet_into(w, wi, Some(wij), true, e, d, |i, _, m| put(i, m));
 }
 
 fn jet<const K: usize>(
@@ -195,13 +257,33 @@ fn jet<const K: usize>(
     wij: Option<&[[Vector3<f64>; K]; K]>,
     only_last: bool,
 ) -> ExpJet<K> {
+    let mut e = Matrix3::zeros();
+    let mut d = [Matrix3::zeros(); K];
+    let mut dd = [[Matrix3::zeros(); K]; K];
+    jet_into(w, wi, wij, only_last, &mut e, &mut d, |i, j, m| {
+        dd[i][j] = m
+    });
+    (e, d, dd)
+}
+
+/// The jet of [`exp_jet`]: the value into `e`, the first derivatives into `d`, and each
+/// second derivative `∂_i∂_j` (`i ≤ j`, only `j = K − 1` with `only_last`) handed to
+/// `put(i, j, ·)`.
+#[inline(always)]
+fn jet_into<const K: usize>(
+    w: &Vector3<f64>,
+    wi: &[Vector3<f64>; K],
+    wij: Option<&[[Vector3<f64>; K]; K]>,
+    only_last: bool,
+    e: &mut Matrix3<f64>,
+    d: &mut [Matrix3<f64>; K],
+    mut put: impl FnMut(usize, usize, Matrix3<f64>),
+) {
     let q = w.norm_squared();
     let [a, a1, a2, b, b1, b2] = rodrigues_coefficients(q);
     let wm = hat(w);
     let w2 = wm * wm;
-    let e = Matrix3::identity() + wm * a + w2 * b;
-    let mut d = [Matrix3::zeros(); K];
-    let mut dd = [[Matrix3::zeros(); K]; K];
+    *e = Matrix3::identity() + wm * a + w2 * b;
     let mut wim = [Matrix3::zeros(); K];
     let mut qi = [0.0; K];
     let mut sym = [Matrix3::zeros(); K]; // W_i W + W W_i
@@ -229,17 +311,20 @@ fn jet<const K: usize>(
             }
             let aij = a2 * qi[i] * qi[j] + a1 * qij;
             let bij = b2 * qi[i] * qi[j] + b1 * qij;
-            dd[i][j] = wm * aij
-                + wim[j] * ai
-                + wim[i] * aj
-                + lin
-                + w2 * bij
-                + sym[j] * bi
-                + sym[i] * bj
-                + pair * b;
+            put(
+                i,
+                j,
+                wm * aij
+                    + wim[j] * ai
+                    + wim[i] * aj
+                    + lin
+                    + w2 * bij
+                    + sym[j] * bi
+                    + sym[i] * bj
+                    + pair * b,
+            );
         }
     }
-    (e, d, dd)
 }
 
 /// Result of integrating the frame along a closed curve.
@@ -362,6 +447,27 @@ mod tests {
             }
             assert!((ev - expm_skew(&hat(&w))).norm() < 1e-14, "|w| = {scale}");
         }
+    }
+
+    /// The per-thread table hands back the computation's bits: values of `q` in both
+    /// branches, more of them than the table has slots (so slots are shared and
+    /// overwritten), asked for twice in different orders.
+    #[test]
+    fn rodrigues_table_returns_the_computed_bits() {
+        let qs: Vec<f64> = (0..3 * (1usize << MEMO_BITS))
+            .map(|i| 1e-6 + 2.5 * (i as f64 * 0.618_033_988_749_895).fract())
+            .collect();
+        for pass in 0..2 {
+            for (i, &q) in qs.iter().enumerate() {
+                let q = if pass == 0 { q } else { qs[qs.len() - 1 - i] };
+                let got = rodrigues_coefficients(q);
+                let want = rodrigues(q);
+                for k in 0..6 {
+                    assert_eq!(got[k].to_bits(), want[k].to_bits(), "q = {q}, entry {k}");
+                }
+            }
+        }
+        assert!(rodrigues_coefficients(f64::NAN).iter().all(|v| v.is_nan()));
     }
 
     #[test]

@@ -82,7 +82,8 @@ pub(crate) struct CellTerms {
 }
 
 impl CellTerms {
-    pub(crate) fn new(model: &SurfaceModel, ch: &Chain, kappa_len: usize, mu: &V3) -> Self {
+    /// The terms at the chain `ch`, which they keep the propagators of.
+    pub(crate) fn new(model: &SurfaceModel, ch: Chain, kappa_len: usize, mu: &V3) -> Self {
         let n = model.cells();
         debug_assert_eq!(kappa_len, 2 * n);
         let cl = Closure::of(&ch.prefix[n]);
@@ -108,7 +109,7 @@ impl CellTerms {
             ]);
         }
         Self {
-            e: ch.e.clone(),
+            e: ch.e,
             a,
             b,
             q,
@@ -239,9 +240,10 @@ impl KktProduct {
         model.check_kappa(kappa)?;
         let ch = model.chain(kappa);
         let d0 = model.stiffness().kind().reference();
+        let closure_jac = model.closure_jacobian_from(&ch);
         Ok(Self {
-            terms: CellTerms::new(model, &ch, kappa.len(), &V3::from(mu)),
-            closure_jac: model.closure_jacobian_from(&ch),
+            terms: CellTerms::new(model, ch, kappa.len(), &V3::from(mu)),
+            closure_jac,
             phase_grad: model.phase().map(|ph| ph.gradient()),
             shift_w: (0..kappa.len())
                 .map(|a| shift * d0 * model.cell_weight(a / 2))
@@ -710,7 +712,7 @@ impl SurfaceModel {
         }
         self.check_kappa(kappa)?;
         let ch = self.chain(kappa);
-        Ok(CellTerms::new(self, &ch, kappa.len(), &V3::from(*mu)).hessian_vector(v))
+        Ok(CellTerms::new(self, ch, kappa.len(), &V3::from(*mu)).hessian_vector(v))
     }
 }
 

@@ -61,7 +61,9 @@ use std::f64::consts::PI;
 
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
-use crate::frame::{exp_jet1, exp_jet_affine, exp_jet_last, exp_value, expm_skew, hat};
+use crate::frame::{
+    exp_jet1_into, exp_jet2_affine_into, exp_jet_last_into, exp_value, expm_skew, hat,
+};
 use crate::mesh::MeshMap;
 use crate::periodic::TrigInterpolant;
 use crate::stiffness::{Stiffness, StiffnessProfile};
@@ -555,21 +557,17 @@ impl SurfaceModel {
 
     fn chain_with(&self, kappa: &[f64], second: bool) -> Chain {
         let n = self.cells;
-        let mut e = Vec::with_capacity(n);
-        let mut de = Vec::with_capacity(n);
-        let mut dde = Vec::with_capacity(if second { n } else { 0 });
-        for c in 0..n {
+        // The jets are written in place into arrays of their final size.
+        let mut e = vec![M3::zeros(); n];
+        let mut de = vec![[M3::zeros(); 2]; n];
+        let mut dde = vec![[M3::zeros(); 3]; if second { n } else { 0 }];
+        for (c, (ec, d)) in e.iter_mut().zip(de.iter_mut()).enumerate() {
             let (w0, v1, v2) = self.cell_vectors(self.cell_length(c));
             let w = w0 + v1 * kappa[2 * c] + v2 * kappa[2 * c + 1];
             if second {
-                let (ec, d, dd) = exp_jet_affine::<2>(&w, &[v1, v2]);
-                e.push(ec);
-                de.push(d);
-                dde.push([dd[0][0], dd[0][1], dd[1][1]]);
+                exp_jet2_affine_into(&w, &[v1, v2], ec, d, &mut dde[c]);
             } else {
-                let (ec, d) = exp_jet1::<2>(&w, &[v1, v2]);
-                e.push(ec);
-                de.push(d);
+                exp_jet1_into(&w, &[v1, v2], ec, d);
             }
         }
         let (prefix, suffix) = prefix_suffix(&e);

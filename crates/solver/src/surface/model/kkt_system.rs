@@ -126,10 +126,10 @@ impl SurfaceModel {
         let avec = V3::new(0.0, 0.0, -1.0);
         let bvec = V3::new(0.0, -1.0 / r, 0.0);
         let cvec = V3::new(-1.0 / r, 0.0, 0.0);
-        let mut e = Vec::with_capacity(n);
-        let mut dk = Vec::with_capacity(n); // ∂E_c/∂κ_ci
-        let mut dh = Vec::with_capacity(n); // ∂E_c/∂L̄ (through h_c = σ-width · 2πR L̄)
-        let mut dkh = Vec::with_capacity(n); // ∂²E_c/∂κ_ci∂L̄
+        let mut e = vec![M3::zeros(); n];
+        let mut dk = vec![[M3::zeros(); 2]; n]; // ∂E_c/∂κ_ci
+        let mut dh = vec![M3::zeros(); n]; // ∂E_c/∂L̄ (through h_c = σ-width · 2πR L̄)
+        let mut dkh = vec![[M3::zeros(); 2]; n]; // ∂²E_c/∂κ_ci∂L̄
         for c in 0..n {
             let h = self.cell_length(c);
             let dh_dlbar = h / self.lbar;
@@ -142,11 +142,15 @@ impl SurfaceModel {
             let whh = cvec * (2.0 * MAGNUS_C * (k2 - k1));
             let z3 = V3::zeros();
             let wij = [[z3, z3, w1h], [z3, z3, w2h], [w1h, w2h, whh]];
-            let (ec, d, dd) = exp_jet_last::<3>(&w, &[v1, v2, wh], &wij);
-            e.push(ec);
-            dk.push([d[0], d[1]]);
-            dh.push(d[2] * dh_dlbar);
-            dkh.push([dd[0][2] * dh_dlbar, dd[1][2] * dh_dlbar]);
+            let mut d = [M3::zeros(); 3];
+            let dkhc = &mut dkh[c];
+            exp_jet_last_into::<3>(&w, &[v1, v2, wh], &wij, &mut e[c], &mut d, |i, m| {
+                if i < 2 {
+                    dkhc[i] = m * dh_dlbar;
+                }
+            });
+            dk[c] = [d[0], d[1]];
+            dh[c] = d[2] * dh_dlbar;
         }
         let (prefix, suffix) = prefix_suffix(&e);
         // ∂_h P_c and ∂_h S_c by the product rule along the chain.
