@@ -45,35 +45,52 @@ pub(super) fn branch_energy(
     Ok(out)
 }
 
-/// Two branches of the enclosed diagram for the exchange locator: `energy(k, x)` is branch
-/// `k`'s energy at `x` with its error estimate; the error of `E_a − E_b` at a point is the
+/// Two branches of the enclosed diagram for the exchange locator: `a(x)` and `b(x)` are the
+/// two branches' energies at `x` with their error estimates, each side with its own state
+/// (its warm start), so the two re-solves at a length run side by side (`b` on a scoped
+/// thread in the caller's solve-count scope); the error of `E_a − E_b` at a point is the
 /// sum of the two estimates there.
-pub(super) struct EnclosedPair<F> {
-    energy: F,
+pub(super) struct EnclosedPair<A, B> {
+    a: A,
+    b: B,
     /// `(x, error of E_a − E_b)` of every evaluation.
     errors: Vec<(f64, f64)>,
 }
 
-impl<F> EnclosedPair<F>
+impl<A, B> EnclosedPair<A, B>
 where
-    F: FnMut(usize, f64) -> Result<(f64, f64), SolverError>,
+    A: FnMut(f64) -> Result<(f64, f64), SolverError> + Send,
+    B: FnMut(f64) -> Result<(f64, f64), SolverError> + Send,
 {
-    pub(super) fn new(energy: F) -> Self {
+    pub(super) fn new(a: A, b: B) -> Self {
         Self {
-            energy,
+            a,
+            b,
             errors: Vec::new(),
         }
     }
 }
 
-impl<F> EnergyPair for EnclosedPair<F>
+impl<A, B> EnergyPair for EnclosedPair<A, B>
 where
-    F: FnMut(usize, f64) -> Result<(f64, f64), SolverError>,
+    A: FnMut(f64) -> Result<(f64, f64), SolverError> + Send,
+    B: FnMut(f64) -> Result<(f64, f64), SolverError> + Send,
 {
     type Error = SolverError;
     fn energies(&mut self, x: f64) -> Result<Energies, SolverError> {
-        let (ea, da) = (self.energy)(0, x)?;
-        let (eb, db) = (self.energy)(1, x)?;
+        let (a, b) = (&mut self.a, &mut self.b);
+        let scope = stats::current();
+        let (ra, rb) = std::thread::scope(|s| {
+            let other = s.spawn(|| stats::within(&scope, || b(x)));
+            let ra = a(x);
+            (
+                ra,
+                other
+                    .join()
+                    .unwrap_or_else(|p| std::panic::resume_unwind(p)),
+            )
+        });
+        let ((ea, da), (eb, db)) = (ra?, rb?);
         self.errors.push((x, da + db));
         Ok(Energies {
             a: ea,
@@ -93,13 +110,14 @@ where
 
 /// [`exchange::locate`] from the guess `x0` (first step `probe`, a window of `±0.25`), with
 /// the locator's errors as the solver's.
-pub(super) fn locate_from<F>(
-    pair: &mut EnclosedPair<F>,
+pub(super) fn locate_from<A, B>(
+    pair: &mut EnclosedPair<A, B>,
     x0: f64,
     settings: &ExchangeSettings,
 ) -> Result<exchange::Exchange, SolverError>
 where
-    F: FnMut(usize, f64) -> Result<(f64, f64), SolverError>,
+    A: FnMut(f64) -> Result<(f64, f64), SolverError> + Send,
+    B: FnMut(f64) -> Result<(f64, f64), SolverError> + Send,
 {
     let window = (x0 - 0.25, x0 + 0.25);
     exchange::locate(pair, Start::Guess { x: x0, window }, settings).map_err(|e| match e {
@@ -246,7 +264,11 @@ pub(super) fn enclosed_crossing(
         ..ExchangeSettings::default()
     };
     let xc = {
-        let mut pair = EnclosedPair::new(|k, x| branch_energy(etas[k], x, &mut tracks[k]));
+        let [ta, tb] = &mut *tracks;
+        let mut pair = EnclosedPair::new(
+            |x| branch_energy(etas[0], x, ta),
+            |x| branch_energy(etas[1], x, tb),
+        );
         locate_from(&mut pair, x0, &coarse)?.x
     };
     let mut fine: [Option<Ladder>; 2] = [None, None];
@@ -265,7 +287,11 @@ pub(super) fn enclosed_crossing(
         baseline: 1e-5,
         ..ExchangeSettings::default()
     };
-    let mut pair = EnclosedPair::new(|k, x| ladder_energy(etas[k], x, &mut fine[k]));
+    let [fa, fb] = &mut fine;
+    let mut pair = EnclosedPair::new(
+        |x| ladder_energy(etas[0], x, fa),
+        |x| ladder_energy(etas[1], x, fb),
+    );
     let ex = locate_from(&mut pair, xc, &settings)?;
     Ok((ex.x, ex.error, 0.5 * (ex.energies.a + ex.energies.b), cells))
 }

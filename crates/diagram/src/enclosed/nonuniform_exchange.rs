@@ -136,7 +136,11 @@ pub(super) fn locate_crossing(
     };
     let mut none: [Option<Levels>; 2] = [None, None];
     let on_surface = {
-        let mut pair = EnclosedPair::new(|k, x| sheet_energy(dopts, surfaces[k], x, &mut none[k]));
+        let [na, nb] = &mut none;
+        let mut pair = EnclosedPair::new(
+            |x| sheet_energy(dopts, surfaces[0], x, na),
+            |x| sheet_energy(dopts, surfaces[1], x, nb),
+        );
         locate_from(&mut pair, xg, &surface)?
     };
     let xs = on_surface.x;
@@ -159,8 +163,11 @@ pub(super) fn locate_crossing(
         ..ExchangeSettings::default()
     };
     let ex = {
-        let mut pair =
-            EnclosedPair::new(|k, x| sheet_energy(dopts, surfaces[k], x, &mut tracks[k]));
+        let [ta, tb] = &mut tracks;
+        let mut pair = EnclosedPair::new(
+            |x| sheet_energy(dopts, surfaces[0], x, ta),
+            |x| sheet_energy(dopts, surfaces[1], x, tb),
+        );
         locate_from(&mut pair, xg, &lifted_settings)?
     };
     if let Ok((fine, ladder_cells)) = ladder_crossing(
@@ -232,15 +239,17 @@ fn ladder_crossing(
         baseline: 1e-5,
         ..ExchangeSettings::default()
     };
-    let mut pair = EnclosedPair::new(|k, y| match &mut ladders[k] {
+    let side = |lad: &mut Option<Ladder>, surface: &TracedBranch, y: f64| match lad {
         Some(lad) => {
             let next = lad.step_to(y)?;
             let e = next.energy()?;
             *lad = next;
             Ok(e)
         }
-        None => surface_energy(dopts, surfaces[k], y),
-    });
+        None => surface_energy(dopts, surface, y),
+    };
+    let [la, lb] = &mut ladders;
+    let mut pair = EnclosedPair::new(|y| side(la, surfaces[0], y), |y| side(lb, surfaces[1], y));
     let ex = locate_from(&mut pair, x, &settings)?;
     Ok((ex, cells))
 }

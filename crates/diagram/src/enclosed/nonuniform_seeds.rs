@@ -3,16 +3,17 @@
 //! equilibrium next to it; the loop that lifts far off the wall (the two-segment figure-eight
 //! with `D1/D0 = 0.5` at `L̄ = 1.35` touches on a quarter of its length and reaches `0.63 R`
 //! inside, 2.5 % below the state next to the surface loop) is reached instead by continuation
-//! in the stiffness from the uniform rod's loop of the branch
-//! ([`stiffness_homotopy_states`]). At the sampled lengths of a branch that no family
-//! found here covers yet (at least [`SEED_SPACING`] apart, and only where the branch lies
-//! within [`RELEVANT`] of the lowest traced state), that search runs on the `N/4` mesh of
-//! the traces; each state
-//! found below the branch's traced states is cascaded to `N/2, N` and traced through the
-//! branch's sampled lengths as a new family.
+//! in the stiffness from the uniform rod's loop of the branch (`stiffness_homotopy_states`,
+//! its shifts on the crate's pool). At the sampled lengths of a branch that no family found
+//! here covers yet (at least [`SEED_SPACING`] apart, and only where the branch lies within
+//! [`RELEVANT`] of the lowest traced state), that search runs on the `N/4` mesh of the
+//! traces; each state found below the branch's traced states is cascaded to `N/2, N` and
+//! traced through the branch's sampled lengths as a new family.
 
 use rodloop_exact::eta_of_branch;
-use rodloop_solver::enclosed::descent::stiffness_homotopy_states;
+use rodloop_solver::enclosed::descent::{
+    distinct_lowest_first, homotopy_shifts, stiffness_path_from_shift,
+};
 use rodloop_solver::enclosed::solve_levels;
 use rodloop_solver::enclosed::stats::{self, Stage};
 
@@ -22,7 +23,7 @@ use super::nonuniform_sheet::SheetOut;
 use super::trace::follow;
 use super::trace::step_options;
 use super::EnclosedDiagramOptions;
-use crate::parallel::run_parallel;
+use crate::parallel::{parallel_map, run_parallel};
 use rodloop_solver::enclosed::nonuniform_cells;
 
 /// Least distance in `L̄` between two lengths searched for one branch: a family found is
@@ -48,6 +49,44 @@ fn lowest_of_branch(sheets: &[SheetOut], branch: u32, x: f64) -> Option<f64> {
         .filter(|s| s.branch == branch)
         .filter_map(|s| interp(s, x))
         .min_by(f64::total_cmp)
+}
+
+/// The states of branch `eta` at `lbar` on `cells` cells that the stiffness path reaches,
+/// one continuation per shift of the uniform rod's loop, the shifts on the crate's pool (the
+/// branches' searches run as tasks of their own, and one branch's lengths one after the
+/// other, so the shifts are where the cores find work): the states of
+/// `stiffness_homotopy_states`, in its order.
+fn stiffness_paths(
+    opts: &EnclosedDiagramOptions,
+    lbar: f64,
+    eta: u32,
+    cells: usize,
+    dopts: &rodloop_solver::enclosed::EnclosedOptions,
+) -> Result<Vec<(f64, rodloop_solver::enclosed::EnclosedState)>, rodloop_solver::SolverError> {
+    let shifts = homotopy_shifts(&opts.stiffness, eta, lbar)?;
+    let scope = stats::current();
+    let reached = parallel_map(&shifts, |&phi| {
+        stats::within(&scope, || {
+            stats::stage(Stage::StiffnessPath, || {
+                stiffness_path_from_shift(
+                    opts.radius,
+                    lbar,
+                    eta,
+                    &opts.stiffness,
+                    cells,
+                    dopts,
+                    phi,
+                )
+            })
+        })
+    });
+    let mut kept = Vec::new();
+    for (phi, r) in shifts.into_iter().zip(reached) {
+        if let Some(s) = r? {
+            kept.push((phi, s));
+        }
+    }
+    Ok(distinct_lowest_first(kept))
 }
 
 /// The families of one branch found from the stiffness path (see the module docs), traced
@@ -98,12 +137,10 @@ fn seed_branch(
         }
         at.push(x);
         searched += 1;
-        let Ok(found) = stats::stage(Stage::StiffnessPath, || {
-            stiffness_homotopy_states(opts.radius, x, eta, &opts.stiffness, n / 4, &dopts)
-        }) else {
+        let Ok(found) = stiffness_paths(opts, x, eta, n / 4, &dopts) else {
             continue;
         };
-        for s in found {
+        for (_, s) in found {
             let levels = stats::stage(Stage::StiffnessPath, || {
                 solve_levels(&s.model, s.z.clone(), None, &dopts)
             });

@@ -123,7 +123,10 @@ pub fn stiffness_homotopy_states(
 }
 
 /// [`stiffness_homotopy_states`] with the shift `φ` (fraction of the length) of the uniform
-/// rod's loop each state comes from: the start a `solve` names.
+/// rod's loop each state comes from: the start a `solve` names. The shifts run one after
+/// the other; a caller with a thread pool runs [`stiffness_path_from_shift`] on each of
+/// [`homotopy_shifts`] itself and keeps [`distinct_lowest_first`] of the results, the same
+/// states in the same order.
 pub fn stiffness_homotopy_starts(
     wall: impl IntoWall,
     lbar: f64,
@@ -133,6 +136,29 @@ pub fn stiffness_homotopy_starts(
     opts: &EnclosedOptions,
 ) -> Result<Vec<(f64, EnclosedState)>, SolverError> {
     let wall = wall.into_wall();
+    let mut reached = Vec::new();
+    for phi in homotopy_shifts(stiffness, eta, lbar)? {
+        if let Some(s) = stiffness_path_from_shift(&wall, lbar, eta, stiffness, cells, opts, phi)? {
+            reached.push((phi, s));
+        }
+    }
+    Ok(distinct_lowest_first(reached))
+}
+
+/// The state of branch `eta` that the continuation in the stiffness reaches from the uniform
+/// rod's enclosed loop shifted by `phi` (one start of [`stiffness_homotopy_starts`]): `None`
+/// where a solve on the way fails or the state reached belongs to another branch
+/// ([`enclosed_periods`]). The shifts are independent of each other.
+pub fn stiffness_path_from_shift(
+    wall: impl IntoWall,
+    lbar: f64,
+    eta: u32,
+    stiffness: &crate::Stiffness,
+    cells: usize,
+    opts: &EnclosedOptions,
+    phi: f64,
+) -> Result<Option<EnclosedState>, SolverError> {
+    let wall = wall.into_wall();
     let radius = wall.radius();
     let l = rodloop_exact::paper_branch_loop(eta, lbar)?;
     let uniform = crate::Stiffness::Uniform {
@@ -140,44 +166,49 @@ pub fn stiffness_homotopy_starts(
     };
     let lmin = l.lambda_range().0;
     let len = l.length();
-    let mut out: Vec<(f64, EnclosedState)> = Vec::new();
-    for phi in homotopy_shifts(stiffness, eta, lbar)? {
-        let kg = |s: f64| {
-            l.point((s + phi).rem_euclid(1.0) * len)
-                .map_or(0.0, |p| p.kappa_g / radius)
-        };
-        let Ok((m, z0)) =
-            crate::enclosed::solve::start_from_surface(&wall, lbar, cells, &uniform, kg)
-        else {
-            continue;
-        };
-        let start = match solve_enclosed(&m, z0.clone(), opts) {
-            Ok(s) => s,
-            Err(_) if lmin < 0.0 => {
-                match crate::enclosed::solve::solve_by_pull_homotopy(&m, z0, lmin, opts) {
-                    Ok(s) => s,
-                    Err(_) => continue,
-                }
+    let kg = |s: f64| {
+        l.point((s + phi).rem_euclid(1.0) * len)
+            .map_or(0.0, |p| p.kappa_g / radius)
+    };
+    let Ok((m, z0)) = crate::enclosed::solve::start_from_surface(&wall, lbar, cells, &uniform, kg)
+    else {
+        return Ok(None);
+    };
+    let start = match solve_enclosed(&m, z0.clone(), opts) {
+        Ok(s) => s,
+        Err(_) if lmin < 0.0 => {
+            match crate::enclosed::solve::solve_by_pull_homotopy(&m, z0, lmin, opts) {
+                Ok(s) => s,
+                Err(_) => return Ok(None),
             }
-            Err(_) => continue,
-        };
-        let Ok(s) = crate::enclosed::continuation::continue_in_stiffness(&start, stiffness, opts)
-        else {
-            continue;
-        };
-        if enclosed_periods(&s).ok().map(|p| p.eta) != Some(eta) {
-            continue;
         }
+        Err(_) => return Ok(None),
+    };
+    let Ok(s) = crate::enclosed::continuation::continue_in_stiffness(&start, stiffness, opts)
+    else {
+        return Ok(None);
+    };
+    if enclosed_periods(&s).ok().map(|p| p.eta) != Some(eta) || !s.energy().is_finite() {
+        return Ok(None);
+    }
+    Ok(Some(s))
+}
+
+/// The states of `reached` (in the order of their shifts) without repeats, a state dropped
+/// where an earlier one has its energy within `1e-9` relative, lowest energy first (ties in
+/// the order of their shifts).
+pub fn distinct_lowest_first(reached: Vec<(f64, EnclosedState)>) -> Vec<(f64, EnclosedState)> {
+    let mut out: Vec<(f64, EnclosedState)> = Vec::new();
+    for (phi, s) in reached {
         let e = s.energy();
-        if !e.is_finite()
-            || out
-                .iter()
-                .any(|(_, o)| (o.energy() - e).abs() <= 1e-9 * e.abs())
+        if out
+            .iter()
+            .any(|(_, o)| (o.energy() - e).abs() <= 1e-9 * e.abs())
         {
             continue;
         }
         out.push((phi, s));
     }
     out.sort_by(|a, b| a.1.energy().total_cmp(&b.1.energy()));
-    Ok(out)
+    out
 }

@@ -21,7 +21,8 @@ mod homotopy;
 mod saddle;
 
 pub use homotopy::{
-    homotopy_shifts, profile_features, stiffness_homotopy_starts, stiffness_homotopy_states,
+    distinct_lowest_first, homotopy_shifts, profile_features, stiffness_homotopy_starts,
+    stiffness_homotopy_states, stiffness_path_from_shift,
 };
 pub use saddle::{
     descend, descend_branch, enclosed_periods, solve_branch_descended, unstable_direction,
