@@ -134,7 +134,7 @@ const JUMP_WIDTH: f64 = 1e-2;
 /// where the eigenvalue jumps ([`jump_found`]).
 const JUMP_SLOPE: f64 = 100.0;
 
-/// The error of a jump where the re-solved values `solved` (`(L̄, state, eigenvalue)`, the
+/// The error of a jump where the re-solved values `solved` (`(L̄, eigenvalue)`, the
 /// bracket's ends first) already show one, so that Brent's method stops there instead of
 /// bisecting it down to its tolerance. The tightest sign-changing bracket `[lo, hi]` holds a
 /// jump when it is narrower than [`JUMP_WIDTH`] of the first bracket `width0` and the
@@ -142,14 +142,14 @@ const JUMP_SLOPE: f64 = 100.0;
 /// to the nearest re-solved value on the same side, the larger of the two sides) times its
 /// width, and [`JUMP`] of the first bracket's values: a continuous crossing has
 /// `|f(lo)| + |f(hi)| ≈ |f'|·width`.
-fn jump_found(solved: &[(f64, EnclosedState, f64)], width0: f64) -> Option<SolverError> {
-    let neg = |p: &&(f64, EnclosedState, f64)| p.2 < 0.0;
-    let pos = |p: &&(f64, EnclosedState, f64)| p.2 > 0.0;
+fn jump_found(solved: &[(f64, f64)], width0: f64) -> Option<SolverError> {
+    let neg = |p: &&(f64, f64)| p.1 < 0.0;
+    let pos = |p: &&(f64, f64)| p.1 > 0.0;
     // The sign-changing bracket of the latest value with the nearest value of the other sign.
     let last = solved.last()?;
     let other = solved
         .iter()
-        .filter(|p| if last.2 > 0.0 { neg(p) } else { pos(p) })
+        .filter(|p| if last.1 > 0.0 { neg(p) } else { pos(p) })
         .min_by(|u, v| (u.0 - last.0).abs().total_cmp(&(v.0 - last.0).abs()))?;
     let width = (last.0 - other.0).abs();
     if width >= JUMP_WIDTH * width0 {
@@ -162,20 +162,20 @@ fn jump_found(solved: &[(f64, EnclosedState, f64)], width0: f64) -> Option<Solve
     {
         return None;
     }
-    let slope = |end: &(f64, EnclosedState, f64)| {
+    let slope = |end: &(f64, f64)| {
         solved
             .iter()
-            .filter(|p| p.0 != end.0 && (p.2 > 0.0) == (end.2 > 0.0))
+            .filter(|p| p.0 != end.0 && (p.1 > 0.0) == (end.1 > 0.0))
             .filter(|p| (p.0 - end.0) * (end.0 - last.0 - other.0 + end.0) >= 0.0)
             .min_by(|u, v| (u.0 - end.0).abs().total_cmp(&(v.0 - end.0).abs()))
-            .map(|p| ((p.2 - end.2) / (p.0 - end.0)).abs())
+            .map(|p| ((p.1 - end.1) / (p.0 - end.0)).abs())
     };
     let s = slope(last)?.max(slope(other)?);
-    let small = last.2.abs().min(other.2.abs());
+    let small = last.1.abs().min(other.1.abs());
     let scale = solved[0]
-        .2
+        .1
         .abs()
-        .max(solved.get(1).map_or(0.0, |p| p.2.abs()));
+        .max(solved.get(1).map_or(0.0, |p| p.1.abs()));
     if small > JUMP_SLOPE * s * width && small > JUMP * scale {
         let (lo, hi) = if last.0 < other.0 {
             (last, other)
@@ -184,8 +184,8 @@ fn jump_found(solved: &[(f64, EnclosedState, f64)], width0: f64) -> Option<Solve
         };
         return Some(SolverError::InvalidInput(format!(
             "{JUMPS} from {:.3e} to {:.3e} at lbar = {:.6} ± {:.0e} (the active set changes there; no eigenvalue crosses zero)",
-            lo.2,
-            hi.2,
+            lo.1,
+            hi.1,
             0.5 * (lo.0 + hi.0),
             0.5 * width
         )));
@@ -225,7 +225,8 @@ pub(super) fn locate_on_level(
         let s = walk_to(&near.1, near.0, x, opts)?;
         let v = eigen(&s, k)?;
         solved.push((x, s, v));
-        if let Some(e) = jump_found(&solved, (xb - xa).abs()) {
+        let values: Vec<(f64, f64)> = solved.iter().map(|p| (p.0, p.2)).collect();
+        if let Some(e) = jump_found(&values, (xb - xa).abs()) {
             return Err(e);
         }
         Ok(v)
@@ -370,6 +371,60 @@ mod tests {
             out.push((s.clone(), t));
         }
         out
+    }
+
+    /// Brent's method on the synthetic eigenvalue `g` over `[0, 1]`, each value checked by
+    /// [`jump_found`] as [`locate_on_level`] checks its re-solves.
+    fn brent_with_jump_check(g: impl Fn(f64) -> f64) -> Result<f64, SolverError> {
+        let mut solved: Vec<(f64, f64)> = vec![(0.0, g(0.0)), (1.0, g(1.0))];
+        let mut f = |x: f64| -> Result<f64, SolverError> {
+            if let Some(p) = solved.iter().find(|p| p.0 == x) {
+                return Ok(p.1);
+            }
+            solved.push((x, g(x)));
+            match jump_found(&solved, 1.0) {
+                Some(e) => Err(e),
+                None => Ok(g(x)),
+            }
+        };
+        match brent(&mut f, 0.0, 1.0, XTOL, MAX_ITER) {
+            Ok(r) => Ok(r.x),
+            Err(RootError::Function(e)) => Err(e),
+            Err(e) => Err(SolverError::InvalidInput(e.to_string())),
+        }
+    }
+
+    #[test]
+    fn a_continuous_crossing_is_not_taken_for_a_jump() {
+        // A straight line and a steep but smooth crossing (slope 50 at the root).
+        let x = brent_with_jump_check(|x| x - 0.3137).unwrap();
+        assert!((x - 0.3137).abs() < 1e-9, "{x}");
+        let x = brent_with_jump_check(|x| 0.05 * ((x - 0.4) / 1e-3).tanh()).unwrap();
+        assert!((x - 0.4).abs() < 1e-9, "{x}");
+    }
+
+    #[test]
+    fn an_eigenvalue_that_jumps_is_reported_as_a_change_of_the_contact_set() {
+        // Negative below 0.618, positive above, with a gap of 0.08 and a small slope: the
+        // contact set changes there, no eigenvalue crosses zero.
+        let g = |x: f64| {
+            if x < 0.618 {
+                -0.049 + 0.002 * x
+            } else {
+                0.031 + 0.002 * x
+            }
+        };
+        let e = brent_with_jump_check(g).unwrap_err();
+        assert!(is_jump(&e), "{e}");
+        // The message places the jump at the bracket it found, next to 0.618.
+        let text = e.to_string();
+        let at: f64 = text
+            .split("lbar = ")
+            .nth(1)
+            .and_then(|t| t.split_whitespace().next())
+            .and_then(|t| t.parse().ok())
+            .unwrap_or_else(|| panic!("no lbar in {text}"));
+        assert!((at - 0.618).abs() < 1e-2, "{text}");
     }
 
     #[test]
