@@ -53,23 +53,35 @@ const HALF_PERIOD_SAMPLES: usize = 512;
 
 /// The profile side of [`PlacedProfile::placements`] for one branch: the stiffness sampled where
 /// the placed loop's energy is summed, the same at every length (so that a search over many
-/// lengths samples it once).
+/// lengths samples it once), folded onto one half period of `κ_g²`.
 pub(crate) struct PlacedProfile<'a> {
     stiffness: &'a Stiffness,
     eta: u32,
-    /// `D` at the `m = 2η ·` [`HALF_PERIOD_SAMPLES`] samples `j/m`.
-    d: Vec<f64>,
+    /// `D` at the `m = 2η ·` [`HALF_PERIOD_SAMPLES`] samples `j/m`, folded onto the
+    /// [`HALF_PERIOD_SAMPLES`] residues `r = j mod` [`HALF_PERIOD_SAMPLES`] and averaged over
+    /// the `2η` half periods: `κ_g²` takes the same value at every sample of a residue, so
+    /// `Σ_j D_j κ²_{j+k} / m = Σ_r D̄_r κ²_{r+k} / ` [`HALF_PERIOD_SAMPLES`].
+    folded: Vec<f64>,
 }
 
 impl<'a> PlacedProfile<'a> {
     /// The samples of `stiffness` for branch `eta`.
     pub(crate) fn new(stiffness: &'a Stiffness, eta: u32) -> Result<Self, SolverError> {
         let profile = stiffness.validate()?;
-        let m = 2 * eta.max(1) as usize * HALF_PERIOD_SAMPLES;
-        let d = (0..m)
-            .map(|j| profile.eval(j as f64 / m as f64).d)
-            .collect();
-        Ok(Self { stiffness, eta, d })
+        let halves = 2 * eta.max(1) as usize;
+        let m = halves * HALF_PERIOD_SAMPLES;
+        let mut folded = vec![0.0; HALF_PERIOD_SAMPLES];
+        for j in 0..m {
+            folded[j % HALF_PERIOD_SAMPLES] += profile.eval(j as f64 / m as f64).d;
+        }
+        for v in &mut folded {
+            *v /= halves as f64;
+        }
+        Ok(Self {
+            stiffness,
+            eta,
+            folded,
+        })
     }
 
     /// The placements (origin shifts, fractions of the length in `[0, 1/(2η))`, as
@@ -92,10 +104,11 @@ impl<'a> PlacedProfile<'a> {
         let (stiffness, eta) = (self.stiffness, self.eta);
         let kg = StartShape::Exact { eta }.interpolant(lbar)?;
         let half = HALF_PERIOD_SAMPLES;
-        let m = self.d.len();
-        let sigmas: Vec<f64> = (0..m).map(|j| j as f64 / m as f64).collect();
+        let m = 2 * eta.max(1) as usize * half;
+        // One half period of `κ_g²` (period `1/(2η)`: `half` samples of spacing `1/m`).
+        let sigmas: Vec<f64> = (0..half).map(|j| j as f64 / m as f64).collect();
         let k2: Vec<f64> = kg.eval_many(&sigmas).iter().map(|v| v.powi(2)).collect();
-        let f = placed_energies(&self.d, &k2, half);
+        let f = placed_energies(&self.folded, &k2, half);
         let mut out: Vec<f64> = critical_points(&f)
             .into_iter()
             .map(|x| x / m as f64)
@@ -254,6 +267,41 @@ mod tests {
             for (k, fk) in f.iter().enumerate() {
                 let want = (0..m).fold(0.0, |acc, j| acc + d[j] * k2[(j + k) % m]) / m as f64;
                 assert_eq!(fk.to_bits(), want.to_bits(), "m {m} half {half} k {k}");
+            }
+        }
+    }
+
+    /// The folded sums of [`PlacedProfile`] equal the placed energy summed over all
+    /// `m = 2η ·` [`HALF_PERIOD_SAMPLES`] samples of the loop (`κ_g` evaluated at each, not
+    /// tiled from one half period) to rounding: `κ_g²` of the exact loop has period `1/(2η)`.
+    #[test]
+    fn folded_placed_energy_equals_the_full_sum() {
+        let st = Stiffness::Tanh {
+            d0: 1.0,
+            d1: 0.07,
+            s0: 0.21,
+            s1: 0.68,
+            gamma: 140.0,
+        };
+        let profile = st.validate().unwrap();
+        for (eta, lbar) in [(1u32, 1.3), (2, 1.9), (3, 2.4), (4, 3.3)] {
+            let placed = PlacedProfile::new(&st, eta).unwrap();
+            let half = HALF_PERIOD_SAMPLES;
+            let m = 2 * eta as usize * half;
+            let kg = StartShape::Exact { eta }.interpolant(lbar).unwrap();
+            let sig: Vec<f64> = (0..half).map(|j| j as f64 / m as f64).collect();
+            let k2: Vec<f64> = kg.eval_many(&sig).iter().map(|v| v * v).collect();
+            let folded = placed_energies(&placed.folded, &k2, half);
+            let all: Vec<f64> = (0..m).map(|j| j as f64 / m as f64).collect();
+            let k2_all: Vec<f64> = kg.eval_many(&all).iter().map(|v| v * v).collect();
+            let d: Vec<f64> = all.iter().map(|&s| profile.eval(s).d).collect();
+            let scale = folded.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            for (k, fk) in folded.iter().enumerate() {
+                let want = (0..m).map(|j| d[j] * k2_all[(j + k) % m]).sum::<f64>() / m as f64;
+                assert!(
+                    (fk - want).abs() <= 1e-12 * scale,
+                    "eta {eta} k {k}: folded {fk} full {want}"
+                );
             }
         }
     }
