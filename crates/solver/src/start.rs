@@ -89,11 +89,7 @@ impl StartShape {
         if shift == 0.0 {
             return Ok(self.clone());
         }
-        let t = self.interpolant(lbar)?;
-        let m = 2 * Self::samples(lbar);
-        let sigmas: Vec<f64> = (0..m).map(|j| j as f64 / m as f64 + shift).collect();
-        let kg = t.eval_many(&sigmas);
-        Ok(StartShape::Profile(TrigInterpolant::new(&kg)?))
+        Ok(StartShape::Profile(self.interpolant(lbar)?.moved(shift)))
     }
 
     /// Number of oscillation periods of `κ_g` (half the number of sign changes of

@@ -74,6 +74,16 @@ impl TrigInterpolant {
         Ok(Self { offset, a0, a, b })
     }
 
+    /// The interpolant of `σ ↦ y(σ + shift)`: the same coefficients about the origin moved
+    /// by `−shift` (a translate of a trigonometric polynomial is the polynomial of the same
+    /// degree with its phases turned, so nothing is resampled).
+    pub fn moved(&self, shift: f64) -> Self {
+        Self {
+            offset: self.offset - shift,
+            ..self.clone()
+        }
+    }
+
     /// Value, first and second derivative in `σ` at `σ`.
     pub fn eval_all(&self, sigma: f64) -> (f64, f64, f64) {
         let x = 2.0 * PI * (sigma - self.offset);
@@ -347,6 +357,40 @@ mod tests {
             for (&sg, &v) in sigmas.iter().zip(&many) {
                 assert_eq!(v.to_bits(), t.eval(sg).to_bits(), "m = {m}, σ = {sg}");
             }
+        }
+    }
+
+    /// The moved interpolant is the interpolant of the shifted samples: a trigonometric
+    /// polynomial of degree 5 (exactly representable on 64 samples) moved by `0.137` equals,
+    /// to rounding, the interpolant built from its samples at `j/M + 0.137` and its own
+    /// values at `σ + 0.137`; a smooth periodic function moved by `−0.41` still interpolates
+    /// the function at the shifted points.
+    #[test]
+    fn moved_is_the_interpolant_of_the_shifted_samples() {
+        let p = |s: f64| {
+            0.7 + (2.0 * PI * s).cos() - 0.4 * (6.0 * PI * s).sin() + 0.2 * (10.0 * PI * s).cos()
+        };
+        let m = 64;
+        let y: Vec<f64> = (0..m).map(|j| p(j as f64 / m as f64)).collect();
+        let t = TrigInterpolant::new(&y).unwrap();
+        let shift = 0.137;
+        let moved = t.moved(shift);
+        let ys: Vec<f64> = (0..m).map(|j| p(j as f64 / m as f64 + shift)).collect();
+        let resampled = TrigInterpolant::new(&ys).unwrap();
+        for j in 0..200 {
+            let s = j as f64 / 200.0 - 0.3;
+            assert!((moved.eval(s) - resampled.eval(s)).abs() < 1e-13, "σ = {s}");
+            assert!((moved.eval(s) - t.eval(s + shift)).abs() < 1e-13, "σ = {s}");
+            assert!((moved.eval(s) - p(s + shift)).abs() < 1e-13, "σ = {s}");
+            let (v, d, dd) = moved.eval_all(s);
+            let (v0, d0, dd0) = t.eval_all(s + shift);
+            assert!((v - v0).abs() < 1e-13 && (d - d0).abs() < 1e-11 && (dd - dd0).abs() < 1e-9);
+        }
+        let f = |s: f64| (2.0 * PI * s).sin().exp();
+        let y: Vec<f64> = (0..65).map(|j| f(j as f64 / 65.0)).collect();
+        let moved = TrigInterpolant::new(&y).unwrap().moved(-0.41);
+        for &s in &[0.0, 0.123, 0.5, 0.77] {
+            assert!((moved.eval(s) - f(s - 0.41)).abs() < 1e-12);
         }
     }
 
