@@ -4,7 +4,9 @@
 //! Newton matrix with one solve (the core of a Newton step) at a two-segment rod's equilibrium,
 //! the construction of a two-segment rod's model on its graded mesh, and a two-segment rod's
 //! Newton run that keeps the run where a looser tolerance stops (what a diagram's state
-//! verification runs for every state it writes).
+//! verification runs for every state it writes), and the closure rows of a line-search trial
+//! (`kkt_closure_residual` at states none of whose cells the per-thread table of Rodrigues
+//! coefficients holds, as at a rejected trial).
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::DVector;
@@ -68,6 +70,26 @@ fn benches(c: &mut Criterion) {
     c.bench_function(
         &format!("kkt_factor_and_solve_d1_0.5_lbar1.2_N{cells}"),
         |b| b.iter(|| KktFactor::new(model, &z, 0.0).unwrap().solve(&rhs).unwrap()),
+    );
+    // 64 trial states, more cells in all than the table has slots.
+    let trials: Vec<Vec<f64>> = (0..64)
+        .map(|t| {
+            let mut zt = z.clone();
+            for (i, v) in zt.iter_mut().enumerate().take(model.n_kappa()) {
+                *v += 1e-3 * (((i * 31 + t * 17) % 23) as f64 / 23.0 - 0.5);
+            }
+            zt
+        })
+        .collect();
+    let mut next = 0;
+    c.bench_function(
+        &format!("kkt_closure_residual_d1_0.5_lbar1.2_N{cells}"),
+        |b| {
+            b.iter(|| {
+                next = (next + 1) % trials.len();
+                model.kkt_closure_residual(&trials[next]).unwrap()
+            })
+        },
     );
 }
 
