@@ -329,6 +329,40 @@ fn detached_interval_ends_have_zero_lambda_min() {
     }
 }
 
+/// The intervals from the closure at `k² = 1/2` are those where the branch's own `k²`
+/// (`paper_branch_loop`, a root search in `k²` at each length) exceeds `1/2`: for
+/// `η = 1 … 5` over each branch's whole range, every end is a sign change of `k²(L̄) − 1/2`
+/// within `10⁻¹⁰` (`k²` on both sides) and, on a grid of 2000 lengths, a length lies in an
+/// interval exactly where `k² > 1/2`.
+#[test]
+fn detached_intervals_are_where_the_branch_modulus_exceeds_one_half() {
+    for eta in 1u32..=5 {
+        let e = f64::from(eta);
+        let iv = rodloop_solver::enclosed::detached_intervals(eta, e - 1.0, e + 1.0).unwrap();
+        let m = |l: f64| paper_branch_loop(eta, l).unwrap().m;
+        for &(a, b) in &iv {
+            assert!(a < b, "eta {eta}: {iv:?}");
+            for end in [a, b] {
+                if end > e - 1.0 + 1e-6 && end < e + 1.0 - 1e-6 {
+                    let (lo, hi) = (m(end - 1e-10), m(end + 1e-10));
+                    assert!(
+                        (lo - 0.5) * (hi - 0.5) <= 0.0,
+                        "eta {eta}: k² = {lo}, {hi} about the end {end}"
+                    );
+                }
+            }
+        }
+        for i in 1..2000 {
+            let l = e - 1.0 + 2.0 * i as f64 / 2000.0;
+            let inside = iv.iter().any(|&(a, b)| a < l && l < b);
+            let mk = m(l);
+            if (mk - 0.5).abs() > 1e-9 {
+                assert_eq!(inside, mk > 0.5, "eta {eta} at {l}: k² = {mk}, {iv:?}");
+            }
+        }
+    }
+}
+
 /// The three-level estimate on model sequences `E_N = E + C N^{−p}`: it recovers `p` and
 /// the error of the finest level exactly for `1 ≤ p ≤ 4`, and clamps outside.
 #[test]

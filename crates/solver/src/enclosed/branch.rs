@@ -464,16 +464,22 @@ pub const LIFTED_OFF_MAX_ORDER: f64 = 2.5;
 /// The `L̄` intervals (within `(lo, hi)`) where the paper's homogeneous branch with `eta`
 /// periods needs a pulling wall somewhere, `λ_min < 0`, and so lifts off in the ball. For
 /// the wave family Eq. (38) gives `λ_min R³/D = c²(1 − 2k²)`: the loop detaches exactly
-/// where `k² > 1/2`. The ends are roots of `k²(L̄) = 1/2`, found by bisection on the exact
-/// layer to `1e-13`.
+/// where `k² > 1/2`. The branch's `k²` at `L̄` is the one root in `m` of the closure
+/// condition, where the continuous winding `p_cont(L̄, m)` (Eqs. (48)–(50)) falls through
+/// `q = −(η + 1)` ([`rodloop_exact::paper_branch_loop`]); so `k² > 1/2` exactly where
+/// `p_cont(L̄, 1/2) > q`, and the ends are the roots in `L̄` of that one closure evaluation
+/// (not of `k²(L̄)`, which takes a root search in `m` each), on a grid of 400 steps and by
+/// Brent's method to `10⁻¹⁴` relative.
 pub fn detached_intervals(eta: u32, lo: f64, hi: f64) -> Result<Vec<(f64, f64)>, SolverError> {
     let e = f64::from(eta);
     let (a, b) = ((e - 1.0).max(lo), (e + 1.0).min(hi));
     if a >= b {
         return Ok(Vec::new());
     }
-    let f = |l: f64| -> Result<f64, SolverError> {
-        Ok(rodloop_exact::paper_branch_loop(eta, l)?.m - 0.5)
+    let q = -(e + 1.0);
+    let f = |l: f64| {
+        rodloop_exact::homogeneous::closure(rodloop_exact::Family::Wave, eta, l, 0.5)
+            .map(|c| c.p_cont - q)
     };
     let steps = 400;
     let pad = 1e-9;
@@ -488,17 +494,7 @@ pub fn detached_intervals(eta: u32, lo: f64, hi: f64) -> Result<Vec<(f64, f64)>,
     let mut start = if vals[0] > 0.0 { Some(a) } else { None };
     for i in 1..grid.len() {
         if (vals[i - 1] > 0.0) != (vals[i] > 0.0) {
-            let (mut x0, mut x1) = (grid[i - 1], grid[i]);
-            let s0 = vals[i - 1] > 0.0;
-            while x1 - x0 > 1e-13 {
-                let xm = 0.5 * (x0 + x1);
-                if (f(xm)? > 0.0) == s0 {
-                    x0 = xm;
-                } else {
-                    x1 = xm;
-                }
-            }
-            let root = 0.5 * (x0 + x1);
+            let root = rodloop_exact::roots::brent(f, grid[i - 1], grid[i], 1e-14, 200)?;
             match start.take() {
                 Some(s) => out.push((s, root)),
                 None => start = Some(root),
