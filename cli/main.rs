@@ -19,6 +19,7 @@ mod atlas;
 mod compare;
 mod compare_segments;
 mod converge;
+mod decimal;
 mod diagram;
 mod dispatch;
 mod draw;

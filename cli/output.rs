@@ -97,11 +97,11 @@ impl Table {
             }
         }
         for cell in &row {
-            // Numbers in their shortest round-trip form (`{}`), text as given.
+            // Numbers in their shortest round-trip form (as `{}` writes them), text as given.
             let field: &str = match cell {
                 Cell::F(v) => {
                     self.cell.clear();
-                    write!(self.cell, "{v}")?;
+                    crate::decimal::push_f64(&mut self.cell, *v);
                     &self.cell
                 }
                 Cell::I(v) => {
