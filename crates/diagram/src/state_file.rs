@@ -126,32 +126,70 @@ impl<'a> SampledEnergy<'a> {
     }
 }
 
-/// The profile of `eq` at `m ≥ min_points` points uniform in arclength, `m` doubled (up to
-/// [`MAX_STATE_POINTS`]) until the energy of the samples settles (changes by less than a
-/// thousandth of `tol` on doubling) or lies within `tol` of `target`: uniform samples of a
-/// graded mesh miss narrow features (a very soft segment bent sharply, a steep stiffness
-/// step).
-pub(crate) fn uniform_profile(
-    eq: &Equilibrium,
-    min_points: usize,
-    target: f64,
-    tol: f64,
-    d0: f64,
-) -> Result<Vec<rodloop_solver::ProfilePoint>, SolverError> {
-    let mut sampled = SampledEnergy::new(eq, d0)?;
-    let mut m = min_points.max(8);
-    let mut e_m = sampled.at(m);
-    while m < MAX_STATE_POINTS && (e_m - target).abs() > tol {
-        let e_2m = sampled.at(2 * m);
-        m *= 2;
-        let settled = (e_2m - e_m).abs() <= 1e-3 * tol;
-        e_m = e_2m;
-        if settled {
-            break;
-        }
-    }
-    eq.profile_uniform(m)
+/// The samples a state file of `eq` holds, before their profile is built: `m ≥ min_points`
+/// points uniform in arclength, `m` doubled (up to [`MAX_STATE_POINTS`]) until the energy of
+/// the samples settles (changes by less than a thousandth of `tol` on doubling) or lies
+/// within `tol` of `target`: uniform samples of a graded mesh miss narrow features (a very
+/// soft segment bent sharply, a steep stiffness step).
+struct Samples {
+    /// Points of the file.
+    points: usize,
+    /// Energy `E R/(π D0)` of the samples ([`SampledEnergy`]).
+    energy: f64,
+    /// Energy of every other sample (the samples of `points/2`), where `points` was doubled.
+    every_other: Option<f64>,
 }
+
+impl Samples {
+    fn settle(
+        eq: &Equilibrium,
+        min_points: usize,
+        target: f64,
+        tol: f64,
+        d0: f64,
+    ) -> Result<Self, SolverError> {
+        let mut sampled = SampledEnergy::new(eq, d0)?;
+        let mut m = min_points.max(8);
+        let mut e_m = sampled.at(m);
+        let mut every_other = None;
+        while m < MAX_STATE_POINTS && (e_m - target).abs() > tol {
+            let e_2m = sampled.at(2 * m);
+            m *= 2;
+            let settled = (e_2m - e_m).abs() <= 1e-3 * tol;
+            every_other = Some(e_m);
+            e_m = e_2m;
+            if settled {
+                break;
+            }
+        }
+        Ok(Self {
+            points: m,
+            energy: e_m,
+            every_other,
+        })
+    }
+
+    /// Why the file of these samples fails `claim` before its profile is built, if it
+    /// does by a wide margin: the state's own closure ([`rodloop_solver::check_holonomy`],
+    /// the first check of [`rodloop_solver::verify_state`]) and then the energy of the
+    /// samples beyond [`PRECHECK_MARGIN`] times the energy check's tolerance (the profile's
+    /// energy is the same sums up to round-off). A state whose cells do not resolve its
+    /// bends fails here (its samples' energy settles 20 % away from its row on `D1/D0 =
+    /// 0.001`), without building the eleven columns of thousands of points it would not
+    /// write.
+    fn fails_early(&self, eq: &Equilibrium, claim: &Claim) -> Option<SolverError> {
+        if let Err(e) = rodloop_solver::check_holonomy(eq) {
+            return Some(e);
+        }
+        let every_other = self.every_other?;
+        rodloop_solver::check_energy(claim, self.energy, every_other, PRECHECK_MARGIN).err()
+    }
+}
+
+/// Multiple of the energy check's tolerance by which the energy of a file's samples must
+/// miss its claim for [`Samples::fails_early`] to reject the file without building it: wide
+/// enough that round-off between the samples' sums and the profile's cannot decide.
+const PRECHECK_MARGIN: f64 = 2.0;
 
 impl TracedBranch {
     /// Traced state `k` as its state file holds it, verified against its row
@@ -286,15 +324,22 @@ fn verify_refining_from(
                 claim.energy_error = ESTIMATES * est;
             }
         }
-        let profile = uniform_profile(
+        let samples = Samples::settle(
             at,
             STATE_POINTS.max(cells),
             claim.energy,
             claim.energy_error,
             d0,
         )?;
-        match rodloop_solver::verify_state(at, &profile, &claim) {
-            Ok(verification) => {
+        let checked = match samples.fails_early(at, &claim) {
+            Some(why) => Err(why),
+            None => {
+                let profile = at.profile_uniform(samples.points)?;
+                rodloop_solver::verify_state(at, &profile, &claim).map(|v| (profile, v))
+            }
+        };
+        match checked {
+            Ok((profile, verification)) => {
                 return Ok(StateFile {
                     profile,
                     verification,

@@ -69,7 +69,7 @@ pub use stability::{Stability, StabilityOptions};
 pub use start::StartShape;
 pub use stiffness::{Stiffness, StiffnessProfile};
 pub use verify::{
-    enclosed_profile, profile_energy, verify_accurate, verify_enclosed, verify_state, Claim,
+    check_energy, check_holonomy, enclosed_profile, profile_energy, verify_accurate, verify_enclosed, verify_state, Claim,
     EnclosedVerification, Verification,
 };
 

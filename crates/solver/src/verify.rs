@@ -115,19 +115,7 @@ pub fn verify_state(
     let length = model.length();
     let d0 = model.stiffness().kind().reference();
     let fail = |m: String| Err(SolverError::Unverified(m));
-    let h = model.holonomy(eq.kappa())?;
-    let skew = nalgebra::Vector3::new(
-        h[(2, 1)] - h[(1, 2)],
-        h[(0, 2)] - h[(2, 0)],
-        h[(1, 0)] - h[(0, 1)],
-    );
-    let angle = (0.5 * skew.norm()).atan2(0.5 * (h.trace() - 1.0));
-    if angle.is_nan() || angle > MAX_HOLONOMY_ANGLE {
-        return fail(format!(
-            "the loop does not close: its frame comes back turned by {angle:.3e} rad (at most \
-             {MAX_HOLONOMY_ANGLE:e})"
-        ));
-    }
+    let angle = check_holonomy(eq)?;
     let n = profile.len();
     if n < 8 {
         return fail(format!(
@@ -160,18 +148,7 @@ pub fn verify_state(
         ));
     }
     let (fine, coarse) = profile_energy(profile, length, r, d0);
-    let energy_tolerance = claim.energy_error.abs()
-        + claim.profile_error.abs()
-        + (fine - coarse).abs()
-        + ENERGY_RELATIVE_SLACK * claim.energy.abs().max(1.0);
-    let gap = (fine - claim.energy).abs();
-    if gap.is_nan() || gap > energy_tolerance {
-        return fail(format!(
-            "the energy recomputed from the written profile, {fine:.10}, differs from the reported \
-             {:.10} by more than {energy_tolerance:.1e}",
-            claim.energy
-        ));
-    }
+    let energy_tolerance = check_energy(claim, fine, coarse, 1.0)?;
     // Without a requested branch, a state whose periods are not named counts 0.
     let eta = match (identify_profile(profile, length), claim.eta) {
         (Ok(p), _) => p.eta,
@@ -196,6 +173,61 @@ pub fn verify_state(
         energy_tolerance,
         eta,
     })
+}
+
+/// The closure check of the state itself (see the module docs): the rotation angle of the
+/// holonomy of `eq`'s curvature, at most [`MAX_HOLONOMY_ANGLE`] (the angle, not `vee(skew H)`,
+/// which also vanishes at a half-turn).
+///
+/// Errors: [`SolverError::Unverified`] with the angle where the loop does not close; the
+/// model's own errors where the holonomy cannot be built.
+pub fn check_holonomy(eq: &Equilibrium) -> Result<f64, SolverError> {
+    let h = eq.model().holonomy(eq.kappa())?;
+    let skew = nalgebra::Vector3::new(
+        h[(2, 1)] - h[(1, 2)],
+        h[(0, 2)] - h[(2, 0)],
+        h[(1, 0)] - h[(0, 1)],
+    );
+    let angle = (0.5 * skew.norm()).atan2(0.5 * (h.trace() - 1.0));
+    if angle.is_nan() || angle > MAX_HOLONOMY_ANGLE {
+        return Err(SolverError::Unverified(format!(
+            "the loop does not close: its frame comes back turned by {angle:.3e} rad (at most \
+             {MAX_HOLONOMY_ANGLE:e})"
+        )));
+    }
+    Ok(angle)
+}
+
+/// The energy check of written samples (see the module docs): `fine`, the periodic
+/// trapezoidal energy `E R/(π D0)` of the samples, and `coarse`, that of every other sample,
+/// against `claim`; the tolerance is the claim's error estimates, `|fine − coarse|` (the
+/// quadrature's own error) and [`ENERGY_RELATIVE_SLACK`] of the energy, and the check fails
+/// where the gap exceeds `margin` times it ([`verify_state`] uses `margin = 1`; a caller that
+/// checks the energy of the samples before building the rest of the profile uses a larger
+/// one, so that round-off between the two computations of the same sums cannot decide).
+///
+/// Returns the tolerance. Errors: [`SolverError::Unverified`] naming the energies and the
+/// allowed gap.
+pub fn check_energy(
+    claim: &Claim,
+    fine: f64,
+    coarse: f64,
+    margin: f64,
+) -> Result<f64, SolverError> {
+    let energy_tolerance = claim.energy_error.abs()
+        + claim.profile_error.abs()
+        + (fine - coarse).abs()
+        + ENERGY_RELATIVE_SLACK * claim.energy.abs().max(1.0);
+    let gap = (fine - claim.energy).abs();
+    if gap.is_nan() || gap > margin * energy_tolerance {
+        return Err(SolverError::Unverified(format!(
+            "the energy recomputed from the written points, {fine:.10}, differs from the reported \
+             {:.10} by more than {:.1e}",
+            claim.energy,
+            margin * energy_tolerance
+        )));
+    }
+    Ok(energy_tolerance)
 }
 
 /// Energy `E R/(π D0)` of a written profile (dimensional, of a loop of length `length` on a
@@ -461,18 +493,10 @@ pub fn verify_enclosed(
             }
         }
     }
+    // The written points carry the model's own Gauss weights ([`weighted_energy`]): no
+    // every-other-point estimate of the quadrature's error.
     let fine = weighted_energy(&pts, r, d0);
-    let energy_tolerance = claim.energy_error.abs()
-        + claim.profile_error.abs()
-        + ENERGY_RELATIVE_SLACK * claim.energy.abs().max(1.0);
-    let gap = (fine - claim.energy).abs();
-    if gap.is_nan() || gap > energy_tolerance {
-        return fail(format!(
-            "the energy recomputed from the written points, {fine:.10}, differs from the \
-             reported {:.10} by more than {energy_tolerance:.1e}",
-            claim.energy
-        ));
-    }
+    let energy_tolerance = check_energy(claim, fine, fine, 1.0)?;
     // Without a requested branch, a state whose periods are not named (the planar circle)
     // counts 0.
     let eta = match (identify_enclosed(st), claim.eta) {
