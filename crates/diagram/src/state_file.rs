@@ -651,6 +651,73 @@ mod tests {
         );
     }
 
+    /// The early rejection of a file ([`super::Samples::fails_early`]) agrees with the full
+    /// check of its profile ([`rodloop_solver::verify_state`]): on a two-segment state whose
+    /// samples settle at several doublings, claims off by a growing multiple of the check's
+    /// tolerance are rejected early only where the full check rejects them too, the right
+    /// claim is not, and from 2.5 tolerances on every claim is rejected early.
+    #[test]
+    fn early_rejection_agrees_with_the_full_check() {
+        use rodloop_solver::{
+            solve_cells, verify_state, Claim, SolveOptions, StartShape, Stiffness,
+        };
+        let st = Stiffness::Tanh {
+            d0: 1.0,
+            d1: 0.1,
+            s0: 0.3,
+            s1: 0.8,
+            gamma: 200.0,
+        };
+        let eq = solve_cells(
+            1.0,
+            1.4,
+            80,
+            &st,
+            &StartShape::Euler { l: 2 },
+            None,
+            &SolveOptions::default(),
+        )
+        .unwrap();
+        // The energy the samples converge to, claimed with a small error estimate, so that
+        // the samples are doubled past the first count.
+        let e = super::SampledEnergy::new(&eq, 1.0).unwrap().at(8192);
+        let estimate = 1e-9;
+        let claim = |energy: f64| Claim {
+            energy,
+            energy_error: estimate,
+            profile_error: 0.0,
+            eta: None,
+        };
+        let truth = super::Samples::settle(&eq, 64, e, estimate, 1.0).unwrap();
+        assert!(truth.every_other.is_some(), "the samples were not doubled");
+        assert!(truth.fails_early(&eq, &claim(e)).is_none());
+        let profile = eq.profile_uniform(truth.points).unwrap();
+        let tol =
+            rodloop_solver::check_energy(&claim(e), truth.energy, truth.every_other.unwrap(), 1.0)
+                .unwrap();
+        let mut early = 0;
+        for k in 1..=40 {
+            let off = 0.1 * f64::from(k) * tol;
+            for energy in [e + off, e - off] {
+                let c = claim(energy);
+                let samples = super::Samples::settle(&eq, 64, energy, estimate, 1.0).unwrap();
+                let full = verify_state(&eq, &eq.profile_uniform(samples.points).unwrap(), &c);
+                match samples.fails_early(&eq, &c) {
+                    Some(_) => {
+                        early += 1;
+                        assert!(full.is_err(), "rejected early, passes in full: {energy}");
+                    }
+                    None => assert!(
+                        off < 2.5 * tol,
+                        "not rejected early at {off:e} (tolerance {tol:e})"
+                    ),
+                }
+            }
+        }
+        assert!(early > 0);
+        assert!(verify_state(&eq, &profile, &claim(e)).is_ok());
+    }
+
     /// States failing the same check with their own numbers share one warning that names
     /// them all; a state failing another check keeps its own.
     #[test]

@@ -69,8 +69,8 @@ pub use stability::{Stability, StabilityOptions};
 pub use start::StartShape;
 pub use stiffness::{Stiffness, StiffnessProfile};
 pub use verify::{
-    check_energy, check_holonomy, enclosed_profile, profile_energy, verify_accurate, verify_enclosed, verify_state, Claim,
-    EnclosedVerification, Verification,
+    check_energy, check_holonomy, enclosed_profile, profile_energy, verify_accurate,
+    verify_enclosed, verify_state, Claim, EnclosedVerification, Verification,
 };
 
 /// Errors of the solver crate.
