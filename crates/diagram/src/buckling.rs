@@ -159,62 +159,31 @@ fn circle_modes(
     let weights = DVector::from_fn(n, |a, _| model.cell_weight(a / 2));
     let red = TangentReduction::new(&model.closure_jacobian(&zero)?, &weights, 1e-8)?;
     let block = red.reduce(&h1);
-    let r = block.nrows();
-    if !vectors {
-        let mut vals: Vec<f64> = block.symmetric_eigenvalues().iter().copied().collect();
-        vals.sort_by(f64::total_cmp);
-        let mut out = Vec::new();
-        if r >= 2 {
-            for (end, beta) in [(-1i8, vals[0]), (1, vals[r - 1])] {
-                if beta.abs() > 1e-12 {
-                    out.push(Mode {
-                        end,
-                        multiplier: -d / beta,
-                        periods: 0,
-                        multiplicity: 0,
-                        vector: DVector::zeros(0),
-                    });
-                }
-            }
-        }
-        return Ok(out);
+    if block.nrows() < 2 {
+        return Ok(Vec::new());
     }
-    let eig = block.symmetric_eigen();
-    let mut order: Vec<usize> = (0..r).collect();
-    order.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
     // Extremes: the most negative (n = m + 1) and the most positive (n = m − 1) eigenvalues,
     // each with its partner when they form a degenerate pair (sin/cos).
-    let close = |i: usize, j: usize| {
-        let (a, c) = (eig.eigenvalues[i], eig.eigenvalues[j]);
-        (a - c).abs() <= 1e-6 * a.abs().max(c.abs())
-    };
-    let mut picks: Vec<(i8, Vec<usize>)> = Vec::new();
-    if r >= 2 {
-        let lo = if close(order[0], order[1]) {
-            vec![order[0], order[1]]
-        } else {
-            vec![order[0]]
-        };
-        let hi = if close(order[r - 1], order[r - 2]) {
-            vec![order[r - 1], order[r - 2]]
-        } else {
-            vec![order[r - 1]]
-        };
-        picks.push((-1i8, lo));
-        picks.push((1i8, hi));
-    }
+    let ends = rodloop_solver::extreme_eigenpairs(&block, 2);
+    let close = |a: f64, c: f64| (a - c).abs() <= 1e-6 * a.abs().max(c.abs());
     let mut out = Vec::new();
-    for (end, g) in picks {
-        let beta = eig.eigenvalues[g[0]];
-        if beta.abs() < 1e-12 {
+    for (end, pairs) in [(-1i8, &ends.low), (1i8, &ends.high)] {
+        let beta = pairs[0].0;
+        if beta.abs() <= 1e-12 {
             continue;
         }
-        let vector = red.lift(&eig.eigenvectors.column(g[0]).into_owned());
+        let multiplicity = if close(pairs[0].0, pairs[1].0) { 2 } else { 1 };
+        let (periods, vector) = if vectors {
+            let vector = red.lift(&pairs[0].1);
+            (dominant_frequency(&vector, cells), vector)
+        } else {
+            (0, DVector::zeros(0))
+        };
         out.push(Mode {
             end,
             multiplier: -d / beta,
-            periods: dominant_frequency(&vector, cells),
-            multiplicity: g.len(),
+            periods,
+            multiplicity: if vectors { multiplicity } else { 0 },
             vector,
         });
     }

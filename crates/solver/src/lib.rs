@@ -65,7 +65,7 @@ pub use solve::{
     solve, solve_from_state, solve_newton_keeping, solve_newton_keeping_until, ConvergenceReport,
     EnergyReport, Equilibrium, Globalization, NewtonRun, ProfilePoint, SolveOptions, Stall,
 };
-pub use stability::{Stability, StabilityOptions};
+pub use stability::{extreme_eigenpairs, Extremes, Stability, StabilityOptions};
 pub use start::StartShape;
 pub use stiffness::{Stiffness, StiffnessProfile};
 pub use verify::{

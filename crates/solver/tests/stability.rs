@@ -113,3 +113,94 @@ fn negative_direction_lowers_the_energy_at_fixed_closure() {
         }
     }
 }
+
+/// A symmetric matrix `Q diag(λ) Qᵀ` of size `n` with the spectrum `lambda` (a deterministic
+/// orthogonal `Q` from the QR factorisation of a pseudo-random matrix).
+fn with_spectrum(lambda: &[f64]) -> nalgebra::DMatrix<f64> {
+    let n = lambda.len();
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    let g = nalgebra::DMatrix::from_fn(n, n, |_, _| next());
+    let q = g.qr().q();
+    &q * nalgebra::DMatrix::from_diagonal(&DVector::from_column_slice(lambda)) * q.transpose()
+}
+
+/// The extreme eigenpairs by block Lanczos ([`rodloop_solver::extreme_eigenpairs`]) are the
+/// dense decomposition's: on matrices with the spectrum of a great circle's buckling pencil
+/// (isolated extremes, one of them a degenerate pair, above a bulk near zero that holds
+/// tight pairs of its own) and on one with a single extreme at each end and an even bulk,
+/// the extreme eigenvalues agree to 1e-12 of the spectral radius, a degenerate extreme comes
+/// with its partner, and the vectors span the dense eigenspaces (residuals and projections
+/// to 1e-10).
+#[test]
+fn extreme_eigenpairs_are_those_of_the_dense_decomposition() {
+    let pencil = |n: usize, top: &[f64], bottom: &[f64]| {
+        let mut l: Vec<f64> = top.iter().chain(bottom).copied().collect();
+        let bulk = n - l.len();
+        for i in 0..bulk {
+            // Tight pairs falling towards zero, as the high harmonics of the pencil.
+            let k = (i / 2 + 3) as f64;
+            l.push(0.05 / (k * k) * if i % 2 == 0 { 1.0 } else { 1.0 + 1e-9 });
+        }
+        l
+    };
+    let spectra = [
+        pencil(
+            200,
+            &[1.8, 1.8, 1.125, 1.125],
+            &[-1.2857, -1.2857, -0.5625, -0.5625],
+        ),
+        pencil(300, &[1.0], &[-1.0 / 3.0, -1.0 / 3.0, -0.125, -0.125]),
+        (0..150)
+            .map(|i| -1.0 + 2.0 * i as f64 / 149.0)
+            .collect::<Vec<f64>>(),
+        pencil(20, &[2.0, 2.0], &[-1.0]),
+    ];
+    for lambda in &spectra {
+        let a = with_spectrum(lambda);
+        let mut sorted = lambda.clone();
+        sorted.sort_by(f64::total_cmp);
+        let scale = sorted[0].abs().max(sorted[sorted.len() - 1].abs());
+        let ex = rodloop_solver::extreme_eigenpairs(&a, 2);
+        let (lo, hi) = (sorted[0], sorted[sorted.len() - 1]);
+        assert!(
+            (ex.low[0].0 - lo).abs() <= 1e-12 * scale,
+            "{} vs {lo}",
+            ex.low[0].0
+        );
+        assert!(
+            (ex.high[0].0 - hi).abs() <= 1e-12 * scale,
+            "{} vs {hi}",
+            ex.high[0].0
+        );
+        for (pairs, want) in [
+            (&ex.low, &sorted[..2]),
+            (
+                &ex.high,
+                &[sorted[sorted.len() - 1], sorted[sorted.len() - 2]][..],
+            ),
+        ] {
+            let degenerate = (want[0] - want[1]).abs() <= 1e-6 * scale;
+            let found = (pairs[0].0 - pairs[1].0).abs() <= 1e-6 * scale;
+            assert_eq!(
+                degenerate,
+                found,
+                "pair {want:?}: found {:?}",
+                (pairs[0].0, pairs[1].0)
+            );
+            let count = if degenerate { 2 } else { 1 };
+            for (theta, v) in &pairs[..count] {
+                assert!((v.norm() - 1.0).abs() < 1e-12);
+                assert!((&a * v - v * *theta).norm() <= 1e-10 * scale);
+            }
+            if degenerate {
+                assert!(pairs[0].1.dot(&pairs[1].1).abs() < 1e-10);
+            }
+        }
+    }
+}

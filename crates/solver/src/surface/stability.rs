@@ -228,6 +228,143 @@ impl TangentReduction {
     }
 }
 
+/// The extreme eigenpairs of a symmetric matrix: its `per_end` lowest and `per_end` highest
+/// eigenvalues with unit eigenvectors, by [`extreme_eigenpairs`]. The first pair of each end
+/// is converged; a further one is converged too, or else lies more than [`SEPARATED`] of the
+/// spectral radius inside the spectrum (then it is a Ritz pair within its residual of an
+/// eigenvalue: enough to tell that the extreme has no degenerate partner).
+#[derive(Clone, Debug)]
+pub struct Extremes {
+    /// The lowest eigenvalues, ascending, with their eigenvectors.
+    pub low: Vec<(f64, DVector<f64>)>,
+    /// The highest eigenvalues, descending, with their eigenvectors.
+    pub high: Vec<(f64, DVector<f64>)>,
+}
+
+/// Distance (relative to the spectral radius) from the extreme eigenvalue beyond which
+/// [`extreme_eigenpairs`] does not wait for the next Ritz pair of its end to converge.
+const SEPARATED: f64 = 1e-3;
+
+/// Matrices up to this size are decomposed densely by [`extreme_eigenpairs`].
+const EXTREMES_DENSE_LIMIT: usize = 48;
+
+/// Relative residual `‖A y − θ y‖ / max|θ|` at which [`extreme_eigenpairs`] accepts a Ritz
+/// pair: the Ritz value is then within the residual squared over the gap to the rest of the
+/// spectrum, the vector within the residual over the gap.
+const EXTREMES_RESIDUAL: f64 = 1e-12;
+
+/// The `per_end` lowest and highest eigenpairs of the symmetric matrix `a` (the buckling
+/// pencil of a great circle, whose spectrum has a few isolated extremes above a bulk near
+/// zero): block Lanczos with block size 2 (a degenerate pair, the sine and cosine of one
+/// mode, is found as a pair) and full reorthogonalisation, with Rayleigh–Ritz on the Krylov
+/// basis every step until the wanted Ritz pairs have relative residuals below
+/// [`EXTREMES_RESIDUAL`] (C. Lanczos 1950; G. H. Golub & R. Underwood 1977 for the block
+/// form; Golub & Van Loan §10.3). Each step costs two products with `a`, `O(n²)`, against
+/// `O(n³)` for the dense decomposition, which small matrices and a basis that fills the space
+/// fall back to.
+pub fn extreme_eigenpairs(a: &DMatrix<f64>, per_end: usize) -> Extremes {
+    let n = a.nrows();
+    let dense = || {
+        let se = a.clone().symmetric_eigen();
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by(|&i, &j| se.eigenvalues[i].total_cmp(&se.eigenvalues[j]));
+        let pair = |i: usize| (se.eigenvalues[i], se.eigenvectors.column(i).into_owned());
+        Extremes {
+            low: order.iter().take(per_end).map(|&i| pair(i)).collect(),
+            high: order.iter().rev().take(per_end).map(|&i| pair(i)).collect(),
+        }
+    };
+    if n <= EXTREMES_DENSE_LIMIT.max(4 * per_end) {
+        return dense();
+    }
+    // Orthonormal Krylov basis and its images under `a`.
+    let mut basis: Vec<DVector<f64>> = Vec::new();
+    let mut images: Vec<DVector<f64>> = Vec::new();
+    // Append `w` orthogonalised against the basis (twice: full reorthogonalisation); false
+    // where nothing of it is left.
+    let push = |basis: &mut Vec<DVector<f64>>, mut w: DVector<f64>| -> bool {
+        let size = w.norm();
+        for _ in 0..2 {
+            for q in basis.iter() {
+                let c = q.dot(&w);
+                w.axpy(-c, q, 1.0);
+            }
+        }
+        let left = w.norm();
+        if left.is_nan() || left <= 1e-10 * size {
+            return false;
+        }
+        basis.push(w / left);
+        true
+    };
+    // Deterministic start with every harmonic present in both vectors.
+    push(
+        &mut basis,
+        DVector::from_fn(n, |i, _| 1.0 + (i as f64 * 0.754_877_666_2).sin()),
+    );
+    push(
+        &mut basis,
+        DVector::from_fn(n, |i, _| (i as f64 * 0.569_840_291 + 0.5).cos()),
+    );
+    let mut next = 0;
+    loop {
+        // Images of the newest block, and the next block from them.
+        let fresh: Vec<DVector<f64>> = basis[next..].iter().map(|q| a * q).collect();
+        next = basis.len();
+        images.extend(fresh.iter().cloned());
+        let mut grew = false;
+        for w in fresh {
+            grew |= push(&mut basis, w);
+        }
+        let k = images.len();
+        if k >= 4 * per_end {
+            // Rayleigh–Ritz on the part of the basis with images.
+            let q = DMatrix::from_columns(&basis[..k]);
+            let aq = DMatrix::from_columns(&images);
+            let h = q.transpose() * &aq;
+            let h = (&h + h.transpose()) * 0.5;
+            let se = h.symmetric_eigen();
+            let mut order: Vec<usize> = (0..k).collect();
+            order.sort_by(|&i, &j| se.eigenvalues[i].total_cmp(&se.eigenvalues[j]));
+            let scale = se.eigenvalues.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let pair = |i: usize| {
+                let y = se.eigenvectors.column(i);
+                let theta = se.eigenvalues[i];
+                let vector = &q * y;
+                let residual = (&aq * y - &vector * theta).norm();
+                (theta, vector, residual)
+            };
+            let ends: Vec<usize> = order
+                .iter()
+                .take(per_end)
+                .chain(order.iter().rev().take(per_end))
+                .copied()
+                .collect();
+            let pairs: Vec<(f64, DVector<f64>, f64)> = ends.iter().map(|&i| pair(i)).collect();
+            // Converged: at each end the extreme pair, and the next one unless it lies well
+            // inside the spectrum (a bulk whose Ritz pairs converge slowly; a degenerate
+            // partner of the extreme converges with it, the block holding both).
+            let tol = EXTREMES_RESIDUAL * scale.max(f64::MIN_POSITIVE);
+            let done = pairs.chunks(per_end).all(|end| {
+                let (first, _, r0) = &end[0];
+                *r0 <= tol
+                    && end[1..].iter().all(|(theta, _, r)| {
+                        *r <= tol || (theta - first).abs() > SEPARATED * scale + r
+                    })
+            });
+            if done {
+                let mut it = pairs.into_iter().map(|(t, v, _)| (t, v));
+                let low = it.by_ref().take(per_end).collect();
+                let high = it.collect();
+                return Extremes { low, high };
+            }
+        }
+        if !grew || basis.len() + 2 > n {
+            return dense();
+        }
+    }
+}
+
 /// Shift mode `dκ/dσ` at the Gauss points of a uniform mesh (spectral derivative on the two
 /// interleaved sub-grids).
 fn shift_mode(kappa: &[f64], cells: usize) -> Result<DVector<f64>, SolverError> {
