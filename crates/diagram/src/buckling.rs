@@ -16,7 +16,10 @@
 //! periods of each null vector (dominant Fourier mode of `δκ`) identifies the mode; the
 //! continuum answer (Eqs. 30–34) is `λR³/D = n²/m²` for `n ≠ m` periods (the `n = m` modes
 //! are excluded by the linearised closure), the extreme eigenvalues being `n = m ± 1`:
-//! Eq. (33) `(m + 1)²/m²` and Eq. (34) `(m − 1)²/m²`. Each load is computed at three
+//! Eq. (33) `(m + 1)²/m²` and Eq. (34) `(m − 1)²/m²`. Only those extremes (and whether each
+//! is a sine/cosine pair) are wanted, and they stand apart from a bulk of high harmonics near
+//! `β = 0`: block Lanczos finds them ([`rodloop_solver::extreme_eigenpairs`], 24–32 basis
+//! vectors for pencils of 62–446 rows). Each load is computed at three
 //! resolutions `N, 2N, 4N` (`N = 4, 8, 16 × (m + 2)` cells for fast, default, high) and
 //! Richardson-extrapolated twice (`h⁴` and `h⁶` terms); the report gives the deviation from
 //! the formula next to the estimated error.
