@@ -230,7 +230,7 @@ impl TangentReduction {
 
 /// The extreme eigenpairs of a symmetric matrix: its `per_end` lowest and `per_end` highest
 /// eigenvalues with unit eigenvectors, by [`extreme_eigenpairs`]. The first pair of each end
-/// is converged; a further one is converged too, or else lies more than [`SEPARATED`] of the
+/// is converged; a further one is converged too, or else lies more than `SEPARATED` (10⁻³) of the
 /// spectral radius inside the spectrum (then it is a Ritz pair within its residual of an
 /// eigenvalue: enough to tell that the extreme has no degenerate partner).
 #[derive(Clone, Debug)]
@@ -258,7 +258,7 @@ const EXTREMES_RESIDUAL: f64 = 1e-12;
 /// zero): block Lanczos with block size 2 (a degenerate pair, the sine and cosine of one
 /// mode, is found as a pair) and full reorthogonalisation, with Rayleigh–Ritz on the Krylov
 /// basis every step until the wanted Ritz pairs have relative residuals below
-/// [`EXTREMES_RESIDUAL`] (C. Lanczos 1950; G. H. Golub & R. Underwood 1977 for the block
+/// `EXTREMES_RESIDUAL` (10⁻¹²) (C. Lanczos 1950; G. H. Golub & R. Underwood 1977 for the block
 /// form; Golub & Van Loan §10.3). Each step costs two products with `a`, `O(n²)`, against
 /// `O(n³)` for the dense decomposition, which small matrices and a basis that fills the space
 /// fall back to.
