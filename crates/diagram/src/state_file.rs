@@ -605,12 +605,9 @@ pub fn branch_identification(
 mod tests {
     use super::{unverified_warnings, SampledEnergy};
 
-    /// The energies of doubled samples, going on from the kept densities, are those of the
-    /// samples evaluated afresh, to the bit (the state files' point counts follow from
-    /// them), on a graded mesh (a two-segment rod); they converge to the discrete energy as
-    /// the samples resolve the profile.
-    #[test]
-    fn doubled_samples_reuse_their_points_to_the_bit() {
+    /// The state of a two-segment rod (`D1/D0 = 0.1`, `γ = 200`) at `L̄ = 1.4` reached from
+    /// the Euler curve of two periods, on 80 cells of its graded mesh.
+    fn graded_state() -> rodloop_solver::Equilibrium {
         use rodloop_solver::{solve_cells, SolveOptions, StartShape, Stiffness};
         let st = Stiffness::Tanh {
             d0: 1.0,
@@ -619,7 +616,7 @@ mod tests {
             s1: 0.8,
             gamma: 200.0,
         };
-        let eq = solve_cells(
+        solve_cells(
             1.0,
             1.4,
             80,
@@ -628,7 +625,16 @@ mod tests {
             None,
             &SolveOptions::default(),
         )
-        .unwrap();
+        .unwrap()
+    }
+
+    /// The energies of doubled samples, going on from the kept densities, are those of the
+    /// samples evaluated afresh, to the bit (the state files' point counts follow from
+    /// them), on a graded mesh (a two-segment rod); they converge to the discrete energy as
+    /// the samples resolve the profile.
+    #[test]
+    fn doubled_samples_reuse_their_points_to_the_bit() {
+        let eq = graded_state();
         assert!(!eq.model().mesh().is_uniform());
         let mut going_on = SampledEnergy::new(&eq, 1.0).unwrap();
         let mut last = going_on.at(64);
@@ -658,26 +664,8 @@ mod tests {
     /// claim is not, and from 2.5 tolerances on every claim is rejected early.
     #[test]
     fn early_rejection_agrees_with_the_full_check() {
-        use rodloop_solver::{
-            solve_cells, verify_state, Claim, SolveOptions, StartShape, Stiffness,
-        };
-        let st = Stiffness::Tanh {
-            d0: 1.0,
-            d1: 0.1,
-            s0: 0.3,
-            s1: 0.8,
-            gamma: 200.0,
-        };
-        let eq = solve_cells(
-            1.0,
-            1.4,
-            80,
-            &st,
-            &StartShape::Euler { l: 2 },
-            None,
-            &SolveOptions::default(),
-        )
-        .unwrap();
+        use rodloop_solver::{verify_state, Claim};
+        let eq = graded_state();
         // The energy the samples converge to, claimed with a small error estimate, so that
         // the samples are doubled past the first count.
         let e = super::SampledEnergy::new(&eq, 1.0).unwrap().at(8192);
