@@ -268,7 +268,7 @@ fn anchors(l: &SampledLoop) -> Vec<f64> {
         let hi = if i + 1 == n { s[0] + len } else { s[i + 1] };
         let mut hint = i as isize;
         let mut f = |x: f64| periodic_lagrange(s, kg, len, x, &mut hint).abs();
-        let x = golden_min(|x| -f(x), lo, hi, 60);
+        let x = brent_min(|x| -f(x), lo, hi, PEAK_XTOL * len, 60);
         out.push((x, f(x)));
     }
     // Merge near-duplicates (a flat peak sampled twice), keeping the higher.
@@ -337,7 +337,13 @@ fn point_group_of(l: &SampledLoop, tol: f64) -> (String, usize, f64) {
                 a
             } else {
                 let f = |x: f64| best(&sample(x, dir, SEARCH), &base_search);
-                golden_min(f, a - 2.0 * spacing, a + 2.0 * spacing, 28)
+                brent_min(
+                    f,
+                    a - 2.0 * spacing,
+                    a + 2.0 * spacing,
+                    MAP_XTOL * spacing,
+                    30,
+                )
             };
             found.test(&base_coarse, &sample(start, dir, coarse), tol);
         }
@@ -346,28 +352,102 @@ fn point_group_of(l: &SampledLoop, tol: f64) -> (String, usize, f64) {
     (g.symbol, g.order, g.worst_residual / l.radius)
 }
 
-/// Minimiser of `f` on `[lo, hi]` by golden-section search (`iters` steps).
-fn golden_min(mut f: impl FnMut(f64) -> f64, lo: f64, hi: f64, iters: usize) -> f64 {
-    let g = 0.5 * (5f64.sqrt() - 1.0);
-    let (mut x0, mut x3) = (lo, hi);
-    let (mut x1, mut x2) = (x3 - g * (x3 - x0), x0 + g * (x3 - x0));
-    let (mut f1, mut f2) = (f(x1), f(x2));
-    for _ in 0..iters {
-        if f1 < f2 {
-            x3 = x2;
-            x2 = x1;
-            f2 = f1;
-            x1 = x3 - g * (x3 - x0);
-            f1 = f(x1);
+/// Bracket (fraction of the loop's length) to which [`brent_min`] locates a peak of `|κ_g|`
+/// for the anchors: far below the interpolant's own accuracy (`O(h³)`), so the anchor is
+/// the interpolant's peak.
+const PEAK_XTOL: f64 = 1e-9;
+
+/// Bracket (fraction of the `κ_g` sample spacing) to which [`brent_min`] locates the start
+/// of a symmetry map's image of least residual (the golden sections it replaces reached
+/// `5·10⁻⁶` of the spacing).
+const MAP_XTOL: f64 = 1e-6;
+
+/// Minimiser of `f` on `[lo, hi]` by Brent's method: parabolic interpolation through the
+/// three best points so far, a golden-section step wherever the parabola is not trusted
+/// (R. P. Brent, *Algorithms for Minimization without Derivatives*, 1973, ch. 5), until the
+/// minimiser is bracketed to `xtol` (plus `√ε` relative) or after `max_evals` evaluations.
+/// On a smooth minimum it needs fewer evaluations than golden sections for the same bracket
+/// (at most 30 against 45 on the smooth minima of the test below).
+pub(crate) fn brent_min(
+    mut f: impl FnMut(f64) -> f64,
+    lo: f64,
+    hi: f64,
+    xtol: f64,
+    max_evals: usize,
+) -> f64 {
+    let golden = 0.5 * (3.0 - 5f64.sqrt());
+    let root_eps = f64::EPSILON.sqrt();
+    let (mut a, mut b) = (lo.min(hi), lo.max(hi));
+    let mut x = a + golden * (b - a);
+    let (mut w, mut v) = (x, x);
+    let mut fx = f(x);
+    let (mut fw, mut fv) = (fx, fx);
+    // The step taken and the one before it.
+    let (mut d, mut e) = (0.0f64, 0.0f64);
+    for _ in 1..max_evals {
+        let m = 0.5 * (a + b);
+        let tol = root_eps * x.abs() + xtol / 3.0;
+        let t2 = 2.0 * tol;
+        if (x - m).abs() <= t2 - 0.5 * (b - a) {
+            break;
+        }
+        let mut parabolic = false;
+        if e.abs() > tol {
+            let r = (x - w) * (fx - fv);
+            let mut q = (x - v) * (fx - fw);
+            let mut p = (x - v) * q - (x - w) * r;
+            q = 2.0 * (q - r);
+            if q > 0.0 {
+                p = -p;
+            } else {
+                q = -q;
+            }
+            let before = e;
+            e = d;
+            // Accept the parabola's vertex only inside the bracket and for a step shorter
+            // than half the one before last.
+            if p.abs() < (0.5 * q * before).abs() && p > q * (a - x) && p < q * (b - x) {
+                d = p / q;
+                let u = x + d;
+                if u - a < t2 || b - u < t2 {
+                    d = if x < m { tol } else { -tol };
+                }
+                parabolic = true;
+            }
+        }
+        if !parabolic {
+            e = if x < m { b - x } else { a - x };
+            d = golden * e;
+        }
+        let u = if d.abs() >= tol {
+            x + d
+        } else if d > 0.0 {
+            x + tol
         } else {
-            x0 = x1;
-            x1 = x2;
-            f1 = f2;
-            x2 = x0 + g * (x3 - x0);
-            f2 = f(x2);
+            x - tol
+        };
+        let fu = f(u);
+        if fu <= fx {
+            if u < x {
+                b = x;
+            } else {
+                a = x;
+            }
+            (v, fv, w, fw, x, fx) = (w, fw, x, fx, u, fu);
+        } else {
+            if u < x {
+                a = u;
+            } else {
+                b = u;
+            }
+            if fu <= fw || w == x {
+                (v, fv, w, fw) = (w, fw, u, fu);
+            } else if fu <= fv || v == x || v == w {
+                (v, fv) = (u, fu);
+            }
         }
     }
-    0.5 * (x0 + x3)
+    x
 }
 
 /// [`loop_shape`] of samples `(s, r, κ_g)` of a loop of length `length` on the unit sphere.
@@ -466,4 +546,62 @@ pub fn diagram_shapes(
         }
         Ok(out)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::brent_min;
+
+    /// Brent's minimiser finds known minima to its bracket plus `√ε` relative (where a
+    /// smooth minimum is defined in floating point): a parabola, a cosine, a peak of a
+    /// trigonometric sum like `|κ_g|` (where the derivative vanishes), a minimum at an end of
+    /// the bracket, and a flat quartic (minimiser defined only to `ε^{1/4}`); the smooth
+    /// interior ones in at most 30 evaluations, where golden sections need 45 to shrink the
+    /// bracket to 1e-9.
+    #[test]
+    fn brent_min_finds_known_minima() {
+        // (function, bracket, minimiser (NaN: where the derivative vanishes), tolerance)
+        type Case<'a> = (&'a dyn Fn(f64) -> f64, f64, f64, f64, f64);
+        let cases: [Case; 5] = [
+            (&|x: f64| (x - 0.3).powi(2) + 1.0, -1.0, 2.0, 0.3, 3e-8),
+            (&|x: f64| x.cos(), 2.0, 4.5, std::f64::consts::PI, 1e-7),
+            (
+                &|x: f64| -(x.sin() + 0.3 * (2.0 * x).sin() + 0.1 * (5.0 * x).cos()).abs(),
+                0.5,
+                1.6,
+                f64::NAN,
+                0.0,
+            ),
+            (&|x: f64| (x - 2.0).powi(2), 0.0, 1.0, 1.0, 3e-8),
+            (&|x: f64| (x - 0.7).powi(4), 0.0, 1.0, 0.7, 1e-3),
+        ];
+        for (k, (f, lo, hi, want, tol)) in cases.iter().enumerate() {
+            let mut evals = 0;
+            let x = brent_min(
+                |x| {
+                    evals += 1;
+                    f(x)
+                },
+                *lo,
+                *hi,
+                1e-9,
+                200,
+            );
+            // The interior peak: no closed form; the derivative vanishes there.
+            let want = if want.is_nan() {
+                let h = 1e-6;
+                assert!(
+                    ((f(x + h) - f(x - h)) / (2.0 * h)).abs() < 1e-6,
+                    "case {k}: {x}"
+                );
+                x
+            } else {
+                *want
+            };
+            assert!((x - want).abs() <= *tol, "case {k}: {x} vs {want}");
+            if k < 3 {
+                assert!(evals <= 30, "case {k}: {evals} evaluations");
+            }
+        }
+    }
 }
