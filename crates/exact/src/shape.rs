@@ -358,8 +358,9 @@ fn point_group_of(l: &SampledLoop, tol: f64) -> (String, usize, f64) {
 const PEAK_XTOL: f64 = 1e-9;
 
 /// Bracket (fraction of the `κ_g` sample spacing) to which [`brent_min`] locates the start
-/// of a symmetry map's image of least residual (the golden sections it replaces reached
-/// `5·10⁻⁶` of the spacing).
+/// of a symmetry map's image of least residual: the least residual is flat to second order
+/// there, so the residual at the bracket's ends differs from the least by far less than the
+/// symmetry tolerance.
 const MAP_XTOL: f64 = 1e-6;
 
 /// Minimiser of `f` on `[lo, hi]` by Brent's method: parabolic interpolation through the
