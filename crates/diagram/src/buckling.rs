@@ -175,7 +175,6 @@ fn circle_modes(
         if beta.abs() <= 1e-12 {
             continue;
         }
-        let multiplicity = if close(pairs[0].0, pairs[1].0) { 2 } else { 1 };
         let (periods, vector) = if vectors {
             let vector = red.lift(&pairs[0].1);
             (dominant_frequency(&vector, cells), vector)
@@ -186,7 +185,7 @@ fn circle_modes(
             end,
             multiplier: -d / beta,
             periods,
-            multiplicity: if vectors { multiplicity } else { 0 },
+            multiplicity: if close(pairs[0].0, pairs[1].0) { 2 } else { 1 },
             vector,
         });
     }

@@ -369,13 +369,7 @@ const MAP_XTOL: f64 = 1e-6;
 /// minimiser is bracketed to `xtol` (plus `√ε` relative) or after `max_evals` evaluations.
 /// On a smooth minimum it needs fewer evaluations than golden sections for the same bracket
 /// (at most 30 against 45 on the smooth minima of the test below).
-pub(crate) fn brent_min(
-    mut f: impl FnMut(f64) -> f64,
-    lo: f64,
-    hi: f64,
-    xtol: f64,
-    max_evals: usize,
-) -> f64 {
+fn brent_min(mut f: impl FnMut(f64) -> f64, lo: f64, hi: f64, xtol: f64, max_evals: usize) -> f64 {
     let golden = 0.5 * (3.0 - 5f64.sqrt());
     let root_eps = f64::EPSILON.sqrt();
     let (mut a, mut b) = (lo.min(hi), lo.max(hi));
