@@ -264,6 +264,12 @@ const EXTREMES_RESIDUAL: f64 = 1e-12;
 /// fall back to.
 pub fn extreme_eigenpairs(a: &DMatrix<f64>, per_end: usize) -> Extremes {
     let n = a.nrows();
+    if per_end == 0 {
+        return Extremes {
+            low: Vec::new(),
+            high: Vec::new(),
+        };
+    }
     let dense = || {
         let se = a.clone().symmetric_eigen();
         let mut order: Vec<usize> = (0..n).collect();
