@@ -7,13 +7,8 @@ use rodloop_solver::frame::{
 };
 use rodloop_solver::{LbarProblem, Phase, StartShape, Stiffness, SurfaceModel};
 
-/// Small deterministic pseudo-random numbers in [-1, 1].
-fn lcg(seed: &mut u64) -> f64 {
-    *seed = seed
-        .wrapping_mul(6364136223846793005)
-        .wrapping_add(1442695040888963407);
-    ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-}
+mod common;
+use common::lcg;
 
 fn rel_err(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {
     (a - b).abs().max() / b.abs().max().max(1e-300)

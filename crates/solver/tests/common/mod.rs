@@ -119,3 +119,11 @@ pub fn enclosed_branch(eta: u32, lbar: f64, cells: usize) -> BranchSolve {
 pub fn enclosed_figure_eight(lbar: f64, cells: usize) -> EnclosedState {
     enclosed_branch(1, lbar, cells).fine
 }
+
+/// Small deterministic pseudo-random numbers in [-1, 1].
+pub fn lcg(seed: &mut u64) -> f64 {
+    *seed = seed
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
+    ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+}
