@@ -135,11 +135,12 @@ fn enclosed_run(dir: &Path, lbar: &str, acc: &str, extra: &[&str]) -> serde_json
 
 /// The two-segment enclosed scene at L̄ = 0.9, branch 2 (the figure-eight, η = 1): `solve`
 /// reports one state at every accuracy level: the branch identified from the state, one
-/// stability index, the energies within each other's estimates. Where that state is a saddle
-/// (no local minimum of the branch is found here: the uniform rod's figure-eight held at its
-/// lobe tips is a saddle too, opened toward the planar circle by turning one lobe against
-/// the other about the axis through the two contacts), `solve` says so, and the state Newton
-/// reaches from the surface loop (`--keep-saddle`) does not lie below the one reported.
+/// stability index, the energies within each other's estimates. Every start reaches a
+/// saddle on the 96 cells of `fast` and `default` (the uniform rod's figure-eight held at its
+/// lobe tips is a saddle too); on 128 cells the saddle reached from `high`'s surface loop
+/// descends to a local minimum of the branch, which every level reports. Where the state
+/// reported is a saddle, `solve` says so; the state Newton reaches from the surface loop
+/// (`--keep-saddle`) does not lie below the one reported.
 #[test]
 fn enclosed_state_is_the_same_at_every_accuracy() {
     let dir = tmp("descend-enclosed-0.9");

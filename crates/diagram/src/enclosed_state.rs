@@ -306,8 +306,10 @@ pub fn solve_state_with(
             solve_branch(&wall, lbar, stiffness, &source, cells, &opts).map_err(context(what()))?;
         (b, None, Vec::new())
     } else {
-        // Two-segment rods: where the mesh of this accuracy does not end at a local minimum,
-        // the meshes of the finer levels (and twice the finest) are tried.
+        // Two-segment rods: every start (this level's surface loop, the stiffness paths,
+        // the other levels' surface loops) is tried on the mesh of this accuracy first;
+        // only where none of them ends at a local minimum there are the meshes of the finer
+        // levels (and twice the finest) tried, from every start again.
         let mut ladder = vec![cells];
         if !stiffness.is_uniform() {
             for a in [Accuracy::Default, Accuracy::High] {
@@ -317,15 +319,51 @@ pub fn solve_state_with(
             ladder.retain(|&n| n >= cells);
             ladder.dedup();
         }
-        let (out, replaced) =
-            solve_branch_lowest(&wall, lbar, eta, stiffness, &source, &ladder, &opts)
-                .map_err(context(what()))?;
-        lower_minimum = replaced;
-        if stiffness.is_uniform() {
-            out
-        } else {
-            lowest_over_surface_starts(&wall, lbar, eta, stiffness, accuracy, &ladder, &opts, out)
+        let search = |ladder: &[usize]| -> Result<(DescendedSolve, bool), DiagramError> {
+            let (out, replaced) =
+                solve_branch_lowest(&wall, lbar, eta, stiffness, &source, ladder, &opts)
+                    .map_err(context(what()))?;
+            if stiffness.is_uniform() {
+                return Ok((out, replaced));
+            }
+            let out = lowest_over_surface_starts(
+                &wall, lbar, eta, stiffness, accuracy, ladder, &opts, out,
+            );
+            Ok((out, replaced))
+        };
+        let minimum = |b: &BranchSolve| b.coarsest().stability(1e-6).is_ok_and(|s| s.0 == 0);
+        // Mesh by mesh, coarsest first; where none ends at a local minimum, the whole ladder
+        // at once (a mesh then also starts from an index-0 state a coarser one reached at
+        // its N/4 level only).
+        let mut by_mesh = None;
+        let mut passed_over = Vec::new();
+        if ladder.len() > 1 {
+            for &m in &ladder {
+                match search(&[m]) {
+                    Ok(f) if minimum(&f.0 .0) => {
+                        by_mesh = Some(f);
+                        break;
+                    }
+                    Ok(_) => passed_over.push(format!(
+                        "at N = {m} cells no start ended at a local minimum of the branch"
+                    )),
+                    Err(e) => {
+                        passed_over.push(format!("at N = {m} cells no start converged ({e})"))
+                    }
+                }
+            }
         }
+        let ((b, descent, mut given_up), replaced) = match by_mesh {
+            Some(f) => f,
+            None => {
+                passed_over.clear();
+                search(&ladder)?
+            }
+        };
+        passed_over.append(&mut given_up);
+        let given_up = passed_over;
+        lower_minimum = replaced;
+        (b, descent, given_up)
     };
     let cells = b.fine.model.cells();
     let stability = b.coarsest().stability(1e-6).map_err(passed)?;
