@@ -68,8 +68,8 @@ pub(crate) fn finer_resolution(
 /// `--param` alike: the resampled profile as start (and, for uniform stiffness, as phase
 /// reference), Newton to the tolerance a traced state is accepted with (`1e-8`, as in
 /// [`crate::TracedBranch::equilibrium_of`]; on a very soft segment, `D1/D0 = 0.001`, the
-/// residual of the finer resolutions stalls at a few 1e-9 in round-off), for as long as the
-/// run converges ([`newton_until_stall`]).
+/// residual of the finer resolutions can stall above the solver's default `1e-10`), for as
+/// long as the run converges ([`newton_until_stall`]).
 pub(crate) fn resolved(eq: &Equilibrium, cells: usize) -> Result<Equilibrium, SolverError> {
     resolved_from(eq, cells, &FinerRun::default())
 }
@@ -94,10 +94,12 @@ const STEADY_FALL: f64 = 2.0;
 /// soft segment bent more sharply than the tracing resolution resolves, the resampled start
 /// lies far from any equilibrium of the finer mesh) and moves its residual by about 8 % per
 /// stretch. Runs that creep towards their equilibrium and converge lengthen their steps: of
-/// every Newton solve of the `D1/D0 = 0.001` diagram, the longest creep at one short step
-/// is 13 passes at 1/1024 (a seed at 100 cells, which then lengthens its steps and
-/// converges at pass 55), and the re-solves at twice the tracing resolution creep at 1/64
-/// for up to 28 passes (branch 3 at `L̄ = 2.805`, converging at pass 58).
+/// every Newton solve of the `D1/D0 = 0.001` diagram, the longest stretch of steps of at
+/// most 1/256 in a run that converges is 14 passes (a seed at 100 cells, which converges at
+/// pass 40), and the re-solves at twice the tracing resolution that converge take at most 8
+/// passes in a row at 1/32 of the step or less, none at 1/128 or less (the line search
+/// shortens a rejected step to between a tenth and a half of it, so its steps are not
+/// powers of two).
 const STALLED: Stall = Stall {
     passes: 20,
     max_step: 1.0 / 256.0,
