@@ -307,9 +307,10 @@ pub fn solve_state_with(
         (b, None, Vec::new())
     } else {
         // Two-segment rods: every start (this level's surface loop, the stiffness paths,
-        // the other levels' surface loops) is tried on the mesh of this accuracy first;
-        // only where none of them ends at a local minimum there are the meshes of the finer
-        // levels (and twice the finest) tried, from every start again.
+        // the minima at other lengths, the other levels' surface loops) is tried on the mesh
+        // of this accuracy first; only where none of them ends at a local minimum there are
+        // the meshes of the finer levels (and twice the finest) tried, with the surface
+        // loops.
         let mut ladder = vec![cells];
         if !stiffness.is_uniform() {
             for a in [Accuracy::Default, Accuracy::High] {
@@ -331,31 +332,59 @@ pub fn solve_state_with(
             );
             Ok((out, replaced))
         };
+        // The finer meshes without the routes of `solve_branch_lowest` (the stiffness paths
+        // and the minima at other lengths, which it follows on one coarse mesh whatever the
+        // ladder and carries to the first mesh): this level's surface loop, then the others'.
+        let search_finer = |m: usize| -> Result<(DescendedSolve, bool), DiagramError> {
+            let out = solve_branch_descended(&wall, lbar, stiffness, &source, &[m], &opts)
+                .map_err(context(what()))?;
+            let out =
+                lowest_over_surface_starts(&wall, lbar, eta, stiffness, accuracy, &[m], &opts, out);
+            Ok((out, false))
+        };
         let minimum = |b: &BranchSolve| b.coarsest().stability(1e-6).is_ok_and(|s| s.0 == 0);
-        // Mesh by mesh, coarsest first; where none ends at a local minimum, the whole ladder
-        // at once (a mesh then also starts from an index-0 state a coarser one reached at
-        // its N/4 level only).
+        // Mesh by mesh, coarsest first, each with every start. Where none ends at a local
+        // minimum, the finest mesh's result stands (every start's last mesh, as one search
+        // over the whole ladder would end), unless a descent reached an index-0 state on a
+        // mesh's N/4 level whose finer levels did not converge: then the whole ladder at
+        // once, where the next mesh starts from that state.
         let mut by_mesh = None;
+        let mut finest = None;
         let mut passed_over = Vec::new();
+        let mut minimum_at_quarter = false;
         if ladder.len() > 1 {
-            for &m in &ladder {
-                match search(&[m]) {
+            for (k, &m) in ladder.iter().enumerate() {
+                let found = if k == 0 {
+                    search(&[m])
+                } else {
+                    search_finer(m)
+                };
+                match found {
                     Ok(f) if minimum(&f.0 .0) => {
                         by_mesh = Some(f);
                         break;
                     }
-                    Ok(_) => passed_over.push(format!(
-                        "at N = {m} cells no start ended at a local minimum of the branch"
-                    )),
+                    Ok(f) => {
+                        passed_over.push(format!(
+                            "at N = {m} cells no start ended at a local minimum of the branch"
+                        ));
+                        minimum_at_quarter |= f.0 .1.as_ref().is_some_and(|d| d.end().index == 0);
+                        finest = Some((f, passed_over.len()));
+                    }
                     Err(e) => {
                         passed_over.push(format!("at N = {m} cells no start converged ({e})"))
                     }
                 }
             }
         }
-        let ((b, descent, mut given_up), replaced) = match by_mesh {
-            Some(f) => f,
-            None => {
+        let ((b, descent, mut given_up), replaced) = match (by_mesh, finest) {
+            (Some(f), _) => f,
+            (None, Some((f, before))) if !minimum_at_quarter => {
+                // The meshes passed over, without the one reported.
+                passed_over.remove(before - 1);
+                f
+            }
+            _ => {
                 passed_over.clear();
                 search(&ladder)?
             }
