@@ -343,11 +343,12 @@ pub fn solve_state_with(
             Ok((out, false))
         };
         let minimum = |b: &BranchSolve| b.coarsest().stability(1e-6).is_ok_and(|s| s.0 == 0);
-        // Mesh by mesh, coarsest first, each with every start. Where none ends at a local
-        // minimum, the finest mesh's result stands (every start's last mesh, as one search
-        // over the whole ladder would end), unless a descent reached an index-0 state on a
-        // mesh's N/4 level whose finer levels did not converge: then the whole ladder at
-        // once, where the next mesh starts from that state.
+        // Mesh by mesh, coarsest first: the first with every start, the finer ones with the
+        // surface loops. Where none ends at a local minimum, the finest mesh's result stands
+        // (every start's last mesh, as one search over the whole ladder would end), unless a
+        // descent reached an index-0 state on a mesh's N/4 level whose finer levels did not
+        // converge: then the whole ladder at once, where the next mesh starts from that
+        // state.
         let mut by_mesh = None;
         let mut finest = None;
         let mut passed_over = Vec::new();

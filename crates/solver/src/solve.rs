@@ -776,9 +776,9 @@ fn closure_merit_above(model: &SurfaceModel, scales: &[f64], z: &[f64], bound: f
 /// (Nocedal & Wright, *Numerical Optimization*, Sec. 3.5). The merit `φ(α) = Σ sᵢ Fᵢ(z +
 /// αδ)²` along the Newton step `δ` has `φ(0) = m` and `φ'(0) = −2m` (`J δ = −F`), so the
 /// parabola through these and `φ(alpha) = at` has its minimum at `m alpha²/(at − m + 2m
-/// alpha)`; the step is kept within `[alpha/10, alpha/2]`, so that the search ends in as many
-/// trials as halvings would allow at most, and halves where the parabola has no minimum or
-/// the merit is unknown. A lower bound of `φ(alpha)` gives a step at least as long as the
+/// alpha)`; the step is kept within `[alpha/10, alpha/2]`, so that it shrinks at least as
+/// fast as by halving and at most tenfold per trial, and halves where the parabola has no
+/// minimum or the merit is unknown. A lower bound of `φ(alpha)` gives a step at least as long as the
 /// merit itself would. Where Newton's model of the residual holds only over a sliver of the
 /// step (a run that creeps at a few per cent of it), the parabola reaches that sliver in two
 /// or three trials instead of five to eight halvings.
