@@ -653,9 +653,8 @@ impl EnclosedModel {
         // The complementarity row's slopes in `λ_j` and `σ g_j` ([`super::model::Complementarity::eval`]).
         let slopes: Vec<(f64, f64)> = (0..n)
             .map(|j| {
-                let (_, da, db) = self
-                    .complementarity()
-                    .eval(lam[j] + self.pull_impulse(j), sigma * wall.gap(&r[j]));
+                let (_, da, db) =
+                    self.wall_row(j, lam[j] + self.pull_impulse(j), sigma * wall.gap(&r[j]));
                 (da, db)
             })
             .collect();

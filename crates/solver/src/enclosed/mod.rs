@@ -32,6 +32,7 @@
 //! * [`branch`]: a paper branch in an enclosed scene with the two-resolution error estimate.
 //! * [`stats`]: counters of the Newton solves by stage of a caller.
 
+pub mod arclength;
 pub mod branch;
 mod carry;
 pub mod centre;

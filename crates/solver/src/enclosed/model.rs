@@ -97,6 +97,7 @@ pub struct EnclosedModel {
     gauge: Gauge,
     pull: f64,
     complementarity: Complementarity,
+    contact_set: Option<Arc<[bool]>>,
 }
 
 /// The function `φ(a, b)` with `φ = 0 ⇔ a ≥ 0, b ≥ 0, ab = 0` that writes the wall's
@@ -251,6 +252,7 @@ impl EnclosedModel {
             gauge,
             pull: 0.0,
             complementarity: Complementarity::Min,
+            contact_set: None,
         };
         m.d_gauss = (0..2 * cells)
             .map(|g| m.stiffness.eval(m.gauss_sigma(g)).d)
@@ -417,6 +419,38 @@ impl EnclosedModel {
     pub fn with_complementarity(mut self, c: Complementarity) -> Self {
         self.complementarity = c;
         self
+    }
+
+    /// The same model on one smooth piece of the complementarity: the wall row `σ g_j = 0`
+    /// at the nodes `j` with `contact[j]` and `λ_j = 0` at the others, the contact set held
+    /// fixed instead of chosen by `min(λ_j, σ g_j)` ([`super::arclength`]: pseudo-arclength
+    /// continuation through folds, which needs a smooth system). A state of this model is
+    /// an equilibrium of the wall where its contact impulses and free gaps are nonnegative
+    /// ([`super::arclength::contact_slack`]).
+    pub fn with_contact_set(mut self, contact: Vec<bool>) -> Result<Self, SolverError> {
+        if contact.len() != self.cells {
+            return Err(SolverError::WrongLength {
+                expected: self.cells,
+                found: contact.len(),
+            });
+        }
+        self.contact_set = Some(contact.into());
+        Ok(self)
+    }
+
+    /// The contact set held fixed ([`Self::with_contact_set`]), if any.
+    pub fn contact_set(&self) -> Option<&[bool]> {
+        self.contact_set.as_deref()
+    }
+
+    /// Node `j`'s wall row `(φ, ∂φ/∂a, ∂φ/∂b)` at `a = λ_j + π_j`, `b = σ g_j`: the
+    /// complementarity function, or the fixed contact set's piece of `min`.
+    pub(super) fn wall_row(&self, j: usize, a: f64, b: f64) -> (f64, f64, f64) {
+        match &self.contact_set {
+            Some(set) if set[j] => (b, 0.0, 1.0),
+            Some(_) => (a, 1.0, 0.0),
+            None => self.complementarity.eval(a, b),
+        }
     }
 
     /// How the wall's complementarity is written ([`Complementarity`]).
@@ -757,10 +791,7 @@ impl EnclosedModel {
             let lam = z[lo + j];
             fr -= self.wall.gradient(&r) * lam;
             let g = self.wall.gap(&r);
-            f[lo + j] = self
-                .complementarity
-                .eval(lam + self.pull_impulse(j), sigma * g)
-                .0;
+            f[lo + j] = self.wall_row(j, lam + self.pull_impulse(j), sigma * g).0;
         }
         for k in 0..3 {
             f[4 * n + k] = fr[k];
@@ -962,12 +993,15 @@ impl EnclosedModel {
             for a in 0..np {
                 jac[(a, lo + j)] = -grad[a];
             }
-            if sigma * g <= lam + self.pull_impulse(j) {
+            let (a, b) = (lam + self.pull_impulse(j), sigma * g);
+            let on_wall = match &self.contact_set {
+                Some(set) => set[j],
+                None => b <= a,
+            };
+            if on_wall {
                 wall_rows.push(j);
             }
-            let (_, da, db) = self
-                .complementarity
-                .eval(lam + self.pull_impulse(j), sigma * g);
+            let (_, da, db) = self.wall_row(j, a, b);
             if db != 0.0 {
                 for a in 0..np {
                     jac[(lo + j, a)] = db * sigma * grad[a];

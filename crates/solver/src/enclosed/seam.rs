@@ -16,8 +16,11 @@
 //! `min(λ_j, σ g_j)` has a kink: Newton at a fixed parameter (the natural-parameter loop,
 //! [`rodloop_continuation::natural`]) passes it, while the bordered corrector of
 //! pseudo-arclength stalls there (measured on the lifted-off figure-eight at `L̄ ≈ 1.4198`,
-//! `N = 64`, in this module's tests): tracing through contact changes needs events on
-//! `λ_j` and `g_j` and a switch of the active set.
+//! `N = 64`, in this module's tests). A model with its contact set held fixed
+//! ([`EnclosedModel::with_contact_set`], [`super::arclength`]) is smooth: pseudo-arclength
+//! follows it through folds, with the piece's end (a contact impulse or a free gap reaching
+//! zero, [`super::arclength::contact_slack`]) as an event; [`Confinement::with_param`] keeps
+//! the set.
 
 use std::cell::OnceCell;
 
@@ -148,8 +151,13 @@ impl Confinement for EnclosedModel {
             Param::Lbar => (value, self.stiffness().kind().clone()),
             _ => (self.lbar(), self.stiffness().kind().with_param(p, value)?),
         };
-        self.rebuilt(lbar, self.cells(), &stiffness, self.gauge().clone())?
-            .with_pull(self.pull())
+        let m = self
+            .rebuilt(lbar, self.cells(), &stiffness, self.gauge().clone())?
+            .with_pull(self.pull())?;
+        match self.contact_set() {
+            Some(set) => m.with_contact_set(set.to_vec()),
+            None => Ok(m),
+        }
     }
     /// Central difference of the residual in the parameter (see the module docs).
     fn dparam(&self, z: &[f64], p: Param) -> Result<DVector<f64>, SolverError> {

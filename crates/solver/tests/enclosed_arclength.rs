@@ -1,0 +1,162 @@
+//! Pseudo-arclength continuation of an enclosed family at a fixed contact set
+//! (`rodloop_solver::enclosed::arclength`): the smooth piece's Jacobian against central
+//! differences, the contact set carried to other parameter values, and a fold of the
+//! two-segment rod's branch 1 (`D1/D0 = 0.5`, Sec. 5) that natural-parameter steps in `L̄`
+//! cannot pass, checked by independent semismooth re-solves on both of its sides and by the
+//! index changing across it.
+
+use nalgebra::DVector;
+use rodloop_continuation::{fd_jacobian, Continuation, Problem, PseudoArclength, SpecialKind};
+use rodloop_solver::enclosed::arclength::{contact_set_of, contact_slack};
+use rodloop_solver::enclosed::{
+    solve_branch, solve_enclosed, EnclosedOptions, EnclosedState, SurfaceSource,
+};
+use rodloop_solver::{
+    solve_robust, Accuracy, Confinement, Param, ParamProblem, SolveOptions, StartShape, Stiffness,
+};
+
+/// The enclosed branch-1 state (`η = 2`) of the paper's two-segment rod at `lbar` on
+/// `cells` cells, solved from its surface loop as `rodloop solve` does.
+fn branch_one(lbar: f64, cells: usize) -> (Stiffness, EnclosedState) {
+    let stiffness = Stiffness::paper_sec5(0.5);
+    let (res, _) = solve_robust(
+        1.0,
+        lbar,
+        &stiffness,
+        &StartShape::Euler { l: 2 },
+        Accuracy::Default,
+        Some(2),
+        &SolveOptions::default(),
+    )
+    .expect("surface loop of branch 1");
+    let src = SurfaceSource::Numeric(Box::new(res.equilibrium));
+    let b = solve_branch(
+        1.0,
+        lbar,
+        &stiffness,
+        &src,
+        cells,
+        &EnclosedOptions::default(),
+    )
+    .expect("enclosed branch-1 state");
+    (stiffness, b.fine)
+}
+
+#[test]
+fn the_fixed_contact_set_is_a_smooth_system_with_the_state_as_a_root() {
+    let (_, state) = branch_one(2.24, 32);
+    let set = contact_set_of(&state).unwrap();
+    assert!(set.iter().any(|&on| on) && set.iter().any(|&on| !on));
+    let fixed = state.model.clone().with_contact_set(set.clone()).unwrap();
+    // The state is a root of its own piece, as of the min-function.
+    let f = Confinement::residual(&fixed, &state.z).unwrap();
+    assert!(
+        fixed.residual_norm(&f) < 1e-9,
+        "{}",
+        fixed.residual_norm(&f)
+    );
+    assert!(contact_slack(&fixed, &state.z).unwrap() > 0.0);
+    // The contact set is carried to another length.
+    let other = Confinement::with_param(&fixed, Param::Lbar, 2.25).unwrap();
+    assert_eq!(other.contact_set(), Some(set.as_slice()));
+    // Away from the state (where `min` would pick other rows at some nodes), the piece's
+    // Jacobian is the derivative of its residual.
+    let problem = ParamProblem::new(fixed, Param::Lbar).unwrap();
+    let mut x = DVector::from_column_slice(&state.z);
+    for (i, v) in x.iter_mut().enumerate() {
+        *v += 1e-3 * ((i as f64) * 0.7).sin();
+    }
+    let jac = problem.jacobian(&x, 2.24).unwrap();
+    let fd = fd_jacobian(|v: &DVector<f64>| problem.residual(v, 2.24), &x).unwrap();
+    let err = (&jac - &fd).amax();
+    assert!(err < 1e-7 * jac.amax(), "{err:e} of {:e}", jac.amax());
+}
+
+#[test]
+fn branch_one_folds_and_both_sides_are_equilibria_of_the_wall() {
+    let cells = 64;
+    let lbar = 2.24;
+    let (stiffness, state) = branch_one(lbar, cells);
+    assert_eq!(state.index(1e-6).unwrap(), 0);
+    let set = contact_set_of(&state).unwrap();
+    let fixed = state.model.clone().with_contact_set(set).unwrap();
+    let problem = ParamProblem::new(fixed, Param::Lbar).unwrap();
+    let settings = PseudoArclength::new()
+        .with_ds(0.05)
+        .unwrap()
+        .with_ds_bounds(1e-7, 0.2)
+        .unwrap()
+        .with_tol(1e-9)
+        .unwrap()
+        .with_range(lbar - 0.2, lbar + 0.2)
+        .unwrap()
+        .with_max_steps(200)
+        .unwrap();
+    let slack = |x: &DVector<f64>, p: f64| {
+        let m = problem.model_at(p).unwrap();
+        contact_slack(&m, x.as_slice()).unwrap()
+    };
+    let run = Continuation::new(&problem, settings).with_event("contact slack", slack);
+    let branch = run
+        .run(&DVector::from_column_slice(&state.z), lbar)
+        .unwrap();
+    let fold = branch
+        .special
+        .iter()
+        .find(|s| s.kind == SpecialKind::Fold)
+        .expect("a fold of branch 1");
+    assert!(fold.p > lbar && fold.p < lbar + 0.1, "fold at {}", fold.p);
+    assert!(slack(&fold.x, fold.p) > 0.0, "the fold lies on the piece");
+    // The first contact change after the fold ends the piece's equilibria.
+    let end = branch
+        .special
+        .iter()
+        .find(|s| matches!(s.kind, SpecialKind::Event { .. }) && s.s > fold.s)
+        .map_or(f64::INFINITY, |s| s.s);
+    // Points before and after the fold on the piece, within 1e-2 of it in L̄.
+    let near = |after: bool| {
+        branch
+            .points
+            .iter()
+            .filter(|q| (q.s > fold.s) == after && q.s < end && fold.p - q.p < 1e-2)
+            .min_by(|a, b| (fold.p - a.p).total_cmp(&(fold.p - b.p)))
+            .unwrap_or_else(|| {
+                panic!(
+                    "a point {} the fold",
+                    if after { "after" } else { "before" }
+                )
+            })
+            .clone()
+    };
+    let (below, above) = (near(false), near(true));
+    for (q, index) in [(&below, 0), (&above, 1)] {
+        assert!(q.p < fold.p);
+        // The wall model at this length, no contact set fixed.
+        let m = problem.model();
+        let model = m
+            .rebuilt(q.p, cells, &stiffness, m.gauge().clone())
+            .unwrap();
+        assert_eq!(model.contact_set(), None);
+        let at = EnclosedState {
+            model: model.clone(),
+            z: q.x.as_slice().to_vec(),
+            iterations: 0,
+            residual: 0.0,
+        };
+        // The index changes across the fold (the lowest eigenvalue of the tangent Hessian
+        // goes through zero there).
+        assert_eq!(at.index(1e-6).unwrap(), index, "L̄ = {}", q.p);
+        // An independent semismooth solve of the wall model (min-function, its own contact
+        // set) from the continued state stays there: an equilibrium of the wall.
+        let again = solve_enclosed(&model, at.z.clone(), &EnclosedOptions::default())
+            .expect("semismooth re-solve");
+        let (e, e_again) = (at.energy(), again.energy());
+        assert!((e - e_again).abs() < 1e-10, "L̄ = {}: {e} vs {e_again}", q.p);
+        let dz =
+            at.z.iter()
+                .zip(&again.z)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+        assert!(dz < 1e-6, "L̄ = {}: the re-solve moved by {dz:e}", q.p);
+    }
+}
