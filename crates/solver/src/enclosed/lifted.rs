@@ -54,25 +54,25 @@ use nalgebra::{Const, DVector, Matrix3, Matrix4, SMatrix, SVector, Vector3};
 use super::model::{closure_rotation, tr4, translation, vee_skew3, EnclosedModel, TWIST_ROW};
 use crate::SolverError;
 
-const B: usize = 17;
+pub(super) const B: usize = 17;
 type Blk = SMatrix<f64, B, B>;
-type BVec = SVector<f64, B>;
+pub(super) type BVec = SVector<f64, B>;
 /// Border size, padded: `10 + gauges` unknowns (at most 15) with identity rows after them,
 /// so that every block of the factorisation has a fixed size.
 const G: usize = 15;
 type BCol = SMatrix<f64, B, G>;
 type BRow = SMatrix<f64, G, B>;
 type GMat = SMatrix<f64, G, G>;
-type GVec = SVector<f64, G>;
+pub(super) type GVec = SVector<f64, G>;
 type M4 = Matrix4<f64>;
 type M3 = Matrix3<f64>;
 type V3 = Vector3<f64>;
 
 // Local layout of a cell block (unknowns and equations).
-const K0: usize = 0; // δκ_c / stationarity
-const X0: usize = 4; // ξ_{c+1} / forward recursion
-const M0: usize = 10; // δm_c / backward recursion
-const L0: usize = 16; // δλ_{c+1} / wall row of node c+1
+pub(super) const K0: usize = 0; // δκ_c / stationarity
+pub(super) const X0: usize = 4; // ξ_{c+1} / forward recursion
+pub(super) const M0: usize = 10; // δm_c / backward recursion
+pub(super) const L0: usize = 16; // δλ_{c+1} / wall row of node c+1
 
 /// Pivot ratio below which a block counts as singular.
 const PIVOT_RATIO: f64 = 1e-14;
@@ -161,7 +161,7 @@ type B6 = SMatrix<f64, B, 6>;
 /// stationarity rows (columns `ξ_c` only), and to block `c + 1` through `−δm_{c+1}` in its
 /// backward rows (`U_c = −E_M`, `c ≤ N − 2`). Only `low` is stored.
 #[derive(Default)]
-struct Lifted {
+pub(super) struct Lifted {
     n: usize,
     /// Border columns in use (`10 + gauges`); the rest are padding.
     g: usize,
@@ -177,20 +177,20 @@ struct Lifted {
 
 /// Right-hand side or solution of the lifted system.
 #[derive(Clone, Default)]
-struct LVec {
-    blocks: Vec<BVec>,
-    border: GVec,
+pub(super) struct LVec {
+    pub(super) blocks: Vec<BVec>,
+    pub(super) border: GVec,
 }
 
 impl LVec {
     /// `n` zero blocks and a zero border, reusing the allocation.
-    fn reset(&mut self, n: usize) {
+    pub(super) fn reset(&mut self, n: usize) {
         self.blocks.clear();
         self.blocks.resize(n, BVec::zeros());
         self.border = GVec::zeros();
     }
 
-    fn norm(&self) -> f64 {
+    pub(super) fn norm(&self) -> f64 {
         (self.blocks.iter().map(|b| b.norm_squared()).sum::<f64>() + self.border.norm_squared())
             .sqrt()
     }
@@ -225,7 +225,7 @@ impl Lifted {
     }
 
     /// `out = M x`.
-    fn apply(&self, x: &LVec, out: &mut LVec) {
+    pub(super) fn apply(&self, x: &LVec, out: &mut LVec) {
         let n = self.n;
         let blocks = &mut out.blocks;
         blocks.clear();
@@ -249,9 +249,44 @@ impl Lifted {
         out.border = border;
     }
 
+    /// Fills the auxiliary unknowns of `x` (`ξ_{c+1}` and `δm_c` of every block) from its
+    /// others so that the forward and backward recursion rows of `M x` vanish: `ξ` by a
+    /// forward sweep from `ξ_0 = 0`, `δm` by a backward one (both rows have the identity on
+    /// their own unknown). `M x` then holds `J v` in its other rows, `v` the unknowns of the
+    /// model that `x` lifts ([`super::lifted_factor`]).
+    pub(super) fn complete(&self, x: &mut LVec) {
+        let n = self.n;
+        let mut xi_prev = SVector::<f64, 6>::zeros();
+        for c in 0..n {
+            let xc = &mut x.blocks[c];
+            for k in 0..6 {
+                xc[X0 + k] = 0.0;
+                xc[M0 + k] = 0.0;
+            }
+            let r = self.diag[c] * *xc + self.bcol[c] * x.border;
+            for k in 0..6 {
+                xc[X0 + k] = -(r[X0 + k] - xi_prev[k]);
+            }
+            xi_prev = xc.fixed_rows::<6>(X0).into_owned();
+        }
+        let mut m_next = SVector::<f64, 6>::zeros();
+        for c in (0..n).rev() {
+            let xc = &mut x.blocks[c];
+            let r = self.diag[c] * *xc + self.bcol[c] * x.border;
+            for k in 0..6 {
+                xc[M0 + k] = -(r[M0 + k] - m_next[k]);
+            }
+            m_next = if c >= 1 {
+                xc.fixed_rows::<6>(M0).into_owned()
+            } else {
+                SVector::zeros()
+            };
+        }
+    }
+
     /// Largest entry of the tridiagonal blocks and the corner (the constant off-diagonal
     /// entries are ±1).
-    fn amax(&self) -> f64 {
+    pub(super) fn amax(&self) -> f64 {
         self.diag
             .iter()
             .map(|b| b.amax())
@@ -266,7 +301,7 @@ impl Lifted {
 /// so their eliminated columns are zero as well, and every product below skips them. The
 /// factors are written in place into buffers kept across Newton steps ([`block_lu`]).
 #[derive(Default)]
-struct Factor {
+pub(super) struct Factor {
     /// The LU factors of the pivot blocks `S_c` (unit lower and upper triangle in one block).
     lu: Vec<Blk>,
     /// Their row interchanges ([`block_lu`]).
@@ -393,7 +428,7 @@ fn dot_rc<const R: usize, const C: usize>(
 
 impl Factor {
     /// Factor `sys` into `self`, reusing the allocations.
-    fn factor(&mut self, sys: &Lifted) -> Result<(), SolverError> {
+    pub(super) fn factor(&mut self, sys: &Lifted) -> Result<(), SolverError> {
         let n = sys.n;
         let g = sys.g;
         let singular = || SolverError::SingularJacobian { iteration: 0 };
@@ -488,8 +523,36 @@ impl Factor {
         Ok(())
     }
 
+    /// `(sign, ln|det|)` of the factored lifted matrix: the pivot blocks' LU diagonals and
+    /// row interchanges, and the border's Schur complement (its padding is the identity).
+    /// Eliminating the auxiliary unknowns `ξ`, `δm` (unit block-bidiagonal recursions, whose
+    /// determinant is 1) leaves the dense Jacobian, so `ln|det|` is the dense one's and the
+    /// sign differs from it by that of a fixed reordering (the same for every state of a
+    /// mesh): a sign change along a path is the dense Jacobian's.
+    pub(super) fn determinant(&self, n: usize) -> (f64, f64) {
+        let (mut sign, mut log) = (1.0f64, 0.0f64);
+        for c in 0..n {
+            let (lu, perm) = (&self.lu[c], &self.perm[c]);
+            for i in 0..B {
+                let d = lu[(i, i)];
+                sign *= d.signum();
+                log += d.abs().ln();
+                if perm[i] != i {
+                    sign = -sign;
+                }
+            }
+        }
+        match &self.corner {
+            Some(corner) => {
+                let d = corner.determinant();
+                (sign * d.signum(), log + d.abs().ln())
+            }
+            None => (0.0, f64::NEG_INFINITY),
+        }
+    }
+
     /// Solve `sys x = rhs` into `x` (`y` a work buffer); false if a pivot is zero.
-    fn solve(&self, sys: &Lifted, rhs: &LVec, y: &mut Vec<BVec>, x: &mut LVec) -> bool {
+    pub(super) fn solve(&self, sys: &Lifted, rhs: &LVec, y: &mut Vec<BVec>, x: &mut LVec) -> bool {
         let n = sys.n;
         let g = sys.g;
         let Some(corner) = &self.corner else {
@@ -602,7 +665,7 @@ impl EnclosedModel {
     }
 
     /// The step in the model's unknowns from the lifted solution.
-    fn unlift(&self, x: &LVec) -> DVector<f64> {
+    pub(super) fn unlift(&self, x: &LVec) -> DVector<f64> {
         let n = self.cells();
         let np = self.n_primal();
         let ng = self.n_gauge();
@@ -627,7 +690,7 @@ impl EnclosedModel {
     }
 
     /// Assemble the lifted system and its right-hand side `−F` (see the module docs).
-    fn lifted_system(
+    pub(super) fn lifted_system(
         &self,
         z: &[f64],
         ch: &super::model::Chain,

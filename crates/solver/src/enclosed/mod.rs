@@ -43,6 +43,7 @@ pub mod inertia;
 pub mod jet;
 pub mod length_path;
 pub mod lifted;
+pub mod lifted_factor;
 pub mod model;
 pub mod seam;
 pub mod solve;

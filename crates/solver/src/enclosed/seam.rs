@@ -6,9 +6,10 @@
 //! closure, gauges and `min(λ_j, σ g_j) = 0` at the nodes); its Jacobian is the generalised
 //! (active-set) Jacobian of [`EnclosedModel::evaluate`], so Newton's method through the seam
 //! is the semismooth Newton method without globalisation (the model's own
-//! [`solve_enclosed`](super::solve_enclosed) adds backtracking). The factorisation is a dense
-//! LU (`O(N³)`; the `O(N)` block form of [`super::lifted`] gives Newton steps but no
-//! determinant yet). Parameter derivatives `∂F/∂θ` are central differences of the residual
+//! [`solve_enclosed`](super::solve_enclosed) adds backtracking). The factorisation is the
+//! `O(N)` block form of [`super::lifted`] ([`LiftedFactor`]: solves, products and the
+//! determinant), and a dense LU where the Jacobian is shifted (inertia) or a pivot block
+//! is nearly singular. Parameter derivatives `∂F/∂θ` are central differences of the residual
 //! ([`rodloop_continuation::fd_dparam`], error `O(δ²)`): the chain of cell propagators
 //! depends on `L̄` through every cell length, and its analytic derivative is not written yet.
 //!
@@ -27,6 +28,7 @@ use std::cell::OnceCell;
 use nalgebra::{DMatrix, DVector};
 use rodloop_continuation::{DenseLu, Factorization};
 
+use super::lifted_factor::LiftedFactor;
 use super::model::EnclosedModel;
 use super::solve::EnclosedState;
 use crate::param::Param;
@@ -34,28 +36,44 @@ use crate::seam::{Confinement, Inertia};
 use crate::stiffness::StiffnessProfile;
 use crate::SolverError;
 
-/// A factorised enclosed KKT Jacobian (dense LU), with the stability index of its state
-/// computed on first request.
+/// A factorised enclosed KKT Jacobian, with the stability index of its state computed on
+/// first request: the `O(N)` lifted block form ([`LiftedFactor`]) where it is unshifted
+/// and its pivot blocks are regular, else the dense LU.
 pub struct EnclosedFactor {
-    lu: DenseLu,
+    lu: Inner,
     model: EnclosedModel,
     z: Vec<f64>,
     shift: f64,
     negative: OnceCell<usize>,
 }
 
+/// The factors of an [`EnclosedFactor`].
+enum Inner {
+    Dense(DenseLu),
+    Lifted(Box<LiftedFactor>),
+}
+
+impl Inner {
+    fn get(&self) -> &dyn Factorization {
+        match self {
+            Inner::Dense(lu) => lu,
+            Inner::Lifted(f) => f.as_ref(),
+        }
+    }
+}
+
 impl Factorization for EnclosedFactor {
     fn solve(&self, b: &DVector<f64>) -> Option<DVector<f64>> {
-        self.lu.solve(b)
+        self.lu.get().solve(b)
     }
     fn apply(&self, v: &DVector<f64>) -> DVector<f64> {
-        self.lu.apply(v)
+        self.lu.get().apply(v)
     }
     fn det_sign(&self) -> f64 {
-        self.lu.det_sign()
+        self.lu.get().det_sign()
     }
     fn log_abs_det(&self) -> f64 {
-        self.lu.log_abs_det()
+        self.lu.get().log_abs_det()
     }
 }
 
@@ -118,6 +136,24 @@ impl Confinement for EnclosedModel {
         Ok(self.evaluate(z)?.jacobian)
     }
     fn factorize(&self, z: &[f64], shift: f64) -> Result<EnclosedFactor, SolverError> {
+        let lifted = if shift == 0.0 {
+            match LiftedFactor::new(self, z) {
+                Ok(f) if f.log_abs_det().is_finite() => Some(f),
+                Ok(_) | Err(SolverError::SingularJacobian { .. }) => None,
+                Err(e) => return Err(e),
+            }
+        } else {
+            None
+        };
+        if let Some(f) = lifted {
+            return Ok(EnclosedFactor {
+                lu: Inner::Lifted(Box::new(f)),
+                model: self.clone(),
+                z: z.to_vec(),
+                shift,
+                negative: OnceCell::new(),
+            });
+        }
         let mut j = self.evaluate(z)?.jacobian;
         if shift != 0.0 {
             for (a, m) in mass(self).into_iter().enumerate() {
@@ -129,7 +165,7 @@ impl Confinement for EnclosedModel {
             return Err(SolverError::SingularJacobian { iteration: 0 });
         }
         Ok(EnclosedFactor {
-            lu,
+            lu: Inner::Dense(lu),
             model: self.clone(),
             z: z.to_vec(),
             shift,
