@@ -194,8 +194,8 @@ fn events_separate_attached_and_lifted_off_solves() {
             EventKind::Landing => (below, above),
             EventKind::LiftOff => (above, below),
             // Below L̄ = 1 only (tests/enclosed_detachment.rs); two-segment rods only.
-            EventKind::Detachment | EventKind::BranchPoint => {
-                panic!("no detachment or branch point in [1, 3]: {e:?}")
+            EventKind::Detachment | EventKind::BranchPoint | EventKind::Fold => {
+                panic!("no detachment, branch point or fold in [1, 3]: {e:?}")
             }
         };
         let (_, _, gap_l) = enclosed_energy(eta, lifted, 64);

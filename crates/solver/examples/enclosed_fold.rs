@@ -9,8 +9,11 @@
 //! Arguments: the start length `L̄` and the cells `N` of the enclosed state (solved from
 //! the surface loop as `rodloop solve` does). It prints each located fold and each end of the
 //! piece (a contact impulse or a free gap reaching zero, where the contact set changes), with
-//! the located point's slack ([`contact_slack`]). The Jacobian is factored in `O(N)`
-//! (`rodloop_solver::enclosed::lifted_factor`): a run at `N = 128` takes about 1 s.
+//! the located point's slack ([`contact_slack`]). The step is at most `0.02` in the
+//! continuation's norm of `(z, L̄)`: with steps ten times longer, the corrector lands on
+//! other parts of the curve next to the point where the lowest eigenvalue nearly vanishes
+//! and reports folds that shorter steps do not find. The Jacobian is factored in `O(N)`
+//! (`rodloop_solver::enclosed::lifted_factor`): a run at `N = 128` takes about 2 s.
 
 use nalgebra::DVector;
 use rodloop_continuation::{Continuation, PseudoArclength, SpecialKind};
@@ -50,8 +53,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .with_contact_set(contact_set_of(state)?)?;
     let problem = ParamProblem::new(model, Param::Lbar)?;
     let settings = PseudoArclength::new()
-        .with_ds(0.05)?
-        .with_ds_bounds(1e-7, 0.2)?
+        .with_ds(0.01)?
+        .with_ds_bounds(1e-7, 0.02)?
         .with_tol(1e-9)?
         .with_range(lbar - 0.05, lbar + 0.1)?
         .with_max_steps(400)?;

@@ -67,6 +67,7 @@ use crate::parallel::run_parallel;
 use crate::DiagramError;
 
 mod critical;
+mod fold;
 mod levels;
 mod locate;
 mod nonuniform;
@@ -287,6 +288,9 @@ pub enum EventKind {
     /// An eigenvalue on the tangent space of the active constraints crosses zero on a
     /// lifted-off sheet (the Hessian index changes): another family meets the sheet there.
     BranchPoint,
+    /// A lifted-off family turns back in `L̄` (a fold: the family and one whose index differs
+    /// by one meet and end there), located from a trace's stop (`fold.rs`).
+    Fold,
 }
 
 impl EventKind {
@@ -297,6 +301,7 @@ impl EventKind {
             EventKind::Landing => "landing",
             EventKind::Detachment => "detachment",
             EventKind::BranchPoint => "branch_point",
+            EventKind::Fold => "fold",
         }
     }
 }

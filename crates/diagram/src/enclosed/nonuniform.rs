@@ -57,7 +57,7 @@ use super::nonuniform_descent::descend_unstable;
 use super::nonuniform_exchange::{interp, locate_crossing, lowest_at, mean_stiffness, CIRCLE};
 use super::nonuniform_seeds::seed_from_stiffness_path;
 use super::nonuniform_sheet::{surface_at, surface_energy, SheetOut};
-use super::nonuniform_special::{branch_points, classify_stops};
+use super::nonuniform_special::{branch_points, classify_stops, fold_events, stop_folds};
 use super::trace::follow;
 use super::trace::step_options;
 use super::{
@@ -708,7 +708,15 @@ pub(super) fn nonuniform_diagram(
         notes.extend(n);
         warnings.extend(w);
     }
-    let (stop_notes, stop_warnings) = classify_stops(&outs, &special);
+    let folds = run_parallel(
+        threads,
+        (0..outs.len()).collect(),
+        &mut |_| {},
+        &mut |_: &Vec<super::fold::StopFold>| {},
+        |i, _| stop_folds(&outs[i]),
+    );
+    special.extend(fold_events(&outs, &folds));
+    let (stop_notes, stop_warnings) = classify_stops(&outs, &special, &folds);
     notes.extend(stop_notes);
     warnings.extend(stop_warnings);
     timings.lifted_off += tbp.elapsed().as_secs_f64();

@@ -17,18 +17,20 @@
 //!   points of the two-segment scene is located and the diagram costs 8 % more.)
 //! * **Stops.** A trace that stops where Newton fails under step halving is explained when
 //!   it stops next to the end of its branch's range (the `m`-fold great circle, where the
-//!   sheet collapses onto the wall: the collapse at `L̄ = m` is exact) or next to a located
-//!   branch point of its branch (a family that ends where it meets another: natural
+//!   sheet collapses onto the wall: the collapse at `L̄ = m` is exact), where the family
+//!   folds (located from the stop by pseudo-arclength, `fold.rs`; a fold event, once per
+//!   fold), or next to a located branch point of its branch (a family that ends where it meets another: natural
 //!   parameter steps cannot pass the vertical tangent of a pitchfork's asymmetric side;
 //!   within the point's estimate plus `2e-2`).
 //!   Other stops stay warnings.
 
 use rodloop_solver::SolverError;
 
+use super::fold::{fold_at_stop, StopFold};
 use super::levels::Levels;
 use super::locate::{is_jump, locate};
 use super::nonuniform_sheet::SheetOut;
-use super::trace::step_options;
+use super::trace::{step_options, TraceStop};
 use super::{EnclosedEvent, EventKind, PointSource};
 
 /// Eigenvalue `k` (ascending) on the tangent space of the active constraints, level `lvl`.
@@ -160,16 +162,76 @@ const NEAR_CIRCLE: f64 = 5e-3;
 /// trace's stop is put down to it.
 const NEAR_BRANCH_POINT: f64 = 2e-2;
 
-/// Sort the traces' stops into notes (explained: the end of the branch's range, or a branch
-/// point of the branch) and warnings (see the module docs). Returns `(notes, warnings)`.
+/// The folds at the stops of sheet `s`, one entry per stop (`fold.rs`); none for a stop
+/// next to a great circle ending the branch's range (a collapse, explained below).
+pub(super) fn stop_folds(s: &SheetOut) -> Vec<StopFold> {
+    let e = f64::from(s.eta);
+    s.stops
+        .iter()
+        .map(|st| {
+            let at_circle = [e - 1.0, e + 1.0]
+                .iter()
+                .any(|m| (st.lbar - m).abs() < NEAR_CIRCLE);
+            if at_circle {
+                StopFold::None
+            } else {
+                fold_at_stop(&st.last, st.dir)
+            }
+        })
+        .collect()
+}
+
+/// The fold events of the stops' folds (`folds[i]` of sheet `outs[i]`): one per fold, a fold
+/// reached from both of its sides (the two families that meet there) once.
+pub(super) fn fold_events(outs: &[SheetOut], folds: &[Vec<StopFold>]) -> Vec<EnclosedEvent> {
+    let mut events: Vec<EnclosedEvent> = Vec::new();
+    for (s, fs) in outs.iter().zip(folds) {
+        for f in fs.iter().filter_map(|f| match f {
+            StopFold::Located(f) => Some(f),
+            _ => None,
+        }) {
+            let seen = events.iter().any(|v| {
+                v.branch == s.branch
+                    && (v.lbar - f.lbar).abs() <= v.error_estimate + f.error_estimate
+            });
+            if !seen {
+                events.push(EnclosedEvent {
+                    kind: EventKind::Fold,
+                    branch: s.branch,
+                    family: s.family,
+                    lbar: f.lbar,
+                    error_estimate: f.error_estimate,
+                    energy: f.energy,
+                    index_before: f.index_before,
+                    index_after: f.index_after,
+                });
+            }
+        }
+    }
+    events
+}
+
+/// Sort the traces' stops into notes (explained: the end of the branch's range, a fold
+/// located from the stop, or a branch point of the branch) and warnings (see the module
+/// docs). Returns `(notes, warnings)`.
 pub(super) fn classify_stops(
     outs: &[SheetOut],
     events: &[EnclosedEvent],
+    folds: &[Vec<StopFold>],
 ) -> (Vec<String>, Vec<String>) {
     let (mut notes, mut warnings) = (Vec::new(), Vec::new());
-    for s in outs {
+    for (s, fs) in outs.iter().zip(folds) {
         let e = f64::from(s.eta);
-        for st in &s.stops {
+        for (st, fold) in s.stops.iter().zip(fs) {
+            let text = match fold {
+                StopFold::CoarseOnly(x) => format!(
+                    "{} (the trace's level N/2 folds at L̄ = {x:.9}, {:.1e} from the stop, by pseudo-arclength on the last state's contact set, where level N has no fold: the walk of all levels cannot pass a fold of its coarser mesh)",
+                    st.text,
+                    (x - st.lbar).abs()
+                ),
+                _ => st.text.clone(),
+            };
+            let st = &TraceStop { text, ..st.clone() };
             if let Some(m) = [e - 1.0, e + 1.0]
                 .into_iter()
                 .find(|m| (st.lbar - m).abs() < NEAR_CIRCLE)
@@ -178,6 +240,18 @@ pub(super) fn classify_stops(
                     "{} — explained: {:.1e} from L̄ = {m}, where this branch's sheets end on the {m}-fold great circle (a collapse, exact)",
                     st.text,
                     (st.lbar - m).abs()
+                ));
+                continue;
+            }
+            if let StopFold::Located(f) = fold {
+                notes.push(format!(
+                    "{} — explained: the family folds at L̄ = {:.9} ± {:.1e}, {:.1e} from the stop (index {} before, {} past it; pseudo-arclength on the last state's contact set, levels N/2 and N)",
+                    st.text,
+                    f.lbar,
+                    f.error_estimate,
+                    (f.lbar - st.lbar).abs(),
+                    f.index_before,
+                    f.index_after
                 ));
                 continue;
             }

@@ -1,0 +1,176 @@
+//! Folds where a lifted-off trace of a non-uniform rod stops.
+//!
+//! The traces step in `L̄` (natural parameter, `trace.rs`), which cannot pass a fold: where
+//! the family turns back, Newton fails under every halving and the trace stops. From the
+//! last state reached, the family is followed by pseudo-arclength continuation on the smooth
+//! piece of its contact set ([`rodloop_solver::enclosed::arclength`]: the contact set of that
+//! state held fixed, the Jacobian factored in `O(N)`), in the direction the trace went, over
+//! at most [`REACH`] in `L̄`. A fold met before the piece ends (a contact impulse or a free
+//! gap reaching zero, the event [`contact_slack`]) is located by the continuation crate (the
+//! tangent's `L̄` component changing sign, to `1e-10` in arclength), on the levels `N/2` and
+//! `N` of the trace: the value is the finer level's, the estimate the distance between the
+//! two (the discretisation error of the coarser one, as for the branch points of
+//! `locate.rs`). Where the piece ends first, or a level finds no fold, nothing is located.
+//! A fold of level `N/2` alone is a fold of that mesh: the walk of all three levels cannot
+//! pass it although the family goes on with `N` cells (branch 1 of the two-segment rod at
+//! `L̄ = 2.2611218`, 64 cells, where 96 and 128 cells have none), and the stop's warning
+//! says so.
+
+use nalgebra::DVector;
+use rodloop_continuation::{Continuation, Direction, PseudoArclength, SpecialKind};
+use rodloop_solver::enclosed::arclength::{contact_set_of, contact_slack};
+use rodloop_solver::enclosed::EnclosedState;
+use rodloop_solver::{Confinement, Param, ParamProblem, SolverError};
+
+use super::levels::Levels;
+
+/// Farthest the continuation looks past a trace's stop, in `L̄` (the traces' sample spacing
+/// is a few `10⁻²`, and a stop lies within one failed step of the singular point).
+pub(super) const REACH: f64 = 0.05;
+
+/// Longest continuation step, in the continuation's norm of `(z, L̄)`. With steps ten times
+/// longer the corrector lands on other parts of the curve next to a point where the lowest
+/// eigenvalue nearly vanishes (branch 1 of the two-segment rod at `L̄ ≈ 2.2635`, 128 cells:
+/// `3.2·10⁻⁵`) and reports folds that shorter steps do not find.
+const MAX_STEP: f64 = 0.02;
+
+/// Continuation steps past a fold, on its piece, before the index past it is taken.
+const PAST: usize = 3;
+
+/// A fold located from a trace's stop.
+#[derive(Clone, Debug)]
+pub(super) struct Fold {
+    /// `L̄` of the fold (the finer level's).
+    pub(super) lbar: f64,
+    /// Its estimate: the distance between the two levels' folds.
+    pub(super) error_estimate: f64,
+    /// Energy `E R/(π D0)` of the fold state (finer level).
+    pub(super) energy: f64,
+    /// Index of the trace's state, and of the family past the fold (finer level).
+    pub(super) index_before: usize,
+    /// Index past the fold.
+    pub(super) index_after: usize,
+}
+
+/// The fold of `state`'s family on its own mesh within [`REACH`] in the direction `dir`
+/// (`+1`: increasing `L̄`): its `L̄`, the fold state's energy, and the index of the first
+/// continued state past it (`None` where no state past it lies on the piece). `Ok(None)`
+/// where the piece ends first or no fold is met.
+fn fold_on_level(
+    state: &EnclosedState,
+    dir: f64,
+) -> Result<Option<(f64, f64, Option<usize>)>, SolverError> {
+    let set = contact_set_of(state)?;
+    let model = state.model.clone().with_contact_set(set)?;
+    let lbar = state.model.lbar();
+    let problem = ParamProblem::new(model, Param::Lbar)?;
+    let direction = if dir > 0.0 {
+        Direction::Forward
+    } else {
+        Direction::Backward
+    };
+    let invalid = |e: rodloop_continuation::ContinuationError| {
+        SolverError::InvalidInput(format!("fold continuation: {e}"))
+    };
+    let settings = PseudoArclength::new()
+        .with_ds(0.01)
+        .and_then(|s| s.with_ds_bounds(1e-7, MAX_STEP))
+        .and_then(|s| s.with_tol(1e-9))
+        .and_then(|s| s.with_range(lbar - REACH, lbar + REACH))
+        .and_then(|s| s.with_max_steps(200))
+        .and_then(|s| s.with_direction(direction))
+        .map_err(invalid)?;
+    let slack = |x: &DVector<f64>, p: f64| {
+        problem
+            .model_at(p)
+            .and_then(|m| contact_slack(&m, x.as_slice()))
+            .unwrap_or(f64::NAN)
+    };
+    let run = Continuation::new(&problem, settings).with_event("contact slack", slack);
+    let mut stepper = run
+        .start(&DVector::from_column_slice(&state.z), lbar)
+        .map_err(invalid)?;
+    // Step until the fold, then on past it along its piece for up to `PAST` steps (the
+    // index past the fold is taken at the last of them: right at the fold the eigenvalue
+    // that crossed zero is below any threshold).
+    let mut fold: Option<rodloop_continuation::SpecialPoint> = None;
+    let mut past: Option<rodloop_continuation::Point> = None;
+    let mut after = 0;
+    'run: loop {
+        let step = stepper.step().map_err(invalid)?;
+        for sp in &step.special {
+            match sp.kind {
+                SpecialKind::Fold if fold.is_none() => fold = Some(sp.clone()),
+                SpecialKind::Event { .. } => break 'run,
+                _ => {}
+            }
+        }
+        let Some(point) = step.point else { break };
+        if fold.is_some() {
+            past = Some(point);
+            after += 1;
+            if after >= PAST {
+                break;
+            }
+        }
+        if step.stop.is_some() {
+            break;
+        }
+    }
+    let Some(fold) = fold else {
+        return Ok(None);
+    };
+    // On its piece (a NaN slack, a model that cannot be built, counts as off it).
+    if slack(&fold.x, fold.p).partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return Ok(None);
+    }
+    // The wall model (no contact set held) at a state of the run.
+    let plain = |x: &DVector<f64>, p: f64| -> Result<EnclosedState, SolverError> {
+        let m = state.model.with_param(Param::Lbar, p)?;
+        Ok(EnclosedState {
+            model: m,
+            z: x.as_slice().to_vec(),
+            iterations: 0,
+            residual: f64::NAN,
+        })
+    };
+    let energy = plain(&fold.x, fold.p)?.energy();
+    let past = past
+        .map(|q| plain(&q.x, q.p).and_then(|st| st.index(1e-6)))
+        .transpose()?;
+    Ok(Some((fold.p, energy, past)))
+}
+
+/// What the continuation finds past a trace's stop on its levels `N/2` and `N`.
+#[derive(Clone, Debug)]
+pub(super) enum StopFold {
+    /// Both levels fold: the family's fold, located (see the module docs).
+    Located(Fold),
+    /// Only level `N/2` folds, at this `L̄`: a fold of the coarser mesh, which the walk of
+    /// all three levels cannot pass, while on `N` cells the family goes on.
+    CoarseOnly(f64),
+    /// No fold on level `N/2` (or none could be followed).
+    None,
+}
+
+/// The fold of the trace stopped at `last` (levels `N/4, N/2, N`), going in direction `dir`
+/// (see the module docs). [`StopFold::Located`] needs a continued state past the fine
+/// level's fold on its piece (the index past the fold is taken there).
+pub(super) fn fold_at_stop(last: &Levels, dir: f64) -> StopFold {
+    let Ok(Some((coarse, _, _))) = fold_on_level(&last.states[1], dir) else {
+        return StopFold::None;
+    };
+    let Ok(Some((fine, energy, past))) = fold_on_level(&last.states[2], dir) else {
+        return StopFold::CoarseOnly(coarse);
+    };
+    let (Ok(index_before), Some(index_after)) = (last.states[2].index(1e-6), past) else {
+        return StopFold::None;
+    };
+    StopFold::Located(Fold {
+        lbar: fine,
+        error_estimate: (fine - coarse).abs(),
+        energy,
+        index_before,
+        index_after,
+    })
+}
