@@ -439,3 +439,35 @@ fn branch_one_family_one_is_traced_past_its_branch_point() {
         }
     }
 }
+
+/// Where a lifted-off trace stops, the diagram follows its last state by pseudo-arclength
+/// on the state's contact set: a fold found on both of the trace's finer levels is a special
+/// point of kind `fold`, across which the index changes by one (a simple fold: one
+/// eigenvalue of the smooth piece goes through zero), with an estimate below the traces'
+/// sample spacing, lying next to where some family of its branch stops.
+#[test]
+fn folds_at_the_traces_stops_change_the_index_by_one() {
+    let d = whole_diagram();
+    let folds: Vec<_> = d
+        .events
+        .iter()
+        .filter(|e| e.kind == EventKind::Fold)
+        .collect();
+    assert!(!folds.is_empty(), "{:?}", d.events);
+    for f in folds {
+        assert_eq!(f.index_before.abs_diff(f.index_after), 1, "{f:?}");
+        assert!(
+            f.error_estimate.is_finite() && f.error_estimate < 1e-2,
+            "{f:?}"
+        );
+        assert!(f.energy.is_finite(), "{f:?}");
+        // The family's traced states end on one side of the fold, within one sample step.
+        let near = d
+            .points
+            .iter()
+            .filter(|p| p.branch == f.branch && p.family == f.family)
+            .map(|p| (p.lbar - f.lbar).abs())
+            .fold(f64::INFINITY, f64::min);
+        assert!(near < 0.05, "{f:?}: nearest state of its family {near}");
+    }
+}

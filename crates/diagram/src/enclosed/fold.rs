@@ -4,8 +4,8 @@
 //! the family turns back, Newton fails under every halving and the trace stops. From the
 //! last state reached, the family is followed by pseudo-arclength continuation on the smooth
 //! piece of its contact set ([`rodloop_solver::enclosed::arclength`]: the contact set of that
-//! state held fixed, the Jacobian factored in `O(N)`), in the direction the trace went, over
-//! at most [`REACH`] in `L̄`. A fold met before the piece ends (a contact impulse or a free
+//! state held fixed, the Jacobian factored in `O(N)`) towards the sample length the trace
+//! could not reach (a fold that stopped the walk lies before it). A fold met before the piece ends (a contact impulse or a free
 //! gap reaching zero, the event [`contact_slack`]) is located by the continuation crate (the
 //! tangent's `L̄` component changing sign, to `1e-10` in arclength), on the levels `N/2` and
 //! `N` of the trace: the value is the finer level's, the estimate the distance between the
@@ -23,10 +23,6 @@ use rodloop_solver::enclosed::EnclosedState;
 use rodloop_solver::{Confinement, Param, ParamProblem, SolverError};
 
 use super::levels::Levels;
-
-/// Farthest the continuation looks past a trace's stop, in `L̄` (the traces' sample spacing
-/// is a few `10⁻²`, and a stop lies within one failed step of the singular point).
-pub(super) const REACH: f64 = 0.05;
 
 /// Longest continuation step, in the continuation's norm of `(z, L̄)`. With steps ten times
 /// longer the corrector lands on other parts of the curve next to a point where the lowest
@@ -52,19 +48,18 @@ pub(super) struct Fold {
     pub(super) index_after: usize,
 }
 
-/// The fold of `state`'s family on its own mesh within [`REACH`] in the direction `dir`
-/// (`+1`: increasing `L̄`): its `L̄`, the fold state's energy, and the index of the first
+/// The fold of `state`'s family on its own mesh between its length and `toward`: its `L̄`, the fold state's energy, and the index of the first
 /// continued state past it (`None` where no state past it lies on the piece). `Ok(None)`
 /// where the piece ends first or no fold is met.
 fn fold_on_level(
     state: &EnclosedState,
-    dir: f64,
+    toward: f64,
 ) -> Result<Option<(f64, f64, Option<usize>)>, SolverError> {
     let set = contact_set_of(state)?;
     let model = state.model.clone().with_contact_set(set)?;
     let lbar = state.model.lbar();
     let problem = ParamProblem::new(model, Param::Lbar)?;
-    let direction = if dir > 0.0 {
+    let direction = if toward > lbar {
         Direction::Forward
     } else {
         Direction::Backward
@@ -76,7 +71,7 @@ fn fold_on_level(
         .with_ds(0.01)
         .and_then(|s| s.with_ds_bounds(1e-7, MAX_STEP))
         .and_then(|s| s.with_tol(1e-9))
-        .and_then(|s| s.with_range(lbar - REACH, lbar + REACH))
+        .and_then(|s| s.with_range(lbar.min(toward), lbar.max(toward)))
         .and_then(|s| s.with_max_steps(200))
         .and_then(|s| s.with_direction(direction))
         .map_err(invalid)?;
@@ -153,14 +148,14 @@ pub(super) enum StopFold {
     None,
 }
 
-/// The fold of the trace stopped at `last` (levels `N/4, N/2, N`), going in direction `dir`
+/// The fold of the trace stopped at `last` (levels `N/4, N/2, N`) on its way to `toward`
 /// (see the module docs). [`StopFold::Located`] needs a continued state past the fine
 /// level's fold on its piece (the index past the fold is taken there).
-pub(super) fn fold_at_stop(last: &Levels, dir: f64) -> StopFold {
-    let Ok(Some((coarse, _, _))) = fold_on_level(&last.states[1], dir) else {
+pub(super) fn fold_at_stop(last: &Levels, toward: f64) -> StopFold {
+    let Ok(Some((coarse, _, _))) = fold_on_level(&last.states[1], toward) else {
         return StopFold::None;
     };
-    let Ok(Some((fine, energy, past))) = fold_on_level(&last.states[2], dir) else {
+    let Ok(Some((fine, energy, past))) = fold_on_level(&last.states[2], toward) else {
         return StopFold::CoarseOnly(coarse);
     };
     let (Ok(index_before), Some(index_after)) = (last.states[2].index(1e-6), past) else {

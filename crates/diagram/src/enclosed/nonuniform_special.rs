@@ -175,7 +175,7 @@ pub(super) fn stop_folds(s: &SheetOut) -> Vec<StopFold> {
             if at_circle {
                 StopFold::None
             } else {
-                fold_at_stop(&st.last, st.dir)
+                fold_at_stop(&st.last, st.toward)
             }
         })
         .collect()

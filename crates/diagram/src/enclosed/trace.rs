@@ -241,11 +241,10 @@ pub(super) struct TraceStop {
     pub(super) lbar: f64,
     /// The warning text (what stopped, why, the last state's contact).
     pub(super) text: String,
-    /// The last state reached (its levels) and the direction the trace went (`±1` in `L̄`),
-    /// from which a fold is looked for (`fold.rs`).
+    /// The last state reached (its levels), from which a fold is looked for (`fold.rs`).
     pub(super) last: Box<Levels>,
-    /// `+1` for increasing `L̄`.
-    pub(super) dir: f64,
+    /// The sample length the trace was walking to and could not reach.
+    pub(super) toward: f64,
 }
 
 /// Follow a lifted-off state `first` (at `xs[mid]`) through the sample lengths `xs` both
@@ -335,7 +334,7 @@ pub(super) fn follow(
             let c = cur.states[2].contact(TOUCH).ok();
             stops.push(TraceStop {
                 last: Box::new(cur.clone()),
-                dir: dir as f64,
+                toward: x,
                 lbar: cur.lbar,
                 text: format!(
                     "{what}: the lifted-off trace stops at lbar = {:.6} ({}); the last state touches the wall on {:.1}% of its length with contact forces in [{:.3e}, {:.3e}]; Newton failed under {} step halvings (perhaps a fold or a bifurcation of the lifted-off branch; not traced further)",
