@@ -142,9 +142,10 @@ pub(super) enum StopFold {
     /// Both levels fold: the family's fold, located (see the module docs).
     Located(Fold),
     /// Only level `N/2` folds, at this `L̄`: a fold of the coarser mesh, which the walk of
-    /// all three levels cannot pass, while on `N` cells the family goes on.
+    /// all three levels cannot pass, while on `N` cells the family goes on (its continuation
+    /// reaches the unreached sample, or the end of its piece, without a fold).
     CoarseOnly(f64),
-    /// No fold on level `N/2` (or none could be followed).
+    /// No fold on level `N/2`, or a level whose continuation could not be followed.
     None,
 }
 
@@ -155,8 +156,11 @@ pub(super) fn fold_at_stop(last: &Levels, toward: f64) -> StopFold {
     let Ok(Some((coarse, _, _))) = fold_on_level(&last.states[1], toward) else {
         return StopFold::None;
     };
-    let Ok(Some((fine, energy, past))) = fold_on_level(&last.states[2], toward) else {
-        return StopFold::CoarseOnly(coarse);
+    let (fine, energy, past) = match fold_on_level(&last.states[2], toward) {
+        Ok(Some(f)) => f,
+        Ok(None) => return StopFold::CoarseOnly(coarse),
+        // A continuation that could not be followed says nothing about level N.
+        Err(_) => return StopFold::None,
     };
     let (Ok(index_before), Some(index_after)) = (last.states[2].index(1e-6), past) else {
         return StopFold::None;
