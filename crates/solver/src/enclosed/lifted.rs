@@ -610,6 +610,30 @@ struct Workspace {
     ax: LVec,
 }
 
+/// The model's unknowns (or equations) of a lifted vector: the curvature unknowns
+/// (stationarity rows) of cell `c` and the wall multiplier (row) of node `c + 1` from block
+/// `c`, and `(r0, μ, ν, λ_0)` from the border; the auxiliary `ξ`, `δm` are dropped. `n` cells,
+/// `np` primal unknowns, `ng` gauges, `lo` the offset of `λ`.
+pub(super) fn unlift_layout(n: usize, np: usize, ng: usize, lo: usize, x: &LVec) -> DVector<f64> {
+    let mut dz = DVector::zeros(lo + n);
+    for c in 0..n {
+        for i in 0..4 {
+            dz[4 * c + i] = x.blocks[c][K0 + i];
+        }
+        if c + 1 < n {
+            dz[lo + c + 1] = x.blocks[c][L0];
+        }
+    }
+    for k in 0..3 {
+        dz[4 * n + k] = x.border[k];
+    }
+    for k in 0..6 + ng {
+        dz[np + k] = x.border[3 + k];
+    }
+    dz[lo] = x.border[9 + ng];
+    dz
+}
+
 thread_local! {
     static WORKSPACE: std::cell::RefCell<Workspace> = std::cell::RefCell::new(Workspace::default());
 }
@@ -664,29 +688,15 @@ impl EnclosedModel {
         })
     }
 
-    /// The step in the model's unknowns from the lifted solution.
+    /// The step in the model's unknowns from the lifted solution ([`unlift_layout`]).
     pub(super) fn unlift(&self, x: &LVec) -> DVector<f64> {
-        let n = self.cells();
-        let np = self.n_primal();
-        let ng = self.n_gauge();
-        let lo = self.lambda_offset();
-        let mut dz = DVector::zeros(self.dim());
-        for c in 0..n {
-            for i in 0..4 {
-                dz[4 * c + i] = x.blocks[c][K0 + i];
-            }
-            if c + 1 < n {
-                dz[lo + c + 1] = x.blocks[c][L0];
-            }
-        }
-        for k in 0..3 {
-            dz[4 * n + k] = x.border[k];
-        }
-        for k in 0..6 + ng {
-            dz[np + k] = x.border[3 + k];
-        }
-        dz[lo] = x.border[9 + ng];
-        dz
+        unlift_layout(
+            self.cells(),
+            self.n_primal(),
+            self.n_gauge(),
+            self.lambda_offset(),
+            x,
+        )
     }
 
     /// Assemble the lifted system and its right-hand side `−F` (see the module docs).

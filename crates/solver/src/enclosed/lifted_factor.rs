@@ -14,7 +14,7 @@
 use nalgebra::DVector;
 use rodloop_continuation::Factorization;
 
-use super::lifted::{BVec, Factor, LVec, Lifted, K0, L0};
+use super::lifted::{unlift_layout, BVec, Factor, LVec, Lifted, K0, L0};
 use super::model::EnclosedModel;
 use crate::SolverError;
 
@@ -54,10 +54,6 @@ impl LiftedFactor {
         })
     }
 
-    fn dim(&self) -> usize {
-        self.lambda_offset + self.cells
-    }
-
     /// `v` (unknowns or equations of the model) in the lifted layout, zero in the auxiliary
     /// rows and unknowns.
     fn lift(&self, v: &DVector<f64>) -> LVec {
@@ -83,26 +79,16 @@ impl LiftedFactor {
         x
     }
 
-    /// The model's rows of a lifted vector (the inverse of [`Self::lift`] on them).
+    /// The model's rows (or unknowns) of a lifted vector, the inverse of [`Self::lift`] on
+    /// them ([`unlift_layout`]).
     fn rows(&self, y: &LVec) -> DVector<f64> {
-        let (n, np, lo) = (self.cells, self.n_primal, self.lambda_offset);
-        let mut out = DVector::zeros(self.dim());
-        for c in 0..n {
-            for i in 0..4 {
-                out[4 * c + i] = y.blocks[c][K0 + i];
-            }
-            if c + 1 < n {
-                out[lo + c + 1] = y.blocks[c][L0];
-            }
-        }
-        for k in 0..3 {
-            out[4 * n + k] = y.border[k];
-        }
-        for k in 0..6 + self.n_gauge {
-            out[np + k] = y.border[3 + k];
-        }
-        out[lo] = y.border[9 + self.n_gauge];
-        out
+        unlift_layout(
+            self.cells,
+            self.n_primal,
+            self.n_gauge,
+            self.lambda_offset,
+            y,
+        )
     }
 
     /// `M x` of the lifted system.
