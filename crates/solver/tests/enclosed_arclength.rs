@@ -8,8 +8,11 @@
 use nalgebra::DVector;
 use rodloop_continuation::{
     fd_jacobian, Continuation, DenseLu, Factorization, Problem, PseudoArclength, SpecialKind,
+    StopReason,
 };
-use rodloop_solver::enclosed::arclength::{contact_set_of, contact_slack};
+use rodloop_solver::enclosed::arclength::{
+    contact_set_of, contact_slack, follow_contacts, node_slacks, ContactRunEnd,
+};
 use rodloop_solver::enclosed::lifted_factor::LiftedFactor;
 use rodloop_solver::enclosed::{
     solve_branch, solve_enclosed, EnclosedOptions, EnclosedState, SurfaceSource,
@@ -205,4 +208,79 @@ fn the_lifted_factorisation_is_the_dense_one() {
         signs.push(dense.det_sign() * lifted.det_sign());
     }
     assert!(signs.iter().all(|&s| s == signs[0]), "{signs:?}");
+}
+
+/// The uniform rod's lifted-off figure-eight (branch 2) at `lbar` on 64 cells.
+fn figure_eight(lbar: f64) -> EnclosedState {
+    let l = rodloop_exact::paper_branch_loop(1, lbar).unwrap();
+    solve_branch(
+        1.0,
+        lbar,
+        &Stiffness::uniform(1.0),
+        &SurfaceSource::Exact(l),
+        64,
+        &EnclosedOptions::default(),
+    )
+    .unwrap()
+    .fine
+}
+
+/// Pseudo-arclength across contact changes: the lifted-off figure-eight followed from
+/// `L̄ = 1.40` to 1.43, where its contact set changes near `L̄ = 1.4198` (nodes touch down
+/// with zero force; the bordered corrector on the min-function stalls there), reaches the
+/// state that the enclosed tracer's semismooth Newton steps reach at 1.43 (energy to 1e-9),
+/// and every continued point lies inside its piece (impulses on the set and gaps off it
+/// nonnegative).
+#[test]
+fn the_figure_eight_is_followed_across_its_contact_changes() {
+    let start = figure_eight(1.40);
+    let settings = PseudoArclength::new()
+        .with_ds(0.005)
+        .unwrap()
+        .with_ds_bounds(1e-7, 0.01)
+        .unwrap()
+        .with_tol(1e-10)
+        .unwrap()
+        .with_range(1.39, 1.43)
+        .unwrap();
+    let (pieces, end) = follow_contacts(&start, Param::Lbar, &settings, 20).unwrap();
+    assert_eq!(
+        end,
+        ContactRunEnd::Stopped(StopReason::LeftRange { boundary: 1.43 })
+    );
+    assert!(pieces.len() >= 2, "{} piece(s)", pieces.len());
+    let first_end = pieces[1].points[0].p;
+    assert!(
+        (first_end - 1.4198).abs() < 1e-3,
+        "first switch at {first_end}"
+    );
+    for piece in &pieces {
+        let model = start
+            .model
+            .clone()
+            .with_contact_set(piece.contact.clone())
+            .unwrap();
+        for q in &piece.points {
+            let m = Confinement::with_param(&model, Param::Lbar, q.p).unwrap();
+            let least = node_slacks(&m, q.x.as_slice())
+                .unwrap()
+                .into_iter()
+                .fold(f64::INFINITY, f64::min);
+            assert!(least > -1e-9, "L̄ = {}: slack {least:e}", q.p);
+        }
+    }
+    let last = pieces.last().unwrap().points.last().unwrap();
+    assert!((last.p - 1.43).abs() < 1e-12, "{}", last.p);
+    let opts = EnclosedOptions::default();
+    let mut tracer = start.clone();
+    for l in [1.41, 1.42, 1.43] {
+        tracer = tracer.step_to(l, &opts).unwrap();
+    }
+    let plain = Confinement::with_param(&start.model, Param::Lbar, 1.43).unwrap();
+    let e = Confinement::energy(&plain, last.x.as_slice()).unwrap();
+    assert!(
+        (e - tracer.energy()).abs() < 1e-9 * e,
+        "{e} vs {}",
+        tracer.energy()
+    );
 }

@@ -3,24 +3,24 @@
 //! The traces step in `L̄` (natural parameter, `trace.rs`), which cannot pass a fold: where
 //! the family turns back, Newton fails under every halving and the trace stops. From the
 //! last state reached, the family is followed by pseudo-arclength continuation on the smooth
-//! piece of its contact set ([`rodloop_solver::enclosed::arclength`]: the contact set of that
-//! state held fixed, the Jacobian factored in `O(N)`) towards the sample length the trace
-//! could not reach (a fold that stopped the walk lies before it). A fold met before the piece ends (a contact impulse or a free
-//! gap reaching zero, the event [`contact_slack`]) is located by the continuation crate (the
+//! pieces of its contact set ([`rodloop_solver::enclosed::arclength::follow_contacts`]: a
+//! contact set held fixed on each, switched where a contact impulse or a free gap reaches
+//! zero, the Jacobian factored in `O(N)`) towards the sample length the trace could not reach
+//! (a fold that stopped the walk lies before it). The first fold is located by the continuation crate (the
 //! tangent's `L̄` component changing sign, to `1e-10` in arclength), on the levels `N/2` and
 //! `N` of the trace: the value is the finer level's, the estimate the distance between the
 //! two (the discretisation error of the coarser one, as for the branch points of
-//! `locate.rs`). Where the piece ends first, or a level finds no fold, nothing is located.
+//! `locate.rs`). Where a level finds no fold before that sample, nothing is located.
 //! A fold of level `N/2` alone is a fold of that mesh: the walk of all three levels cannot
 //! pass it although the family goes on with `N` cells (branch 1 of the two-segment rod at
 //! `L̄ = 2.2611218`, 64 cells, where 96 and 128 cells have none), and the stop's warning
 //! says so.
 
 use nalgebra::DVector;
-use rodloop_continuation::{Continuation, Direction, PseudoArclength, SpecialKind};
-use rodloop_solver::enclosed::arclength::{contact_set_of, contact_slack};
+use rodloop_continuation::{Direction, PseudoArclength};
+use rodloop_solver::enclosed::arclength::{contact_slack, follow_contacts};
 use rodloop_solver::enclosed::EnclosedState;
-use rodloop_solver::{Confinement, Param, ParamProblem, SolverError};
+use rodloop_solver::{Confinement, Param, SolverError};
 
 use super::levels::Levels;
 
@@ -29,6 +29,9 @@ use super::levels::Levels;
 /// eigenvalue nearly vanishes (branch 1 of the two-segment rod at `L̄ ≈ 2.2635`, 128 cells:
 /// `3.2·10⁻⁵`) and reports folds that shorter steps do not find.
 const MAX_STEP: f64 = 0.02;
+
+/// Most pieces (contact sets) a search follows: every contact change starts one.
+const MAX_PIECES: usize = 20;
 
 /// Continuation steps past a fold, on its piece, before the index past it is taken.
 const PAST: usize = 3;
@@ -55,10 +58,7 @@ fn fold_on_level(
     state: &EnclosedState,
     toward: f64,
 ) -> Result<Option<(f64, f64, Option<usize>)>, SolverError> {
-    let set = contact_set_of(state)?;
-    let model = state.model.clone().with_contact_set(set)?;
     let lbar = state.model.lbar();
-    let problem = ParamProblem::new(model, Param::Lbar)?;
     let direction = if toward > lbar {
         Direction::Forward
     } else {
@@ -75,48 +75,31 @@ fn fold_on_level(
         .and_then(|s| s.with_max_steps(200))
         .and_then(|s| s.with_direction(direction))
         .map_err(invalid)?;
-    let slack = |x: &DVector<f64>, p: f64| {
-        problem
-            .model_at(p)
-            .and_then(|m| contact_slack(&m, x.as_slice()))
-            .unwrap_or(f64::NAN)
-    };
-    let run = Continuation::new(&problem, settings).with_event("contact slack", slack);
-    let mut stepper = run
-        .start(&DVector::from_column_slice(&state.z), lbar)
-        .map_err(invalid)?;
-    // Step until the fold, then on past it along its piece for up to `PAST` steps (the
-    // index past the fold is taken at the last of them: right at the fold the eigenvalue
-    // that crossed zero is below any threshold).
-    let mut fold: Option<rodloop_continuation::SpecialPoint> = None;
-    let mut past: Option<rodloop_continuation::Point> = None;
-    let mut after = 0;
-    'run: loop {
-        let step = stepper.step().map_err(invalid)?;
-        for sp in &step.special {
-            match sp.kind {
-                SpecialKind::Fold if fold.is_none() => fold = Some(sp.clone()),
-                SpecialKind::Event { .. } => break 'run,
-                _ => {}
-            }
-        }
-        let Some(point) = step.point else { break };
-        if fold.is_some() {
-            past = Some(point);
-            after += 1;
-            if after >= PAST {
-                break;
-            }
-        }
-        if step.stop.is_some() {
-            break;
-        }
-    }
-    let Some(fold) = fold else {
+    let (pieces, _) = follow_contacts(state, Param::Lbar, &settings, MAX_PIECES)?;
+    // The first fold along the run, and the point `PAST` steps beyond it on its piece (or
+    // the piece's last): the index past the fold is taken there, since right at the fold
+    // the eigenvalue that crossed zero is below any threshold.
+    let Some((piece, fold)) = pieces
+        .iter()
+        .find_map(|piece| piece.folds.first().map(|f| (piece, f.clone())))
+    else {
         return Ok(None);
     };
+    let past = piece
+        .points
+        .iter()
+        .filter(|q| q.s > fold.s)
+        .take(PAST)
+        .last()
+        .cloned();
     // On its piece (a NaN slack, a model that cannot be built, counts as off it).
-    if slack(&fold.x, fold.p).partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+    let on_piece = state
+        .model
+        .clone()
+        .with_contact_set(piece.contact.clone())
+        .and_then(|m| m.with_param(Param::Lbar, fold.p))
+        .and_then(|m| contact_slack(&m, fold.x.as_slice()));
+    if !matches!(on_piece, Ok(v) if v > 0.0) {
         return Ok(None);
     }
     // The wall model (no contact set held) at a state of the run.
@@ -143,7 +126,7 @@ pub(super) enum StopFold {
     Located(Fold),
     /// Only level `N/2` folds, at this `L̄`: a fold of the coarser mesh, which the walk of
     /// all three levels cannot pass, while on `N` cells the family goes on (its continuation
-    /// reaches the unreached sample, or the end of its piece, without a fold).
+    /// reaches the unreached sample without a fold).
     CoarseOnly(f64),
     /// No fold on level `N/2`, or a level whose continuation could not be followed.
     None,

@@ -225,7 +225,7 @@ pub(super) fn classify_stops(
         for (st, fold) in s.stops.iter().zip(fs) {
             let text = match fold {
                 StopFold::CoarseOnly(x) => format!(
-                    "{} (the trace's level N/2 folds at L̄ = {x:.9}, {:.1e} from the stop, by pseudo-arclength on the last state's contact set, where level N meets no fold before the next sample or the end of its contact set: the walk of all levels cannot pass a fold of its coarser mesh)",
+                    "{} (the trace's level N/2 folds at L̄ = {x:.9}, {:.1e} from the stop, by pseudo-arclength from the last state across its contact changes, where level N meets no fold before the next sample: the walk of all levels cannot pass a fold of its coarser mesh)",
                     st.text,
                     (x - st.lbar).abs()
                 ),
@@ -245,7 +245,7 @@ pub(super) fn classify_stops(
             }
             if let StopFold::Located(f) = fold {
                 notes.push(format!(
-                    "{} — explained: the family folds at L̄ = {:.9} ± {:.1e}, {:.1e} from the stop (index {} before, {} past it; pseudo-arclength on the last state's contact set, levels N/2 and N)",
+                    "{} — explained: the family folds at L̄ = {:.9} ± {:.1e}, {:.1e} from the stop (index {} before, {} past it; pseudo-arclength from the last state across its contact changes, levels N/2 and N)",
                     st.text,
                     f.lbar,
                     f.error_estimate,

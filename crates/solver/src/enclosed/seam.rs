@@ -20,8 +20,8 @@
 //! `N = 64`, in this module's tests). A model with its contact set held fixed
 //! ([`EnclosedModel::with_contact_set`], [`super::arclength`]) is smooth: pseudo-arclength
 //! follows it through folds, with the piece's end (a contact impulse or a free gap reaching
-//! zero, [`super::arclength::contact_slack`]) as an event; [`Confinement::with_param`] keeps
-//! the set.
+//! zero, [`super::arclength::contact_slack`]) as an event where the set is switched
+//! ([`super::arclength::follow_contacts`]); [`Confinement::with_param`] keeps the set.
 
 use std::cell::OnceCell;
 
