@@ -5,6 +5,7 @@
 //! cannot pass, checked by independent semismooth re-solves on both of its sides and by the
 //! index changing across it, and the `O(N)` factorisation against the dense one.
 
+mod common;
 use nalgebra::DVector;
 use rodloop_continuation::{
     fd_jacobian, Continuation, DenseLu, Factorization, Problem, PseudoArclength, SpecialKind,
@@ -210,21 +211,6 @@ fn the_lifted_factorisation_is_the_dense_one() {
     assert!(signs.iter().all(|&s| s == signs[0]), "{signs:?}");
 }
 
-/// The uniform rod's lifted-off figure-eight (branch 2) at `lbar` on 64 cells.
-fn figure_eight(lbar: f64) -> EnclosedState {
-    let l = rodloop_exact::paper_branch_loop(1, lbar).unwrap();
-    solve_branch(
-        1.0,
-        lbar,
-        &Stiffness::uniform(1.0),
-        &SurfaceSource::Exact(l),
-        64,
-        &EnclosedOptions::default(),
-    )
-    .unwrap()
-    .fine
-}
-
 /// Pseudo-arclength across contact changes: the lifted-off figure-eight followed from
 /// `L̄ = 1.40` to 1.43, where its contact set changes near `L̄ = 1.4198` (nodes touch down
 /// with zero force; the bordered corrector on the min-function stalls there), reaches the
@@ -233,7 +219,7 @@ fn figure_eight(lbar: f64) -> EnclosedState {
 /// nonnegative).
 #[test]
 fn the_figure_eight_is_followed_across_its_contact_changes() {
-    let start = figure_eight(1.40);
+    let start = common::enclosed_figure_eight(1.40, 64);
     let settings = PseudoArclength::new()
         .with_ds(0.005)
         .unwrap()
