@@ -85,9 +85,9 @@ pub enum ContactRunEnd {
     /// The continuation stopped by itself (the parameter range left, the step budget used
     /// up, the step below its minimum, a closed loop).
     Stopped(StopReason),
-    /// A node switched at a piece's start reached zero again before any other did: the
-    /// switch does not continue the family (a contact that would both pull and penetrate),
-    /// so the run ends there.
+    /// A node switched at a piece's start reached zero again before the piece took a step:
+    /// the switch does not continue the family (a contact that would both pull and
+    /// penetrate), so the run ends there.
     SwitchReversed,
     /// `max_pieces` pieces were followed.
     Pieces,
@@ -167,6 +167,8 @@ pub fn follow_contacts(
                 return Ok((pieces, ContactRunEnd::Stopped(reason)));
             }
         };
+        // A piece with no accepted step beyond its start made no progress.
+        let progressed = piece.points.len() > 1;
         pieces.push(piece);
         // The nodes whose slack is zero at the piece's end switch.
         let m = problem.model_at(end.p)?;
@@ -175,7 +177,7 @@ pub fn follow_contacts(
         let zero: Vec<usize> = (0..slacks.len())
             .filter(|&j| slacks[j] <= SWITCH_TOLERANCE * scale)
             .collect();
-        if zero.iter().any(|j| switched.contains(j)) {
+        if !progressed && zero.iter().any(|j| switched.contains(j)) {
             return Ok((pieces, ContactRunEnd::SwitchReversed));
         }
         for &j in &zero {
