@@ -12,7 +12,7 @@ use rodloop_continuation::{
     StopReason,
 };
 use rodloop_solver::enclosed::arclength::{
-    contact_set_of, contact_slack, follow_contacts, node_slacks, ContactRunEnd,
+    contact_slack, follow_contacts, node_slacks, ContactRunEnd,
 };
 use rodloop_solver::enclosed::lifted_factor::LiftedFactor;
 use rodloop_solver::enclosed::{
@@ -52,7 +52,7 @@ fn branch_one(lbar: f64, cells: usize) -> (Stiffness, EnclosedState) {
 #[test]
 fn the_fixed_contact_set_is_a_smooth_system_with_the_state_as_a_root() {
     let (_, state) = branch_one(2.24, 32);
-    let set = contact_set_of(&state).unwrap();
+    let set = state.model.wall_active(&state.z).unwrap();
     assert!(set.iter().any(|&on| on) && set.iter().any(|&on| !on));
     let fixed = state.model.clone().with_contact_set(set.clone()).unwrap();
     // The state is a root of its own piece, as of the min-function.
@@ -85,7 +85,7 @@ fn branch_one_folds_and_both_sides_are_equilibria_of_the_wall() {
     let lbar = 2.24;
     let (stiffness, state) = branch_one(lbar, cells);
     assert_eq!(state.index(1e-6).unwrap(), 0);
-    let set = contact_set_of(&state).unwrap();
+    let set = state.model.wall_active(&state.z).unwrap();
     let fixed = state.model.clone().with_contact_set(set).unwrap();
     let problem = ParamProblem::new(fixed, Param::Lbar).unwrap();
     // Short steps (at most 0.02 in the norm of `(z, L̄)`): longer ones let the corrector
@@ -177,7 +177,7 @@ fn branch_one_folds_and_both_sides_are_equilibria_of_the_wall() {
 #[test]
 fn the_lifted_factorisation_is_the_dense_one() {
     let (_, state) = branch_one(2.24, 32);
-    let set = contact_set_of(&state).unwrap();
+    let set = state.model.wall_active(&state.z).unwrap();
     let mut signs = Vec::new();
     for (case, fixed) in [(0, false), (1, false), (2, true)] {
         let mut model = state.model.clone();

@@ -7,7 +7,7 @@
 //! complementarity `λ_j ≥ 0, g_j ≥ 0, λ_j g_j = 0` as `min(λ_j, σ g_j) = 0`, which has a kink
 //! wherever its two arguments are equal; the bordered corrector of pseudo-arclength stalls
 //! there ([`super::seam`]). With the contact set `A` fixed (the nodes whose row is the wall at
-//! a converged state), the system is the smooth one of that piece: `σ g_j = 0` for `j ∈ A`,
+//! a converged state, [`EnclosedModel::wall_active`]), the system is the smooth one of that piece: `σ g_j = 0` for `j ∈ A`,
 //! `λ_j = 0` otherwise, the stationarity, closure and gauge rows unchanged. Its solutions are
 //! equilibria of the wall as long as every contact impulse `λ_j` (`j ∈ A`) and every free gap
 //! `g_j` (`j ∉ A`) stays nonnegative: [`contact_slack`] is the least of them (the gaps scaled
@@ -23,17 +23,6 @@ use rodloop_continuation::{
 use super::model::EnclosedModel;
 use super::state::EnclosedState;
 use crate::{Confinement, Param, ParamProblem, SolverError};
-
-/// The contact set of `state`: the nodes whose min-function row is the wall
-/// (`σ g_j ≤ λ_j`, [`EnclosedModel::evaluate`]).
-pub fn contact_set_of(state: &EnclosedState) -> Result<Vec<bool>, SolverError> {
-    let m = &state.model;
-    let mut set = vec![false; m.cells()];
-    for j in m.evaluate(&state.z)?.wall_rows {
-        set[j] = true;
-    }
-    Ok(set)
-}
 
 /// How far the state `z` of `model` (a fixed contact set, [`EnclosedModel::with_contact_set`])
 /// lies inside its piece: the least of the contact impulses `λ_j` on the set and of the
@@ -114,7 +103,7 @@ pub fn follow_contacts(
     let invalid =
         |e: ContinuationError| SolverError::InvalidInput(format!("contact continuation: {e}"));
     let base = state.model.clone();
-    let mut set = contact_set_of(state)?;
+    let mut set = base.wall_active(&state.z)?;
     let mut x = DVector::from_column_slice(&state.z);
     let mut p = Confinement::param(&base, param)?;
     let mut direction = settings.direction();

@@ -443,11 +443,20 @@ impl EnclosedModel {
         self.contact_set.as_deref()
     }
 
+    /// Whether node `j`'s row is the wall at `a = λ_j + π_j`, `b = σ g_j`: in the fixed
+    /// contact set where one is held, else `b ≤ a` (the branch of `min` that is active).
+    fn on_wall(&self, j: usize, a: f64, b: f64) -> bool {
+        match &self.contact_set {
+            Some(set) => set[j],
+            None => b <= a,
+        }
+    }
+
     /// Node `j`'s wall row `(φ, ∂φ/∂a, ∂φ/∂b)` at `a = λ_j + π_j`, `b = σ g_j`: the
     /// complementarity function, or the fixed contact set's piece of `min`.
     pub(super) fn wall_row(&self, j: usize, a: f64, b: f64) -> (f64, f64, f64) {
         match &self.contact_set {
-            Some(set) if set[j] => (b, 0.0, 1.0),
+            Some(_) if self.on_wall(j, a, b) => (b, 0.0, 1.0),
             Some(_) => (a, 1.0, 0.0),
             None => self.complementarity.eval(a, b),
         }
@@ -542,7 +551,8 @@ impl EnclosedModel {
     }
 
     /// The contact set of the semismooth Newton step at `z`: node `j` takes the wall row
-    /// where `σ g_j ≤ λ_j + π_j` (the branch of the min-function that is active).
+    /// where `σ g_j ≤ λ_j + π_j` (the branch of the min-function that is active), or where
+    /// the contact set held fixed ([`Self::with_contact_set`]) says so.
     pub fn wall_active(&self, z: &[f64]) -> Result<Vec<bool>, SolverError> {
         self.check(z)?;
         let lo = self.lambda_offset();
@@ -551,7 +561,13 @@ impl EnclosedModel {
             .positions(z)?
             .iter()
             .enumerate()
-            .map(|(j, r)| sigma * self.wall.gap(r) <= z[lo + j] + self.pull_impulse(j))
+            .map(|(j, r)| {
+                self.on_wall(
+                    j,
+                    z[lo + j] + self.pull_impulse(j),
+                    sigma * self.wall.gap(r),
+                )
+            })
             .collect())
     }
 
@@ -994,11 +1010,7 @@ impl EnclosedModel {
                 jac[(a, lo + j)] = -grad[a];
             }
             let (a, b) = (lam + self.pull_impulse(j), sigma * g);
-            let on_wall = match &self.contact_set {
-                Some(set) => set[j],
-                None => b <= a,
-            };
-            if on_wall {
+            if self.on_wall(j, a, b) {
                 wall_rows.push(j);
             }
             let (_, da, db) = self.wall_row(j, a, b);
