@@ -523,6 +523,37 @@ impl Factor {
         Ok(())
     }
 
+    /// Solve `sys x = rhs` into `buf.x` with one step of iterative refinement against the
+    /// lifted system; false where a pivot is zero or the refined residual stays above
+    /// `1e-9 |rhs| + 1e-13 max|M| |x|` (the second term is the round-off floor near
+    /// convergence, where the right-hand side is tiny).
+    pub(super) fn solve_refined(&self, sys: &Lifted, rhs: &LVec, buf: &mut SolveBuffers) -> bool {
+        if !self.solve(sys, rhs, &mut buf.y, &mut buf.x) {
+            return false;
+        }
+        sys.apply(&buf.x, &mut buf.ax);
+        for (a, b) in buf.ax.blocks.iter_mut().zip(&rhs.blocks) {
+            *a = b - *a;
+        }
+        buf.ax.border = rhs.border - buf.ax.border;
+        if !self.solve(sys, &buf.ax, &mut buf.y, &mut buf.dx) {
+            return false;
+        }
+        let x = &mut buf.x;
+        for (a, b) in x.blocks.iter_mut().zip(&buf.dx.blocks) {
+            *a += b;
+        }
+        x.border += buf.dx.border;
+        sys.apply(x, &mut buf.ax);
+        let ax = &buf.ax;
+        let mut err = (ax.border - rhs.border).norm_squared();
+        for (a, b) in ax.blocks.iter().zip(&rhs.blocks) {
+            err += (a - b).norm_squared();
+        }
+        let scale = 1e-9 * rhs.norm() + 1e-13 * sys.amax() * x.norm();
+        err.sqrt() <= scale.max(1e-300)
+    }
+
     /// `(sign, ln|det|)` of the factored lifted matrix: the pivot blocks' LU diagonals and
     /// row interchanges, and the border's Schur complement (its padding is the identity).
     /// Eliminating the auxiliary unknowns `ξ`, `δm` (unit block-bidiagonal recursions, whose
@@ -604,10 +635,40 @@ struct Workspace {
     sys: Lifted,
     rhs: LVec,
     fac: Factor,
+    buf: SolveBuffers,
+}
+
+/// Buffers of [`Factor::solve_refined`]: its solution `x`, and work space.
+#[derive(Default)]
+pub(super) struct SolveBuffers {
     y: Vec<BVec>,
-    x: LVec,
+    pub(super) x: LVec,
     dx: LVec,
     ax: LVec,
+}
+
+/// A vector of the model's unknowns (or equations) in the lifted layout, the inverse of
+/// [`unlift_layout`] on them, zero in the auxiliary unknowns `ξ`, `δm` (and rows).
+pub(super) fn lift_layout(n: usize, np: usize, ng: usize, lo: usize, v: &DVector<f64>) -> LVec {
+    let mut x = LVec::default();
+    x.reset(n);
+    for c in 0..n {
+        let b = &mut x.blocks[c];
+        for i in 0..4 {
+            b[K0 + i] = v[4 * c + i];
+        }
+        if c + 1 < n {
+            b[L0] = v[lo + c + 1];
+        }
+    }
+    for k in 0..3 {
+        x.border[k] = v[4 * n + k];
+    }
+    for k in 0..6 + ng {
+        x.border[3 + k] = v[np + k];
+    }
+    x.border[9 + ng] = v[lo];
+    x
 }
 
 /// The model's unknowns (or equations) of a lifted vector: the curvature unknowns
@@ -654,36 +715,10 @@ impl EnclosedModel {
             self.lifted_system(z, &ch, &adj, &f, &mut w.sys, &mut w.rhs);
             let (sys, rhs) = (&w.sys, &w.rhs);
             w.fac.factor(sys)?;
-            let singular = || SolverError::SingularJacobian { iteration: 0 };
-            if !w.fac.solve(sys, rhs, &mut w.y, &mut w.x) {
-                return Err(singular());
+            if !w.fac.solve_refined(sys, rhs, &mut w.buf) {
+                return Err(SolverError::SingularJacobian { iteration: 0 });
             }
-            // One step of iterative refinement against the lifted system.
-            sys.apply(&w.x, &mut w.ax);
-            for (a, b) in w.ax.blocks.iter_mut().zip(&rhs.blocks) {
-                *a = b - *a;
-            }
-            w.ax.border = rhs.border - w.ax.border;
-            if !w.fac.solve(sys, &w.ax, &mut w.y, &mut w.dx) {
-                return Err(singular());
-            }
-            let x = &mut w.x;
-            for (a, b) in x.blocks.iter_mut().zip(&w.dx.blocks) {
-                *a += b;
-            }
-            x.border += w.dx.border;
-            sys.apply(x, &mut w.ax);
-            let ax = &w.ax;
-            let mut err = (ax.border - rhs.border).norm_squared();
-            for (a, b) in ax.blocks.iter().zip(&rhs.blocks) {
-                err += (a - b).norm_squared();
-            }
-            let big = sys.amax();
-            let scale = 1e-9 * rhs.norm() + 1e-13 * big * x.norm();
-            let ok = err.sqrt() <= scale.max(1e-300);
-            if !ok {
-                return Err(singular());
-            }
+            let x = &w.buf.x;
             Ok((f, self.unlift(x)))
         })
     }

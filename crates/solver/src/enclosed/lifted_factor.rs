@@ -5,7 +5,7 @@
 //! instead of the dense LU's `O(N³)`.
 //!
 //! A vector of the model's unknowns or equations maps to the lifted layout by the
-//! Newton step's own assignment ([`EnclosedModel::unlift`] and its inverse here): the
+//! Newton step's own assignment ([`lift_layout`], [`unlift_layout`]): the
 //! curvature unknowns and stationarity rows of cell `c`, the wall multiplier and row of node
 //! `c + 1` in block `c`, and `(r0, μ, ν, λ_0)` in the border; the auxiliary recursion rows
 //! have a zero right-hand side. A product `J v` fills the auxiliary unknowns of the lifted
@@ -14,7 +14,7 @@
 use nalgebra::DVector;
 use rodloop_continuation::Factorization;
 
-use super::lifted::{unlift_layout, BVec, Factor, LVec, Lifted, K0, L0};
+use super::lifted::{lift_layout, unlift_layout, Factor, LVec, Lifted, SolveBuffers};
 use super::model::EnclosedModel;
 use crate::SolverError;
 
@@ -54,29 +54,15 @@ impl LiftedFactor {
         })
     }
 
-    /// `v` (unknowns or equations of the model) in the lifted layout, zero in the auxiliary
-    /// rows and unknowns.
+    /// `v` (unknowns or equations of the model) in the lifted layout ([`lift_layout`]).
     fn lift(&self, v: &DVector<f64>) -> LVec {
-        let (n, np, lo) = (self.cells, self.n_primal, self.lambda_offset);
-        let mut x = LVec::default();
-        x.reset(n);
-        for c in 0..n {
-            let b: &mut BVec = &mut x.blocks[c];
-            for i in 0..4 {
-                b[K0 + i] = v[4 * c + i];
-            }
-            if c + 1 < n {
-                b[L0] = v[lo + c + 1];
-            }
-        }
-        for k in 0..3 {
-            x.border[k] = v[4 * n + k];
-        }
-        for k in 0..6 + self.n_gauge {
-            x.border[3 + k] = v[np + k];
-        }
-        x.border[9 + self.n_gauge] = v[lo];
-        x
+        lift_layout(
+            self.cells,
+            self.n_primal,
+            self.n_gauge,
+            self.lambda_offset,
+            v,
+        )
     }
 
     /// The model's rows (or unknowns) of a lifted vector, the inverse of [`Self::lift`] on
@@ -100,34 +86,13 @@ impl LiftedFactor {
 }
 
 impl Factorization for LiftedFactor {
-    /// Block elimination and one step of iterative refinement against the lifted system;
-    /// `None` where a pivot is zero or the refined residual stays above `1e-9 |b|` plus the
-    /// round-off floor `1e-13 max|M| |x|` (the Newton step's own test).
+    /// Block elimination and one step of iterative refinement against the lifted system
+    /// ([`Factor::solve_refined`], the Newton step's own); `None` where that fails.
     fn solve(&self, b: &DVector<f64>) -> Option<DVector<f64>> {
-        let rhs = self.lift(b);
-        let (mut y, mut x, mut dx) = (Vec::new(), LVec::default(), LVec::default());
-        if !self.fac.solve(&self.sys, &rhs, &mut y, &mut x) {
-            return None;
-        }
-        let mut r = self.apply_lifted(&x);
-        for (a, b) in r.blocks.iter_mut().zip(&rhs.blocks) {
-            *a = b - *a;
-        }
-        r.border = rhs.border - r.border;
-        if !self.fac.solve(&self.sys, &r, &mut y, &mut dx) {
-            return None;
-        }
-        for (a, b) in x.blocks.iter_mut().zip(&dx.blocks) {
-            *a += b;
-        }
-        x.border += dx.border;
-        let ax = self.apply_lifted(&x);
-        let mut err = (ax.border - rhs.border).norm_squared();
-        for (a, b) in ax.blocks.iter().zip(&rhs.blocks) {
-            err += (a - b).norm_squared();
-        }
-        let scale = 1e-9 * rhs.norm() + 1e-13 * self.sys.amax() * x.norm();
-        (err.sqrt() <= scale.max(1e-300)).then(|| self.rows(&x))
+        let mut buf = SolveBuffers::default();
+        self.fac
+            .solve_refined(&self.sys, &self.lift(b), &mut buf)
+            .then(|| self.rows(&buf.x))
     }
 
     fn apply(&self, v: &DVector<f64>) -> DVector<f64> {
