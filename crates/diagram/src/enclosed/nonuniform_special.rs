@@ -162,21 +162,23 @@ const NEAR_CIRCLE: f64 = 5e-3;
 /// trace's stop is put down to it.
 const NEAR_BRANCH_POINT: f64 = 2e-2;
 
+/// The great circle `L̄ = m` ending the range of sheet `s`'s branch (`m = η ± 1`) that a stop
+/// at `lbar` lies next to, if any.
+fn circle_next_to(s: &SheetOut, lbar: f64) -> Option<f64> {
+    let e = f64::from(s.eta);
+    [e - 1.0, e + 1.0]
+        .into_iter()
+        .find(|m| (lbar - m).abs() < NEAR_CIRCLE)
+}
+
 /// The folds at the stops of sheet `s`, one entry per stop (`fold.rs`); none for a stop
 /// next to a great circle ending the branch's range (a collapse, explained below).
 pub(super) fn stop_folds(s: &SheetOut) -> Vec<StopFold> {
-    let e = f64::from(s.eta);
     s.stops
         .iter()
-        .map(|st| {
-            let at_circle = [e - 1.0, e + 1.0]
-                .iter()
-                .any(|m| (st.lbar - m).abs() < NEAR_CIRCLE);
-            if at_circle {
-                StopFold::None
-            } else {
-                fold_at_stop(&st.last, st.toward)
-            }
+        .map(|st| match circle_next_to(s, st.lbar) {
+            Some(_) => StopFold::None,
+            None => fold_at_stop(&st.last, st.toward),
         })
         .collect()
 }
@@ -221,7 +223,6 @@ pub(super) fn classify_stops(
 ) -> (Vec<String>, Vec<String>) {
     let (mut notes, mut warnings) = (Vec::new(), Vec::new());
     for (s, fs) in outs.iter().zip(folds) {
-        let e = f64::from(s.eta);
         for (st, fold) in s.stops.iter().zip(fs) {
             let text = match fold {
                 StopFold::CoarseOnly(x) => format!(
@@ -232,10 +233,7 @@ pub(super) fn classify_stops(
                 _ => st.text.clone(),
             };
             let st = &TraceStop { text, ..st.clone() };
-            if let Some(m) = [e - 1.0, e + 1.0]
-                .into_iter()
-                .find(|m| (st.lbar - m).abs() < NEAR_CIRCLE)
-            {
+            if let Some(m) = circle_next_to(s, st.lbar) {
                 notes.push(format!(
                     "{} — explained: {:.1e} from L̄ = {m}, where this branch's sheets end on the {m}-fold great circle (a collapse, exact)",
                     st.text,
