@@ -7,10 +7,8 @@
 //! ([`descend`](rodloop_solver::enclosed::descent::descend)); the state reached is
 //! re-solved at `N/4, N/2, N` and traced through the parent sheet's sampled lengths as a
 //! new family of the same branch. The new family's states are kept where they lie below
-//! the parent's (elsewhere they have merged into it). Before that, the index of such a
-//! lowest state is taken again on its finest level (the traces take it on the coarsest,
-//! where a small eigenvalue can have the wrong sign); only a state unstable there is
-//! descended from.
+//! the parent's (elsewhere they have merged into it). The index is that of the state
+//! reported, its finest level ([`Levels::index`]).
 
 use rodloop_solver::enclosed::descent::descend;
 use rodloop_solver::enclosed::stats::{self, Stage};
@@ -83,30 +81,6 @@ fn lower_state(lv: &Levels, outs: &[SheetOut], opts: &EnclosedOptions) -> Option
     None
 }
 
-/// The index of every lowest state whose coarsest level (`N/4`, where the traces take the
-/// index: the eigen-decomposition is dense) shows index ≥ 1, taken again on its finest level
-/// (`N`, the state whose energy is reported). Near a collapse onto a great circle the lowest
-/// eigenvalue is small and the coarse level can get its sign wrong: branch 1 family 2 of
-/// the two-segment rod (D1/D0 = 0.5) at `L̄ = 2.99722` has `−2.0e-2` at `N = 32` and
-/// `+0.15` at `N = 128` and `192` (`solve --from` its state file at `--accuracy high`).
-fn confirm_on_finest(outs: &mut [SheetOut]) {
-    for (k, xs) in unstable_lowest(outs) {
-        let s = &mut outs[k];
-        for x in xs {
-            let Some(lv) = s.levels.iter().find(|l| (l.lbar - x).abs() < 1e-12) else {
-                continue;
-            };
-            let Ok(index) = lv.states[2].index(1e-6) else {
-                continue;
-            };
-            for p in s.points.iter_mut().filter(|p| (p.lbar - x).abs() < 1e-12) {
-                p.index = index;
-            }
-            s.fine_index.push(x);
-        }
-    }
-}
-
 /// Add the families found below unstable lowest states to `outs` (see the module docs).
 /// Returns the warnings and, for each sheet appended to `outs`, the index of the sheet of
 /// the surface diagram it descends from (`roots[k]` for the first `roots.len()` sheets).
@@ -124,7 +98,6 @@ pub(super) fn descend_unstable(
             parents[k - roots.len()]
         }
     };
-    confirm_on_finest(outs);
     let sopts = step_options();
     // The descent and its cascade get the full Newton budget (the shape moves far).
     let dopts = EnclosedOptions::default();

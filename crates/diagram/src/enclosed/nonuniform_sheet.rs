@@ -25,9 +25,6 @@ pub(super) struct SheetOut {
     pub(super) warnings: Vec<String>,
     /// Where its lifted-off traces stopped (classified in `nonuniform_special.rs`).
     pub(super) stops: Vec<TraceStop>,
-    /// `L̄` of the states whose index was taken on the finest level, not the coarsest
-    /// (`nonuniform_descent.rs`).
-    pub(super) fine_index: Vec<f64>,
     pub(super) attached_s: f64,
     pub(super) lifted_s: f64,
 }
@@ -44,7 +41,6 @@ impl SheetOut {
             events: Vec::new(),
             warnings: Vec::new(),
             stops: Vec::new(),
-            fine_index: Vec::new(),
             attached_s: 0.0,
             lifted_s: 0.0,
         }
@@ -174,8 +170,6 @@ impl SheetOut {
         }
         self.levels
             .retain(|l| !gone.iter().any(|&(x, _)| (l.lbar - x).abs() < 1e-12));
-        self.fine_index
-            .retain(|&x| !gone.iter().any(|&(y, _)| (x - y).abs() < 1e-12));
         let list: Vec<String> = gone
             .iter()
             .map(|(x, e)| format!("lbar = {x:.6} (eta = {e})"))

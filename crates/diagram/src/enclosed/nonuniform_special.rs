@@ -33,6 +33,9 @@ use super::nonuniform_sheet::SheetOut;
 use super::trace::{step_options, TraceStop};
 use super::{EnclosedEvent, EventKind, PointSource};
 
+/// The finest level of a sample's [`Levels`]: the state reported.
+const FINEST: usize = 2;
+
 /// Eigenvalue `k` (ascending) on the tangent space of the active constraints, level `lvl`.
 fn eigenvalue(l: &Levels, lvl: usize, k: usize) -> Result<f64, SolverError> {
     let (_, vals) = l.states[lvl].stability(1e-6)?;
@@ -63,24 +66,9 @@ pub(super) fn branch_points(s: &SheetOut) -> (Vec<EnclosedEvent>, Vec<String>, V
             let (Some(a), Some(b)) = (find(p.lbar), find(q.lbar)) else {
                 continue;
             };
-            // Both indices on one level: the coarsest (where the traces take it), or the
-            // finest where one of the two was taken there (`nonuniform_descent.rs`); an
-            // index change that is not there on the finest level is no branch point.
-            let fine = [p.lbar, q.lbar]
-                .iter()
-                .any(|x| s.fine_index.iter().any(|f| (f - x).abs() < 1e-12));
-            let lvl = if fine { 2 } else { 0 };
-            let (ip, iq) = if fine {
-                match (a.states[2].stability(1e-6), b.states[2].stability(1e-6)) {
-                    (Ok((ip, _)), Ok((iq, _))) => (ip, iq),
-                    _ => (p.index, q.index),
-                }
-            } else {
-                (p.index, q.index)
-            };
-            if ip == iq {
-                continue;
-            }
+            // The indices are those of the finest levels ([`Levels::index`]), where the
+            // crossing eigenvalue is interpolated below.
+            let (ip, iq) = (p.index, q.index);
             // Located on re-solved states (see the module docs).
             let mut sorted: Vec<&Levels> = s.levels.iter().collect();
             sorted.sort_by(|u, v| u.lbar.total_cmp(&v.lbar));
@@ -120,8 +108,8 @@ pub(super) fn branch_points(s: &SheetOut) -> (Vec<EnclosedEvent>, Vec<String>, V
             let k = ip.min(iq);
             // The crossing eigenvalue at the two states (on that level), interpolated
             // linearly; the estimate is half the bracket.
-            let located = eigenvalue(a, lvl, k).and_then(|fa| {
-                let fb = eigenvalue(b, lvl, k)?;
+            let located = eigenvalue(a, FINEST, k).and_then(|fa| {
+                let fb = eigenvalue(b, FINEST, k)?;
                 let t = if fa * fb < 0.0 { fa / (fa - fb) } else { 0.5 };
                 let x = a.lbar + t * (b.lbar - a.lbar);
                 let energy = p.energy + t * (q.energy - p.energy);

@@ -577,8 +577,8 @@ fn sopts_locate() -> EnclosedOptions {
 }
 
 /// Branch points between consecutive states of a trace `tr` of a uniform rod's branch
-/// (both on the wall, or both free) where the index (on the coarsest level, as the traces
-/// take it) changes ([`super::locate`]; located on the levels `N/2` and `N`). Returns the
+/// (both on the wall, or both free) where the index (of the finest level, as the traces
+/// report it, [`Levels::index`]) changes ([`super::locate`]; located on the levels `N/2` and `N`). Returns the
 /// events, notes for changes at a change of the contact set (the eigenvalue jumps) and
 /// warnings for changes that were not located.
 fn locate_branch_points(
@@ -593,7 +593,7 @@ fn locate_branch_points(
         if a.free() != b.free() {
             continue;
         }
-        let (Ok(ia), Ok(ib)) = (a.states[0].index(1e-6), b.states[0].index(1e-6)) else {
+        let (Ok(ia), Ok(ib)) = (a.index(), b.index()) else {
             continue;
         };
         if ia == ib {

@@ -16,9 +16,30 @@
 //!
 //! Cost: `(n + r)³/3` flops for the factorisation (`n = 4N + 3`), against the dense
 //! reduction's projector products and a full symmetric eigen-decomposition of size `n`.
+//!
+//! # The index carried to a finer level
+//!
+//! The sign of the determinant of the semismooth Newton Jacobian `J` at a converged state
+//! ([`LiftedFactor`], `O(N)`) gives the parity of the index: `sign det J = c (−1)^index`.
+//! The rows of a free node (`λ_j = 0`, slope `1`) factor out. A wall node's row is
+//! `σ ∇g_j` (`σ > 0`) and its column `∂F/∂λ_j = −∇g_jᵀ`: turning the column and scaling
+//! the row by `1/σ` makes it a symmetric border row of `K(0)` above at the cost of a factor
+//! `−σ`, and `sign det K(0) = (−1)^{index + r}` counts that row once more, so the wall rows
+//! leave the sign alone. The closure and gauge rows enter the same way up to a sign of their
+//! own, `c`, fixed by which rows the model has: on every level of one loop the same
+//! (`c = −1` for a uniform rod with the phase condition, `+1` for a two-segment rod; the test
+//! below checks it on every level of uniform and two-segment loops of both parities). It
+//! holds where the wall rows of `J` are the strongly active ones of the index; a node on
+//! the wall with a vanishing impulse, a dependent row or a zero eigenvalue can break it.
+//! [`EnclosedState::index_beside`] therefore only uses it to carry a count from a coarser
+//! level of the same loop, comparing the two levels' signs (so `c` cancels), and counts
+//! again where they differ: a level whose contact sits differently on its nodes may have
+//! another index than the coarser one, and the state reported is the finer one.
 
 use nalgebra::DMatrix;
+use rodloop_continuation::Factorization;
 
+use super::lifted_factor::LiftedFactor;
 use super::solve::EnclosedState;
 use crate::SolverError;
 
@@ -184,6 +205,33 @@ impl EnclosedState {
     pub fn index(&self, tol: f64) -> Result<usize, SolverError> {
         self.count_below(tol, 0.0)
     }
+
+    /// The sign of the determinant of the Newton Jacobian at this state (the lifted block
+    /// factorisation, `O(N)`; module docs): `None` where a pivot block is nearly singular.
+    pub fn jacobian_sign(&self) -> Option<f64> {
+        LiftedFactor::new(&self.model, &self.z)
+            .ok()
+            .map(|f| f.det_sign())
+            .filter(|s| *s != 0.0)
+    }
+
+    /// The index of this state ([`Self::index`]) given `coarse_index`, the index of
+    /// `coarse`, the same loop on a coarser mesh: `coarse_index` where the two Newton
+    /// Jacobians' determinants have the same sign (the same index parity, module docs),
+    /// else (or where a sign is not available) counted here. The cost is `O(N)` where the
+    /// levels agree and the dense count `O((5N)³/3)` where they do not. A change of the
+    /// index by an even number between the levels is not seen.
+    pub fn index_beside(
+        &self,
+        coarse: &EnclosedState,
+        coarse_index: usize,
+        tol: f64,
+    ) -> Result<usize, SolverError> {
+        match (self.jacobian_sign(), coarse.jacobian_sign()) {
+            (Some(a), Some(b)) if a == b => Ok(coarse_index),
+            _ => self.index(tol),
+        }
+    }
 }
 
 #[cfg(test)]
@@ -241,6 +289,82 @@ mod tests {
             assert_eq!(neg + pos, n + m);
             assert_eq!(neg, dense_negatives(&a), "trial {trial}");
         }
+    }
+
+    /// `sign det J = c (−1)^index` (module docs) on every level of uniform and two-segment
+    /// loops, attached and lifted off, stable and unstable, with one `c` per kind of gauge
+    /// (the phase condition of a uniform rod or not) on every level; and
+    /// [`EnclosedState::index_beside`] carries a coarser level's count where the signs
+    /// agree and counts again where they do not (a state of the other parity handed to it as
+    /// the coarse level).
+    #[test]
+    fn the_jacobian_sign_is_the_index_parity() {
+        let tanh = Stiffness::Tanh {
+            d0: 1.0,
+            d1: 0.5,
+            s0: 0.3,
+            s1: 0.8,
+            gamma: 10.0,
+        };
+        let cases = [
+            (1, 1.4, Stiffness::uniform(1.0)),
+            (2, 2.3, Stiffness::uniform(1.0)),
+            (3, 3.2, Stiffness::uniform(1.0)),
+            (2, 1.8, tanh.clone()),
+            (2, 1.6, tanh.clone()),
+            (2, 2.0, tanh.clone()),
+            (3, 2.6, tanh.clone()),
+            (1, 1.3, tanh.clone()),
+            (3, 2.3, tanh),
+            (2, 1.6, Stiffness::uniform(1.0)),
+            (2, 1.8, Stiffness::uniform(1.0)),
+            (3, 2.6, Stiffness::uniform(1.0)),
+        ];
+        // (gauge rows, fine state, its index, c) of every case.
+        let mut fines = Vec::new();
+        let mut constants: Vec<(usize, f64)> = Vec::new();
+        for (eta, lbar, stiff) in cases {
+            let l = rodloop_exact::paper_branch_loop(eta, lbar).unwrap();
+            let Ok(solved) = solve_branch(
+                1.0,
+                lbar,
+                &stiff,
+                &SurfaceSource::Exact(l),
+                16 * (1 + eta as usize),
+                &EnclosedOptions::default(),
+            ) else {
+                continue;
+            };
+            for st in [&solved.quarter, &solved.coarse, &solved.fine] {
+                let index = st.index(1e-6).unwrap();
+                let sign = st.jacobian_sign().expect("a regular Jacobian");
+                let c = if index % 2 == 0 { sign } else { -sign };
+                let gauge = st.model.n_gauge();
+                match constants.iter().find(|(g, _)| *g == gauge) {
+                    Some(&(_, c0)) => {
+                        assert_eq!(c, c0, "eta {eta}, lbar {lbar}, N {}", st.model.cells())
+                    }
+                    None => constants.push((gauge, c)),
+                }
+            }
+            let (coarse, fine) = (&solved.coarse, &solved.fine);
+            let (ic, ifine) = (coarse.index(1e-6).unwrap(), fine.index(1e-6).unwrap());
+            assert_eq!(fine.index_beside(coarse, ic, 1e-6).unwrap(), ifine);
+            fines.push((fine.model.n_gauge(), solved.fine.clone(), ifine));
+        }
+        // Both kinds of gauge, and states of both parities of one kind.
+        assert_eq!(constants.len(), 2, "{constants:?}");
+        let mut crossed = 0;
+        for (ga, a, ia) in &fines {
+            for (gb, b, ib) in &fines {
+                if ga == gb && (ia + ib) % 2 == 1 {
+                    assert_eq!(a.index_beside(b, *ib, 1e-6).unwrap(), *ia);
+                    crossed += 1;
+                }
+            }
+        }
+        let kinds: Vec<(usize, usize)> = fines.iter().map(|(g, _, i)| (*g, *i)).collect();
+        assert!(crossed > 0, "(gauge rows, index): {kinds:?}");
     }
 
     /// The inertia counts against the dense reduction's eigenvalues
