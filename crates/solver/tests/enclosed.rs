@@ -435,3 +435,49 @@ fn curvature_is_interpolated_across_the_closing_node_with_the_holonomy() {
         "next to the closing node {at_seam:.3e}, elsewhere at most {elsewhere:.3e}"
     );
 }
+
+/// The prolongation inside the contact runs (`EnclosedState::refine_in_runs`) carries a
+/// lifted-off two-segment figure-eight (Eq. (51), `D1/D0 = 0.5`, `γ = 200`, `L̄ = 1.358`,
+/// branch 2 from the stiffness path on 32 cells) up a ladder to 1024 cells: every level
+/// converges, the energy differences fall at every doubling (the ladder converges), and
+/// each level's contact lies within the next coarser one's runs widened by one of its cells
+/// (the runs shrink onto the contact arcs, the property the prolongation rests on).
+#[test]
+fn the_prolongation_inside_the_runs_climbs_a_ladder_of_meshes() {
+    use rodloop_solver::enclosed::descent::stiffness_path_from_shift;
+    use rodloop_solver::enclosed::solve_enclosed;
+    let st = Stiffness::paper_sec5(0.5);
+    let opts = EnclosedOptions::default();
+    let wd = EnclosedOptions {
+        watchdog: 2,
+        ..opts.clone()
+    };
+    let mut level = stiffness_path_from_shift(1.0, 1.358, 1, &st, 32, &opts, 0.2)
+        .unwrap()
+        .expect("a state from the stiffness path");
+    let mut energies = vec![level.energy()];
+    while level.model.cells() < 1024 {
+        let (m, z) = level.refine_in_runs().unwrap();
+        let next = solve_enclosed(&m, z.clone(), &wd)
+            .or_else(|_| solve_enclosed(&m, z, &opts))
+            .unwrap_or_else(|e| panic!("{} cells: {e}", m.cells()));
+        // Node 2j of the finer mesh is node j of the coarser one.
+        let n = level.model.cells();
+        let (lc, lf) = (level.model.lambda_offset(), next.model.lambda_offset());
+        let coarse_on = |j: usize| level.z[lc + j % n] > 0.0;
+        for k in 0..2 * n {
+            if next.z[lf + k] > 0.0 {
+                let j = k / 2;
+                let near =
+                    coarse_on(j) || coarse_on(j + 1) || coarse_on(j + n - 1) || coarse_on(j + 2);
+                assert!(near, "{} cells: node {k} touches outside the runs", 2 * n);
+            }
+        }
+        energies.push(next.energy());
+        level = next;
+    }
+    let d: Vec<f64> = energies.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
+    for w in d.windows(2) {
+        assert!(w[1] < 0.5 * w[0], "differences {d:?}");
+    }
+}

@@ -140,14 +140,15 @@ impl Ladder {
         let opts = EnclosedOptions::default();
         let at = t.step_to(lbar, &opts)?;
         let mut states: Vec<EnclosedState> = at.states.to_vec();
-        // The prolonged start has its contact ends a node or two off: the watchdog, with
-        // plain backtracking where it fails (as `solve_branch` does).
+        // The prolonged start (its contact runs inside the coarser ones) has its contact
+        // ends a node or two off: the watchdog, with plain backtracking where it fails (as
+        // `solve_branch` does).
         let wd = EnclosedOptions {
             watchdog: 2,
             ..opts.clone()
         };
         for _ in 0..extra {
-            let (m, z) = states.last().expect("a level").refine()?;
+            let (m, z) = states.last().expect("a level").refine_in_runs()?;
             let next =
                 solve_enclosed(&m, z.clone(), &wd).or_else(|_| solve_enclosed(&m, z, &opts))?;
             states.push(next);
