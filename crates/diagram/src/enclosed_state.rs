@@ -37,8 +37,9 @@ pub struct EnclosedResult {
     pub energy: (f64, f64),
     /// Surface loop energy and `λ_min` (None for branch 0).
     pub surface: Option<(f64, f64)>,
-    /// Stability index and lowest eigenvalues (on the coarsest level of the cascade, `N/8`
-    /// or `N/4`; dense, `O(N³)`).
+    /// Stability index of the state reported (its finest level) and the lowest eigenvalues
+    /// of the constrained Hessian on the coarsest level of the cascade (`N/8` or `N/4`;
+    /// dense, `O(N³)`).
     pub stability: (usize, Vec<f64>),
     /// How the energy was obtained.
     pub method: String,
@@ -171,6 +172,15 @@ pub fn verify_written(
             })
         }
     }
+}
+
+/// The reported state's stability: the index of the finest level ([`BranchSolve::index`])
+/// and the lowest eigenvalues of the constrained Hessian on the coarsest level (a dense
+/// eigen-decomposition, `O(N³)`; an approximation of the finest level's, whose count of
+/// negative ones can differ from the index next to a zero eigenvalue).
+fn stability_of(b: &BranchSolve) -> Result<(usize, Vec<f64>), rodloop_solver::SolverError> {
+    let (_, vals) = b.coarsest().stability(1e-6)?;
+    Ok((b.index(1e-6)?, vals))
 }
 
 /// An error of a lower layer with what was being computed when it happened.
@@ -342,7 +352,7 @@ pub fn solve_state_with(
                 lowest_over_surface_starts(&wall, lbar, eta, stiffness, accuracy, &[m], &opts, out);
             Ok((out, false))
         };
-        let minimum = |b: &BranchSolve| b.coarsest().stability(1e-6).is_ok_and(|s| s.0 == 0);
+        let minimum = |b: &BranchSolve| b.index(1e-6).is_ok_and(|i| i == 0);
         // Mesh by mesh, coarsest first: the first with every start, the finer ones with the
         // surface loops. Where none ends at a local minimum, the finest mesh's result stands
         // (every start's last mesh, as one search over the whole ladder would end), unless a
@@ -396,7 +406,7 @@ pub fn solve_state_with(
         (b, descent, given_up)
     };
     let cells = b.fine.model.cells();
-    let stability = b.coarsest().stability(1e-6).map_err(passed)?;
+    let stability = stability_of(&b).map_err(passed)?;
     let moved = lower_minimum || descent.as_ref().is_some_and(|d| d.moved());
     let (energy, mut method) = if attached && !moved {
         (
@@ -474,7 +484,7 @@ fn lowest_over_surface_starts(
     found: DescendedSolve,
 ) -> DescendedSolve {
     let rank = |b: &BranchSolve| -> Option<(bool, f64)> {
-        let index = b.coarsest().stability(1e-6).ok()?.0;
+        let index = b.index(1e-6).ok()?;
         let same = enclosed_periods(&b.fine).ok().map(|p| p.eta) == Some(eta);
         same.then_some((index > 0, b.energy))
     };
@@ -569,7 +579,7 @@ pub fn solve_from_shape(
         descend_branch(b, &opts)
             .map_err(context("descending from the saddle Newton converged to"))?
     };
-    let stability = b.coarsest().stability(1e-6).map_err(passed)?;
+    let stability = stability_of(&b).map_err(passed)?;
     let mut method = format!(
         "3-D enclosed model, N = {cells} cells (semismooth Newton from the saved shape); {}",
         b.estimate_method()

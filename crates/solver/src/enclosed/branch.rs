@@ -362,8 +362,17 @@ fn ladder_estimate(e: &[f64], max_order: f64) -> (f64, f64) {
 }
 
 impl BranchSolve {
+    /// The stability index of the finest level, the state reported: counted on `N/2` and
+    /// carried to `N` where the two levels' Newton Jacobians have determinants of one sign,
+    /// counted on `N` where they differ ([`EnclosedState::index_beside`]).
+    pub fn index(&self, tol: f64) -> Result<usize, SolverError> {
+        let half = self.coarse.index(tol)?;
+        self.fine.index_beside(&self.coarse, half, tol)
+    }
+
     /// The coarsest level kept (`N/8` where the cascade has it, else `N/4`): where callers
-    /// compute the stability index (a dense eigen-decomposition, `O(N³)`).
+    /// compute the lowest eigenvalues of the constrained Hessian (a dense
+    /// eigen-decomposition, `O(N³)`) and step along its unstable directions.
     pub fn coarsest(&self) -> &EnclosedState {
         self.eighth.as_ref().unwrap_or(&self.quarter)
     }

@@ -296,7 +296,7 @@ mod tests {
     /// (the phase condition of a uniform rod or not) on every level; and
     /// [`EnclosedState::index_beside`] carries a coarser level's count where the signs
     /// agree and counts again where they do not (a state of the other parity handed to it as
-    /// the coarse level).
+    /// the coarse level); a cascade's index ([`BranchSolve::index`]) is its finest level's.
     #[test]
     fn the_jacobian_sign_is_the_index_parity() {
         let tanh = Stiffness::Tanh {
@@ -350,6 +350,7 @@ mod tests {
             let (coarse, fine) = (&solved.coarse, &solved.fine);
             let (ic, ifine) = (coarse.index(1e-6).unwrap(), fine.index(1e-6).unwrap());
             assert_eq!(fine.index_beside(coarse, ic, 1e-6).unwrap(), ifine);
+            assert_eq!(solved.index(1e-6).unwrap(), ifine);
             fines.push((fine.model.n_gauge(), solved.fine.clone(), ifine));
         }
         // Both kinds of gauge, and states of both parities of one kind.
