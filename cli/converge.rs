@@ -46,7 +46,7 @@ struct Rung {
 }
 
 /// The `η` of `--branch`, with `--levels` and `--lbar` checked.
-fn checked_eta(args: &Args) -> Result<u32> {
+pub(crate) fn checked_eta(args: &Args) -> Result<u32> {
     if args.branch == 0 || args.branch > 1000 {
         bail!("--branch must be from 1 to 1000 (got {})", args.branch);
     }
@@ -69,7 +69,7 @@ fn checked_eta(args: &Args) -> Result<u32> {
 
 /// The cells of the coarsest rung (`--min-cells`, else a quarter of the default level's
 /// `default_cells`), checked with the finest rung against the cap.
-fn ladder_base(args: &Args, default_cells: usize) -> Result<usize> {
+pub(crate) fn ladder_base(args: &Args, default_cells: usize) -> Result<usize> {
     if let Some(m) = args.min_cells.filter(|&m| m < 8) {
         bail!("--min-cells must be at least 8 (got {m})");
     }

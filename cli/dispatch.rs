@@ -103,8 +103,8 @@ impl SceneEngine for Enclosed {
     ) -> Result<()> {
         Err(surface_only(scene))
     }
-    fn converge(&self, _args: &crate::converge::Args, scene: &Scene) -> Result<()> {
-        Err(surface_only(scene))
+    fn converge(&self, args: &crate::converge::Args, scene: &Scene) -> Result<()> {
+        crate::converge_enclosed::run(args, scene)
     }
     fn phase(&self, _args: &crate::phase::Args, scene: &Scene, _t_start: Instant) -> Result<()> {
         Err(surface_only(scene))
@@ -114,7 +114,7 @@ impl SceneEngine for Enclosed {
 /// The one-line error of a command that runs the surface model only, on an enclosed scene.
 fn surface_only(scene: &Scene) -> anyhow::Error {
     anyhow!(
-        "scene {}: confinement = \"enclosed\" is handled by `rodloop solve`, `rodloop diagram`, `rodloop report` and `rodloop compare --scene enclosed`; this command runs the surface model only (converge and phase are built on the surface model's O(N) factorisation and its diagram; the enclosed model is dense and has its own diagram). See the README, Enclosed loops",
+        "scene {}: confinement = \"enclosed\" is handled by `rodloop solve`, `rodloop diagram`, `rodloop report`, `rodloop converge` and `rodloop compare --scene enclosed`; this command runs the surface model only (its continuation in the stiffness follows the surface diagram's exchanges; the enclosed model has its own diagram). See the README, Enclosed loops",
         scene.name
     )
 }

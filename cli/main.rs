@@ -19,6 +19,7 @@ mod atlas;
 mod compare;
 mod compare_segments;
 mod converge;
+mod converge_enclosed;
 mod decimal;
 mod diagram;
 mod dispatch;

@@ -7,7 +7,7 @@
 
 use anyhow::Result;
 use rodloop_diagram::state_rows::{
-    result_rows, surface_rows, ENCLOSED_COLUMNS, NODE_COLUMN, SURFACE_COLUMNS,
+    model_rows, result_rows, surface_rows, ENCLOSED_COLUMNS, NODE_COLUMN, SURFACE_COLUMNS,
 };
 use rodloop_diagram::{PointStates, StateTable};
 
@@ -144,6 +144,15 @@ pub fn files_in(dir: &std::path::Path) -> Result<Vec<String>> {
     walk(dir, dir, &mut out)?;
     out.sort();
     Ok(out)
+}
+
+/// The enclosed `config.csv` table of a 3-D state ([`model_rows`]).
+pub fn model_table(st: &rodloop_solver::enclosed::EnclosedState, r: f64, d0: f64) -> Result<Table> {
+    rows_table(
+        &ENCLOSED_COLUMNS,
+        &model_rows(st, r, d0)?,
+        Some(NODE_COLUMN),
+    )
 }
 
 /// The enclosed `config.csv` table of a solve's result ([`result_rows`]).

@@ -1529,8 +1529,7 @@ fn usage_mistakes_are_one_line() {
 #[test]
 fn surface_only_commands_refuse_an_enclosed_scene() {
     let scene = "data/scenes/homogeneous-enclosed.toml";
-    let cases: [&[&str]; 3] = [
-        &["converge", "--lbar", "1.2", "--branch", "1"],
+    let cases: [&[&str]; 2] = [
         &["phase", "--to", "0.5"],
         &["diagram", "--param", "d1", "--lbar", "1.2"],
     ];

@@ -4,10 +4,7 @@
 
 use rodloop_continuation::exchange::{self, Energies, EnergyPair, ExchangeSettings, Ranked, Start};
 use rodloop_solver::enclosed::stats;
-use rodloop_solver::enclosed::{
-    four_level_estimate, point_like_contact, solve_enclosed, three_level_estimate, EnclosedOptions,
-    EnclosedState, LIFTED_OFF_MAX_ORDER,
-};
+use rodloop_solver::enclosed::{finest_energy, solve_enclosed, EnclosedOptions, EnclosedState};
 use rodloop_solver::{Accuracy, SolverError};
 
 use super::levels::Levels;
@@ -184,27 +181,13 @@ impl Ladder {
         Ok(Self { states })
     }
 
-    /// Energy of the finest level and its error: [`four_level_estimate`] over the last four
-    /// levels (order capped at [`LIFTED_OFF_MAX_ORDER`], or 1 for point-like contact), or
-    /// the three-level rule where the ladder has three.
+    /// Energy of the finest level and its error: the solver's rule for a ladder of meshes
+    /// ([`finest_energy`]: the four-level rule over the last four levels of a lifted-off
+    /// loop, order capped for its contact; the three-level rule where the ladder has three,
+    /// or where the loop touches everywhere).
     pub(super) fn energy(&self) -> Result<(f64, f64), SolverError> {
-        let e: Vec<f64> = self.states.iter().map(EnclosedState::energy).collect();
-        let fine = self.states.last().expect("a level");
-        let c = fine.contact(super::TOUCH)?;
-        let max_order = if c.fraction >= 1.0 {
-            4.0
-        } else if point_like_contact(fine, &c) {
-            1.0
-        } else {
-            LIFTED_OFF_MAX_ORDER
-        };
-        let k = e.len();
-        let (err, _) = if k >= 4 && c.fraction < 1.0 {
-            four_level_estimate([e[k - 4], e[k - 3], e[k - 2], e[k - 1]], max_order)
-        } else {
-            three_level_estimate(e[k - 3], e[k - 2], e[k - 1], max_order)
-        };
-        Ok((e[k - 1], err))
+        let levels: Vec<&EnclosedState> = self.states.iter().collect();
+        finest_energy(&levels)
     }
 
     /// Cells of the levels, coarsest first.

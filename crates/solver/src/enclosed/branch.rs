@@ -427,6 +427,39 @@ pub fn point_like_contact(state: &EnclosedState, contact: &super::solve::Contact
     })
 }
 
+/// Energy of the finest of `levels` (coarsest first, each of twice the cells of the one
+/// before, at least three) and its error estimate, the rule of a ladder of meshes: a loop
+/// touching the wall everywhere converges at the scheme's fourth order
+/// ([`three_level_estimate`] over the last three, order at most 4); a lifted-off one by
+/// [`four_level_estimate`] over the last four (three where there are three), its order at
+/// most [`LIFTED_OFF_MAX_ORDER`], or 1 where its contact is point-like
+/// ([`point_like_contact`]): the contact ends fall between nodes and the energies converge
+/// irregularly. The enclosed diagrams' exchanges and `rodloop converge` use it.
+pub fn finest_energy(levels: &[&EnclosedState]) -> Result<(f64, f64), SolverError> {
+    let k = levels.len();
+    if k < 3 {
+        return Err(SolverError::InvalidInput(format!(
+            "a ladder estimate needs three levels (got {k})"
+        )));
+    }
+    let e: Vec<f64> = levels.iter().map(|s| s.energy()).collect();
+    let fine = levels[k - 1];
+    let c = fine.contact(1e-9)?;
+    let max_order = if c.fraction >= 1.0 {
+        4.0
+    } else if point_like_contact(fine, &c) {
+        1.0
+    } else {
+        LIFTED_OFF_MAX_ORDER
+    };
+    let (err, _) = if k >= 4 && c.fraction < 1.0 {
+        four_level_estimate([e[k - 4], e[k - 3], e[k - 2], e[k - 1]], max_order)
+    } else {
+        three_level_estimate(e[k - 3], e[k - 2], e[k - 1], max_order)
+    };
+    Ok((e[k - 1], err))
+}
+
 /// Error estimate of the finest of four energies at `N/8, N/4, N/2, N` cells, for sequences
 /// that converge irregularly (contact ends between nodes): the order is the smaller of the
 /// two observed, `p = min(log2(d0/d1), log2(d1/d2))` with `d_k` the successive differences,
