@@ -410,6 +410,41 @@ fn every_index_is_that_of_the_state_reported() {
     );
 }
 
+/// `solve` at `L̄ = 1.45`, between the diagram's samples, reaches the diagram's stable state
+/// there: no higher than the lowest index-0 sample next to it plus both estimates and the
+/// change along the family over the distance (slope at most 1 in `E R/(πD0)` per unit
+/// `L̄`). `solve` decides whether a state is a local minimum by the index of the state it
+/// reports (its finest level); taken on the coarsest level, the index let it stop at a
+/// higher state of branch 2 (1.2e-2 above).
+#[test]
+fn solve_between_samples_reaches_the_stable_state() {
+    use rodloop_diagram::enclosed_state::solve_state;
+    let d = whole_diagram();
+    let x = 1.45;
+    let p = d
+        .points
+        .iter()
+        .filter(|p| p.branch == 2 && p.lowest && p.index == 0)
+        .min_by(|a, b| (a.lbar - x).abs().total_cmp(&(b.lbar - x).abs()))
+        .expect("a stable sample of branch 2");
+    assert!(
+        (p.lbar - x).abs() < 0.01,
+        "nearest stable sample at {}",
+        p.lbar
+    );
+    let r = solve_state(1.0, &sharp(), x, 2, Accuracy::Default).unwrap();
+    assert_eq!(r.stability.0, 0);
+    let allowed = p.energy_error + r.energy.1 + (p.lbar - x).abs();
+    assert!(
+        r.energy.0 <= p.energy + allowed,
+        "solve {:?} at {x}, stable sample {} +- {:.1e} at {}",
+        r.energy,
+        p.energy,
+        p.energy_error,
+        p.lbar
+    );
+}
+
 /// No state of the whole diagram contradicts its row: every 3-D state whose moment (of its
 /// central projection) has countable periods has its row's `η` and says so
 /// (`branch_from = periods`); one without periods (a loop in a plane through the centre)

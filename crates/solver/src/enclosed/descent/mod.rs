@@ -99,7 +99,7 @@ pub fn solve_branch_lowest(
     };
     let cells = ladder.first().copied().unwrap_or(0);
     let rank = |b: &BranchSolve| -> Option<(usize, f64)> {
-        let index = saddle.index(b.coarsest()).ok()?;
+        let index = b.index(saddle.tol).ok()?;
         let same = enclosed_periods(&b.fine).ok().map(|p| p.eta) == Some(eta);
         same.then_some((usize::from(index > 0), b.energy))
     };

@@ -194,9 +194,8 @@ pub fn descend_branch(
         opts: opts.clone(),
         ..EnclosedSaddle::default()
     };
-    // The index where callers compute it (the coarsest level: `N/8` where the cascade has
-    // it, a dense eigen-decomposition).
-    if saddle.index(b.coarsest())? == 0 {
+    // The index of the state reported, its finest level ([`BranchSolve::index`]).
+    if b.index(saddle.tol)? == 0 {
         return Ok((b, None));
     }
     // Semismooth Newton from the displaced state does not decrease the energy on its way:
@@ -304,7 +303,7 @@ pub fn solve_branch_descended(
             }
         };
         let (b, d) = descend_branch(b, opts)?;
-        if saddle.index(b.coarsest())? == 0 {
+        if b.index(saddle.tol)? == 0 {
             return Ok((b, d, notes));
         }
         notes.push(format!(
