@@ -249,6 +249,46 @@ mod tests {
             .count()
     }
 
+    /// The two-segment stiffness of the cases below (Eq. (51), mild transitions).
+    fn tanh() -> Stiffness {
+        Stiffness::Tanh {
+            d0: 1.0,
+            d1: 0.5,
+            s0: 0.3,
+            s1: 0.8,
+            gamma: 10.0,
+        }
+    }
+
+    /// Uniform and two-segment loops, attached and lifted off, stable and unstable:
+    /// `(η, L̄, stiffness)`.
+    fn cases() -> Vec<(u32, f64, Stiffness)> {
+        vec![
+            (1, 1.4, Stiffness::uniform(1.0)),
+            (2, 2.3, Stiffness::uniform(1.0)),
+            (3, 3.2, Stiffness::uniform(1.0)),
+            (2, 1.8, tanh()),
+            (2, 1.6, tanh()),
+            (2, 2.0, tanh()),
+            (3, 2.6, tanh()),
+        ]
+    }
+
+    /// The cascade of a case from the exact surface loop on `16(1 + η)` cells; `None` where
+    /// Newton does not bring the start to an equilibrium (no case for the count).
+    fn solved(eta: u32, lbar: f64, stiff: &Stiffness) -> Option<crate::enclosed::BranchSolve> {
+        let l = rodloop_exact::paper_branch_loop(eta, lbar).unwrap();
+        solve_branch(
+            1.0,
+            lbar,
+            stiff,
+            &SurfaceSource::Exact(l),
+            16 * (1 + eta as usize),
+            &EnclosedOptions::default(),
+        )
+        .ok()
+    }
+
     #[test]
     fn bunch_kaufman_inertia_matches_the_eigenvalue_count() {
         // Pseudo-random symmetric matrices, among them saddle-point matrices with a zero
@@ -299,40 +339,19 @@ mod tests {
     /// the coarse level); a cascade's index ([`BranchSolve::index`]) is its finest level's.
     #[test]
     fn the_jacobian_sign_is_the_index_parity() {
-        let tanh = Stiffness::Tanh {
-            d0: 1.0,
-            d1: 0.5,
-            s0: 0.3,
-            s1: 0.8,
-            gamma: 10.0,
-        };
-        let cases = [
-            (1, 1.4, Stiffness::uniform(1.0)),
-            (2, 2.3, Stiffness::uniform(1.0)),
-            (3, 3.2, Stiffness::uniform(1.0)),
-            (2, 1.8, tanh.clone()),
-            (2, 1.6, tanh.clone()),
-            (2, 2.0, tanh.clone()),
-            (3, 2.6, tanh.clone()),
-            (1, 1.3, tanh.clone()),
-            (3, 2.3, tanh),
+        let mut cases = cases();
+        cases.extend([
+            (1, 1.3, tanh()),
+            (3, 2.3, tanh()),
             (2, 1.6, Stiffness::uniform(1.0)),
             (2, 1.8, Stiffness::uniform(1.0)),
             (3, 2.6, Stiffness::uniform(1.0)),
-        ];
+        ]);
         // (gauge rows, fine state, its index, c) of every case.
         let mut fines = Vec::new();
         let mut constants: Vec<(usize, f64)> = Vec::new();
         for (eta, lbar, stiff) in cases {
-            let l = rodloop_exact::paper_branch_loop(eta, lbar).unwrap();
-            let Ok(solved) = solve_branch(
-                1.0,
-                lbar,
-                &stiff,
-                &SurfaceSource::Exact(l),
-                16 * (1 + eta as usize),
-                &EnclosedOptions::default(),
-            ) else {
+            let Some(solved) = solved(eta, lbar, &stiff) else {
                 continue;
             };
             for st in [&solved.quarter, &solved.coarse, &solved.fine] {
@@ -374,34 +393,9 @@ mod tests {
     /// branches 1 and 3, and a saddle (index 1) of branch 1 with Eq. (51) stiffness.
     #[test]
     fn inertia_counts_match_the_dense_eigenvalues() {
-        let tanh = Stiffness::Tanh {
-            d0: 1.0,
-            d1: 0.5,
-            s0: 0.3,
-            s1: 0.8,
-            gamma: 10.0,
-        };
-        let cases = [
-            (1, 1.4, Stiffness::uniform(1.0)),
-            (2, 2.3, Stiffness::uniform(1.0)),
-            (3, 3.2, Stiffness::uniform(1.0)),
-            (2, 1.8, tanh.clone()),
-            (2, 1.6, tanh.clone()),
-            (2, 2.0, tanh.clone()),
-            (3, 2.6, tanh),
-        ];
         let mut indices = Vec::new();
-        for (eta, lbar, stiff) in cases {
-            let l = rodloop_exact::paper_branch_loop(eta, lbar).unwrap();
-            // A start Newton does not bring to an equilibrium is no case for the count.
-            let Ok(solved) = solve_branch(
-                1.0,
-                lbar,
-                &stiff,
-                &SurfaceSource::Exact(l),
-                16 * (1 + eta as usize),
-                &EnclosedOptions::default(),
-            ) else {
+        for (eta, lbar, stiff) in cases() {
+            let Some(solved) = solved(eta, lbar, &stiff) else {
                 continue;
             };
             let st = solved.coarse;
