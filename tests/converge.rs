@@ -5,19 +5,23 @@
 mod common;
 use common::{bin, read_csv, tmp};
 
-#[test]
-fn converge_ladder_is_fourth_order_against_the_exact_loop() {
-    let out = tmp("converge-ladder");
+/// `rodloop converge ARGS --out OUT` run to success; the table's header and rows.
+fn converge(out: &std::path::Path, args: &[&str]) -> (Vec<String>, Vec<Vec<String>>) {
     let o = bin()
-        .args([
-            "converge", "--lbar", "1.3", "--branch", "2", "--levels", "4",
-        ])
+        .arg("converge")
+        .args(args)
         .arg("--out")
-        .arg(&out)
+        .arg(out)
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let (header, rows) = read_csv(&out.join("converge.csv"));
+    read_csv(&out.join("converge.csv"))
+}
+
+#[test]
+fn converge_ladder_is_fourth_order_against_the_exact_loop() {
+    let out = tmp("converge-ladder");
+    let (header, rows) = converge(&out, &["--lbar", "1.3", "--branch", "2", "--levels", "4"]);
     let col = |n: &str| common::col(&header, n);
     assert_eq!(rows.len(), 4);
     // The exact energy comes from the exact layer, independently of the numerical model.
@@ -57,9 +61,9 @@ fn converge_ladder_is_fourth_order_against_the_exact_loop() {
 #[test]
 fn converge_on_an_enclosed_scene_climbs_a_ladder_from_the_solved_state() {
     let out = tmp("converge-enclosed");
-    let o = bin()
-        .args([
-            "converge",
+    let (header, rows) = converge(
+        &out,
+        &[
             "--scene",
             "data/scenes/homogeneous-enclosed.toml",
             "--lbar",
@@ -70,13 +74,8 @@ fn converge_on_an_enclosed_scene_climbs_a_ladder_from_the_solved_state() {
             "64",
             "--levels",
             "4",
-        ])
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let (header, rows) = read_csv(&out.join("converge.csv"));
+        ],
+    );
     let col = |n: &str| common::col(&header, n);
     assert_eq!(rows.len(), 4);
     let energy: Vec<f64> = rows
