@@ -445,6 +445,36 @@ fn solve_between_samples_reaches_the_stable_state() {
     );
 }
 
+/// At the lengths of the stable samples of branch 2 below the exchange (index 0, `1.30 ≤ L̄
+/// ≤ 1.36`), `solve --branch 2` reaches a state no higher than the sample plus both
+/// estimates: the lowest local minimum of the branch that `solve` reports is at least as low
+/// as the diagram's. At `L̄ = 1.328827` that needs the stiffness paths at the nearest probe
+/// lengths as well as the surface loop's first minimum continued in `L̄` (which reaches the
+/// saddle 1.8169945712).
+#[test]
+fn solve_at_the_stable_samples_reaches_them() {
+    use rodloop_diagram::enclosed_state::solve_state;
+    let d = whole_diagram();
+    let samples: Vec<_> = d
+        .points
+        .iter()
+        .filter(|p| p.branch == 2 && p.index == 0 && (1.30..=1.36).contains(&p.lbar))
+        .collect();
+    assert!(!samples.is_empty());
+    for p in samples {
+        let r = solve_state(1.0, &sharp(), p.lbar, 2, Accuracy::Default).unwrap();
+        assert!(
+            r.energy.0 <= p.energy + p.energy_error + r.energy.1,
+            "solve {:?} at {}, sample {} +- {:.1e} (family {})",
+            r.energy,
+            p.lbar,
+            p.energy,
+            p.energy_error,
+            p.family
+        );
+    }
+}
+
 /// No state of the whole diagram contradicts its row: every 3-D state whose moment (of its
 /// central projection) has countable periods has its row's `η` and says so
 /// (`branch_from = periods`); one without periods (a loop in a plane through the centre)

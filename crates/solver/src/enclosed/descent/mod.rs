@@ -234,13 +234,17 @@ fn local_minima(
 /// searched, after the surface loop has been tried at every probe length.
 pub const STIFFNESS_PROBES: usize = 2;
 
-/// Local minima of branch `eta` at one length of [`probe_lengths`], continued to `lbar`:
-/// the states at `lbar` on `cells` cells of branch `eta`, lowest first (their index may have
+/// Local minima of branch `eta` at lengths of [`probe_lengths`], continued to `lbar`: the
+/// states at `lbar` on `cells` cells of branch `eta`, lowest first (their index may have
 /// changed on the way), each with the length it comes from. The starts at a probe length
-/// `x`: the enclosed state from the surface loop `surface(x)` (where one is solved) at every
-/// probe length in turn, then the stiffness paths at the [`STIFFNESS_PROBES`] nearest ones;
-/// each descended where it is a saddle. The first probe length that gives a state at
-/// `lbar` ends the search; empty when none does.
+/// `x`: the enclosed state from the surface loop `surface(x)` (where one is solved), at the
+/// probe lengths in turn up to the first that gives a state at `lbar`, and the stiffness
+/// paths at the [`STIFFNESS_PROBES`] nearest ones, every one of them (the families they
+/// reach differ from the surface loop's: on the two-segment rod of Eq. (51), `D1/D0 = 0.5`,
+/// at `L̄ = 1.328827` the surface loop's minimum from 1.5288 continues to the saddle
+/// 1.8169945712 that the surface loop reaches there too, a stiffness path's from 1.4288 to
+/// the stable state 1.7488917142 that the enclosed diagram traces there); each descended
+/// where it is a saddle. Empty when none gives a state.
 pub fn states_by_length_continuation<F>(
     wall: impl IntoWall,
     lbar: f64,
@@ -265,6 +269,7 @@ where
         out
     };
     let lengths = probe_lengths(lbar, eta);
+    let mut all = Vec::new();
     for &x in &lengths {
         let Some(src) = surface(x) else { continue };
         let Ok(s) = solve_from_surface(&wall, x, stiffness, &src, cells, opts) else {
@@ -272,18 +277,18 @@ where
         };
         let out = continued(x, local_minima(vec![s], eta, opts));
         if !out.is_empty() {
-            return out;
+            all.extend(out);
+            break;
         }
     }
     for &x in lengths.iter().take(STIFFNESS_PROBES) {
         let starts =
             stiffness_homotopy_states(&wall, x, eta, stiffness, cells, opts).unwrap_or_default();
         let out = continued(x, local_minima(starts, eta, opts));
-        if !out.is_empty() {
-            return out;
-        }
+        all.extend(out);
     }
-    Vec::new()
+    all.sort_by(|a, b| a.1.energy().total_cmp(&b.1.energy()));
+    all
 }
 
 #[cfg(test)]
