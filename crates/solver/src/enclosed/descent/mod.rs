@@ -238,9 +238,10 @@ pub const STIFFNESS_PROBES: usize = 2;
 /// states at `lbar` on `cells` cells of branch `eta`, lowest first (their index may have
 /// changed on the way), each with the length it comes from. The starts at a probe length
 /// `x`: the enclosed state from the surface loop `surface(x)` (where one is solved), at the
-/// probe lengths in turn up to the first that gives a state at `lbar`, and the stiffness
-/// paths at the [`STIFFNESS_PROBES`] nearest ones, every one of them (the families they
-/// reach differ from the surface loop's: on the two-segment rod of Eq. (51), `D1/D0 = 0.5`,
+/// probe lengths in turn up to the first that gives a state at `lbar`, and, unless that
+/// state arrives as a local minimum, the stiffness paths at the [`STIFFNESS_PROBES`] nearest
+/// ones, every one of them (the families they reach differ from the surface loop's: on the
+/// two-segment rod of Eq. (51), `D1/D0 = 0.5`,
 /// at `L̄ = 1.328827` the surface loop's minimum from 1.5288 continues to the saddle
 /// 1.8169945712 that the surface loop reaches there too, a stiffness path's from 1.4288 to
 /// the stable state 1.7488917142 that the enclosed diagram traces there); each descended
@@ -281,11 +282,17 @@ where
             break;
         }
     }
-    for &x in lengths.iter().take(STIFFNESS_PROBES) {
-        let starts =
-            stiffness_homotopy_states(&wall, x, eta, stiffness, cells, opts).unwrap_or_default();
-        let out = continued(x, local_minima(starts, eta, opts));
-        all.extend(out);
+    // The stiffness paths where the surface loop's minimum does not arrive as a local
+    // minimum (their continuations are the costly start).
+    let arrived = all
+        .iter()
+        .any(|(_, s): &(f64, EnclosedState)| s.index(1e-6).ok() == Some(0));
+    if !arrived {
+        for &x in lengths.iter().take(STIFFNESS_PROBES) {
+            let starts = stiffness_homotopy_states(&wall, x, eta, stiffness, cells, opts)
+                .unwrap_or_default();
+            all.extend(continued(x, local_minima(starts, eta, opts)));
+        }
     }
     all.sort_by(|a, b| a.1.energy().total_cmp(&b.1.energy()));
     all
