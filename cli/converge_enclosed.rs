@@ -35,41 +35,17 @@ struct Rung {
 }
 
 /// The rung solved from `start` (watchdog steps first, plain backtracking where they fail,
-/// as the exchange ladders do). Where the start's Jacobian is singular (a node whose impulse
-/// and gap both vanish: the min-function's kink), Newton on the Fischer–Burmeister form of
-/// the complementarity, smooth there, to `tolerance/1.75` (which puts the min-function's
-/// residual below the tolerance), the state kept with the min-function's model.
+/// as the exchange ladders do).
 fn solve_rung(
     model: &rodloop_solver::enclosed::EnclosedModel,
     z: Vec<f64>,
 ) -> Result<EnclosedState, rodloop_solver::SolverError> {
-    use rodloop_solver::enclosed::Complementarity;
     let opts = EnclosedOptions::default();
     let wd = EnclosedOptions {
         watchdog: 2,
         ..opts.clone()
     };
-    match solve_enclosed(model, z.clone(), &wd).or_else(|_| solve_enclosed(model, z.clone(), &opts))
-    {
-        Err(rodloop_solver::SolverError::SingularJacobian { .. }) => {
-            let fb = model
-                .clone()
-                .with_complementarity(Complementarity::FischerBurmeister);
-            let fopts = EnclosedOptions {
-                tolerance: opts.tolerance / 1.75,
-                ..opts.clone()
-            };
-            let st = solve_enclosed(&fb, z, &fopts)?;
-            let residual = model.residual_norm(&model.residual(&st.z)?);
-            Ok(EnclosedState {
-                model: model.clone(),
-                z: st.z,
-                iterations: st.iterations,
-                residual,
-            })
-        }
-        other => other,
-    }
+    solve_enclosed(model, z.clone(), &wd).or_else(|_| solve_enclosed(model, z, &opts))
 }
 
 /// Run the subcommand on an enclosed scene.
