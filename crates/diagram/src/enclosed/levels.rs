@@ -138,13 +138,12 @@ impl Levels {
     /// The stability index of the finest level, the state reported: counted on `N/2` (the
     /// dense inertia count, eight times cheaper than on `N`) and carried to `N` where the
     /// two levels' Newton Jacobians have determinants of one sign, counted on `N` where
-    /// they do not ([`rodloop_solver::enclosed::EnclosedState::index_beside`]). The levels'
+    /// they do not ([`rodloop_solver::enclosed::EnclosedState::index_via`]). The levels'
     /// contacts sit differently on their nodes, and their indices can differ: on the
     /// two-segment scene 15 of its 164 sampled states have levels of different index (9 of
     /// them `N` against `N/4`, the index a count on the coarsest level would report).
     pub(super) fn index(&self) -> Result<usize, SolverError> {
-        let half = self.states[1].index(1e-6)?;
-        self.states[2].index_beside(&self.states[1], half, 1e-6)
+        self.states[2].index_via(&self.states[1], 1e-6)
     }
 
     pub(super) fn point(&self, branch: u32, eta: u32) -> Result<EnclosedPoint, SolverError> {

@@ -364,10 +364,9 @@ fn ladder_estimate(e: &[f64], max_order: f64) -> (f64, f64) {
 impl BranchSolve {
     /// The stability index of the finest level, the state reported: counted on `N/2` and
     /// carried to `N` where the two levels' Newton Jacobians have determinants of one sign,
-    /// counted on `N` where they differ ([`EnclosedState::index_beside`]).
+    /// counted on `N` where they differ ([`EnclosedState::index_via`]).
     pub fn index(&self, tol: f64) -> Result<usize, SolverError> {
-        let half = self.coarse.index(tol)?;
-        self.fine.index_beside(&self.coarse, half, tol)
+        self.fine.index_via(&self.coarse, tol)
     }
 
     /// The coarsest level kept (`N/8` where the cascade has it, else `N/4`): where callers

@@ -232,6 +232,14 @@ impl EnclosedState {
             _ => self.index(tol),
         }
     }
+
+    /// The index of this state counted on `coarse`, the same loop on the mesh of half its
+    /// cells, and carried here ([`Self::index_beside`]): the index of a cascade's or a
+    /// trace's finest level, the state reported, at an eighth of the cost of counting it
+    /// here where the two levels agree.
+    pub fn index_via(&self, coarse: &EnclosedState, tol: f64) -> Result<usize, SolverError> {
+        self.index_beside(coarse, coarse.index(tol)?, tol)
+    }
 }
 
 #[cfg(test)]
