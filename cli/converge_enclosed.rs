@@ -13,7 +13,7 @@ use anyhow::{bail, Context, Result};
 use rodloop_diagram::enclosed_state::TOUCH;
 use rodloop_scene::Scene;
 use rodloop_solver::enclosed::{
-    branch::resample_state, finest_energy, solve_enclosed, EnclosedOptions, EnclosedState,
+    branch::resample_state, finest_energy, solve_prolonged, EnclosedOptions, EnclosedState,
 };
 use rodloop_solver::{Accuracy, Claim};
 use serde_json::json;
@@ -32,20 +32,6 @@ struct Rung {
     fraction: f64,
     runs: usize,
     seconds: f64,
-}
-
-/// The rung solved from `start` (watchdog steps first, plain backtracking where they fail,
-/// as the exchange ladders do).
-fn solve_rung(
-    model: &rodloop_solver::enclosed::EnclosedModel,
-    z: Vec<f64>,
-) -> Result<EnclosedState, rodloop_solver::SolverError> {
-    let opts = EnclosedOptions::default();
-    let wd = EnclosedOptions {
-        watchdog: 2,
-        ..opts.clone()
-    };
-    solve_enclosed(model, z.clone(), &wd).or_else(|_| solve_enclosed(model, z, &opts))
 }
 
 /// Run the subcommand on an enclosed scene.
@@ -82,14 +68,14 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
             None => {
                 let (model, z) = resample_state(&solved.state, cells)
                     .with_context(|| format!("starting the rung of {cells} cells"))?;
-                solve_rung(&model, z)
+                solve_prolonged(&model, z, &EnclosedOptions::default())
                     .with_context(|| format!("solving the rung of {cells} cells"))?
             }
             Some(r) => {
                 let solved = r
                     .state
                     .refine_in_runs()
-                    .and_then(|(model, z)| solve_rung(&model, z));
+                    .and_then(|(model, z)| solve_prolonged(&model, z, &EnclosedOptions::default()));
                 match solved {
                     Ok(st) => st,
                     Err(e) if rungs.len() >= 3 => {
@@ -128,16 +114,8 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
                 .flatten()
         })
         .collect();
-    let orders: Vec<Option<f64>> = (0..n)
-        .map(|k| {
-            (k >= 2).then(|| {
-                ((energies[k - 1] - energies[k - 2]) / (energies[k] - energies[k - 1]))
-                    .abs()
-                    .log2()
-            })
-        })
-        .map(|o| o.filter(|v| v.is_finite()))
-        .collect();
+    // The distance to the finest rung and the observed order, as the surface ladder gives them.
+    let errors = rodloop_solver::accuracy::rung_errors(&energies, None);
     // The finest rung as its file holds it, verified against its energy and estimate.
     let claim = Claim {
         energy: finest,
@@ -203,13 +181,13 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     };
     let mut rows = Vec::new();
     for (k, r) in rungs.iter().enumerate() {
-        let vs_finest = (k + 1 < n).then(|| (energies[k] - finest).abs());
+        let (vs_finest, order) = (errors[k].vs_finest, errors[k].order);
         table.push(vec![
             Cell::I(r.state.model.cells() as i64),
             Cell::F(energies[k]),
             opt(estimates[k]),
             opt(vs_finest),
-            opt(orders[k]),
+            opt(order),
             Cell::F(r.fraction),
             Cell::I(r.runs as i64),
             Cell::I(r.state.iterations as i64),
@@ -226,7 +204,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
             energies[k],
             show(estimates[k], 10),
             show(vs_finest, 10),
-            orders[k]
+            order
                 .map(|o| format!("{o:.2}"))
                 .unwrap_or_else(|| "-".into()),
             r.fraction,
@@ -237,7 +215,7 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
         rows.push(json!({
             "cells": r.state.model.cells(), "energy": energies[k],
             "error_estimate": estimates[k], "error_vs_finest": vs_finest,
-            "observed_order": orders[k], "contact_fraction": r.fraction,
+            "observed_order": order, "contact_fraction": r.fraction,
             "contact_runs": r.runs, "iterations": r.state.iterations, "seconds": r.seconds,
         }));
     }

@@ -4,7 +4,7 @@
 
 use rodloop_continuation::exchange::{self, Energies, EnergyPair, ExchangeSettings, Ranked, Start};
 use rodloop_solver::enclosed::stats;
-use rodloop_solver::enclosed::{finest_energy, solve_enclosed, EnclosedOptions, EnclosedState};
+use rodloop_solver::enclosed::{finest_energy, solve_prolonged, EnclosedOptions, EnclosedState};
 use rodloop_solver::{Accuracy, SolverError};
 
 use super::levels::Levels;
@@ -138,16 +138,10 @@ impl Ladder {
         let at = t.step_to(lbar, &opts)?;
         let mut states: Vec<EnclosedState> = at.states.to_vec();
         // The prolonged start (its contact runs inside the coarser ones) has its contact
-        // ends a node or two off: the watchdog, with plain backtracking where it fails (as
-        // `solve_branch` does).
-        let wd = EnclosedOptions {
-            watchdog: 2,
-            ..opts.clone()
-        };
+        // ends a node or two off (`solve_prolonged`, as `solve_branch` solves its levels).
         for _ in 0..extra {
             let (m, z) = states.last().expect("a level").refine_in_runs()?;
-            let next =
-                solve_enclosed(&m, z.clone(), &wd).or_else(|_| solve_enclosed(&m, z, &opts))?;
+            let next = solve_prolonged(&m, z, &opts)?;
             states.push(next);
         }
         // Four levels are all the estimate uses.

@@ -5,8 +5,8 @@
 use rodloop_exact::ExactLoop;
 
 use super::solve::{
-    solve_by_pull_homotopy, solve_enclosed, start_from_curvature, start_from_surface,
-    transfer_multipliers, EnclosedOptions, EnclosedState,
+    solve_by_pull_homotopy, solve_enclosed, solve_prolonged, start_from_curvature,
+    start_from_surface, transfer_multipliers, EnclosedOptions, EnclosedState,
 };
 use super::wall::IntoWall;
 pub use crate::accuracy::three_level_estimate;
@@ -201,23 +201,10 @@ fn solve_ladder(
             None => return Err(plain),
         },
     };
-    // The prolonged start has its contact ends a node or two off: let up to two full steps
-    // move them (watchdog) instead of crawling there in short steps. On the figure-eight at
-    // L̄ = 1.36–1.45, N = 128–512, the finest level takes 3–7 iterations instead of 4–18;
-    // where the watchdog solve fails, plain backtracking from the same start.
-    let fine_opts = EnclosedOptions {
-        watchdog: opts.watchdog.max(2),
-        ..opts.clone()
-    };
+    // The prolonged start has its contact ends a node or two off (`solve_prolonged`).
     let refine = |prev: &EnclosedState| -> Result<EnclosedState, SolverError> {
         let (model, z0) = prev.refine()?;
-        let first_try = solve_enclosed(&model, z0.clone(), &fine_opts).or_else(|e| {
-            if fine_opts.watchdog == opts.watchdog {
-                Err(e)
-            } else {
-                solve_enclosed(&model, z0.clone(), opts)
-            }
-        });
+        let first_try = solve_prolonged(&model, z0.clone(), opts);
         match (first_try, lambda_min) {
             (Ok(s), _) => Ok(s),
             // The prolonged state is close to the finer solution; where the active set

@@ -61,6 +61,7 @@ pub use from_shape::{start_from_shape, SavedShape};
 pub use model::{Complementarity, EnclosedModel, Gauge};
 pub use seam::EnclosedFactor;
 pub use solve::{
-    free_circle, solve_enclosed, start_from_surface, Contact, EnclosedOptions, EnclosedState,
+    free_circle, solve_enclosed, solve_prolonged, start_from_surface, Contact, EnclosedOptions,
+    EnclosedState,
 };
 pub use wall::{IntoWall, SphereWall, Wall};

@@ -10,7 +10,7 @@ use crate::descend::{descend as descend_saddle, Descent, DescentSettings, Saddle
 use crate::enclosed::branch::{
     resample_state, solve_branch, solve_levels, solve_levels_from_fine, BranchSolve, SurfaceSource,
 };
-use crate::enclosed::solve::{solve_enclosed, EnclosedOptions, EnclosedState};
+use crate::enclosed::solve::{solve_enclosed, solve_prolonged, EnclosedOptions, EnclosedState};
 use crate::enclosed::wall::IntoWall;
 use crate::identify::Periods;
 use crate::SolverError;
@@ -215,12 +215,7 @@ pub fn descend_branch(
     let n = b.fine.model.cells();
     let direct = || -> Result<BranchSolve, SolverError> {
         let (m, z) = resample_state(&d.state, n)?;
-        let watchdog = EnclosedOptions {
-            watchdog: opts.watchdog.max(2),
-            ..opts.clone()
-        };
-        let fine =
-            solve_enclosed(&m, z.clone(), &watchdog).or_else(|_| solve_enclosed(&m, z, opts))?;
+        let fine = solve_prolonged(&m, z, opts)?;
         solve_levels_from_fine(fine, opts)
     };
     let cascade = solve_levels(&d.state.model, d.state.z.clone(), None, opts);
