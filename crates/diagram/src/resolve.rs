@@ -1,7 +1,9 @@
 //! Re-solving a known state at another resolution: Newton from its resampled profile at the
 //! same length (and, for uniform stiffness, the phase condition of that profile), for the
 //! Richardson partner at half the resolution, the kept run at twice it, and the refined
-//! states of the verification ladder ([`crate::state_file`]).
+//! states of the verification ladder ([`crate::state_file`]). A finer resolution starts from
+//! the state's curvature interpolated cell by cell ([`Equilibrium::prolong`]): a bend the
+//! coarser cells do not resolve stays where it is instead of ringing over the loop.
 
 use rodloop_solver::{
     solve, solve_newton_keeping_until, Equilibrium, Globalization, Phase, SolveOptions,
@@ -36,8 +38,14 @@ pub(crate) fn half_resolution(
     solve(&model, &kappa, &newton_options()).ok()
 }
 
-/// [`half_resolution`] at `cells` cells by [`rodloop_solver::solve_newton_keeping`]: the
-/// equilibrium, and the run kept for [`resolved`] (its tolerance, [`RESOLVED_TOLERANCE`]).
+/// `eq` re-solved at `cells` (more than its own) cells by
+/// [`rodloop_solver::solve_newton_keeping_until`] from its prolonged curvature: the
+/// equilibrium, and the run kept for [`resolved`]. Its tolerance is [`resolved`]'s,
+/// [`RESOLVED_TOLERANCE`]: the run gives the energy of the estimate's third rung, and the
+/// energy is stationary at an equilibrium, so a KKT residual `r` moves it by about
+/// `r²/λ_min` (1e-16 over the smallest Hessian eigenvalue), far below any estimate; a
+/// tighter tolerance only adds passes, and on a very soft segment (`D1/D0 = 0.001`) the
+/// residual at twice the tracing resolution stalls at about 5e-10 after reaching 1e-8.
 pub(crate) fn finer_resolution(
     opts: &DiagramOptions,
     eq: &Equilibrium,
@@ -47,19 +55,18 @@ pub(crate) fn finer_resolution(
     if cells < 4 {
         return none();
     }
-    let Ok(kappa) = eq.resample(cells) else {
+    let Ok(kappa) = eq.prolong(cells) else {
         return none();
     };
     let Ok(model) = model_with_phase(opts, eq.lbar(), cells, &kappa) else {
         return none();
     };
-    let (r, run) = solve_newton_keeping_until(
-        &model,
-        &kappa,
-        &newton_options(),
-        RESOLVED_TOLERANCE,
-        Some(STALLED),
-    );
+    let newton = SolveOptions {
+        tolerance: RESOLVED_TOLERANCE,
+        ..newton_options()
+    };
+    let (r, run) =
+        solve_newton_keeping_until(&model, &kappa, &newton, RESOLVED_TOLERANCE, Some(STALLED));
     (r.ok(), FinerRun::new(kappa, run))
 }
 
@@ -88,21 +95,20 @@ const NEWTON_STRETCH: usize = 20;
 const STEADY_FALL: f64 = 2.0;
 
 /// Where the re-solves at a finer resolution ([`finer_resolution`], [`resolved`]) give up
-/// before their iteration limit: twenty passes in a row whose line search accepts at most
-/// 1/256 of the Newton step without lengthening it ([`rodloop_solver::Stall`]). Such a run
-/// sits where Newton's model of the residual holds over a sliver of its step (on a very
-/// soft segment bent more sharply than the tracing resolution resolves, the resampled start
-/// lies far from any equilibrium of the finer mesh) and moves its residual by about 8 % per
-/// stretch. Runs that creep towards their equilibrium and converge lengthen their steps: of
-/// every Newton solve of the `D1/D0 = 0.001` diagram, the longest stretch of steps of at
-/// most 1/256 in a run that converges is 14 passes (a seed at 100 cells, which converges at
-/// pass 40), and the re-solves at twice the tracing resolution that converge take at most 8
-/// passes in a row at 1/32 of the step or less, none at 1/128 or less (the line search
-/// shortens a rejected step to between a tenth and a half of it, so its steps are not
-/// powers of two).
+/// before their iteration limit: four passes in a row whose line search accepts at most
+/// 1/128 of the Newton step without lengthening it ([`rodloop_solver::Stall`]). Such a run
+/// sits where Newton's model of the residual holds over a sliver of its step: on a very soft
+/// segment bent more sharply than the tracing resolution resolves, the start lies far from
+/// any equilibrium of the finer mesh, and the residual moves by a fraction of a per cent per
+/// pass. Runs that converge from their prolonged starts take longer steps: in the four
+/// surface diagrams of `data/scenes` (about 980 re-solves at twice the tracing resolution),
+/// no run that converges accepts a step of 1/128 or less even once, the slowest creeps at
+/// about 1/100 for 24 passes and then converges, and on `D1/D0 = 0.001` the rule ends 40 %
+/// of the failing runs' passes (the line search shortens a rejected step to between a
+/// tenth and a half of it, so its steps are not powers of two).
 const STALLED: Stall = Stall {
-    passes: 20,
-    max_step: 1.0 / 256.0,
+    passes: 4,
+    max_step: 1.0 / 128.0,
 };
 
 /// [`resolved`], going on from the kept run `finer` where it is a run of the same model
@@ -113,7 +119,7 @@ pub(crate) fn resolved_from(
     finer: &FinerRun,
 ) -> Result<Equilibrium, SolverError> {
     let m = eq.model();
-    let kappa = eq.resample(cells)?;
+    let kappa = eq.prolong(cells)?;
     let kind = m.stiffness().kind();
     let mut model = m.with_cells(cells)?;
     if kind.is_uniform() {

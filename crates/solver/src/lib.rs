@@ -38,6 +38,7 @@ pub mod enclosed;
 pub mod identify;
 pub mod mesh;
 pub mod param;
+pub mod prolong;
 mod resample;
 pub mod robust;
 pub mod seam;
