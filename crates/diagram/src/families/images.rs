@@ -6,6 +6,15 @@ use rodloop_solver::{Stiffness, SurfaceSolve};
 use super::{Curve, SAME_STATE};
 use crate::march::MarchPoint;
 
+/// The mirror axis of a stiffness profile: `a` with `D(a − σ) = D(σ)` (`s0* + s1*` for the
+/// two-segment profile of Eq. (51)); `None` for profiles without one.
+pub(super) fn mirror_axis(stiffness: &Stiffness) -> Option<f64> {
+    match stiffness {
+        Stiffness::Tanh { s0, s1, .. } => Some(s0 + s1),
+        _ => None,
+    }
+}
+
 /// The symmetry images of a state's curvatures: the mirror axis of the profile.
 pub(super) struct Images {
     /// `σ` of the Gauss points (fraction of the length).
@@ -23,10 +32,7 @@ impl Images {
         let shape = model.dim() - model.n_constraints();
         Self {
             sigma: model.gauss_sigma(),
-            axis: match stiffness {
-                Stiffness::Tanh { s0, s1, .. } => Some(s0 + s1),
-                _ => None,
-            },
+            axis: mirror_axis(stiffness),
             shape,
             scale: model.radius() / (shape as f64).sqrt(),
         }

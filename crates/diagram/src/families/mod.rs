@@ -520,6 +520,78 @@ mod tests {
     use super::*;
     use rodloop_solver::{StartShape, Stiffness};
 
+    /// The Euler placements left out as mirror images of kept ones seed the mirror images of
+    /// the kept ones' states: one placement of the four is left out, the kept placement the
+    /// mirror formula names is among the kept ones, and the two seeds, solved independently
+    /// at the tracing resolution (soft segment `D1/D0 = 0.3`, whose bends the cells
+    /// resolve), lie within [`SAME_STATE`] of each other's symmetry images with the same
+    /// energy to 1e-6. Two profiles: the soft segment half the loop long (the seeds are two
+    /// distinct mirror images) and a quarter of it (both reach one mirror-symmetric state).
+    #[test]
+    fn mirror_placements_left_out_seed_the_images_of_kept_ones() {
+        for (s0, s1) in [(0.3, 0.8), (0.2, 0.45)] {
+            let st = Stiffness::Tanh {
+                d0: 1.0,
+                d1: 0.3,
+                s0,
+                s1,
+                gamma: 60.0,
+            };
+            let opts = DiagramOptions {
+                stiffness: st.clone(),
+                lbar_min: 1.0,
+                lbar_max: 2.0,
+                ..DiagramOptions::default()
+            };
+            let (eta, l) = (1, 1.3);
+            let all = crate::sampling::feature_shifts(&st, eta, &[0, 1, 2, 3], false);
+            let kept: Vec<f64> = euler_jobs(&st, eta, l)
+                .into_iter()
+                .map(|(_, seed)| match seed {
+                    Seed::Shifted(sh) => sh,
+                    other => panic!("{other:?}"),
+                })
+                .collect();
+            let left: Vec<f64> = all
+                .iter()
+                .copied()
+                .filter(|a| !kept.iter().any(|k| (k - a).abs() < 1e-12))
+                .collect();
+            assert_eq!(left.len(), 1, "({s0}, {s1}): all {all:?}, kept {kept:?}");
+            let model = opts.model(l, opts.trace_cells(eta)).unwrap();
+            let images = Images::new(&model, &st);
+            let energy = |x: &[f64]| {
+                let eq = model
+                    .clone()
+                    .solve_from_state(x.to_vec(), &crate::states::newton_options())
+                    .unwrap();
+                eq.energy().total
+            };
+            let seed = |sh: f64| seeding::seed_state(&model, eta, l, sh).unwrap();
+            let dropped = seed(left[0]);
+            // The start `κ(σ) = f(σ + sh)` mirrored, `f(a − σ + sh)`, is `±f(σ − a − sh)` for
+            // the Euler curve (even about its origin): the placement `−a − sh`, modulo the
+            // half period `1/(2η)` (a reflection `κ_g → −κ_g`).
+            let half = 0.5 / f64::from(eta);
+            let partner = (-(s0 + s1) - left[0]).rem_euclid(half);
+            let k = kept
+                .iter()
+                .copied()
+                .find(|k| {
+                    let d = (k - partner).rem_euclid(half);
+                    d.min(half - d) < 1e-9
+                })
+                .unwrap_or_else(|| panic!("({s0}, {s1}): {partner} not among {kept:?}"));
+            let (x, e) = (seed(k), energy(&seed(k)));
+            assert!(
+                images.dist_images(&x, &dropped) < SAME_STATE
+                    && (e - energy(&dropped)).abs() < 1e-6 * e,
+                "({s0}, {s1}): the seeds at {} and {k} are not images of each other",
+                left[0]
+            );
+        }
+    }
+
     /// A nearly uniform rod (`D1/D0 = 0.95`): every placement where a family leaves the
     /// uniform circle is traced, with the energy first-order perturbation theory gives it:
     /// `E R/(π D0) = L̄ ∫ D(σ) κ(σ + φ)² dσ` of the uniform rod's exact loop placed at `φ`

@@ -45,7 +45,9 @@ pub(super) fn uniform_jobs(l: f64, shifts: &[f64]) -> Vec<Job> {
 /// another dominant harmonic): the Euler start `l = η` with the stiffness change `s0*` at
 /// the phases `j/(8η)`, `j = 0…3`, of its `κ_g` ([`crate::sampling::feature_shifts`]; half
 /// a period, a shift by half a period is the reflection `κ_g → −κ_g`, and the profile's
-/// mirror symmetry carries them to `s1*`), solved directly.
+/// mirror symmetry carries them to `s1*`), solved directly. A placement whose start is the
+/// mirror image of an earlier one's ([`without_mirror_images`]) is left out: its states are
+/// the images of the earlier one's, which the sheets count twice (multiplicity 2).
 pub(super) fn euler_jobs(stiffness: &Stiffness, eta: u32, l: f64) -> Vec<Job> {
     let mut shifts = crate::sampling::feature_shifts(stiffness, eta, &[0, 1, 2, 3], false);
     if shifts.is_empty() {
@@ -54,10 +56,53 @@ pub(super) fn euler_jobs(stiffness: &Stiffness, eta: u32, l: f64) -> Vec<Job> {
             .map(|j| f64::from(j) / (8.0 * f64::from(eta)))
             .collect();
     }
+    let shifts = match super::images::mirror_axis(stiffness) {
+        Some(axis) => without_mirror_images(&StartShape::Euler { l: eta }, l, axis, shifts),
+        None => shifts,
+    };
     shifts
         .into_iter()
         .map(|sh| (l, Seed::Shifted(sh)))
         .collect()
+}
+
+/// `shifts` less every shift whose start (`start` at `lbar` with its origin moved by it,
+/// [`StartShape::shifted`]) is the mirror image `σ ↦ axis − σ` of an earlier kept one's, up
+/// to the reflection `κ_g → −κ_g`: the two starts, compared on 256 points of the loop, agree
+/// to 1e-9 of their largest value (distinct placements differ by a fraction of it). The
+/// comparison is of the starts themselves, so it holds whatever the start's own symmetry.
+pub(super) fn without_mirror_images(
+    start: &StartShape,
+    lbar: f64,
+    axis: f64,
+    shifts: Vec<f64>,
+) -> Vec<f64> {
+    let Ok(f) = start.interpolant(lbar) else {
+        return shifts;
+    };
+    const POINTS: usize = 256;
+    let sigma = |j: usize| j as f64 / POINTS as f64;
+    let placed = |sh: f64| -> Vec<f64> { (0..POINTS).map(|j| f.eval(sigma(j) + sh)).collect() };
+    let mirrored =
+        |sh: f64| -> Vec<f64> { (0..POINTS).map(|j| f.eval(axis - sigma(j) + sh)).collect() };
+    let scale = placed(0.0).iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let same = |a: &[f64], b: &[f64], sign: f64| {
+        a.iter()
+            .zip(b)
+            .all(|(x, y)| (x - sign * y).abs() <= 1e-9 * scale)
+    };
+    let mut kept: Vec<(f64, Vec<f64>)> = Vec::new();
+    for sh in shifts {
+        let own = placed(sh);
+        let image_of_kept = kept.iter().any(|(k, _)| {
+            let m = mirrored(*k);
+            same(&own, &m, 1.0) || same(&own, &m, -1.0)
+        });
+        if !image_of_kept {
+            kept.push((sh, own));
+        }
+    }
+    kept.into_iter().map(|(sh, _)| sh).collect()
 }
 
 /// A seed length of [`seed_lengths`] with the placements
