@@ -6,8 +6,8 @@
 //! coarser cells do not resolve stays where it is instead of ringing over the loop.
 
 use rodloop_solver::{
-    solve, solve_newton_keeping_until, Equilibrium, Globalization, Phase, SolveOptions,
-    SolverError, Stall, SurfaceSolve,
+    solve_newton_keeping_until, solve_newton_until, Equilibrium, Globalization, Phase,
+    SolveOptions, SolverError, Stall, SurfaceSolve,
 };
 
 use crate::options::model_with_phase;
@@ -24,7 +24,8 @@ pub(crate) fn newton_options() -> SolveOptions {
 }
 
 /// The equilibrium `eq` re-solved with `cells` cells (resampled start, phase condition from
-/// the resampled profile so that the arclength origin is the same).
+/// the resampled profile so that the arclength origin is the same), given up where the run
+/// stalls ([`STALLED`]).
 pub(crate) fn half_resolution(
     opts: &DiagramOptions,
     eq: &Equilibrium,
@@ -35,7 +36,7 @@ pub(crate) fn half_resolution(
     }
     let kappa = eq.resample(cells).ok()?;
     let model = model_with_phase(opts, eq.lbar(), cells, &kappa).ok()?;
-    solve(&model, &kappa, &newton_options()).ok()
+    solve_newton_until(&model, &kappa, &newton_options(), STALLED).ok()
 }
 
 /// `eq` re-solved at `cells` (more than its own) cells by
@@ -94,18 +95,20 @@ const NEWTON_STRETCH: usize = 20;
 /// stalled.
 const STEADY_FALL: f64 = 2.0;
 
-/// Where the re-solves at a finer resolution ([`finer_resolution`], [`resolved`]) give up
-/// before their iteration limit: four passes in a row whose line search accepts at most
-/// 1/128 of the Newton step without lengthening it ([`rodloop_solver::Stall`]). Such a run
-/// sits where Newton's model of the residual holds over a sliver of its step: on a very soft
-/// segment bent more sharply than the tracing resolution resolves, the start lies far from
-/// any equilibrium of the finer mesh, and the residual moves by a fraction of a per cent per
-/// pass. Runs that converge from their prolonged starts take longer steps: in the four
-/// surface diagrams of `data/scenes` (about 980 re-solves at twice the tracing resolution),
-/// no run that converges accepts a step of 1/128 or less even once, the slowest creeps at
-/// about 1/100 for 24 passes and then converges, and on `D1/D0 = 0.001` the rule ends 40 %
-/// of the failing runs' passes (the line search shortens a rejected step to between a
-/// tenth and a half of it, so its steps are not powers of two).
+/// Where the re-solves at another resolution ([`half_resolution`], [`finer_resolution`],
+/// [`resolved`]) give up before their iteration limit: four passes in a row whose line
+/// search accepts at most 1/128 of the Newton step without lengthening it
+/// ([`rodloop_solver::Stall`]). Such a run sits where Newton's model of the residual holds
+/// over a sliver of its step: on a very soft segment bent more sharply than the tracing
+/// resolution resolves, the start lies far from any equilibrium of the other mesh, and the
+/// residual moves by a fraction of a per cent per pass. Runs that converge take longer
+/// steps: in the four surface diagrams of `data/scenes` (about 980 re-solves at twice the
+/// tracing resolution from prolonged starts and 1,050 at half of it), no run that converges
+/// accepts a step of 1/128 or less twice in a row, the slowest creeps at about 1/100 for
+/// 24 passes and then converges, and on `D1/D0 = 0.001` the rule ends 40 % of the failing
+/// finer runs' passes and half of the failing half-resolution runs' (the line search
+/// shortens a rejected step to between a tenth and a half of it, so its steps are not
+/// powers of two).
 const STALLED: Stall = Stall {
     passes: 4,
     max_step: 1.0 / 128.0,

@@ -63,8 +63,9 @@ pub use param::Param;
 pub use robust::{solve_robust, solve_robust_verified, solve_robust_with, Fallbacks, Strategy};
 pub use seam::{Confinement, Inertia, ModelFactor, ParamProblem, SurfaceSolve};
 pub use solve::{
-    solve, solve_from_state, solve_newton_keeping, solve_newton_keeping_until, ConvergenceReport,
-    EnergyReport, Equilibrium, Globalization, NewtonRun, ProfilePoint, SolveOptions, Stall,
+    solve, solve_from_state, solve_newton_keeping, solve_newton_keeping_until, solve_newton_until,
+    ConvergenceReport, EnergyReport, Equilibrium, Globalization, NewtonRun, ProfilePoint,
+    SolveOptions, Stall,
 };
 pub use stability::{extreme_eigenpairs, Extremes, Stability, StabilityOptions};
 pub use start::StartShape;

@@ -464,6 +464,26 @@ impl Stall {
     }
 }
 
+/// [`solve`] with [`Globalization::Newton`] whose run also ends, unconverged, where it has
+/// stalled (`stall`, see [`Stall`]).
+pub fn solve_newton_until(
+    model: &SurfaceModel,
+    start: &[f64],
+    opts: &SolveOptions,
+    stall: Stall,
+) -> Result<Equilibrium, SolverError> {
+    let newton = SolveOptions {
+        globalization: Globalization::Newton,
+        ..opts.clone()
+    };
+    let (m, z0) = newton_start(model, start)?;
+    let run = NewtonRun {
+        stall: Some(stall),
+        ..NewtonRun::start(m, z0)?
+    };
+    run.iterate(&newton, None)
+}
+
 /// [`solve_newton_keeping`] whose run also ends, unconverged, where it has stalled
 /// (`stall`, see [`Stall`]); the kept run carries the rule, so a resumed run stops where
 /// one run from the start with the resumed options would.
