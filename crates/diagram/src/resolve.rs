@@ -2,8 +2,8 @@
 //! same length (and, for uniform stiffness, the phase condition of that profile), for the
 //! Richardson partner at half the resolution, the kept run at twice it, and the refined
 //! states of the verification ladder ([`crate::state_file`]). A finer resolution starts from
-//! the state's curvature interpolated trigonometrically where its cells resolve its bends,
-//! and cell by cell where they do not ([`finer_start`]).
+//! the state's curvature interpolated cell by cell ([`Equilibrium::prolong`]): a bend the
+//! coarser cells do not resolve stays where it is instead of ringing over the loop.
 
 use rodloop_solver::{
     solve_newton_keeping_until, solve_newton_until, Equilibrium, Globalization, Phase,
@@ -56,7 +56,7 @@ pub(crate) fn finer_resolution(
     if cells < 4 {
         return none();
     }
-    let Ok(kappa) = finer_start(eq, cells) else {
+    let Ok(kappa) = eq.prolong(cells) else {
         return none();
     };
     let Ok(model) = model_with_phase(opts, eq.lbar(), cells, &kappa) else {
@@ -122,7 +122,7 @@ pub(crate) fn resolved_from(
     finer: &FinerRun,
 ) -> Result<Equilibrium, SolverError> {
     let m = eq.model();
-    let kappa = finer_start(eq, cells)?;
+    let kappa = eq.prolong(cells)?;
     let kind = m.stiffness().kind();
     let mut model = m.with_cells(cells)?;
     if kind.is_uniform() {
@@ -182,46 +182,4 @@ fn newton_until_stall(
             None => return result,
         }
     }
-}
-
-/// The start of a re-solve of `eq` at `cells` (more than its own) cells: its curvature
-/// interpolated trigonometrically ([`Equilibrium::resample`], spectrally accurate for a
-/// smooth state) where its cells resolve its bends, and cell by cell
-/// ([`Equilibrium::prolong`], a bend staying within the cells next to it) where one of its
-/// cells turns the tangent by more than [`UNRESOLVED_TURNING`]: there the trigonometric
-/// interpolant rings over the loop. On `D1/D0 = 0.001` the prolonged starts of branch 2's
-/// unresolved states near `L̄ = 1` converge where the resampled ones stall (family 2's 25
-/// states, unverifiable from resampled starts, are verified), while two resolved states next
-/// to a branch point (`L̄ ≈ 1.8728`) converge from the resampled start only.
-fn finer_start(eq: &Equilibrium, cells: usize) -> Result<Vec<f64>, SolverError> {
-    if turning_per_cell(eq) > UNRESOLVED_TURNING {
-        eq.prolong(cells)
-    } else {
-        eq.resample(cells)
-    }
-}
-
-/// Turning of the tangent within one cell (radians) above which a state's cells do not
-/// resolve its bends: the scheme's error terms, powers of `κ h` from `(κ h)⁴` on, are no
-/// longer small (`0.5⁴ ≈ 0.06`).
-pub(crate) const UNRESOLVED_TURNING: f64 = 0.5;
-
-/// The largest turning of the tangent within one cell of `eq`, `max |κ_g| h` over its cell
-/// boundaries (radians): the state's own scale of resolution (of order 1 where the cells do
-/// not resolve its bends).
-pub(crate) fn turning_per_cell(eq: &Equilibrium) -> f64 {
-    let p = eq.profile();
-    let length = eq.model().length();
-    let n = p.len();
-    (0..n)
-        .map(|j| {
-            let ds = if j + 1 < n {
-                p[j + 1].s - p[j].s
-            } else {
-                length + p[0].s - p[j].s
-            };
-            let k = p[j].kappa_g.abs().max(p[(j + 1) % n].kappa_g.abs());
-            k * ds
-        })
-        .fold(0.0, f64::max)
 }

@@ -11,7 +11,7 @@ use std::f64::consts::PI;
 
 use rodloop_solver::{Claim, Equilibrium, SolverError};
 
-use crate::resolve::{resolved_from, turning_per_cell, UNRESOLVED_TURNING};
+use crate::resolve::resolved_from;
 use crate::types::{FinerRun, TracedBranch};
 use crate::DiagramOptions;
 
@@ -395,6 +395,31 @@ fn verify_refining_from(
             }
         }
     }
+}
+
+/// Turning of the tangent within one cell (radians) above which a state's cells do not
+/// resolve its bends: the scheme's error terms, powers of `κ h` from `(κ h)⁴` on, are no
+/// longer small (`0.5⁴ ≈ 0.06`).
+const UNRESOLVED_TURNING: f64 = 0.5;
+
+/// The largest turning of the tangent within one cell of `eq`, `max |κ_g| h` over its cell
+/// boundaries (radians): the state's own scale of resolution (of order 1 where the cells do
+/// not resolve its bends).
+fn turning_per_cell(eq: &Equilibrium) -> f64 {
+    let p = eq.profile();
+    let length = eq.model().length();
+    let n = p.len();
+    (0..n)
+        .map(|j| {
+            let ds = if j + 1 < n {
+                p[j + 1].s - p[j].s
+            } else {
+                length + p[0].s - p[j].s
+            };
+            let k = p[j].kappa_g.abs().max(p[(j + 1) % n].kappa_g.abs());
+            k * ds
+        })
+        .fold(0.0, f64::max)
 }
 
 /// Why the finest resolution of the ladder `energies` (`E_N, E_{2N}, …` from `first = N`
