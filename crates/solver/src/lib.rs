@@ -38,7 +38,6 @@ pub mod enclosed;
 pub mod identify;
 pub mod mesh;
 pub mod param;
-pub mod prolong;
 mod resample;
 pub mod robust;
 pub mod seam;
