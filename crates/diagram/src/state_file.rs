@@ -4,7 +4,7 @@
 //! at `2N`, `4N`, … by [`crate::resolve`], the row re-estimated where the refined states
 //! converge and disagree with it); plus how the branches of the files are identified.
 //!
-//! The file is over 600 lines with its tests (about 75): the check of a file, its samples and
+//! The file is over 600 lines with its tests (about 175): the check of a file, its samples and
 //! its ladder are one job, the verification of a written state.
 
 use std::f64::consts::PI;

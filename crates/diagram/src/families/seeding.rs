@@ -91,15 +91,15 @@ pub(super) fn without_mirror_images(
             .zip(b)
             .all(|(x, y)| (x - sign * y).abs() <= 1e-9 * scale)
     };
+    // The kept shifts with the mirror images of their starts.
     let mut kept: Vec<(f64, Vec<f64>)> = Vec::new();
     for sh in shifts {
         let own = placed(sh);
-        let image_of_kept = kept.iter().any(|(k, _)| {
-            let m = mirrored(*k);
-            same(&own, &m, 1.0) || same(&own, &m, -1.0)
-        });
+        let image_of_kept = kept
+            .iter()
+            .any(|(_, m)| same(&own, m, 1.0) || same(&own, m, -1.0));
         if !image_of_kept {
-            kept.push((sh, own));
+            kept.push((sh, mirrored(sh)));
         }
     }
     kept.into_iter().map(|(sh, _)| sh).collect()
