@@ -23,16 +23,7 @@ fn jacobian_matches_finite_differences() {
     for (stiff, pull) in [
         (Stiffness::uniform(1.0), 0.0),
         (Stiffness::uniform(1.0), 0.7),
-        (
-            Stiffness::Tanh {
-                d0: 1.0,
-                d1: 0.5,
-                s0: 0.3,
-                s1: 0.8,
-                gamma: 10.0,
-            },
-            0.0,
-        ),
+        (common::mild_two_segment(), 0.0),
     ] {
         let (m, mut z) = exact_start(1, 1.5, 10, &stiff);
         let m = m.with_pull(pull).unwrap();
@@ -72,13 +63,7 @@ fn jacobian_matches_finite_differences() {
 /// the pull homotopy's wall, and the free circle's pinned start point.
 #[test]
 fn lifted_step_equals_dense_step() {
-    let tanh = Stiffness::Tanh {
-        d0: 1.0,
-        d1: 0.5,
-        s0: 0.3,
-        s1: 0.8,
-        gamma: 10.0,
-    };
+    let tanh = common::mild_two_segment();
     let mut cases = Vec::new();
     for (stiff, pull, cells) in [
         (Stiffness::uniform(1.0), 0.0, 12),

@@ -3,6 +3,8 @@
 //! `g = R² − rᵀAr` with a full symmetric `A` (`∇g = −2Ar`, `∇²g = −2A`, off-diagonal
 //! Hessian entries) checks the general terms the sphere's `−2I` leaves out.
 
+mod common;
+
 use std::sync::Arc;
 
 use nalgebra::{Matrix3, Vector3};
@@ -71,16 +73,7 @@ fn state(cells: usize, stiff: &Stiffness) -> (EnclosedModel, Vec<f64>) {
 }
 
 fn stiffnesses() -> [Stiffness; 2] {
-    [
-        Stiffness::uniform(1.0),
-        Stiffness::Tanh {
-            d0: 1.0,
-            d1: 0.5,
-            s0: 0.3,
-            s1: 0.8,
-            gamma: 10.0,
-        },
-    ]
+    [Stiffness::uniform(1.0), common::mild_two_segment()]
 }
 
 /// The semismooth Jacobian inside the quadric against central differences of the residual.

@@ -127,3 +127,15 @@ pub fn lcg(seed: &mut u64) -> f64 {
         .wrapping_add(1442695040888963407);
     ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
 }
+
+/// The two-segment stiffness of the enclosed model's tests (Eq. (51), `D1/D0 = 0.5`,
+/// `s0* = 0.3`, `s1* = 0.8`, mild transitions `γ = 10`).
+pub fn mild_two_segment() -> Stiffness {
+    Stiffness::Tanh {
+        d0: 1.0,
+        d1: 0.5,
+        s0: 0.3,
+        s1: 0.8,
+        gamma: 10.0,
+    }
+}
