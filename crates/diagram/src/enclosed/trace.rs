@@ -14,7 +14,7 @@ use rodloop_exact::{branch_of_eta, paper_branch_loop, ExactLoop};
 use rodloop_solver::enclosed::stats::{self, Stage};
 use rodloop_solver::enclosed::{
     detached_intervals, enclosed_cells, solve_branch, three_level_estimate, EnclosedOptions,
-    SurfaceSource,
+    SurfaceSource, STEP_ITERATIONS,
 };
 use rodloop_solver::{
     solve_cells, Accuracy, Confinement, Globalization, SolveOptions, SolverError, StartShape,
@@ -623,14 +623,13 @@ fn locate_branch_points(
     (events, notes, warnings)
 }
 
-/// Newton options of the continuation steps: a step that needs more than 30 iterations is
-/// halved instead (most steps take 2–6; with 12, steps that were converging slowly, at
-/// residuals 1e-8, stopped the traces; the default 80 makes a failing step 2.7× dearer), and
-/// one that has not halved its residual in 6 iterations is given up (it is shedding the old
-/// contact set node by node; a shorter step does better).
+/// Newton options of the continuation steps: a step that needs more than
+/// [`STEP_ITERATIONS`] iterations is halved instead, and one that has not halved its
+/// residual in 6 iterations is given up (it is shedding the old contact set node by node; a
+/// shorter step does better).
 pub(super) fn step_options() -> EnclosedOptions {
     EnclosedOptions {
-        max_iterations: 30,
+        max_iterations: STEP_ITERATIONS,
         stall_window: 6,
         ..EnclosedOptions::default()
     }

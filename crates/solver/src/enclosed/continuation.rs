@@ -18,6 +18,7 @@ use rodloop_continuation::natural::{walk_adaptive, AdaptiveSettings};
 
 use super::solve::{
     solve_enclosed, start_from_curvature, transfer_multipliers, EnclosedOptions, EnclosedState,
+    STEP_ITERATIONS,
 };
 use crate::stiffness::Stiffness;
 use crate::SolverError;
@@ -345,8 +346,8 @@ const SNAP_AMPLITUDES: [f64; 4] = [0.05, 0.15, 0.3, 0.5];
 /// Natural-parameter continuation of an enclosed state of the uniform rod (or of any
 /// stiffness) to the stiffness `target` along [`blended_stiffness`], `t` from 0 to 1, at
 /// fixed `L̄` and mesh size, walked by the continuation crate's
-/// [`walk_adaptive`]: steps of `t` of at most `1/4`, halved on a failed Newton solve down to
-/// `1/512`, grown by half after a success. Where the steps fail at a fold of the
+/// [`walk_adaptive`]: steps of `t` of at most `1/4`, halved on a failed Newton solve
+/// ([`STEP_ITERATIONS`] iterations) down to `1/512`, grown by half after a success. Where the steps fail at a fold of the
 /// path (the state ceases to exist as `t` grows), the loop snaps through as a quasi-static
 /// loading would: just past the fold, Newton from the last state displaced along its
 /// [`softest_direction`] (amplitudes [`SNAP_AMPLITUDES`], both signs), and the lowest
@@ -366,6 +367,11 @@ pub fn continue_in_stiffness(
         // Folds snapped through at most (each one lowers the energy).
         max_rescues: 4,
         restart_step: 4.0 * MIN_STEP,
+    };
+    // Steps and snaps: Newton with the continuation steps' budget.
+    let opts = &EnclosedOptions {
+        max_iterations: STEP_ITERATIONS,
+        ..opts.clone()
     };
     let step = |cur: &EnclosedState, tn: f64| {
         let st = blended_stiffness(target, tn);

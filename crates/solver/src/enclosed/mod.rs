@@ -62,6 +62,6 @@ pub use model::{Complementarity, EnclosedModel, Gauge};
 pub use seam::EnclosedFactor;
 pub use solve::{
     free_circle, solve_enclosed, solve_prolonged, start_from_surface, Contact, EnclosedOptions,
-    EnclosedState,
+    EnclosedState, STEP_ITERATIONS,
 };
 pub use wall::{IntoWall, SphereWall, Wall};
