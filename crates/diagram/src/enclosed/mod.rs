@@ -379,6 +379,17 @@ pub struct EnclosedTimings {
     pub critical: f64,
     /// Surface families traced first (non-uniform rods; 0 for uniform ones).
     pub surface: f64,
+    /// Non-uniform rods (0 for uniform ones), wall-clock seconds of each stage after the
+    /// surface families: the sheets (attached samples, events, lifted-off traces)...
+    pub sheets: f64,
+    /// ... the search for lifted-off families from the stiffness path ...
+    pub stiffness_path: f64,
+    /// ... the descent from unstable lowest states ...
+    pub descent: f64,
+    /// ... the branch points of the lifted-off sheets ...
+    pub branch_points: f64,
+    /// ... and the folds at the traces' stops.
+    pub folds: f64,
 }
 
 /// A stage of [`enclosed_diagram_with`] for progress reports (sent on the calling thread).

@@ -633,6 +633,7 @@ pub(super) fn nonuniform_diagram(
         }
     }
     progress(EnclosedProgress::Planned(order.len()));
+    let tsheets = Instant::now();
     let scope = stats::current();
     let outs = run_parallel(
         threads,
@@ -654,6 +655,7 @@ pub(super) fn nonuniform_diagram(
             })
         },
     );
+    timings.sheets = tsheets.elapsed().as_secs_f64();
     let mut traced: Vec<(usize, SheetOut)> = Vec::new();
     for (i, o) in order.into_iter().zip(outs) {
         let o = o?;
@@ -676,7 +678,8 @@ pub(super) fn nonuniform_diagram(
             .map_or(idx[0], |j| idx[j]);
         idx.push(root);
     }
-    timings.lifted_off += tseed.elapsed().as_secs_f64();
+    timings.stiffness_path = tseed.elapsed().as_secs_f64();
+    timings.lifted_off += timings.stiffness_path;
     progress(EnclosedProgress::Done(
         "lifted-off families from the stiffness path".into(),
     ));
@@ -689,7 +692,8 @@ pub(super) fn nonuniform_diagram(
     warnings.extend(w);
     idx.extend(parents);
     warnings.extend(outs.iter_mut().filter_map(SheetOut::drop_other_branches));
-    timings.lifted_off += tdesc.elapsed().as_secs_f64();
+    timings.descent = tdesc.elapsed().as_secs_f64();
+    timings.lifted_off += timings.descent;
     progress(EnclosedProgress::Done(
         "descent from unstable lowest states".into(),
     ));
@@ -708,6 +712,8 @@ pub(super) fn nonuniform_diagram(
         notes.extend(n);
         warnings.extend(w);
     }
+    timings.branch_points = tbp.elapsed().as_secs_f64();
+    let tfold = Instant::now();
     let folds = run_parallel(
         threads,
         (0..outs.len()).collect(),
@@ -715,6 +721,7 @@ pub(super) fn nonuniform_diagram(
         &mut |_: &Vec<super::fold::StopFold>| {},
         |i, _| stop_folds(&outs[i]),
     );
+    timings.folds = tfold.elapsed().as_secs_f64();
     special.extend(fold_events(&outs, &folds));
     let (stop_notes, stop_warnings) = classify_stops(&outs, &special, &folds);
     notes.extend(stop_notes);
