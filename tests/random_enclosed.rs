@@ -7,24 +7,8 @@
 
 mod common;
 
-use common::{col, read_csv, read_json, rodloop_ok, tmp};
+use common::{col, read_csv, read_json, rodloop_ok, tmp, Lcg};
 use std::f64::consts::PI;
-
-/// A linear congruential generator (Knuth's MMIX constants): the same scene on every machine.
-struct Lcg(u64);
-
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
-}
 
 /// A two-segment enclosed scene: `D1/D0` in 0.2–0.8, the soft segment 0.2–0.6 of the loop at
 /// a random place, `γ` in 20–100, on `L̄` from 1.2 to 1.7 (`R = 1`, `D0 = 1`).

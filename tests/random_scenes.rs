@@ -17,24 +17,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{rodloop, rodloop_ok, tmp};
-
-/// A small linear congruential generator (Knuth's MMIX constants): the scenes are the same
-/// on every machine.
-struct Lcg(u64);
-
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
-}
+use common::{rodloop, rodloop_ok, tmp, Lcg};
 
 /// A two-segment surface scene: `D1/D0` in 0.01–0.7 (log scale), the soft segment 0.1–0.9
 /// of the loop at a random place, `γ` in 20–300, on `lo ≤ L̄ ≤ hi`.

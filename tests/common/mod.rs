@@ -1,5 +1,6 @@
 //! Helpers shared by the end-to-end tests: running the built binary, fresh output
-//! directories, and reading what a run wrote (CSV tables, `summary.json`).
+//! directories, reading what a run wrote (CSV tables, `summary.json`), and the generator
+//! of the random scenes.
 //! Each test file uses some of them.
 #![allow(dead_code)]
 
@@ -92,4 +93,24 @@ pub fn read_json(path: &Path) -> serde_json::Value {
 /// The `summary.json` of an output directory.
 pub fn summary(dir: &Path) -> serde_json::Value {
     read_json(&dir.join("summary.json"))
+}
+
+/// A small linear congruential generator (Knuth's MMIX constants): random scenes that are
+/// the same on every machine.
+pub struct Lcg(pub u64);
+
+impl Lcg {
+    /// The next number, uniform in `[0, 1)`.
+    pub fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// The next number, uniform in `[lo, hi)`.
+    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next()
+    }
 }
