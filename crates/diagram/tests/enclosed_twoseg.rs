@@ -580,3 +580,37 @@ fn the_state_solve_reports_lies_inside_the_ball_at_every_node() {
         r.method
     );
 }
+
+/// The mild rod on `1 ≤ L̄ ≤ 2`: where the lowest sampled state changes from branch 1 to 2,
+/// the exchange is reported even where a lifted-off family cannot be re-solved next to it
+/// (there the crossing of the sampled energies stands, with the distance to the farther
+/// sample as its estimate, and a warning says so), and independent solves (the lowest
+/// minimum `solve` reports) at the ends of its estimate have `E_1 < E_2` below and
+/// `E_1 > E_2` above.
+#[test]
+fn the_mild_rods_exchange_is_reported_and_brackets_independent_solves() {
+    use rodloop_diagram::enclosed_state::solve_state;
+    let mut o = EnclosedDiagramOptions::new(1.0, mild(), 1.0, 2.0);
+    o.branches = Some(vec![1, 2]);
+    let d = enclosed_diagram(&o).expect("mild enclosed diagram, 1 to 2");
+    let c = d
+        .critical
+        .iter()
+        .find(|c| c.critical.from_branch == 1 && c.critical.to_branch == 2)
+        .unwrap_or_else(|| panic!("no exchange 1 -> 2: {:?}", d.warnings));
+    let (x, err) = (c.critical.lbar_cr, c.critical.error_estimate);
+    assert!(x.is_finite() && err.is_finite() && err > 0.0, "{c:?}");
+    let gap = |l: f64| {
+        let e = |b: u32| solve_state(1.0, &mild(), l, b, Accuracy::Default).unwrap();
+        let (e1, e2) = (e(1), e(2));
+        (e1.energy.0 - e2.energy.0, e1.energy.1 + e2.energy.1)
+    };
+    let (below, d1) = gap(x - err);
+    let (above, d2) = gap(x + err);
+    assert!(
+        below < -d1 && above > d2,
+        "{c:?}: E1 - E2 = {below} at {}, {above} at {}",
+        x - err,
+        x + err
+    );
+}

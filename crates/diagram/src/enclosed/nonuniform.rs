@@ -34,9 +34,10 @@
 //!   lifted-off energies carry discretisation noise where contact ends cross nodes, and the
 //!   curves meet at a small angle). Error: `(δE_a + δE_b + m)/|d(E_a − E_b)/dL̄|` plus the
 //!   final bracket, with the slope and the noise misfit `m` from the chord over `±2e-3`
-//!   around the root. The surface value of the same exchange is located on the same two
-//!   sheets for
-//!   comparison. Where the lowest branch ends at the `m`-fold great circle and another
+//!   around the root. Where a lifted-off sheet cannot be re-solved next to the crossing,
+//!   the root of the sampled energies' interpolated difference stands, with the distance
+//!   to the farther sample as its estimate, and a warning. The surface value of the same
+//!   exchange is located on the same two sheets for comparison. Where the lowest branch ends at the `m`-fold great circle and another
 //!   begins there (the traces do not overlap), the exchange is a collapse at `L̄ = m`, with
 //!   the distance of the last traced states from `m` as its estimate. A change between
 //!   families of one branch is not an exchange (as in the surface diagram).
@@ -798,19 +799,25 @@ pub(super) fn nonuniform_diagram(
                 .binary_search(&j)
                 .expect("an overlapping bracket is a job");
             match located[k].take().expect("each exchange is recorded once") {
-                Ok((x, err, e, xs, method)) => {
+                Ok(c) => {
+                    if let Some(why) = &c.not_located {
+                        warnings.push(format!(
+                            "the exchange of branches {} -> {} between lbar = {:.6} and {:.6} is placed by interpolation of the sampled energies only (to {:.1e}): not located on re-solved states ({why})",
+                            sa.branch, sb.branch, w[0], w[1], c.error
+                        ));
+                    }
                     brackets.push((w[0], w[1], a, b));
                     critical.push(EnclosedCritical {
                         critical: Critical {
-                            lbar_cr: x,
-                            energy: e,
-                            error_estimate: err,
+                            lbar_cr: c.lbar,
+                            energy: c.energy,
+                            error_estimate: c.error,
                             ..base
                         },
-                        surface_lbar_cr: xs,
+                        surface_lbar_cr: c.surface_lbar,
                         method: format!(
-                            "{method}; families {} -> {}",
-                            sa.family, sb.family
+                            "{}; families {} -> {}",
+                            c.method, sa.family, sb.family
                         ),
                     });
                 }

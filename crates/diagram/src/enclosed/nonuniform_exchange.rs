@@ -95,15 +95,30 @@ pub(super) fn sheet_energy(
     }
 }
 
-/// Locate `E_a = E_b` near `[x0, x1]` (see the module docs). Returns `(L̄, error, energy,
-/// surface L̄, method)`.
+/// An exchange located by [`locate_crossing`].
+pub(super) struct Crossing {
+    /// `L̄` of the exchange.
+    pub(super) lbar: f64,
+    /// Its estimate.
+    pub(super) error: f64,
+    /// `E R/(π D0)` there.
+    pub(super) energy: f64,
+    /// The surface value on the same two sheets.
+    pub(super) surface_lbar: f64,
+    /// How it was located.
+    pub(super) method: String,
+    /// Why it was not located on re-solved states, where it comes from the sampled energies.
+    pub(super) not_located: Option<String>,
+}
+
+/// Locate `E_a = E_b` near `[x0, x1]` (see the module docs).
 pub(super) fn locate_crossing(
     dopts: &DiagramOptions,
     sheets: [&SheetOut; 2],
     surfaces: [&TracedBranch; 2],
     x0: f64,
     x1: f64,
-) -> Result<(f64, f64, f64, f64, String), SolverError> {
+) -> Result<Crossing, SolverError> {
     // First guess: the root of the interpolated difference.
     let d = |x: f64| interp(sheets[0], x).unwrap_or(0.0) - interp(sheets[1], x).unwrap_or(0.0);
     let (d0, d1) = (d(x0), d(x1));
@@ -145,13 +160,14 @@ pub(super) fn locate_crossing(
     };
     let xs = on_surface.x;
     if !lifted {
-        return Ok((
-            xs,
-            on_surface.error,
-            0.5 * (on_surface.energies.a + on_surface.energies.b),
-            xs,
-            "surface states (both attached: lambda_min > 0); the exchange locator on E_a = E_b (hunt from the interpolated root, Brent), error from the N and 2N surface energies, the chord's noise over +-1e-5 and the final bracket".into(),
-        ));
+        return Ok(Crossing {
+            lbar: xs,
+            error: on_surface.error,
+            energy: 0.5 * (on_surface.energies.a + on_surface.energies.b),
+            surface_lbar: xs,
+            method: "surface states (both attached: lambda_min > 0); the exchange locator on E_a = E_b (hunt from the interpolated root, Brent), error from the N and 2N surface energies, the chord's noise over +-1e-5 and the final bracket".into(),
+            not_located: None,
+        });
     }
     // The energies of lifted-off states carry discretisation noise (contact ends crossing
     // nodes) and the two curves meet at a small angle: the slope and the noise misfit come
@@ -168,7 +184,29 @@ pub(super) fn locate_crossing(
             |x| sheet_energy(dopts, surfaces[0], x, ta),
             |x| sheet_energy(dopts, surfaces[1], x, tb),
         );
-        locate_from(&mut pair, xg, &lifted_settings)?
+        locate_from(&mut pair, xg, &lifted_settings)
+    };
+    // Where a lifted-off sheet cannot be re-solved next to the crossing (a fold or a change
+    // of the contact set of its family there), the crossing of the sampled energies stands:
+    // the root of their interpolated difference, which lies in the bracket, with the
+    // distance to the bracket's farther end as its estimate.
+    let ex = match ex {
+        Ok(ex) => ex,
+        Err(e) => {
+            let energy = interp(sheets[0], xg)
+                .or_else(|| interp(sheets[1], xg))
+                .ok_or_else(|| SolverError::InvalidInput(e.to_string()))?;
+            return Ok(Crossing {
+                lbar: xg,
+                error: (xg - x0).abs().max((x1 - xg).abs()),
+                energy,
+                surface_lbar: xs,
+                method: format!(
+                    "the root of the sampled energies' interpolated difference between lbar = {x0:.6} and {x1:.6}, its estimate the distance to the farther sample; not located on re-solved states ({e}); surface value on the same sheets"
+                ),
+                not_located: Some(e.to_string()),
+            });
+        }
     };
     if let Ok((fine, ladder_cells)) = ladder_crossing(
         dopts,
@@ -179,16 +217,17 @@ pub(super) fn locate_crossing(
     ) {
         if (fine.x - ex.x).abs() <= ex.error {
             let cells: Vec<String> = ladder_cells.iter().map(|c| c.to_string()).collect();
-            return Ok((
-                fine.x,
-                fine.error,
-                0.5 * (fine.energies.a + fine.energies.b),
-                xs,
-                format!(
+            return Ok(Crossing {
+                lbar: fine.x,
+                error: fine.error,
+                energy: 0.5 * (fine.energies.a + fine.energies.b),
+                surface_lbar: xs,
+                method: format!(
                     "the exchange locator on E_a = E_b with the lifted-off state(s) re-solved on a ladder of meshes (3-D model at N = {}; the trace's levels N/4, N/2, N first, hunt from the interpolated root, Brent to 1e-10, then the ladder from that root); error: the ladder's energy estimates (four levels) plus the misfit of the chord over +-1e-5, over its slope, plus the final bracket; surface value on the same sheets",
                     cells.join(", ")
                 ),
-            ));
+                not_located: None,
+            });
         }
     }
     let cells = tracks
@@ -197,18 +236,19 @@ pub(super) fn locate_crossing(
         .map(|t| t.states[2].model.cells())
         .max()
         .unwrap_or(0);
-    Ok((
-        ex.x,
-        ex.error,
-        0.5 * (ex.energies.a + ex.energies.b),
-        xs,
-        format!(
+    Ok(Crossing {
+        lbar: ex.x,
+        error: ex.error,
+        energy: 0.5 * (ex.energies.a + ex.energies.b),
+        surface_lbar: xs,
+        method: format!(
             "the exchange locator on E_a = E_b with the lifted-off state(s) re-solved (3-D model at N = {}, {}, {}; hunt from the interpolated root, Brent to 1e-10); error: the three levels' energy estimates plus the misfit of the chord over +-2e-3, over its slope, plus the final bracket; surface value on the same sheets",
             cells / 4,
             cells / 2,
             cells
         ),
-    ))
+        not_located: None,
+    })
 }
 
 /// `E_a = E_b` near `x` on ladders of meshes ([`Ladder::from_levels`] with `doublings`
