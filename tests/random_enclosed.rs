@@ -1,9 +1,9 @@
-//! The enclosed diagram of a two-segment rod drawn at random (fixed seed), checked from the
-//! files it writes alone: every state file closes, lies inside the ball at its nodes and
+//! Enclosed diagrams of two-segment rods drawn at random (fixed seeds), checked from the
+//! files they write alone: every state file closes, lies inside the ball at its nodes and
 //! holds the energy of its row (recomputed by its quadrature weights), every lowest state
 //! has index 0, and the completeness certificate (`solve` at three lowest states) finds
-//! nothing below the diagram's lowest state. The paper's enclosed scene is one profile; this
-//! one is drawn from the ranges a user writes.
+//! nothing below the diagram's lowest state. The paper's enclosed scene is one profile; these
+//! are drawn from the ranges a user writes.
 
 mod common;
 
@@ -11,16 +11,16 @@ use common::{col, read_csv, read_json, rodloop_ok, tmp, Lcg};
 use std::f64::consts::PI;
 
 /// A two-segment enclosed scene: `D1/D0` in 0.2–0.8, the soft segment 0.2–0.6 of the loop at
-/// a random place, `γ` in 20–100, on `L̄` from 1.2 to 1.7 (`R = 1`, `D0 = 1`).
-fn scene(seed: u64) -> String {
+/// a random place, `γ` in 20–100, on `lo ≤ L̄ ≤ hi` (`R = 1`, `D0 = 1`).
+fn scene(seed: u64, lo: f64, hi: f64) -> String {
     let mut g = Lcg(seed);
     let d1 = g.range(0.2, 0.8);
     let len = g.range(0.2, 0.6);
     let s0 = g.range(0.0, 1.0 - len);
     let gamma = g.range(20.0, 100.0);
     format!(
-        "name = \"random-enclosed\"\nradius = 1.0\nconfinement = \"enclosed\"\nlbar_min = 1.2\n\
-         lbar_max = 1.7\naccuracy = \"default\"\n\n[stiffness]\nkind = \"tanh\"\nd0 = 1.0\n\
+        "name = \"random-enclosed\"\nradius = 1.0\nconfinement = \"enclosed\"\nlbar_min = {lo:?}\n\
+         lbar_max = {hi:?}\naccuracy = \"default\"\n\n[stiffness]\nkind = \"tanh\"\nd0 = 1.0\n\
          d1 = {d1}\ns0 = {s0}\ns1 = {}\ngamma = {gamma}\n",
         s0 + len
     )
@@ -32,11 +32,12 @@ fn column(header: &[String], rows: &[Vec<String>], name: &str) -> Vec<f64> {
     rows.iter().map(|r| r[c].parse().unwrap()).collect()
 }
 
-#[test]
-fn random_two_segment_enclosed_diagram_holds_from_its_files() {
-    let dir = tmp("random-enclosed");
+/// The diagram of scene `seed` on `lo ≤ L̄ ≤ hi`, checked from its files (see the module
+/// docs).
+fn check_scene(seed: u64, lo: f64, hi: f64) {
+    let dir = tmp(&format!("random-enclosed-{seed}"));
     std::fs::create_dir_all(&dir).unwrap();
-    let text = scene(20261129);
+    let text = scene(seed, lo, hi);
     let sc = dir.join("scene.toml");
     std::fs::write(&sc, &text).unwrap();
     let out = dir.join("out");
@@ -113,4 +114,19 @@ fn random_two_segment_enclosed_diagram_holds_from_its_files() {
     for c in cert {
         assert_eq!(c["below"], false, "solve found a lower state: {c}\n{text}");
     }
+}
+
+/// `D1/D0 = 0.223` on `0.673 ≤ s/L ≤ 0.999`, `γ = 74.9`, around the exchange 1 → 2.
+#[test]
+fn random_two_segment_enclosed_diagram_holds_from_its_files() {
+    check_scene(20261129, 1.2, 1.7);
+}
+
+/// `D1/D0 = 0.661` on `0.299 ≤ s/L ≤ 0.866`, `γ = 49.2`, through the great circle `L̄ = 2`:
+/// two index-1 states of one family are lowest (`L̄ = 1.5477` and 1.5743), and the
+/// descent from each of them to a lower family has to be tried, not only from the first
+/// that leads to one.
+#[test]
+fn random_enclosed_diagram_through_a_great_circle_holds_from_its_files() {
+    check_scene(2, 1.0, 2.6);
 }

@@ -8,7 +8,9 @@
 //! re-solved at `N/4, N/2, N` and traced through the parent sheet's sampled lengths as a
 //! new family of the same branch. The new family's states are kept where they lie below
 //! the parent's (elsewhere they have merged into it). The index is that of the state
-//! reported, its finest level ([`Levels::index`]).
+//! reported, its finest level ([`Levels::index`]). A sheet's search stops at the first of
+//! its unstable lowest states that leads lower; the ones it did not reach stay candidates
+//! of the next round (a family traced from one of them need not reach the others).
 
 use rodloop_solver::enclosed::descent::descend;
 use rodloop_solver::enclosed::stats::{self, Stage};
@@ -121,7 +123,6 @@ pub(super) fn descend_unstable(
                         .any(|&(kk, xx)| kk == k && (xx - x).abs() < 1e-9)
                 })
                 .collect();
-            tried.extend(cands.iter().map(|&x| (k, x)));
             if !cands.is_empty() {
                 jobs.push((k, cands));
             }
@@ -132,7 +133,7 @@ pub(super) fn descend_unstable(
             threads,
             jobs,
             &mut |_| {},
-            &mut |_: &(usize, Vec<f64>, Option<Found>)| {},
+            &mut |_: &(usize, Vec<f64>, Vec<f64>, Option<Found>)| {},
             |(k, cands), _| {
                 let _counted = stats::reopen(&scope);
                 let parent = &shared[k];
@@ -141,7 +142,11 @@ pub(super) fn descend_unstable(
                     parent.branch, parent.eta, parent.family
                 );
                 let mut found = None;
+                // The lengths searched: the search stops at the first lower state found, and
+                // the others stay candidates of the next round.
+                let mut searched = Vec::new();
                 for &x in &cands {
+                    searched.push(x);
                     let Some(lv) = parent.levels.iter().find(|l| (l.lbar - x).abs() < 1e-12) else {
                         continue;
                     };
@@ -160,10 +165,11 @@ pub(super) fn descend_unstable(
                         break;
                     }
                 }
-                (k, cands, found)
+                (k, cands, searched, found)
             },
         );
-        for (k, cands, found) in results {
+        for (k, cands, searched, found) in results {
+            tried.extend(searched.iter().map(|&x| (k, x)));
             let parent = &outs[k];
             let Some((traced, stops)) = found else {
                 warnings.push(format!(
