@@ -37,7 +37,8 @@
 //!   around the root. Where a lifted-off sheet cannot be re-solved next to the crossing,
 //!   the root of the sampled energies' interpolated difference stands, with the distance
 //!   to the farther sample as its estimate, and a warning. The surface value of the same
-//!   exchange is located on the same two sheets for comparison. Where the lowest branch ends at the `m`-fold great circle and another
+//!   exchange is located on the same two sheets for comparison. Where the lowest branch
+//!   ends at the `m`-fold great circle and another
 //!   begins there (the traces do not overlap), the exchange is a collapse at `L̄ = m`, with
 //!   the distance of the last traced states from `m` as its estimate. A change between
 //!   families of one branch is not an exchange (as in the surface diagram).

@@ -347,7 +347,8 @@ const SNAP_AMPLITUDES: [f64; 4] = [0.05, 0.15, 0.3, 0.5];
 /// stiffness) to the stiffness `target` along [`blended_stiffness`], `t` from 0 to 1, at
 /// fixed `L̄` and mesh size, walked by the continuation crate's
 /// [`walk_adaptive`]: steps of `t` of at most `1/4`, halved on a failed Newton solve
-/// ([`STEP_ITERATIONS`] iterations) down to `1/512`, grown by half after a success. Where the steps fail at a fold of the
+/// ([`STEP_ITERATIONS`] iterations) down to `1/512`, grown by half after a success. Where
+/// the steps fail at a fold of the
 /// path (the state ceases to exist as `t` grows), the loop snaps through as a quasi-static
 /// loading would: just past the fold, Newton from the last state displaced along its
 /// [`softest_direction`] (amplitudes [`SNAP_AMPLITUDES`], both signs), and the lowest
