@@ -2,7 +2,8 @@
 //! files they write alone: every state file closes, lies inside the ball at its nodes and
 //! holds the energy of its row (recomputed by its quadrature weights), every lowest state
 //! has index 0, and the completeness certificate (`solve` at three lowest states) finds
-//! nothing below the diagram's lowest state. The paper's enclosed scene is one profile; these
+//! nothing below the diagram's lowest state, while `solve` for the lowest state's branch
+//! reaches it (nothing above it either). The paper's enclosed scene is one profile; these
 //! are drawn from the ranges a user writes.
 
 mod common;
@@ -114,6 +115,28 @@ fn check_scene(seed: u64, lo: f64, hi: f64) {
     for c in cert {
         assert_eq!(c["below"], false, "solve found a lower state: {c}\n{text}");
     }
+    // And `solve` reaches it: where the certificate asked for the lowest state's branch,
+    // `solve`'s state is not above the lowest state by more than the two estimates (a saddle
+    // or a higher minimum there would be the wrong answer to `solve --branch`).
+    let f = |v: &serde_json::Value| v.as_f64().expect("a number");
+    let mut asked = 0;
+    for c in cert {
+        let lowest = c["lowest"].as_array().expect("the lowest state");
+        if c["branch"] != lowest[0] {
+            continue;
+        }
+        asked += 1;
+        let (e, de) = (f(&lowest[2]), f(&lowest[3]));
+        let found = c["solve_energy"].as_array().expect("solve found a state");
+        let (es, des) = (f(&found[0]), f(&found[1]));
+        assert!(
+            es <= e + de + des,
+            "solve --branch {} at lbar = {}: {es} ± {des}, above the diagram's lowest state {e} ± {de}\n{text}",
+            c["branch"],
+            c["lbar"]
+        );
+    }
+    assert!(asked > 0, "{summary}");
 }
 
 /// `D1/D0 = 0.223` on `0.673 ≤ s/L ≤ 0.999`, `γ = 74.9`, around the exchange 1 → 2.

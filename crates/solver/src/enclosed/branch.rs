@@ -269,6 +269,25 @@ pub fn solve_levels_from_fine(
     assemble(fine, coarse, quarter, None, false)
 }
 
+/// A [`BranchSolve`] from its three levels `N, N/2, N/4` solved separately (each continued
+/// from the levels of a solve at another length, as the enclosed diagram walks its traces'
+/// levels): [`solve_levels`]'s estimate.
+pub fn branch_from_levels(
+    fine: EnclosedState,
+    coarse: EnclosedState,
+    quarter: EnclosedState,
+) -> Result<BranchSolve, SolverError> {
+    let n = fine.model.cells();
+    if coarse.model.cells() * 2 != n || quarter.model.cells() * 4 != n {
+        return Err(SolverError::InvalidInput(format!(
+            "levels of {n}, {} and {} cells are not N, N/2, N/4",
+            coarse.model.cells(),
+            quarter.model.cells()
+        )));
+    }
+    assemble(fine, coarse, quarter, None, false)
+}
+
 /// A [`BranchSolve`] from its levels: the contact summary of the finest and the error
 /// estimate (see [`BranchSolve::energy_error`]).
 fn assemble(

@@ -31,11 +31,11 @@ pub use saddle::{
 
 use crate::descend::{descend as descend_saddle, Descent, DescentSettings, SaddleModel};
 use crate::enclosed::branch::{
-    resample_state, solve_from_surface, solve_levels, solve_levels_from_fine, BranchSolve,
-    SurfaceSource,
+    branch_from_levels, resample_state, solve_from_surface, solve_levels, solve_levels_from_fine,
+    BranchSolve, SurfaceSource,
 };
 use crate::enclosed::length_path::{continue_in_length, probe_lengths};
-use crate::enclosed::solve::{solve_enclosed, EnclosedOptions, EnclosedState};
+use crate::enclosed::solve::{solve_enclosed, solve_prolonged, EnclosedOptions, EnclosedState};
 use crate::enclosed::wall::IntoWall;
 use crate::SolverError;
 /// A state found on a coarse mesh as a solve with `cells` cells and its levels: its
@@ -62,6 +62,66 @@ fn carry_to_ladder(s: &EnclosedState, cells: usize, opts: &EnclosedOptions) -> O
     Some(fine.unwrap_or(own))
 }
 
+/// The local minimum `probe` (at another length, on a coarse mesh) carried to a ladder of
+/// `cells` cells there ([`carry_to_ladder`]) and continued in `L̄` to `lbar`
+/// ([`continue_in_length`]) level by level, as the enclosed diagram walks the levels of its
+/// traces. A level's walk can fail where another's does not (a point contact between two
+/// nodes makes the contact set cycle on some meshes only): such a level is re-solved from one
+/// that arrived, resampled to its cells (the finer first; Newton with the watchdog of
+/// prolonged starts). `None` unless the three levels' energies converge (the second
+/// difference smaller than the first: levels continued separately may end on different
+/// families).
+fn continue_ladder(
+    probe: &EnclosedState,
+    lbar: f64,
+    cells: usize,
+    opts: &EnclosedOptions,
+) -> Option<BranchSolve> {
+    let at_probe = carry_to_ladder(probe, cells, opts)?;
+    let arrived: Vec<Option<EnclosedState>> = [&at_probe.fine, &at_probe.coarse, &at_probe.quarter]
+        .iter()
+        .map(|level| continue_in_length(level, lbar, opts).ok())
+        .collect();
+    let watchdog = EnclosedOptions {
+        watchdog: opts.watchdog.max(2),
+        ..opts.clone()
+    };
+    // A level that did not arrive: another that did, resampled to its cells and re-solved
+    // (the finer ones first).
+    let sizes = [cells, cells / 2, cells / 4];
+    let levels: Vec<EnclosedState> = sizes
+        .iter()
+        .zip(&arrived)
+        .map(|(&n, own)| {
+            own.clone().or_else(|| {
+                arrived.iter().flatten().find_map(|there| {
+                    let prolonged = (there.model.cells() * 2 == n)
+                        .then(|| {
+                            there
+                                .refine_in_runs()
+                                .and_then(|(m, z)| solve_prolonged(&m, z, opts))
+                                .ok()
+                        })
+                        .flatten();
+                    prolonged.or_else(|| {
+                        resample_state(there, n)
+                            .and_then(|(m, z)| solve_enclosed(&m, z, &watchdog))
+                            .ok()
+                    })
+                })
+            })
+        })
+        .collect::<Option<_>>()?;
+    let [f, c, q] = <[EnclosedState; 3]>::try_from(levels).ok()?;
+    let (d1, d2) = (
+        (c.energy() - q.energy()).abs(),
+        (f.energy() - c.energy()).abs(),
+    );
+    (d2 < d1)
+        .then(|| branch_from_levels(f, c, q).ok())
+        .flatten()
+}
+
 /// What [`solve_branch_lowest`] returns: [`DescendedSolve`] and `true` where the state
 /// reported is not the one reached from the surface loop but a lower local minimum from
 /// [`stiffness_homotopy_states`].
@@ -75,7 +135,12 @@ pub type LowestSolve = (DescendedSolve, bool);
 /// Where none of these is a local minimum, the local minima of the branch found at the
 /// nearest other lengths are continued in `L̄` to `lbar` on the same coarse mesh
 /// ([`crate::enclosed::length_path`]) and cascaded and descended in the same way (the enclosed
-/// diagram follows a stable family through the branch's range likewise).
+/// diagram follows a stable family through the branch's range likewise). Where the cascade
+/// of such a coarse state does not converge, the minimum at its probe length is cascaded
+/// there instead and its finest level continued in `L̄` (the enclosed diagram's traces step
+/// their finest level likewise): on a two-segment rod drawn at random (`D1/D0 = 0.661` on
+/// `0.299 ≤ s/L ≤ 0.866`, `γ = 49.2`) the minimum at `L̄ = 1.35` continued to 1.45 on 24
+/// cells does not cascade to 96, and the branch's local minimum there is reached only so.
 /// Of the states of branch `eta`, an index-0 one goes before any with index > 0, and the
 /// lowest of those is returned. The semismooth Newton from the surface loop stops at the
 /// equilibrium next to it, which need not be the lowest minimum of the branch.
@@ -153,10 +218,14 @@ pub fn solve_branch_lowest(
             .ok()
             .map(|(r, _)| SurfaceSource::Numeric(Box::new(r.equilibrium)))
         };
-        for (x, s) in
+        for (x, s, probe) in
             states_by_length_continuation(&wall, lbar, eta, stiffness, search, opts, surface)
         {
-            let Some(b) = carry_to_ladder(&s, cells, opts) else {
+            // The state continued on the coarse mesh carried to the ladder, else the probe
+            // length's minimum carried to the ladder there and its finest level continued.
+            let carried = carry_to_ladder(&s, cells, opts)
+                .or_else(|| continue_ladder(&probe, lbar, cells, opts));
+            let Some(b) = carried else {
                 continue;
             };
             let Ok((b, d)) = descend_branch(b, opts) else {
@@ -234,9 +303,14 @@ fn local_minima(
 /// searched, after the surface loop has been tried at every probe length.
 pub const STIFFNESS_PROBES: usize = 2;
 
+/// A state of [`states_by_length_continuation`]: the probe length `x`, the state continued
+/// to the length asked for, and the local minimum at `x` it was continued from.
+pub type Continued = (f64, EnclosedState, EnclosedState);
+
 /// Local minima of branch `eta` at lengths of [`probe_lengths`], continued to `lbar`: the
 /// states at `lbar` on `cells` cells of branch `eta`, lowest first (their index may have
-/// changed on the way), each with the length it comes from. The starts at a probe length
+/// changed on the way), each with the length it comes from and the minimum there
+/// ([`Continued`]). The starts at a probe length
 /// `x`: the enclosed state from the surface loop `surface(x)` (where one is solved), at the
 /// probe lengths in turn up to the first that gives a state at `lbar`, and, unless that
 /// state arrives as a local minimum, the stiffness paths at the [`STIFFNESS_PROBES`] nearest
@@ -254,17 +328,17 @@ pub fn states_by_length_continuation<F>(
     cells: usize,
     opts: &EnclosedOptions,
     surface: F,
-) -> Vec<(f64, EnclosedState)>
+) -> Vec<Continued>
 where
     F: Fn(f64) -> Option<SurfaceSource>,
 {
     let wall = wall.into_wall();
-    let continued = |x: f64, minima: Vec<EnclosedState>| {
-        let mut out: Vec<(f64, EnclosedState)> = minima
+    let continued = |x: f64, minima: Vec<EnclosedState>| -> Vec<Continued> {
+        let mut out: Vec<Continued> = minima
             .into_iter()
-            .filter_map(|s| continue_in_length(&s, lbar, opts).ok())
-            .filter(|s| enclosed_periods(s).ok().map(|p| p.eta) == Some(eta))
-            .map(|s| (x, s))
+            .filter_map(|s| continue_in_length(&s, lbar, opts).ok().map(|at| (at, s)))
+            .filter(|(s, _)| enclosed_periods(s).ok().map(|p| p.eta) == Some(eta))
+            .map(|(s, p)| (x, s, p))
             .collect();
         out.sort_by(|a, b| a.1.energy().total_cmp(&b.1.energy()));
         out
@@ -286,7 +360,7 @@ where
     // minimum (their continuations are the costly start).
     let arrived = all
         .iter()
-        .any(|(_, s): &(f64, EnclosedState)| s.index(1e-6).ok() == Some(0));
+        .any(|(_, s, _): &Continued| s.index(1e-6).ok() == Some(0));
     if !arrived {
         for &x in lengths.iter().take(STIFFNESS_PROBES) {
             let starts = stiffness_homotopy_states(&wall, x, eta, stiffness, cells, opts)
