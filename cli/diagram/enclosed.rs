@@ -95,7 +95,8 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     Ok(())
 }
 
-/// One line per length of the certificate, a warning per state below the diagram's.
+/// One line per length of the certificate, a warning per state below the diagram's and per
+/// lowest state that `solve` for its branch does not reach.
 fn print_certificate(cert: &[CertificateCheck]) {
     let mut xs: Vec<f64> = cert.iter().map(|c| c.lbar).collect();
     xs.dedup();
@@ -120,6 +121,16 @@ fn print_certificate(cert: &[CertificateCheck]) {
                     c.branch
                 );
             }
+        }
+        for c in here.iter().filter(|c| c.misses) {
+            let found = match c.solve_energy {
+                Some((v, err)) => format!("E R/(pi D) = {v:.10} ± {err:.1e}, above it"),
+                None => format!("no state ({})", c.note),
+            };
+            eprintln!(
+                "warning: solve --branch {} at lbar = {x:.6} does not reach the diagram's lowest state ({e:.10} ± {de:.1e}): {found}",
+                c.branch
+            );
         }
     }
 }

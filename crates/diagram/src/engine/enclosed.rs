@@ -216,8 +216,39 @@ pub struct CertificateCheck {
     pub lowest: (u32, u32, f64, f64),
     /// `solve`'s state lies below the lowest state by more than the two estimates.
     pub below: bool,
+    /// `solve` was asked for the lowest state's branch and its state (or none) lies above the
+    /// lowest state by more than the two estimates: `solve --branch` misses the stable state.
+    pub misses: bool,
     /// Why `solve` found no state (empty otherwise).
     pub note: String,
+}
+
+impl CertificateCheck {
+    /// The check of `solve`'s result `solve_energy` for `branch` at `lbar` against the
+    /// diagram's `lowest` state there: below it, or (for its own branch) above it, by more
+    /// than the two estimates; `solve` finding no state misses the lowest state of its branch.
+    pub fn new(
+        lbar: f64,
+        branch: u32,
+        solve_energy: Option<(f64, f64)>,
+        lowest: (u32, u32, f64, f64),
+        note: String,
+    ) -> Self {
+        let (_, _, e0, de0) = lowest;
+        let (below, misses) = match solve_energy {
+            Some((e, de)) => (e + de < e0 - de0, branch == lowest.0 && e - de > e0 + de0),
+            None => (false, branch == lowest.0),
+        };
+        Self {
+            lbar,
+            branch,
+            solve_energy,
+            lowest,
+            below,
+            misses,
+            note,
+        }
+    }
 }
 
 /// Lowest states at which the certificate runs `solve`: three, spread over the range.
@@ -274,24 +305,9 @@ impl EnclosedEngine {
                 opts.accuracy,
             ) {
                 Ok(res) => {
-                    let (e, err) = res.energy;
-                    CertificateCheck {
-                        lbar: p.lbar,
-                        branch,
-                        solve_energy: Some((e, err)),
-                        lowest,
-                        below: e + err < p.energy - p.energy_error,
-                        note: String::new(),
-                    }
+                    CertificateCheck::new(p.lbar, branch, Some(res.energy), lowest, String::new())
                 }
-                Err(e) => CertificateCheck {
-                    lbar: p.lbar,
-                    branch,
-                    solve_energy: None,
-                    lowest,
-                    below: false,
-                    note: error_chain(&e),
-                },
+                Err(e) => CertificateCheck::new(p.lbar, branch, None, lowest, error_chain(&e)),
             }
         })
     }
@@ -355,4 +371,33 @@ fn error_chain(e: &dyn std::error::Error) -> String {
         source = s.source();
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::CertificateCheck;
+
+    /// A state of `solve` counts as below or above the lowest state only beyond the sum of
+    /// the two estimates, and above only for the lowest state's own branch.
+    #[test]
+    fn certificate_checks_compare_beyond_both_estimates() {
+        let lowest = (2, 1, 1.0, 1e-3);
+        let check = |branch, e: f64, de: f64| {
+            let c = CertificateCheck::new(1.5, branch, Some((e, de)), lowest, String::new());
+            (c.below, c.misses)
+        };
+        // Within the two estimates either way: the same state.
+        assert_eq!(check(2, 1.0 + 1.5e-3, 1e-3), (false, false));
+        assert_eq!(check(2, 1.0 - 1.5e-3, 1e-3), (false, false));
+        // Beyond them: a state the diagram missed, or the stable state `solve` missed.
+        assert_eq!(check(2, 1.0 - 2.5e-3, 1e-3), (true, false));
+        assert_eq!(check(2, 1.0 + 2.5e-3, 1e-3), (false, true));
+        // Another branch above the lowest state is expected.
+        assert_eq!(check(1, 1.5, 1e-3), (false, false));
+        assert_eq!(check(1, 0.9, 1e-3), (true, false));
+        // No state of the lowest state's branch misses it; of another branch, says nothing.
+        let none = |branch| CertificateCheck::new(1.5, branch, None, lowest, "x".into());
+        assert!(none(2).misses && !none(2).below);
+        assert!(!none(1).misses);
+    }
 }
