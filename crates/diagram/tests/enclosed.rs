@@ -165,7 +165,7 @@ fn lifted_off_exchange_brackets_independent_solves() {
         .iter()
         .find(|c| c.critical.from_branch == 1 && c.critical.to_branch == 2)
         .expect("the 1 -> 2 exchange");
-    assert!(c.critical.lbar_cr < c.surface_lbar_cr);
+    assert!(c.critical.lbar_cr < c.surface_lbar_cr.expect("the surface value"));
     let c = &c.critical;
     let delta = 10.0 * c.error_estimate + 2e-7;
     let f = |x: f64| {

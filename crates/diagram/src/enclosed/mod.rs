@@ -336,8 +336,10 @@ pub struct EnclosedCritical {
     /// The critical length, its kind, branches, energy and error estimate.
     #[serde(flatten)]
     pub critical: Critical,
-    /// The surface diagram's value (exact layer).
-    pub surface_lbar_cr: f64,
+    /// The surface diagram's value (exact layer; for a non-uniform rod the same two sheets'
+    /// surface states), where it was located.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub surface_lbar_cr: Option<f64>,
     /// How it was obtained.
     pub method: String,
 }
@@ -524,7 +526,7 @@ fn uniform_diagram(
         if !lifted {
             critical.push(EnclosedCritical {
                 critical: *c,
-                surface_lbar_cr: c.lbar_cr,
+                surface_lbar_cr: Some(c.lbar_cr),
                 method: "exact layer: both states attached, so the surface value holds".into(),
             });
             continue;
@@ -572,7 +574,7 @@ fn uniform_diagram(
                 error_estimate: err,
                 ..*c
             },
-            surface_lbar_cr: c.lbar_cr,
+            surface_lbar_cr: Some(c.lbar_cr),
             method: format!(
                 "the exchange locator on E_a = E_b with the lifted-off state re-solved (3-D model at N = {}; error from these levels (the smaller observed order, the larger of the last two differences' estimates), the noise of the slope's chord over +-1e-5 and the final bracket)",
                 cells.join(", ")

@@ -871,7 +871,7 @@ pub(super) fn nonuniform_diagram(
                 energy: m * dbar,
                 error_estimate: (a_end - m).abs().max((b_start - m).abs()),
             },
-            surface_lbar_cr: m,
+            surface_lbar_cr: Some(m),
             method: format!(
                 "the lowest branch {} ends at the {m}-fold great circle and branch {} begins there (E R/(pi D0) = m mean(D)/D0); the enclosed traces reach lbar = {a_end:.6} and {b_start:.6}, so the error estimate is their distance from {m}",
                 sa.branch, sb.branch

@@ -10,7 +10,9 @@
 //! figure-eight of `D1/D0 = 0.5` has point contacts between nodes, so its prolonged contact
 //! set is the wrong one: Newton converges there through the Fischer–Burmeister form of the
 //! complementarity, [`rodloop_solver::enclosed::Complementarity`]), or where the ladder's
-//! root lies outside the levels' estimate, the levels' result stands.
+//! root lies outside the levels' estimate, the levels' result stands. The surface value on the
+//! same two sheets is located first, for comparison only: where a sheet has lifted off, its
+//! failure leaves the exchange standing without it (`surface_lbar_cr` is then absent).
 
 use rodloop_solver::SolverError;
 
@@ -103,8 +105,8 @@ pub(super) struct Crossing {
     pub(super) error: f64,
     /// `E R/(π D0)` there.
     pub(super) energy: f64,
-    /// The surface value on the same two sheets.
-    pub(super) surface_lbar: f64,
+    /// The surface value on the same two sheets, where it was located.
+    pub(super) surface_lbar: Option<f64>,
     /// How it was located.
     pub(super) method: String,
     /// Why it was not located on re-solved states, where it comes from the sampled energies.
@@ -156,15 +158,18 @@ pub(super) fn locate_crossing(
             |x| sheet_energy(dopts, surfaces[0], x, na),
             |x| sheet_energy(dopts, surfaces[1], x, nb),
         );
-        locate_from(&mut pair, xg, &surface)?
+        locate_from(&mut pair, xg, &surface)
     };
-    let xs = on_surface.x;
+    // Where a sheet is lifted off, the surface value is only a comparison: its failure (a
+    // surface sheet that cannot be re-solved there) leaves the enclosed exchange standing.
     if !lifted {
+        let on_surface = on_surface?;
+        let xs = on_surface.x;
         return Ok(Crossing {
             lbar: xs,
             error: on_surface.error,
             energy: 0.5 * (on_surface.energies.a + on_surface.energies.b),
-            surface_lbar: xs,
+            surface_lbar: Some(xs),
             method: "surface states (both attached: lambda_min > 0); the exchange locator on E_a = E_b (hunt from the interpolated root, Brent), error from the N and 2N surface energies, the chord's noise over +-1e-5 and the final bracket".into(),
             not_located: None,
         });
@@ -190,6 +195,13 @@ pub(super) fn locate_crossing(
     // of the contact set of its family there), the crossing of the sampled energies stands:
     // the root of their interpolated difference, which lies in the bracket, with the
     // distance to the bracket's farther end as its estimate.
+    let (xs, surface_note) = match on_surface {
+        Ok(s) => (Some(s.x), "surface value on the same sheets".to_string()),
+        Err(e) => (
+            None,
+            format!("no surface value (the same sheets' surface states not located: {e})"),
+        ),
+    };
     let ex = match ex {
         Ok(ex) => ex,
         Err(e) => {
@@ -202,7 +214,7 @@ pub(super) fn locate_crossing(
                 energy,
                 surface_lbar: xs,
                 method: format!(
-                    "the root of the sampled energies' interpolated difference between lbar = {x0:.6} and {x1:.6}, its estimate the distance to the farther sample; not located on re-solved states ({e}); surface value on the same sheets"
+                    "the root of the sampled energies' interpolated difference between lbar = {x0:.6} and {x1:.6}, its estimate the distance to the farther sample; not located on re-solved states ({e}); {surface_note}"
                 ),
                 not_located: Some(e.to_string()),
             });
@@ -223,8 +235,9 @@ pub(super) fn locate_crossing(
                 energy: 0.5 * (fine.energies.a + fine.energies.b),
                 surface_lbar: xs,
                 method: format!(
-                    "the exchange locator on E_a = E_b with the lifted-off state(s) re-solved on a ladder of meshes (3-D model at N = {}; the trace's levels N/4, N/2, N first, hunt from the interpolated root, Brent to 1e-10, then the ladder from that root); error: the ladder's energy estimates (four levels) plus the misfit of the chord over +-1e-5, over its slope, plus the final bracket; surface value on the same sheets",
-                    cells.join(", ")
+                    "the exchange locator on E_a = E_b with the lifted-off state(s) re-solved on a ladder of meshes (3-D model at N = {}; the trace's levels N/4, N/2, N first, hunt from the interpolated root, Brent to 1e-10, then the ladder from that root); error: the ladder's energy estimates (four levels) plus the misfit of the chord over +-1e-5, over its slope, plus the final bracket; {}",
+                    cells.join(", "),
+                    surface_note
                 ),
                 not_located: None,
             });
@@ -242,7 +255,7 @@ pub(super) fn locate_crossing(
         energy: 0.5 * (ex.energies.a + ex.energies.b),
         surface_lbar: xs,
         method: format!(
-            "the exchange locator on E_a = E_b with the lifted-off state(s) re-solved (3-D model at N = {}, {}, {}; hunt from the interpolated root, Brent to 1e-10); error: the three levels' energy estimates plus the misfit of the chord over +-2e-3, over its slope, plus the final bracket; surface value on the same sheets",
+            "the exchange locator on E_a = E_b with the lifted-off state(s) re-solved (3-D model at N = {}, {}, {}; hunt from the interpolated root, Brent to 1e-10); error: the three levels' energy estimates plus the misfit of the chord over +-2e-3, over its slope, plus the final bracket; {surface_note}",
             cells / 4,
             cells / 2,
             cells
