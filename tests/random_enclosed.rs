@@ -153,3 +153,44 @@ fn random_two_segment_enclosed_diagram_holds_from_its_files() {
 fn random_enclosed_diagram_through_a_great_circle_holds_from_its_files() {
     check_scene(2, 1.0, 2.6);
 }
+
+/// `solve --from` the state file `solve` wrote, at the same length, returns the same state:
+/// energy within the two estimates, the same index. On the second scene at `L̄ = 1.45` the
+/// saved figure-eight's point contacts fall between the nodes of the cascade's coarsest
+/// level, from which Newton does not converge; the start on the finest mesh does.
+#[test]
+fn solve_from_its_own_state_file_returns_that_state() {
+    let dir = tmp("random-enclosed-from");
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = scene(2, 1.0, 2.6);
+    let sc = dir.join("scene.toml");
+    std::fs::write(&sc, &text).unwrap();
+    let run = |out: &str, extra: &[&str]| {
+        let out = dir.join(out);
+        let mut args = vec![
+            "solve",
+            "--scene",
+            sc.to_str().unwrap(),
+            "--lbar",
+            "1.45",
+            "--branch",
+            "2",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        rodloop_ok(&args);
+        read_json(&out.join("summary.json"))
+    };
+    let first = run("first", &[]);
+    let file = dir.join("first").join("config.csv");
+    let again = run("again", &["--from", file.to_str().unwrap()]);
+    let f = |s: &serde_json::Value, k: &str| s[k].as_f64().expect("a number");
+    let (e1, d1) = (f(&first, "energy"), f(&first, "error_estimate"));
+    let (e2, d2) = (f(&again, "energy"), f(&again, "error_estimate"));
+    assert!(
+        (e1 - e2).abs() <= d1 + d2,
+        "solve: {e1} ± {d1}; from its file: {e2} ± {d2}\n{text}"
+    );
+    assert_eq!(first["index"], again["index"], "{first}\n{again}");
+}

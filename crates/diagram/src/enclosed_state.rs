@@ -13,7 +13,7 @@ use std::sync::Arc;
 
 use rodloop_exact::{eta_of_branch, paper_branch_loop};
 use rodloop_solver::accuracy::enclosed_scene_cells;
-use rodloop_solver::enclosed::branch::BranchSolve;
+use rodloop_solver::enclosed::branch::{solve_levels_from_fine, BranchSolve};
 use rodloop_solver::enclosed::descent::{
     descend_branch, enclosed_periods, solve_branch_descended, solve_branch_lowest, DescendedSolve,
 };
@@ -557,7 +557,8 @@ fn describe_descent(
 
 /// Solve from a saved enclosed shape at `lbar`: the shape's curvature vectors, aligned by
 /// [`start_from_shape`], start the cascade at `N/4` (`N = 32(1 + η)` with the branch's `η`
-/// when given, else `η = 2`).
+/// when given, else `η = 2`), else, where that cascade does not converge, Newton on `N`
+/// cells with its coarser levels re-solved from it ([`solve_levels_from_fine`]).
 pub fn solve_from_shape(
     wall: impl IntoWall,
     stiffness: &Stiffness,
@@ -569,9 +570,23 @@ pub fn solve_from_shape(
 ) -> Result<EnclosedResult, DiagramError> {
     let eta = branch.filter(|&b| b > 0).map_or(2, eta_of_branch);
     let cells = enclosed_scene_cells(stiffness, accuracy, eta);
-    let (model, z0) = start_from_shape(wall, lbar, cells / 4, stiffness, shape).map_err(passed)?;
+    let wall = wall.into_wall();
+    let (model, z0) = start_from_shape(&wall, lbar, cells / 4, stiffness, shape).map_err(passed)?;
     let opts = EnclosedOptions::default();
+    // The cascade from `N/4`; where it does not converge (the coarse mesh cannot carry the
+    // saved contacts: point contacts of a finer mesh's state fall between its nodes), the
+    // shape on `N` cells first, its coarser levels re-solved from it.
     let b = solve_levels(&model, z0, None, &opts)
+        .or_else(|first| {
+            let watchdog = EnclosedOptions {
+                watchdog: 2,
+                ..opts.clone()
+            };
+            start_from_shape(&wall, lbar, cells, stiffness, shape)
+                .and_then(|(m, z)| solve_enclosed(&m, z, &watchdog))
+                .and_then(|fine| solve_levels_from_fine(fine, &opts))
+                .map_err(|_| first)
+        })
         .map_err(context("the enclosed loop from the saved shape"))?;
     let (b, descent) = if keep_saddle {
         (b, None)
