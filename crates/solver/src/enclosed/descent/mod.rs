@@ -132,15 +132,17 @@ pub type LowestSolve = (DescendedSolve, bool);
 /// the states reached by continuation in the stiffness from the uniform rod's loop
 /// ([`stiffness_homotopy_states`], on `8(2 + η)` cells and carried to `N/4` of the first
 /// mesh of `ladder`), each cascaded to `N/2, N` ([`solve_levels`]) and descended where it is a saddle ([`descend_branch`]).
-/// Where none of these is a local minimum, the local minima of the branch found at the
-/// nearest other lengths are continued in `L̄` to `lbar` on the same coarse mesh
-/// ([`crate::enclosed::length_path`]) and cascaded and descended in the same way (the enclosed
-/// diagram follows a stable family through the branch's range likewise). Where the cascade
-/// of such a coarse state does not converge, the minimum at its probe length is cascaded
-/// there instead and its finest level continued in `L̄` (the enclosed diagram's traces step
-/// their finest level likewise): on a two-segment rod drawn at random (`D1/D0 = 0.661` on
-/// `0.299 ≤ s/L ≤ 0.866`, `γ = 49.2`) the minimum at `L̄ = 1.35` continued to 1.45 on 24
-/// cells does not cascade to 96, and the branch's local minimum there is reached only so.
+/// Then the local minima of the branch found at the nearest other lengths (on the same coarse
+/// mesh, [`crate::enclosed::length_path`]) are cascaded there and continued in `L̄` to `lbar`
+/// level by level ([`continue_ladder`], as the enclosed diagram walks a stable family
+/// through the branch's range), else continued on the coarse mesh and cascaded at `lbar`,
+/// and descended in the same way; where none of the starts above is a local minimum, the
+/// stiffness paths at the nearest lengths are continued too. On two-segment rods drawn at
+/// random these are the routes to the branch's lowest minimum: `D1/D0 = 0.661` on
+/// `0.299 ≤ s/L ≤ 0.866`, `γ = 49.2`, at `L̄ = 1.45` (the surface loop leads to a saddle
+/// only, and the minimum continued from 1.35 on 24 cells does not cascade to 96), and
+/// `D1/D0 = 0.268` on `0.492 ≤ s/L ≤ 0.822`, `γ = 47.7`, branch 1 at `L̄ = 2.468938` (the
+/// surface loop leads to a minimum 4.8e-4 above the one continued from 2.368938).
 /// Of the states of branch `eta`, an index-0 one goes before any with index > 0, and the
 /// lowest of those is returned. The semismooth Newton from the surface loop stops at the
 /// equilibrium next to it, which need not be the lowest minimum of the branch.
@@ -168,7 +170,11 @@ pub fn solve_branch_lowest(
         let same = enclosed_periods(&b.fine).ok().map(|p| p.eta) == Some(eta);
         same.then_some((usize::from(index > 0), b.energy))
     };
-    let better = |x: (usize, f64), y: (usize, f64)| x.0 < y.0 || (x.0 == y.0 && x.1 < y.1);
+    // Lower by more than round-off: the same state reached by another route (the minima
+    // continued in L̄ end on the ones found here, to 1e-10) stays the first route's.
+    let better = |x: (usize, f64), y: (usize, f64)| {
+        x.0 < y.0 || (x.0 == y.0 && x.1 < y.1 - 1e-9 * y.1.abs().max(1.0))
+    };
     // The best state of the other routes, with the route that reaches it.
     type Found = Option<(BranchSolve, Option<Descent<EnclosedState>>, String)>;
     let mut best: Found = None;
@@ -199,11 +205,13 @@ pub fn solve_branch_lowest(
             offer(&mut best, b, d, format!("continuation in the stiffness from the uniform rod's loop with its arclength origin shifted by {phi:.4} L"));
         }
     }
-    // No local minimum yet: one reached at other lengths of the branch, continued in L̄.
+    // Local minima reached at other lengths of the branch, continued in L̄: a lower one than
+    // those found here, or where none was found, one at all (then also from the stiffness
+    // paths at the probe lengths, the costly start).
     let stable = |b: &BranchSolve| rank(b).is_some_and(|r| r.0 == 0);
     let found_minimum = base.as_ref().is_ok_and(|b| stable(&b.0))
         || best.as_ref().is_some_and(|(b, _, _)| stable(b));
-    if !found_minimum && cells >= 32 && cells % 4 == 0 {
+    if cells >= 32 && cells % 4 == 0 {
         let radius = wall.radius();
         let surface = |x: f64| {
             crate::solve_robust(
@@ -218,13 +226,20 @@ pub fn solve_branch_lowest(
             .ok()
             .map(|(r, _)| SurfaceSource::Numeric(Box::new(r.equilibrium)))
         };
-        for (x, s, probe) in
-            states_by_length_continuation(&wall, lbar, eta, stiffness, search, opts, surface)
-        {
+        for (x, s, probe) in states_by_length_continuation(
+            &wall,
+            lbar,
+            eta,
+            stiffness,
+            search,
+            opts,
+            surface,
+            !found_minimum,
+        ) {
             // The state continued on the coarse mesh carried to the ladder, else the probe
             // length's minimum carried to the ladder there and its finest level continued.
-            let carried = carry_to_ladder(&s, cells, opts)
-                .or_else(|| continue_ladder(&probe, lbar, cells, opts));
+            let carried = continue_ladder(&probe, lbar, cells, opts)
+                .or_else(|| carry_to_ladder(&s, cells, opts));
             let Some(b) = carried else {
                 continue;
             };
@@ -319,7 +334,9 @@ pub type Continued = (f64, EnclosedState, EnclosedState);
 /// at `L̄ = 1.328827` the surface loop's minimum from 1.5288 continues to the saddle
 /// 1.8169945712 that the surface loop reaches there too, a stiffness path's from 1.4288 to
 /// the stable state 1.7488917142 that the enclosed diagram traces there); each descended
-/// where it is a saddle. Empty when none gives a state.
+/// where it is a saddle. Empty when none gives a state. `stiffness_paths = false` leaves the
+/// stiffness paths out (the caller has a local minimum already and looks for a lower one).
+#[allow(clippy::too_many_arguments)]
 pub fn states_by_length_continuation<F>(
     wall: impl IntoWall,
     lbar: f64,
@@ -328,6 +345,7 @@ pub fn states_by_length_continuation<F>(
     cells: usize,
     opts: &EnclosedOptions,
     surface: F,
+    stiffness_paths: bool,
 ) -> Vec<Continued>
 where
     F: Fn(f64) -> Option<SurfaceSource>,
@@ -361,7 +379,7 @@ where
     let arrived = all
         .iter()
         .any(|(_, s, _): &Continued| s.index(1e-6).ok() == Some(0));
-    if !arrived {
+    if !arrived && stiffness_paths {
         for &x in lengths.iter().take(STIFFNESS_PROBES) {
             let starts = stiffness_homotopy_states(&wall, x, eta, stiffness, cells, opts)
                 .unwrap_or_default();
