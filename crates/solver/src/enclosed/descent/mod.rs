@@ -334,8 +334,9 @@ pub type Continued = (f64, EnclosedState, EnclosedState);
 /// at `L̄ = 1.328827` the surface loop's minimum from 1.5288 continues to the saddle
 /// 1.8169945712 that the surface loop reaches there too, a stiffness path's from 1.4288 to
 /// the stable state 1.7488917142 that the enclosed diagram traces there); each descended
-/// where it is a saddle. Empty when none gives a state. `stiffness_paths = false` leaves the
-/// stiffness paths out (the caller has a local minimum already and looks for a lower one).
+/// where it is a saddle. Empty when none gives a state. `exhaustive = false` (the caller has a
+/// local minimum already and looks for a lower one) searches the two nearest probe lengths
+/// only and leaves the stiffness paths out.
 #[allow(clippy::too_many_arguments)]
 pub fn states_by_length_continuation<F>(
     wall: impl IntoWall,
@@ -345,7 +346,7 @@ pub fn states_by_length_continuation<F>(
     cells: usize,
     opts: &EnclosedOptions,
     surface: F,
-    stiffness_paths: bool,
+    exhaustive: bool,
 ) -> Vec<Continued>
 where
     F: Fn(f64) -> Option<SurfaceSource>,
@@ -363,7 +364,8 @@ where
     };
     let lengths = probe_lengths(lbar, eta);
     let mut all = Vec::new();
-    for &x in &lengths {
+    let searched = if exhaustive { lengths.len() } else { 2 };
+    for &x in lengths.iter().take(searched) {
         let Some(src) = surface(x) else { continue };
         let Ok(s) = solve_from_surface(&wall, x, stiffness, &src, cells, opts) else {
             continue;
@@ -379,7 +381,7 @@ where
     let arrived = all
         .iter()
         .any(|(_, s, _): &Continued| s.index(1e-6).ok() == Some(0));
-    if !arrived && stiffness_paths {
+    if !arrived && exhaustive {
         for &x in lengths.iter().take(STIFFNESS_PROBES) {
             let starts = stiffness_homotopy_states(&wall, x, eta, stiffness, cells, opts)
                 .unwrap_or_default();
