@@ -10,6 +10,7 @@ mod common;
 
 use common::{col, read_csv, read_json, rodloop_ok, tmp, Lcg};
 use std::f64::consts::PI;
+use std::path::PathBuf;
 
 /// A two-segment enclosed scene: `D1/D0` in 0.2–0.8, the soft segment 0.2–0.6 of the loop at
 /// a random place, `γ` in 20–100, on `lo ≤ L̄ ≤ hi` (`R = 1`, `D0 = 1`).
@@ -27,6 +28,17 @@ fn scene(seed: u64, lo: f64, hi: f64) -> String {
     )
 }
 
+/// [`scene`] written to `scene.toml` in a fresh directory `name`: the directory, the file and
+/// the scene's text.
+fn scene_file(name: &str, seed: u64, lo: f64, hi: f64) -> (PathBuf, PathBuf, String) {
+    let dir = tmp(name);
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = scene(seed, lo, hi);
+    let sc = dir.join("scene.toml");
+    std::fs::write(&sc, &text).unwrap();
+    (dir, sc, text)
+}
+
 /// The numbers of column `name` of a state file.
 fn column(header: &[String], rows: &[Vec<String>], name: &str) -> Vec<f64> {
     let c = col(header, name);
@@ -36,11 +48,7 @@ fn column(header: &[String], rows: &[Vec<String>], name: &str) -> Vec<f64> {
 /// The diagram of scene `seed` on `lo ≤ L̄ ≤ hi`, checked from its files (see the module
 /// docs).
 fn check_scene(seed: u64, lo: f64, hi: f64) {
-    let dir = tmp(&format!("random-enclosed-{seed}"));
-    std::fs::create_dir_all(&dir).unwrap();
-    let text = scene(seed, lo, hi);
-    let sc = dir.join("scene.toml");
-    std::fs::write(&sc, &text).unwrap();
+    let (dir, sc, text) = scene_file(&format!("random-enclosed-{seed}"), seed, lo, hi);
     let out = dir.join("out");
     rodloop_ok(&[
         "diagram",
@@ -168,11 +176,7 @@ fn random_enclosed_diagram_where_solve_must_continue_a_minimum_holds() {
 /// level, from which Newton does not converge; the start on the finest mesh does.
 #[test]
 fn solve_from_its_own_state_file_returns_that_state() {
-    let dir = tmp("random-enclosed-from");
-    std::fs::create_dir_all(&dir).unwrap();
-    let text = scene(2, 1.0, 2.6);
-    let sc = dir.join("scene.toml");
-    std::fs::write(&sc, &text).unwrap();
+    let (dir, sc, text) = scene_file("random-enclosed-from", 2, 1.0, 2.6);
     let run = |out: &str, extra: &[&str]| {
         let out = dir.join(out);
         let mut args = vec![

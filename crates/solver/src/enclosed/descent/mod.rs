@@ -67,10 +67,11 @@ fn carry_to_ladder(s: &EnclosedState, cells: usize, opts: &EnclosedOptions) -> O
 /// ([`continue_in_length`]) level by level, as the enclosed diagram walks the levels of its
 /// traces. A level's walk can fail where another's does not (a point contact between two
 /// nodes makes the contact set cycle on some meshes only): such a level is re-solved from one
-/// that arrived, resampled to its cells (the finer first; Newton with the watchdog of
-/// prolonged starts). `None` unless the three levels' energies converge (the second
-/// difference smaller than the first: levels continued separately may end on different
-/// families).
+/// that arrived (the finer first): prolonged with its contact runs kept
+/// ([`EnclosedState::refine_in_runs`], [`solve_prolonged`]) from the level of half its cells,
+/// else resampled to its cells (Newton with the watchdog of prolonged starts). `None` unless
+/// the three levels' energies converge (the second difference smaller than the first: levels
+/// continued separately may end on different families).
 fn continue_ladder(
     probe: &EnclosedState,
     lbar: f64,
@@ -86,30 +87,29 @@ fn continue_ladder(
         watchdog: opts.watchdog.max(2),
         ..opts.clone()
     };
-    // A level that did not arrive: another that did, resampled to its cells and re-solved
-    // (the finer ones first).
+    // A level of `n` cells re-solved from `there`, one that arrived.
+    let from_level = |there: &EnclosedState, n: usize| -> Option<EnclosedState> {
+        let prolonged = if there.model.cells() * 2 == n {
+            there
+                .refine_in_runs()
+                .and_then(|(m, z)| solve_prolonged(&m, z, opts))
+                .ok()
+        } else {
+            None
+        };
+        prolonged.or_else(|| {
+            resample_state(there, n)
+                .and_then(|(m, z)| solve_enclosed(&m, z, &watchdog))
+                .ok()
+        })
+    };
     let sizes = [cells, cells / 2, cells / 4];
     let levels: Vec<EnclosedState> = sizes
         .iter()
         .zip(&arrived)
         .map(|(&n, own)| {
-            own.clone().or_else(|| {
-                arrived.iter().flatten().find_map(|there| {
-                    let prolonged = (there.model.cells() * 2 == n)
-                        .then(|| {
-                            there
-                                .refine_in_runs()
-                                .and_then(|(m, z)| solve_prolonged(&m, z, opts))
-                                .ok()
-                        })
-                        .flatten();
-                    prolonged.or_else(|| {
-                        resample_state(there, n)
-                            .and_then(|(m, z)| solve_enclosed(&m, z, &watchdog))
-                            .ok()
-                    })
-                })
-            })
+            own.clone()
+                .or_else(|| arrived.iter().flatten().find_map(|t| from_level(t, n)))
         })
         .collect::<Option<_>>()?;
     let [f, c, q] = <[EnclosedState; 3]>::try_from(levels).ok()?;
@@ -236,8 +236,8 @@ pub fn solve_branch_lowest(
             surface,
             !found_minimum,
         ) {
-            // The state continued on the coarse mesh carried to the ladder, else the probe
-            // length's minimum carried to the ladder there and its finest level continued.
+            // The probe length's minimum carried to the ladder there and its levels continued,
+            // else the state continued on the coarse mesh carried to the ladder.
             let carried = continue_ladder(&probe, lbar, cells, opts)
                 .or_else(|| carry_to_ladder(&s, cells, opts));
             let Some(b) = carried else {
