@@ -528,6 +528,65 @@ fn branch_one_family_one_is_traced_past_its_branch_point() {
     }
 }
 
+/// A branch point of a lifted-off sheet (a pitchfork or a transcritical point: one eigenvalue
+/// through zero) changes the index by one. Next to the great circles `L̄ = 2, 3`, where sheets
+/// collapse onto the circle, a sheet's last two samples differ in index by more than one: no
+/// branch point is reported between them.
+#[test]
+fn branch_points_change_the_index_by_one() {
+    let d = whole_diagram();
+    let points: Vec<_> = d
+        .events
+        .iter()
+        .filter(|e| e.kind == EventKind::BranchPoint)
+        .collect();
+    assert!(!points.is_empty(), "{:?}", d.events);
+    for b in &points {
+        assert_eq!(b.index_before.abs_diff(b.index_after), 1, "{b:?}");
+    }
+    let mut jumps = 0;
+    let mut sheets: Vec<(u32, u32, u32)> = d
+        .points
+        .iter()
+        .map(|p| (p.branch, p.family, p.sheet))
+        .collect();
+    sheets.sort_unstable();
+    sheets.dedup();
+    for (branch, family, sheet) in sheets {
+        let mut s: Vec<_> = d
+            .points
+            .iter()
+            .filter(|p| {
+                (p.branch, p.family, p.sheet) == (branch, family, sheet)
+                    && p.source == PointSource::Model
+            })
+            .collect();
+        s.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
+        for w in s.windows(2) {
+            let next_to_circle = (w[1].lbar - w[1].lbar.round()).abs() < 5e-3;
+            if w[0].index.abs_diff(w[1].index) < 2 || !next_to_circle {
+                continue;
+            }
+            jumps += 1;
+            assert!(
+                !points.iter().any(|b| b.branch == branch
+                    && b.family == family
+                    && b.lbar > w[0].lbar
+                    && b.lbar < w[1].lbar),
+                "a branch point between {} (index {}) and {} (index {}) of branch {branch} family {family}",
+                w[0].lbar,
+                w[0].index,
+                w[1].lbar,
+                w[1].index
+            );
+        }
+    }
+    assert!(
+        jumps > 0,
+        "no sheet whose index jumps next to a great circle"
+    );
+}
+
 /// Where a lifted-off trace stops, the diagram follows its last state by pseudo-arclength
 /// on the state's contact set: a fold found on both of the trace's finer levels is a special
 /// point of kind `fold`, across which the index changes by one (a simple fold: one

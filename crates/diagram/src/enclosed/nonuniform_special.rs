@@ -9,6 +9,9 @@
 //!   plus the distance between the two levels' roots). Where the eigenvalue jumps at the
 //!   root instead, the contact set changes there and no eigenvalue crosses zero: no branch
 //!   point is reported, and a note says where (as for uniform rods, `trace.rs`). Where the
+//!   index changes by more than one between a sheet's end next to the great circle it
+//!   collapses onto and the sample before ([`collapse_jump`]), several eigenvalues change
+//!   sign in between: no branch point is reported, and a note says so. Where the
 //!   location fails otherwise (a re-solve does not converge next to the singular point, or
 //!   a level's index does not change next to the pair), the root of the eigenvalue
 //!   interpolated linearly between the two states stands, with half the bracket as its
@@ -69,6 +72,18 @@ pub(super) fn branch_points(s: &SheetOut) -> (Vec<EnclosedEvent>, Vec<String>, V
             // The indices are those of the finest levels ([`Levels::index`]), where the
             // crossing eigenvalue is interpolated below.
             let (ip, iq) = (p.index, q.index);
+            if let Some(m) = collapse_jump(s, p.lbar, q.lbar, ip, iq) {
+                notes.push(format!(
+                    "branch {} (eta = {}) family {}: the index changes from {ip} to {iq} between lbar = {:.6} and {:.6}, the sheet's end next to the {m}-fold great circle onto which it collapses: {} eigenvalues change sign between them as the loop nears the circle; not one branch point, none reported",
+                    s.branch,
+                    s.eta,
+                    s.family,
+                    p.lbar,
+                    q.lbar,
+                    ip.abs_diff(iq),
+                ));
+                continue;
+            }
             // Located on re-solved states (see the module docs).
             let mut sorted: Vec<&Levels> = s.levels.iter().collect();
             sorted.sort_by(|u, v| u.lbar.total_cmp(&v.lbar));
@@ -140,6 +155,25 @@ pub(super) fn branch_points(s: &SheetOut) -> (Vec<EnclosedEvent>, Vec<String>, V
         }
     }
     (events, notes, warnings)
+}
+
+/// The great circle `L̄ = m` where the index changes from `ip` to `iq` by more than one
+/// between two samples of sheet `s` at `a < b`, one of them the sheet's end within
+/// [`NEAR_CIRCLE`] of the circle that ends its branch's range, where the sheet collapses onto
+/// the `m`-fold great circle: several eigenvalues change sign between the two samples (the
+/// two-segment enclosed scene: index 0 or 1 up to `4·10⁻²` before `L̄ = 2` and `3`, index 7
+/// or 8 at `5·10⁻⁵` before them), so what lies in between is not one branch point, and the
+/// interpolated root of one eigenvalue would report a point that does not exist.
+fn collapse_jump(s: &SheetOut, a: f64, b: f64, ip: usize, iq: usize) -> Option<u32> {
+    if ip.abs_diff(iq) < 2 {
+        return None;
+    }
+    let ends = [s.points.first(), s.points.last()].map(|p| p.map(|p| p.lbar));
+    [a, b]
+        .into_iter()
+        .filter(|x| ends.iter().flatten().any(|e| (e - x).abs() < 1e-12))
+        .find_map(|x| circle_next_to(s, x))
+        .map(|m| m.round() as u32)
 }
 
 /// Distance within which a trace's stop is put down to a great circle `L̄ = m` ending its
