@@ -587,6 +587,29 @@ fn branch_points_change_the_index_by_one() {
     );
 }
 
+/// An index change is reported once: a branch point of a family does not lie, within the two
+/// estimates, on a fold of the same family across which the index changes between the same
+/// two values (a fold changes the index by one too; the samples on its two sides bracket
+/// both).
+#[test]
+fn no_fold_is_also_reported_as_a_branch_point() {
+    let d = whole_diagram();
+    let of = |k: EventKind| d.events.iter().filter(move |e| e.kind == k);
+    assert!(of(EventKind::Fold).count() > 0, "{:?}", d.events);
+    for f in of(EventKind::Fold) {
+        for b in of(EventKind::BranchPoint) {
+            let same = b.branch == f.branch
+                && b.family == f.family
+                && b.index_before.min(b.index_after) == f.index_before.min(f.index_after)
+                && b.index_before.max(b.index_after) == f.index_before.max(f.index_after);
+            assert!(
+                !same || (b.lbar - f.lbar).abs() > b.error_estimate + f.error_estimate,
+                "the fold {f:?} is also the branch point {b:?}"
+            );
+        }
+    }
+}
+
 /// Where a lifted-off trace stops, the diagram follows its last state by pseudo-arclength
 /// on the state's contact set: a fold found on both of the trace's finer levels is a special
 /// point of kind `fold`, across which the index changes by one (a simple fold: one

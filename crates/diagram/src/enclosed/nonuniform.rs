@@ -59,7 +59,9 @@ use super::nonuniform_descent::descend_unstable;
 use super::nonuniform_exchange::{interp, locate_crossing, lowest_at, mean_stiffness, CIRCLE};
 use super::nonuniform_seeds::seed_from_stiffness_path;
 use super::nonuniform_sheet::{surface_at, surface_energy, SheetOut};
-use super::nonuniform_special::{branch_points, classify_stops, fold_events, stop_folds};
+use super::nonuniform_special::{
+    branch_points, classify_stops, fold_events, stop_folds, unlocated_at_folds, SheetBranchPoints,
+};
 use super::trace::follow;
 use super::trace::step_options;
 use super::{
@@ -705,14 +707,16 @@ pub(super) fn nonuniform_diagram(
         threads,
         (0..outs.len()).collect(),
         &mut |_| {},
-        &mut |_: &(Vec<EnclosedEvent>, Vec<String>, Vec<String>)| {},
+        &mut |_: &SheetBranchPoints| {},
         |i, _| branch_points(&outs[i]),
     );
     let mut special: Vec<EnclosedEvent> = Vec::new();
-    for (ev, n, w) in found {
-        special.extend(ev);
-        notes.extend(n);
-        warnings.extend(w);
+    let mut unlocated = Vec::new();
+    for f in found {
+        special.extend(f.events);
+        notes.extend(f.notes);
+        warnings.extend(f.warnings);
+        unlocated.extend(f.unlocated);
     }
     timings.branch_points = tbp.elapsed().as_secs_f64();
     let tfold = Instant::now();
@@ -724,7 +728,12 @@ pub(super) fn nonuniform_diagram(
         |i, _| stop_folds(&outs[i]),
     );
     timings.folds = tfold.elapsed().as_secs_f64();
-    special.extend(fold_events(&outs, &folds));
+    let fold_points = fold_events(&outs, &folds);
+    let (at, n, w) = unlocated_at_folds(unlocated, &fold_points);
+    special.extend(at);
+    notes.extend(n);
+    warnings.extend(w);
+    special.extend(fold_points);
     let (stop_notes, stop_warnings) = classify_stops(&outs, &special, &folds);
     notes.extend(stop_notes);
     warnings.extend(stop_warnings);

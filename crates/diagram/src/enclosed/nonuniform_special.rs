@@ -15,16 +15,18 @@
 //!   location fails otherwise (a re-solve does not converge next to the singular point, or
 //!   a level's index does not change next to the pair), the root of the eigenvalue
 //!   interpolated linearly between the two states stands, with half the bracket as its
-//!   estimate, and a warning says why. (The re-solves
+//!   estimate, and a warning says why, unless a fold of the same family located from a
+//!   trace's stop lies in the bracket with the same index change ([`unlocated_at_folds`]):
+//!   then the fold changes the index, and a note says so. (The re-solves
 //!   take the tracer's Newton budget: with the default 80 iterations, one of the fifteen
 //!   points of the two-segment scene is located and the diagram costs 8 % more.)
 //! * **Stops.** A trace that stops where Newton fails under step halving is explained when
 //!   it stops next to the end of its branch's range (the `m`-fold great circle, where the
 //!   sheet collapses onto the wall: the collapse at `L̄ = m` is exact), where the family
 //!   folds (located from the stop by pseudo-arclength, `fold.rs`; a fold event, once per
-//!   fold), or next to a located branch point of its branch (a family that ends where it meets another: natural
-//!   parameter steps cannot pass the vertical tangent of a pitchfork's asymmetric side;
-//!   within the point's estimate plus `2e-2`).
+//!   fold), or next to a branch point or a fold of its branch (a family that ends where it
+//!   meets another: natural parameter steps cannot pass the vertical tangent of a
+//!   pitchfork's asymmetric side or a fold; within the point's estimate plus `2e-2`).
 //!   Other stops stay warnings.
 
 use rodloop_solver::SolverError;
@@ -50,10 +52,11 @@ fn eigenvalue(l: &Levels, lvl: usize, k: usize) -> Result<f64, SolverError> {
 /// Branch points of a lifted-off sheet (see the module docs), notes for index changes at a
 /// change of the contact set (the eigenvalue jumps, no eigenvalue crosses zero: no branch
 /// point), and warnings for index changes that were not located.
-pub(super) fn branch_points(s: &SheetOut) -> (Vec<EnclosedEvent>, Vec<String>, Vec<String>) {
+pub(super) fn branch_points(s: &SheetOut) -> SheetBranchPoints {
     let mut events = Vec::new();
     let mut warnings = Vec::new();
     let mut notes = Vec::new();
+    let mut unlocated = Vec::new();
     {
         let pts: Vec<_> = s
             .points
@@ -131,26 +134,94 @@ pub(super) fn branch_points(s: &SheetOut) -> (Vec<EnclosedEvent>, Vec<String>, V
                 Ok((x, 0.5 * (b.lbar - a.lbar).abs(), energy))
             });
             match located {
-                Ok((x, err, energy)) => {
-                    warnings.push(format!(
-                    "branch {} (eta = {}) family {}: the branch point between lbar = {:.6} and {:.6} is placed by interpolation only (to half the bracket): not located on re-solved states ({why})",
-                    s.branch, s.eta, s.family, p.lbar, q.lbar
-                    ));
-                    events.push(EnclosedEvent {
-                    kind: EventKind::BranchPoint,
-                    branch: s.branch,
-                    family: s.family,
-                    lbar: x,
-                    error_estimate: err,
-                    energy,
-                    index_before: ip,
-                    index_after: iq,
-                    })
-                }
+                Ok((x, err, energy)) => unlocated.push(Unlocated {
+                    warning: format!(
+                        "branch {} (eta = {}) family {}: the branch point between lbar = {:.6} and {:.6} is placed by interpolation only (to half the bracket): not located on re-solved states ({why})",
+                        s.branch, s.eta, s.family, p.lbar, q.lbar
+                    ),
+                    bracket: (p.lbar, q.lbar),
+                    event: EnclosedEvent {
+                        kind: EventKind::BranchPoint,
+                        branch: s.branch,
+                        family: s.family,
+                        lbar: x,
+                        error_estimate: err,
+                        energy,
+                        index_before: ip,
+                        index_after: iq,
+                    },
+                }),
                 Err(e) => warnings.push(format!(
                     "branch {} (eta = {}) family {}: the index changes from {} to {} between lbar = {:.6} and {:.6}, but the branch point was not located ({e})",
                     s.branch, s.eta, s.family, p.index, q.index, p.lbar, q.lbar
                 )),
+            }
+        }
+    }
+    SheetBranchPoints {
+        events,
+        notes,
+        warnings,
+        unlocated,
+    }
+}
+
+/// An index change of a sheet that was not located on re-solved states: the branch point
+/// placed by interpolating the crossing eigenvalue between the two samples `bracket`, with
+/// the warning that says so ([`unlocated_at_folds`] decides whether it is written).
+#[derive(Clone, Debug)]
+pub(super) struct Unlocated {
+    pub(super) event: EnclosedEvent,
+    pub(super) bracket: (f64, f64),
+    pub(super) warning: String,
+}
+
+/// What [`branch_points`] finds on one sheet: located branch points, notes, warnings, and
+/// the index changes placed by interpolation only.
+pub(super) struct SheetBranchPoints {
+    pub(super) events: Vec<EnclosedEvent>,
+    pub(super) notes: Vec<String>,
+    pub(super) warnings: Vec<String>,
+    pub(super) unlocated: Vec<Unlocated>,
+}
+
+/// The index changes placed by interpolation only (`unlocated`) against the folds located
+/// from the traces' stops (`folds`, [`fold_events`]): a fold of the same family inside the
+/// bracket (to its estimate) that changes the index between the same two values is what
+/// changes it (a fold changes the index by one; the two samples lie on its two sides), so no
+/// branch point is written there and a note names the fold; the others are written as
+/// branch points with their warnings. Returns `(events, notes, warnings)`.
+pub(super) fn unlocated_at_folds(
+    unlocated: Vec<Unlocated>,
+    folds: &[EnclosedEvent],
+) -> (Vec<EnclosedEvent>, Vec<String>, Vec<String>) {
+    let (mut events, mut notes, mut warnings) = (Vec::new(), Vec::new(), Vec::new());
+    for u in unlocated {
+        let v = &u.event;
+        let (lo, hi) = (u.bracket.0.min(u.bracket.1), u.bracket.0.max(u.bracket.1));
+        let same_change = |f: &EnclosedEvent| {
+            let mut a = [f.index_before, f.index_after];
+            let mut b = [v.index_before, v.index_after];
+            a.sort_unstable();
+            b.sort_unstable();
+            a == b
+        };
+        let fold = folds.iter().find(|f| {
+            f.kind == EventKind::Fold
+                && f.branch == v.branch
+                && f.family == v.family
+                && f.lbar >= lo - f.error_estimate
+                && f.lbar <= hi + f.error_estimate
+                && same_change(f)
+        });
+        match fold {
+            Some(f) => notes.push(format!(
+                "branch {} family {}: the index changes from {} to {} between lbar = {lo:.6} and {hi:.6} at the fold of the family at L̄ = {:.9} ± {:.1e} (located from a trace's stop), not at a branch point; none reported",
+                v.branch, v.family, v.index_before, v.index_after, f.lbar, f.error_estimate
+            )),
+            None => {
+                warnings.push(u.warning);
+                events.push(u.event);
             }
         }
     }
@@ -180,8 +251,8 @@ fn collapse_jump(s: &SheetOut, a: f64, b: f64, ip: usize, iq: usize) -> Option<u
 /// branch's range.
 const NEAR_CIRCLE: f64 = 5e-3;
 
-/// Distance, beyond a branch point's own estimate (half its bracket), within which a
-/// trace's stop is put down to it.
+/// Distance, beyond the own estimate of a branch point (half its bracket) or a fold, within
+/// which a trace's stop is put down to it.
 const NEAR_BRANCH_POINT: f64 = 2e-2;
 
 /// The great circle `L̄ = m` ending the range of sheet `s`'s branch (`m = η ± 1`) that a stop
@@ -277,7 +348,8 @@ pub(super) fn classify_stops(
             }
             let bp = events
                 .iter()
-                .filter(|v| v.kind == EventKind::BranchPoint && v.branch == s.branch)
+                .filter(|v| matches!(v.kind, EventKind::BranchPoint | EventKind::Fold))
+                .filter(|v| v.branch == s.branch)
                 .min_by(|u, v| {
                     (u.lbar - st.lbar)
                         .abs()
@@ -285,9 +357,10 @@ pub(super) fn classify_stops(
                 });
             match bp {
                 Some(v) if (v.lbar - st.lbar).abs() < v.error_estimate + NEAR_BRANCH_POINT => notes.push(format!(
-                    "{} — consistent with an end where this family meets another: {:.1e} from the branch point of branch {} family {} at L̄ = {:.6} ± {:.1e}",
+                    "{} — consistent with an end where this family meets another: {:.1e} from the {} of branch {} family {} at L̄ = {:.6} ± {:.1e}",
                     st.text,
                     (st.lbar - v.lbar).abs(),
+                    if v.kind == EventKind::Fold { "fold" } else { "branch point" },
                     v.branch,
                     v.family,
                     v.lbar,
