@@ -587,6 +587,60 @@ fn branch_points_change_the_index_by_one() {
     );
 }
 
+/// Every change of the index between two consecutive samples of a sheet is accounted for:
+/// by a branch point or a fold of its family within the bracket (to the event's estimate),
+/// or by a note or a warning that names the two samples (a change of the contact set, the
+/// collapse onto a great circle, a fold, or a branch point placed by interpolation).
+#[test]
+fn every_index_change_is_accounted_for() {
+    let d = whole_diagram();
+    let mut sheets: Vec<(u32, u32, u32)> = d
+        .points
+        .iter()
+        .map(|p| (p.branch, p.family, p.sheet))
+        .collect();
+    sheets.sort_unstable();
+    sheets.dedup();
+    let mut changes = 0;
+    for (branch, family, sheet) in sheets {
+        let mut s: Vec<_> = d
+            .points
+            .iter()
+            .filter(|p| {
+                (p.branch, p.family, p.sheet) == (branch, family, sheet)
+                    && p.source == PointSource::Model
+            })
+            .collect();
+        s.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
+        for w in s.windows(2) {
+            if w[0].index == w[1].index || w[1].lbar - w[0].lbar < 1e-12 {
+                continue;
+            }
+            changes += 1;
+            let event = d.events.iter().any(|e| {
+                matches!(e.kind, EventKind::BranchPoint | EventKind::Fold)
+                    && e.branch == branch
+                    && e.family == family
+                    && e.lbar > w[0].lbar - e.error_estimate
+                    && e.lbar < w[1].lbar + e.error_estimate
+            });
+            let named = format!("between lbar = {:.6} and {:.6}", w[0].lbar, w[1].lbar);
+            let said = d
+                .notes
+                .iter()
+                .chain(&d.warnings)
+                .any(|t| t.contains(&named) && t.contains(&format!("family {family}")));
+            assert!(
+                event || said,
+                "branch {branch} family {family}: the index change {} -> {} {named} is not accounted for",
+                w[0].index,
+                w[1].index
+            );
+        }
+    }
+    assert!(changes > 0);
+}
+
 /// An index change is reported once: a branch point of a family does not lie, within the two
 /// estimates, on a fold of the same family across which the index changes between the same
 /// two values (a fold changes the index by one too; the samples on its two sides bracket

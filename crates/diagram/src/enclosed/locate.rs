@@ -18,7 +18,9 @@
 //! The root of that eigenvalue is located by Brent's method
 //! ([`rodloop_continuation::roots::brent`]) on states re-solved at each trial `L̄`, each by
 //! natural-parameter steps from the nearest state already re-solved on the family (a failed
-//! step halved), so that every trial state lies on the family the bracket is taken on. This is done on two mesh
+//! step halved; where that walk fails, from the nearest one on the other side of the trial
+//! `L̄`, since next to a singular point Newton may converge from one side only), so that
+//! every trial state lies on the family the bracket is taken on. This is done on two mesh
 //! levels of the trace; the value is the finer level's root and its estimate the final
 //! bracket plus the distance between the two levels' roots (the discretisation error of the
 //! coarser one, which bounds the finer one's where the location converges at order ≥ 1).
@@ -218,11 +220,22 @@ pub(super) fn locate_on_level(
         if let Some(p) = solved.iter().find(|p| p.0 == x) {
             return Ok(p.2);
         }
-        let near = solved
-            .iter()
-            .min_by(|u, v| (u.0 - x).abs().total_cmp(&(v.0 - x).abs()))
-            .expect("the bracket's first end");
-        let s = walk_to(&near.1, near.0, x, opts)?;
+        // From the nearest re-solved state; where that walk fails (Newton does not converge
+        // next to the singular point), from the nearest one on the other side of `x`.
+        let nearest = |below: Option<bool>| {
+            solved
+                .iter()
+                .filter(|p| below.is_none_or(|b| (p.0 < x) == b))
+                .min_by(|u, v| (u.0 - x).abs().total_cmp(&(v.0 - x).abs()))
+        };
+        let near = nearest(None).expect("the bracket's first end");
+        let s = match walk_to(&near.1, near.0, x, opts) {
+            Ok(s) => s,
+            Err(e) => match nearest(Some(near.0 > x)) {
+                Some(other) => walk_to(&other.1, other.0, x, opts)?,
+                None => return Err(e),
+            },
+        };
         let v = eigen(&s, k)?;
         solved.push((x, s, v));
         let values: Vec<(f64, f64)> = solved.iter().map(|p| (p.0, p.2)).collect();
