@@ -48,6 +48,22 @@ pub(super) fn is_jump(e: &SolverError) -> bool {
     matches!(e, SolverError::InvalidInput(m) if m.starts_with(JUMPS))
 }
 
+/// Where the eigenvalue jumps ([`is_jump`]): the `L̄` of the jump and the half-width of its
+/// bracket (0 where the message gives none), as the message states them.
+pub(super) fn jump_at(e: &SolverError) -> Option<(f64, f64)> {
+    if !is_jump(e) {
+        return None;
+    }
+    let text = e.to_string();
+    let mut words = text.split("at lbar = ").nth(1)?.split_whitespace();
+    let x = words.next()?.parse().ok()?;
+    let w = match (words.next(), words.next()) {
+        (Some("±"), Some(w)) => w.parse().ok()?,
+        _ => 0.0,
+    };
+    Some((x, w))
+}
+
 /// Brent's relative bracket tolerance and iteration budget.
 const XTOL: f64 = 1e-10;
 const MAX_ITER: usize = 40;
@@ -405,6 +421,16 @@ mod tests {
             Err(RootError::Function(e)) => Err(e),
             Err(e) => Err(SolverError::InvalidInput(e.to_string())),
         }
+    }
+
+    #[test]
+    fn the_place_of_a_jump_is_read_from_its_error() {
+        let g = |x: f64| if x < 0.618 { -0.05 } else { 0.03 };
+        let e = brent_with_jump_check(g).unwrap_err();
+        let (x, w) = jump_at(&e).expect("a jump");
+        assert!((x - 0.618).abs() <= w + 1e-6, "{x} ± {w}: {e}");
+        assert!(w < 1e-2, "{w}");
+        assert_eq!(jump_at(&SolverError::InvalidInput("other".into())), None);
     }
 
     #[test]

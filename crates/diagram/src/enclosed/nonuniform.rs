@@ -712,11 +712,13 @@ pub(super) fn nonuniform_diagram(
     );
     let mut special: Vec<EnclosedEvent> = Vec::new();
     let mut unlocated = Vec::new();
+    let mut contact_changes = Vec::new();
     for f in found {
         special.extend(f.events);
         notes.extend(f.notes);
         warnings.extend(f.warnings);
         unlocated.extend(f.unlocated);
+        contact_changes.extend(f.contact_changes);
     }
     timings.branch_points = tbp.elapsed().as_secs_f64();
     let tfold = Instant::now();
@@ -734,7 +736,7 @@ pub(super) fn nonuniform_diagram(
     notes.extend(n);
     warnings.extend(w);
     special.extend(fold_points);
-    let (stop_notes, stop_warnings) = classify_stops(&outs, &special, &folds);
+    let (stop_notes, stop_warnings) = classify_stops(&outs, &special, &contact_changes, &folds);
     notes.extend(stop_notes);
     warnings.extend(stop_warnings);
     timings.lifted_off += tbp.elapsed().as_secs_f64();

@@ -29,15 +29,16 @@
 //!   folds (located from the stop by pseudo-arclength, `fold.rs`; a fold event, once per
 //!   fold), or next to a branch point or a fold of its branch (a family that ends where it
 //!   meets another: natural parameter steps cannot pass the vertical tangent of a
-//!   pitchfork's asymmetric side or a fold; within the point's estimate plus `2e-2`).
-//!   Other stops stay warnings.
+//!   pitchfork's asymmetric side or a fold; within the point's estimate plus `2e-2`), or
+//!   where the family's index changes at a change of its contact set located on re-solved
+//!   states (to that location's bracket). Other stops stay warnings.
 
 use rodloop_solver::enclosed::EnclosedOptions;
 use rodloop_solver::SolverError;
 
 use super::fold::{fold_at_stop, StopFold};
 use super::levels::Levels;
-use super::locate::{is_jump, locate};
+use super::locate::{is_jump, jump_at, locate};
 use super::nonuniform_sheet::SheetOut;
 use super::trace::TraceStop;
 use super::{EnclosedEvent, EventKind, PointSource};
@@ -61,6 +62,7 @@ pub(super) fn branch_points(s: &SheetOut) -> SheetBranchPoints {
     let mut warnings = Vec::new();
     let mut notes = Vec::new();
     let mut unlocated = Vec::new();
+    let mut contact_changes = Vec::new();
     {
         let pts: Vec<_> = s
             .points
@@ -105,6 +107,13 @@ pub(super) fn branch_points(s: &SheetOut) -> SheetBranchPoints {
                 let got = locate(&sorted, j, [1, 2], &EnclosedOptions::default());
                 if let Err(e) = &got {
                     if is_jump(e) {
+                        if let Some(at) = jump_at(e) {
+                            contact_changes.push(ContactChange {
+                                branch: s.branch,
+                                family: s.family,
+                                at,
+                            });
+                        }
                         notes.push(format!(
                             "branch {} (eta = {}) family {}: the index changes from {ip} to {iq} between lbar = {:.6} and {:.6} at a change of the contact set, not at a branch point ({e})",
                             s.branch, s.eta, s.family, p.lbar, q.lbar
@@ -167,7 +176,17 @@ pub(super) fn branch_points(s: &SheetOut) -> SheetBranchPoints {
         notes,
         warnings,
         unlocated,
+        contact_changes,
     }
+}
+
+/// An index change of a sheet located on re-solved states as a change of the contact set
+/// (the eigenvalue jumps; no branch point): at `L̄ = at.0 ± at.1`.
+#[derive(Clone, Debug)]
+pub(super) struct ContactChange {
+    pub(super) branch: u32,
+    pub(super) family: u32,
+    pub(super) at: (f64, f64),
 }
 
 /// An index change of a sheet that was not located on re-solved states: the branch point
@@ -187,6 +206,7 @@ pub(super) struct SheetBranchPoints {
     pub(super) notes: Vec<String>,
     pub(super) warnings: Vec<String>,
     pub(super) unlocated: Vec<Unlocated>,
+    pub(super) contact_changes: Vec<ContactChange>,
 }
 
 /// The index changes placed by interpolation only (`unlocated`) against the folds located
@@ -316,6 +336,7 @@ pub(super) fn fold_events(outs: &[SheetOut], folds: &[Vec<StopFold>]) -> Vec<Enc
 pub(super) fn classify_stops(
     outs: &[SheetOut],
     events: &[EnclosedEvent],
+    contact_changes: &[ContactChange],
     folds: &[Vec<StopFold>],
 ) -> (Vec<String>, Vec<String>) {
     let (mut notes, mut warnings) = (Vec::new(), Vec::new());
@@ -370,7 +391,23 @@ pub(super) fn classify_stops(
                     v.lbar,
                     v.error_estimate
                 )),
-                _ => warnings.push(st.text.clone()),
+                _ => {
+                    // A stop where the family's index changes at a change of its contact set
+                    // (to the located change's bracket): its Hessian on the tangent space
+                    // changes there, and the walk does not get past it.
+                    let at_change = contact_changes.iter().find(|c| {
+                        c.branch == s.branch
+                            && c.family == s.family
+                            && (c.at.0 - st.lbar).abs() <= c.at.1 + 1e-6
+                    });
+                    match at_change {
+                        Some(c) => notes.push(format!(
+                            "{} — explained: the index of the family changes at a change of its contact set at L̄ = {:.6} ± {:.0e}, located on re-solved states (no eigenvalue crosses zero)",
+                            st.text, c.at.0, c.at.1
+                        )),
+                        None => warnings.push(st.text.clone()),
+                    }
+                }
             }
         }
     }
