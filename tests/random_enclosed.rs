@@ -206,3 +206,43 @@ fn solve_from_its_own_state_file_returns_that_state() {
     );
     assert_eq!(first["index"], again["index"], "{first}\n{again}");
 }
+
+/// `solve` returns the branch's lowest local minimum at every accuracy: on the second scene
+/// at `L̄ = 1.45` (branch 2) the minimum has no converged state on 64 cells, the `N/2` level
+/// of the high accuracy's 128-cell ladder, so no mesh of that accuracy gives it; `high`
+/// then reports it from the default accuracy's mesh and says so, the same state as `fast`
+/// and `default` within the estimates.
+#[test]
+fn solve_gives_the_same_minimum_at_every_accuracy() {
+    let (dir, sc, text) = scene_file("random-enclosed-accuracies", 2, 1.0, 2.6);
+    let run = |acc: &str| {
+        let out = dir.join(acc);
+        rodloop_ok(&[
+            "solve",
+            "--scene",
+            sc.to_str().unwrap(),
+            "--lbar",
+            "1.45",
+            "--branch",
+            "2",
+            "--accuracy",
+            acc,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        read_json(&out.join("summary.json"))
+    };
+    let f = |s: &serde_json::Value, k: &str| s[k].as_f64().expect("a number");
+    let states: Vec<_> = ["fast", "default", "high"].into_iter().map(run).collect();
+    for s in &states {
+        assert_eq!(s["index"], 0, "{s}\n{text}");
+    }
+    for s in &states[1..] {
+        let (e0, d0) = (f(&states[0], "energy"), f(&states[0], "error_estimate"));
+        let (e, d) = (f(s, "energy"), f(s, "error_estimate"));
+        assert!(
+            (e - e0).abs() <= d + d0,
+            "{e} ± {d} against {e0} ± {d0}\n{text}"
+        );
+    }
+}
