@@ -10,7 +10,7 @@ mod common;
 
 use common::{col, read_csv, read_json, rodloop_ok, tmp, Lcg};
 use std::f64::consts::PI;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// A two-segment enclosed scene: `D1/D0` in 0.2–0.8, the soft segment 0.2–0.6 of the loop at
 /// a random place, `γ` in 20–100, on `lo ≤ L̄ ≤ hi` (`R = 1`, `D0 = 1`).
@@ -37,6 +37,26 @@ fn scene_file(name: &str, seed: u64, lo: f64, hi: f64) -> (PathBuf, PathBuf, Str
     let sc = dir.join("scene.toml");
     std::fs::write(&sc, &text).unwrap();
     (dir, sc, text)
+}
+
+/// `rodloop solve --lbar 1.45 --branch 2` on the scene file `sc` with `extra` arguments,
+/// written to `dir/out`: its `summary.json`.
+fn solve_branch_2(dir: &Path, sc: &Path, out: &str, extra: &[&str]) -> serde_json::Value {
+    let out = dir.join(out);
+    let mut args = vec![
+        "solve",
+        "--scene",
+        sc.to_str().unwrap(),
+        "--lbar",
+        "1.45",
+        "--branch",
+        "2",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    rodloop_ok(&args);
+    read_json(&out.join("summary.json"))
 }
 
 /// The numbers of column `name` of a state file.
@@ -177,26 +197,9 @@ fn random_enclosed_diagram_where_solve_must_continue_a_minimum_holds() {
 #[test]
 fn solve_from_its_own_state_file_returns_that_state() {
     let (dir, sc, text) = scene_file("random-enclosed-from", 2, 1.0, 2.6);
-    let run = |out: &str, extra: &[&str]| {
-        let out = dir.join(out);
-        let mut args = vec![
-            "solve",
-            "--scene",
-            sc.to_str().unwrap(),
-            "--lbar",
-            "1.45",
-            "--branch",
-            "2",
-            "--out",
-            out.to_str().unwrap(),
-        ];
-        args.extend_from_slice(extra);
-        rodloop_ok(&args);
-        read_json(&out.join("summary.json"))
-    };
-    let first = run("first", &[]);
+    let first = solve_branch_2(&dir, &sc, "first", &[]);
     let file = dir.join("first").join("config.csv");
-    let again = run("again", &["--from", file.to_str().unwrap()]);
+    let again = solve_branch_2(&dir, &sc, "again", &["--from", file.to_str().unwrap()]);
     let f = |s: &serde_json::Value, k: &str| s[k].as_f64().expect("a number");
     let (e1, d1) = (f(&first, "energy"), f(&first, "error_estimate"));
     let (e2, d2) = (f(&again, "energy"), f(&again, "error_estimate"));
@@ -215,25 +218,11 @@ fn solve_from_its_own_state_file_returns_that_state() {
 #[test]
 fn solve_gives_the_same_minimum_at_every_accuracy() {
     let (dir, sc, text) = scene_file("random-enclosed-accuracies", 2, 1.0, 2.6);
-    let run = |acc: &str| {
-        let out = dir.join(acc);
-        rodloop_ok(&[
-            "solve",
-            "--scene",
-            sc.to_str().unwrap(),
-            "--lbar",
-            "1.45",
-            "--branch",
-            "2",
-            "--accuracy",
-            acc,
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        read_json(&out.join("summary.json"))
-    };
     let f = |s: &serde_json::Value, k: &str| s[k].as_f64().expect("a number");
-    let states: Vec<_> = ["fast", "default", "high"].into_iter().map(run).collect();
+    let states: Vec<_> = ["fast", "default", "high"]
+        .into_iter()
+        .map(|acc| solve_branch_2(&dir, &sc, acc, &["--accuracy", acc]))
+        .collect();
     for s in &states {
         assert_eq!(s["index"], 0, "{s}\n{text}");
     }

@@ -8,8 +8,8 @@ use common::sharp;
 use std::sync::OnceLock;
 
 use rodloop_diagram::enclosed::{
-    enclosed_diagram, nonuniform_cells, EnclosedDiagram, EnclosedDiagramOptions, EventKind,
-    PointSource,
+    enclosed_diagram, nonuniform_cells, EnclosedDiagram, EnclosedDiagramOptions, EnclosedPoint,
+    EventKind, PointSource,
 };
 use rodloop_exact::diagram::CriticalKind;
 use rodloop_exact::eta_of_branch;
@@ -528,6 +528,32 @@ fn branch_one_family_one_is_traced_past_its_branch_point() {
     }
 }
 
+/// A sheet of a diagram, `(branch, family, sheet)`, with its samples.
+type SheetSamples<'a> = ((u32, u32, u32), Vec<&'a EnclosedPoint>);
+
+/// The samples of the 3-D model of each sheet of `d`, in increasing `L̄`.
+fn model_samples_by_sheet(d: &EnclosedDiagram) -> Vec<SheetSamples<'_>> {
+    let mut sheets: Vec<(u32, u32, u32)> = d
+        .points
+        .iter()
+        .map(|p| (p.branch, p.family, p.sheet))
+        .collect();
+    sheets.sort_unstable();
+    sheets.dedup();
+    sheets
+        .into_iter()
+        .map(|key| {
+            let mut s: Vec<&EnclosedPoint> = d
+                .points
+                .iter()
+                .filter(|p| (p.branch, p.family, p.sheet) == key && p.source == PointSource::Model)
+                .collect();
+            s.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
+            (key, s)
+        })
+        .collect()
+}
+
 /// A branch point of a lifted-off sheet (a pitchfork or a transcritical point: one eigenvalue
 /// through zero) changes the index by one. Next to the great circles `L̄ = 2, 3`, where sheets
 /// collapse onto the circle, a sheet's last two samples differ in index by more than one: no
@@ -545,23 +571,7 @@ fn branch_points_change_the_index_by_one() {
         assert_eq!(b.index_before.abs_diff(b.index_after), 1, "{b:?}");
     }
     let mut jumps = 0;
-    let mut sheets: Vec<(u32, u32, u32)> = d
-        .points
-        .iter()
-        .map(|p| (p.branch, p.family, p.sheet))
-        .collect();
-    sheets.sort_unstable();
-    sheets.dedup();
-    for (branch, family, sheet) in sheets {
-        let mut s: Vec<_> = d
-            .points
-            .iter()
-            .filter(|p| {
-                (p.branch, p.family, p.sheet) == (branch, family, sheet)
-                    && p.source == PointSource::Model
-            })
-            .collect();
-        s.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
+    for ((branch, family, _), s) in model_samples_by_sheet(d) {
         for w in s.windows(2) {
             let next_to_circle = (w[1].lbar - w[1].lbar.round()).abs() < 5e-3;
             if w[0].index.abs_diff(w[1].index) < 2 || !next_to_circle {
@@ -594,24 +604,8 @@ fn branch_points_change_the_index_by_one() {
 #[test]
 fn every_index_change_is_accounted_for() {
     let d = whole_diagram();
-    let mut sheets: Vec<(u32, u32, u32)> = d
-        .points
-        .iter()
-        .map(|p| (p.branch, p.family, p.sheet))
-        .collect();
-    sheets.sort_unstable();
-    sheets.dedup();
     let mut changes = 0;
-    for (branch, family, sheet) in sheets {
-        let mut s: Vec<_> = d
-            .points
-            .iter()
-            .filter(|p| {
-                (p.branch, p.family, p.sheet) == (branch, family, sheet)
-                    && p.source == PointSource::Model
-            })
-            .collect();
-        s.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
+    for ((branch, family, _), s) in model_samples_by_sheet(d) {
         for w in s.windows(2) {
             if w[0].index == w[1].index || w[1].lbar - w[0].lbar < 1e-12 {
                 continue;
