@@ -235,3 +235,41 @@ fn solve_gives_the_same_minimum_at_every_accuracy() {
         );
     }
 }
+
+/// The estimate `solve` prints bounds the error of a lifted-off state where its levels
+/// `N/4, N/2, N` converge irregularly: on the sixth scene (`D1/D0 = 0.289` on
+/// `0.502 ≤ s/L ≤ 0.921`, `γ = 43.3`), branch 1 at `L̄ = 1.6`, the three-level estimate alone is 1.2e-6 against an error of 2.9e-6;
+/// the reference is the same state carried by `rodloop converge` up a ladder to 4096 cells.
+#[test]
+fn solve_estimate_bounds_the_error_of_an_irregular_ladder() {
+    let (dir, sc, text) = scene_file("random-enclosed-estimate", 6, 1.0, 2.6);
+    let run = |cmd: &str, out: &str| {
+        let out = dir.join(out);
+        rodloop_ok(&[
+            cmd,
+            "--scene",
+            sc.to_str().unwrap(),
+            "--lbar",
+            "1.6",
+            "--branch",
+            "1",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        out
+    };
+    let s = read_json(&run("solve", "solve").join("summary.json"));
+    let (e, est) = (
+        s["energy"].as_f64().unwrap(),
+        s["error_estimate"].as_f64().unwrap(),
+    );
+    let (h, rows) = read_csv(&run("converge", "converge").join("converge.csv"));
+    let last = rows.last().expect("a rung");
+    let cells: usize = last[col(&h, "cells")].parse().unwrap();
+    let reference: f64 = last[col(&h, "energy")].parse().unwrap();
+    assert!(cells >= 2048, "the ladder stops at {cells} cells\n{text}");
+    assert!(
+        (e - reference).abs() <= est,
+        "solve: {e} ± {est}; converged on {cells} cells: {reference}\n{text}"
+    );
+}

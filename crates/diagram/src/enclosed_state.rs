@@ -18,8 +18,8 @@ use rodloop_solver::enclosed::descent::{
     descend_branch, enclosed_periods, solve_branch_descended, solve_branch_lowest, DescendedSolve,
 };
 use rodloop_solver::enclosed::{
-    enclosed_cells, free_circle, solve_branch, solve_enclosed, solve_levels, start_from_shape,
-    EnclosedOptions, EnclosedState, SavedShape, SurfaceSource,
+    enclosed_cells, finer_check, free_circle, solve_branch, solve_enclosed, solve_levels,
+    start_from_shape, EnclosedOptions, EnclosedState, SavedShape, SurfaceSource,
 };
 use rodloop_solver::enclosed::{IntoWall, Wall};
 use rodloop_solver::{solve_robust, Accuracy, SolveOptions, StartShape, Stiffness};
@@ -443,10 +443,11 @@ pub fn solve_state_with(
             ),
         )
     } else {
+        let checked = lifted_check(&b, stiffness, &opts);
         (
-            (b.energy, b.energy_error),
+            (b.energy, checked.map_or(b.energy_error, |c| c.0.max(b.energy_error))),
             format!(
-                "3-D enclosed model, N = {cells} cells (semismooth Newton from {}, lambda_min = {lam_min:.6}); {}",
+                "3-D enclosed model, N = {cells} cells (semismooth Newton from {}, lambda_min = {lam_min:.6}); {}{}",
                 if lower_minimum {
                     "the start of the route named below"
                 } else if b.homotopy {
@@ -454,7 +455,18 @@ pub fn solve_state_with(
                 } else {
                     "the surface loop"
                 },
-                b.estimate_method()
+                b.estimate_method(),
+                match checked {
+                    Some((c, e2)) if c > b.energy_error => format!(
+                        ", widened to {c:.1e} by the check on N = {} cells (E R/(pi D0) = {e2:.10}: the distance to it plus its own estimate from N/2, N, 2N)",
+                        2 * cells
+                    ),
+                    Some(_) => format!(
+                        "; checked on N = {} cells (the distance to it plus its own estimate is within the estimate)",
+                        2 * cells
+                    ),
+                    None => String::new(),
+                }
             ),
         )
     };
@@ -489,6 +501,19 @@ pub fn solve_state_with(
         method,
         attached_loop,
     })
+}
+
+/// [`finer_check`] of a two-segment rod's lifted-off state `b`: `None` for a uniform rod
+/// (its ladders are studied in `converge`) or an attached state.
+fn lifted_check(
+    b: &BranchSolve,
+    stiffness: &Stiffness,
+    opts: &EnclosedOptions,
+) -> Option<(f64, f64)> {
+    if stiffness.is_uniform() || b.fine.contact(1e-9).ok()?.fraction >= 1.0 {
+        return None;
+    }
+    finer_check(&b.fine, b.coarse.energy(), opts)
 }
 
 /// Where the lowest state of a two-segment rod's branch `eta` that a solve finds (`found`,

@@ -390,8 +390,10 @@ pub struct EnclosedTimings {
     pub descent: f64,
     /// ... the branch points of the lifted-off sheets ...
     pub branch_points: f64,
-    /// ... and the folds at the traces' stops.
+    /// ... the folds at the traces' stops ...
     pub folds: f64,
+    /// ... and the check of the lifted-off rows' estimates on twice their cells.
+    pub row_checks: f64,
 }
 
 /// A stage of [`enclosed_diagram_with`] for progress reports (sent on the calling thread).

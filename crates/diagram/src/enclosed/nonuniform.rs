@@ -58,7 +58,7 @@ use super::levels::Levels;
 use super::nonuniform_descent::descend_unstable;
 use super::nonuniform_exchange::{interp, locate_crossing, lowest_at, mean_stiffness, CIRCLE};
 use super::nonuniform_seeds::seed_from_stiffness_path;
-use super::nonuniform_sheet::{surface_at, surface_energy, SheetOut};
+use super::nonuniform_sheet::{check_rows_on_finer, surface_at, surface_energy, SheetOut};
 use super::nonuniform_special::{
     branch_points, classify_stops, fold_events, stop_folds, unlocated_at_folds, SheetBranchPoints,
 };
@@ -742,6 +742,19 @@ pub(super) fn nonuniform_diagram(
     timings.lifted_off += tbp.elapsed().as_secs_f64();
     progress(EnclosedProgress::Done("branch points located".into()));
     let surf: Vec<&TracedBranch> = idx.iter().map(|&i| &sheets[i]).collect();
+    // 2d. Each lifted-off row's estimate checked on twice its cells.
+    let tcheck = Instant::now();
+    let (widened, failed) = check_rows_on_finer(&mut outs, threads);
+    notes.push(format!(
+        "the estimates of the lifted-off rows that touch the wall are checked on twice their cells (the distance to that state plus its own estimate from N/2, N, 2N): {widened} widened to that bound{}",
+        if failed > 0 {
+            format!(", {failed} not checked (the re-solve on 2N cells failed)")
+        } else {
+            String::new()
+        }
+    ));
+    timings.row_checks = tcheck.elapsed().as_secs_f64();
+    timings.lifted_off += timings.row_checks;
     // 3. Exchanges of the lowest branch.
     let tc = Instant::now();
     let mut grid: Vec<f64> = outs

@@ -4,12 +4,13 @@
 //! diagram's route, its exchanges, special points and descents all build on these.
 
 use rodloop_continuation::natural::{self, Halted, StepSettings};
-use rodloop_solver::enclosed::EnclosedOptions;
+use rodloop_solver::enclosed::{finer_check, EnclosedOptions};
 use rodloop_solver::{solve_from_state, Equilibrium, SolverError};
 
 use super::levels::Levels;
 use super::trace::{step_options, TraceStop};
-use super::{EnclosedEvent, EnclosedPoint};
+use super::{EnclosedEvent, EnclosedPoint, PointSource};
+use crate::parallel::run_parallel;
 use crate::states::{half_resolution, newton_options};
 use crate::types::TracedBranch;
 use crate::DiagramOptions;
@@ -183,4 +184,48 @@ impl SheetOut {
             list.join(", ")
         ))
     }
+}
+
+/// The rows of the sheets `outs` that have lifted off and touch the wall, each checked on
+/// twice its cells ([`finer_check`]: the state prolonged and re-solved, the distance to it
+/// plus its own estimate), on `threads` threads: a row's estimate is widened to that bound
+/// where it is larger (the three-level estimate of `N/4, N/2, N` is short where those levels
+/// converge irregularly). Returns how many rows were widened and how many checks failed.
+pub(super) fn check_rows_on_finer(outs: &mut [SheetOut], threads: usize) -> (usize, usize) {
+    let mut items = Vec::new();
+    for (i, s) in outs.iter().enumerate() {
+        for (j, p) in s.points.iter().enumerate() {
+            let touches = p.contact_fraction > 0.0 && !p.attached;
+            if p.source == PointSource::Model && touches {
+                items.push((i, j));
+            }
+        }
+    }
+    let opts = EnclosedOptions::default();
+    let found = {
+        let outs = &*outs;
+        run_parallel(threads, items, &mut |_| {}, &mut |_| {}, |(i, j), _| {
+            let p = &outs[i].points[j];
+            let bound = outs[i]
+                .levels
+                .iter()
+                .find(|l| (l.lbar - p.lbar).abs() < 1e-12)
+                .and_then(|l| finer_check(&l.states[2], l.states[1].energy(), &opts))
+                .map(|c| c.0);
+            (i, j, bound)
+        })
+    };
+    let (mut widened, mut failed) = (0, 0);
+    for (i, j, bound) in found {
+        let p = &mut outs[i].points[j];
+        match bound {
+            Some(b) if b > p.energy_error => {
+                p.energy_error = b;
+                widened += 1;
+            }
+            Some(_) => {}
+            None => failed += 1,
+        }
+    }
+    (widened, failed)
 }

@@ -53,9 +53,9 @@ pub mod wall;
 
 pub use crate::accuracy::{enclosed_cells, enclosed_solve_cells, nonuniform_cells};
 pub use branch::{
-    detached_intervals, finest_energy, four_level_estimate, point_like_contact, solve_branch,
-    solve_levels, three_level_estimate, BranchSolve, SurfaceSource, LIFTED_OFF_MAX_ORDER,
-    POINT_CONTACT_CELLS,
+    detached_intervals, finer_check, finest_energy, four_level_estimate, point_like_contact,
+    solve_branch, solve_levels, three_level_estimate, BranchSolve, SurfaceSource,
+    LIFTED_OFF_MAX_ORDER, POINT_CONTACT_CELLS,
 };
 pub use from_shape::{start_from_shape, SavedShape};
 pub use model::{Complementarity, EnclosedModel, Gauge};
