@@ -8,6 +8,11 @@
 //! energy reported is the surface one (exact layer for uniform rods) and the 3-D enclosed
 //! model re-solves it as a check. Where `λ < 0` somewhere, the 3-D model's semismooth
 //! Newton finds the lift-off.
+//!
+//! The file is over 600 lines because it is one pipeline: the start, the search over the
+//! meshes of the accuracy levels, the descent, the check on twice the cells and the report,
+//! each step reading what the ones before found (the routes tried, the meshes passed over),
+//! which the report names.
 
 use std::sync::Arc;
 
