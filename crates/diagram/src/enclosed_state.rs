@@ -508,14 +508,16 @@ pub fn solve_state_with(
     })
 }
 
-/// [`finer_check`] of a two-segment rod's lifted-off state `b`: `None` for a uniform rod
-/// (its ladders are studied in `converge`) or an attached state.
+/// [`finer_check`] of a two-segment rod's lifted-off state `b` that touches the wall, as the
+/// diagram checks its rows: `None` for a uniform rod (its ladders are studied in
+/// `converge`), an attached state or a free loop.
 fn lifted_check(
     b: &BranchSolve,
     stiffness: &Stiffness,
     opts: &EnclosedOptions,
 ) -> Option<(f64, f64)> {
-    if stiffness.is_uniform() || b.fine.contact(1e-9).ok()?.fraction >= 1.0 {
+    let fraction = b.fine.contact(1e-9).ok()?.fraction;
+    if stiffness.is_uniform() || fraction >= 1.0 || fraction == 0.0 {
         return None;
     }
     finer_check(&b.fine, b.coarse.energy(), opts)
