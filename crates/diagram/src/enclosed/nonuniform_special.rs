@@ -22,7 +22,7 @@
 //!   (30, given up after 6 that do not halve the residual): next to a singular point Newton
 //!   converges slowly, and with the tracer's budget three index changes of the two-segment
 //!   scene that are changes of the contact set (located to `2·10⁻⁸`–`10⁻⁶`) stay
-//!   interpolated branch points, for 1.8 s less of the diagram's 16 s.
+//!   interpolated branch points, for 1.8 s less wall time of that diagram.
 //! * **Stops.** A trace that stops where Newton fails under step halving is explained when
 //!   it stops next to the end of its branch's range (the `m`-fold great circle, where the
 //!   sheet collapses onto the wall: the collapse at `L̄ = m` is exact), where the family
@@ -56,7 +56,9 @@ fn eigenvalue(l: &Levels, lvl: usize, k: usize) -> Result<f64, SolverError> {
 
 /// Branch points of a lifted-off sheet (see the module docs), notes for index changes at a
 /// change of the contact set (the eigenvalue jumps, no eigenvalue crosses zero: no branch
-/// point), and warnings for index changes that were not located.
+/// point) with where they were located, notes for the collapse onto a great circle, and the
+/// index changes that were not located (placed by interpolation; [`unlocated_at_folds`]
+/// decides whether they are written).
 pub(super) fn branch_points(s: &SheetOut) -> SheetBranchPoints {
     let mut events = Vec::new();
     let mut warnings = Vec::new();
