@@ -90,6 +90,12 @@ fn check_scene(seed: u64, lo: f64, hi: f64) {
             assert_eq!(index, 0, "a lowest state of index > 0: {what}");
         }
         let file = get(r, "state_file");
+        if get(r, "lowest") == "1" {
+            assert!(
+                !file.is_empty(),
+                "a lowest state without a state file: {what}"
+            );
+        }
         if file.is_empty() {
             continue;
         }
@@ -126,13 +132,25 @@ fn check_scene(seed: u64, lo: f64, hi: f64) {
             "the loop does not close: chord {chord}, arc {}: {what}",
             length - s[n - 1]
         );
-        // The row's energy from the file: (R/π D0) Σ w ½ D κ².
+        // The row's energy from the file: (R/π D0) Σ w ½ D κ². A 3-D state's weights are
+        // its model's quadrature, so the sum is the row's own energy, within its estimate.
+        // An attached state's file samples its surface loop (every row a node, uniform
+        // weights) with `κ_g` from the moment, a second discretisation of the state: the sum
+        // is held to what `diagram` verifies, `ESTIMATES` times the estimate plus the
+        // periodic trapezoid's own error (the sum over every other point).
         let e: f64 = get(r, "energy").parse().unwrap();
         let de: f64 = get(r, "energy_error").parse().unwrap();
-        let from_file: f64 = (0..n).map(|i| w[i] * 0.5 * d[i] * k[i] * k[i]).sum::<f64>() / PI;
+        let density = |i: usize| 0.5 * d[i] * k[i] * k[i] / PI;
+        let from_file: f64 = (0..n).map(|i| w[i] * density(i)).sum();
+        let tolerance = if node.iter().all(|&v| v == 1.0) {
+            let every_other: f64 = (0..n).step_by(2).map(|i| 2.0 * w[i] * density(i)).sum();
+            rodloop_diagram::ESTIMATES * de + (from_file - every_other).abs() + 1e-9 * e
+        } else {
+            de + 1e-9 * e
+        };
         assert!(
-            (from_file - e).abs() <= de + 1e-9 * e,
-            "file energy {from_file} against the row's {e} ± {de}: {what}"
+            (from_file - e).abs() <= tolerance,
+            "file energy {from_file} against the row's {e} ± {de} (allowed {tolerance:.2e}): {what}"
         );
     }
     assert!(files > 0, "no state files: {text}");
@@ -188,6 +206,56 @@ fn random_enclosed_diagram_through_a_great_circle_holds_from_its_files() {
 #[test]
 fn random_enclosed_diagram_where_solve_must_continue_a_minimum_holds() {
     check_scene(3, 1.0, 2.6);
+}
+
+/// `D1/D0 = 0.745` on `0.099 ≤ s/L ≤ 0.623`, `γ = 31.5`, where the lowest states are
+/// attached loops of branch 1 on 44 cells: the profile of that resolution (`κ_g` from the
+/// moment, a second discretisation) misses the row's energy by several of its estimates, so
+/// each file samples the state re-solved on more cells.
+#[test]
+fn random_enclosed_diagram_of_attached_lowest_states_holds_from_its_files() {
+    check_scene(14, 2.45, 2.6);
+}
+
+/// `solve` writes the attached lowest state of the scene above (branch 1 at `L̄ = 2.6`) as a
+/// file whose energy, recomputed from its points by their weights, is the reported one
+/// within the tolerance `summary.json` states, and whose moment has the branch's periods.
+#[test]
+fn solve_writes_an_attached_two_segment_state_that_holds_its_energy() {
+    let (dir, sc, text) = scene_file("random-enclosed-attached-solve", 14, 2.45, 2.6);
+    let out = dir.join("out");
+    rodloop_ok(&[
+        "solve",
+        "--scene",
+        sc.to_str().unwrap(),
+        "--lbar",
+        "2.6",
+        "--branch",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let summary = read_json(&out.join("summary.json"));
+    assert_eq!(summary["attached"], true, "{summary}\n{text}");
+    assert_eq!(summary["identified_eta"], 2, "{summary}");
+    let e = summary["energy"].as_f64().unwrap();
+    let tol = summary["verification"]["energy_tolerance"]
+        .as_f64()
+        .unwrap();
+    let (sh, srows) = read_csv(&out.join("config.csv"));
+    let (w, d, k) = (
+        column(&sh, &srows, "weight"),
+        column(&sh, &srows, "D"),
+        column(&sh, &srows, "kappa"),
+    );
+    let from_file: f64 = (0..w.len())
+        .map(|i| w[i] * 0.5 * d[i] * k[i] * k[i])
+        .sum::<f64>()
+        / PI;
+    assert!(
+        (from_file - e).abs() <= tol,
+        "file energy {from_file} against the reported {e} within {tol}\n{text}"
+    );
 }
 
 /// `solve --from` the state file `solve` wrote, at the same length, returns the same state:

@@ -16,7 +16,7 @@
 
 use std::sync::Arc;
 
-use rodloop_exact::{eta_of_branch, paper_branch_loop};
+use rodloop_exact::{eta_of_branch, paper_branch_loop, ExactLoop};
 use rodloop_solver::accuracy::enclosed_scene_cells;
 use rodloop_solver::enclosed::branch::{solve_levels_from_fine, BranchSolve};
 use rodloop_solver::enclosed::descent::{
@@ -27,7 +27,7 @@ use rodloop_solver::enclosed::{
     start_from_shape, EnclosedOptions, EnclosedState, SavedShape, SurfaceSource,
 };
 use rodloop_solver::enclosed::{IntoWall, Wall};
-use rodloop_solver::{solve_robust, Accuracy, SolveOptions, StartShape, Stiffness};
+use rodloop_solver::{solve_robust, Accuracy, Equilibrium, SolveOptions, StartShape, Stiffness};
 
 use crate::DiagramError;
 
@@ -50,10 +50,34 @@ pub struct EnclosedResult {
     pub method: String,
     /// The 3-D model's own energy (and estimate).
     pub model_energy: (f64, f64),
-    /// Where the energy reported is the surface loop's (attached): that loop and the number
-    /// of points its state file samples (uniform in arclength, at least three per cell of the
-    /// solve's own resolution). `None`: the file holds [`EnclosedResult::state`].
-    pub attached_loop: Option<(SurfaceSource, usize)>,
+    /// Where the energy reported is the surface loop's (attached): that loop as its state
+    /// file holds it. `None`: the file holds [`EnclosedResult::state`].
+    pub attached_loop: Option<AttachedLoop>,
+}
+
+/// The surface loop an attached enclosed state's file holds.
+#[derive(Clone, Debug)]
+pub enum AttachedLoop {
+    /// The exact loop of a uniform rod and the number of points its file samples (uniform in
+    /// arclength, at least three per cell of the solve's own resolution).
+    Exact(ExactLoop, usize),
+    /// A two-segment rod's numerical surface loop as its file holds it, verified against the
+    /// reported energy by the routine that verifies every traced surface state
+    /// ([`crate::states::verify_refining`]): where the profile of the solve's resolution does
+    /// not reproduce the energy within its estimate (`κ_g = 𝓜·n/D` is a second `O(h⁴)`
+    /// discretisation of the state), the file samples the state re-solved on `2N`, `4N`, ….
+    Numeric(Box<crate::StateFile>),
+}
+
+/// [`AttachedLoop::Numeric`] of the surface loop `eq` reported with `energy`: its file
+/// verified by [`crate::states::verify_refining`] (the claim kept: `energy` within
+/// [`crate::ESTIMATES`] times its estimate), the one check of every surface state's file.
+pub fn attached_file(
+    eq: &Equilibrium,
+    energy: (f64, f64),
+) -> Result<AttachedLoop, rodloop_solver::SolverError> {
+    crate::states::verify_refining(eq, energy.0, Some(energy.1), crate::states::Ladder::Keep)
+        .map(|f| AttachedLoop::Numeric(Box::new(f)))
 }
 
 /// What [`verify_written`] measured.
@@ -110,14 +134,16 @@ pub fn attached_rows(
 /// its error estimate (the energy is that of the finest level, or the surface loop's):
 /// a 3-D state by [`rodloop_solver::verify_enclosed`] (closed, nodes inside the ball, Gauss
 /// points within their cells' reach, energy by the file's quadrature weights, branch `eta`);
-/// a numerical surface loop by [`rodloop_solver::verify_state`] on its written samples; an
-/// exact surface loop by the periodic trapezoid on its samples, within that rule's own error
+/// a numerical surface loop's file ([`AttachedLoop::Numeric`], verified when the result was
+/// built) by the periodic trapezoid on its written samples again and the periods of its
+/// moment; an exact surface loop by the periodic trapezoid on its samples, within that rule's own error
 /// `|T_h − T_2h|` (the loop is exact, its estimate 0).
 pub fn verify_written(
     res: &EnclosedResult,
     eta: Option<u32>,
 ) -> Result<WrittenCheck, DiagramError> {
-    use rodloop_solver::{verify_enclosed, verify_state, Claim};
+    use rodloop_solver::identify::identify_profile;
+    use rodloop_solver::{verify_enclosed, Claim};
     let claim = Claim {
         energy: res.energy.0,
         energy_error: crate::ESTIMATES * res.energy.1,
@@ -133,19 +159,39 @@ pub fn verify_written(
                 identified_eta: v.eta,
             })
         }
-        Some((SurfaceSource::Numeric(eq), points)) => {
-            let profile = eq.profile_uniform(*points).map_err(passed)?;
-            let v = verify_state(eq, &profile, &claim).map_err(passed)?;
-            Ok(WrittenCheck {
-                energy_from_file: v.energy_from_profile,
-                energy_tolerance: v.energy_tolerance,
-                identified_eta: v.eta,
-            })
-        }
-        Some((source @ SurfaceSource::Exact(_), points)) => {
+        Some(AttachedLoop::Numeric(file)) => {
+            // The profile written, checked again against the claim: its energy by the
+            // periodic trapezoid and the periods of its moment.
             let m = &res.state.model;
             let (r, d0) = (m.radius(), m.stiffness().kind().reference());
-            let rows = attached_rows(source, *points, r, d0)?;
+            let (fine, coarse) =
+                rodloop_solver::verify::profile_energy(&file.profile, m.length(), r, d0);
+            let tolerance =
+                rodloop_solver::check_energy(&claim, fine, coarse, 1.0).map_err(passed)?;
+            let counted = identify_profile(&file.profile, m.length()).map(|p| p.eta);
+            match (eta, &counted) {
+                (Some(want), Ok(got)) if *got != want => {
+                    return Err(passed(rodloop_solver::SolverError::Unverified(format!(
+                        "its bending moment D κ_g has {got} periods, not the requested {want}"
+                    ))))
+                }
+                (Some(_), Err(e)) => {
+                    return Err(passed(rodloop_solver::SolverError::Unverified(format!(
+                        "its branch cannot be identified ({e})"
+                    ))))
+                }
+                _ => {}
+            }
+            Ok(WrittenCheck {
+                energy_from_file: fine,
+                energy_tolerance: tolerance,
+                identified_eta: counted.unwrap_or(0),
+            })
+        }
+        Some(AttachedLoop::Exact(l, points)) => {
+            let m = &res.state.model;
+            let (r, d0) = (m.radius(), m.stiffness().kind().reference());
+            let rows = attached_rows(&SurfaceSource::Exact(*l), *points, r, d0)?;
             let ds = m.length() / *points as f64;
             let sum = |step: usize| {
                 rows.iter()
@@ -475,14 +521,17 @@ pub fn solve_state_with(
             ),
         )
     };
-    let attached_loop = (attached && !moved).then(|| {
+    let attached_loop = if attached && !moved {
         let points = crate::STATE_POINTS.max(3 * enclosed_scene_cells(stiffness, accuracy, eta));
-        let points = match &source {
-            SurfaceSource::Numeric(eq) => points.max(eq.model().cells()),
-            SurfaceSource::Exact(_) => points,
-        };
-        (source.clone(), points)
-    });
+        Some(match &source {
+            SurfaceSource::Numeric(eq) => attached_file(eq, energy).map_err(context(format!(
+                "the surface loop of branch {branch} as its state file holds it"
+            )))?,
+            SurfaceSource::Exact(l) => AttachedLoop::Exact(*l, points),
+        })
+    } else {
+        None
+    };
     for why in &given_up {
         method.push_str(&format!("; {why}"));
     }

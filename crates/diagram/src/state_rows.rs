@@ -10,7 +10,7 @@ use rodloop_solver::enclosed::{EnclosedState, SurfaceSource};
 use rodloop_solver::ProfilePoint;
 
 use crate::enclosed::{EnclosedPoint, PointShape};
-use crate::enclosed_state::{attached_rows, EnclosedResult};
+use crate::enclosed_state::{attached_rows, AttachedLoop, EnclosedResult};
 use crate::{DiagramError, STATE_POINTS};
 
 /// The columns of a surface state file (`solve`'s `config.csv`).
@@ -128,12 +128,24 @@ pub fn model_rows(st: &EnclosedState, r: f64, d0: f64) -> Result<Vec<[f64; 12]>,
 /// (attached), else the 3-D state.
 pub fn result_rows(res: &EnclosedResult, r: f64, d0: f64) -> Result<Vec<[f64; 12]>, DiagramError> {
     match &res.attached_loop {
-        Some((source, points)) => {
-            let rows = attached_rows(source, *points, r, d0)?;
+        Some(AttachedLoop::Exact(l, points)) => {
+            let rows = attached_rows(&SurfaceSource::Exact(*l), *points, r, d0)?;
             Ok(sphere_rows(&rows, res.state.model.length(), r, d0))
         }
+        Some(AttachedLoop::Numeric(file)) => Ok(file_rows(file, res.state.model.length(), r, d0)),
         None => model_rows(&res.state, r, d0),
     }
+}
+
+/// The enclosed rows of a verified surface state file ([`crate::StateFile`]: its profile,
+/// uniform in arclength over `length`).
+fn file_rows(file: &crate::StateFile, length: f64, r: f64, d0: f64) -> Vec<[f64; 12]> {
+    let rows: Vec<[f64; 7]> = file
+        .profile
+        .iter()
+        .map(|q| [q.s, q.x, q.y, q.z, q.kappa_g, q.lambda, q.d])
+        .collect();
+    sphere_rows(&rows, length, r, d0)
 }
 
 /// The enclosed rows of one point of an enclosed diagram (see [`sphere_rows`] for attached
@@ -142,15 +154,7 @@ pub fn result_rows(res: &EnclosedResult, r: f64, d0: f64) -> Result<Vec<[f64; 12
 pub fn point_rows(p: &EnclosedPoint, r: f64, d0: f64) -> Result<Vec<[f64; 12]>, DiagramError> {
     match &p.shape {
         PointShape::Model(st) => model_rows(st, r, d0),
-        PointShape::Surface(eq) => {
-            let m = STATE_POINTS.max(eq.model().cells());
-            let rows: Vec<[f64; 7]> = eq
-                .profile_uniform(m)?
-                .iter()
-                .map(|q| [q.s, q.x, q.y, q.z, q.kappa_g, q.lambda, q.d])
-                .collect();
-            Ok(sphere_rows(&rows, eq.model().length(), r, d0))
-        }
+        PointShape::SurfaceFile(file, length) => Ok(file_rows(file, *length, r, d0)),
         PointShape::Exact(l) => {
             let source = SurfaceSource::Exact(*l);
             let rows = attached_rows(&source, STATE_POINTS, r, d0)?;
@@ -178,6 +182,9 @@ pub fn point_rows(p: &EnclosedPoint, r: f64, d0: f64) -> Result<Vec<[f64; 12]>, 
                 })
                 .collect())
         }
+        PointShape::Surface(_) => Err(DiagramError::Unsolved(
+            "the surface state has not been verified as its file holds it".into(),
+        )),
         PointShape::Missing => Err(DiagramError::Unsolved(
             "no verified shape (the diagram's warnings say why)".into(),
         )),

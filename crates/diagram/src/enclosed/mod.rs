@@ -205,8 +205,15 @@ impl BranchFrom {
 pub enum PointShape {
     /// The reported 3-D state (lifted off: the finest of the levels `N/4, N/2, N`).
     Model(Box<EnclosedState>),
-    /// The surface equilibrium of an attached state (non-uniform rods, `λ_min > 0`).
+    /// The surface equilibrium of an attached state (non-uniform rods, `λ_min > 0`), before
+    /// its file is verified (`verify.rs` replaces it by [`PointShape::SurfaceFile`]).
     Surface(Box<Equilibrium>),
+    /// An attached state's surface loop as its file holds it, verified against the row by
+    /// the routine that verifies every traced surface state
+    /// ([`crate::states::verify_refining`]; the file may sample the state re-solved on
+    /// `2N`, `4N`, … where the tracing resolution's profile does not reproduce the row's
+    /// energy), and the loop's length.
+    SurfaceFile(Box<crate::StateFile>, f64),
     /// The exact surface loop of an attached state (uniform rods).
     Exact(ExactLoop),
     /// The free planar circle of radius `R L̄` through the centre's plane (branch 0).

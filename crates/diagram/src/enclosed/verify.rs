@@ -17,7 +17,9 @@
 //! written) with a warning that says why.
 
 use rodloop_solver::identify::{identify_enclosed, identify_profile, Periods};
-use rodloop_solver::{verify_enclosed, verify_state, Claim, SolverError};
+use rodloop_solver::{verify_enclosed, Claim, SolverError};
+
+use crate::states::{verify_refining, Ladder};
 
 use super::{BranchFrom, EnclosedDiagram, PointShape};
 
@@ -57,19 +59,22 @@ pub(crate) fn verified(mut d: EnclosedDiagram) -> EnclosedDiagram {
                         .map_err(|e| e.to_string())
                 })
             }
-            PointShape::Surface(eq) => eq
-                .profile_uniform(crate::STATE_POINTS.max(eq.model().cells()))
-                .map_err(|e| e.to_string())
-                .and_then(|profile| {
-                    let (from, eta) =
-                        branch_claim(identify_profile(&profile, eq.model().length()), p.eta)?;
-                    claim.eta = eta;
-                    p.branch_from = from;
-                    verify_state(eq, &profile, &claim)
-                        .map(|_| ())
-                        .map_err(|e| e.to_string())
-                }),
-            PointShape::Exact(_) | PointShape::Circle | PointShape::Missing => Ok(()),
+            PointShape::Surface(eq) => {
+                let length = eq.model().length();
+                verify_refining(eq, p.energy, Some(p.energy_error), Ladder::Keep)
+                    .map_err(|e| e.to_string())
+                    .and_then(|file| {
+                        let (from, _) =
+                            branch_claim(identify_profile(&file.profile, length), p.eta)?;
+                        p.branch_from = from;
+                        p.shape = PointShape::SurfaceFile(Box::new(file), length);
+                        Ok(())
+                    })
+            }
+            PointShape::SurfaceFile(..)
+            | PointShape::Exact(_)
+            | PointShape::Circle
+            | PointShape::Missing => Ok(()),
         };
         if let Err(e) = checked {
             d.warnings.push(format!(
