@@ -20,7 +20,7 @@ use rodloop_continuation::exchange::ExchangeSettings;
 
 use super::critical::{exchange_doublings, locate_from, EnclosedPair, Ladder};
 use super::levels::Levels;
-use super::nonuniform_sheet::{surface_energy, walk, SheetOut};
+use super::nonuniform_sheet::{surface_energy, surface_energy_doubled, walk, SheetOut};
 use super::{EnclosedDiagramOptions, PointSource};
 use crate::types::TracedBranch;
 use crate::DiagramOptions;
@@ -266,7 +266,8 @@ pub(super) fn locate_crossing(
 
 /// `E_a = E_b` near `x` on ladders of meshes ([`Ladder::from_levels`] with `doublings`
 /// more levels) for the lifted-off sheets (`tracks`, walked to `x` first) and the surface
-/// energies for the others; first step `−10⁻⁵`, slope and noise from the chord over
+/// energies for the others, on `doublings` doublings of their tracing resolution as well
+/// ([`surface_energy_doubled`]); first step `−10⁻⁵`, slope and noise from the chord over
 /// `±10⁻⁵`. Returns the exchange and the cells of the finest ladder's levels.
 fn ladder_crossing(
     dopts: &DiagramOptions,
@@ -299,7 +300,7 @@ fn ladder_crossing(
             *lad = next;
             Ok(e)
         }
-        None => surface_energy(dopts, surface, y),
+        None => surface_energy_doubled(dopts, surface, y, doublings),
     };
     let [la, lb] = &mut ladders;
     let mut pair = EnclosedPair::new(|y| side(la, surfaces[0], y), |y| side(lb, surfaces[1], y));

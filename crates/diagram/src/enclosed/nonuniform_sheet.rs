@@ -81,15 +81,38 @@ pub(super) fn surface_energy(
     sheet: &TracedBranch,
     x: f64,
 ) -> Result<(f64, f64), SolverError> {
-    let n = sheet.cells;
-    let e1 = surface_at(dopts, sheet, x, n)?;
-    let e2 = half_resolution(dopts, &e1, 2 * n).ok_or_else(|| {
+    surface_energy_doubled(dopts, sheet, x, 0)
+}
+
+/// [`surface_energy`] on `2^k N` and `2^(k+1) N` cells (`N` the tracing resolution): the
+/// attached side of an exchange located on a ladder of meshes `k` doublings above the
+/// trace (`exchange_doublings`), so that its energy is resolved as finely as the lifted-off
+/// side's. The state is solved at `N` from the traced state nearest in `L̄`, then re-solved
+/// at each doubling from the one below.
+pub(super) fn surface_energy_doubled(
+    dopts: &DiagramOptions,
+    sheet: &TracedBranch,
+    x: f64,
+    k: usize,
+) -> Result<(f64, f64), SolverError> {
+    let mut n = sheet.cells;
+    let mut coarse = surface_at(dopts, sheet, x, n)?;
+    for _ in 0..k {
+        coarse = half_resolution(dopts, &coarse, 2 * n).ok_or_else(|| {
+            SolverError::InvalidInput(format!(
+                "the surface state at lbar = {x} did not re-solve at {} cells",
+                2 * n
+            ))
+        })?;
+        n *= 2;
+    }
+    let fine = half_resolution(dopts, &coarse, 2 * n).ok_or_else(|| {
         SolverError::InvalidInput(format!(
             "the surface state at lbar = {x} at {} cells",
             2 * n
         ))
     })?;
-    let (a, b) = (e1.energy().total, e2.energy().total);
+    let (a, b) = (coarse.energy().total, fine.energy().total);
     Ok((b, rodloop_solver::richardson_error(b, a)))
 }
 
