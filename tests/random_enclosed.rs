@@ -258,6 +258,79 @@ fn solve_writes_an_attached_two_segment_state_that_holds_its_energy() {
     );
 }
 
+/// `D1/D0 = 0.352` on `0.179 ≤ s/L ≤ 0.466`, `γ = 30.1`: the exchange 3 → 1 between an
+/// attached loop of branch 3 and a lifted-off one of branch 1. Independent `solve`s of both
+/// branches `10⁻⁵` either side of the diagram's root put the root, by the secant of
+/// `E_3 − E_1`, within the two estimates of the diagram's; and the diagram's estimate is no
+/// wider than the one of that independent root (the solves' estimates over the slope): the
+/// attached side is resolved as finely as the lifted-off one.
+#[test]
+fn random_enclosed_exchange_with_an_attached_side_agrees_with_independent_solves() {
+    let (dir, sc, text) = scene_file("random-enclosed-attached-exchange", 15, 2.38, 2.45);
+    let out = dir.join("out");
+    rodloop_ok(&[
+        "diagram",
+        "--scene",
+        sc.to_str().unwrap(),
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let (h, rows) = read_csv(&out.join("critical.csv"));
+    let crossing = rows
+        .iter()
+        .find(|r| r[col(&h, "kind")] == "crossing")
+        .unwrap_or_else(|| panic!("no exchange located: {rows:?}\n{text}"));
+    let num = |name: &str| -> f64 { crossing[col(&h, name)].parse().unwrap() };
+    let (x, err) = (num("lbar_cr"), num("error_estimate"));
+    let branches = [
+        &crossing[col(&h, "from_branch")],
+        &crossing[col(&h, "to_branch")],
+    ];
+    let delta = 1e-5;
+    // E_from − E_to and its estimate at `x + t`.
+    let difference = |t: f64, tag: &str| {
+        let mut d = 0.0;
+        let mut e = 0.0;
+        for (k, b) in branches.iter().enumerate() {
+            let o = dir.join(format!("solve-{tag}-{b}"));
+            rodloop_ok(&[
+                "solve",
+                "--scene",
+                sc.to_str().unwrap(),
+                "--lbar",
+                &format!("{}", x + t),
+                "--branch",
+                b,
+                "--out",
+                o.to_str().unwrap(),
+            ]);
+            let j = read_json(&o.join("summary.json"));
+            let sign = if k == 0 { 1.0 } else { -1.0 };
+            d += sign * j["energy"].as_f64().unwrap();
+            e += j["error_estimate"].as_f64().unwrap();
+        }
+        (d, e)
+    };
+    let (dm, em) = difference(-delta, "below");
+    let (dp, ep) = difference(delta, "above");
+    assert!(
+        dm * dp < 0.0,
+        "E_a − E_b does not change sign: {dm} at x − 1e-5, {dp} at x + 1e-5\n{text}"
+    );
+    let slope = (dp - dm) / (2.0 * delta);
+    let root = x - delta - dm / slope;
+    let independent = em.max(ep) / slope.abs();
+    assert!(
+        (root - x).abs() <= err + independent,
+        "the diagram's exchange {x} ± {err:.1e} against the solves' root {root} ± {independent:.1e}\n{text}"
+    );
+    assert!(
+        err <= independent,
+        "the diagram's estimate {err:.1e} is wider than the independent root's {independent:.1e}\n{text}"
+    );
+}
+
 /// `solve --from` the state file `solve` wrote, at the same length, returns the same state:
 /// energy within the two estimates, the same index. On the second scene at `L̄ = 1.45` the
 /// saved figure-eight's point contacts fall between the nodes of the cascade's coarsest
