@@ -151,12 +151,12 @@ pub(super) fn locate_crossing(
         baseline: 1e-5,
         ..ExchangeSettings::default()
     };
-    let mut none: [Option<Levels>; 2] = [None, None];
+    // On the doublings of the tracing resolution of the lifted-off exchanges' ladders.
+    let doublings = exchange_doublings(dopts.accuracy);
     let on_surface = {
-        let [na, nb] = &mut none;
         let mut pair = EnclosedPair::new(
-            |x| sheet_energy(dopts, surfaces[0], x, na),
-            |x| sheet_energy(dopts, surfaces[1], x, nb),
+            |x| surface_energy_doubled(dopts, surfaces[0], x, doublings),
+            |x| surface_energy_doubled(dopts, surfaces[1], x, doublings),
         );
         locate_from(&mut pair, xg, &surface)
     };
@@ -170,7 +170,7 @@ pub(super) fn locate_crossing(
             error: on_surface.error,
             energy: 0.5 * (on_surface.energies.a + on_surface.energies.b),
             surface_lbar: Some(xs),
-            method: "surface states (both attached: lambda_min > 0); the exchange locator on E_a = E_b (hunt from the interpolated root, Brent), error from the N and 2N surface energies, the chord's noise over +-1e-5 and the final bracket".into(),
+            method: format!("surface states (both attached: lambda_min > 0), each on 2^k N and 2^(k+1) N cells (tracing resolutions N = {}, {}; k = {doublings}); the exchange locator on E_a = E_b (hunt from the interpolated root, Brent), error from the two resolutions' energies, the chord's noise over +-1e-5 and the final bracket", surfaces[0].cells, surfaces[1].cells),
             not_located: None,
         });
     }
