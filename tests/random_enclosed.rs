@@ -208,6 +208,62 @@ fn random_enclosed_diagram_where_solve_must_continue_a_minimum_holds() {
     check_scene(3, 1.0, 2.6);
 }
 
+/// `D1/D0 = 0.517` on `0.026 ≤ s/L ≤ 0.298`, `γ = 37.4`: next to the exchange 3 → 1
+/// (placed by interpolation, a trace of branch 1 stopping at its fold `6·10⁻⁶` away) the
+/// lowest state at `L̄ = 2.427429` is the saddle half of the fold (lowest eigenvalue
+/// `−1·10⁻⁵`), tied with the attached branch-3 state within the labels' allowance. Every
+/// lowest state of index > 0 must have been descended from and be named by the diagram's
+/// warning for its family (branch, family and a range of lengths holding it).
+#[test]
+fn a_lowest_saddle_is_named_by_a_warning() {
+    let (dir, sc, text) = scene_file("random-enclosed-lowest-saddle", 10, 1.0, 2.6);
+    let out = dir.join("out");
+    rodloop_ok(&[
+        "diagram",
+        "--scene",
+        sc.to_str().unwrap(),
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let (h, rows) = read_csv(&out.join("branches.csv"));
+    let summary = read_json(&out.join("summary.json"));
+    let warnings: Vec<&str> = summary["warnings"]
+        .as_array()
+        .expect("warnings")
+        .iter()
+        .map(|w| w.as_str().unwrap())
+        .collect();
+    for r in rows.iter().filter(|r| r[col(&h, "lowest")] == "1") {
+        if r[col(&h, "index")] == "0" {
+            continue;
+        }
+        let lbar: f64 = r[col(&h, "lbar")].parse().unwrap();
+        let head = format!(
+            "family {}: the lowest traced state has index >= 1 at ",
+            r[col(&h, "family")]
+        );
+        let named = warnings.iter().any(|w| {
+            let Some(at) = w.find(&head) else {
+                return false;
+            };
+            let branch = format!("branch {} ", r[col(&h, "branch")]);
+            let Some(range) = w[at..].split('[').nth(1).and_then(|t| t.split(']').next()) else {
+                return false;
+            };
+            let ends: Vec<f64> = range.split(", ").filter_map(|t| t.parse().ok()).collect();
+            w.starts_with(&branch)
+                && ends.len() == 2
+                && lbar >= ends[0] - 1e-4
+                && lbar <= ends[1] + 1e-4
+        });
+        assert!(
+            named,
+            "a lowest state of index > 0 without its warning: {r:?}\n{warnings:#?}\n{text}"
+        );
+    }
+}
+
 /// `D1/D0 = 0.745` on `0.099 ≤ s/L ≤ 0.623`, `γ = 31.5`, where the lowest states are
 /// attached loops of branch 1 on 44 cells: the profile of that resolution (`κ_g` from the
 /// moment, a second discretisation) misses the row's energy by several of its estimates, so

@@ -124,7 +124,7 @@ where
 /// `p` first. Inside the bracket of a located crossing the sheet its critical
 /// length names as lowest on `p`'s side is preferred in ties; elsewhere the least energy
 /// decides.
-fn ranked_at(
+pub(super) fn ranked_at(
     outs: &[SheetOut],
     brackets: &[(f64, f64, usize, usize)],
     critical: &[EnclosedCritical],

@@ -16,7 +16,10 @@ use rodloop_solver::enclosed::descent::descend;
 use rodloop_solver::enclosed::stats::{self, Stage};
 use rodloop_solver::enclosed::{solve_levels, EnclosedOptions};
 
+use rodloop_continuation::exchange::lowest_state;
+
 use super::levels::Levels;
+use super::nonuniform::ranked_at;
 use super::nonuniform_exchange::{interp, lowest_near_circle};
 use super::nonuniform_sheet::SheetOut;
 use super::trace::step_options;
@@ -33,7 +36,12 @@ type Found = (Vec<Levels>, Vec<TraceStop>);
 /// Most rounds of descent (a new family may itself be unstable where it is lowest).
 const ROUNDS: usize = 2;
 
-/// Sheets whose lowest states are unstable: `(sheet, L̄ of those states)`.
+/// Sheets whose lowest states are unstable: `(sheet, L̄ of those states)`. A state counts
+/// as lowest where it is the least interpolated energy at its length, or where it is tied
+/// with the least within the labeller's allowance ([`ranked_at`] without exchanges): the
+/// exchanges located later can make any tied state the lowest one (a crossing placed
+/// inside the tie prefers its branch), and the labels must not name a saddle lowest that
+/// no descent was tried from.
 fn unstable_lowest(outs: &[SheetOut]) -> Vec<(usize, Vec<f64>)> {
     let mut found = Vec::new();
     for (k, s) in outs.iter().enumerate() {
@@ -43,7 +51,8 @@ fn unstable_lowest(outs: &[SheetOut]) -> Vec<(usize, Vec<f64>)> {
             .filter(|p| {
                 p.index > 0
                     && p.source == PointSource::Model
-                    && lowest_near_circle(outs, p.lbar) == Some(k)
+                    && (lowest_near_circle(outs, p.lbar) == Some(k)
+                        || lowest_state(&ranked_at(outs, &[], &[], k, p)).contains(&0))
             })
             .map(|p| p.lbar)
             .collect();
