@@ -2,8 +2,12 @@
 //! returned: lifted-off 3-D states by [`rodloop_solver::verify_enclosed`] (the rod closes in
 //! position and tangent, lies inside the ball, and the energy recomputed from its written
 //! nodes equals the point's within [`crate::ESTIMATES`] times its error estimate plus the
-//! rule's own error), attached surface states by [`rodloop_solver::verify_state`] on the
-//! profile their file holds. Exact loops and the free circle are closed-form.
+//! rule's own error), attached surface states by the routine that verifies every traced
+//! surface state's file ([`crate::states::verify_refining`], the row's energy and estimate
+//! kept): the profile `κ_g = 𝓜·n/D` (Eq. (41)) is a second discretisation of the state, and
+//! where the tracing resolution's profile misses the row's energy the file samples the state
+//! re-solved on `2N`, `4N`, … ([`PointShape::SurfaceFile`]). Exact loops and the free circle
+//! are closed-form.
 //!
 //! **Branch.** Each state is verified with its row's branch: where the periods of its moment
 //! (of its central projection onto the sphere for a 3-D state,
