@@ -63,14 +63,14 @@ pub enum AttachedLoop {
     Exact(ExactLoop, usize),
     /// A two-segment rod's numerical surface loop as its file holds it, verified against the
     /// reported energy by the routine that verifies every traced surface state
-    /// ([`crate::states::verify_refining`]): where the profile of the solve's resolution does
+    /// (`verify_refining` (`state_file.rs`)): where the profile of the solve's resolution does
     /// not reproduce the energy within its estimate (`κ_g = 𝓜·n/D` is a second `O(h⁴)`
     /// discretisation of the state), the file samples the state re-solved on `2N`, `4N`, ….
     Numeric(Box<crate::StateFile>),
 }
 
 /// [`AttachedLoop::Numeric`] of the surface loop `eq` reported with `energy`: its file
-/// verified by [`crate::states::verify_refining`] (the claim kept: `energy` within
+/// verified by `verify_refining` (`state_file.rs`) (the claim kept: `energy` within
 /// [`crate::ESTIMATES`] times its estimate), the one check of every surface state's file.
 pub fn attached_file(
     eq: &Equilibrium,

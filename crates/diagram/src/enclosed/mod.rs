@@ -210,7 +210,7 @@ pub enum PointShape {
     Surface(Box<Equilibrium>),
     /// An attached state's surface loop as its file holds it, verified against the row by
     /// the routine that verifies every traced surface state
-    /// ([`crate::states::verify_refining`]; the file may sample the state re-solved on
+    /// (`verify_refining` (`state_file.rs`); the file may sample the state re-solved on
     /// `2N`, `4N`, … where the tracing resolution's profile does not reproduce the row's
     /// energy), and the loop's length.
     SurfaceFile(Box<crate::StateFile>, f64),
