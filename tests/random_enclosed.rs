@@ -39,6 +39,20 @@ fn scene_file(name: &str, seed: u64, lo: f64, hi: f64) -> (PathBuf, PathBuf, Str
     (dir, sc, text)
 }
 
+/// `rodloop diagram --quiet` on the scene file `sc`, written to `dir/out`: that directory.
+fn diagram_of(dir: &Path, sc: &Path) -> PathBuf {
+    let out = dir.join("out");
+    rodloop_ok(&[
+        "diagram",
+        "--scene",
+        sc.to_str().unwrap(),
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    out
+}
+
 /// `rodloop solve --lbar 1.45 --branch 2` on the scene file `sc` with `extra` arguments,
 /// written to `dir/out`: its `summary.json`.
 fn solve_branch_2(dir: &Path, sc: &Path, out: &str, extra: &[&str]) -> serde_json::Value {
@@ -69,15 +83,7 @@ fn column(header: &[String], rows: &[Vec<String>], name: &str) -> Vec<f64> {
 /// docs).
 fn check_scene(seed: u64, lo: f64, hi: f64) {
     let (dir, sc, text) = scene_file(&format!("random-enclosed-{seed}"), seed, lo, hi);
-    let out = dir.join("out");
-    rodloop_ok(&[
-        "diagram",
-        "--scene",
-        sc.to_str().unwrap(),
-        "--quiet",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let out = diagram_of(&dir, &sc);
     let (h, rows) = read_csv(&out.join("branches.csv"));
     assert!(!rows.is_empty(), "{text}");
     let get = |r: &Vec<String>, name: &str| r[col(&h, name)].clone();
@@ -217,15 +223,7 @@ fn random_enclosed_diagram_where_solve_must_continue_a_minimum_holds() {
 #[test]
 fn a_lowest_saddle_is_named_by_a_warning() {
     let (dir, sc, text) = scene_file("random-enclosed-lowest-saddle", 10, 1.0, 2.6);
-    let out = dir.join("out");
-    rodloop_ok(&[
-        "diagram",
-        "--scene",
-        sc.to_str().unwrap(),
-        "--quiet",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let out = diagram_of(&dir, &sc);
     let (h, rows) = read_csv(&out.join("branches.csv"));
     let summary = read_json(&out.join("summary.json"));
     let warnings: Vec<&str> = summary["warnings"]
@@ -323,15 +321,7 @@ fn solve_writes_an_attached_two_segment_state_that_holds_its_energy() {
 #[test]
 fn random_enclosed_exchange_with_an_attached_side_agrees_with_independent_solves() {
     let (dir, sc, text) = scene_file("random-enclosed-attached-exchange", 15, 2.38, 2.45);
-    let out = dir.join("out");
-    rodloop_ok(&[
-        "diagram",
-        "--scene",
-        sc.to_str().unwrap(),
-        "--quiet",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let out = diagram_of(&dir, &sc);
     let (h, rows) = read_csv(&out.join("critical.csv"));
     let crossing = rows
         .iter()
