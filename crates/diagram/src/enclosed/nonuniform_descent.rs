@@ -19,8 +19,7 @@ use rodloop_solver::enclosed::{solve_levels, EnclosedOptions};
 use rodloop_continuation::exchange::lowest_state;
 
 use super::levels::Levels;
-use super::nonuniform::ranked_at;
-use super::nonuniform_exchange::{interp, lowest_near_circle};
+use super::nonuniform_exchange::{interp, lowest_near_circle, ranked_at};
 use super::nonuniform_sheet::SheetOut;
 use super::trace::step_options;
 use super::trace::{follow, TraceStop};

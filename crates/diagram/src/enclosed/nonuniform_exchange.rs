@@ -16,12 +16,12 @@
 
 use rodloop_solver::SolverError;
 
-use rodloop_continuation::exchange::ExchangeSettings;
+use rodloop_continuation::exchange::{ExchangeSettings, Ranked};
 
 use super::critical::{exchange_doublings, locate_from, EnclosedPair, Ladder};
 use super::levels::Levels;
 use super::nonuniform_sheet::{surface_energy, surface_energy_doubled, walk, SheetOut};
-use super::{EnclosedDiagramOptions, PointSource};
+use super::{EnclosedCritical, EnclosedDiagramOptions, EnclosedPoint, PointSource};
 use crate::types::TracedBranch;
 use crate::DiagramOptions;
 
@@ -76,6 +76,80 @@ pub(super) fn lowest_near_circle(sheets: &[SheetOut], lbar: f64) -> Option<usize
         })
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|(i, _)| i)
+}
+
+/// The labeller's view ([`rodloop_continuation::exchange`]) of the sampled state `p` of
+/// sheet `k` and of the other sheets at its length (energies interpolated linearly, with
+/// their error plus `5·10⁻⁴` for the interpolation; index 0 where both neighbouring samples
+/// have it; within `CIRCLE` of a great circle, the end state of a sheet that ends there):
+/// `p` first. Inside the bracket of a located crossing the sheet its critical
+/// length names as lowest on `p`'s side is preferred in ties; elsewhere the least energy
+/// decides.
+pub(super) fn ranked_at(
+    outs: &[SheetOut],
+    brackets: &[(f64, f64, usize, usize)],
+    critical: &[EnclosedCritical],
+    k: usize,
+    p: &EnclosedPoint,
+) -> Vec<Ranked> {
+    const ALLOWANCE: f64 = 5e-4;
+    let mut named: Option<usize> = None;
+    for &(x0, x1, a, b) in brackets {
+        if p.lbar > x0 && p.lbar < x1 {
+            let c = critical
+                .iter()
+                .find(|c| c.critical.lbar_cr >= x0 - 0.05 && c.critical.lbar_cr <= x1 + 0.05)
+                .map_or(0.5 * (x0 + x1), |c| c.critical.lbar_cr);
+            named = Some(if p.lbar < c { a } else { b });
+        }
+    }
+    let mut states = vec![Ranked {
+        energy: p.energy,
+        error: p.energy_error + ALLOWANCE,
+        index: p.index,
+        preferred: named == Some(k),
+    }];
+    // Next to a great circle `L̄ = m`, where sheets begin or end, a sheet that ends within
+    // `CIRCLE` of `p` competes with its end state.
+    let at_circle = (p.lbar - p.lbar.round()).abs() < CIRCLE;
+    for (j, s) in outs.iter().enumerate().filter(|(j, _)| *j != k) {
+        let end = || {
+            [s.points.first(), s.points.last()]
+                .into_iter()
+                .flatten()
+                .find(|u| at_circle && (u.lbar - p.lbar).abs() < CIRCLE)
+        };
+        let energy = match (interp(s, p.lbar), end()) {
+            (Some(e), _) => e,
+            (None, Some(u)) => {
+                states.push(Ranked {
+                    energy: u.energy,
+                    error: u.energy_error + ALLOWANCE,
+                    index: u.index,
+                    preferred: named == Some(j),
+                });
+                continue;
+            }
+            (None, None) => continue,
+        };
+        let q = &s.points;
+        let i = q.partition_point(|u| u.lbar < p.lbar);
+        let index0 = match q.iter().find(|u| (u.lbar - p.lbar).abs() < 1e-12) {
+            Some(u) => u.index == 0,
+            None => [i.checked_sub(1), Some(i)]
+                .into_iter()
+                .flatten()
+                .filter_map(|i| q.get(i))
+                .all(|u| u.index == 0),
+        };
+        states.push(Ranked {
+            energy,
+            error: ALLOWANCE,
+            index: usize::from(!index0),
+            preferred: named == Some(j),
+        });
+    }
+    states
 }
 
 /// Energy of sheet `s` at `x`: the 3-D model stepped from `track` where the sheet has
