@@ -35,31 +35,49 @@ type Found = (Vec<Levels>, Vec<TraceStop>);
 /// Most rounds of descent (a new family may itself be unstable where it is lowest).
 const ROUNDS: usize = 2;
 
-/// Sheets whose lowest states are unstable: `(sheet, L̄ of those states)`. A state counts
-/// as lowest where it is the least interpolated energy at its length, or where it is tied
-/// with the least within the labeller's allowance ([`ranked_at`] without exchanges): the
-/// exchanges located later can make any tied state the lowest one (a crossing placed
-/// inside the tie prefers its branch), and the labels must not name a saddle lowest that
-/// no descent was tried from.
-fn unstable_lowest(outs: &[SheetOut]) -> Vec<(usize, Vec<f64>)> {
+/// Sheets whose lowest states are unstable: `(sheet, L̄ of the states whose energy is the
+/// least of the sheets' there, L̄ of those only tied with the least)`. Tied means the
+/// labeller ([`ranked_at`] without exchanges) would call the state lowest: within its
+/// allowance of the least and no local minimum tied with it. The exchanges located later
+/// can make such a state the lowest one (a crossing placed inside the tie prefers its
+/// branch), and the labels must not name a saddle lowest that no descent was tried from.
+fn unstable_lowest(outs: &[SheetOut]) -> Vec<(usize, Vec<f64>, Vec<f64>)> {
     let mut found = Vec::new();
     for (k, s) in outs.iter().enumerate() {
-        let xs: Vec<f64> = s
+        let saddles = s
             .points
             .iter()
-            .filter(|p| {
-                p.index > 0
-                    && p.source == PointSource::Model
-                    && (lowest_near_circle(outs, p.lbar) == Some(k)
-                        || lowest_state(&ranked_at(outs, &[], &[], k, p)).contains(&0))
-            })
-            .map(|p| p.lbar)
-            .collect();
-        if !xs.is_empty() {
-            found.push((k, xs));
+            .filter(|p| p.index > 0 && p.source == PointSource::Model);
+        let (mut least, mut tied) = (Vec::new(), Vec::new());
+        for p in saddles {
+            if lowest_near_circle(outs, p.lbar) == Some(k) {
+                least.push(p.lbar);
+            } else if lowest_state(&ranked_at(outs, &[], &[], k, p)).contains(&0) {
+                tied.push(p.lbar);
+            }
+        }
+        if !least.is_empty() || !tied.is_empty() {
+            found.push((k, least, tied));
         }
     }
     found
+}
+
+/// Up to three of a sheet's unstable lowest states to descend from, the least first, each
+/// group from its middle outwards ([`unstable_lowest`]).
+fn candidates(least: &[f64], tied: &[f64]) -> Vec<f64> {
+    let from_middle = |xs: &[f64]| {
+        let Some(&mid) = xs.get(xs.len() / 2) else {
+            return Vec::new();
+        };
+        let mut order = xs.to_vec();
+        order.sort_by(|u, v| (u - mid).abs().total_cmp(&(v - mid).abs()));
+        order
+    };
+    let mut order = from_middle(least);
+    order.extend(from_middle(tied));
+    order.truncate(3);
+    order
 }
 
 /// The lowest new state reached from `lv` (coarsest level) along its unstable direction,
@@ -116,15 +134,11 @@ pub(super) fn descend_unstable(
         let mut added: Vec<SheetOut> = Vec::new();
         let mut added_parents = Vec::new();
         // The sheets to try this round, with up to three untried unstable lowest states
-        // each (the middle one first); the searches and traces run in parallel.
+        // each ([`candidates`]); the searches and traces run in parallel.
         let mut jobs: Vec<(usize, Vec<f64>)> = Vec::new();
-        for (k, xs) in unstable_lowest(outs) {
-            let mid_x = xs[xs.len() / 2];
-            let mut order = xs.clone();
-            order.sort_by(|u, v| (u - mid_x).abs().total_cmp(&(v - mid_x).abs()));
-            let cands: Vec<f64> = order
+        for (k, least, tied) in unstable_lowest(outs) {
+            let cands: Vec<f64> = candidates(&least, &tied)
                 .into_iter()
-                .take(3)
                 .filter(|&x| {
                     !tried
                         .iter()
@@ -237,7 +251,10 @@ pub(super) fn descend_unstable(
         outs.extend(added);
         parents.extend(added_parents);
     }
-    for (k, xs) in unstable_lowest(outs) {
+    for (k, least, tied) in unstable_lowest(outs) {
+        let mut xs = least;
+        xs.extend(tied);
+        xs.sort_by(f64::total_cmp);
         let s = &outs[k];
         // The two lowest eigenvalues (mass-normalised), to tell a clear saddle from a nearly
         // degenerate state.
