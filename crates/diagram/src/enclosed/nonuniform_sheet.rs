@@ -95,23 +95,18 @@ pub(super) fn surface_energy_doubled(
     x: f64,
     k: usize,
 ) -> Result<(f64, f64), SolverError> {
-    let mut n = sheet.cells;
-    let mut coarse = surface_at(dopts, sheet, x, n)?;
-    for _ in 0..k {
-        coarse = half_resolution(dopts, &coarse, 2 * n).ok_or_else(|| {
+    let mut fine = surface_at(dopts, sheet, x, sheet.cells)?;
+    let mut coarse = None;
+    for _ in 0..=k {
+        let n = 2 * fine.model().cells();
+        let next = half_resolution(dopts, &fine, n).ok_or_else(|| {
             SolverError::InvalidInput(format!(
-                "the surface state at lbar = {x} did not re-solve at {} cells",
-                2 * n
+                "the surface state at lbar = {x} did not re-solve at {n} cells"
             ))
         })?;
-        n *= 2;
+        coarse = Some(std::mem::replace(&mut fine, next));
     }
-    let fine = half_resolution(dopts, &coarse, 2 * n).ok_or_else(|| {
-        SolverError::InvalidInput(format!(
-            "the surface state at lbar = {x} at {} cells",
-            2 * n
-        ))
-    })?;
+    let coarse = coarse.expect("at least one doubling");
     let (a, b) = (coarse.energy().total, fine.energy().total);
     Ok((b, rodloop_solver::richardson_error(b, a)))
 }
