@@ -134,15 +134,14 @@ pub fn attached_rows(
 /// its error estimate (the energy is that of the finest level, or the surface loop's):
 /// a 3-D state by [`rodloop_solver::verify_enclosed`] (closed, nodes inside the ball, Gauss
 /// points within their cells' reach, energy by the file's quadrature weights, branch `eta`);
-/// a numerical surface loop's file ([`AttachedLoop::Numeric`], verified when the result was
-/// built) by the periodic trapezoid on its written samples again and the periods of its
-/// moment; an exact surface loop by the periodic trapezoid on its samples, within that rule's own error
+/// a numerical surface loop's file ([`AttachedLoop::Numeric`]) by its verification when the
+/// result was built (the same claim: the periodic trapezoid on its written samples) and the
+/// periods of its moment; an exact surface loop by the periodic trapezoid on its samples, within that rule's own error
 /// `|T_h − T_2h|` (the loop is exact, its estimate 0).
 pub fn verify_written(
     res: &EnclosedResult,
     eta: Option<u32>,
 ) -> Result<WrittenCheck, DiagramError> {
-    use rodloop_solver::identify::identify_profile;
     use rodloop_solver::{verify_enclosed, Claim};
     let claim = Claim {
         energy: res.energy.0,
@@ -160,32 +159,15 @@ pub fn verify_written(
             })
         }
         Some(AttachedLoop::Numeric(file)) => {
-            // The profile written, checked again against the claim: its energy by the
-            // periodic trapezoid and the periods of its moment.
-            let m = &res.state.model;
-            let (r, d0) = (m.radius(), m.stiffness().kind().reference());
-            let (fine, coarse) =
-                rodloop_solver::verify::profile_energy(&file.profile, m.length(), r, d0);
-            let tolerance =
-                rodloop_solver::check_energy(&claim, fine, coarse, 1.0).map_err(passed)?;
-            let counted = identify_profile(&file.profile, m.length()).map(|p| p.eta);
-            match (eta, &counted) {
-                (Some(want), Ok(got)) if *got != want => {
-                    return Err(passed(rodloop_solver::SolverError::Unverified(format!(
-                        "its bending moment D κ_g has {got} periods, not the requested {want}"
-                    ))))
-                }
-                (Some(_), Err(e)) => {
-                    return Err(passed(rodloop_solver::SolverError::Unverified(format!(
-                        "its branch cannot be identified ({e})"
-                    ))))
-                }
-                _ => {}
-            }
+            // The file was verified against this claim when the result was built
+            // (`attached_file`); the branch requested is checked on its profile.
+            let identified_eta =
+                rodloop_solver::verify::check_periods(&file.profile, res.state.model.length(), eta)
+                    .map_err(passed)?;
             Ok(WrittenCheck {
-                energy_from_file: fine,
-                energy_tolerance: tolerance,
-                identified_eta: counted.unwrap_or(0),
+                energy_from_file: file.verification.energy_from_profile,
+                energy_tolerance: file.verification.energy_tolerance,
+                identified_eta,
             })
         }
         Some(AttachedLoop::Exact(l, points)) => {
@@ -565,7 +547,7 @@ fn lifted_check(
     stiffness: &Stiffness,
     opts: &EnclosedOptions,
 ) -> Option<(f64, f64)> {
-    let fraction = b.fine.contact(1e-9).ok()?.fraction;
+    let fraction = b.fine.contact(TOUCH).ok()?.fraction;
     if stiffness.is_uniform() || fraction >= 1.0 || fraction == 0.0 {
         return None;
     }

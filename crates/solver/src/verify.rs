@@ -149,21 +149,7 @@ pub fn verify_state(
     }
     let (fine, coarse) = profile_energy(profile, length, r, d0);
     let energy_tolerance = check_energy(claim, fine, coarse, 1.0)?;
-    // Without a requested branch, a state whose periods are not named counts 0.
-    let eta = match (identify_profile(profile, length), claim.eta) {
-        (Ok(p), _) => p.eta,
-        (Err(_), None) => 0,
-        (Err(e), Some(_)) => {
-            return fail(format!("its branch cannot be identified ({e})"));
-        }
-    };
-    if let Some(want) = claim.eta {
-        if eta != want {
-            return fail(format!(
-                "its bending moment D κ_g has {eta} periods, not the requested {want}"
-            ));
-        }
-    }
+    let eta = check_periods(profile, length, claim.eta)?;
     Ok(Verification {
         holonomy_angle: angle,
         closing_chord,
@@ -173,6 +159,33 @@ pub fn verify_state(
         energy_tolerance,
         eta,
     })
+}
+
+/// The branch check of written samples (see the module docs): the periods `η` of the moment
+/// `D κ_g` of `profile` (a loop of `length`, [`identify_profile`]), which must be `want`
+/// where a branch is requested. Without one, a state whose periods are not named counts 0.
+///
+/// Errors: [`SolverError::Unverified`] where the periods are not the requested ones or
+/// cannot be counted for a requested branch.
+pub fn check_periods(
+    profile: &[ProfilePoint],
+    length: f64,
+    want: Option<u32>,
+) -> Result<u32, SolverError> {
+    let fail = |m: String| Err(SolverError::Unverified(m));
+    let eta = match (identify_profile(profile, length), want) {
+        (Ok(p), _) => p.eta,
+        (Err(_), None) => 0,
+        (Err(e), Some(_)) => {
+            return fail(format!("its branch cannot be identified ({e})"));
+        }
+    };
+    match want {
+        Some(want) if eta != want => fail(format!(
+            "its bending moment D κ_g has {eta} periods, not the requested {want}"
+        )),
+        _ => Ok(eta),
+    }
 }
 
 /// The closure check of the state itself (see the module docs): the rotation angle of the
