@@ -15,7 +15,8 @@
 
 use rodloop_continuation::natural::{walk_adaptive, AdaptiveSettings};
 
-use super::solve::{EnclosedOptions, EnclosedState};
+use super::branch::resample_state;
+use super::solve::{solve_prolonged, EnclosedOptions, EnclosedState};
 use crate::SolverError;
 
 /// Spacing in `L̄` of the lengths searched: a twentieth of a branch's range
@@ -72,6 +73,37 @@ pub fn continue_in_length(
         |cur: &EnclosedState, t| cur.step_to(at(t), opts),
         |_, _, e| Err(e),
     )
+}
+
+/// Doublings of a state's cells on which [`continue_refining`] tries the walk again.
+pub const REFINEMENTS: usize = 2;
+
+/// `state` continued in `L̄` to `lbar` ([`continue_in_length`]); where that walk fails on the
+/// state's own mesh, the state is resampled to twice its cells and re-solved, and walked
+/// again, up to [`REFINEMENTS`] doublings. A coarse mesh can fold where the family does
+/// not: on a two-segment rod whose soft part the coarse mesh resolves with a few cells, the
+/// discrete family turns back before the length the finer meshes reach (the walk then ends
+/// in Newton failures at the fold), and the minimum would be lost to the search.
+pub fn continue_refining(
+    state: &EnclosedState,
+    lbar: f64,
+    opts: &EnclosedOptions,
+) -> Result<EnclosedState, SolverError> {
+    let mut failure = match continue_in_length(state, lbar, opts) {
+        Ok(s) => return Ok(s),
+        Err(e) => e,
+    };
+    for k in 1..=REFINEMENTS {
+        let cells = state.model.cells() << k;
+        let walked = resample_state(state, cells)
+            .and_then(|(m, z)| solve_prolonged(&m, z, opts))
+            .and_then(|fine| continue_in_length(&fine, lbar, opts));
+        match walked {
+            Ok(s) => return Ok(s),
+            Err(e) => failure = e,
+        }
+    }
+    Err(failure)
 }
 
 #[cfg(test)]

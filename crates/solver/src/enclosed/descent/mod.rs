@@ -34,7 +34,7 @@ use crate::enclosed::branch::{
     branch_from_levels, resample_state, solve_from_surface, solve_levels, solve_levels_from_fine,
     BranchSolve, SurfaceSource,
 };
-use crate::enclosed::length_path::{continue_in_length, probe_lengths};
+use crate::enclosed::length_path::{continue_in_length, continue_refining, probe_lengths};
 use crate::enclosed::solve::{solve_enclosed, solve_prolonged, EnclosedOptions, EnclosedState};
 use crate::enclosed::wall::IntoWall;
 use crate::SolverError;
@@ -355,7 +355,7 @@ where
     let continued = |x: f64, minima: Vec<EnclosedState>| -> Vec<Continued> {
         let mut out: Vec<Continued> = minima
             .into_iter()
-            .filter_map(|s| continue_in_length(&s, lbar, opts).ok().map(|at| (at, s)))
+            .filter_map(|s| continue_refining(&s, lbar, opts).ok().map(|at| (at, s)))
             .filter(|(s, _)| enclosed_periods(s).ok().map(|p| p.eta) == Some(eta))
             .map(|(s, p)| (x, s, p))
             .collect();
