@@ -85,8 +85,9 @@ use critical::{detached_at, enclosed_crossing, exchange_doublings, label};
 use levels::Levels;
 use trace::{circle_point, grid, trace_branch, BranchOut};
 
-/// Gap (units of `R`) below which a node touches the wall.
-pub const TOUCH: f64 = 1e-9;
+/// Gap (units of `R`) below which a node touches the wall: the one tolerance of `solve`'s
+/// enclosed states and the diagrams' rows.
+pub use crate::enclosed_state::TOUCH;
 
 /// What to compute.
 #[derive(Clone, Debug)]
