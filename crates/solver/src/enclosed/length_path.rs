@@ -75,24 +75,21 @@ pub fn continue_in_length(
     )
 }
 
-/// Doublings of a state's cells on which [`continue_refining`] tries the walk again.
+/// Doublings of a state's cells on which [`continue_on_finer`] walks.
 pub const REFINEMENTS: usize = 2;
 
-/// `state` continued in `L̄` to `lbar` ([`continue_in_length`]); where that walk fails on the
-/// state's own mesh, the state is resampled to twice its cells and re-solved, and walked
-/// again, up to [`REFINEMENTS`] doublings. A coarse mesh can fold where the family does
-/// not: on a two-segment rod whose soft part the coarse mesh resolves with a few cells, the
-/// discrete family turns back before the length the finer meshes reach (the walk then ends
-/// in Newton failures at the fold), and the minimum would be lost to the search.
-pub fn continue_refining(
+/// `state`, whose walk in `L̄` to `lbar` on its own mesh failed ([`continue_in_length`]),
+/// resampled to twice its cells, re-solved and walked again, up to [`REFINEMENTS`]
+/// doublings. A coarse mesh can fold where the family does not: on a two-segment rod whose
+/// soft part the coarse mesh resolves with a few cells, the discrete family turns back
+/// before the length the finer meshes reach (the walk then ends in Newton failures at the
+/// fold), and the minimum would be lost to the search.
+pub fn continue_on_finer(
     state: &EnclosedState,
     lbar: f64,
     opts: &EnclosedOptions,
 ) -> Result<EnclosedState, SolverError> {
-    let mut failure = match continue_in_length(state, lbar, opts) {
-        Ok(s) => return Ok(s),
-        Err(e) => e,
-    };
+    let mut failure = SolverError::InvalidInput("no finer mesh walked".into());
     for k in 1..=REFINEMENTS {
         let cells = state.model.cells() << k;
         let walked = resample_state(state, cells)

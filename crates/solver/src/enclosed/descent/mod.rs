@@ -34,7 +34,7 @@ use crate::enclosed::branch::{
     branch_from_levels, resample_state, solve_from_surface, solve_levels, solve_levels_from_fine,
     BranchSolve, SurfaceSource,
 };
-use crate::enclosed::length_path::{continue_in_length, continue_refining, probe_lengths};
+use crate::enclosed::length_path::{continue_in_length, continue_on_finer, probe_lengths};
 use crate::enclosed::solve::{solve_enclosed, solve_prolonged, EnclosedOptions, EnclosedState};
 use crate::enclosed::wall::IntoWall;
 use crate::SolverError;
@@ -352,13 +352,17 @@ where
     F: Fn(f64) -> Option<SurfaceSource>,
 {
     let wall = wall.into_wall();
-    let continued = |x: f64, minima: Vec<EnclosedState>| -> Vec<Continued> {
-        let mut out: Vec<Continued> = minima
-            .into_iter()
-            .filter_map(|s| continue_refining(&s, lbar, opts).ok().map(|at| (at, s)))
-            .filter(|(s, _)| enclosed_periods(s).ok().map(|p| p.eta) == Some(eta))
-            .map(|(s, p)| (x, s, p))
-            .collect();
+    // The minima whose walk on their own mesh fails are kept for the walks on finer meshes.
+    let mut stuck: Vec<(f64, EnclosedState)> = Vec::new();
+    let mut continued = |x: f64, minima: Vec<EnclosedState>| -> Vec<Continued> {
+        let mut out: Vec<Continued> = Vec::new();
+        for s in minima {
+            match continue_in_length(&s, lbar, opts) {
+                Ok(at) => out.push((x, at, s)),
+                Err(_) => stuck.push((x, s)),
+            }
+        }
+        out.retain(|(_, s, _)| enclosed_periods(s).ok().map(|p| p.eta) == Some(eta));
         out.sort_by(|a, b| a.1.energy().total_cmp(&b.1.energy()));
         out
     };
@@ -378,14 +382,25 @@ where
     }
     // The stiffness paths where the surface loop's minimum does not arrive as a local
     // minimum (their continuations are the costly start).
-    let arrived = all
-        .iter()
-        .any(|(_, s, _): &Continued| s.index(1e-6).ok() == Some(0));
-    if !arrived && exhaustive {
+    let arrived = |all: &[Continued]| all.iter().any(|(_, s, _)| s.index(1e-6).ok() == Some(0));
+    if !arrived(&all) && exhaustive {
         for &x in lengths.iter().take(STIFFNESS_PROBES) {
             let starts = stiffness_homotopy_states(&wall, x, eta, stiffness, cells, opts)
                 .unwrap_or_default();
             all.extend(continued(x, local_minima(starts, eta, opts)));
+        }
+    }
+    // Where still none arrives as a local minimum, the minima whose walk failed are walked
+    // on finer meshes ([`continue_on_finer`]): a fold of the coarse mesh's family that the
+    // finer meshes do not have.
+    if !arrived(&all) {
+        for (x, s) in stuck {
+            let Ok(at) = continue_on_finer(&s, lbar, opts) else {
+                continue;
+            };
+            if enclosed_periods(&at).ok().map(|p| p.eta) == Some(eta) {
+                all.push((x, at, s));
+            }
         }
     }
     all.sort_by(|a, b| a.1.energy().total_cmp(&b.1.energy()));
