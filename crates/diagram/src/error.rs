@@ -59,7 +59,8 @@ pub enum DiagramError {
         /// What went wrong.
         reason: String,
     },
-    /// A traced branch passed to [`assemble`] is unusable (no points, wrong state length, …).
+    /// A traced branch passed to [`assemble`](crate::assemble) is unusable (no points, wrong state
+    /// length, …).
     #[error("traced branch eta = {eta} is unusable: {reason}")]
     InvalidBranch {
         /// Periods of `κ_g`.
@@ -67,7 +68,8 @@ pub enum DiagramError {
         /// What is wrong with it.
         reason: String,
     },
-    /// The per-branch hook of [`compute`] failed (e.g. a branch file could not be written).
+    /// The per-branch hook of [`compute`](crate::compute) failed (e.g. a branch file could not be
+    /// written).
     #[error("branch hook: {0}")]
     Hook(#[source] rodloop_continuation::BoxError),
     /// A state that could not be solved on its branch (every start tried, each reason given).

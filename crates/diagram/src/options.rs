@@ -31,14 +31,15 @@ pub struct DiagramOptions {
     pub trace_cells_per_period: Option<usize>,
     /// Distance from the great circle at which a branch end stops (must be in `(0, 1e-2)`).
     pub end_distance: f64,
-    /// Whether [`assemble`] analyses the great circles (buckling loads and branch switching).
+    /// Whether [`assemble`](crate::assemble) analyses the great circles (buckling loads and branch
+    /// switching).
     pub great_circles: bool,
     /// Worker threads for tracing and refinement (0: the available parallelism).
     pub threads: usize,
     /// The continued parameter of the branches. Only [`Param::Lbar`] makes a branch diagram
     /// (critical lengths, great circles); [`DiagramOptions::validate`] rejects the others.
     /// Continuing a branch in another parameter (e.g. `d1` at fixed `L̄`) is done with
-    /// [`march()`] on a [`rodloop_solver::ParamProblem`].
+    /// [`march()`](crate::march()) on a [`rodloop_solver::ParamProblem`].
     pub param: Param,
     /// Only these paper branch numbers ([`rodloop_exact::branch_of_eta`]); `None`: all of
     /// [`DiagramOptions::etas`]. Not part of the fingerprint.
@@ -152,7 +153,7 @@ pub(crate) fn surface_model(
 }
 
 impl DiagramOptions {
-    /// The scene's model at length `lbar` with `cells` cells ([`surface_model`]).
+    /// The scene's model at length `lbar` with `cells` cells (`surface_model`).
     pub fn model(&self, lbar: f64, cells: usize) -> Result<Model, SolverError> {
         surface_model(self.radius, lbar, cells, &self.stiffness)
     }
@@ -257,8 +258,8 @@ impl DiagramOptions {
     }
 
     /// A string identifying everything that determines a traced branch (scene, range,
-    /// accuracy, tracing resolution, end distance): [`compute`] reuses a resumed branch only
-    /// if its fingerprint matches.
+    /// accuracy, tracing resolution, end distance): [`compute`](crate::compute) reuses a resumed
+    /// branch only if its fingerprint matches.
     pub fn fingerprint(&self) -> String {
         format!(
             "R={:e};D={:?};range=[{:e},{:e}];accuracy={:?};cpp={};end={:e};v=1",

@@ -76,7 +76,7 @@ where
 }
 
 /// `f` of every item of `items` on the available cores, in the order of `items` (the pool of
-/// [`run_parallel`] without progress events).
+/// `run_parallel` without progress events).
 pub fn parallel_map<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     run_parallel(

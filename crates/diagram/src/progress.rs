@@ -3,12 +3,13 @@
 
 use crate::CriticalKind;
 
-/// Progress events of [`compute`], [`compute_branch`] and [`assemble`] (for progress bars).
+/// Progress events of [`compute`](crate::compute), [`compute_branch`](crate::compute_branch) and
+/// [`assemble`](crate::assemble) (for progress bars).
 #[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
 pub enum Progress {
-    /// [`compute`] will produce these branches (`η` values), `resumed` of them from the
-    /// resume list.
+    /// [`compute`](crate::compute) will produce these branches (`η` values), `resumed` of them from
+    /// the resume list.
     Planned {
         /// Branches (`η`) of the diagram.
         etas: Vec<u32>,
@@ -66,9 +67,9 @@ pub enum Progress {
         /// Why it was rejected.
         reason: String,
     },
-    /// [`assemble`] will locate this many crossings and analyse this many great circles
-    /// (one [`Progress::CriticalLocated`] per crossing, one [`Progress::GreatCircleDone`] per
-    /// circle follow, in any order).
+    /// [`assemble`](crate::assemble) will locate this many crossings and analyse this many great
+    /// circles (one [`Progress::CriticalLocated`] per crossing, one [`Progress::GreatCircleDone`]
+    /// per circle follow, in any order).
     AssemblyPlanned {
         /// Number of crossings found on the samples.
         crossings: usize,

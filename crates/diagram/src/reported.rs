@@ -24,9 +24,9 @@ use crate::StateFile;
 /// The error estimate `|E_N − E_{N/2}|/15` of the energy of `eq` (`N` cells), from the same
 /// state at half the resolution (an even number of cells) at its length and stiffness:
 /// Newton from the resampled profile with the closure multipliers carried over (the
-/// resolution-independent moment; for uniform stiffness through [`resolved`]). Where the
+/// resolution-independent moment; for uniform stiffness through `resolved`). Where the
 /// coarser resolution has no state there (next to a fold, which moves with the resolution),
-/// `16/15 |E_N − E_{2N}|` from the state at twice the resolution ([`resolved`]), as the
+/// `16/15 |E_N − E_{2N}|` from the state at twice the resolution (`resolved`), as the
 /// accuracy levels of `solve` fall back to.
 pub fn half_resolution_estimate(eq: &Equilibrium) -> Result<f64, SolverError> {
     half_resolution(eq).or_else(|half| {

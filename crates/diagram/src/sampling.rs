@@ -22,10 +22,10 @@ pub fn sample_lengths(lo: f64, hi: f64) -> (Vec<f64>, f64) {
 
 /// Origin shifts (fractions of the length, in `[0, 1/(2η))`) that put the point of phase
 /// `j/(8η)` of the Euler curve of `eta` periods (`j` in `phases`) at each stiffness change:
-/// `s0*`, and `s1*` too if `both`. [`StartShape::shifted`] samples the start at `σ + shift`,
-/// so the start's point `σ₀` lands at `σ₀ − shift`; the shift that puts phase `φ` at `s` is
-/// `φ − s` (modulo the half period `1/(2η)`, a shift by which is the reflection
-/// `κ_g → −κ_g`). Empty for a profile without stiffness changes.
+/// `s0*`, and `s1*` too if `both`. [`StartShape::shifted`](rodloop_solver::StartShape::shifted)
+/// samples the start at `σ + shift`, so the start's point `σ₀` lands at `σ₀ − shift`; the shift
+/// that puts phase `φ` at `s` is `φ − s` (modulo the half period `1/(2η)`, a shift by which is the
+/// reflection `κ_g → −κ_g`). Empty for a profile without stiffness changes.
 pub fn feature_shifts(stiffness: &Stiffness, eta: u32, phases: &[u32], both: bool) -> Vec<f64> {
     let features: Vec<f64> = match stiffness {
         Stiffness::Tanh { s0, s1, .. } if both => vec![*s0, *s1],

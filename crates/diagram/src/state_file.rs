@@ -224,7 +224,7 @@ impl TracedBranch {
     /// can differ from the family's `η` ([`StateFile::counted_other_eta`]).
     ///
     /// Errors: [`SolverError::Unverified`] naming why no resolution up to the limit passes
-    /// (see [`verify_refining`]); the state's own errors when it cannot be re-evaluated.
+    /// (see `verify_refining`); the state's own errors when it cannot be re-evaluated.
     pub fn verified_state(
         &self,
         opts: &DiagramOptions,

@@ -4,31 +4,31 @@
 /// What a column of `branches.csv` holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Field {
-    /// [`Point::branch`].
+    /// [`Point::branch`](crate::Point::branch).
     Branch,
-    /// [`Point::eta`].
+    /// [`Point::eta`](crate::Point::eta).
     Eta,
-    /// [`Point::family`].
+    /// [`Point::family`](crate::Point::family).
     Family,
-    /// [`Point::sheet`].
+    /// [`Point::sheet`](crate::Point::sheet).
     Sheet,
-    /// The coordinate of the axis of the same name ([`Point::coords`]).
+    /// The coordinate of the axis of the same name ([`Point::coords`](crate::Point::coords)).
     Coord,
-    /// [`Point::energy`].
+    /// [`Point::energy`](crate::Point::energy).
     Energy,
-    /// [`Point::energy_error`].
+    /// [`Point::energy_error`](crate::Point::energy_error).
     EnergyError,
-    /// [`Point::index`].
+    /// [`Point::index`](crate::Point::index).
     Index,
-    /// [`Point::label`].
+    /// [`Point::label`](crate::Point::label).
     Label,
-    /// [`Point::state_file`].
+    /// [`Point::state_file`](crate::Point::state_file).
     StateFile,
-    /// A number in [`Point::extra`].
+    /// A number in [`Point::extra`](crate::Point::extra).
     Number,
-    /// An integer in [`Point::extra`].
+    /// An integer in [`Point::extra`](crate::Point::extra).
     Integer,
-    /// Text in [`Point::extra`].
+    /// Text in [`Point::extra`](crate::Point::extra).
     Text,
 }
 

@@ -117,7 +117,7 @@ pub struct Fallbacks {
     /// Newton from the start and from the start with its origin moved (`false`: the caller
     /// has tried those already).
     pub starts: bool,
-    /// Continuation in `D1/D0` from the contrasts of [`HOMOTOPY_STARTS`].
+    /// Continuation in `D1/D0` from the contrasts of `HOMOTOPY_STARTS`.
     pub homotopy: bool,
     /// Continuation in `L̄` from other lengths of the branch's range.
     pub lbar_path: bool,

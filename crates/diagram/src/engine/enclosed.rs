@@ -256,7 +256,7 @@ const CERTIFICATE_SAMPLES: usize = 3;
 
 impl EnclosedEngine {
     /// The completeness certificate of a non-uniform rod's diagram `d`: at the lengths of
-    /// [`CERTIFICATE_SAMPLES`] lowest states of the diagram spread over its range, `solve`'s
+    /// `CERTIFICATE_SAMPLES` lowest states of the diagram spread over its range, `solve`'s
     /// search ([`crate::enclosed_state::solve_state`]: the surface loop of each branch that
     /// exists there, then the enclosed loop from it) for every selected branch, in parallel; a
     /// state of `solve` below the diagram's lowest one by more than the two error estimates is

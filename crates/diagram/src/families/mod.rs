@@ -12,7 +12,7 @@
 //! 1. **Seeds** (`seeding.rs`): the uniform rod's exact loop of `η` periods at every
 //!    placement where a family leaves the uniform circle of loops as `D1/D0` departs from 1
 //!    (the critical points of the placed loop's energy on the scene's profile,
-//!    [`crate::placements::PlacedProfile::placements`]), continued in `ln(D1/D0)` from 0 to the
+//!    `crate::placements::PlacedProfile::placements`), continued in `ln(D1/D0)` from 0 to the
 //!    scene's contrast by pseudo-arclength; and the Euler rotation curve `l = η`
 //!    (Eqs. 4–8) with the stiffness change `s0*` at the phases `j/(8η)` (`j = 0…3`) of its
 //!    `κ_g`, solved directly. The range is cut into stretches over which the number of

@@ -153,7 +153,7 @@ impl EnergyPair for GapPair<'_> {
 /// locator ([`rodloop_continuation::exchange::locate`]) on re-solved equilibria, hunting
 /// from their common length (first step `+10⁻³`, steps clamped to 0.05, within `±0.5`);
 /// returns the two equilibria at the critical length and `d(E_a − E_b)/dL̄` there (the
-/// chord over `±10⁻⁵`). The energies carry noise of about [`RESOLVE_NOISE`], so `L̄` is
+/// chord over `±10⁻⁵`). The energies carry noise of about `RESOLVE_NOISE`, so `L̄` is
 /// refined to `10⁻¹¹` only; the augmented Newton polishes.
 pub fn maxwell_point(
     a: &Equilibrium,

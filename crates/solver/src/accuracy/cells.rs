@@ -55,7 +55,8 @@ impl Accuracy {
     }
 
     /// Number of cells of the main solve for a loop whose geodesic curvature has `periods`
-    /// oscillation periods (`η` of the branch; see [`StartShape::periods`]):
+    /// oscillation periods (`η` of the branch; see
+    /// [`StartShape::periods`](crate::StartShape::periods)):
     /// `N = c (1 + η)` with `c = 56` (default, high) or `20` (fast). The discretisation error
     /// grows with the number of oscillations, not with `L̄`; `c = 56` keeps the energy error
     /// of the homogeneous branches η = 1..4 below 1e-7 relative (`tests/convergence.rs`,

@@ -13,7 +13,7 @@
 //!   those of the `2N` solution.
 //!
 //! Every rule that turns a level and a scene into a number of cells, whatever it is used
-//! for (solve, tracing, reporting pair, buckling loads, enclosed levels), is in [`cells`]
+//! for (solve, tracing, reporting pair, buckling loads, enclosed levels), is in `cells`
 //! with the resolution table it reads.
 
 mod cells;

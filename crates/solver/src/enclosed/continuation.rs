@@ -316,7 +316,7 @@ pub fn with_stiffness(
 }
 
 /// The eigenvector of the lowest eigenvalue (of any sign) of the tangent Hessian of
-/// `state` ([`EnclosedState::tangent_hessian`], active wall multipliers above `1e-6` of the
+/// `state` (`EnclosedState::tangent_hessian`, active wall multipliers above `1e-6` of the
 /// largest), in the primal unknowns, scaled to the state's `(∫|κ|² ds)^½` in the mass norm;
 /// with the eigenvalue. At a fold of a one-parameter family of equilibria that eigenvalue
 /// goes through zero and its eigenvector is the direction in which the state leaves.
@@ -351,7 +351,7 @@ const SNAP_AMPLITUDES: [f64; 4] = [0.05, 0.15, 0.3, 0.5];
 /// the steps fail at a fold of the
 /// path (the state ceases to exist as `t` grows), the loop snaps through as a quasi-static
 /// loading would: just past the fold, Newton from the last state displaced along its
-/// [`softest_direction`] (amplitudes [`SNAP_AMPLITUDES`], both signs), and the lowest
+/// [`softest_direction`] (amplitudes `SNAP_AMPLITUDES`, both signs), and the lowest
 /// state reached below the last one's energy carries the path on. The enclosed problem of
 /// a two-segment rod has lifted-off equilibria that no surface family of that rod leads to
 /// but that the uniform rod's loops lead to along this path.

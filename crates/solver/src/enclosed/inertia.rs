@@ -4,7 +4,7 @@
 //! The index is the number of eigenvalues below a threshold of the mass-scaled Hessian of
 //! the Lagrangian `W` restricted to the tangent space `{y : B y = 0}` of the closure, the
 //! gauges and the strongly active wall constraints (second-order optimality, Sec. 3.2; the
-//! same operator as [`EnclosedState::tangent_hessian`]). With `r` independent rows `B`, the
+//! same operator as `EnclosedState::tangent_hessian`). With `r` independent rows `B`, the
 //! bordered matrix `K(σ) = [[W − σI, Bᵀ], [B, 0]]` has inertia
 //! `(n_−, n_+, n_0) = inertia(Zᵀ(W − σI)Z) + (r, r, 0)` (Sylvester's law of inertia with
 //! Haynsworth's additivity, `Z` an orthonormal basis of the tangent space), so the number of

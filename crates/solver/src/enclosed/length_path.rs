@@ -9,9 +9,9 @@
 //! by the enclosed diagram through the branch's whole range. This route does the same for
 //! one length: at lengths of the branch nearest the one asked for ([`probe_lengths`]) it
 //! finds a local minimum of the branch on a coarse mesh (from the surface loop, else from the
-//! stiffness paths of [`stiffness_homotopy_states`], each descended where it is a saddle),
-//! and continues it in `L̄` to the length asked for ([`continue_in_length`]):
-//! [`super::descent::states_by_length_continuation`].
+//! stiffness paths of [`stiffness_homotopy_states`](super::descent::stiffness_homotopy_states),
+//! each descended where it is a saddle), and continues it in `L̄` to the length asked for
+//! ([`continue_in_length`]): [`super::descent::states_by_length_continuation`].
 
 use rodloop_continuation::natural::{walk_adaptive, AdaptiveSettings};
 

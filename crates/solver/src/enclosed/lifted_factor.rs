@@ -5,11 +5,11 @@
 //! instead of the dense LU's `O(N³)`.
 //!
 //! A vector of the model's unknowns or equations maps to the lifted layout by the
-//! Newton step's own assignment ([`lift_layout`], [`unlift_layout`]): the
+//! Newton step's own assignment (`lift_layout`, `unlift_layout`): the
 //! curvature unknowns and stationarity rows of cell `c`, the wall multiplier and row of node
 //! `c + 1` in block `c`, and `(r0, μ, ν, λ_0)` in the border; the auxiliary recursion rows
 //! have a zero right-hand side. A product `J v` fills the auxiliary unknowns of the lifted
-//! `v` ([`Lifted::complete`]) and reads the model's rows of `M v`.
+//! `v` (`Lifted::complete`) and reads the model's rows of `M v`.
 
 use nalgebra::DVector;
 use rodloop_continuation::Factorization;
@@ -87,7 +87,7 @@ impl LiftedFactor {
 
 impl Factorization for LiftedFactor {
     /// Block elimination and one step of iterative refinement against the lifted system
-    /// ([`Factor::solve_refined`], the Newton step's own); `None` where that fails.
+    /// (`Factor::solve_refined`, the Newton step's own); `None` where that fails.
     fn solve(&self, b: &DVector<f64>) -> Option<DVector<f64>> {
         let mut buf = SolveBuffers::default();
         self.fac

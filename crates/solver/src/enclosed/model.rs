@@ -22,7 +22,7 @@
 //!
 //! Positions and frames at the nodes `s_j` (cell boundaries) follow from the SE(3) Magnus
 //! chain `P_{c+1} = P_c exp(Θ_c)` ([`super::jet`]), `r_j = r0 + p_j`. Closure of position
-//! and tangent, `C = (c_rot(X_N), p_N) = 0` with the rows of [`closure_rotation`] (the tangent
+//! and tangent, `C = (c_rot(X_N), p_N) = 0` with the rows of `closure_rotation` (the tangent
 //! back on `t(0) = e1`, full rank at every turn of the frame about it); the
 //! rotation about the tangent (row [`TWIST_ROW`]) is free: its row reads `μ_twist = 0` (no
 //! twisting moment). The wall
@@ -64,7 +64,7 @@ type M4 = Matrix4<f64>;
 type V3 = Vector3<f64>;
 
 /// The closure row of the rotation about the tangent `t(0)` (the first component of
-/// [`closure_rotation`]). The rod has no twist energy (paper Sec. 2: pure bending, `M·t = 0`), so
+/// `closure_rotation`). The rod has no twist energy (paper Sec. 2: pure bending, `M·t = 0`), so
 /// the rotation-minimising frame need not return about the tangent: a space curve's frame
 /// comes back turned by its holonomy (`−∮τ ds` mod 2π; zero on the sphere, Geppert's
 /// theorem, but not for a loop off the wall). Requiring it to return would be a constraint
@@ -571,7 +571,7 @@ impl EnclosedModel {
             .collect())
     }
 
-    /// Closure residual `(c_rot(X_N), p_N)` ([`closure_rotation`]) with its twist component
+    /// Closure residual `(c_rot(X_N), p_N)` (`closure_rotation`) with its twist component
     /// (about `t(0)`, the first) reported as 0: the loop closes when position and tangent return; the
     /// rotation-minimising frame may come back turned about the tangent (see
     /// [`TWIST_ROW`]).

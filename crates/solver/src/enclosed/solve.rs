@@ -1,6 +1,6 @@
 //! Semismooth Newton on the enclosed KKT system and its starting shapes (surface loop,
 //! curvature profile, free circle; the multipliers carried between meshes are in
-//! [`super::carry`]); what is read off a converged state is in [`super::state`].
+//! `super::carry`); what is read off a converged state is in [`super::state`].
 //!
 //! # Solver choice
 //!
@@ -186,7 +186,7 @@ pub fn solve_prolonged(
 }
 
 /// Iterations in a row that do not halve the residual before semismooth Newton on the
-/// min-function hands over to Fischer–Burmeister ([`newton`]).
+/// min-function hands over to Fischer–Burmeister (`newton`).
 pub const CRAWL_WINDOW: usize = 10;
 
 /// [`solve_enclosed`]'s iteration; `ended` says where it stopped.

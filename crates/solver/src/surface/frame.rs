@@ -48,7 +48,7 @@ pub fn expm_skew(w: &Matrix3<f64>) -> Matrix3<f64> {
 /// returns `[a, a', a'', b, b', b'']`.
 ///
 /// For `q < 1` the Maclaurin series `a = Σ (−q)^k/(2k+1)!`, `b = Σ (−q)^k/(2k+2)!` and their
-/// derivatives are summed ([`SERIES_TERMS`] terms, Horner's rule); otherwise the closed forms
+/// derivatives are summed (`SERIES_TERMS` terms, Horner's rule); otherwise the closed forms
 /// `a' = (cos θ − a)/(2q)`, `a'' = −(a/2 + 3a')/(2q)`, `b' = (a/2 − b)/q`,
 /// `b'' = (a'/2 − 2b')/q` are used, which have no cancellation problem there.
 ///

@@ -110,7 +110,7 @@ impl TrigInterpolant {
     }
 
     /// Values at every `σ` of `sigmas`: those of [`TrigInterpolant::eval`], bit for bit
-    /// (each value sees the same operations in the same order). [`EVAL_LANES`] points are
+    /// (each value sees the same operations in the same order). `EVAL_LANES` points are
     /// evaluated side by side, so that their angle-addition recurrences, each a chain of
     /// dependent products, overlap instead of waiting on each other.
     pub fn eval_many(&self, sigmas: &[f64]) -> Vec<f64> {

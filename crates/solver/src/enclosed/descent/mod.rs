@@ -134,7 +134,7 @@ pub type LowestSolve = (DescendedSolve, bool);
 /// mesh of `ladder`), each cascaded to `N/2, N` ([`solve_levels`]) and descended where it is a saddle ([`descend_branch`]).
 /// Then the local minima of the branch found at the nearest other lengths (on the same coarse
 /// mesh, [`crate::enclosed::length_path`]) are cascaded there and continued in `L̄` to `lbar`
-/// level by level ([`continue_ladder`], as the enclosed diagram walks a stable family
+/// level by level (`continue_ladder`, as the enclosed diagram walks a stable family
 /// through the branch's range), else continued on the coarse mesh and cascaded at `lbar`,
 /// and descended in the same way; where none of the starts above is a local minimum, the
 /// stiffness paths at the nearest lengths are continued too. On two-segment rods drawn at

@@ -29,7 +29,7 @@ impl SurfaceModel {
     /// [`crate::frame::exp_value`], multiplied in the same order), with the same errors, at a
     /// fraction of its cost (no derivatives, no adjoint sweep): where these rows alone give a
     /// merit above a bound, the whole residual does (a line search rejects its trial from
-    /// them, [`crate::solve`]).
+    /// them, [`mod@crate::solve`]).
     pub fn kkt_closure_residual(&self, z: &[f64]) -> Result<[f64; 3], SolverError> {
         let (kappa, _, _) = self.split(z)?;
         self.check_kappa(kappa)?;
