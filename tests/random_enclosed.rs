@@ -220,6 +220,15 @@ fn random_enclosed_diagram_where_solve_must_continue_a_minimum_holds() {
     check_scene(3, 1.0, 2.6);
 }
 
+/// `D1/D0 = 0.580` on `0.195 ≤ s/L ≤ 0.734`, `γ = 24.2`: at `L̄ = 1.538165` the lowest traced
+/// state of branch 2 is a saddle (lowest eigenvalue `−6·10⁻³`) from which no descent leads
+/// lower; `solve`'s search there (Newton from the surface loop) reaches a minimum 5.2e-4
+/// below it, which the diagram traces as a family of its own.
+#[test]
+fn random_enclosed_diagram_where_only_solve_reaches_the_lowest_minimum_holds() {
+    check_scene(19, 1.0, 2.6);
+}
+
 /// `D1/D0 = 0.517` on `0.026 ≤ s/L ≤ 0.298`, `γ = 37.4`: next to the exchange 3 → 1
 /// (placed by interpolation, a trace of branch 1 stopping at its fold `6·10⁻⁶` away) the
 /// lowest state at `L̄ = 2.427429` is the saddle half of the fold (lowest eigenvalue

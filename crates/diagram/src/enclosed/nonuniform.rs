@@ -620,7 +620,7 @@ pub(super) fn nonuniform_diagram(
     // States that another branch's periods name are no rows of this one (before the descent,
     // which starts from the lowest rows, and after it, for the families it adds).
     warnings.extend(outs.iter_mut().filter_map(SheetOut::drop_other_branches));
-    let (w, parents) = descend_unstable(&mut outs, &idx, threads);
+    let (w, parents) = descend_unstable(&mut outs, &idx, opts.accuracy, threads);
     warnings.extend(w);
     idx.extend(parents);
     warnings.extend(outs.iter_mut().filter_map(SheetOut::drop_other_branches));

@@ -6,15 +6,17 @@
 //! its unstable direction, both signs, and Newton
 //! ([`descend`](rodloop_solver::enclosed::descent::descend)); the state reached is
 //! re-solved at `N/4, N/2, N` and traced through the parent sheet's sampled lengths as a
-//! new family of the same branch. The new family's states are kept where they lie below
+//! new family of the same branch. Where no descent leads lower, `solve`'s search for the
+//! branch at that length is the last resort (its other starts reach other minima). The new family's states are kept where they lie below
 //! the parent's (elsewhere they have merged into it). The index is that of the state
 //! reported, its finest level ([`Levels::index`]). A sheet's search stops at the first of
 //! its unstable lowest states that leads lower; the ones it did not reach stay candidates
 //! of the next round (a family traced from one of them need not reach the others).
 
-use rodloop_solver::enclosed::descent::descend;
+use rodloop_solver::enclosed::descent::{descend, solve_branch_lowest};
 use rodloop_solver::enclosed::stats::{self, Stage};
-use rodloop_solver::enclosed::{solve_levels, EnclosedOptions};
+use rodloop_solver::enclosed::{solve_levels, EnclosedOptions, SurfaceSource};
+use rodloop_solver::{solve_robust, Accuracy, SolveOptions, StartShape};
 
 use rodloop_continuation::exchange::lowest_state;
 
@@ -23,7 +25,7 @@ use super::nonuniform_exchange::{interp, lowest_near_circle, ranked_at};
 use super::nonuniform_sheet::SheetOut;
 use super::trace::step_options;
 use super::trace::{follow, TraceStop};
-use super::PointSource;
+use super::{PointSource, TOUCH};
 use crate::parallel::run_parallel;
 
 /// Relative step amplitudes along the unstable direction, tried in turn.
@@ -82,9 +84,24 @@ fn candidates(least: &[f64], tied: &[f64]) -> Vec<f64> {
 
 /// The lowest new state reached from `lv` (coarsest level) along its unstable direction,
 /// cascaded to `N/2` and `N`: below `lv` and not a state another sheet already has there.
-fn lower_state(lv: &Levels, outs: &[SheetOut], opts: &EnclosedOptions) -> Option<Levels> {
+/// Where no descent leads lower and `accuracy` is given, `solve`'s search for branch `eta`
+/// at that length ([`lowest_by_solve`]).
+fn lower_state(
+    lv: &Levels,
+    eta: u32,
+    outs: &[SheetOut],
+    accuracy: Option<Accuracy>,
+    opts: &EnclosedOptions,
+) -> Option<Levels> {
     let x = lv.lbar;
     let e0 = lv.energy().0;
+    let new_and_lower = |l: &Levels| {
+        let e = l.energy().0;
+        let known = outs
+            .iter()
+            .any(|s| interp(s, x).is_some_and(|es| (es - e).abs() < 1e-6));
+        e < e0 - 1e-7 && !known
+    };
     for amp in AMPLITUDES {
         let Ok(cands) = descend(&lv.states[0], amp, opts) else {
             continue;
@@ -97,16 +114,57 @@ fn lower_state(lv: &Levels, outs: &[SheetOut], opts: &EnclosedOptions) -> Option
                 lbar: x,
                 states: [b.quarter, b.coarse, b.fine],
             };
-            let e = l.energy().0;
-            let known = outs
-                .iter()
-                .any(|s| interp(s, x).is_some_and(|es| (es - e).abs() < 1e-6));
-            if e < e0 - 1e-7 && !known {
+            if new_and_lower(&l) {
                 return Some(l);
             }
         }
     }
-    None
+    lowest_by_solve(lv, eta, accuracy?, opts).filter(|l| new_and_lower(l))
+}
+
+/// The lowest local minimum of branch `eta` at `lv`'s length by `solve`'s search on `lv`'s
+/// meshes ([`solve_branch_lowest`] with the surface loop there: Newton from the surface loop,
+/// the stiffness paths and the minima of other lengths continued in `L̄`, each descended),
+/// where it is lifted off and of index 0. The descents from a saddle end where Newton takes
+/// the displaced state, which need not be the branch's lowest minimum; `solve`'s starts
+/// reach minima the traces and descents do not (random seed 19 of
+/// `tests/random_enclosed.rs`, branch 2 at `L̄ = 1.538165`: a saddle traced as the lowest
+/// state, 5.2e-4 above the minimum that Newton reaches from the surface loop).
+fn lowest_by_solve(
+    lv: &Levels,
+    eta: u32,
+    accuracy: Accuracy,
+    opts: &EnclosedOptions,
+) -> Option<Levels> {
+    let m = &lv.states[2].model;
+    let stiffness = m.stiffness().kind();
+    let (surface, _) = solve_robust(
+        m.radius(),
+        lv.lbar,
+        stiffness,
+        &StartShape::Euler { l: eta },
+        accuracy,
+        Some(eta),
+        &SolveOptions::default(),
+    )
+    .ok()?;
+    let source = SurfaceSource::Numeric(Box::new(surface.equilibrium));
+    let ((b, _, _), _) = solve_branch_lowest(
+        m.wall(),
+        lv.lbar,
+        eta,
+        stiffness,
+        &source,
+        &[m.cells()],
+        opts,
+    )
+    .ok()?;
+    let l = Levels {
+        lbar: lv.lbar,
+        states: [b.quarter, b.coarse, b.fine],
+    };
+    let lifted = l.states[2].contact(TOUCH).ok()?.fraction < 1.0;
+    (lifted && l.index().ok()? == 0).then_some(l)
 }
 
 /// Add the families found below unstable lowest states to `outs` (see the module docs).
@@ -115,6 +173,7 @@ fn lower_state(lv: &Levels, outs: &[SheetOut], opts: &EnclosedOptions) -> Option
 pub(super) fn descend_unstable(
     outs: &mut Vec<SheetOut>,
     roots: &[usize],
+    accuracy: Accuracy,
     threads: usize,
 ) -> (Vec<String>, Vec<usize>) {
     let mut warnings = Vec::new();
@@ -167,12 +226,16 @@ pub(super) fn descend_unstable(
                 // The lengths searched: the search stops at the first lower state found, and
                 // the others stay candidates of the next round.
                 let mut searched = Vec::new();
-                for &x in &cands {
+                for (i, &x) in cands.iter().enumerate() {
                     searched.push(x);
+                    // `solve`'s search (seconds) at the sheet's first candidate of the round.
+                    let search = (i == 0).then_some(accuracy);
                     let Some(lv) = parent.levels.iter().find(|l| (l.lbar - x).abs() < 1e-12) else {
                         continue;
                     };
-                    let lower = stats::stage(Stage::Descent, || lower_state(lv, shared, &dopts));
+                    let lower = stats::stage(Stage::Descent, || {
+                        lower_state(lv, parent.eta, shared, search, &dopts)
+                    });
                     if let Some(first) = lower {
                         let mut grid: Vec<f64> = parent.levels.iter().map(|l| l.lbar).collect();
                         grid.sort_by(f64::total_cmp);
@@ -195,7 +258,7 @@ pub(super) fn descend_unstable(
             let parent = &outs[k];
             let Some((traced, stops)) = found else {
                 warnings.push(format!(
-                    "branch {} (eta = {}) below family {}: the lowest states at lbar = {} have index >= 1, but no lower equilibrium was reached along their unstable directions",
+                    "branch {} (eta = {}) below family {}: the lowest states at lbar = {} have index >= 1, but no lower equilibrium was reached along their unstable directions or by the search of solve there",
                     parent.branch,
                     parent.eta,
                     parent.family,
