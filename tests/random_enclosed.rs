@@ -335,11 +335,36 @@ fn solve_writes_an_attached_two_segment_state_that_holds_its_energy() {
 /// attached side is resolved as finely as the lifted-off one.
 #[test]
 fn random_enclosed_exchange_with_an_attached_side_agrees_with_independent_solves() {
-    let (dir, sc, text) = scene_file("random-enclosed-attached-exchange", 15, 2.38, 2.45);
+    exchange_agrees_with_independent_solves(
+        "random-enclosed-attached-exchange",
+        15,
+        2.38,
+        2.45,
+        1e-5,
+    );
+}
+
+/// `D1/D0 = 0.271` on `0.728 ≤ s/L ≤ 0.987`, `γ = 85.1`, over `1 ≤ L̄ ≤ 2.6`: the exchange
+/// 3 → 1 between two lifted-off families, where the walk of branch 1 from the sample nearest
+/// the root stalls (KKT residual `2·10⁻⁵`) and the one from the next sample arrives. Located
+/// on the ladder, it agrees with independent `solve`s `10⁻⁴` either side as above, and its
+/// estimate is no wider than theirs (the crossing of the sampled energies would be `±1.6e-2`).
+#[test]
+fn random_enclosed_exchange_past_a_stalled_walk_agrees_with_independent_solves() {
+    exchange_agrees_with_independent_solves("random-enclosed-stalled-exchange", 32, 1.0, 2.6, 1e-4);
+}
+
+/// The diagram of scene `seed` on `lo ≤ L̄ ≤ hi`, its last crossing `x ± err` against the root
+/// of `E_from − E_to` from independent `solve`s of both branches at `x ± delta` (secant): the
+/// two within the two estimates, and the diagram's estimate no wider than the independent
+/// root's (the solves' estimates over the slope).
+fn exchange_agrees_with_independent_solves(name: &str, seed: u64, lo: f64, hi: f64, delta: f64) {
+    let (dir, sc, text) = scene_file(name, seed, lo, hi);
     let out = diagram_of(&dir, &sc);
     let (h, rows) = read_csv(&out.join("critical.csv"));
     let crossing = rows
         .iter()
+        .rev()
         .find(|r| r[col(&h, "kind")] == "crossing")
         .unwrap_or_else(|| panic!("no exchange located: {rows:?}\n{text}"));
     let num = |name: &str| -> f64 { crossing[col(&h, name)].parse().unwrap() };
@@ -348,7 +373,6 @@ fn random_enclosed_exchange_with_an_attached_side_agrees_with_independent_solves
         &crossing[col(&h, "from_branch")],
         &crossing[col(&h, "to_branch")],
     ];
-    let delta = 1e-5;
     // E_from − E_to and its estimate at `x + t`.
     let difference = |t: f64, tag: &str| {
         let mut d = 0.0;
@@ -377,7 +401,7 @@ fn random_enclosed_exchange_with_an_attached_side_agrees_with_independent_solves
     let (dp, ep) = difference(delta, "above");
     assert!(
         dm * dp < 0.0,
-        "E_a − E_b does not change sign: {dm} at x − 1e-5, {dp} at x + 1e-5\n{text}"
+        "E_a − E_b does not change sign: {dm} at x − {delta:e}, {dp} at x + {delta:e}\n{text}"
     );
     let slope = (dp - dm) / (2.0 * delta);
     let root = x - delta - dm / slope;
