@@ -462,6 +462,15 @@ fn solve_continues_a_minimum_past_a_fold_of_its_coarse_mesh() {
     same_minimum_at_every_accuracy("random-enclosed-coarse-fold", 12, "1.34");
 }
 
+/// As above on the 26th scene (`D1/D0 = 0.229` on `0.376 ≤ s/L ≤ 0.857`, `γ = 93.9`) at
+/// `L̄ = 1.3679277`: Newton from the surface loop ends, on every mesh, at an index-0 state
+/// whose branch cannot be identified (grid-scale noise in its curvature), which is no
+/// answer; the minimum comes from the continuation in `L̄` on the 128-cell mesh.
+#[test]
+fn solve_passes_over_a_state_of_no_branch_to_the_minimum() {
+    same_minimum_at_every_accuracy("random-enclosed-no-branch", 26, "1.3679277308532274");
+}
+
 /// `solve --lbar LBAR --branch 2` on scene `seed` at the three accuracies: index 0 each, the
 /// energies equal within the estimates.
 fn same_minimum_at_every_accuracy(name: &str, seed: u64, lbar: &str) {
