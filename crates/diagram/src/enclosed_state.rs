@@ -440,30 +440,30 @@ pub fn solve_state_with(
                 }
             }
         }
+        // Then every start on the meshes of the lower accuracies, finest first, and, as the
+        // last resort, on the finer meshes too. The minima of other lengths, carried to a mesh
+        // and continued there, can converge on one mesh and not on another (random seed 26 of
+        // `tests/random_enclosed.rs`, branch 2 at `L̄ = 1.3679277`: on 128 cells, not on 96,
+        // while the surface loop leads to a state whose branch cannot be identified on every
+        // mesh).
         if by_mesh.is_none() && ladder.len() > 1 {
-            for &m in &coarser {
+            let lower = coarser.iter().map(|&m| {
+                (
+                    m,
+                    "the mesh of a lower accuracy (its estimate from N/4, N/2, N there)",
+                )
+            });
+            let finer = ladder[1..].iter().map(|&m| {
+                (
+                    m,
+                    "by every start (on the meshes before it, by the surface loops)",
+                )
+            });
+            for (m, how) in lower.chain(finer) {
                 if let Ok(f) = search(&[m]) {
                     if minimum(&f.0 .0) {
                         passed_over.push(format!(
-                            "the state is the lowest local minimum found on N = {m} cells, the mesh of a lower accuracy (its estimate from N/4, N/2, N there)"
-                        ));
-                        by_mesh = Some(f);
-                        break;
-                    }
-                }
-            }
-        }
-        // The last resort: every start on the finer meshes too. The minima of other lengths,
-        // carried to a mesh and continued there, can converge on one mesh and not on another
-        // (random seed 26 of `tests/random_enclosed.rs`, branch 2 at `L̄ = 1.3679277`: on 128
-        // cells, not on 96, while the surface loop leads to a state whose branch cannot be
-        // identified on every mesh).
-        if by_mesh.is_none() && ladder.len() > 1 {
-            for &m in &ladder[1..] {
-                if let Ok(f) = search(&[m]) {
-                    if minimum(&f.0 .0) {
-                        passed_over.push(format!(
-                            "the state is the lowest local minimum found on N = {m} cells by every start (on the meshes before it, by the surface loops)"
+                            "the state is the lowest local minimum found on N = {m} cells, {how}"
                         ));
                         by_mesh = Some(f);
                         break;
