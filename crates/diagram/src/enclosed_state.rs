@@ -27,7 +27,7 @@ use rodloop_solver::enclosed::{
     start_from_shape, EnclosedOptions, EnclosedState, SavedShape, SurfaceSource,
 };
 use rodloop_solver::enclosed::{IntoWall, Wall};
-use rodloop_solver::{solve_robust, Accuracy, Equilibrium, SolveOptions, StartShape, Stiffness};
+use rodloop_solver::{Accuracy, Equilibrium, Stiffness};
 
 use crate::DiagramError;
 
@@ -319,18 +319,8 @@ pub fn solve_state_with(
         )))?;
         (SurfaceSource::Exact(l), 0.0)
     } else {
-        let (res, _) = solve_robust(
-            r,
-            lbar,
-            stiffness,
-            &StartShape::Euler { l: eta },
-            accuracy,
-            Some(eta),
-            &SolveOptions::default(),
-        )
-        .map_err(context(format!("the surface loop of branch {branch}")))?;
-        let err = res.energy_error;
-        (SurfaceSource::Numeric(Box::new(res.equilibrium)), err)
+        SurfaceSource::numeric(r, lbar, stiffness, eta, accuracy)
+            .map_err(context(format!("the surface loop of branch {branch}")))?
     };
     let e_surf = source.energy().map_err(passed)?;
     let lam_min = source.lambda_min(r, d0);
@@ -617,18 +607,10 @@ fn lowest_over_surface_starts(
         if level == accuracy {
             continue;
         }
-        let Ok((surface, _)) = solve_robust(
-            wall.radius(),
-            lbar,
-            stiffness,
-            &StartShape::Euler { l: eta },
-            level,
-            Some(eta),
-            &SolveOptions::default(),
-        ) else {
+        let Ok((source, _)) = SurfaceSource::numeric(wall.radius(), lbar, stiffness, eta, level)
+        else {
             continue;
         };
-        let source = SurfaceSource::Numeric(Box::new(surface.equilibrium));
         let Ok((b, d, mut notes)) =
             solve_branch_descended(wall, lbar, stiffness, &source, ladder, opts)
         else {

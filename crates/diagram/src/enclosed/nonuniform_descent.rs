@@ -16,7 +16,7 @@
 use rodloop_solver::enclosed::descent::{descend, solve_branch_lowest};
 use rodloop_solver::enclosed::stats::{self, Stage};
 use rodloop_solver::enclosed::{solve_levels, EnclosedOptions, SurfaceSource};
-use rodloop_solver::{solve_robust, Accuracy, SolveOptions, StartShape};
+use rodloop_solver::Accuracy;
 
 use rodloop_continuation::exchange::lowest_state;
 
@@ -138,17 +138,7 @@ fn lowest_by_solve(
 ) -> Option<Levels> {
     let m = &lv.states[2].model;
     let stiffness = m.stiffness().kind();
-    let (surface, _) = solve_robust(
-        m.radius(),
-        lv.lbar,
-        stiffness,
-        &StartShape::Euler { l: eta },
-        accuracy,
-        Some(eta),
-        &SolveOptions::default(),
-    )
-    .ok()?;
-    let source = SurfaceSource::Numeric(Box::new(surface.equilibrium));
+    let (source, _) = SurfaceSource::numeric(m.radius(), lv.lbar, stiffness, eta, accuracy).ok()?;
     let ((b, _, _), _) = solve_branch_lowest(
         m.wall(),
         lv.lbar,

@@ -24,6 +24,31 @@ pub enum SurfaceSource {
 }
 
 impl SurfaceSource {
+    /// The numerical surface loop of branch `eta` at `lbar` ([`crate::solve_robust`] from the
+    /// Euler curve `l = η`, at `accuracy`) and its energy estimate: the start of an enclosed
+    /// solve of a non-uniform rod.
+    pub fn numeric(
+        radius: f64,
+        lbar: f64,
+        stiffness: &Stiffness,
+        eta: u32,
+        accuracy: crate::Accuracy,
+    ) -> Result<(Self, f64), SolverError> {
+        let (res, _) = crate::solve_robust(
+            radius,
+            lbar,
+            stiffness,
+            &crate::StartShape::Euler { l: eta },
+            accuracy,
+            Some(eta),
+            &crate::SolveOptions::default(),
+        )?;
+        Ok((
+            SurfaceSource::Numeric(Box::new(res.equilibrium)),
+            res.energy_error,
+        ))
+    }
+
     /// `κ_g` at `σ = s/L` (units of the model).
     pub fn kappa_g(&self, radius: f64, sigma: &[f64]) -> Result<Vec<f64>, SolverError> {
         match self {

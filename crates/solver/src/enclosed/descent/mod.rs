@@ -214,17 +214,9 @@ pub fn solve_branch_lowest(
     if cells >= 32 && cells % 4 == 0 {
         let radius = wall.radius();
         let surface = |x: f64| {
-            crate::solve_robust(
-                radius,
-                x,
-                stiffness,
-                &crate::StartShape::Euler { l: eta },
-                crate::Accuracy::Fast,
-                Some(eta),
-                &crate::SolveOptions::default(),
-            )
-            .ok()
-            .map(|(r, _)| SurfaceSource::Numeric(Box::new(r.equilibrium)))
+            SurfaceSource::numeric(radius, x, stiffness, eta, crate::Accuracy::Fast)
+                .ok()
+                .map(|(s, _)| s)
         };
         for (x, s, probe) in states_by_length_continuation(
             &wall,
@@ -354,6 +346,7 @@ where
     let wall = wall.into_wall();
     // The minima whose walk on their own mesh fails are kept for the walks on finer meshes.
     let mut stuck: Vec<(f64, EnclosedState)> = Vec::new();
+    let of_branch = |s: &EnclosedState| enclosed_periods(s).ok().map(|p| p.eta) == Some(eta);
     let mut continued = |x: f64, minima: Vec<EnclosedState>| -> Vec<Continued> {
         let mut out: Vec<Continued> = Vec::new();
         for s in minima {
@@ -362,7 +355,7 @@ where
                 Err(_) => stuck.push((x, s)),
             }
         }
-        out.retain(|(_, s, _)| enclosed_periods(s).ok().map(|p| p.eta) == Some(eta));
+        out.retain(|(_, s, _)| of_branch(s));
         out.sort_by(|a, b| a.1.energy().total_cmp(&b.1.energy()));
         out
     };
@@ -398,7 +391,7 @@ where
             let Ok(at) = continue_on_finer(&s, lbar, opts) else {
                 continue;
             };
-            if enclosed_periods(&at).ok().map(|p| p.eta) == Some(eta) {
+            if of_branch(&at) {
                 all.push((x, at, s));
             }
         }
