@@ -338,9 +338,10 @@ fn random_enclosed_exchange_with_an_attached_side_agrees_with_independent_solves
     exchange_agrees_with_independent_solves(
         "random-enclosed-attached-exchange",
         15,
-        2.38,
-        2.45,
+        (2.38, 2.45),
+        ["3", "1"],
         1e-5,
+        1.0,
     );
 }
 
@@ -351,22 +352,58 @@ fn random_enclosed_exchange_with_an_attached_side_agrees_with_independent_solves
 /// estimate is no wider than theirs (the crossing of the sampled energies would be `±1.6e-2`).
 #[test]
 fn random_enclosed_exchange_past_a_stalled_walk_agrees_with_independent_solves() {
-    exchange_agrees_with_independent_solves("random-enclosed-stalled-exchange", 32, 1.0, 2.6, 1e-4);
+    exchange_agrees_with_independent_solves(
+        "random-enclosed-stalled-exchange",
+        32,
+        (1.0, 2.6),
+        ["3", "1"],
+        1e-4,
+        1.0,
+    );
 }
 
-/// The diagram of scene `seed` on `lo ≤ L̄ ≤ hi`, its last crossing `x ± err` against the root
-/// of `E_from − E_to` from independent `solve`s of both branches at `x ± delta` (secant): the
-/// two within the two estimates, and the diagram's estimate no wider than the independent
-/// root's (the solves' estimates over the slope).
-fn exchange_agrees_with_independent_solves(name: &str, seed: u64, lo: f64, hi: f64, delta: f64) {
+/// `D1/D0 = 0.331` on `0.049 ≤ s/L ≤ 0.647`, `γ = 34.5`, over `1 ≤ L̄ ≤ 2.6`: the lowest
+/// state changes from branch 1 to 2 between samples where the trace of the branch-2 family
+/// stops (its coarse level folds at `L̄ = 1.3607`, and the minimum below lives on finer
+/// meshes only). The diagram locates the exchange on `solve`'s lowest minima of the two
+/// branches; independent `solve`s `10⁻⁴` either side put the root within the two
+/// estimates. The diagram's estimate is at most twice the independent one: it is those
+/// solves' estimates over the slope plus the final bracket of its root finder.
+#[test]
+fn random_enclosed_exchange_where_a_trace_stopped_agrees_with_independent_solves() {
+    exchange_agrees_with_independent_solves(
+        "random-enclosed-stopped-exchange",
+        12,
+        (1.0, 2.6),
+        ["1", "2"],
+        1e-4,
+        2.0,
+    );
+}
+
+/// The diagram of scene `seed` on `lo ≤ L̄ ≤ hi`, its crossing `x ± err` of the branches
+/// `pair` (from, to) against the root of `E_from − E_to` from independent `solve`s of both
+/// branches at `x ± delta` (secant): the two within the two estimates, and the diagram's
+/// estimate no wider than `wider` times the independent root's (the solves' estimates over
+/// the slope).
+fn exchange_agrees_with_independent_solves(
+    name: &str,
+    seed: u64,
+    (lo, hi): (f64, f64),
+    pair: [&str; 2],
+    delta: f64,
+    wider: f64,
+) {
     let (dir, sc, text) = scene_file(name, seed, lo, hi);
     let out = diagram_of(&dir, &sc);
     let (h, rows) = read_csv(&out.join("critical.csv"));
     let crossing = rows
         .iter()
-        .rev()
-        .find(|r| r[col(&h, "kind")] == "crossing")
-        .unwrap_or_else(|| panic!("no exchange located: {rows:?}\n{text}"));
+        .find(|r| {
+            r[col(&h, "kind")] == "crossing"
+                && [&r[col(&h, "from_branch")], &r[col(&h, "to_branch")]] == pair
+        })
+        .unwrap_or_else(|| panic!("no exchange {pair:?} located: {rows:?}\n{text}"));
     let num = |name: &str| -> f64 { crossing[col(&h, name)].parse().unwrap() };
     let (x, err) = (num("lbar_cr"), num("error_estimate"));
     let branches = [
@@ -411,8 +448,8 @@ fn exchange_agrees_with_independent_solves(name: &str, seed: u64, lo: f64, hi: f
         "the diagram's exchange {x} ± {err:.1e} against the solves' root {root} ± {independent:.1e}\n{text}"
     );
     assert!(
-        err <= independent,
-        "the diagram's estimate {err:.1e} is wider than the independent root's {independent:.1e}\n{text}"
+        err <= wider * independent,
+        "the diagram's estimate {err:.1e} is wider than {wider} times the independent root's {independent:.1e}\n{text}"
     );
 }
 

@@ -57,7 +57,7 @@ use rodloop_solver::{solve_from_state, SolverError};
 use super::levels::Levels;
 use super::nonuniform_descent::descend_unstable;
 use super::nonuniform_exchange::{
-    interp, locate_crossing, lowest_at, mean_stiffness, ranked_at, CIRCLE,
+    interp, locate_crossing, locate_crossing_by_solve, lowest_at, mean_stiffness, ranked_at, CIRCLE,
 };
 use super::nonuniform_seeds::seed_from_stiffness_path;
 use super::nonuniform_sheet::{check_rows_on_finer, surface_at, surface_energy, SheetOut};
@@ -788,10 +788,34 @@ pub(super) fn nonuniform_diagram(
             // Sheets begin and end at the great circles: handled below.
             continue;
         }
-        warnings.push(format!(
-            "the lowest state changes from branch {} to {} between lbar = {:.6} and {:.6} where a trace stopped; not located",
-            sa.branch, sb.branch, w[0], w[1]
-        ));
+        // A trace stopped inside the bracket: `solve`'s lowest minima of the two branches.
+        let by_solve = stats::within(&scope, || {
+            stats::stage(Stage::Exchange, || {
+                locate_crossing_by_solve(opts, [sa.branch, sb.branch], w[0], w[1])
+            })
+        });
+        match by_solve {
+            Ok(c) => {
+                brackets.push((w[0], w[1], a, b));
+                critical.push(EnclosedCritical {
+                    critical: Critical {
+                        lbar_cr: c.lbar,
+                        energy: c.energy,
+                        error_estimate: c.error,
+                        ..base
+                    },
+                    surface_lbar_cr: c.surface_lbar,
+                    method: format!(
+                        "{}; the sampled lowest families {} -> {}",
+                        c.method, sa.family, sb.family
+                    ),
+                });
+            }
+            Err(e) => warnings.push(format!(
+                "the lowest state changes from branch {} to {} between lbar = {:.6} and {:.6} where a trace stopped; not located ({e})",
+                sa.branch, sb.branch, w[0], w[1]
+            )),
+        }
     }
     // Collapses: the lowest sheet just below a great circle `L̄ = m` ends there and the
     // lowest just above begins there.

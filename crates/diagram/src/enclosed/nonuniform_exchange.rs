@@ -22,8 +22,9 @@ use super::critical::{exchange_doublings, locate_from, EnclosedPair, Ladder};
 use super::levels::Levels;
 use super::nonuniform_sheet::{surface_energy, surface_energy_doubled, walk, SheetOut};
 use super::{EnclosedCritical, EnclosedDiagramOptions, EnclosedPoint, PointSource};
+use crate::enclosed_state::solve_state;
 use crate::types::TracedBranch;
-use crate::DiagramOptions;
+use crate::{DiagramError, DiagramOptions};
 
 /// Energy of sheet `s` at `lbar` interpolated linearly between its samples (`None`
 /// outside them).
@@ -426,4 +427,119 @@ pub(super) fn mean_stiffness(opts: &EnclosedDiagramOptions) -> Result<f64, Solve
         .map(|i| prof.eval((i as f64 + 0.5) / n as f64).d)
         .sum();
     Ok(sum / n as f64 / opts.stiffness.reference())
+}
+
+/// Root evaluations that [`locate_crossing_by_solve`] allows.
+const SOLVE_ROOT_ITERATIONS: usize = 8;
+
+/// Largest ratio of the slope of `E_a − E_b` across the final bracket to its slope across
+/// the samples' bracket that [`locate_crossing_by_solve`] accepts as one smooth crossing;
+/// a jump (the lowest minimum of one branch changing family inside the bracket) makes the
+/// final slope grow without bound as the bracket shrinks.
+const SOLVE_ROOT_STEEPENING: f64 = 10.0;
+
+/// Locate `E_a = E_b` in `[x0, x1]` where the trace of one side stopped inside the bracket,
+/// so that no walk of both sheets reaches the crossing: the root of the difference of
+/// `solve`'s lowest local minima of the two branches ([`crate::enclosed_state::solve_state`]
+/// at the diagram's accuracy, the two branches on two threads), by the Illinois method
+/// ([`rodloop_continuation::roots::illinois`]) until the bracket is inside the two energies'
+/// estimates over the chord's slope. The estimate is the final bracket plus the estimates
+/// over the slope there. Refused: a state of index > 0 (`solve` found only saddles), no sign
+/// change, or a jump of the difference ([`SOLVE_ROOT_STEEPENING`]).
+pub(super) fn locate_crossing_by_solve(
+    opts: &EnclosedDiagramOptions,
+    branches: [u32; 2],
+    x0: f64,
+    x1: f64,
+) -> Result<Crossing, DiagramError> {
+    use rodloop_continuation::{roots, RootError};
+    use rodloop_solver::enclosed::stats;
+    let scope = stats::current();
+    let refused = |lbar: f64, reason: String| DiagramError::Critical {
+        from_branch: branches[0],
+        to_branch: branches[1],
+        lbar,
+        reason,
+    };
+    // (lbar, [E_a, E_b], [error_a, error_b]) of every evaluation.
+    let mut seen: Vec<(f64, [f64; 2], [f64; 2])> = Vec::new();
+    let mut solve_both = |x: f64| -> Result<([f64; 2], [f64; 2]), DiagramError> {
+        if let Some(&(_, e, err)) = seen.iter().find(|s| s.0 == x) {
+            return Ok((e, err));
+        }
+        let solve_one = |branch: u32| {
+            stats::within(&scope, || {
+                let res = solve_state(&opts.wall, &opts.stiffness, x, branch, opts.accuracy)?;
+                if res.stability.0 > 0 {
+                    return Err(refused(
+                        x,
+                        format!(
+                            "solve finds no local minimum of branch {branch} there (the lowest state it reaches has index {})",
+                            res.stability.0
+                        ),
+                    ));
+                }
+                Ok(res.energy)
+            })
+        };
+        let (a, b) = std::thread::scope(|s| {
+            let a = s.spawn(|| solve_one(branches[0]));
+            let b = solve_one(branches[1]);
+            (a.join(), b)
+        });
+        let a = a.map_err(|_| refused(x, "a solve thread panicked".into()))??;
+        let b = b?;
+        let out = ([a.0, b.0], [a.1, b.1]);
+        seen.push((x, out.0, out.1));
+        Ok(out)
+    };
+    let (e0, r0) = solve_both(x0)?;
+    let (e1, r1) = solve_both(x1)?;
+    let chord = ((e1[0] - e1[1]) - (e0[0] - e0[1])) / (x1 - x0);
+    let noise = (r0[0] + r0[1]).max(r1[0] + r1[1]);
+    let tol = if chord.abs() > 0.0 {
+        noise / chord.abs()
+    } else {
+        x1 - x0
+    };
+    let root = roots::illinois(
+        |x| solve_both(x).map(|(e, _)| e[0] - e[1]),
+        x0,
+        x1,
+        tol,
+        SOLVE_ROOT_ITERATIONS,
+    )
+    .map_err(|e| match e {
+        RootError::Function(e) => e,
+        RootError::NoBracket { a, b, fa, fb } => refused(
+            a,
+            format!(
+                "solve's lowest minima do not cross in [{a:.6}, {b:.6}] (E_a - E_b = {fa:.3e}, {fb:.3e})"
+            ),
+        ),
+        other => refused(x0, other.to_string()),
+    })?;
+    if root.slope.abs() > SOLVE_ROOT_STEEPENING * chord.abs() {
+        return Err(refused(
+            root.x,
+            format!(
+                "E_a - E_b jumps there (slope {:.3e} across the final bracket, {chord:.3e} across the samples): the lowest minimum of a branch changes family",
+                root.slope
+            ),
+        ));
+    }
+    let (e, err) = solve_both(root.x)?;
+    Ok(Crossing {
+        lbar: root.x,
+        error: root.width + (err[0] + err[1]) / root.slope.abs(),
+        energy: 0.5 * (e[0] + e[1]),
+        surface_lbar: None,
+        method: format!(
+            "a trace stopped inside the bracket, so the root of E_a - E_b on solve's lowest local minima of branches {} and {} (the solve command's search at this accuracy), Illinois from lbar = {x0:.6}, {x1:.6} in {} evaluations; error: the final bracket plus the two energies' estimates over the slope",
+            branches[0],
+            branches[1],
+            root.iterations + 2
+        ),
+        not_located: None,
+    })
 }
