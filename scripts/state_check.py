@@ -30,8 +30,9 @@ check_state(out_dir, branch) returns a list of problems, each one of:
                          at most about 12 x);
   "branch contradiction" summary.json names another branch than the one asked, or the
                          periods of the file's bending moment D kappa_g (branch_of_file; an
-                         enclosed file: of its central projection onto the sphere) do not name
-                         the asked branch's eta;
+                         enclosed file: of its central projection onto the sphere, and a
+                         one-fold loop shorter than the great circle is branch 0, one_fold)
+                         do not name the asked branch's eta;
   "unreadable"           the files are missing or malformed.
 
 check_diagram_branches(out_dir) names the branch of every state file of a diagram from the
@@ -183,7 +184,10 @@ def branch_of_file(rows, length):
     else:
         kg = projected_kappa_g(rows, length)
         if kg is None:
-            return principal_axis_periods(rows, length)
+            eta = principal_axis_periods(rows, length)
+            if eta == 1 and length < 2 * math.pi and one_fold(rows):
+                return 0
+            return eta
         # A loop in a plane through the centre projects onto a great circle: no periods
         # (rodloop_solver::identify::PLANAR, relative to the largest D |kappa|).
         mean = sum(kg) / len(kg)
@@ -191,7 +195,57 @@ def branch_of_file(rows, length):
             r["D"] * abs(r["kappa"]) for r in rows
         ):
             return None
-    return named_periods([r["s"] for r in rows], [k * r["D"] for k, r in zip(kg, rows)], length)
+    eta = named_periods([r["s"] for r in rows], [k * r["D"] for k, r in zip(kg, rows)], length)
+    if eta == 1 and "kappa_g" not in rows[0] and length < 2 * math.pi and one_fold(rows):
+        return 0
+    return eta
+
+
+def one_fold(rows):
+    """Whether an enclosed file's loop (shorter than the great circle) is one-fold, the
+    circle's family (branch 0) rather than a figure-eight: the polygon of its positions,
+    projected onto the plane normal to its area vector A = 1/2 sum r_i x r_(i+1), turns once
+    around (a figure-eight's projection turns 0 times). Undecided (False) where |A| is below
+    a tenth of the circle's L^2/(4 pi) or an edge is nearly along A: the same rule as
+    rodloop_solver::identify::identify_enclosed, on the file's polygon instead of the
+    model's Gauss points."""
+    pos = [(r["x"], r["y"], r["z"]) for r in rows]
+    n = len(pos)
+    ax = ay = az = 0.0
+    length = 0.0
+    for i in range(n):
+        (x0, y0, z0), (x1, y1, z1) = pos[i], pos[(i + 1) % n]
+        ax += 0.5 * (y0 * z1 - z0 * y1)
+        ay += 0.5 * (z0 * x1 - x0 * z1)
+        az += 0.5 * (x0 * y1 - y0 * x1)
+        length += math.dist(pos[i], pos[(i + 1) % n])
+    norm = math.sqrt(ax * ax + ay * ay + az * az)
+    if norm < 0.1 * length * length / (4 * math.pi):
+        return False
+    nx, ny, nz = ax / norm, ay / norm, az / norm
+    # An orthonormal pair in the plane normal to A.
+    ux, uy, uz = (1.0, 0.0, 0.0) if abs(nx) < 0.9 else (0.0, 1.0, 0.0)
+    d = ux * nx + uy * ny + uz * nz
+    ux, uy, uz = ux - d * nx, uy - d * ny, uz - d * nz
+    u = math.sqrt(ux * ux + uy * uy + uz * uz)
+    ux, uy, uz = ux / u, uy / u, uz / u
+    vx, vy, vz = ny * uz - nz * uy, nz * ux - nx * uz, nx * uy - ny * ux
+    angles = []
+    for i in range(n):
+        (x0, y0, z0), (x1, y1, z1) = pos[i], pos[(i + 1) % n]
+        ex, ey, ez = x1 - x0, y1 - y0, z1 - z0
+        e = math.sqrt(ex * ex + ey * ey + ez * ez)
+        if e == 0.0:
+            continue
+        a, b = (ex * ux + ey * uy + ez * uz) / e, (ex * vx + ey * vy + ez * vz) / e
+        if math.hypot(a, b) < 0.1:
+            return False
+        angles.append(math.atan2(b, a))
+    turn = 0.0
+    for i in range(len(angles)):
+        d = angles[(i + 1) % len(angles)] - angles[i]
+        turn += (d + math.pi) % (2 * math.pi) - math.pi
+    return abs(round(turn / (2 * math.pi))) == 1
 
 
 def principal_axis_periods(rows, length):

@@ -329,26 +329,18 @@ pub fn enclosed_signal(
     let m = &state.model;
     let n = m.cells();
     let z = &state.z;
-    let x = m.transforms(z)?;
-    let r0 = m.start_point(z);
-    let col = |g: &nalgebra::Matrix4<f64>, c: usize| Vector3::new(g[(0, c)], g[(1, c)], g[(2, c)]);
+    let points = gauss_points(state)?;
     let mut s = Vec::with_capacity(2 * n);
     let mut projected = Vec::with_capacity(2 * n);
     let mut regular = true;
     let mut scale = 0.0f64;
-    for c in 0..n {
-        let cell = [z[4 * c], z[4 * c + 1], z[4 * c + 2], z[4 * c + 3]];
-        for (i, theta) in crate::model::GAUSS_OFFSETS.into_iter().enumerate() {
-            let g = x[c] * crate::enclosed::jet::cell_exp_part(m.cell_length(c), cell, theta);
-            let kappa = col(&g, 1) * cell[2 * i] + col(&g, 2) * cell[2 * i + 1];
-            let r = r0 + col(&g, 3);
-            let sigma = m.gauss_sigma(2 * c + i);
-            s.push(sigma * m.length());
-            scale = scale.max(m.stiffness().eval(sigma).d * kappa.norm());
-            match projected_geodesic_curvature(&r, &col(&g, 0), &kappa, m.radius()) {
-                Some(v) if regular => projected.push(m.stiffness().eval(sigma).d * v),
-                _ => regular = false,
-            }
+    for (g, p) in points.iter().enumerate() {
+        let sigma = m.gauss_sigma(g);
+        s.push(sigma * m.length());
+        scale = scale.max(m.stiffness().eval(sigma).d * p.kappa.norm());
+        match projected_geodesic_curvature(&p.r, &p.t, &p.kappa, m.radius()) {
+            Some(v) if regular => projected.push(m.stiffness().eval(sigma).d * v),
+            _ => regular = false,
         }
     }
     if regular {
@@ -392,10 +384,106 @@ pub fn enclosed_signal(
     Ok((s, signal, false))
 }
 
+/// Position, unit tangent and curvature vector of an enclosed state at the Gauss points of
+/// its cells, in order along the loop.
+struct GaussPoint {
+    /// The point's share of the length (half its cell).
+    ds: f64,
+    r: Vector3<f64>,
+    t: Vector3<f64>,
+    kappa: Vector3<f64>,
+}
+
+fn gauss_points(state: &crate::enclosed::EnclosedState) -> Result<Vec<GaussPoint>, SolverError> {
+    let m = &state.model;
+    let z = &state.z;
+    let x = m.transforms(z)?;
+    let r0 = m.start_point(z);
+    let col = |g: &nalgebra::Matrix4<f64>, c: usize| Vector3::new(g[(0, c)], g[(1, c)], g[(2, c)]);
+    let mut out = Vec::with_capacity(2 * m.cells());
+    for c in 0..m.cells() {
+        let cell = [z[4 * c], z[4 * c + 1], z[4 * c + 2], z[4 * c + 3]];
+        for (i, theta) in crate::model::GAUSS_OFFSETS.into_iter().enumerate() {
+            let g = x[c] * crate::enclosed::jet::cell_exp_part(m.cell_length(c), cell, theta);
+            out.push(GaussPoint {
+                ds: 0.5 * m.cell_length(c),
+                r: r0 + col(&g, 3),
+                t: col(&g, 0),
+                kappa: col(&g, 1) * cell[2 * i] + col(&g, 2) * cell[2 * i + 1],
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// Smallest `|A|/(L²/4π)` (the area vector `A = ½∮ r × t ds` against the circle's) of a loop
+/// that [`turns_once`] can call one-fold: a symmetric figure-eight's lobes cancel (`0`), a
+/// circle gives `1`; below this the plane of `A` is not defined well enough to project on.
+pub const ONE_FOLD_AREA: f64 = 0.1;
+
+/// Smallest length of the projected unit tangent for which [`turns_once`] counts the turning
+/// of the projection: below it the projection has (nearly) a cusp and its turning number is
+/// not defined.
+pub const ONE_FOLD_TANGENT: f64 = 0.1;
+
+/// Whether an enclosed loop is one-fold: its projection onto the plane normal to its area
+/// vector `A = ½∮ r × t ds` is regular and its tangent turns once around (the turning number
+/// of a figure-eight's projection is 0). `None` where that is not decided: `|A|` below
+/// [`ONE_FOLD_AREA`] of the circle's, or a projected tangent shorter than
+/// [`ONE_FOLD_TANGENT`].
+fn turns_once(points: &[GaussPoint], length: f64) -> Option<bool> {
+    let n = points.len();
+    let mut area = Vector3::zeros();
+    for p in points {
+        area += 0.5 * p.r.cross(&p.t) * p.ds;
+    }
+    if area.norm() < ONE_FOLD_AREA * length * length / (4.0 * PI) {
+        return None;
+    }
+    let normal = area.normalize();
+    let e1 = if normal.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
+    let e1 = (e1 - normal * normal.dot(&e1)).normalize();
+    let e2 = normal.cross(&e1);
+    let mut angles = Vec::with_capacity(n);
+    for p in points {
+        let u = p.t - normal * normal.dot(&p.t);
+        if u.norm() < ONE_FOLD_TANGENT {
+            return None;
+        }
+        angles.push(u.dot(&e2).atan2(u.dot(&e1)));
+    }
+    let turn: f64 = (0..n)
+        .map(|i| {
+            let d = angles[(i + 1) % n] - angles[i];
+            (d + PI).rem_euclid(2.0 * PI) - PI
+        })
+        .sum();
+    Some((turn / (2.0 * PI)).round().abs() == 1.0)
+}
+
 /// The periods of an enclosed state's [`enclosed_signal`]: its branch `η`.
+///
+/// A loop shorter than the great circle (`L < 2πR`) whose moment counts `η = 1` but which
+/// [`turns_once`] is the circle's family, branch 0, and is named `η = 0`: a non-uniform rod's
+/// one-fold loop bends more where it is softer, so its moment varies once around the loop
+/// about its mean as a figure-eight's does, but only the figure-eight crosses itself in its
+/// plane (turning number 0). Without a self-contact in the model, a figure-eight that unwinds
+/// through its crossing becomes that loop.
 pub fn identify_enclosed(state: &crate::enclosed::EnclosedState) -> Result<Periods, SolverError> {
     let (s, signal, _) = enclosed_signal(state)?;
-    identify_periods(&s, &signal, state.model.length())
+    let periods = identify_periods(&s, &signal, state.model.length())?;
+    let length = state.model.length();
+    if periods.eta == 1 && length < 2.0 * PI * state.model.radius() {
+        let points = gauss_points(state)?;
+        if turns_once(&points, length) == Some(true) {
+            return Ok(Periods { eta: 0, ..periods });
+        }
+    }
+    Ok(periods)
 }
 
 #[cfg(test)]
@@ -543,5 +631,54 @@ mod tests {
         assert!(
             projected_geodesic_curvature(&(0.5 * radial), &radial, &Vector3::x(), 1.0).is_none()
         );
+    }
+
+    /// A circle of the paper's two-segment rod (Sec. 5, `D1/D0 = 0.5`) in a plane `0.3 R` from
+    /// the centre: its moment `D κ` varies once about its mean (`η = 1` by the count), but it
+    /// turns once around, so at `L̄ = 0.9` and 0.6 it is named the circle's family (`η = 0`);
+    /// at `L̄ = 1.2`, longer than the great circle, it is not branch 0 and keeps `η = 1`. The
+    /// closed figure-eight of a uniform rod with tangent angle `a sin 2πσ` (`J0(a) = 0`, turning
+    /// number 0) keeps `η = 1`.
+    #[test]
+    fn a_one_fold_loop_with_a_varying_moment_is_the_circle_family() {
+        use crate::enclosed::{EnclosedModel, EnclosedState, Gauge};
+        use crate::stiffness::Stiffness;
+        let state = |lbar: f64, stiffness: &Stiffness, kappa: &dyn Fn(f64) -> f64| {
+            let gauge = Gauge {
+                reference: vec![1.0; 256],
+                slope: None,
+                pin: Some([0.0, 0.3, lbar]),
+            };
+            let model = EnclosedModel::new(1.0, lbar, 64, stiffness, gauge).unwrap();
+            let mut z = vec![0.0; model.dim()];
+            for g in 0..128 {
+                z[2 * g + 1] = kappa(model.gauss_sigma(g));
+            }
+            z[4 * 64 + 1] = 0.3;
+            z[4 * 64 + 2] = lbar;
+            EnclosedState {
+                model,
+                z,
+                iterations: 0,
+                residual: 0.0,
+            }
+        };
+        let two_segment = Stiffness::paper_sec5(0.5);
+        for (lbar, want) in [(0.9, 0), (0.6, 0), (1.2, 1)] {
+            let st = state(lbar, &two_segment, &|_| -1.0 / lbar);
+            let (s, signal, _) = enclosed_signal(&st).unwrap();
+            let counted = identify_periods(&s, &signal, st.model.length()).unwrap();
+            assert_eq!(counted.eta, 1, "lbar {lbar}: {counted:?}");
+            let named = identify_enclosed(&st).unwrap();
+            assert_eq!(named.eta, want, "lbar {lbar}: {named:?}");
+        }
+        // J0's first zero: the tangent angle a sin 2πσ closes the loop.
+        let a = 2.404_825_557_695_773;
+        let eight = state(0.9, &Stiffness::uniform(1.0), &|sigma| {
+            -a * (2.0 * PI * sigma).cos() / 0.9
+        });
+        let points = gauss_points(&eight).unwrap();
+        assert_ne!(turns_once(&points, eight.model.length()), Some(true));
+        assert_eq!(identify_enclosed(&eight).unwrap().eta, 1);
     }
 }
