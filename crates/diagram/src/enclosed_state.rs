@@ -278,7 +278,30 @@ pub fn solve_state_with(
             1,
         );
         let (model, z0) = free_circle(&wall, lbar, cells, stiffness).map_err(passed)?;
-        let state = solve_enclosed(&model, z0, &opts).map_err(context("the free circle"))?;
+        // A non-uniform rod's free loop is not a circle: Newton from the circle, with the
+        // start point pinned (the translations of a free loop), answers only where it
+        // converges to a loop clear of the wall (one that touches would hang on the pin).
+        let nonuniform = |why: String| {
+            DiagramError::Unsolved(format!(
+                "branch 0 of a non-uniform rod at lbar = {lbar}: {why}; its free loop is not a circle and rodloop has no other start for it (the enclosed diagram of such a rod starts at lbar = 1)"
+            ))
+        };
+        let state = match solve_enclosed(&model, z0, &opts) {
+            Ok(s) => s,
+            Err(e) if !stiffness.is_uniform() => {
+                return Err(nonuniform(format!("Newton from the circle fails ({e})")))
+            }
+            Err(e) => return Err(context("the free circle")(e)),
+        };
+        if !stiffness.is_uniform() {
+            let c = state.contact(TOUCH).map_err(passed)?;
+            if c.fraction > 0.0 {
+                return Err(nonuniform(format!(
+                    "Newton from the circle reaches a loop touching the wall on {:.1}% of its length, which the pinned start point would hold",
+                    100.0 * c.fraction
+                )));
+            }
+        }
         let (cm, cz) = free_circle(&wall, lbar, cells / 2, stiffness).map_err(passed)?;
         let comp = solve_enclosed(&cm, cz, &opts).map_err(passed)?;
         let e = state.energy();
