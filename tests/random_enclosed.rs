@@ -229,16 +229,19 @@ fn random_enclosed_diagram_where_only_solve_reaches_the_lowest_minimum_holds() {
     check_scene(19, 1.0, 2.6);
 }
 
-/// `D1/D0 = 0.517` on `0.026 ≤ s/L ≤ 0.298`, `γ = 37.4`: next to the exchange 3 → 1
-/// (placed by interpolation, a trace of branch 1 stopping at its fold `6·10⁻⁶` away) the
+/// `D1/D0 = 0.517` on `0.026 ≤ s/L ≤ 0.298`, `γ = 37.4`: next to the exchange 3 → 1, where
+/// the trace of branch 1 stops at its fold and the walks of the exchange locator fail, the
 /// lowest state at `L̄ = 2.427429` is the saddle half of the fold (lowest eigenvalue
-/// `−1·10⁻⁵`), tied with the attached branch-3 state within the labels' allowance. Every
-/// lowest state of index > 0 must have been descended from and be named by the diagram's
-/// warning for its family (branch, family and a range of lengths holding it).
+/// `−1·10⁻⁵`). Every lowest state of index > 0 must have been descended from and be named by
+/// the diagram's warning for its family (branch, family and a range of lengths holding it).
+/// The exchange, located on `solve`'s lowest minima of the two branches, agrees with
+/// independent `solve`s `10⁻⁵` either side as in
+/// [`random_enclosed_exchange_where_a_trace_stopped_agrees_with_independent_solves`].
 #[test]
 fn a_lowest_saddle_is_named_by_a_warning() {
     let (dir, sc, text) = scene_file("random-enclosed-lowest-saddle", 10, 1.0, 2.6);
     let out = diagram_of(&dir, &sc);
+    exchange_of_diagram_agrees(&dir, &sc, &text, &out, ["3", "1"], 1e-5, 2.0);
     let (h, rows) = read_csv(&out.join("branches.csv"));
     let summary = read_json(&out.join("summary.json"));
     let warnings: Vec<&str> = summary["warnings"]
@@ -396,6 +399,20 @@ fn exchange_agrees_with_independent_solves(
 ) {
     let (dir, sc, text) = scene_file(name, seed, lo, hi);
     let out = diagram_of(&dir, &sc);
+    exchange_of_diagram_agrees(&dir, &sc, &text, &out, pair, delta, wider);
+}
+
+/// [`exchange_agrees_with_independent_solves`] on the diagram `out` of the scene file `sc`
+/// (text `text`), the solves written under `dir`.
+fn exchange_of_diagram_agrees(
+    dir: &Path,
+    sc: &Path,
+    text: &str,
+    out: &Path,
+    pair: [&str; 2],
+    delta: f64,
+    wider: f64,
+) {
     let (h, rows) = read_csv(&out.join("critical.csv"));
     let crossing = rows
         .iter()

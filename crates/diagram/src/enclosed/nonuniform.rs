@@ -57,7 +57,8 @@ use rodloop_solver::{solve_from_state, SolverError};
 use super::levels::Levels;
 use super::nonuniform_descent::descend_unstable;
 use super::nonuniform_exchange::{
-    interp, locate_crossing, locate_crossing_by_solve, lowest_at, mean_stiffness, ranked_at, CIRCLE,
+    interp, locate_crossing, locate_crossing_by_solve, lowest_at, mean_stiffness, ranked_at,
+    Crossing, CIRCLE,
 };
 use super::nonuniform_seeds::seed_from_stiffness_path;
 use super::nonuniform_sheet::{check_rows_on_finer, surface_at, surface_energy, SheetOut};
@@ -753,6 +754,26 @@ pub(super) fn nonuniform_diagram(
                 .expect("an overlapping bracket is a job");
             match located[k].take().expect("each exchange is recorded once") {
                 Ok(c) => {
+                    // Placed by interpolation: `solve`'s lowest minima of the two branches,
+                    // where they locate it more closely.
+                    let c = match &c.not_located {
+                        Some(_) => match stats::within(&scope, || {
+                            stats::stage(Stage::Exchange, || {
+                                locate_crossing_by_solve(opts, [sa.branch, sb.branch], x0, x1)
+                            })
+                        }) {
+                            Ok(by) if by.error < c.error => Crossing {
+                                method: format!(
+                                    "{}; the traced sheets place it by interpolation only ({})",
+                                    by.method,
+                                    c.not_located.as_deref().unwrap_or_default()
+                                ),
+                                ..by
+                            },
+                            _ => c,
+                        },
+                        None => c,
+                    };
                     if let Some(why) = &c.not_located {
                         warnings.push(format!(
                             "the exchange of branches {} -> {} between lbar = {:.6} and {:.6} is placed by interpolation of the sampled energies only (to {:.1e}): not located on re-solved states ({why})",
@@ -806,7 +827,7 @@ pub(super) fn nonuniform_diagram(
                     },
                     surface_lbar_cr: c.surface_lbar,
                     method: format!(
-                        "{}; the sampled lowest families {} -> {}",
+                        "{}; a trace stopped inside the bracket; the sampled lowest families {} -> {}",
                         c.method, sa.family, sb.family
                     ),
                 });

@@ -438,8 +438,9 @@ const SOLVE_ROOT_ITERATIONS: usize = 8;
 /// final slope grow without bound as the bracket shrinks.
 const SOLVE_ROOT_STEEPENING: f64 = 10.0;
 
-/// Locate `E_a = E_b` in `[x0, x1]` where the trace of one side stopped inside the bracket,
-/// so that no walk of both sheets reaches the crossing: the root of the difference of
+/// Locate `E_a = E_b` in `[x0, x1]` where the traced sheets do not (the trace of one side
+/// stopped inside the bracket, or a walk there fails at a fold or a change of the contact
+/// set, so the crossing would be placed by interpolation): the root of the difference of
 /// `solve`'s lowest local minima of the two branches ([`crate::enclosed_state::solve_state`]
 /// at the diagram's accuracy, the two branches on two threads), by the Illinois method
 /// ([`rodloop_continuation::roots::illinois`]) until the bracket is inside the two energies'
@@ -535,7 +536,7 @@ pub(super) fn locate_crossing_by_solve(
         energy: 0.5 * (e[0] + e[1]),
         surface_lbar: None,
         method: format!(
-            "a trace stopped inside the bracket, so the root of E_a - E_b on solve's lowest local minima of branches {} and {} (the solve command's search at this accuracy), Illinois from lbar = {x0:.6}, {x1:.6} in {} evaluations; error: the final bracket plus the two energies' estimates over the slope",
+            "the root of E_a - E_b on solve's lowest local minima of branches {} and {} (the solve command's search at this accuracy), Illinois from lbar = {x0:.6}, {x1:.6} in {} evaluations; error: the final bracket plus the two energies' estimates over the slope",
             branches[0],
             branches[1],
             root.iterations + 2
