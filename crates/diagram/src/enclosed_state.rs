@@ -454,7 +454,7 @@ pub fn solve_state_with(
             }
         }
         // Then every start on the meshes of the lower accuracies, finest first, and, as the
-        // last resort, on the finer meshes too. The minima of other lengths, carried to a mesh
+        // last resort, on the finer accuracy levels' meshes too. The minima of other lengths, carried to a mesh
         // and continued there, can converge on one mesh and not on another (random seed 26 of
         // `tests/random_enclosed.rs`, branch 2 at `L̄ = 1.3679277`: on 128 cells, not on 96,
         // while the surface loop leads to a state whose branch cannot be identified on every
@@ -466,7 +466,9 @@ pub fn solve_state_with(
                     "the mesh of a lower accuracy (its estimate from N/4, N/2, N there)",
                 )
             });
-            let finer = ladder[1..].iter().map(|&m| {
+            // The accuracy levels' meshes only: the ladder's last one, twice the finest, checks
+            // a state; every start on it costs as much as the rest of the search together.
+            let finer = ladder[1..ladder.len() - 1].iter().map(|&m| {
                 (
                     m,
                     "by every start (on the meshes before it, by the surface loops)",
