@@ -713,10 +713,9 @@ fn the_state_solve_reports_lies_inside_the_ball_at_every_node() {
 
 /// The mild rod on `1 ≤ L̄ ≤ 2`: where the lowest sampled state changes from branch 1 to 2,
 /// the exchange is reported even where a lifted-off family cannot be re-solved next to it
-/// (there the crossing of the sampled energies stands, with the distance to the farther
-/// sample as its estimate, and a warning says so), and independent solves (the lowest
-/// minimum `solve` reports) at the ends of its estimate have `E_1 < E_2` below and
-/// `E_1 > E_2` above.
+/// (there it is located on `solve`'s lowest minima of the two branches), and independent
+/// solves (the lowest minimum `solve` reports) `10⁻⁴` either side have `E_1 < E_2` below and
+/// `E_1 > E_2` above; their secant root lies within the two estimates of the diagram's.
 #[test]
 fn the_mild_rods_exchange_is_reported_and_brackets_independent_solves() {
     use rodloop_diagram::enclosed_state::solve_state;
@@ -735,12 +734,20 @@ fn the_mild_rods_exchange_is_reported_and_brackets_independent_solves() {
         let (e1, e2) = (e(1), e(2));
         (e1.energy.0 - e2.energy.0, e1.energy.1 + e2.energy.1)
     };
-    let (below, d1) = gap(x - err);
-    let (above, d2) = gap(x + err);
+    let delta = 1e-4;
+    let (below, d1) = gap(x - delta);
+    let (above, d2) = gap(x + delta);
     assert!(
         below < -d1 && above > d2,
-        "{c:?}: E1 - E2 = {below} at {}, {above} at {}",
-        x - err,
-        x + err
+        "{c:?}: E1 - E2 = {below} ± {d1} at {}, {above} ± {d2} at {}",
+        x - delta,
+        x + delta
+    );
+    let slope = (above - below) / (2.0 * delta);
+    let root = x - delta - below / slope;
+    let independent = d1.max(d2) / slope.abs();
+    assert!(
+        (root - x).abs() <= err + independent,
+        "{c:?}: the solves' root {root} ± {independent:.1e}"
     );
 }

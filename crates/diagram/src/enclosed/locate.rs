@@ -211,6 +211,90 @@ fn jump_found(solved: &[(f64, f64)], width0: f64) -> Option<SolverError> {
     None
 }
 
+/// Steps of [`jump_extent`]'s walks across the bracket.
+const EXTENT_STEPS: u32 = 8;
+
+/// The error of a jump of eigenvalue `k` between the bracket's ends `xa` and `xb`, placed by
+/// the extent of the two contact sets on either side of it (`solved`: the re-solved states
+/// with their eigenvalue; each side's family is the sign of its eigenvalue). A mesh's contact
+/// set changes with hysteresis: the state of each side continues past the place where the
+/// other one ends, so where Brent's method meets the jump depends on which side it walked
+/// from. Each side's state nearest the other end is walked on towards it in
+/// [`EXTENT_STEPS`] steps until its index changes or Newton fails; the jump lies
+/// between the two places reached (the interval where both sides exist, or the gap between
+/// them), and the error gives its middle and half-width plus a step.
+fn jump_extent(
+    solved: &[(f64, EnclosedState, f64)],
+    xa: f64,
+    xb: f64,
+    opts: &EnclosedOptions,
+) -> SolverError {
+    let fa = solved[0].2;
+    let fb = solved
+        .iter()
+        .find(|p| (p.2 > 0.0) != (fa > 0.0))
+        .map_or(f64::NAN, |p| p.2);
+    // Each side's state nearest the other end.
+    let nearest = |positive: bool, to: f64| {
+        solved
+            .iter()
+            .filter(|p| (p.2 > 0.0) == positive)
+            .min_by(|u, v| (to - u.0).abs().total_cmp(&(to - v.0).abs()))
+            .map(|p| (&p.1, p.0))
+    };
+    match (nearest(fa > 0.0, xb), nearest(fa <= 0.0, xa)) {
+        (Some(a), Some(b)) => sides_extent(a, b, xa, xb, opts)
+            .map(|(x, w, how)| {
+                SolverError::InvalidInput(format!(
+                    "{JUMPS} from {fa:.3e} to {fb:.3e} at lbar = {x:.6} ± {w:.1e} ({how}: the active set changes there; no eigenvalue crosses zero)"
+                ))
+            })
+            .unwrap_or_else(|e| e),
+        _ => SolverError::InvalidInput(format!(
+            "{JUMPS} between lbar = {xa:.6} and {xb:.6} (the active set changes there; no eigenvalue crosses zero)"
+        )),
+    }
+}
+
+/// Where the contact set of a mesh changes between the bracket's ends `xa` and `xb`, from a
+/// state of each side (`(state, L̄)`, the `xa` side first; see [`jump_extent`]): each is
+/// walked on towards the other end in [`EXTENT_STEPS`] steps of the bracket until its index
+/// (the inertia) changes or Newton fails. Returns the middle of the two places reached, the
+/// half-distance plus a step, and how they lie.
+fn sides_extent(
+    a: (&EnclosedState, f64),
+    b: (&EnclosedState, f64),
+    xa: f64,
+    xb: f64,
+    opts: &EnclosedOptions,
+) -> Result<(f64, f64, &'static str), SolverError> {
+    let h = (xb - xa) / f64::from(EXTENT_STEPS);
+    let reach = |(start, x0): (&EnclosedState, f64), to: f64| -> Result<f64, SolverError> {
+        let dx = h.abs().copysign(to - x0);
+        let index = start.index(ACTIVE)?;
+        let (mut cur, mut at) = (start.clone(), x0);
+        for _ in 0..EXTENT_STEPS {
+            let next = at + dx;
+            if (next - to) * dx > 0.0 {
+                break;
+            }
+            match step(&cur, next, opts).and_then(|t| Ok((t.index(ACTIVE)?, t))) {
+                Ok((i, t)) if i == index => (cur, at) = (t, next),
+                _ => break,
+            }
+        }
+        Ok(at)
+    };
+    let (ra, rb) = (reach(a, xb)?, reach(b, xa)?);
+    let (lo, hi) = (ra.min(rb), ra.max(rb));
+    let how = if (ra - xa).abs() > (rb - xa).abs() {
+        "where the states of either side exist on this mesh"
+    } else {
+        "between the places the states of either side reach on this mesh"
+    };
+    Ok((0.5 * (lo + hi), 0.5 * (hi - lo) + h.abs(), how))
+}
+
 /// The root on one level between `from` (at `xa`, the family the bracket is taken on) and
 /// `to` (at `xb`): `to` is used as the far end where its index differs from `from`'s (the
 /// same family on the other side of the point); otherwise (a change of symmetry) the far
@@ -262,6 +346,9 @@ pub(super) fn locate_on_level(
     };
     let root = match brent(&mut f, xa, xb, XTOL, MAX_ITER) {
         Ok(r) => r,
+        Err(RootError::Function(e)) if is_jump(&e) => {
+            return Err(jump_extent(&solved, xa, xb, opts))
+        }
         Err(RootError::Function(e)) => return Err(e),
         Err(e) => {
             return Err(SolverError::InvalidInput(format!(
@@ -296,10 +383,7 @@ pub(super) fn locate_on_level(
     // off the tangent space) and no eigenvalue crosses zero.
     let scale = solved[0].2.abs().max(solved[1].2.abs());
     if lo.2.abs().max(hi.2.abs()) > JUMP * scale {
-        return Err(SolverError::InvalidInput(format!(
-            "{JUMPS} from {:.3e} to {:.3e} at lbar = {x:.9} (the active set changes there; no eigenvalue crosses zero)",
-            lo.2, hi.2
-        )));
+        return Err(jump_extent(&solved, xa, xb, opts));
     }
     Ok(LevelRoot {
         x,
@@ -326,6 +410,10 @@ pub(super) fn locate(
     opts: &EnclosedOptions,
 ) -> Result<Located, SolverError> {
     let mut r = Vec::with_capacity(2);
+    // Per level: the jump's `(L̄, half-width)` where the eigenvalue jumps there.
+    let mut jumps: Vec<(usize, f64, f64)> = Vec::new();
+    // The samples' window around the change, for a jump seen on one level only.
+    let window_ends = (tr[j].lbar, tr[(j + 1).min(tr.len() - 1)].lbar);
     for lvl in levels {
         let lo = j.saturating_sub(1);
         let hi = (j + 2).min(tr.len() - 1);
@@ -342,13 +430,57 @@ pub(super) fn locate(
                 ))
             })?;
         let (a, b) = (tr[window], tr[window + 1]);
-        r.push(locate_on_level(
-            &a.states[lvl],
-            a.lbar,
-            &b.states[lvl],
-            b.lbar,
-            opts,
-        )?);
+        if !jumps.is_empty() {
+            // A jump on the coarser level: on this one, where its contact set changes.
+            let (x, w, _) = sides_extent(
+                (&a.states[lvl], a.lbar),
+                (&b.states[lvl], b.lbar),
+                a.lbar,
+                b.lbar,
+                opts,
+            )?;
+            jumps.push((lvl, x, w));
+            continue;
+        }
+        match locate_on_level(&a.states[lvl], a.lbar, &b.states[lvl], b.lbar, opts) {
+            Ok(root) => r.push(root),
+            Err(e) => match jump_at(&e) {
+                Some((x, w)) => jumps.push((lvl, x, w)),
+                None if jumps.is_empty() => return Err(e),
+                None => break,
+            },
+        }
+    }
+    if !jumps.is_empty() {
+        // Where the contact set of a mesh changes depends on the mesh: the finer level's
+        // place, with the distance to the coarser level's (a jump or a root) as well as both
+        // estimates; seen on one level only, the samples' window bounds it.
+        let mut places: Vec<(usize, f64, f64)> = jumps.clone();
+        places.extend(r.iter().filter_map(|c| {
+            levels
+                .iter()
+                .find(|l| !jumps.iter().any(|p| p.0 == **l))
+                .map(|&l| (l, c.x, c.width))
+        }));
+        places.sort_by_key(|p| p.0);
+        let (x, w, how) = match places.as_slice() {
+            [c, f] => (
+                f.1,
+                f.2 + c.2 + (f.1 - c.1).abs(),
+                format!("on levels N/2 and N at {:.6} and {:.6}", c.1, f.1),
+            ),
+            _ => {
+                let x = places[0].1;
+                (
+                    x,
+                    (x - window_ends.0).abs().max((window_ends.1 - x).abs()),
+                    format!("on one level at {x:.6}, within the samples' window"),
+                )
+            }
+        };
+        return Err(SolverError::InvalidInput(format!(
+            "{JUMPS} at lbar = {x:.6} ± {w:.1e} ({how}: the active set of the mesh changes there, a place that moves with the mesh; no eigenvalue crosses zero)"
+        )));
     }
     let (c, f) = (&r[0], &r[1]);
     Ok(Located {
