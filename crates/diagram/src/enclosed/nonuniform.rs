@@ -35,6 +35,9 @@
 //!   curves meet at a small angle). Error: `(δE_a + δE_b + m)/|d(E_a − E_b)/dL̄|` plus the
 //!   final bracket, with the slope and the noise misfit `m` from the chord over `±2e-3`
 //!   around the root. Where a lifted-off sheet cannot be re-solved next to the crossing,
+//!   or where the trace of one side stops inside the bracket, the exchange is located on
+//!   `solve`'s lowest minima of the two branches instead
+//!   ([`super::nonuniform_exchange::locate_crossing_by_solve`]); where that is refused too,
 //!   the root of the sampled energies' interpolated difference stands, with the distance
 //!   to the farther sample as its estimate, and a warning. The surface value of the same
 //!   exchange is located on the same two sheets for comparison. Where the lowest branch
