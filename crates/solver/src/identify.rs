@@ -417,11 +417,11 @@ fn gauss_points(state: &crate::enclosed::EnclosedState) -> Result<Vec<GaussPoint
 }
 
 /// Smallest `|A|/(L²/4π)` (the area vector `A = ½∮ r × t ds` against the circle's) of a loop
-/// that [`turns_once`] can call one-fold: a symmetric figure-eight's lobes cancel (`0`), a
+/// that `turns_once` can call one-fold: a symmetric figure-eight's lobes cancel (`0`), a
 /// circle gives `1`; below this the plane of `A` is not defined well enough to project on.
 pub const ONE_FOLD_AREA: f64 = 0.1;
 
-/// Smallest length of the projected unit tangent for which [`turns_once`] counts the turning
+/// Smallest length of the projected unit tangent for which `turns_once` counts the turning
 /// of the projection: below it the projection has (nearly) a cusp and its turning number is
 /// not defined.
 pub const ONE_FOLD_TANGENT: f64 = 0.1;
@@ -468,7 +468,7 @@ fn turns_once(points: &[GaussPoint], length: f64) -> Option<bool> {
 /// The periods of an enclosed state's [`enclosed_signal`]: its branch `η`.
 ///
 /// A loop shorter than the great circle (`L < 2πR`) whose moment counts `η = 1` but which
-/// [`turns_once`] is the circle's family, branch 0, and is named `η = 0`: a non-uniform rod's
+/// `turns_once` is the circle's family, branch 0, and is named `η = 0`: a non-uniform rod's
 /// one-fold loop bends more where it is softer, so its moment varies once around the loop
 /// about its mean as a figure-eight's does, but only the figure-eight crosses itself in its
 /// plane (turning number 0). Without a self-contact in the model, a figure-eight that unwinds
