@@ -739,6 +739,28 @@ pub(super) fn nonuniform_diagram(
         .into_iter()
         .map(Some)
         .collect();
+    // `solve`'s lowest minima of the two branches (where the traced sheets fail).
+    let by_solve = |sa: &SheetOut, sb: &SheetOut, x0: f64, x1: f64| {
+        stats::within(&scope, || {
+            stats::stage(Stage::Exchange, || {
+                locate_crossing_by_solve(opts, [sa.branch, sb.branch], x0, x1)
+            })
+        })
+    };
+    // A located exchange, its bracket `(x0, x1, a, b)` kept for the lowest flags.
+    let mut record = |c: Crossing, base: Critical, method: String, bracket| {
+        brackets.push(bracket);
+        critical.push(EnclosedCritical {
+            critical: Critical {
+                lbar_cr: c.lbar,
+                energy: c.energy,
+                error_estimate: c.error,
+                ..base
+            },
+            surface_lbar_cr: c.surface_lbar,
+            method,
+        });
+    };
     for (j, &(x0, x1, a, b, overlap)) in changes.iter().enumerate() {
         let w = [x0, x1];
         let (sa, sb) = (&outs[a], &outs[b]);
@@ -760,11 +782,7 @@ pub(super) fn nonuniform_diagram(
                     // Placed by interpolation: `solve`'s lowest minima of the two branches,
                     // where they locate it more closely.
                     let c = match &c.not_located {
-                        Some(_) => match stats::within(&scope, || {
-                            stats::stage(Stage::Exchange, || {
-                                locate_crossing_by_solve(opts, [sa.branch, sb.branch], x0, x1)
-                            })
-                        }) {
+                        Some(_) => match by_solve(sa, sb, x0, x1) {
                             Ok(by) if by.error < c.error => Crossing {
                                 method: format!(
                                     "{}; the traced sheets place it by interpolation only ({})",
@@ -783,20 +801,8 @@ pub(super) fn nonuniform_diagram(
                             sa.branch, sb.branch, w[0], w[1], c.error
                         ));
                     }
-                    brackets.push((w[0], w[1], a, b));
-                    critical.push(EnclosedCritical {
-                        critical: Critical {
-                            lbar_cr: c.lbar,
-                            energy: c.energy,
-                            error_estimate: c.error,
-                            ..base
-                        },
-                        surface_lbar_cr: c.surface_lbar,
-                        method: format!(
-                            "{}; families {} -> {}",
-                            c.method, sa.family, sb.family
-                        ),
-                    });
+                    let method = format!("{}; families {} -> {}", c.method, sa.family, sb.family);
+                    record(c, base, method, (x0, x1, a, b));
                 }
                 Err(e) => warnings.push(format!(
                     "the exchange of branches {} -> {} between lbar = {:.6} and {:.6} was not located: {e}",
@@ -812,28 +818,14 @@ pub(super) fn nonuniform_diagram(
             // Sheets begin and end at the great circles: handled below.
             continue;
         }
-        // A trace stopped inside the bracket: `solve`'s lowest minima of the two branches.
-        let by_solve = stats::within(&scope, || {
-            stats::stage(Stage::Exchange, || {
-                locate_crossing_by_solve(opts, [sa.branch, sb.branch], w[0], w[1])
-            })
-        });
-        match by_solve {
+        // A trace stopped inside the bracket.
+        match by_solve(sa, sb, x0, x1) {
             Ok(c) => {
-                brackets.push((w[0], w[1], a, b));
-                critical.push(EnclosedCritical {
-                    critical: Critical {
-                        lbar_cr: c.lbar,
-                        energy: c.energy,
-                        error_estimate: c.error,
-                        ..base
-                    },
-                    surface_lbar_cr: c.surface_lbar,
-                    method: format!(
-                        "{}; a trace stopped inside the bracket; the sampled lowest families {} -> {}",
-                        c.method, sa.family, sb.family
-                    ),
-                });
+                let method = format!(
+                    "{}; a trace stopped inside the bracket; the sampled lowest families {} -> {}",
+                    c.method, sa.family, sb.family
+                );
+                record(c, base, method, (x0, x1, a, b));
             }
             Err(e) => warnings.push(format!(
                 "the lowest state changes from branch {} to {} between lbar = {:.6} and {:.6} where a trace stopped; not located ({e})",
