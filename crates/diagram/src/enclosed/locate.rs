@@ -214,9 +214,10 @@ fn jump_found(solved: &[(f64, f64)], width0: f64) -> Option<SolverError> {
 /// Steps of [`jump_extent`]'s walks across the bracket.
 const EXTENT_STEPS: u32 = 8;
 
-/// The error of a jump of eigenvalue `k` between the bracket's ends `xa` and `xb`, placed by
-/// the extent of the two contact sets on either side of it (`solved`: the re-solved states
-/// with their eigenvalue; each side's family is the sign of its eigenvalue). A mesh's contact
+/// The error of a jump of the crossing eigenvalue between the bracket's ends `xa` and `xb`,
+/// placed by the extent of the two contact sets on either side of it (`solved`: the
+/// re-solved states with their eigenvalue; each side's family is the sign of its
+/// eigenvalue). A mesh's contact
 /// set changes with hysteresis: the state of each side continues past the place where the
 /// other one ends, so where Brent's method meets the jump depends on which side it walked
 /// from. Each side's state nearest the other end is walked on towards it in
@@ -410,10 +411,9 @@ pub(super) fn locate(
     opts: &EnclosedOptions,
 ) -> Result<Located, SolverError> {
     let mut r = Vec::with_capacity(2);
-    // Per level: the jump's `(L̄, half-width)` where the eigenvalue jumps there.
-    let mut jumps: Vec<(usize, f64, f64)> = Vec::new();
-    // The samples' window around the change, for a jump seen on one level only.
-    let window_ends = (tr[j].lbar, tr[(j + 1).min(tr.len() - 1)].lbar);
+    // Per level, coarser first: the root or the jump, `(L̄, estimate)`.
+    let mut places: Vec<(f64, f64)> = Vec::with_capacity(2);
+    let mut jumped = false;
     for lvl in levels {
         let lo = j.saturating_sub(1);
         let hi = (j + 2).min(tr.len() - 1);
@@ -430,7 +430,7 @@ pub(super) fn locate(
                 ))
             })?;
         let (a, b) = (tr[window], tr[window + 1]);
-        if !jumps.is_empty() {
+        if jumped {
             // A jump on the coarser level: on this one, where its contact set changes.
             let (x, w, _) = sides_extent(
                 (&a.states[lvl], a.lbar),
@@ -439,47 +439,31 @@ pub(super) fn locate(
                 b.lbar,
                 opts,
             )?;
-            jumps.push((lvl, x, w));
+            places.push((x, w));
             continue;
         }
         match locate_on_level(&a.states[lvl], a.lbar, &b.states[lvl], b.lbar, opts) {
-            Ok(root) => r.push(root),
+            Ok(root) => {
+                places.push((root.x, root.width));
+                r.push(root);
+            }
             Err(e) => match jump_at(&e) {
-                Some((x, w)) => jumps.push((lvl, x, w)),
-                None if jumps.is_empty() => return Err(e),
-                None => break,
+                Some(p) => {
+                    places.push(p);
+                    jumped = true;
+                }
+                None => return Err(e),
             },
         }
     }
-    if !jumps.is_empty() {
+    if jumped {
         // Where the contact set of a mesh changes depends on the mesh: the finer level's
         // place, with the distance to the coarser level's (a jump or a root) as well as both
-        // estimates; seen on one level only, the samples' window bounds it.
-        let mut places: Vec<(usize, f64, f64)> = jumps.clone();
-        places.extend(r.iter().filter_map(|c| {
-            levels
-                .iter()
-                .find(|l| !jumps.iter().any(|p| p.0 == **l))
-                .map(|&l| (l, c.x, c.width))
-        }));
-        places.sort_by_key(|p| p.0);
-        let (x, w, how) = match places.as_slice() {
-            [c, f] => (
-                f.1,
-                f.2 + c.2 + (f.1 - c.1).abs(),
-                format!("on levels N/2 and N at {:.6} and {:.6}", c.1, f.1),
-            ),
-            _ => {
-                let x = places[0].1;
-                (
-                    x,
-                    (x - window_ends.0).abs().max((window_ends.1 - x).abs()),
-                    format!("on one level at {x:.6}, within the samples' window"),
-                )
-            }
-        };
+        // estimates.
+        let ((xc, wc), (x, wf)) = (places[0], places[1]);
+        let w = wf + wc + (x - xc).abs();
         return Err(SolverError::InvalidInput(format!(
-            "{JUMPS} at lbar = {x:.6} ± {w:.1e} ({how}: the active set of the mesh changes there, a place that moves with the mesh; no eigenvalue crosses zero)"
+            "{JUMPS} at lbar = {x:.6} ± {w:.1e} (on levels N/2 and N at {xc:.6} and {x:.6}: the active set of the mesh changes there, a place that moves with the mesh; no eigenvalue crosses zero)"
         )));
     }
     let (c, f) = (&r[0], &r[1]);
