@@ -455,10 +455,10 @@ pub fn solve_state_with(
         }
         // Then every start on the meshes of the lower accuracies, finest first, and, as the
         // last resort, on the finer accuracy levels' meshes too. The minima of other lengths,
-        // carried to a mesh and continued there, can converge on one mesh and not on another (random seed 26 of
-        // `tests/random_enclosed.rs`, branch 2 at `L̄ = 1.3679277`: on 128 cells, not on 96,
-        // while the surface loop leads to a state whose branch cannot be identified on every
-        // mesh).
+        // carried to a mesh and continued there, can converge on one mesh and not on another
+        // (random seed 26 of `tests/random_enclosed.rs`, branch 2 at `L̄ = 1.3679277`: on 128
+        // cells, not on 96, while the surface loop leads to a state whose branch cannot be
+        // identified on every mesh).
         if by_mesh.is_none() && ladder.len() > 1 {
             let lower = coarser.iter().map(|&m| {
                 (
