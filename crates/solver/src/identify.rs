@@ -326,10 +326,17 @@ pub const PROJECTION_REGULARITY: f64 = 0.25;
 pub fn enclosed_signal(
     state: &crate::enclosed::EnclosedState,
 ) -> Result<(Vec<f64>, Vec<f64>, bool), SolverError> {
+    signal_at(state, &gauss_points(state)?)
+}
+
+/// [`enclosed_signal`] from the state's [`gauss_points`].
+fn signal_at(
+    state: &crate::enclosed::EnclosedState,
+    points: &[GaussPoint],
+) -> Result<(Vec<f64>, Vec<f64>, bool), SolverError> {
     let m = &state.model;
     let n = m.cells();
     let z = &state.z;
-    let points = gauss_points(state)?;
     let mut s = Vec::with_capacity(2 * n);
     let mut projected = Vec::with_capacity(2 * n);
     let mut regular = true;
@@ -474,14 +481,15 @@ fn turns_once(points: &[GaussPoint], length: f64) -> Option<bool> {
 /// plane (turning number 0). Without a self-contact in the model, a figure-eight that unwinds
 /// through its crossing becomes that loop.
 pub fn identify_enclosed(state: &crate::enclosed::EnclosedState) -> Result<Periods, SolverError> {
-    let (s, signal, _) = enclosed_signal(state)?;
+    let points = gauss_points(state)?;
+    let (s, signal, _) = signal_at(state, &points)?;
     let periods = identify_periods(&s, &signal, state.model.length())?;
     let length = state.model.length();
-    if periods.eta == 1 && length < 2.0 * PI * state.model.radius() {
-        let points = gauss_points(state)?;
-        if turns_once(&points, length) == Some(true) {
-            return Ok(Periods { eta: 0, ..periods });
-        }
+    if periods.eta == 1
+        && length < 2.0 * PI * state.model.radius()
+        && turns_once(&points, length) == Some(true)
+    {
+        return Ok(Periods { eta: 0, ..periods });
     }
     Ok(periods)
 }
