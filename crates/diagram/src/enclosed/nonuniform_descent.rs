@@ -34,6 +34,10 @@ const AMPLITUDES: [f64; 4] = [0.05, 0.15, 0.3, 0.5];
 /// A lower state's trace and where it stopped.
 type Found = (Vec<Levels>, Vec<TraceStop>);
 
+/// One sheet's descent job: the sheet, its candidates, the lengths searched, the family
+/// found below, and `solve`'s index-0 states level with its saddles (`[L̄, E, estimate]`).
+type Searched = (usize, Vec<f64>, Vec<f64>, Option<Found>, Vec<[f64; 3]>);
+
 /// Most rounds of descent (a new family may itself be unstable where it is lowest).
 const ROUNDS: usize = 2;
 
@@ -92,7 +96,7 @@ fn lower_state(
     outs: &[SheetOut],
     accuracy: Option<Accuracy>,
     opts: &EnclosedOptions,
-) -> Option<Levels> {
+) -> Lower {
     let x = lv.lbar;
     let e0 = lv.energy().0;
     let new_and_lower = |l: &Levels| {
@@ -115,11 +119,34 @@ fn lower_state(
                 states: [b.quarter, b.coarse, b.fine],
             };
             if new_and_lower(&l) {
-                return Some(l);
+                return Lower::Below(Box::new(l));
             }
         }
     }
-    lowest_by_solve(lv, eta, accuracy?, opts).filter(|l| new_and_lower(l))
+    let Some(l) = accuracy.and_then(|a| lowest_by_solve(lv, eta, a, opts)) else {
+        return Lower::Nothing;
+    };
+    if new_and_lower(&l) {
+        return Lower::Below(Box::new(l));
+    }
+    let ((e, de), (e0, de0)) = (l.energy(), lv.energy());
+    if (e - e0).abs() <= de + de0 {
+        Lower::Level(e, de)
+    } else {
+        Lower::Nothing
+    }
+}
+
+/// What [`lower_state`] reached from a saddle.
+enum Lower {
+    /// A new state below it.
+    Below(Box<Levels>),
+    /// `solve`'s index-0 state there, level with the saddle within the two estimates
+    /// (energy, estimate): the other half of a fold, or the same state on the other side of
+    /// a contact node's release.
+    Level(f64, f64),
+    /// Nothing lower or level.
+    Nothing,
 }
 
 /// The lowest local minimum of branch `eta` at `lv`'s length by `solve`'s search on `lv`'s
@@ -179,6 +206,8 @@ pub(super) fn descend_unstable(
     // The descent and its cascade get the full Newton budget (the shape moves far).
     let dopts = EnclosedOptions::default();
     let mut tried: Vec<(usize, f64)> = Vec::new();
+    // Per sheet, `solve`'s index-0 states level with its saddles (`[L̄, E, estimate]`).
+    let mut level_with: Vec<(usize, [f64; 3])> = Vec::new();
     for _ in 0..ROUNDS {
         let mut added: Vec<SheetOut> = Vec::new();
         let mut added_parents = Vec::new();
@@ -204,7 +233,7 @@ pub(super) fn descend_unstable(
             threads,
             jobs,
             &mut |_| {},
-            &mut |_: &(usize, Vec<f64>, Vec<f64>, Option<Found>)| {},
+            &mut |_: &Searched| {},
             |(k, cands), _| {
                 let _counted = stats::reopen(&scope);
                 let parent = &shared[k];
@@ -213,6 +242,8 @@ pub(super) fn descend_unstable(
                     parent.branch, parent.eta, parent.family
                 );
                 let mut found = None;
+                // `(L̄, E, estimate)` of `solve`'s index-0 states level with the saddle.
+                let mut level = Vec::new();
                 // The lengths searched: the search stops at the first lower state found, and
                 // the others stay candidates of the next round.
                 let mut searched = Vec::new();
@@ -226,25 +257,32 @@ pub(super) fn descend_unstable(
                     let lower = stats::stage(Stage::Descent, || {
                         lower_state(lv, parent.eta, shared, search, &dopts)
                     });
-                    if let Some(first) = lower {
-                        let mut grid: Vec<f64> = parent.levels.iter().map(|l| l.lbar).collect();
-                        grid.sort_by(f64::total_cmp);
-                        grid.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
-                        let mid = grid
-                            .iter()
-                            .position(|&g| (g - x).abs() < 1e-12)
-                            .unwrap_or(0);
-                        let mut stops = Vec::new();
-                        let traced = follow(first, &grid, mid, &what, &sopts, true, &mut stops);
-                        found = Some((traced, stops));
-                        break;
-                    }
+                    let first = match lower {
+                        Lower::Below(l) => *l,
+                        Lower::Level(e, de) => {
+                            level.push([x, e, de]);
+                            continue;
+                        }
+                        Lower::Nothing => continue,
+                    };
+                    let mut grid: Vec<f64> = parent.levels.iter().map(|l| l.lbar).collect();
+                    grid.sort_by(f64::total_cmp);
+                    grid.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
+                    let mid = grid
+                        .iter()
+                        .position(|&g| (g - x).abs() < 1e-12)
+                        .unwrap_or(0);
+                    let mut stops = Vec::new();
+                    let traced = follow(first, &grid, mid, &what, &sopts, true, &mut stops);
+                    found = Some((traced, stops));
+                    break;
                 }
-                (k, cands, searched, found)
+                (k, cands, searched, found, level)
             },
         );
-        for (k, cands, searched, found) in results {
+        for (k, cands, searched, found, level) in results {
             tried.extend(searched.iter().map(|&x| (k, x)));
+            level_with.extend(level.into_iter().map(|l| (k, l)));
             let parent = &outs[k];
             let Some((traced, stops)) = found else {
                 warnings.push(format!(
@@ -323,8 +361,21 @@ pub(super) fn descend_unstable(
                     v.get(1).copied().unwrap_or(f64::NAN)
                 )
             });
+        // Where `solve` reaches an index-0 state level with the saddle (the two halves of a
+        // fold, or one state on either side of a contact node's release), nothing lower is
+        // known.
+        let level = level_with
+            .iter()
+            .find(|(kk, l)| *kk == k && xs.iter().any(|x| (x - l[0]).abs() < 1e-9))
+            .map(|(_, l)| l);
+        let tail = match level {
+            Some([x, e, de]) => format!(
+                "; at lbar = {x:.6} solve's search on the same mesh reaches an index-0 state level with it within the two estimates ({e:.10} ± {de:.1e}), and no lower equilibrium is known there: the index changes beside it (a fold, or a contact node whose force vanishes)"
+            ),
+            None => "; a lower equilibrium exists there that the traces did not find".into(),
+        };
         warnings.push(format!(
-            "branch {} (eta = {}) family {}: the lowest traced state has index >= 1 at {} sampled lengths in [{:.4}, {:.4}]{mu}; a lower equilibrium exists there that the traces did not find",
+            "branch {} (eta = {}) family {}: the lowest traced state has index >= 1 at {} sampled lengths in [{:.4}, {:.4}]{mu}{tail}",
             s.branch,
             s.eta,
             s.family,
