@@ -624,8 +624,9 @@ pub(super) fn nonuniform_diagram(
     // States that another branch's periods name are no rows of this one (before the descent,
     // which starts from the lowest rows, and after it, for the families it adds).
     warnings.extend(outs.iter_mut().filter_map(SheetOut::drop_other_branches));
-    let (w, parents) = descend_unstable(&mut outs, &idx, opts.accuracy, threads);
+    let (w, n, parents) = descend_unstable(&mut outs, &idx, opts.accuracy, threads);
     warnings.extend(w);
+    notes.extend(n);
     idx.extend(parents);
     warnings.extend(outs.iter_mut().filter_map(SheetOut::drop_other_branches));
     timings.descent = tdesc.elapsed().as_secs_f64();

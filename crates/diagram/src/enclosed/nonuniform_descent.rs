@@ -7,15 +7,23 @@
 //! ([`descend`](rodloop_solver::enclosed::descent::descend)); the state reached is
 //! re-solved at `N/4, N/2, N` and traced through the parent sheet's sampled lengths as a
 //! new family of the same branch. Where no descent leads lower, `solve`'s search for the
-//! branch at that length is the last resort (its other starts reach other minima). The new family's states are kept where they lie below
-//! the parent's (elsewhere they have merged into it). The index is that of the state
+//! branch at that length is the last resort (its other starts reach other minima), on the
+//! saddle's mesh and then as the `solve` command runs it. The new family's states are kept
+//! where they lie below the parent's (elsewhere they have merged into it). An index-0 state
+//! that the search reaches level with the saddle (one more contact node held, or the other
+//! half of a fold) is traced too, through the parent's saddle samples around it, and its
+//! states are kept where they are level with those saddles or below the parent: the
+//! labeller then names the minimum lowest there, not the saddle. The index is that of the state
 //! reported, its finest level ([`Levels::index`]). A sheet's search stops at the first of
 //! its unstable lowest states that leads lower; the ones it did not reach stay candidates
 //! of the next round (a family traced from one of them need not reach the others).
 
 use rodloop_solver::enclosed::descent::{descend, solve_branch_lowest};
 use rodloop_solver::enclosed::stats::{self, Stage};
-use rodloop_solver::enclosed::{solve_levels, EnclosedOptions, SurfaceSource};
+use rodloop_solver::enclosed::{
+    branch::{finer_check, resample_state, solve_levels_from_fine},
+    solve_enclosed, solve_levels, EnclosedOptions, SurfaceSource,
+};
 use rodloop_solver::Accuracy;
 
 use rodloop_continuation::exchange::lowest_state;
@@ -25,21 +33,26 @@ use super::nonuniform_exchange::{interp, lowest_near_circle, ranked_at};
 use super::nonuniform_sheet::SheetOut;
 use super::trace::step_options;
 use super::trace::{follow, TraceStop};
-use super::{PointSource, TOUCH};
+use super::{EnclosedPoint, PointSource, TOUCH};
+use crate::enclosed_state::solve_state;
 use crate::parallel::run_parallel;
 
 /// Relative step amplitudes along the unstable direction, tried in turn.
 const AMPLITUDES: [f64; 4] = [0.05, 0.15, 0.3, 0.5];
 
-/// A lower state's trace and where it stopped.
-type Found = (Vec<Levels>, Vec<TraceStop>);
+/// A lower (or level, index-0) state's trace, where it stopped, and whether it began level
+/// with the saddle ([`Lower::Level`]).
+type Found = (Vec<Levels>, Vec<TraceStop>, bool);
 
 /// One sheet's descent job: the sheet, its candidates, the lengths searched, the family
 /// found below, and `solve`'s index-0 states level with its saddles (`[L̄, E, estimate]`).
 type Searched = (usize, Vec<f64>, Vec<f64>, Option<Found>, Vec<[f64; 3]>);
 
-/// Most rounds of descent (a new family may itself be unstable where it is lowest).
-const ROUNDS: usize = 2;
+/// Most rounds of descent. A new family may itself be unstable where it is lowest, so the
+/// rounds go on while one adds a family (each kept state lies below its parent's or is an
+/// index-0 state level with one of its saddles, and each saddle is tried once); this bound
+/// only guarantees the end (random seed 24 of `tests/random_enclosed.rs` needs three).
+const ROUNDS: usize = 8;
 
 /// Sheets whose lowest states are unstable: `(sheet, L̄ of the states whose energy is the
 /// least of the sheets' there, L̄ of those only tied with the least)`. Tied means the
@@ -88,11 +101,13 @@ fn candidates(least: &[f64], tied: &[f64]) -> Vec<f64> {
 
 /// The lowest new state reached from `lv` (coarsest level) along its unstable direction,
 /// cascaded to `N/2` and `N`: below `lv` and not a state another sheet already has there.
-/// Where no descent leads lower and `accuracy` is given, `solve`'s search for branch `eta`
-/// at that length ([`lowest_by_solve`]).
+/// Where no descent leads lower and `accuracy` is given, `solve`'s search for the branch
+/// (`[branch, η]`) at that length: on `lv`'s mesh ([`lowest_by_solve`]), then, where that
+/// reaches nothing level with `lv` or lower, the `solve` command's
+/// ([`lowest_by_solve_command`]).
 fn lower_state(
     lv: &Levels,
-    eta: u32,
+    [branch, eta]: [u32; 2],
     outs: &[SheetOut],
     accuracy: Option<Accuracy>,
     opts: &EnclosedOptions,
@@ -123,30 +138,130 @@ fn lower_state(
             }
         }
     }
-    let Some(l) = accuracy.and_then(|a| lowest_by_solve(lv, eta, a, opts)) else {
+    let Some(accuracy) = accuracy else {
         return Lower::Nothing;
     };
-    if new_and_lower(&l) {
-        return Lower::Below(Box::new(l));
+    // The search on the saddle's own mesh, then the `solve` command's on the accuracy's
+    // meshes, where the discrete minimum may exist only on finer ones.
+    let searches: [&dyn Fn() -> Option<Levels>; 2] =
+        [&|| lowest_by_solve(lv, eta, accuracy, opts), &|| {
+            lowest_by_solve_command(lv, branch, accuracy, opts)
+        }];
+    for search in searches {
+        let Some(l) = search() else {
+            continue;
+        };
+        if new_and_lower(&l) {
+            return Lower::Below(Box::new(l));
+        }
+        if level(lv, &l, opts) {
+            return Lower::Level(Box::new(l));
+        }
     }
-    let ((e, de), (e0, de0)) = (l.energy(), lv.energy());
-    if (e - e0).abs() <= de + de0 {
-        Lower::Level(e, de)
-    } else {
-        Lower::Nothing
-    }
+    Lower::Nothing
 }
 
 /// What [`lower_state`] reached from a saddle.
 enum Lower {
     /// A new state below it.
     Below(Box<Levels>),
-    /// `solve`'s index-0 state there, level with the saddle within the two estimates
-    /// (energy, estimate): the other half of a fold, or the same state on the other side of
-    /// a contact node's release.
-    Level(f64, f64),
+    /// `solve`'s index-0 state there, level with the saddle within the two estimates: the
+    /// other half of a fold, or the same loop on the other side of a contact node's release
+    /// (the node held with a small force where the saddle has it free at the wall).
+    Level(Box<Levels>),
     /// Nothing lower or level.
     Nothing,
+}
+
+/// `first` traced through `parent`'s sampled lengths from its own (natural-parameter steps,
+/// [`follow`]), with the stops of the trace; `saddles`: only through the run of the
+/// parent's samples of index > 0 that holds `first`'s length (where a state level with a
+/// saddle can be kept).
+fn trace_on(
+    parent: &SheetOut,
+    first: Levels,
+    what: &str,
+    saddles: bool,
+) -> (Vec<Levels>, Vec<TraceStop>) {
+    let x = first.lbar;
+    let mut grid: Vec<f64> = parent.levels.iter().map(|l| l.lbar).collect();
+    grid.sort_by(f64::total_cmp);
+    grid.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
+    if saddles {
+        let saddle = |g: f64| {
+            parent
+                .points
+                .iter()
+                .any(|p| (p.lbar - g).abs() < 1e-12 && p.index > 0)
+        };
+        let at = grid
+            .iter()
+            .position(|&g| (g - x).abs() < 1e-12)
+            .unwrap_or(0);
+        let lo = (0..at)
+            .rev()
+            .take_while(|&i| saddle(grid[i]))
+            .last()
+            .unwrap_or(at);
+        let hi = (at + 1..grid.len())
+            .take_while(|&i| saddle(grid[i]))
+            .last()
+            .unwrap_or(at);
+        grid = grid[lo..=hi].to_vec();
+    }
+    let mid = grid
+        .iter()
+        .position(|&g| (g - x).abs() < 1e-12)
+        .unwrap_or(0);
+    let mut stops = Vec::new();
+    let traced = follow(first, &grid, mid, what, &step_options(), true, &mut stops);
+    (traced, stops)
+}
+
+/// The energy of `l` and its estimate as a row gets it: the three-level estimate, widened
+/// to the bound of the check on twice the cells where that is larger
+/// ([`finer_check`], as `check_rows_on_finer` widens every row that touches the wall).
+fn checked_energy(l: &Levels, opts: &EnclosedOptions) -> (f64, f64) {
+    let (e, de) = l.energy();
+    let bound = finer_check(&l.states[2], l.states[1].energy(), opts).map_or(0.0, |c| c.0);
+    (e, de.max(bound))
+}
+
+/// Whether `a` and `b` (one length, possibly different meshes) are level within their
+/// estimates ([`checked_energy`]).
+fn level(a: &Levels, b: &Levels, opts: &EnclosedOptions) -> bool {
+    let ((ea, da), (eb, db)) = (a.energy(), b.energy());
+    if (ea - eb).abs() <= da + db {
+        return true;
+    }
+    let ((ea, da), (eb, db)) = (checked_energy(a, opts), checked_energy(b, opts));
+    (ea - eb).abs() <= da + db
+}
+
+/// Whether sheet `k` has a saddle sampled at `l`'s length level with `l` ([`level`]).
+fn level_with_saddle(outs: &[SheetOut], k: usize, l: &Levels, opts: &EnclosedOptions) -> bool {
+    let s = &outs[k];
+    s.points.iter().any(|q| {
+        (q.lbar - l.lbar).abs() < 1e-12
+            && q.index > 0
+            && s.levels
+                .iter()
+                .find(|m| (m.lbar - l.lbar).abs() < 1e-12)
+                .is_some_and(|m| level(m, l, opts))
+    })
+}
+
+/// Whether a sheet other than `k` already has an index-0 state at `pt`'s length level with
+/// `pt` within the two estimates (then `pt` adds nothing).
+fn minimum_elsewhere(outs: &[SheetOut], k: usize, pt: &EnclosedPoint) -> bool {
+    outs.iter().enumerate().any(|(j, s)| {
+        j != k
+            && s.points.iter().any(|q| {
+                (q.lbar - pt.lbar).abs() < 1e-12
+                    && q.index == 0
+                    && (q.energy - pt.energy).abs() <= q.energy_error + pt.energy_error
+            })
+    })
 }
 
 /// The lowest local minimum of branch `eta` at `lv`'s length by `solve`'s search on `lv`'s
@@ -184,16 +299,62 @@ fn lowest_by_solve(
     (lifted && l.index().ok()? == 0).then_some(l)
 }
 
+/// The state the `solve` command reports for `branch` at `lv`'s length
+/// ([`crate::enclosed_state::solve_state`]: the meshes of the accuracy level, their check,
+/// the last resorts), with its levels `N/2, N/4` re-solved from it, where it is lifted off
+/// and of index 0. On random seed 10 of `tests/random_enclosed.rs` the branch's minimum
+/// next to a saddle traced on 128 cells exists on 384 only.
+fn lowest_by_solve_command(
+    lv: &Levels,
+    branch: u32,
+    accuracy: Accuracy,
+    opts: &EnclosedOptions,
+) -> Option<Levels> {
+    let m = &lv.states[2].model;
+    let res = solve_state(m.wall(), m.stiffness().kind(), lv.lbar, branch, accuracy).ok()?;
+    if res.stability.0 != 0 || res.attached_loop.is_some() {
+        return None;
+    }
+    let fine = res.state;
+    let states = match solve_levels_from_fine(fine.clone(), opts) {
+        Ok(b) => [b.quarter, b.coarse, b.fine],
+        // Where the minimum has no state on the coarser meshes (a contact node's release
+        // that they place elsewhere), the saddle's states on those meshes stand for its own
+        // in the three-level estimate: its levels where the meshes are the same, else the
+        // saddle resampled to them and re-solved (seed 26 at `L̄ = 1.367928`: the minimum on
+        // 128 cells has no state on 64, and the saddle's mesh is 96).
+        Err(_) => {
+            let n = fine.model.cells();
+            if n == m.cells() {
+                [lv.states[0].clone(), lv.states[1].clone(), fine]
+            } else {
+                let saddle_on = |cells: usize| {
+                    let (mm, z) = resample_state(&lv.states[2], cells).ok()?;
+                    solve_enclosed(&mm, z, opts).ok()
+                };
+                [saddle_on(n / 4)?, saddle_on(n / 2)?, fine]
+            }
+        }
+    };
+    let l = Levels {
+        lbar: lv.lbar,
+        states,
+    };
+    let lifted = l.states[2].contact(TOUCH).ok()?.fraction < 1.0;
+    (lifted && l.index().ok()? == 0).then_some(l)
+}
+
 /// Add the families found below unstable lowest states to `outs` (see the module docs).
-/// Returns the warnings and, for each sheet appended to `outs`, the index of the sheet of
+/// Returns the warnings, the notes and, for each sheet appended to `outs`, the index of the sheet of
 /// the surface diagram it descends from (`roots[k]` for the first `roots.len()` sheets).
 pub(super) fn descend_unstable(
     outs: &mut Vec<SheetOut>,
     roots: &[usize],
     accuracy: Accuracy,
     threads: usize,
-) -> (Vec<String>, Vec<usize>) {
+) -> (Vec<String>, Vec<String>, Vec<usize>) {
     let mut warnings = Vec::new();
+    let mut notes = Vec::new();
     let mut parents: Vec<usize> = Vec::new();
     let root_of = |k: usize, parents: &[usize]| -> usize {
         if k < roots.len() {
@@ -202,7 +363,6 @@ pub(super) fn descend_unstable(
             parents[k - roots.len()]
         }
     };
-    let sopts = step_options();
     // The descent and its cascade get the full Newton budget (the shape moves far).
     let dopts = EnclosedOptions::default();
     let mut tried: Vec<(usize, f64)> = Vec::new();
@@ -242,8 +402,10 @@ pub(super) fn descend_unstable(
                     parent.branch, parent.eta, parent.family
                 );
                 let mut found = None;
-                // `(L̄, E, estimate)` of `solve`'s index-0 states level with the saddle.
+                // `(L̄, E, estimate)` of `solve`'s index-0 states level with the saddle, and
+                // the first such state, traced where nothing lower is found.
                 let mut level = Vec::new();
+                let mut twin: Option<Levels> = None;
                 // The lengths searched: the search stops at the first lower state found, and
                 // the others stay candidates of the next round.
                 let mut searched = Vec::new();
@@ -255,28 +417,25 @@ pub(super) fn descend_unstable(
                         continue;
                     };
                     let lower = stats::stage(Stage::Descent, || {
-                        lower_state(lv, parent.eta, shared, search, &dopts)
+                        lower_state(lv, [parent.branch, parent.eta], shared, search, &dopts)
                     });
-                    let first = match lower {
-                        Lower::Below(l) => *l,
-                        Lower::Level(e, de) => {
-                            level.push([x, e, de]);
-                            continue;
+                    match lower {
+                        Lower::Below(l) => {
+                            found = Some((trace_on(parent, *l, &what, false), false));
+                            break;
                         }
-                        Lower::Nothing => continue,
-                    };
-                    let mut grid: Vec<f64> = parent.levels.iter().map(|l| l.lbar).collect();
-                    grid.sort_by(f64::total_cmp);
-                    grid.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
-                    let mid = grid
-                        .iter()
-                        .position(|&g| (g - x).abs() < 1e-12)
-                        .unwrap_or(0);
-                    let mut stops = Vec::new();
-                    let traced = follow(first, &grid, mid, &what, &sopts, true, &mut stops);
-                    found = Some((traced, stops));
-                    break;
+                        Lower::Level(l) => {
+                            let (e, de) = l.energy();
+                            level.push([x, e, de]);
+                            twin.get_or_insert(*l);
+                        }
+                        Lower::Nothing => {}
+                    }
                 }
+                if found.is_none() {
+                    found = twin.map(|l| (trace_on(parent, l, &what, true), true));
+                }
+                let found = found.map(|((traced, stops), level)| (traced, stops, level));
                 (k, cands, searched, found, level)
             },
         );
@@ -284,7 +443,7 @@ pub(super) fn descend_unstable(
             tried.extend(searched.iter().map(|&x| (k, x)));
             level_with.extend(level.into_iter().map(|l| (k, l)));
             let parent = &outs[k];
-            let Some((traced, stops)) = found else {
+            let Some((traced, stops, from_level)) = found else {
                 warnings.push(format!(
                     "branch {} (eta = {}) below family {}: the lowest states at lbar = {} have index >= 1, but no lower equilibrium was reached along their unstable directions or by the search of solve there",
                     parent.branch,
@@ -304,6 +463,8 @@ pub(super) fn descend_unstable(
                 + 1;
             let mut new = SheetOut::empty(parent.branch, parent.eta, family);
             new.stops = stops;
+            // States kept level with a saddle of the parent (a trace begun level).
+            let mut level_kept = 0;
             for l in traced {
                 let Some(pe) = interp(parent, l.lbar) else {
                     continue;
@@ -311,10 +472,19 @@ pub(super) fn descend_unstable(
                 let Ok(mut pt) = l.point(parent.branch, parent.eta) else {
                     continue;
                 };
-                if pt.energy >= pe - pt.energy_error {
+                let below = pt.energy < pe - pt.energy_error;
+                // Where the trace began level with a saddle, its index-0 states level with
+                // the parent's saddles at their own lengths are kept: the saddle is then not
+                // the lowest state there (the labeller prefers the minimum in a tie).
+                let twin_of_saddle = from_level
+                    && pt.index == 0
+                    && level_with_saddle(outs, k, &l, &dopts)
+                    && !minimum_elsewhere(outs, k, &pt);
+                if !below && !twin_of_saddle {
                     // Merged back into the parent (or not distinguishable from it).
                     continue;
                 }
+                level_kept += usize::from(!below);
                 let surf = parent
                     .points
                     .iter()
@@ -332,6 +502,21 @@ pub(super) fn descend_unstable(
             warnings.extend(new.drop_other_branches());
             if !new.points.is_empty() {
                 new.points.sort_by(|u, v| u.lbar.total_cmp(&v.lbar));
+                if from_level {
+                    notes.push(format!(
+                        "branch {} (eta = {}) family {}: traced from an index-0 state level with a saddle of family {} that solve's search reaches (the same loop with the wall held at a node where the saddle leaves it free at zero force, or the other half of a fold); {} state(s) in [{:.6}, {:.6}], {} level with the saddles of family {} at their lengths within the two estimates and {} below them: there the saddle is not the lowest state",
+                        new.branch,
+                        new.eta,
+                        family,
+                        parent.family,
+                        new.points.len(),
+                        new.points[0].lbar,
+                        new.points[new.points.len() - 1].lbar,
+                        level_kept,
+                        parent.family,
+                        new.points.len() - level_kept
+                    ));
+                }
                 added.push(new);
                 added_parents.push(root_of(k, &parents));
             }
@@ -343,10 +528,22 @@ pub(super) fn descend_unstable(
         parents.extend(added_parents);
     }
     for (k, least, tied) in unstable_lowest(outs) {
-        let mut xs = least;
-        xs.extend(tied);
-        xs.sort_by(f64::total_cmp);
+        // The saddles the labeller still calls lowest: not those tied with a minimum.
         let s = &outs[k];
+        let mut xs: Vec<f64> = least
+            .into_iter()
+            .chain(tied)
+            .filter(|&x| {
+                s.points
+                    .iter()
+                    .find(|p| (p.lbar - x).abs() < 1e-12)
+                    .is_some_and(|p| lowest_state(&ranked_at(outs, &[], &[], k, p)).contains(&0))
+            })
+            .collect();
+        if xs.is_empty() {
+            continue;
+        }
+        xs.sort_by(f64::total_cmp);
         // The two lowest eigenvalues (mass-normalised), to tell a clear saddle from a nearly
         // degenerate state.
         let mu = s
@@ -370,7 +567,7 @@ pub(super) fn descend_unstable(
             .map(|(_, l)| l);
         let tail = match level {
             Some([x, e, de]) => format!(
-                "; at lbar = {x:.6} solve's search on the same mesh reaches an index-0 state level with it within the two estimates ({e:.10} ± {de:.1e}), and no lower equilibrium is known there: the index changes beside it (a fold, or a contact node whose force vanishes)"
+                "; at lbar = {x:.6} solve's search reaches an index-0 state level with it within the two estimates ({e:.10} ± {de:.1e}) whose trace did not keep a row there, and no lower equilibrium is known there: the index changes beside it (a fold, or a contact node whose force vanishes)"
             ),
             None => "; a lower equilibrium exists there that the traces did not find".into(),
         };
@@ -384,5 +581,5 @@ pub(super) fn descend_unstable(
             xs[xs.len() - 1]
         ));
     }
-    (warnings, parents)
+    (warnings, notes, parents)
 }
