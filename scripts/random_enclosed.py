@@ -7,7 +7,8 @@ of 0.2-0.6 of the loop at a random place, gamma in 20-100, R = 1, D0 = 1, on
 LO <= lbar <= HI. `rodloop diagram` runs on it and one line per seed gives: the profile, the
 wall time, the exchanges and collapses (lbar +- estimate), the warnings, the lowest states
 of index > 0, the rows without a state file and the completeness certificate (lengths where
-`solve` finds a state below the diagram's lowest, or misses it for its branch). Python standard library only.
+`solve` finds a state below the diagram's lowest, or misses it for its branch, and the
+exchanges where `solve` finds a state below the exchange's energy or misses it). Python standard library only.
 
 Usage: scripts/random_enclosed.py SEED [SEED ...] [--bin target/release/rodloop]
        [--lo 1.0] [--hi 2.6] [--out DIR]
@@ -94,11 +95,18 @@ def main():
         cert = summary.get("certificate", [])
         below = [c["lbar"] for c in cert if c.get("below")]
         misses = [c["lbar"] for c in cert if c.get("misses")]
+        # At each located exchange, `solve`'s states of the two branches against the
+        # exchange's energy: below it (the diagram missed a state) or above it / none.
+        at_ex = summary.get("exchange_certificate", [])
+        ex_below = [f"{c['lbar']:.6f}" for c in at_ex if c.get("below")]
+        ex_misses = [f"{c['lbar']:.6f}" for c in at_ex if c.get("misses")]
         print(
             f"{head}; {len(rows)} rows; {ex}; {len(summary['warnings'])} warnings; "
             f"{saddles} lowest of index > 0; {missing} rows without a file; "
             f"certificate: {len(cert)} lengths, solve below the lowest at {below or 'none'}, "
-            f"solve misses it at {misses or 'none'}"
+            f"solve misses it at {misses or 'none'}; "
+            f"{len(at_ex)} exchanges re-solved, solve below at {ex_below or 'none'}, "
+            f"misses at {ex_misses or 'none'}"
         )
     print(f"outputs in {root}", file=sys.stderr)
 

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 use rodloop_diagram::enclosed::EnclosedProgress;
-use rodloop_diagram::engine::CertificateCheck;
+use rodloop_diagram::engine::{CertificateCheck, ExchangeCheck};
 use rodloop_diagram::{EnclosedEngine, Engine, PointStates};
 use rodloop_figures::raster::svg_to_png;
 use rodloop_scene::Scene;
@@ -83,7 +83,8 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     // The completeness certificate (the same search `solve` runs) goes into summary.json.
     let cert = engine.certificate(&d);
     let mut schema = engine.schema(&d, &scene.name)?;
-    schema.set_certificate(&cert)?;
+    schema.set_certificate(&cert.at_lowest)?;
+    schema.put("exchange_certificate", &cert.at_exchanges)?;
     let state_warnings = write_outputs(&mut schema, &d, &engine, &run, args.width, args.height)?;
     if args.shapes > 0 {
         // The branch atlas (cli/atlas.rs): states re-solved along each branch, in states/.
@@ -91,8 +92,47 @@ pub fn run(args: &Args, scene: &Scene) -> Result<()> {
     }
     run.commit()?;
     print(&schema, state_warnings, scene, &engine, &args.out);
-    print_certificate(&cert);
+    print_certificate(&cert.at_lowest);
+    print_exchange_certificate(&cert.at_exchanges);
     Ok(())
+}
+
+/// One line per located exchange of the certificate, a warning where `solve` finds a state
+/// below the exchange's energy (the diagram missed it) and where it does not reach a traced
+/// state there.
+fn print_exchange_certificate(checks: &[ExchangeCheck]) {
+    for c in checks {
+        let [a, b] = c.branches;
+        let (e, de) = c.energy;
+        let show = |f: Option<(f64, f64)>, branch: u32| match f {
+            Some((v, dv)) => format!("branch {branch} {v:.10} ± {dv:.1e}"),
+            None => format!("branch {branch} no local minimum"),
+        };
+        outln!(
+            "  certificate at the exchange {a} -> {b}, lbar = {:.10} ± {:.1e}, E R/(pi D) = {e:.10} ± {de:.1e}: solve finds {}, {}",
+            c.lbar,
+            c.error_estimate,
+            show(c.solve_energies[0], a),
+            show(c.solve_energies[1], b)
+        );
+        if c.below {
+            eprintln!(
+                "warning: solve finds a state below the exchange {a} -> {b} at lbar = {:.10} (E R/(pi D) = {e:.10} ± {de:.1e}) beyond the estimates: the diagram missed it, and the exchange lies elsewhere",
+                c.lbar
+            );
+        }
+        if c.misses {
+            let why = if c.note.is_empty() {
+                "a state above the exchange's energy beyond the estimates".to_string()
+            } else {
+                c.note.clone()
+            };
+            eprintln!(
+                "warning: solve does not reach the traced states of the exchange {a} -> {b} at lbar = {:.10}: {why}",
+                c.lbar
+            );
+        }
+    }
 }
 
 /// One line per length of the certificate, a warning per state below the diagram's and per

@@ -251,6 +251,91 @@ impl CertificateCheck {
     }
 }
 
+/// One check of the certificate at a located exchange `E_a = E_b`: `solve`'s state of each
+/// of the two branches at `L̄_cr` against the exchange's energy `E_c`, within the solve's
+/// estimate, the diagram's there and the slope of the branch times the exchange's estimate.
+/// A state of either branch below `E_c` is one the diagram did not trace next to the
+/// exchange (the exchange is then elsewhere); a state above it, or none, is `solve --branch`
+/// not reaching the traced one (a state whose own periods name no branch, which `solve`
+/// refuses, or a saddle there).
+#[derive(Clone, Debug, Serialize)]
+pub struct ExchangeCheck {
+    /// `L̄_cr`.
+    pub lbar: f64,
+    /// The exchange's error estimate in `L̄`.
+    pub error_estimate: f64,
+    /// The branches lowest below and above it.
+    pub branches: [u32; 2],
+    /// The diagram's energy at the exchange and its estimate.
+    pub energy: (f64, f64),
+    /// `solve`'s energy and error estimate for each branch (`None` where it found no local
+    /// minimum).
+    pub solve_energies: [Option<(f64, f64)>; 2],
+    /// `|E − E_c|` allowed for each branch: the two estimates plus the slope times the
+    /// exchange's estimate.
+    pub allowed: [f64; 2],
+    /// A state of `solve` lies below `E_c` beyond its allowance: the diagram missed it.
+    pub below: bool,
+    /// `solve` finds no local minimum of a branch, or one above `E_c` beyond its allowance.
+    pub misses: bool,
+    /// Why `solve` found no local minimum (empty otherwise).
+    pub note: String,
+}
+
+impl ExchangeCheck {
+    /// The check of `solve`'s states `found` (energy and estimate, or why there is none) of
+    /// the two `branches` at an exchange `lbar ± error_estimate` of energy `energy` (and its
+    /// estimate), where the branches' energies have the slopes `slopes`.
+    pub fn new(
+        lbar: f64,
+        error_estimate: f64,
+        branches: [u32; 2],
+        energy: (f64, f64),
+        slopes: [f64; 2],
+        found: [Result<(f64, f64), String>; 2],
+    ) -> Self {
+        let (mut below, mut misses) = (false, false);
+        let mut allowed = [0.0; 2];
+        for k in 0..2 {
+            allowed[k] = energy.1 + slopes[k].abs() * error_estimate;
+            match &found[k] {
+                Ok((e, de)) => {
+                    allowed[k] += de;
+                    below |= e - energy.0 < -allowed[k];
+                    misses |= e - energy.0 > allowed[k];
+                }
+                Err(_) => misses = true,
+            }
+        }
+        let note = found
+            .iter()
+            .zip(branches)
+            .filter_map(|(f, b)| f.as_ref().err().map(|e| format!("branch {b}: {e}")))
+            .collect::<Vec<_>>()
+            .join("; ");
+        Self {
+            lbar,
+            error_estimate,
+            branches,
+            energy,
+            solve_energies: [found[0].clone().ok(), found[1].clone().ok()],
+            allowed,
+            below,
+            misses,
+            note,
+        }
+    }
+}
+
+/// The enclosed completeness certificate: at lowest states and at located exchanges.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct EnclosedCertificate {
+    /// `solve` for every branch at a few lowest states.
+    pub at_lowest: Vec<CertificateCheck>,
+    /// `solve` for the two branches at each located exchange.
+    pub at_exchanges: Vec<ExchangeCheck>,
+}
+
 /// Lowest states at which the certificate runs `solve`: three, spread over the range.
 const CERTIFICATE_SAMPLES: usize = 3;
 
@@ -262,10 +347,15 @@ impl EnclosedEngine {
     /// state of `solve` below the diagram's lowest one by more than the two error estimates is
     /// a state the diagram missed. A uniform rod's diagram and `solve` start from the same
     /// exact surface loops: no check there (empty).
-    pub fn certificate(&self, d: &EnclosedDiagram) -> Vec<CertificateCheck> {
+    ///
+    /// At each located exchange `E_a = E_b` the same search for the two branches
+    /// ([`ExchangeCheck`]): the lowest states next to an exchange are the ones least sampled
+    /// by the lengths above (random seed 22 of `tests/random_enclosed.rs`: a branch-1 family
+    /// reached only by a search from a saddle moves its exchange 1 → 2 by `5.6·10⁻⁴`).
+    pub fn certificate(&self, d: &EnclosedDiagram) -> EnclosedCertificate {
         let opts = &self.opts;
         if opts.stiffness.is_uniform() {
-            return Vec::new();
+            return EnclosedCertificate::default();
         }
         let mut lowest: Vec<_> = d
             .points
@@ -274,7 +364,7 @@ impl EnclosedEngine {
             .collect();
         lowest.sort_by(|a, b| a.lbar.total_cmp(&b.lbar));
         if lowest.is_empty() {
-            return Vec::new();
+            return EnclosedCertificate::default();
         }
         let n = lowest.len();
         let mut picks: Vec<usize> = (0..CERTIFICATE_SAMPLES)
@@ -282,7 +372,8 @@ impl EnclosedEngine {
             .collect();
         picks.dedup();
         let wanted = |b: u32| opts.branches.as_ref().is_none_or(|s| s.contains(&b));
-        let mut jobs = Vec::new();
+        // The solves: `(L̄, branch)`, at the picked lowest states, then at the exchanges.
+        let mut jobs: Vec<(f64, u32)> = Vec::new();
         for &i in &picks {
             let p = lowest[i];
             let top = p.lbar.floor() as u32 + 1;
@@ -290,27 +381,143 @@ impl EnclosedEngine {
                 let e = f64::from(eta);
                 let branch = rodloop_exact::branch_of_eta(eta);
                 if p.lbar > e - 1.0 && p.lbar < e + 1.0 && wanted(branch) {
-                    jobs.push((p, branch));
+                    jobs.push((p.lbar, branch));
                 }
             }
         }
+        let exchanges: Vec<_> = d
+            .critical
+            .iter()
+            .map(|c| &c.critical)
+            .filter(|c| {
+                c.kind == crate::critical::CriticalKind::Crossing
+                    && c.from_branch > 0
+                    && c.to_branch > 0
+            })
+            .collect();
+        for c in &exchanges {
+            jobs.push((c.lbar_cr, c.from_branch));
+            jobs.push((c.lbar_cr, c.to_branch));
+        }
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-        crate::parallel::run_parallel(threads, jobs, &mut |_| {}, &mut |_| {}, |(p, branch), _| {
-            let lowest = (p.branch, p.family, p.energy, p.energy_error);
-            match crate::enclosed_state::solve_state(
-                &opts.wall,
-                &opts.stiffness,
-                p.lbar,
-                branch,
-                opts.accuracy,
-            ) {
-                Ok(res) => {
-                    CertificateCheck::new(p.lbar, branch, Some(res.energy), lowest, String::new())
+        let solved = crate::parallel::run_parallel(
+            threads,
+            jobs.clone(),
+            &mut |_| {},
+            &mut |_| {},
+            |(x, branch), _| {
+                crate::enclosed_state::solve_state(
+                    &opts.wall,
+                    &opts.stiffness,
+                    x,
+                    branch,
+                    opts.accuracy,
+                )
+                .map(|res| (res.energy, res.stability.0))
+                .map_err(|e| error_chain(&e))
+            },
+        );
+        let found = |x: f64, branch: u32| {
+            jobs.iter()
+                .position(|&(y, b)| y == x && b == branch)
+                .map_or(Err("not solved".to_string()), |k| solved[k].clone())
+        };
+        let at_lowest = picks
+            .iter()
+            .flat_map(|&i| {
+                let p = lowest[i];
+                let lowest = (p.branch, p.family, p.energy, p.energy_error);
+                jobs.iter()
+                    .filter(|&&(x, _)| x == p.lbar)
+                    .map(move |&(x, b)| (x, b, lowest))
+                    .collect::<Vec<_>>()
+            })
+            .map(|(x, b, lowest)| match found(x, b) {
+                Ok((e, _)) => CertificateCheck::new(x, b, Some(e), lowest, String::new()),
+                Err(why) => CertificateCheck::new(x, b, None, lowest, why),
+            })
+            .collect();
+        let minimum = |x: f64, b: u32| {
+            found(x, b).and_then(|(e, index)| {
+                if index == 0 {
+                    Ok(e)
+                } else {
+                    Err(format!("solve finds no local minimum (index {index})"))
                 }
-                Err(e) => CertificateCheck::new(p.lbar, branch, None, lowest, error_chain(&e)),
-            }
-        })
+            })
+        };
+        let at_exchanges = exchanges
+            .iter()
+            .map(|c| {
+                let (x, b) = (c.lbar_cr, [c.from_branch, c.to_branch]);
+                let (slopes, de) = exchange_slopes(d, x, b);
+                ExchangeCheck::new(
+                    x,
+                    c.error_estimate,
+                    b,
+                    (c.energy, de),
+                    slopes,
+                    [minimum(x, b[0]), minimum(x, b[1])],
+                )
+            })
+            .collect();
+        EnclosedCertificate {
+            at_lowest,
+            at_exchanges,
+        }
     }
+}
+
+/// The least energy of branch `b`'s rows at `x`, each family's sheet interpolated linearly
+/// between its samples (`None` where no sheet of the branch spans `x`).
+fn branch_energy(d: &EnclosedDiagram, b: u32, x: f64) -> Option<f64> {
+    let mut sheets: BTreeMap<(u32, u32), Vec<(f64, f64)>> = BTreeMap::new();
+    for p in d.points.iter().filter(|p| p.branch == b) {
+        sheets
+            .entry((p.family, p.sheet))
+            .or_default()
+            .push((p.lbar, p.energy));
+    }
+    sheets
+        .values_mut()
+        .filter_map(|pts| {
+            pts.sort_by(|u, v| u.0.total_cmp(&v.0));
+            let k = pts.partition_point(|q| q.0 < x);
+            let v = pts.get(k)?;
+            if v.0 == x {
+                return Some(v.1);
+            }
+            let u = pts.get(k.checked_sub(1)?)?;
+            Some(u.1 + (x - u.0) / (v.0 - u.0) * (v.1 - u.1))
+        })
+        .min_by(f64::total_cmp)
+}
+
+/// The slopes `dE/dL̄` of the two branches at the exchange `x` (the chords of
+/// [`branch_energy`] between the nearest lowest rows on either side), and the larger energy
+/// estimate of those two rows.
+fn exchange_slopes(d: &EnclosedDiagram, x: f64, branches: [u32; 2]) -> ([f64; 2], f64) {
+    let lows: Vec<_> = d.points.iter().filter(|p| p.lowest).collect();
+    let left = lows
+        .iter()
+        .filter(|p| p.lbar < x)
+        .max_by(|a, b| a.lbar.total_cmp(&b.lbar));
+    let right = lows
+        .iter()
+        .filter(|p| p.lbar > x)
+        .min_by(|a, b| a.lbar.total_cmp(&b.lbar));
+    let (Some(l), Some(r)) = (left, right) else {
+        return ([0.0; 2], 0.0);
+    };
+    let slope = |b: u32| {
+        let (el, er) = (branch_energy(d, b, l.lbar), branch_energy(d, b, r.lbar));
+        el.zip(er)
+            .map_or(0.0, |(el, er)| (er - el) / (r.lbar - l.lbar))
+    };
+    (
+        [slope(branches[0]), slope(branches[1])],
+        l.energy_error.max(r.energy_error),
+    )
 }
 
 /// The `L̄` intervals where the lowest state of an enclosed diagram is a paper branch that has
@@ -375,7 +582,39 @@ fn error_chain(e: &dyn std::error::Error) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::CertificateCheck;
+    use super::{CertificateCheck, ExchangeCheck};
+
+    /// At an exchange `1.5 ± 1e-4` of energy `2 ± 1e-5` where the slopes are 1 and −1,
+    /// `solve`'s state of each branch is level with it within its own estimate, `10⁻⁵` and
+    /// `10⁻⁴`; below that a state the diagram missed, above it (or none) `solve` missing the
+    /// traced one.
+    #[test]
+    fn exchange_checks_allow_the_estimates_and_the_shift_of_the_exchange() {
+        let check = |ea: f64, eb: f64| {
+            let c = ExchangeCheck::new(
+                1.5,
+                1e-4,
+                [1, 2],
+                (2.0, 1e-5),
+                [1.0, -1.0],
+                [Ok((ea, 2e-5)), Ok((eb, 3e-5))],
+            );
+            (c.below, c.misses)
+        };
+        assert_eq!(check(2.0 + 1.2e-4, 2.0 - 1.3e-4), (false, false));
+        assert_eq!(check(2.0 - 1.4e-4, 2.0), (true, false));
+        assert_eq!(check(2.0, 2.0 + 1.5e-4), (false, true));
+        let none = ExchangeCheck::new(
+            1.5,
+            1e-4,
+            [1, 2],
+            (2.0, 1e-5),
+            [1.0, -1.0],
+            [Ok((2.0, 1e-5)), Err("x".into())],
+        );
+        assert!(none.misses && !none.below && none.note == "branch 2: x");
+        assert!(none.solve_energies[1].is_none());
+    }
 
     /// A state of `solve` counts as below or above the lowest state only beyond the sum of
     /// the two estimates, and above only for the lowest state's own branch.

@@ -42,7 +42,9 @@ mod surface;
 mod sweep;
 
 pub use branch_files::{BranchFileEvent, BranchFiles};
-pub use enclosed::{lowest_lifted_off, CertificateCheck, EnclosedEngine};
+pub use enclosed::{
+    lowest_lifted_off, CertificateCheck, EnclosedCertificate, EnclosedEngine, ExchangeCheck,
+};
 pub use exact::{
     etas_in, exact_counterpart, exact_window, exact_window_schema, ExactEngine, ExactOutput,
 };
