@@ -22,7 +22,7 @@ use rodloop_solver::enclosed::descent::{descend, solve_branch_lowest};
 use rodloop_solver::enclosed::stats::{self, Stage};
 use rodloop_solver::enclosed::{
     branch::{finer_check, resample_state, solve_levels_from_fine},
-    solve_enclosed, solve_levels, EnclosedOptions, SurfaceSource,
+    solve_enclosed, solve_levels, EnclosedOptions, EnclosedState, SurfaceSource,
 };
 use rodloop_solver::Accuracy;
 
@@ -291,10 +291,12 @@ fn lowest_by_solve(
         opts,
     )
     .ok()?;
-    let l = Levels {
-        lbar: lv.lbar,
-        states: [b.quarter, b.coarse, b.fine],
-    };
+    lifted_minimum(lv.lbar, [b.quarter, b.coarse, b.fine])
+}
+
+/// The levels `states` at `lbar` where the finest is lifted off and of index 0.
+fn lifted_minimum(lbar: f64, states: [EnclosedState; 3]) -> Option<Levels> {
+    let l = Levels { lbar, states };
     let lifted = l.states[2].contact(TOUCH).ok()?.fraction < 1.0;
     (lifted && l.index().ok()? == 0).then_some(l)
 }
@@ -336,12 +338,7 @@ fn lowest_by_solve_command(
             }
         }
     };
-    let l = Levels {
-        lbar: lv.lbar,
-        states,
-    };
-    let lifted = l.states[2].contact(TOUCH).ok()?.fraction < 1.0;
-    (lifted && l.index().ok()? == 0).then_some(l)
+    lifted_minimum(lv.lbar, states)
 }
 
 /// Add the families found below unstable lowest states to `outs` (see the module docs).
@@ -473,11 +470,11 @@ pub(super) fn descend_unstable(
                     continue;
                 };
                 let below = pt.energy < pe - pt.energy_error;
-                // Where the trace began level with a saddle, its index-0 states level with
-                // the parent's saddles at their own lengths are kept: the saddle is then not
-                // the lowest state there (the labeller prefers the minimum in a tie).
-                let twin_of_saddle = from_level
-                    && pt.index == 0
+                // Index-0 states level with the parent's saddles at their own lengths are kept
+                // too: the saddle is then not the lowest state there (the labeller prefers the
+                // minimum in a tie). A descent can reach one (random seed 24 at
+                // `L̄ = 1.595175`: 5.6e-6 below the saddle, within the estimates).
+                let twin_of_saddle = pt.index == 0
                     && level_with_saddle(outs, k, &l, &dopts)
                     && !minimum_elsewhere(outs, k, &pt);
                 if !below && !twin_of_saddle {
