@@ -483,8 +483,8 @@ fn turns_once(points: &[GaussPoint], length: f64) -> Option<bool> {
 pub fn identify_enclosed(state: &crate::enclosed::EnclosedState) -> Result<Periods, SolverError> {
     let points = gauss_points(state)?;
     let (s, signal, _) = signal_at(state, &points)?;
-    let periods = identify_periods(&s, &signal, state.model.length())?;
     let length = state.model.length();
+    let periods = identify_periods(&s, &signal, length)?;
     if periods.eta == 1
         && length < 2.0 * PI * state.model.radius()
         && turns_once(&points, length) == Some(true)

@@ -460,8 +460,8 @@ pub(super) fn descend_unstable(
                 + 1;
             let mut new = SheetOut::empty(parent.branch, parent.eta, family);
             new.stops = stops;
-            // States kept level with a saddle of the parent (a trace begun level).
-            let mut level_kept = 0;
+            // The lengths of the states kept as level with a saddle of the parent.
+            let mut level_at: Vec<f64> = Vec::new();
             for l in traced {
                 let Some(pe) = interp(parent, l.lbar) else {
                     continue;
@@ -474,14 +474,20 @@ pub(super) fn descend_unstable(
                 // too: the saddle is then not the lowest state there (the labeller prefers the
                 // minimum in a tie). A descent can reach one (random seed 24 at
                 // `L̄ = 1.595175`: 5.6e-6 below the saddle, within the estimates).
-                let twin_of_saddle = pt.index == 0
-                    && level_with_saddle(outs, k, &l, &dopts)
-                    && !minimum_elsewhere(outs, k, &pt);
-                if !below && !twin_of_saddle {
-                    // Merged back into the parent (or not distinguishable from it).
-                    continue;
+                // (Tried only where the state is not below: the level test may re-solve both
+                // states on twice their cells.)
+                let twin_of_saddle = || {
+                    pt.index == 0
+                        && level_with_saddle(outs, k, &l, &dopts)
+                        && !minimum_elsewhere(outs, k, &pt)
+                };
+                if !below {
+                    if !twin_of_saddle() {
+                        // Merged back into the parent (or not distinguishable from it).
+                        continue;
+                    }
+                    level_at.push(l.lbar);
                 }
-                level_kept += usize::from(!below);
                 let surf = parent
                     .points
                     .iter()
@@ -499,6 +505,11 @@ pub(super) fn descend_unstable(
             warnings.extend(new.drop_other_branches());
             if !new.points.is_empty() {
                 new.points.sort_by(|u, v| u.lbar.total_cmp(&v.lbar));
+                let level_kept = new
+                    .points
+                    .iter()
+                    .filter(|p| level_at.contains(&p.lbar))
+                    .count();
                 if from_level {
                     notes.push(format!(
                         "branch {} (eta = {}) family {}: traced from an index-0 state level with a saddle of family {} that solve's search reaches (the same loop with the wall held at a node where the saddle leaves it free at zero force, or the other half of a fold); {} state(s) in [{:.6}, {:.6}], {} level with the saddles of family {} at their lengths within the two estimates and {} below them: there the saddle is not the lowest state",

@@ -202,6 +202,10 @@ impl PointStates for EnclosedDiagram {
     }
 }
 
+/// A lowest state of the diagram as the certificate names it: branch, family, energy, error
+/// estimate.
+pub type LowestState = (u32, u32, f64, f64);
+
 /// One check of the enclosed completeness certificate: `solve`'s state of a branch at the
 /// length of a lowest state of the diagram.
 #[derive(Clone, Debug, Serialize)]
@@ -213,7 +217,7 @@ pub struct CertificateCheck {
     /// `solve`'s energy and error estimate (`None` where it found no state).
     pub solve_energy: Option<(f64, f64)>,
     /// The diagram's lowest state there: branch, family, energy, error estimate.
-    pub lowest: (u32, u32, f64, f64),
+    pub lowest: LowestState,
     /// `solve`'s state lies below the lowest state by more than the two estimates.
     pub below: bool,
     /// `solve` was asked for the lowest state's branch and its state (or none) lies above the
@@ -231,7 +235,7 @@ impl CertificateCheck {
         lbar: f64,
         branch: u32,
         solve_energy: Option<(f64, f64)>,
-        lowest: (u32, u32, f64, f64),
+        lowest: LowestState,
         note: String,
     ) -> Self {
         let (_, _, e0, de0) = lowest;
@@ -372,8 +376,9 @@ impl EnclosedEngine {
             .collect();
         picks.dedup();
         let wanted = |b: u32| opts.branches.as_ref().is_none_or(|s| s.contains(&b));
-        // The solves: `(L̄, branch)`, at the picked lowest states, then at the exchanges.
-        let mut jobs: Vec<(f64, u32)> = Vec::new();
+        // The solves: `(L̄, branch)`, at the picked lowest states (each with that state),
+        // then two at each exchange.
+        let mut at_picks: Vec<(f64, u32, LowestState)> = Vec::new();
         for &i in &picks {
             let p = lowest[i];
             let top = p.lbar.floor() as u32 + 1;
@@ -381,7 +386,11 @@ impl EnclosedEngine {
                 let e = f64::from(eta);
                 let branch = rodloop_exact::branch_of_eta(eta);
                 if p.lbar > e - 1.0 && p.lbar < e + 1.0 && wanted(branch) {
-                    jobs.push((p.lbar, branch));
+                    at_picks.push((
+                        p.lbar,
+                        branch,
+                        (p.branch, p.family, p.energy, p.energy_error),
+                    ));
                 }
             }
         }
@@ -395,14 +404,19 @@ impl EnclosedEngine {
                     && c.to_branch > 0
             })
             .collect();
-        for c in &exchanges {
-            jobs.push((c.lbar_cr, c.from_branch));
-            jobs.push((c.lbar_cr, c.to_branch));
-        }
+        let jobs: Vec<(f64, u32)> = at_picks
+            .iter()
+            .map(|&(x, b, _)| (x, b))
+            .chain(
+                exchanges
+                    .iter()
+                    .flat_map(|c| [(c.lbar_cr, c.from_branch), (c.lbar_cr, c.to_branch)]),
+            )
+            .collect();
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
         let solved = crate::parallel::run_parallel(
             threads,
-            jobs.clone(),
+            jobs,
             &mut |_| {},
             &mut |_| {},
             |(x, branch), _| {
@@ -417,28 +431,17 @@ impl EnclosedEngine {
                 .map_err(|e| error_chain(&e))
             },
         );
-        let found = |x: f64, branch: u32| {
-            jobs.iter()
-                .position(|&(y, b)| y == x && b == branch)
-                .map_or(Err("not solved".to_string()), |k| solved[k].clone())
-        };
-        let at_lowest = picks
+        let (at_lowest_solved, at_exchange_solved) = solved.split_at(at_picks.len());
+        let at_lowest = at_picks
             .iter()
-            .flat_map(|&i| {
-                let p = lowest[i];
-                let lowest = (p.branch, p.family, p.energy, p.energy_error);
-                jobs.iter()
-                    .filter(|&&(x, _)| x == p.lbar)
-                    .map(move |&(x, b)| (x, b, lowest))
-                    .collect::<Vec<_>>()
-            })
-            .map(|(x, b, lowest)| match found(x, b) {
-                Ok((e, _)) => CertificateCheck::new(x, b, Some(e), lowest, String::new()),
-                Err(why) => CertificateCheck::new(x, b, None, lowest, why),
+            .zip(at_lowest_solved)
+            .map(|(&(x, b, lowest), found)| match found {
+                Ok((e, _)) => CertificateCheck::new(x, b, Some(*e), lowest, String::new()),
+                Err(why) => CertificateCheck::new(x, b, None, lowest, why.clone()),
             })
             .collect();
-        let minimum = |x: f64, b: u32| {
-            found(x, b).and_then(|(e, index)| {
+        let minimum = |found: &Result<((f64, f64), usize), String>| {
+            found.clone().and_then(|(e, index)| {
                 if index == 0 {
                     Ok(e)
                 } else {
@@ -448,7 +451,8 @@ impl EnclosedEngine {
         };
         let at_exchanges = exchanges
             .iter()
-            .map(|c| {
+            .zip(at_exchange_solved.chunks(2))
+            .map(|(c, found)| {
                 let (x, b) = (c.lbar_cr, [c.from_branch, c.to_branch]);
                 let (slopes, de) = exchange_slopes(d, x, b);
                 ExchangeCheck::new(
@@ -457,7 +461,7 @@ impl EnclosedEngine {
                     b,
                     (c.energy, de),
                     slopes,
-                    [minimum(x, b[0]), minimum(x, b[1])],
+                    [minimum(&found[0]), minimum(&found[1])],
                 )
             })
             .collect();
