@@ -30,14 +30,16 @@ check_state(out_dir, branch) returns a list of problems, each one of:
                          at most about 12 x);
   "branch contradiction" summary.json names another branch than the one asked, or the
                          periods of the file's bending moment D kappa_g (branch_of_file; an
-                         enclosed file: of its central projection onto the sphere, and a
+                         enclosed file: of its central projection onto the sphere, or its
+                         radial component where that projection is not regular, and a
                          one-fold loop shorter than the great circle is branch 0, one_fold)
                          do not name the asked branch's eta;
   "unreadable"           the files are missing or malformed.
 
 check_diagram_branches(out_dir) names the branch of every state file of a diagram from the
 file alone (branch_of_file: the periods of the bending moment D kappa_g, an enclosed 3-D
-file's from the central projection of its positions onto the sphere; the count of
+file's from the central projection of its positions onto the sphere, or the moment's
+radial component where the projection is not regular; the count of
 rodloop_solver::identify re-implemented) and lists the files that contradict their row.
 """
 import csv, json, math, os
@@ -83,13 +85,9 @@ def _solve(a, b):
     return x
 
 
-def projected_kappa_g(rows, length, half=3, deg=4):
-    """Geodesic curvature of the central projection r/|r| of an enclosed file's loop onto the
-    unit sphere at each row, from the positions alone: r' and r'' of the least-squares
-    polynomial of degree `deg` in s through the 2*half+1 nearest rows (the loop closed), then
-    det(r, t, r'') / (1 - (r.t/|r|)^2)^(3/2). On the sphere it is the loop's kappa_g. None
-    where the projection is not regular (|r| < 1/4 or the tangent within asin(1/4) of
-    radial; rodloop_solver::identify::PROJECTION_REGULARITY)."""
+def _local_frames(rows, length, half=3, deg=4):
+    """Per row (r, t, k): the position, unit tangent and r'' of the least-squares polynomial
+    of degree `deg` in s through the 2*half+1 nearest rows (the loop closed)."""
     n = len(rows)
     out = []
     for j in range(n):
@@ -111,14 +109,44 @@ def projected_kappa_g(rows, length, half=3, deg=4):
             k.append(2 * co[2])
         r = pts[half]
         tn = math.sqrt(sum(v * v for v in t))
-        t = [v / tn for v in t]
+        out.append((r, [v / tn for v in t], k))
+    return out
+
+
+def _det(r, t, k):
+    return (r[0] * (t[1] * k[2] - t[2] * k[1]) - r[1] * (t[0] * k[2] - t[2] * k[0])
+            + r[2] * (t[0] * k[1] - t[1] * k[0]))
+
+
+def projected_kappa_g(rows, length):
+    """Geodesic curvature of the central projection r/|r| of an enclosed file's loop onto the
+    unit sphere at each row, from the positions alone (_local_frames), det(r, t, r'') /
+    (1 - (r.t/|r|)^2)^(3/2). On the sphere it is the loop's kappa_g. None where the projection
+    is not regular (|r| < 1/4 or the tangent within asin(1/4) of radial;
+    rodloop_solver::identify::PROJECTION_REGULARITY)."""
+    out = []
+    for r, t, k in _local_frames(rows, length):
         q = math.sqrt(sum(v * v for v in r))
         along = sum(a * b for a, b in zip(r, t)) / q if q > 0 else 1.0
         if q < 0.25 or 1 - along * along < 0.0625:
             return None
-        det = (r[0] * (t[1] * k[2] - t[2] * k[1]) - r[1] * (t[0] * k[2] - t[2] * k[0])
-               + r[2] * (t[0] * k[1] - t[1] * k[0]))
-        out.append(det / (1 - along * along) ** 1.5)
+        out.append(_det(r, t, k) / (1 - along * along) ** 1.5)
+    return out
+
+
+def radial_moment(rows, length):
+    """The signal of rodloop_solver::identify::enclosed_signal where the central projection is
+    not regular, over D: det(r/|r|, t, r'') sin^2(t, r) at each row (_local_frames), the
+    radial component of t x kappa weighted down where the loop runs radially; 0 at the
+    centre."""
+    out = []
+    for r, t, k in _local_frames(rows, length):
+        q = math.sqrt(sum(v * v for v in r))
+        if q == 0:
+            out.append(0.0)
+            continue
+        along = sum(a * b for a, b in zip(r, t)) / q
+        out.append((1 - along * along) * _det(r, t, k) / q)
     return out
 
 
@@ -184,7 +212,18 @@ def branch_of_file(rows, length):
     else:
         kg = projected_kappa_g(rows, length)
         if kg is None:
-            eta = principal_axis_periods(rows, length)
+            # The radial moment, unless it vanishes (a loop in a plane through the centre,
+            # rodloop_solver::identify::PLANAR): then the principal-axis curvature.
+            kg = radial_moment(rows, length)
+            mean = sum(kg) / len(kg)
+            if max(abs(k - mean) * r["D"] for k, r in zip(kg, rows)) <= 1e-6 * max(
+                r["D"] * abs(r["kappa"]) for r in rows
+            ):
+                eta = principal_axis_periods(rows, length)
+                if eta == 1 and length < 2 * math.pi and one_fold(rows):
+                    return 0
+                return eta
+            eta = named_periods([r["s"] for r in rows], [k * r["D"] for k, r in zip(kg, rows)], length)
             if eta == 1 and length < 2 * math.pi and one_fold(rows):
                 return 0
             return eta
