@@ -7,12 +7,13 @@
 //! its shifts on the crate's pool). At the sampled lengths of a branch that no family found
 //! here covers yet (at least [`SEED_SPACING`] apart, and only where the branch lies within
 //! [`RELEVANT`] of the lowest traced state), that search runs on the `N/4` mesh of the
-//! traces; each state found below the branch's traced states is cascaded to `N/2, N` and
-//! traced through the branch's sampled lengths as a new family.
+//! traces; each state found is cascaded to `N/2, N` and descended where it is a saddle (as
+//! `solve`'s search does), and one below the branch's traced states is traced through the
+//! branch's sampled lengths as a new family.
 
 use rodloop_exact::eta_of_branch;
 use rodloop_solver::enclosed::descent::{
-    distinct_lowest_first, homotopy_shifts, stiffness_path_from_shift,
+    descend_branch, distinct_lowest_first, homotopy_shifts, stiffness_path_from_shift,
 };
 use rodloop_solver::enclosed::solve_levels;
 use rodloop_solver::enclosed::stats::{self, Stage};
@@ -141,10 +142,16 @@ fn seed_branch(
             continue;
         };
         for (_, s) in found {
+            // Cascaded, and descended where it is a saddle, as `solve`'s search treats the
+            // states of the stiffness paths (`solve_branch_lowest`): on random seed 6 of
+            // `tests/random_enclosed.rs` (`D1/D0 = 0.289` on `0.502 ≤ s/L ≤ 0.921`) the path
+            // at `L̄ = 1.3276` ends at a saddle above the traced branch-2 states whose descent
+            // reaches a minimum 2.2e-2 below them, lifted to within `0.03 R` of the centre.
             let levels = stats::stage(Stage::StiffnessPath, || {
                 solve_levels(&s.model, s.z.clone(), None, &dopts)
+                    .and_then(|b| descend_branch(b, &dopts))
             });
-            let Ok(b) = levels else {
+            let Ok((b, _)) = levels else {
                 continue;
             };
             let first = Levels {
