@@ -53,6 +53,9 @@ pub struct EnclosedResult {
     /// Where the energy reported is the surface loop's (attached): that loop as its state
     /// file holds it. `None`: the file holds [`EnclosedResult::state`].
     pub attached_loop: Option<AttachedLoop>,
+    /// The coarser levels of the 3-D model's estimate (`N/4`, `N/2`; `None` for the planar
+    /// circle), with [`EnclosedResult::state`] the ladder the estimate comes from.
+    pub levels: Option<[EnclosedState; 2]>,
 }
 
 /// The surface loop an attached enclosed state's file holds.
@@ -324,6 +327,7 @@ pub fn solve_state_with(
             model_energy: (e, est),
             state,
             attached_loop: None,
+            levels: None,
         });
     }
     let eta = eta_of_branch(branch);
@@ -574,6 +578,7 @@ pub fn solve_state_with(
         stability,
         method,
         attached_loop,
+        levels: Some([b.quarter, b.coarse]),
     })
 }
 
@@ -728,5 +733,6 @@ pub fn solve_from_shape(
         method,
         state: b.fine,
         attached_loop: None,
+        levels: Some([b.quarter, b.coarse]),
     })
 }

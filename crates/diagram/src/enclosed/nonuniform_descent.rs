@@ -21,8 +21,8 @@
 use rodloop_solver::enclosed::descent::{descend, solve_branch_lowest};
 use rodloop_solver::enclosed::stats::{self, Stage};
 use rodloop_solver::enclosed::{
-    branch::{finer_check, resample_state, solve_levels_from_fine},
-    solve_enclosed, solve_levels, EnclosedOptions, EnclosedState, SurfaceSource,
+    branch::{finer_check, solve_levels_from_fine},
+    solve_levels, EnclosedOptions, EnclosedState, SurfaceSource,
 };
 use rodloop_solver::Accuracy;
 
@@ -303,8 +303,8 @@ fn lifted_minimum(lbar: f64, states: [EnclosedState; 3]) -> Option<Levels> {
 
 /// The state the `solve` command reports for `branch` at `lv`'s length
 /// ([`crate::enclosed_state::solve_state`]: the meshes of the accuracy level, their check,
-/// the last resorts), with its levels `N/2, N/4` re-solved from it, where it is lifted off
-/// and of index 0. On random seed 10 of `tests/random_enclosed.rs` the branch's minimum
+/// the last resorts), with its levels `N/2, N/4` re-solved from it (else those of `solve`'s
+/// own estimate), where it is lifted off and of index 0. On random seed 10 of `tests/random_enclosed.rs` the branch's minimum
 /// next to a saddle traced on 128 cells exists on 384 only.
 fn lowest_by_solve_command(
     lv: &Levels,
@@ -320,22 +320,12 @@ fn lowest_by_solve_command(
     let fine = res.state;
     let states = match solve_levels_from_fine(fine.clone(), opts) {
         Ok(b) => [b.quarter, b.coarse, b.fine],
-        // Where the minimum has no state on the coarser meshes (a contact node's release
-        // that they place elsewhere), the saddle's states on those meshes stand for its own
-        // in the three-level estimate: its levels where the meshes are the same, else the
-        // saddle resampled to them and re-solved (seed 26 at `L̄ = 1.367928`: the minimum on
-        // 128 cells has no state on 64, and the saddle's mesh is 96).
+        // Where the minimum has no state on the coarser meshes re-solved from it (a contact
+        // node's release that they place elsewhere), the ladder of `solve`'s own estimate:
+        // `solve` may reach it by continuing a minimum of another length level by level.
         Err(_) => {
-            let n = fine.model.cells();
-            if n == m.cells() {
-                [lv.states[0].clone(), lv.states[1].clone(), fine]
-            } else {
-                let saddle_on = |cells: usize| {
-                    let (mm, z) = resample_state(&lv.states[2], cells).ok()?;
-                    solve_enclosed(&mm, z, opts).ok()
-                };
-                [saddle_on(n / 4)?, saddle_on(n / 2)?, fine]
-            }
+            let [quarter, coarse] = res.levels?;
+            [quarter, coarse, fine]
         }
     };
     lifted_minimum(lv.lbar, states)
