@@ -223,9 +223,8 @@ fn random_two_segment_enclosed_diagram_holds_from_its_files() {
 }
 
 /// `D1/D0 = 0.661` on `0.299 ≤ s/L ≤ 0.866`, `γ = 49.2`, through the great circle `L̄ = 2`:
-/// two index-1 states of one family are lowest (`L̄ = 1.5477` and 1.5743), and the
-/// descent from each of them to a lower family has to be tried, not only from the first
-/// that leads to one.
+/// around `L̄ = 1.55` the family traced from the surface is a saddle, and the lowest states
+/// are the branch-2 families below it that the stiffness-path search finds.
 #[test]
 fn random_enclosed_diagram_through_a_great_circle_holds_from_its_files() {
     check_scene(2, 1.0, 2.6);
@@ -248,6 +247,30 @@ fn random_enclosed_diagram_where_only_solve_reaches_the_lowest_minimum_holds() {
     check_scene(19, 1.0, 2.6);
 }
 
+/// `D1/D0 = 0.394` on `0.272 ≤ s/L ≤ 0.738`, `γ = 21.3`: the branch-2 family that crosses
+/// branch 1 at the exchange 1 → 2 reaches to within `0.06–0.23 R` of the centre on
+/// `1.20 ≤ L̄ ≤ 1.41` (gaps up to `0.77–0.94 R`), where the central projection of the loop is
+/// not regular. Its rows there are
+/// named by their own moment (its radial component), not only by continuation, and `solve
+/// --branch 2` at the exchange reaches that family (the exchange certificate of
+/// [`check_output`]).
+#[test]
+fn random_enclosed_far_lifted_family_is_named_from_its_states() {
+    let (dir, sc, text) = scene_file("random-enclosed-far-lifted", 21, 1.0, 2.6);
+    let out = diagram_of(&dir, &sc);
+    check_output(&out, &text);
+    let (h, rows) = read_csv(&out.join("branches.csv"));
+    let num = |r: &Vec<String>, name: &str| -> f64 { r[col(&h, name)].parse().unwrap() };
+    let far: Vec<&Vec<String>> = rows
+        .iter()
+        .filter(|r| r[col(&h, "branch")] == "2" && num(r, "max_gap") > 0.75)
+        .collect();
+    assert!(far.len() >= 3, "{far:?}\n{text}");
+    for r in far {
+        assert_eq!(r[col(&h, "branch_from")], "periods", "{r:?}\n{text}");
+    }
+}
+
 /// `D1/D0 = 0.517` on `0.026 ≤ s/L ≤ 0.298`, `γ = 37.4`: next to the exchange 3 → 1, where
 /// the trace of branch 1 stops at its fold and the walks of the exchange locator fail, the
 /// least traced state at `L̄ = 2.427429` is a saddle on its 128 cells (lowest eigenvalue
@@ -265,10 +288,23 @@ fn a_least_saddle_gives_way_to_a_minimum_level_with_it() {
     let out = diagram_of(&dir, &sc);
     check_output(&out, &text);
     exchange_of_diagram_agrees(&dir, &sc, &text, &out, ["3", "1"], 1e-5, 2.0);
+    minima_named_lowest_are_level_with_the_saddles_there(&dir, &sc, &text, &out);
+}
+
+/// Every lowest minimum of the diagram in `out` lies above no saddle at its length beyond the
+/// two estimates; where a saddle there is level with it, `solve --branch` at that length
+/// reports a local minimum level with the row; there is at least one such pair.
+fn minima_named_lowest_are_level_with_the_saddles_there(
+    dir: &Path,
+    sc: &Path,
+    text: &str,
+    out: &Path,
+) {
     let (h, rows) = read_csv(&out.join("branches.csv"));
     let num = |r: &Vec<String>, name: &str| -> f64 { r[col(&h, name)].parse().unwrap() };
-    // The lowest minima with a saddle at their length whose energy is not above theirs: the
-    // saddle is the least state there, and the minimum level with it is named lowest.
+    // A saddle below a minimum named lowest must be level with it (the saddle is then the
+    // least state there, and the minimum level with it is named lowest); each pair of a
+    // lowest minimum and a saddle level with it is checked against `solve`.
     let mut saddles = 0;
     for minimum in rows
         .iter()
@@ -279,19 +315,21 @@ fn a_least_saddle_gives_way_to_a_minimum_level_with_it() {
             num(minimum, "energy"),
             num(minimum, "energy_error"),
         );
-        let least = rows.iter().find(|q| {
-            (num(q, "lbar") - x).abs() < 1e-12
-                && q[col(&h, "index")] != "0"
-                && num(q, "energy") <= em
-        });
-        let Some(saddle) = least else {
+        let at_x: Vec<&Vec<String>> = rows
+            .iter()
+            .filter(|q| (num(q, "lbar") - x).abs() < 1e-12 && q[col(&h, "index")] != "0")
+            .collect();
+        for saddle in at_x.iter().filter(|q| num(q, "energy") <= em) {
+            assert!(
+                em - num(saddle, "energy") <= dm + num(saddle, "energy_error"),
+                "a minimum named lowest above a saddle beyond the estimates: {minimum:?} {saddle:?}\n{text}"
+            );
+        }
+        let level = |q: &Vec<String>| (num(q, "energy") - em).abs() <= dm + num(q, "energy_error");
+        if !at_x.iter().any(|q| level(q)) {
             continue;
-        };
+        }
         saddles += 1;
-        assert!(
-            em - num(saddle, "energy") <= dm + num(saddle, "energy_error"),
-            "a minimum named lowest above a saddle beyond the estimates: {minimum:?} {saddle:?}\n{text}"
-        );
         let branch = &minimum[col(&h, "branch")];
         let o = dir.join(format!("solve-{x}"));
         rodloop_ok(&[
@@ -315,7 +353,7 @@ fn a_least_saddle_gives_way_to_a_minimum_level_with_it() {
     }
     assert!(
         saddles > 0,
-        "no least saddle named below a minimum on this scene: {text}"
+        "no lowest minimum level with a saddle at its length on this scene: {text}"
     );
 }
 
@@ -556,17 +594,24 @@ fn solve_continues_a_minimum_past_a_fold_of_its_coarse_mesh() {
 }
 
 /// As above on the 26th scene (`D1/D0 = 0.229` on `0.376 ≤ s/L ≤ 0.857`, `γ = 93.9`) at
-/// `L̄ = 1.3679277`: Newton from the surface loop ends, on every mesh, at an index-0 state
-/// whose branch cannot be identified (grid-scale noise in its curvature), which is no
-/// answer; the minimum comes from the continuation in `L̄` on the 128-cell mesh.
+/// `L̄ = 1.3679277`: Newton from the surface loop ends at an index-0 figure-eight that comes
+/// within `0.2 R` of the centre, where its central projection is not regular; the radial
+/// component of its moment names it branch 2 (`η = 1`), and it is the answer at every
+/// accuracy, 2.9e-2 below the minimum next to the wall (1.2576955904 ± 1.4e-5).
 #[test]
-fn solve_passes_over_a_state_of_no_branch_to_the_minimum() {
-    same_minimum_at_every_accuracy("random-enclosed-no-branch", 26, "1.3679277308532274");
+fn solve_names_a_far_lifted_minimum_by_its_own_moment() {
+    let states =
+        same_minimum_at_every_accuracy("random-enclosed-far-minimum", 26, "1.3679277308532274");
+    for s in &states {
+        assert_eq!(s["identified_eta"], 1, "{s}");
+        assert!(s["max_gap"].as_f64().unwrap() > 0.75, "{s}");
+        assert!(s["energy"].as_f64().unwrap() < 1.25, "{s}");
+    }
 }
 
 /// `solve --lbar LBAR --branch 2` on scene `seed` at the three accuracies: index 0 each, the
-/// energies equal within the estimates.
-fn same_minimum_at_every_accuracy(name: &str, seed: u64, lbar: &str) {
+/// energies equal within the estimates. Returns the three `summary.json`s.
+fn same_minimum_at_every_accuracy(name: &str, seed: u64, lbar: &str) -> Vec<serde_json::Value> {
     let (dir, sc, text) = scene_file(name, seed, 1.0, 2.6);
     let f = |s: &serde_json::Value, k: &str| s[k].as_f64().expect("a number");
     let states: Vec<_> = ["fast", "default", "high"]
@@ -584,6 +629,7 @@ fn same_minimum_at_every_accuracy(name: &str, seed: u64, lbar: &str) {
             "{e} ± {d} against {e0} ± {d0}\n{text}"
         );
     }
+    states
 }
 
 /// The estimate `solve` prints bounds the error of a lifted-off state where its levels
