@@ -366,10 +366,7 @@ fn signal_at(
         }
     }
     if regular {
-        let mean = projected.iter().sum::<f64>() / projected.len() as f64;
-        let spread = projected
-            .iter()
-            .fold(0.0f64, |a, v| a.max((v - mean).abs()));
+        let spread = spread_about_mean(&projected);
         if spread <= PLANAR * scale {
             return Err(SolverError::InvalidInput(format!(
                 "the loop lies in a plane through the centre of the ball (the geodesic \
@@ -384,8 +381,7 @@ fn signal_at(
         .enumerate()
         .map(|(g, p)| m.stiffness().eval(m.gauss_sigma(g)).d * radial_moment(p))
         .collect();
-    let mean = radial.iter().sum::<f64>() / radial.len() as f64;
-    let spread = radial.iter().fold(0.0f64, |a, v| a.max((v - mean).abs()));
+    let spread = spread_about_mean(&radial);
     if spread.is_finite() && spread > PLANAR * scale {
         return Ok((s, radial, false));
     }
@@ -414,6 +410,12 @@ fn signal_at(
         })
         .collect();
     Ok((s, signal, false))
+}
+
+/// `max |v − mean(v)|` (the mean unweighted): how far a signal leaves its mean.
+fn spread_about_mean(v: &[f64]) -> f64 {
+    let mean = v.iter().sum::<f64>() / v.len() as f64;
+    v.iter().fold(0.0f64, |a, x| a.max((x - mean).abs()))
 }
 
 /// `det(r̂, t, κ) sin²∠(t, r)` at a Gauss point: the radial component of `t × κ` (the bending
