@@ -204,6 +204,15 @@ def named_periods(s, signal, length):
     return coarse // 2
 
 
+def _planar(kg, rows):
+    """Whether the signal kg (over D) stays at its mean to 1e-6 of the largest D |kappa|: a
+    loop in a plane through the centre (rodloop_solver::identify::PLANAR)."""
+    mean = sum(kg) / len(kg)
+    return max(abs(k - mean) * r["D"] for k, r in zip(kg, rows)) <= 1e-6 * max(
+        r["D"] * abs(r["kappa"]) for r in rows
+    )
+
+
 def branch_of_file(rows, length):
     """The periods eta of a state file's bending moment D kappa_g (an enclosed 3-D file: of its
     central projection's, from the positions), or None where they name no branch."""
@@ -212,27 +221,15 @@ def branch_of_file(rows, length):
     else:
         kg = projected_kappa_g(rows, length)
         if kg is None:
-            # The radial moment, unless it vanishes (a loop in a plane through the centre,
-            # rodloop_solver::identify::PLANAR): then the principal-axis curvature.
+            # The radial moment, unless it vanishes too: then the principal-axis curvature.
             kg = radial_moment(rows, length)
-            mean = sum(kg) / len(kg)
-            if max(abs(k - mean) * r["D"] for k, r in zip(kg, rows)) <= 1e-6 * max(
-                r["D"] * abs(r["kappa"]) for r in rows
-            ):
+            if _planar(kg, rows):
                 eta = principal_axis_periods(rows, length)
                 if eta == 1 and length < 2 * math.pi and one_fold(rows):
                     return 0
                 return eta
-            eta = named_periods([r["s"] for r in rows], [k * r["D"] for k, r in zip(kg, rows)], length)
-            if eta == 1 and length < 2 * math.pi and one_fold(rows):
-                return 0
-            return eta
-        # A loop in a plane through the centre projects onto a great circle: no periods
-        # (rodloop_solver::identify::PLANAR, relative to the largest D |kappa|).
-        mean = sum(kg) / len(kg)
-        if max(abs(k - mean) * r["D"] for k, r in zip(kg, rows)) <= 1e-6 * max(
-            r["D"] * abs(r["kappa"]) for r in rows
-        ):
+        elif _planar(kg, rows):
+            # A loop in a plane through the centre projects onto a great circle: no periods.
             return None
     eta = named_periods([r["s"] for r in rows], [k * r["D"] for k, r in zip(kg, rows)], length)
     if eta == 1 and "kappa_g" not in rows[0] and length < 2 * math.pi and one_fold(rows):

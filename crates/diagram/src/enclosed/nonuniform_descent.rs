@@ -304,8 +304,9 @@ fn lifted_minimum(lbar: f64, states: [EnclosedState; 3]) -> Option<Levels> {
 /// The state the `solve` command reports for `branch` at `lv`'s length
 /// ([`crate::enclosed_state::solve_state`]: the meshes of the accuracy level, their check,
 /// the last resorts), with its levels `N/2, N/4` re-solved from it (else those of `solve`'s
-/// own estimate), where it is lifted off and of index 0. On random seed 10 of `tests/random_enclosed.rs` the branch's minimum
-/// next to a saddle traced on 128 cells exists on 384 only.
+/// own estimate), where it is lifted off and of index 0. On random seed 10 of
+/// `tests/random_enclosed.rs` the branch's minimum next to a saddle traced on 128 cells exists
+/// on 384 only.
 fn lowest_by_solve_command(
     lv: &Levels,
     branch: u32,
