@@ -27,7 +27,8 @@
 //! * [`roots`] holds the one-dimensional root finders (secant, Illinois, Brent) used
 //!   to locate special points and exchanges of stability; [`exchange`] locates the
 //!   crossing of two branches' energies with an error estimate and labels the states at
-//!   one parameter value (stable, metastable, unstable).
+//!   one parameter value (stable, metastable, unstable); [`sampled`] interpolates a
+//!   sampled curve with an error bound from its own second differences.
 //!
 //! Linear algebra: every solve with the Jacobian goes through
 //! [`Problem::factorize`], which returns a [`Factorization`] of `J = ∂F/∂x` — by
@@ -87,6 +88,7 @@ pub mod natural;
 mod newton;
 mod problem;
 pub mod roots;
+pub mod sampled;
 mod settings;
 mod stepper;
 mod switching;

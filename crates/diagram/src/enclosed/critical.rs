@@ -3,6 +3,7 @@
 //! states), and the lowest-branch labels (see the parent module's docs).
 
 use rodloop_continuation::exchange::{self, Energies, EnergyPair, ExchangeSettings, Ranked, Start};
+use rodloop_continuation::sampled::{self, Sample};
 use rodloop_solver::enclosed::stats;
 use rodloop_solver::enclosed::{finest_energy, solve_prolonged, EnclosedOptions, EnclosedState};
 use rodloop_solver::{Accuracy, SolverError};
@@ -285,43 +286,39 @@ pub(super) fn lowest_branch(critical: &[EnclosedCritical], lbar: f64) -> Option<
     }
 }
 
-/// Energy of `branch` at `lbar` interpolated linearly between its samples.
-pub(super) fn interpolated(points: &[EnclosedPoint], branch: u32, lbar: f64) -> Option<f64> {
-    interpolated_state(points, branch, lbar).map(|(e, _)| e)
-}
-
-/// Energy of `branch` at `lbar` interpolated linearly between its samples, and whether it
-/// has index 0 there (both neighbouring samples have, or the sample at `lbar` has).
-fn interpolated_state(points: &[EnclosedPoint], branch: u32, lbar: f64) -> Option<(f64, bool)> {
+/// Energy of `branch` at `lbar` interpolated linearly between its samples, its error
+/// estimate ([`sampled::interpolate`]: the samples' own estimates plus the interpolation
+/// error from the branch's second differences), and whether it has index 0 there (both
+/// neighbouring samples have, or the sample at `lbar` has).
+fn interpolated_state(
+    points: &[EnclosedPoint],
+    branch: u32,
+    lbar: f64,
+) -> Option<(f64, f64, bool)> {
     let pts: Vec<&EnclosedPoint> = points.iter().filter(|p| p.branch == branch).collect();
+    let samples: Vec<Sample> = pts
+        .iter()
+        .map(|p| Sample {
+            x: p.lbar,
+            f: p.energy,
+            error: p.energy_error,
+        })
+        .collect();
+    let (energy, error) = sampled::interpolate(&samples, lbar)?;
     let k = pts.partition_point(|p| p.lbar < lbar);
-    if k == 0 || k == pts.len() {
-        return pts
-            .iter()
-            .find(|p| (p.lbar - lbar).abs() < 1e-12)
-            .map(|p| (p.energy, p.index == 0));
-    }
-    let (a, b) = (pts[k - 1], pts[k]);
-    let t = (lbar - a.lbar) / (b.lbar - a.lbar);
-    Some((
-        a.energy + t * (b.energy - a.energy),
-        a.index == 0 && b.index == 0,
-    ))
+    let index0 = match pts.iter().find(|p| (p.lbar - lbar).abs() <= 1e-12) {
+        Some(p) => p.index == 0,
+        None => pts[k - 1].index == 0 && pts[k].index == 0,
+    };
+    Some((energy, error, index0))
 }
-
-/// Allowance for the error of an energy interpolated linearly between samples (`~E''h²/8`),
-/// split between the two energies the labeller compares: another branch must lie below
-/// the lowest branch the critical lengths name by more than `10⁻³` before the labels follow
-/// the sampled energies instead.
-const INTERPOLATION_ALLOWANCE: f64 = 5e-4;
 
 /// Lowest flags and labels by the labeller ([`rodloop_continuation::exchange`]): at each
 /// sampled state, it and the other branches interpolated to its length, each with its
-/// error estimate plus [`INTERPOLATION_ALLOWANCE`], the branch the critical lengths name as
-/// lowest preferred in ties; `lowest` is the lowest of them at any index (a local minimum
-/// before a saddle tied with it, [`exchange::lowest_state`]). A warning where a
-/// sampled state lies below the lowest branch by more than the errors (an exchange the
-/// list does not have).
+/// error estimate, the branch the critical lengths name as lowest preferred in ties;
+/// `lowest` is the lowest of them at any index (a local minimum before a saddle tied with
+/// it, [`exchange::lowest_state`]). A warning where a sampled state lies below the lowest
+/// branch by more than the errors (an exchange the list does not have).
 pub(super) fn label(
     points: &mut [EnclosedPoint],
     critical: &[EnclosedCritical],
@@ -335,15 +332,15 @@ pub(super) fn label(
         let named = lowest_branch(critical, p.lbar);
         let mut states = vec![Ranked {
             energy: p.energy,
-            error: p.energy_error + INTERPOLATION_ALLOWANCE,
+            error: p.energy_error,
             index: p.index,
             preferred: named == Some(p.branch),
         }];
         for &b in branches.iter().filter(|&&b| b != p.branch) {
-            if let Some((energy, index0)) = interpolated_state(&snapshot, b, p.lbar) {
+            if let Some((energy, error, index0)) = interpolated_state(&snapshot, b, p.lbar) {
                 states.push(Ranked {
                     energy,
-                    error: INTERPOLATION_ALLOWANCE,
+                    error,
                     index: usize::from(!index0),
                     preferred: named == Some(b),
                 });
@@ -353,8 +350,8 @@ pub(super) fn label(
         p.label = exchange::label(&states)[0].into();
     }
     for p in points.iter() {
-        // Linear interpolation between samples errs by ~E''h²/8; skip the neighbourhood
-        // of the located critical lengths and allow 1e-3.
+        // Skip the neighbourhood of the located critical lengths, where the lowest branch
+        // changes between samples.
         if p.lowest
             || critical
                 .iter()
@@ -363,8 +360,8 @@ pub(super) fn label(
             continue;
         }
         if let Some(b) = lowest_branch(critical, p.lbar) {
-            if let Some(e) = interpolated(&snapshot, b, p.lbar) {
-                if p.energy < e - 1e-3 {
+            if let Some((e, error, _)) = interpolated_state(&snapshot, b, p.lbar) {
+                if p.energy < e - error - p.energy_error {
                     warnings.push(format!(
                         "branch {} at lbar = {:.4} (E = {:.8}) lies below the lowest branch {} (E = {:.8}): an exchange not in the surface list",
                         p.branch, p.lbar, p.energy, b, e

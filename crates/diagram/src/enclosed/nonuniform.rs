@@ -624,7 +624,13 @@ pub(super) fn nonuniform_diagram(
     // States that another branch's periods name are no rows of this one (before the descent,
     // which starts from the lowest rows, and after it, for the families it adds).
     warnings.extend(outs.iter_mut().filter_map(SheetOut::drop_other_branches));
-    let (w, n, parents) = descend_unstable(&mut outs, &idx, opts.accuracy, threads);
+    let (w, n, parents) = descend_unstable(
+        &mut outs,
+        &idx,
+        opts.accuracy,
+        threads,
+        mean_stiffness(opts)?,
+    );
     warnings.extend(w);
     notes.extend(n);
     idx.extend(parents);
@@ -887,7 +893,7 @@ pub(super) fn nonuniform_diagram(
     for (k, s) in outs.iter().enumerate() {
         for p in &s.points {
             let mut p = p.clone();
-            let states = ranked_at(&outs, &brackets, &critical, k, &p);
+            let states = ranked_at(&outs, &brackets, &critical, k, &p, dbar);
             p.lowest = exchange::lowest_state(&states).contains(&0);
             p.label = exchange::label(&states)[0].into();
             points.push(p);

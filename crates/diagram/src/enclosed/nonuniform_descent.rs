@@ -60,7 +60,7 @@ const ROUNDS: usize = 8;
 /// allowance of the least and no local minimum tied with it. The exchanges located later
 /// can make such a state the lowest one (a crossing placed inside the tie prefers its
 /// branch), and the labels must not name a saddle lowest that no descent was tried from.
-fn unstable_lowest(outs: &[SheetOut]) -> Vec<(usize, Vec<f64>, Vec<f64>)> {
+fn unstable_lowest(outs: &[SheetOut], dbar: f64) -> Vec<(usize, Vec<f64>, Vec<f64>)> {
     let mut found = Vec::new();
     for (k, s) in outs.iter().enumerate() {
         let saddles = s
@@ -71,7 +71,7 @@ fn unstable_lowest(outs: &[SheetOut]) -> Vec<(usize, Vec<f64>, Vec<f64>)> {
         for p in saddles {
             if lowest_near_circle(outs, p.lbar) == Some(k) {
                 least.push(p.lbar);
-            } else if lowest_state(&ranked_at(outs, &[], &[], k, p)).contains(&0) {
+            } else if lowest_state(&ranked_at(outs, &[], &[], k, p, dbar)).contains(&0) {
                 tied.push(p.lbar);
             }
         }
@@ -335,11 +335,14 @@ fn lowest_by_solve_command(
 /// Add the families found below unstable lowest states to `outs` (see the module docs).
 /// Returns the warnings, the notes and, for each sheet appended to `outs`, the index of the sheet of
 /// the surface diagram it descends from (`roots[k]` for the first `roots.len()` sheets).
+/// `dbar` is the mean `D/D0` ([`super::nonuniform_exchange::mean_stiffness`]) for the
+/// labeller ([`ranked_at`]).
 pub(super) fn descend_unstable(
     outs: &mut Vec<SheetOut>,
     roots: &[usize],
     accuracy: Accuracy,
     threads: usize,
+    dbar: f64,
 ) -> (Vec<String>, Vec<String>, Vec<usize>) {
     let mut warnings = Vec::new();
     let mut notes = Vec::new();
@@ -362,7 +365,7 @@ pub(super) fn descend_unstable(
         // The sheets to try this round, with up to three untried unstable lowest states
         // each ([`candidates`]); the searches and traces run in parallel.
         let mut jobs: Vec<(usize, Vec<f64>)> = Vec::new();
-        for (k, least, tied) in unstable_lowest(outs) {
+        for (k, least, tied) in unstable_lowest(outs, dbar) {
             let cands: Vec<f64> = candidates(&least, &tied)
                 .into_iter()
                 .filter(|&x| {
@@ -526,7 +529,7 @@ pub(super) fn descend_unstable(
         outs.extend(added);
         parents.extend(added_parents);
     }
-    for (k, least, tied) in unstable_lowest(outs) {
+    for (k, least, tied) in unstable_lowest(outs, dbar) {
         // The saddles the labeller still calls lowest: not those tied with a minimum.
         let s = &outs[k];
         let mut xs: Vec<f64> = least
@@ -536,7 +539,9 @@ pub(super) fn descend_unstable(
                 s.points
                     .iter()
                     .find(|p| (p.lbar - x).abs() < 1e-12)
-                    .is_some_and(|p| lowest_state(&ranked_at(outs, &[], &[], k, p)).contains(&0))
+                    .is_some_and(|p| {
+                        lowest_state(&ranked_at(outs, &[], &[], k, p, dbar)).contains(&0)
+                    })
             })
             .collect();
         if xs.is_empty() {

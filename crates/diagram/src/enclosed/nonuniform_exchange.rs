@@ -17,6 +17,7 @@
 use rodloop_solver::SolverError;
 
 use rodloop_continuation::exchange::{ExchangeSettings, Ranked};
+use rodloop_continuation::sampled::{self, Sample};
 
 use super::critical::{exchange_doublings, locate_from, EnclosedPair, Ladder};
 use super::levels::Levels;
@@ -80,23 +81,26 @@ pub(super) fn lowest_near_circle(sheets: &[SheetOut], lbar: f64) -> Option<usize
 }
 
 /// The labeller's view ([`rodloop_continuation::exchange`]) of the sampled state `p` of
-/// sheet `k` and of the other sheets at its length (energies interpolated linearly, with
-/// their error plus `5·10⁻⁴` for the interpolation; index 0 where both neighbouring samples
-/// have it; within `CIRCLE` of a great circle, the end state of a sheet that ends there):
-/// `p` first. Inside the bracket of a located crossing the sheet its critical
-/// length names as lowest on `p`'s side is preferred in ties; elsewhere the least energy
-/// decides.
+/// sheet `k` and of the other sheets at its length, `p` first. Another sheet's energy is
+/// interpolated linearly between its samples, with the error estimate of
+/// [`sampled::interpolate`] (the samples' own estimates plus `|E''|(x − x_a)(x_b − x)/2`
+/// from the sheet's second differences), and has index 0 where both neighbouring samples
+/// have it. Within `CIRCLE` of a great circle, a sheet that ends there competes with its
+/// end state, whose estimate adds the sheet's end slope times its distance from `p` (of a
+/// one-sample sheet, the slope of its chord to the circle's energy `m D̄/D0`, `dbar = D̄/D0`). In the closed bracket of a
+/// located crossing, the sheets of the branch its critical length names as lowest on `p`'s
+/// side are preferred in ties; elsewhere the least energy decides.
 pub(super) fn ranked_at(
     outs: &[SheetOut],
     brackets: &[(f64, f64, usize, usize)],
     critical: &[EnclosedCritical],
     k: usize,
     p: &EnclosedPoint,
+    dbar: f64,
 ) -> Vec<Ranked> {
-    const ALLOWANCE: f64 = 5e-4;
     let mut named: Option<usize> = None;
     for &(x0, x1, a, b) in brackets {
-        if p.lbar > x0 && p.lbar < x1 {
+        if p.lbar >= x0 && p.lbar <= x1 {
             let c = critical
                 .iter()
                 .find(|c| c.critical.lbar_cr >= x0 - 0.05 && c.critical.lbar_cr <= x1 + 0.05)
@@ -104,36 +108,55 @@ pub(super) fn ranked_at(
             named = Some(if p.lbar < c { a } else { b });
         }
     }
+    // The critical length names a branch: each of its families is preferred.
+    let prefers = |j: usize| named.is_some_and(|n| outs[n].branch == outs[j].branch);
     let mut states = vec![Ranked {
         energy: p.energy,
-        error: p.energy_error + ALLOWANCE,
+        error: p.energy_error,
         index: p.index,
-        preferred: named == Some(k),
+        preferred: prefers(k),
     }];
-    // Next to a great circle `L̄ = m`, where sheets begin or end, a sheet that ends within
-    // `CIRCLE` of `p` competes with its end state.
     let at_circle = (p.lbar - p.lbar.round()).abs() < CIRCLE;
     for (j, s) in outs.iter().enumerate().filter(|(j, _)| *j != k) {
-        let end = || {
-            [s.points.first(), s.points.last()]
-                .into_iter()
-                .flatten()
-                .find(|u| at_circle && (u.lbar - p.lbar).abs() < CIRCLE)
-        };
-        let energy = match (interp(s, p.lbar), end()) {
-            (Some(e), _) => e,
-            (None, Some(u)) => {
+        let q = &s.points;
+        let samples: Vec<Sample> = q
+            .iter()
+            .map(|u| Sample {
+                x: u.lbar,
+                f: u.energy,
+                error: u.energy_error,
+            })
+            .collect();
+        let Some((energy, error)) = sampled::interpolate(&samples, p.lbar) else {
+            // The end state of a sheet that ends next to the circle, with its slope times
+            // the distance.
+            let ends = [
+                (q.first(), q.get(1)),
+                (q.last(), q.len().checked_sub(2).and_then(|i| q.get(i))),
+            ];
+            for (u, v) in ends {
+                let Some(u) = u.filter(|u| at_circle && (u.lbar - p.lbar).abs() < CIRCLE) else {
+                    continue;
+                };
+                // The end chord's slope; of a one-sample sheet, the chord to the circle's
+                // own energy `m D̄/D0`.
+                let m = p.lbar.round();
+                let (x, e) = v.map_or((m, m * dbar), |v| (v.lbar, v.energy));
+                let shift = if (x - u.lbar).abs() > 1e-12 {
+                    ((e - u.energy) / (x - u.lbar) * (u.lbar - p.lbar)).abs()
+                } else {
+                    (e - u.energy).abs()
+                };
                 states.push(Ranked {
                     energy: u.energy,
-                    error: u.energy_error + ALLOWANCE,
+                    error: u.energy_error + shift,
                     index: u.index,
-                    preferred: named == Some(j),
+                    preferred: prefers(j),
                 });
-                continue;
+                break;
             }
-            (None, None) => continue,
+            continue;
         };
-        let q = &s.points;
         let i = q.partition_point(|u| u.lbar < p.lbar);
         let index0 = match q.iter().find(|u| (u.lbar - p.lbar).abs() < 1e-12) {
             Some(u) => u.index == 0,
@@ -145,9 +168,9 @@ pub(super) fn ranked_at(
         };
         states.push(Ranked {
             energy,
-            error: ALLOWANCE,
+            error,
             index: usize::from(!index0),
-            preferred: named == Some(j),
+            preferred: prefers(j),
         });
     }
     states
