@@ -86,8 +86,11 @@ pub(super) fn lowest_near_circle(sheets: &[SheetOut], lbar: f64) -> Option<usize
 /// [`sampled::interpolate`] (the samples' own estimates plus `|E''|(x − x_a)(x_b − x)/2`
 /// from the sheet's second differences), and has index 0 where both neighbouring samples
 /// have it. Within `CIRCLE` of a great circle, a sheet that ends there competes with its
-/// end state, whose estimate adds the sheet's end slope times its distance from `p` (of a
-/// one-sample sheet, the slope of its chord to the circle's energy `m D̄/D0`, `dbar = D̄/D0`). In the closed bracket of a
+/// end state. On the other side of the circle from `p`, the two are the ends of the
+/// collapse there (located to their distance from the circle) and tied; on `p`'s side, the
+/// end state's estimate adds the sheet's end slope times its distance from `p` (of a
+/// one-sample sheet, the slope of its chord to the circle's energy `m D̄/D0`,
+/// `dbar = D̄/D0`). In the closed bracket of a
 /// located crossing, the sheets of the branch its critical length names as lowest on `p`'s
 /// side are preferred in ties; elsewhere the least energy decides.
 pub(super) fn ranked_at(
@@ -138,11 +141,15 @@ pub(super) fn ranked_at(
                 let Some(u) = u.filter(|u| at_circle && (u.lbar - p.lbar).abs() < CIRCLE) else {
                     continue;
                 };
-                // The end chord's slope; of a one-sample sheet, the chord to the circle's
-                // own energy `m D̄/D0`.
                 let m = p.lbar.round();
                 let (x, e) = v.map_or((m, m * dbar), |v| (v.lbar, v.energy));
-                let shift = if (x - u.lbar).abs() > 1e-12 {
+                let shift = if (u.lbar - m) * (p.lbar - m) < 0.0 {
+                    // The two ends of the collapse at `m`, on either side of it within its
+                    // estimate: tied.
+                    (u.energy - p.energy).abs()
+                } else if (x - u.lbar).abs() > 1e-12 {
+                    // The end chord's slope; of a one-sample sheet, the chord to the
+                    // circle's own energy `m D̄/D0`.
                     ((e - u.energy) / (x - u.lbar) * (u.lbar - p.lbar)).abs()
                 } else {
                     (e - u.energy).abs()
@@ -567,3 +574,7 @@ pub(super) fn locate_crossing_by_solve(
         not_located: None,
     })
 }
+
+#[cfg(test)]
+#[path = "nonuniform_exchange_tests.rs"]
+mod tests;
