@@ -24,10 +24,12 @@
 //! levels of the trace; the value is the finer level's root and its estimate the final
 //! bracket plus the distance between the two levels' roots (the discretisation error of the
 //! coarser one, which bounds the finer one's where the location converges at order ≥ 1).
+//! Where the coarser level's index does not change next to the bracket, the finer level and
+//! its bracket states prolonged to twice their cells take the two levels' places.
 
 use rodloop_continuation::roots::brent;
 use rodloop_continuation::RootError;
-use rodloop_solver::enclosed::{EnclosedOptions, EnclosedState};
+use rodloop_solver::enclosed::{solve_prolonged, EnclosedOptions, EnclosedState};
 use rodloop_solver::SolverError;
 
 use super::levels::Levels;
@@ -403,46 +405,73 @@ pub(super) fn locate_on_level(
 /// `j + 1` (`tr` in increasing `L̄`), located on the two mesh levels `levels` (coarser
 /// first). The index may change between other neighbouring states on another level (the
 /// discretisation moves the point): on each level the bracket is the window nearest to
-/// `j`, within one state, where that level's index changes.
+/// `j`, within one state, where that level's index changes. Where the coarser level's index
+/// does not change there (its point lies farther, or its mesh does not resolve it), the
+/// finer level's bracket states are prolonged to twice their cells and re-solved, and the
+/// point is located on the finer level and on that one instead.
 pub(super) fn locate(
     tr: &[&Levels],
     j: usize,
     levels: [usize; 2],
     opts: &EnclosedOptions,
 ) -> Result<Located, SolverError> {
-    let mut r = Vec::with_capacity(2);
-    // Per level, coarser first: the root or the jump, `(L̄, estimate)`.
-    let mut places: Vec<(f64, f64)> = Vec::with_capacity(2);
-    let mut jumped = false;
-    for lvl in levels {
+    let window_on = |lvl: usize| -> Result<Option<usize>, SolverError> {
         let lo = j.saturating_sub(1);
         let hi = (j + 2).min(tr.len() - 1);
         let idx: Vec<usize> = (lo..=hi)
             .map(|i| tr[i].states[lvl].index(ACTIVE))
             .collect::<Result<_, _>>()?;
-        let window = [j, j.wrapping_sub(1), j + 1]
+        Ok([j, j.wrapping_sub(1), j + 1]
             .into_iter()
-            .find(|&w| w >= lo && w < hi && idx[w - lo] != idx[w + 1 - lo])
-            .ok_or_else(|| {
-                SolverError::InvalidInput(format!(
-                    "the index on level {lvl} does not change next to lbar = {:.6}",
-                    tr[j].lbar
-                ))
-            })?;
-        let (a, b) = (tr[window], tr[window + 1]);
+            .find(|&w| w >= lo && w < hi && idx[w - lo] != idx[w + 1 - lo]))
+    };
+    let bracket = |lvl: usize, w: usize| {
+        let (a, b) = (tr[w], tr[w + 1]);
+        (a.states[lvl].clone(), a.lbar, b.states[lvl].clone(), b.lbar)
+    };
+    // The two rungs, coarser first: `(state, L̄)` at either end of the bracket.
+    let mut rungs = Vec::with_capacity(2);
+    match (window_on(levels[0])?, window_on(levels[1])?) {
+        (Some(c), Some(f)) => {
+            rungs.push(bracket(levels[0], c));
+            rungs.push(bracket(levels[1], f));
+        }
+        (None, Some(f)) => {
+            let (a, xa, b, xb) = bracket(levels[1], f);
+            let doubled = |s: &EnclosedState| {
+                let (m, z) = s.refine()?;
+                solve_prolonged(&m, z, opts)
+            };
+            let (a2, b2) = (doubled(&a)?, doubled(&b)?);
+            if a2.index(ACTIVE)? == b2.index(ACTIVE)? {
+                return Err(SolverError::InvalidInput(format!(
+                    "the index on level {} and on twice its cells does not change next to lbar = {:.6}",
+                    levels[0], tr[j].lbar
+                )));
+            }
+            rungs.push((a.clone(), xa, b.clone(), xb));
+            rungs.push((a2, xa, b2, xb));
+        }
+        (c, _) => {
+            let lvl = if c.is_none() { levels[0] } else { levels[1] };
+            return Err(SolverError::InvalidInput(format!(
+                "the index on level {lvl} does not change next to lbar = {:.6}",
+                tr[j].lbar
+            )));
+        }
+    }
+    let mut r = Vec::with_capacity(2);
+    // Per rung, coarser first: the root or the jump, `(L̄, estimate)`.
+    let mut places: Vec<(f64, f64)> = Vec::with_capacity(2);
+    let mut jumped = false;
+    for (a, xa, b, xb) in &rungs {
         if jumped {
-            // A jump on the coarser level: on this one, where its contact set changes.
-            let (x, w, _) = sides_extent(
-                (&a.states[lvl], a.lbar),
-                (&b.states[lvl], b.lbar),
-                a.lbar,
-                b.lbar,
-                opts,
-            )?;
+            // A jump on the coarser rung: on this one, where its contact set changes.
+            let (x, w, _) = sides_extent((a, *xa), (b, *xb), *xa, *xb, opts)?;
             places.push((x, w));
             continue;
         }
-        match locate_on_level(&a.states[lvl], a.lbar, &b.states[lvl], b.lbar, opts) {
+        match locate_on_level(a, *xa, b, *xb, opts) {
             Ok(root) => {
                 places.push((root.x, root.width));
                 r.push(root);
@@ -462,8 +491,9 @@ pub(super) fn locate(
         // estimates.
         let ((xc, wc), (x, wf)) = (places[0], places[1]);
         let w = wf + wc + (x - xc).abs();
+        let (nc, nf) = (rungs[0].0.model.cells(), rungs[1].0.model.cells());
         return Err(SolverError::InvalidInput(format!(
-            "{JUMPS} at lbar = {x:.6} ± {w:.1e} (on levels N/2 and N at {xc:.6} and {x:.6}: the active set of the mesh changes there, a place that moves with the mesh; no eigenvalue crosses zero)"
+            "{JUMPS} at lbar = {x:.6} ± {w:.1e} (on {nc} and {nf} cells at {xc:.6} and {x:.6}: the active set of the mesh changes there, a place that moves with the mesh; no eigenvalue crosses zero)"
         )));
     }
     let (c, f) = (&r[0], &r[1]);

@@ -5,15 +5,17 @@
 //!   sampled states, an eigenvalue on the tangent space of the active constraints crosses
 //!   zero: a pitchfork (or a transcritical point) of the enclosed sheet, where another
 //!   family meets it. It is located as the root of that eigenvalue on re-solved states on
-//!   the levels `N/2` and `N` (`locate.rs`: Brent's method, the estimate the final bracket
-//!   plus the distance between the two levels' roots). Where the eigenvalue jumps at the
+//!   the levels `N/2` and `N`, or `N` and `2N` where `N/2` does not change its index there
+//!   (`locate.rs`: Brent's method, the estimate the final bracket plus the distance between
+//!   the two levels' roots). Where the eigenvalue jumps at the
 //!   root instead, the contact set changes there and no eigenvalue crosses zero: no branch
 //!   point is reported, and a note says where (as for uniform rods, `trace.rs`). Where the
 //!   index changes by more than one between a sheet's end next to the great circle it
 //!   collapses onto and the sample before ([`collapse_jump`]), several eigenvalues change
 //!   sign in between: no branch point is reported, and a note says so. Where the
 //!   location fails otherwise (a re-solve does not converge next to the singular point, or
-//!   a level's index does not change next to the pair), the root of the eigenvalue
+//!   the index does not change next to the pair on the coarser level nor on twice the finer
+//!   level's cells), the root of the eigenvalue
 //!   interpolated linearly between the two states stands, with half the bracket as its
 //!   estimate, and a warning says why, unless a fold of the same family located from a
 //!   trace's stop lies in the bracket with the same index change ([`unlocated_at_folds`]):
