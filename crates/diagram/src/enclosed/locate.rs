@@ -407,8 +407,9 @@ pub(super) fn locate_on_level(
 /// discretisation moves the point): on each level the bracket is the window nearest to
 /// `j`, within one state, where that level's index changes. Where the coarser level's index
 /// does not change there (its point lies farther, or its mesh does not resolve it), the
-/// finer level's bracket states are prolonged to twice their cells and re-solved, and the
-/// point is located on the finer level and on that one instead.
+/// point is located on the finer level and, where it is a root there, again on the finer
+/// level's bracket states prolonged to twice their cells and re-solved; a jump on the finer
+/// level is reported from it alone.
 pub(super) fn locate(
     tr: &[&Levels],
     j: usize,
@@ -437,7 +438,11 @@ pub(super) fn locate(
             rungs.push(bracket(levels[1], f));
         }
         (None, Some(f)) => {
+            // The finer level first: a jump there is reported from it alone (where that
+            // mesh's contact set changes, not a branch point; the doubled mesh's place would
+            // add only cost); a root is located again on twice its cells.
             let (a, xa, b, xb) = bracket(levels[1], f);
+            let c = locate_on_level(&a, xa, &b, xb, opts)?;
             let doubled = |s: &EnclosedState| {
                 let (m, z) = s.refine()?;
                 solve_prolonged(&m, z, opts)
@@ -445,12 +450,12 @@ pub(super) fn locate(
             let (a2, b2) = (doubled(&a)?, doubled(&b)?);
             if a2.index(ACTIVE)? == b2.index(ACTIVE)? {
                 return Err(SolverError::InvalidInput(format!(
-                    "the index on level {} and on twice its cells does not change next to lbar = {:.6}",
-                    levels[0], tr[j].lbar
+                    "the index on twice the cells of level {} does not change next to lbar = {:.6}",
+                    levels[1], tr[j].lbar
                 )));
             }
-            rungs.push((a.clone(), xa, b.clone(), xb));
-            rungs.push((a2, xa, b2, xb));
+            let f = locate_on_level(&a2, xa, &b2, xb, opts)?;
+            return Ok(located(&c, &f));
         }
         (c, _) => {
             let lvl = if c.is_none() { levels[0] } else { levels[1] };
@@ -496,14 +501,19 @@ pub(super) fn locate(
             "{JUMPS} at lbar = {x:.6} ± {w:.1e} (on {nc} and {nf} cells at {xc:.6} and {x:.6}: the active set of the mesh changes there, a place that moves with the mesh; no eigenvalue crosses zero)"
         )));
     }
-    let (c, f) = (&r[0], &r[1]);
-    Ok(Located {
+    Ok(located(&r[0], &r[1]))
+}
+
+/// The point from the roots on a coarser and a finer mesh: the finer one, with its bracket
+/// plus the distance between the two as its estimate.
+fn located(c: &LevelRoot, f: &LevelRoot) -> Located {
+    Located {
         lbar: f.x,
         error_estimate: f.width + (f.x - c.x).abs(),
         energy: f.energy,
         index_below: f.index_below,
         index_above: f.index_above,
-    })
+    }
 }
 
 #[cfg(test)]
