@@ -286,16 +286,22 @@ pub(super) fn lowest_branch(critical: &[EnclosedCritical], lbar: f64) -> Option<
     }
 }
 
-/// Energy of `branch` at `lbar` interpolated linearly between its samples, its error
-/// estimate ([`sampled::interpolate`]: the samples' own estimates plus the interpolation
-/// error from the branch's second differences), and whether it has index 0 there (both
-/// neighbouring samples have, or the sample at `lbar` has).
+/// Energy of `branch` at `lbar` interpolated linearly between its samples
+/// ([`interpolated_rows`]).
 fn interpolated_state(
     points: &[EnclosedPoint],
     branch: u32,
     lbar: f64,
 ) -> Option<(f64, f64, bool)> {
     let pts: Vec<&EnclosedPoint> = points.iter().filter(|p| p.branch == branch).collect();
+    interpolated_rows(&pts, lbar)
+}
+
+/// Energy of the rows `pts` (sorted by `L̄`) at `lbar` interpolated linearly between them,
+/// its error estimate ([`sampled::interpolate`]: the rows' own estimates plus the
+/// interpolation error from their second differences), and whether it has index 0 there
+/// (both neighbouring rows have, or the row at `lbar` has); `None` outside them.
+pub(super) fn interpolated_rows(pts: &[&EnclosedPoint], lbar: f64) -> Option<(f64, f64, bool)> {
     let samples: Vec<Sample> = pts
         .iter()
         .map(|p| Sample {

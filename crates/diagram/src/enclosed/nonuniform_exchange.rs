@@ -17,9 +17,8 @@
 use rodloop_solver::SolverError;
 
 use rodloop_continuation::exchange::{ExchangeSettings, Ranked};
-use rodloop_continuation::sampled::{self, Sample};
 
-use super::critical::{exchange_doublings, locate_from, EnclosedPair, Ladder};
+use super::critical::{exchange_doublings, interpolated_rows, locate_from, EnclosedPair, Ladder};
 use super::levels::Levels;
 use super::nonuniform_sheet::{surface_energy, surface_energy_doubled, walk, SheetOut};
 use super::{EnclosedCritical, EnclosedDiagramOptions, EnclosedPoint, PointSource};
@@ -83,7 +82,7 @@ pub(super) fn lowest_near_circle(sheets: &[SheetOut], lbar: f64) -> Option<usize
 /// The labeller's view ([`rodloop_continuation::exchange`]) of the sampled state `p` of
 /// sheet `k` and of the other sheets at its length, `p` first. Another sheet's energy is
 /// interpolated linearly between its samples, with the error estimate of
-/// [`sampled::interpolate`] (the samples' own estimates plus `|E''|(x − x_a)(x_b − x)/2`
+/// [`interpolated_rows`] (the samples' own estimates plus `|E''|(x − x_a)(x_b − x)/2`
 /// from the sheet's second differences), and has index 0 where both neighbouring samples
 /// have it. Within `CIRCLE` of a great circle, a sheet that ends there competes with its
 /// end state. On the other side of the circle from `p`, the two are the ends of the
@@ -122,15 +121,8 @@ pub(super) fn ranked_at(
     let at_circle = (p.lbar - p.lbar.round()).abs() < CIRCLE;
     for (j, s) in outs.iter().enumerate().filter(|(j, _)| *j != k) {
         let q = &s.points;
-        let samples: Vec<Sample> = q
-            .iter()
-            .map(|u| Sample {
-                x: u.lbar,
-                f: u.energy,
-                error: u.energy_error,
-            })
-            .collect();
-        let Some((energy, error)) = sampled::interpolate(&samples, p.lbar) else {
+        let rows: Vec<&EnclosedPoint> = q.iter().collect();
+        let Some((energy, error, index0)) = interpolated_rows(&rows, p.lbar) else {
             // The end state of a sheet that ends next to the circle, with its slope times
             // the distance.
             let ends = [
@@ -163,15 +155,6 @@ pub(super) fn ranked_at(
                 break;
             }
             continue;
-        };
-        let i = q.partition_point(|u| u.lbar < p.lbar);
-        let index0 = match q.iter().find(|u| (u.lbar - p.lbar).abs() < 1e-12) {
-            Some(u) => u.index == 0,
-            None => [i.checked_sub(1), Some(i)]
-                .into_iter()
-                .flatten()
-                .filter_map(|i| q.get(i))
-                .all(|u| u.index == 0),
         };
         states.push(Ranked {
             energy,
