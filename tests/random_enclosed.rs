@@ -80,6 +80,24 @@ fn solve_branch_2(
     read_json(&out.join("summary.json"))
 }
 
+/// `rodloop solve --lbar LBAR --branch BRANCH` on the scene file `sc`, written to `dir/out`:
+/// its `summary.json`.
+fn solve_at(dir: &Path, sc: &Path, lbar: f64, branch: &str, out: &str) -> serde_json::Value {
+    let o = dir.join(out);
+    rodloop_ok(&[
+        "solve",
+        "--scene",
+        sc.to_str().unwrap(),
+        "--lbar",
+        &format!("{lbar}"),
+        "--branch",
+        branch,
+        "--out",
+        o.to_str().unwrap(),
+    ]);
+    read_json(&o.join("summary.json"))
+}
+
 /// The numbers of column `name` of a state file.
 fn column(header: &[String], rows: &[Vec<String>], name: &str) -> Vec<f64> {
     let c = col(header, name);
@@ -325,19 +343,7 @@ fn labels_past_an_exchange_follow_the_branch_solve_finds_lower() {
             .iter()
             .filter(|r| &r[col(&h, "branch")] == from && num(&h, r, "lbar") == next)
         {
-            let o = dir.join(format!("solve-{to}-{next}"));
-            rodloop_ok(&[
-                "solve",
-                "--scene",
-                sc.to_str().unwrap(),
-                "--lbar",
-                &format!("{next}"),
-                "--branch",
-                to,
-                "--out",
-                o.to_str().unwrap(),
-            ]);
-            let j = read_json(&o.join("summary.json"));
+            let j = solve_at(&dir, &sc, next, to, &format!("solve-{to}-{next}"));
             let (e, de) = (
                 j["energy"].as_f64().unwrap(),
                 j["error_estimate"].as_f64().unwrap(),
@@ -399,19 +405,7 @@ fn minima_named_lowest_are_level_with_the_saddles_there(
         }
         saddles += 1;
         let branch = &minimum[col(&h, "branch")];
-        let o = dir.join(format!("solve-{x}"));
-        rodloop_ok(&[
-            "solve",
-            "--scene",
-            sc.to_str().unwrap(),
-            "--lbar",
-            &format!("{x}"),
-            "--branch",
-            branch,
-            "--out",
-            o.to_str().unwrap(),
-        ]);
-        let solved = read_json(&o.join("summary.json"));
+        let solved = solve_at(dir, sc, x, branch, &format!("solve-{x}"));
         let f = |k: &str| solved[k].as_f64().expect("a number");
         assert_eq!(solved["index"], 0, "{solved}\n{text}");
         assert!(
@@ -577,19 +571,7 @@ fn exchange_of_diagram_agrees(
         let mut d = 0.0;
         let mut e = 0.0;
         for (k, b) in branches.iter().enumerate() {
-            let o = dir.join(format!("solve-{tag}-{b}"));
-            rodloop_ok(&[
-                "solve",
-                "--scene",
-                sc.to_str().unwrap(),
-                "--lbar",
-                &format!("{}", x + t),
-                "--branch",
-                b,
-                "--out",
-                o.to_str().unwrap(),
-            ]);
-            let j = read_json(&o.join("summary.json"));
+            let j = solve_at(dir, sc, x + t, b, &format!("solve-{tag}-{b}"));
             let sign = if k == 0 { 1.0 } else { -1.0 };
             d += sign * j["energy"].as_f64().unwrap();
             e += j["error_estimate"].as_f64().unwrap();
