@@ -25,7 +25,8 @@
 //! bracket plus the distance between the two levels' roots (the discretisation error of the
 //! coarser one, which bounds the finer one's where the location converges at order ≥ 1).
 //! Where the coarser level's index does not change next to the bracket, the finer level and
-//! its bracket states prolonged to twice their cells take the two levels' places.
+//! its bracket states prolonged to twice their cells take the two levels' places (a jump on
+//! the finer level is reported from it alone, [`locate`]).
 
 use rodloop_continuation::roots::brent;
 use rodloop_continuation::RootError;

@@ -624,13 +624,8 @@ pub(super) fn nonuniform_diagram(
     // States that another branch's periods name are no rows of this one (before the descent,
     // which starts from the lowest rows, and after it, for the families it adds).
     warnings.extend(outs.iter_mut().filter_map(SheetOut::drop_other_branches));
-    let (w, n, parents) = descend_unstable(
-        &mut outs,
-        &idx,
-        opts.accuracy,
-        threads,
-        mean_stiffness(opts)?,
-    );
+    let dbar = mean_stiffness(opts)?;
+    let (w, n, parents) = descend_unstable(&mut outs, &idx, opts.accuracy, threads, dbar);
     warnings.extend(w);
     notes.extend(n);
     idx.extend(parents);
@@ -705,7 +700,6 @@ pub(super) fn nonuniform_diagram(
     let mut critical: Vec<EnclosedCritical> = Vec::new();
     // (x0, x1, a, b) brackets of located crossings, for the lowest flags.
     let mut brackets: Vec<(f64, f64, usize, usize)> = Vec::new();
-    let dbar = mean_stiffness(opts)?;
     // Great circles inside the range where some sheet begins or ends.
     let ends: Vec<f64> = (1..=(opts.lbar_max.floor() as u32))
         .map(f64::from)

@@ -56,8 +56,8 @@ const ROUNDS: usize = 8;
 
 /// Sheets whose lowest states are unstable: `(sheet, L̄ of the states whose energy is the
 /// least of the sheets' there, L̄ of those only tied with the least)`. Tied means the
-/// labeller ([`ranked_at`] without exchanges) would call the state lowest: within its
-/// allowance of the least and no local minimum tied with it. The exchanges located later
+/// labeller ([`ranked_at`] without exchanges) would call the state lowest: within the
+/// estimates of the least and no local minimum tied with it. The exchanges located later
 /// can make such a state the lowest one (a crossing placed inside the tie prefers its
 /// branch), and the labels must not name a saddle lowest that no descent was tried from.
 fn unstable_lowest(outs: &[SheetOut], dbar: f64) -> Vec<(usize, Vec<f64>, Vec<f64>)> {

@@ -123,8 +123,7 @@ pub(super) fn ranked_at(
         let q = &s.points;
         let rows: Vec<&EnclosedPoint> = q.iter().collect();
         let Some((energy, error, index0)) = interpolated_rows(&rows, p.lbar) else {
-            // The end state of a sheet that ends next to the circle, with its slope times
-            // the distance.
+            // The end state of a sheet that ends next to the circle (see the doc comment).
             let ends = [
                 (q.first(), q.get(1)),
                 (q.last(), q.len().checked_sub(2).and_then(|i| q.get(i))),
